@@ -1,0 +1,7 @@
+"""The OpenGL layer: contexts and resource wrappers. It knows no reflection technique.
+
+Importing this package selects PyOpenGL's platform (see :mod:`mirrorlab.gl.context`)
+before anything imports OpenGL.
+"""
+
+from mirrorlab.gl import context as context  # noqa: F401  (must run before OpenGL loads)

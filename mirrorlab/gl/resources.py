@@ -1,0 +1,297 @@
+"""GL object wrappers with explicit lifetimes: Program, Texture2D, Framebuffer, MeshBuffer.
+
+Each wrapper registers with the context's
+:class:`~mirrorlab.gl.context.ResourceRegistry` and frees its GL name in
+``release()`` (idempotent). Nothing is freed in ``__del__``: GL calls need the
+right context current, which a garbage collector cannot promise.
+
+Images cross this module as numpy arrays ``(height, width, 3)`` uint8 in
+image row order (row 0 at the top); GL keeps row 0 at the bottom, and the
+flip happens here, nowhere else.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mirrorlab.gl.context import GLContextError, ResourceRegistry
+from OpenGL import GL  # isort: skip  (after mirrorlab.gl.context chose the platform)
+
+from mirrorlab.paths import shader_source
+
+
+class _Resource:
+    def __init__(self, registry: ResourceRegistry) -> None:
+        self._registry = registry
+        self._released = False
+        registry.add(self)
+
+    @property
+    def released(self) -> bool:
+        return self._released
+
+    def release(self) -> None:
+        if self._released:
+            return
+        self._free()
+        self._released = True
+        self._registry.discard(self)
+
+    def _free(self) -> None:  # pragma: no cover - overridden
+        raise NotImplementedError
+
+
+class Program(_Resource):
+    """A linked shader program built from package shader files."""
+
+    def __init__(self, registry: ResourceRegistry, vertex: str, fragment: str) -> None:
+        shaders = []
+        for name, kind in ((vertex, GL.GL_VERTEX_SHADER), (fragment, GL.GL_FRAGMENT_SHADER)):
+            shader = GL.glCreateShader(kind)
+            GL.glShaderSource(shader, shader_source(name))
+            GL.glCompileShader(shader)
+            if not GL.glGetShaderiv(shader, GL.GL_COMPILE_STATUS):
+                log = GL.glGetShaderInfoLog(shader).decode(errors="replace").strip()
+                GL.glDeleteShader(shader)
+                for done in shaders:
+                    GL.glDeleteShader(done)
+                raise GLContextError(f"shader {name} did not compile: {log}")
+            shaders.append(shader)
+        self.name = GL.glCreateProgram()
+        for shader in shaders:
+            GL.glAttachShader(self.name, shader)
+        GL.glLinkProgram(self.name)
+        for shader in shaders:
+            GL.glDetachShader(self.name, shader)
+            GL.glDeleteShader(shader)
+        if not GL.glGetProgramiv(self.name, GL.GL_LINK_STATUS):
+            log = GL.glGetProgramInfoLog(self.name).decode(errors="replace").strip()
+            GL.glDeleteProgram(self.name)
+            raise GLContextError(f"program {vertex}+{fragment} did not link: {log}")
+        self.label = f"{vertex}+{fragment}"
+        self._locations: dict[str, int] = {}
+        super().__init__(registry)
+
+    def use(self) -> None:
+        GL.glUseProgram(self.name)
+
+    def location(self, uniform: str) -> int:
+        """Uniform location (cached); KeyError if the program has no active uniform by that name."""
+        loc = self._locations.get(uniform)
+        if loc is None:
+            loc = int(GL.glGetUniformLocation(self.name, uniform))
+            if loc < 0:
+                raise KeyError(f"program {self.label} has no active uniform {uniform!r}")
+            self._locations[uniform] = loc
+        return loc
+
+    def set_mat4(self, uniform: str, matrix: np.ndarray) -> None:
+        """Set a ``(4, 4)`` row-major (numpy) matrix."""
+        GL.glUniformMatrix4fv(self.location(uniform), 1, GL.GL_TRUE,
+                              np.asarray(matrix, dtype=np.float32))
+
+    def set_mat3(self, uniform: str, matrix: np.ndarray) -> None:
+        """Set a ``(3, 3)`` row-major (numpy) matrix."""
+        GL.glUniformMatrix3fv(self.location(uniform), 1, GL.GL_TRUE,
+                              np.asarray(matrix, dtype=np.float32))
+
+    def set_vec3(self, uniform: str, value) -> None:
+        x, y, z = (float(v) for v in value)
+        GL.glUniform3f(self.location(uniform), x, y, z)
+
+    def set_float(self, uniform: str, value: float) -> None:
+        GL.glUniform1f(self.location(uniform), float(value))
+
+    def set_int(self, uniform: str, value: int) -> None:
+        GL.glUniform1i(self.location(uniform), int(value))
+
+    def _free(self) -> None:
+        GL.glDeleteProgram(self.name)
+
+
+class Texture2D(_Resource):
+    """A 2D RGB texture. Make one with :meth:`from_image` or :meth:`blank`."""
+
+    def __init__(self, registry: ResourceRegistry, width: int, height: int,
+                 pixels: np.ndarray | None, mipmaps: bool, clamp: bool) -> None:
+        self.name = int(GL.glGenTextures(1))
+        self.width, self.height = int(width), int(height)
+        self.mipmaps = mipmaps
+        GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
+        GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
+        data = None if pixels is None else np.ascontiguousarray(pixels[::-1])
+        GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB8, self.width, self.height, 0,
+                        GL.GL_RGB, GL.GL_UNSIGNED_BYTE, data)
+        wrap = GL.GL_CLAMP_TO_EDGE if clamp else GL.GL_REPEAT
+        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_S, wrap)
+        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, wrap)
+        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR)
+        if mipmaps:
+            GL.glGenerateMipmap(GL.GL_TEXTURE_2D)
+            min_filter = GL.GL_LINEAR_MIPMAP_LINEAR
+        else:
+            min_filter = GL.GL_LINEAR
+        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, min_filter)
+        if not mipmaps:
+            GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAX_LEVEL, 0)
+        super().__init__(registry)
+
+    @classmethod
+    def from_image(cls, registry: ResourceRegistry, image: np.ndarray) -> Texture2D:
+        """A mipmapped, repeating texture from ``image`` ``(h, w, 3)`` uint8, row 0 at the top."""
+        image = np.asarray(image)
+        if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
+            raise ValueError(f"texture image must be (h, w, 3) uint8, got {image.shape} "
+                             f"{image.dtype}")
+        return cls(registry, image.shape[1], image.shape[0], image, mipmaps=True, clamp=False)
+
+    @classmethod
+    def blank(cls, registry: ResourceRegistry, width: int, height: int) -> Texture2D:
+        """An empty ``width`` x ``height`` texture for a capture: level 0 only, GL_LINEAR,
+        clamped to the edge (the lab's ENVIRONMENT texture)."""
+        return cls(registry, width, height, None, mipmaps=False, clamp=True)
+
+    def bind(self, unit: int = 0) -> None:
+        GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
+        GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
+
+    def copy_from_framebuffer(self, width: int, height: int) -> None:
+        """Copy the bound read framebuffer's lower-left ``width`` x ``height`` into level 0.
+
+        This is the lab's ``glCopyTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, 0, 0, w, h, 0)``;
+        the texture takes the copied size.
+        """
+        GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
+        GL.glCopyTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB, 0, 0, int(width), int(height), 0)
+        self.width, self.height = int(width), int(height)
+
+    def read(self) -> np.ndarray:
+        """Level 0 as ``(height, width, 3)`` uint8, row 0 at the top."""
+        GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
+        GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
+        data = GL.glGetTexImage(GL.GL_TEXTURE_2D, 0, GL.GL_RGB, GL.GL_UNSIGNED_BYTE)
+        pixels = np.frombuffer(data, dtype=np.uint8).reshape(self.height, self.width, 3)
+        return pixels[::-1].copy()
+
+    def _free(self) -> None:
+        GL.glDeleteTextures([self.name])
+
+
+def read_pixels(width: int, height: int) -> np.ndarray:
+    """The bound read framebuffer's lower-left region as ``(height, width, 3)`` uint8, top row
+    first."""
+    GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
+    data = GL.glReadPixels(0, 0, width, height, GL.GL_RGB, GL.GL_UNSIGNED_BYTE)
+    return np.frombuffer(data, dtype=np.uint8).reshape(height, width, 3)[::-1].copy()
+
+
+class Framebuffer(_Resource):
+    """An offscreen render target: RGBA8 colour and 24-bit depth + 8-bit stencil renderbuffers."""
+
+    def __init__(self, registry: ResourceRegistry, width: int, height: int) -> None:
+        if width < 1 or height < 1:
+            raise ValueError(f"framebuffer size must be positive, got {width}x{height}")
+        max_size = int(GL.glGetIntegerv(GL.GL_MAX_RENDERBUFFER_SIZE))
+        if width > max_size or height > max_size:
+            raise ValueError(f"framebuffer size {width}x{height} exceeds this GL's limit "
+                             f"of {max_size}")
+        self.width, self.height = int(width), int(height)
+        self.name = int(GL.glGenFramebuffers(1))
+        self._renderbuffers = [int(n) for n in np.atleast_1d(GL.glGenRenderbuffers(2))]
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
+        for rb, fmt, attachment in zip(
+            self._renderbuffers,
+            (GL.GL_RGBA8, GL.GL_DEPTH24_STENCIL8),
+            (GL.GL_COLOR_ATTACHMENT0, GL.GL_DEPTH_STENCIL_ATTACHMENT),
+            strict=True,
+        ):
+            GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, rb)
+            GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, fmt, self.width, self.height)
+            GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, attachment, GL.GL_RENDERBUFFER, rb)
+        status = GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
+        if status != GL.GL_FRAMEBUFFER_COMPLETE:
+            GL.glDeleteRenderbuffers(2, self._renderbuffers)
+            GL.glDeleteFramebuffers(1, [self.name])
+            raise GLContextError(f"framebuffer {width}x{height} incomplete (status {status:#x})")
+        super().__init__(registry)
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return self.width, self.height
+
+    def bind(self) -> None:
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
+
+    def read(self) -> np.ndarray:
+        """Colour as ``(height, width, 3)`` uint8, row 0 at the top."""
+        self.bind()
+        return read_pixels(self.width, self.height)
+
+    def _free(self) -> None:
+        GL.glDeleteRenderbuffers(2, self._renderbuffers)
+        GL.glDeleteFramebuffers(1, [self.name])
+
+
+class DefaultFramebuffer:
+    """The window's own framebuffer (GL name 0), with the same interface as Framebuffer.
+
+    ``size`` is asked of the window each time, so it follows resizes.
+    """
+
+    def __init__(self, size_source) -> None:
+        self._size_source = size_source
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return self._size_source()
+
+    def bind(self) -> None:
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
+
+    def read(self) -> np.ndarray:
+        self.bind()
+        GL.glReadBuffer(GL.GL_BACK)
+        width, height = self.size
+        return read_pixels(width, height)
+
+
+class MeshBuffer(_Resource):
+    """A mesh in GPU memory: one VAO over an interleaved VBO and an index buffer.
+
+    Vertex layout (float32): location 0 position xyz, 1 normal xyz, 2 uv.
+    """
+
+    STRIDE = 8 * 4
+
+    def __init__(self, registry: ResourceRegistry, vertices: np.ndarray,
+                 indices: np.ndarray) -> None:
+        vertices = np.ascontiguousarray(vertices, dtype=np.float32)
+        indices = np.ascontiguousarray(indices, dtype=np.uint32).reshape(-1)
+        if vertices.ndim != 2 or vertices.shape[1] != 8:
+            raise ValueError(f"mesh vertices must be (n, 8) float32, got {vertices.shape}")
+        if indices.size and int(indices.max()) >= len(vertices):
+            raise ValueError(f"mesh index {int(indices.max())} out of range for "
+                             f"{len(vertices)} vertices")
+        self.index_count = int(indices.size)
+        self.vao = int(GL.glGenVertexArrays(1))
+        self.vbo, self.ebo = (int(n) for n in GL.glGenBuffers(2))
+        GL.glBindVertexArray(self.vao)
+        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, self.vbo)
+        GL.glBufferData(GL.GL_ARRAY_BUFFER, vertices.nbytes, vertices, GL.GL_STATIC_DRAW)
+        GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, self.ebo)
+        GL.glBufferData(GL.GL_ELEMENT_ARRAY_BUFFER, indices.nbytes, indices, GL.GL_STATIC_DRAW)
+        for location, (size, offset) in enumerate(((3, 0), (3, 12), (2, 24))):
+            GL.glEnableVertexAttribArray(location)
+            GL.glVertexAttribPointer(location, size, GL.GL_FLOAT, GL.GL_FALSE, self.STRIDE,
+                                     GL.GLvoidp(offset))
+        GL.glBindVertexArray(0)
+        super().__init__(registry)
+
+    def draw(self) -> None:
+        """One ``glDrawElements`` call for the whole mesh."""
+        GL.glBindVertexArray(self.vao)
+        GL.glDrawElements(GL.GL_TRIANGLES, self.index_count, GL.GL_UNSIGNED_INT, None)
+
+    def _free(self) -> None:
+        GL.glDeleteVertexArrays(1, [self.vao])
+        GL.glDeleteBuffers(2, [self.vbo, self.ebo])

@@ -1,0 +1,143 @@
+"""Matrix helpers in numpy, with OpenGL's conventions.
+
+All matrices are ``(4, 4)`` float64 arrays acting on column vectors
+(``p_world = M @ p_local``), the layout of the classic ``gluLookAt``/``glOrtho``
+man pages. Upload them to GL with ``transpose=True`` (or ``M.T`` in
+column-major order). Angles are in degrees, lengths in scene units.
+No OpenGL is imported here.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+Vec3 = Sequence[float] | np.ndarray
+
+
+def identity() -> np.ndarray:
+    """The ``(4, 4)`` identity."""
+    return np.eye(4)
+
+
+def translate(offset: Vec3) -> np.ndarray:
+    """Translation by ``offset`` ``(3,)``."""
+    m = np.eye(4)
+    m[:3, 3] = np.asarray(offset, dtype=np.float64)
+    return m
+
+
+def scale(factors: Vec3) -> np.ndarray:
+    """Axis-aligned scale by ``factors`` ``(3,)``."""
+    return np.diag([*np.asarray(factors, dtype=np.float64), 1.0])
+
+
+def rotate(angle_deg: float, axis: Vec3) -> np.ndarray:
+    """Right-handed rotation by ``angle_deg`` about ``axis`` ``(3,)`` (need not be unit).
+
+    Raises ValueError for a zero axis: there is no rotation to pick.
+    """
+    a = np.asarray(axis, dtype=np.float64)
+    length = np.linalg.norm(a)
+    if not np.isfinite(length) or length == 0.0:
+        raise ValueError(f"rotation axis must be a non-zero finite vector, got {tuple(a)}")
+    x, y, z = a / length
+    c, s = np.cos(np.radians(angle_deg)), np.sin(np.radians(angle_deg))
+    t = 1.0 - c
+    m = np.eye(4)
+    m[:3, :3] = [
+        [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+        [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+        [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
+    ]
+    return m
+
+
+def look_at(eye: Vec3, target: Vec3, up: Vec3) -> np.ndarray:
+    """World-to-eye matrix of a camera at ``eye`` looking at ``target``.
+
+    The camera looks down its own -z axis with +y as close to ``up`` as the
+    view direction allows (``gluLookAt``). Raises ValueError when ``eye`` equals
+    ``target`` or ``up`` is parallel to the view direction, since the camera
+    frame is then undefined.
+    """
+    eye_v = np.asarray(eye, dtype=np.float64)
+    forward = np.asarray(target, dtype=np.float64) - eye_v
+    f_len = np.linalg.norm(forward)
+    if f_len == 0.0 or not np.isfinite(f_len):
+        raise ValueError(f"camera position {tuple(eye_v)} must differ from its target")
+    forward /= f_len
+    side = np.cross(forward, np.asarray(up, dtype=np.float64))
+    s_len = np.linalg.norm(side)
+    if s_len < 1e-12:
+        raise ValueError(f"up vector {tuple(up)} is parallel to the view direction")
+    side /= s_len
+    true_up = np.cross(side, forward)
+    m = np.eye(4)
+    m[0, :3], m[1, :3], m[2, :3] = side, true_up, -forward
+    m[:3, 3] = -m[:3, :3] @ eye_v
+    return m
+
+
+def ortho(
+    left: float, right: float, bottom: float, top: float, near: float, far: float
+) -> np.ndarray:
+    """Orthographic projection of ``glOrtho``: the box maps onto the NDC cube [-1, 1]^3."""
+    if left == right or bottom == top or near == far:
+        raise ValueError(
+            f"ortho extents must be non-degenerate, got {(left, right, bottom, top, near, far)}"
+        )
+    m = np.eye(4)
+    m[0, 0] = 2.0 / (right - left)
+    m[1, 1] = 2.0 / (top - bottom)
+    m[2, 2] = -2.0 / (far - near)
+    m[0, 3] = -(right + left) / (right - left)
+    m[1, 3] = -(top + bottom) / (top - bottom)
+    m[2, 3] = -(far + near) / (far - near)
+    return m
+
+
+def perspective(fovy_deg: float, aspect: float, near: float, far: float) -> np.ndarray:
+    """Perspective projection of ``gluPerspective``; ``fovy_deg`` is the full vertical angle."""
+    if not (0.0 < fovy_deg < 180.0) or aspect <= 0.0 or not (0.0 < near < far):
+        raise ValueError(
+            f"perspective needs 0 < fovy < 180, aspect > 0, 0 < near < far; "
+            f"got fovy={fovy_deg}, aspect={aspect}, near={near}, far={far}"
+        )
+    f = 1.0 / np.tan(np.radians(fovy_deg) / 2.0)
+    m = np.zeros((4, 4))
+    m[0, 0] = f / aspect
+    m[1, 1] = f
+    m[2, 2] = (far + near) / (near - far)
+    m[2, 3] = 2.0 * far * near / (near - far)
+    m[3, 2] = -1.0
+    return m
+
+
+def normal_matrix(model: np.ndarray) -> np.ndarray:
+    """``(3, 3)`` inverse-transpose of the upper-left of ``model``, for transforming normals."""
+    return np.linalg.inv(model[:3, :3]).T
+
+
+def transform_points(matrix: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Apply ``matrix`` ``(4, 4)`` to ``points`` ``(..., 3)``; returns ``(..., 4)`` homogeneous."""
+    p = np.asarray(points, dtype=np.float64)
+    homogeneous = np.concatenate([p, np.ones((*p.shape[:-1], 1))], axis=-1)
+    return homogeneous @ matrix.T
+
+
+def project_to_pixels(
+    projection_view: np.ndarray, points: np.ndarray, width: int, height: int
+) -> np.ndarray:
+    """Window coordinates of world ``points`` ``(..., 3)`` as ``(..., 3)``: x, y in pixels, depth.
+
+    x runs right and y runs *down* (image row order, as in a PNG or a numpy
+    image), both measured in pixels from the top-left corner of the image;
+    depth is NDC z in [-1, 1]. Points behind the camera give meaningless values.
+    """
+    clip = transform_points(projection_view, points)
+    ndc = clip[..., :3] / clip[..., 3:4]
+    x = (ndc[..., 0] + 1.0) * 0.5 * width
+    y = (1.0 - ndc[..., 1]) * 0.5 * height
+    return np.stack([x, y, ndc[..., 2]], axis=-1)

@@ -1,0 +1,64 @@
+"""Drawing the scene graph's parts: the piece both the capture and the camera pass use."""
+
+from __future__ import annotations
+
+import numpy as np
+from PIL import Image
+
+from mirrorlab import math3d
+from mirrorlab.gl.context import ResourceRegistry
+from mirrorlab.gl.resources import MeshBuffer, Program, Texture2D
+from mirrorlab.paths import asset_path
+from mirrorlab.scene.mesh import load_model
+from mirrorlab.scene.robot import LabScene
+
+
+def load_texture_image(name: str) -> np.ndarray:
+    """``textures/<name>.png`` as ``(h, w, 3)`` uint8."""
+    path = asset_path("textures", f"{name}.png")
+    with Image.open(path) as image:
+        return np.asarray(image.convert("RGB"))
+
+
+class SceneDrawer:
+    """GPU copies of the scene's meshes and textures, and the lit shader that draws them.
+
+    Draws every node with a mesh (never the mirror) in one ``glDrawElements``
+    call per node.
+    """
+
+    def __init__(self, registry: ResourceRegistry, scene: LabScene) -> None:
+        self.scene = scene
+        self.program = Program(registry, "scene.vert", "scene.frag")
+        self.meshes: dict[str, MeshBuffer] = {}
+        self.textures: dict[str, Texture2D] = {}
+        for node in scene.graph.nodes():
+            if node.mesh and node.mesh not in self.meshes:
+                data = load_model(node.mesh)
+                self.meshes[node.mesh] = MeshBuffer(registry, data.interleaved(), data.indices)
+            if node.texture and node.texture not in self.textures:
+                self.textures[node.texture] = Texture2D.from_image(
+                    registry, load_texture_image(node.texture))
+        self._drawn = [node for node in scene.graph.nodes() if node.mesh]
+        self.program.use()
+        self.program.set_int("surface", 0)
+
+    def draw(self, view_projection: np.ndarray) -> int:
+        """Draw all parts with the given ``(4, 4)`` projection @ view; returns the draw count."""
+        scene, program = self.scene, self.program
+        program.use()
+        program.set_mat4("view_projection", view_projection)
+        light = np.asarray(scene.light_direction, dtype=np.float64)
+        program.set_vec3("light_direction", light / np.linalg.norm(light))
+        program.set_float("ambient", scene.ambient)
+        program.set_float("diffuse", scene.diffuse)
+        for node in self._drawn:
+            model = node.world_matrix()
+            program.set_mat4("model", model)
+            program.set_mat3("normal_matrix", math3d.normal_matrix(model))
+            program.set_vec3("color", node.color)
+            program.set_int("use_texture", node.texture is not None)
+            if node.texture is not None:
+                self.textures[node.texture].bind(0)
+            self.meshes[node.mesh].draw()
+        return len(self._drawn)

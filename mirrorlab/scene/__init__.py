@@ -1,0 +1,1 @@
+"""Scene description in numpy: graph, meshes, the lab scene. No OpenGL here."""

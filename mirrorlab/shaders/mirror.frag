@@ -1,0 +1,16 @@
+#version 330
+// Unlit: the captured image is already lit. The back of the mirror shows its backing.
+in vec2 environment_uv;
+
+uniform sampler2D environment;
+uniform vec3 backing_color;
+
+out vec4 frag_color;
+
+void main() {
+    if (gl_FrontFacing) {
+        frag_color = vec4(texture(environment, environment_uv).rgb, 1.0);
+    } else {
+        frag_color = vec4(backing_color, 1.0);
+    }
+}
