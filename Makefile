@@ -1,0 +1,7 @@
+# Shortcuts for ./dev, which does the real work (and its own set-up).
+.PHONY: render test demo bench setup
+render: ; ./dev render
+test: ; ./dev test
+demo: ; ./dev demo
+bench: ; ./dev bench
+setup: ; ./dev setup

@@ -1,0 +1,1 @@
+"""Interactive front ends (glfw windows)."""

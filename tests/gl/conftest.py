@@ -1,0 +1,39 @@
+"""Headless GL fixtures: one EGL context per test session, GL errors checked and state
+reset around every test."""
+
+from __future__ import annotations
+
+import pytest
+
+from mirrorlab.gl.context import HeadlessContext
+from OpenGL import GL  # isort: skip
+
+
+@pytest.fixture(scope="session")
+def gl_context():
+    with HeadlessContext() as context:
+        yield context
+
+
+@pytest.fixture(autouse=True)
+def clean_gl_state(gl_context):
+    """No GL error may be pending before or left after a test; resources made by the test
+    are released, and bindings reset for the next one."""
+    gl_context.make_current()
+    assert GL.glGetError() == GL.GL_NO_ERROR, "a GL error was pending before the test"
+    live_before = len(gl_context.resources)
+    yield
+    error = GL.glGetError()
+    GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
+    GL.glUseProgram(0)
+    GL.glBindVertexArray(0)
+    GL.glBindTexture(GL.GL_TEXTURE_2D, 0)
+    assert error == GL.GL_NO_ERROR, f"test left GL error {error:#x}"
+    assert len(gl_context.resources) == live_before, "test did not release its GL resources"
+
+
+@pytest.fixture
+def registry(gl_context):
+    """The context's resource registry; whatever a test makes in it is released after."""
+    yield gl_context.resources
+    gl_context.resources.release_all()

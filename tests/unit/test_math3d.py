@@ -1,0 +1,69 @@
+"""Matrix helpers against hand-derived values and invariants."""
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from mirrorlab import math3d
+
+finite = st.floats(-50, 50, allow_nan=False)
+
+
+def test_capture_view_matches_hand_derived_look_at():
+    # gluLookAt((-7,0,0), (0,0,0), (0,1,0)): forward +x, side = forward x up = +z,
+    # so eye x is world z, eye y is world y, eye -z is world +x, origin 7 units ahead.
+    expected = np.array([[0, 0, 1, 0], [0, 1, 0, 0], [-1, 0, 0, -7], [0, 0, 0, 1]], float)
+    assert np.allclose(math3d.look_at((-7, 0, 0), (0, 0, 0), (0, 1, 0)), expected)
+
+
+def test_capture_ortho_matches_glortho_formula():
+    # glOrtho(-6, 2, -3, 5, 0, 15): scale 2/8 in x and y, -2/15 in z; offsets
+    # -(r+l)/(r-l) = 0.5, -(t+b)/(t-b) = -0.25, -(f+n)/(f-n) = -1.
+    expected = np.array(
+        [[0.25, 0, 0, 0.5], [0, 0.25, 0, -0.25], [0, 0, -2 / 15, -1], [0, 0, 0, 1]]
+    )
+    assert np.allclose(math3d.ortho(-6, 2, -3, 5, 0, 15), expected)
+
+
+def test_perspective_maps_near_and_far_planes_to_ndc_bounds():
+    p = math3d.perspective(60, 1.5, 0.5, 40)
+    for z, ndc in ((-0.5, -1.0), (-40.0, 1.0)):
+        clip = p @ np.array([0, 0, z, 1.0])
+        assert clip[2] / clip[3] == pytest.approx(ndc)
+    top = p @ np.array([0, np.tan(np.radians(30)) * 2, -2, 1.0])
+    assert top[1] / top[3] == pytest.approx(1.0)
+
+
+@given(st.floats(-720, 720), st.tuples(finite, finite, finite).filter(
+    lambda a: np.linalg.norm(a) > 1e-3))
+def test_rotation_is_proper_and_fixes_its_axis(angle, axis):
+    r = math3d.rotate(angle, axis)[:3, :3]
+    assert np.allclose(r @ r.T, np.eye(3), atol=1e-9)
+    assert np.linalg.det(r) == pytest.approx(1.0)
+    assert np.allclose(r @ np.asarray(axis), axis, atol=1e-9 * max(1, np.linalg.norm(axis)))
+
+
+def test_rotation_is_right_handed():
+    assert np.allclose(math3d.rotate(90, (0, 0, 1))[:3, 0], (0, 1, 0))
+    assert np.allclose(math3d.rotate(90, (0, 1, 0))[:3, 2], (1, 0, 0))
+
+
+@pytest.mark.parametrize("call", [
+    lambda: math3d.look_at((1, 2, 3), (1, 2, 3), (0, 1, 0)),
+    lambda: math3d.look_at((0, 5, 0), (0, 0, 0), (0, 1, 0)),
+    lambda: math3d.rotate(10, (0, 0, 0)),
+    lambda: math3d.ortho(1, 1, 0, 1, 0, 1),
+    lambda: math3d.perspective(45, 1, 0, 10),
+])
+def test_degenerate_inputs_raise_clear_errors(call):
+    with pytest.raises(ValueError):
+        call()
+
+
+def test_project_to_pixels_puts_view_centre_in_image_centre_and_y_down():
+    view = math3d.look_at((0, 0, 10), (0, 0, 0), (0, 1, 0))
+    vp = math3d.perspective(45, 2.0, 0.1, 100) @ view
+    pts = math3d.project_to_pixels(vp, np.array([[0, 0, 0], [0, 1, 0]], float), 200, 100)
+    assert np.allclose(pts[0, :2], (100, 50))
+    assert pts[1, 1] < 50  # world up is image up, i.e. smaller row
