@@ -52,6 +52,9 @@ def png_path(option: str, text: str) -> Path:
         raise UsageError(f"{option}: expected a file name ending in .png, got {text!r}")
     if path.exists() and path.is_dir():
         raise UsageError(f"{option}: {text!r} is a directory, expected a .png file name")
+    existing = next(p for p in path.absolute().parents if p.exists())
+    if not existing.is_dir():
+        raise UsageError(f"{option}: {existing} is a file, so {text!r} cannot be written")
     return path
 
 
@@ -65,10 +68,17 @@ def write_png_atomic(path: Path, image: np.ndarray) -> None:
     try:
         with os.fdopen(handle, "wb") as stream:
             Image.fromarray(image).save(stream, format="PNG")
+        os.chmod(temp_name, 0o666 & ~_umask())  # mkstemp makes 0600; give the usual mode
         os.replace(temp_name, path)
     except BaseException:
         Path(temp_name).unlink(missing_ok=True)
         raise
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def _joined(values: Sequence[float]) -> str:
@@ -181,6 +191,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ValueError, FileNotFoundError) as exc:
         print(f"mirrorlab {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:
+        where = exc.filename or "output"
+        print(f"mirrorlab {args.command}: error: cannot write {where}: {exc.strerror or exc}",
+              file=sys.stderr)
+        return 1
     except Exception as exc:
         from mirrorlab.gl.context import GLContextError
 

@@ -117,7 +117,8 @@ def main() -> None:
     write_obj(models / "upper_arm.obj", box((0.6, 3.2, 0.6)), "robot upper arm")
     write_obj(models / "joint.obj", sphere(0.55, 1), "joint ball")
     write_obj(models / "mirror_frame.obj", box((0.25, 8.6, 8.6)), "frame behind the mirror")
-    write_obj(models / "hand.obj", box((0.5, 0.5, 1.4), y0=-0.25), "hand (placed off-centre by its node)")
+    write_obj(models / "hand.obj", box((0.5, 0.5, 1.4), y0=-0.25),
+              "hand (placed off-centre by its node)")
     textures = ROOT / "textures"
     textures.mkdir(exist_ok=True)
     Image.fromarray(metal_texture()).save(textures / "metal.png")

@@ -4,4 +4,4 @@ Importing this package selects PyOpenGL's platform (see :mod:`mirrorlab.gl.conte
 before anything imports OpenGL.
 """
 
-from mirrorlab.gl import context as context  # noqa: F401  (must run before OpenGL loads)
+from mirrorlab.gl import context as context

@@ -4,8 +4,8 @@ PyOpenGL binds to one platform (EGL or GLX) the first time ``OpenGL`` is
 imported, for the whole process. This module is the only place that chooses
 it: importing it makes EGL the default, and :func:`use_platform` switches to
 GLX for a window, as long as OpenGL has not been imported yet. Every other
-module in mirrorlab that imports OpenGL imports this module first (through
-``mirrorlab.gl``).
+module in mirrorlab that calls GL takes the ``GL`` namespace from
+:mod:`mirrorlab.gl.opengl`, which imports this module first.
 
 The renderer never creates a context: a caller makes one of these, makes it
 current, and hands the renderer a framebuffer to draw into.
@@ -102,6 +102,9 @@ def check_gl_errors(where: str) -> None:
         raise GLContextError(f"OpenGL error(s) {', '.join(errors)} after {where}")
 
 
+_egl_display_users = 0  # eglTerminate ends every context on the shared display: count users
+
+
 class HeadlessContext:
     """An OpenGL compatibility context with no window, on EGL's surfaceless platform.
 
@@ -137,13 +140,15 @@ class HeadlessContext:
         if not EGL.eglChooseConfig(
             self.display, attributes, ctypes.pointer(config), 1, ctypes.pointer(count)
         ) or count.value < 1:
-            EGL.eglTerminate(self.display)
+            self._terminate_if_unused()
             raise GLContextError("EGL has no config for desktop OpenGL (is Mesa installed?)")
         EGL.eglBindAPI(EGL.EGL_OPENGL_API)
         self.context = EGL.eglCreateContext(self.display, config, EGL.EGL_NO_CONTEXT, None)
         if not self.context:
-            EGL.eglTerminate(self.display)
+            self._terminate_if_unused()
             raise GLContextError("eglCreateContext failed for desktop OpenGL")
+        global _egl_display_users
+        _egl_display_users += 1
         self.make_current()
         self.resources = ResourceRegistry()
         self._released = False
@@ -167,8 +172,14 @@ class HeadlessContext:
         egl.eglMakeCurrent(self.display, egl.EGL_NO_SURFACE, egl.EGL_NO_SURFACE,
                            egl.EGL_NO_CONTEXT)
         egl.eglDestroyContext(self.display, self.context)
-        egl.eglTerminate(self.display)
+        global _egl_display_users
+        _egl_display_users -= 1
+        self._terminate_if_unused()
         self._released = True
+
+    def _terminate_if_unused(self) -> None:
+        if _egl_display_users == 0:
+            self._egl.eglTerminate(self.display)
 
     def __enter__(self) -> HeadlessContext:
         return self

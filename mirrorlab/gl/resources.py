@@ -15,8 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from mirrorlab.gl.context import GLContextError, ResourceRegistry
-from OpenGL import GL  # isort: skip  (after mirrorlab.gl.context chose the platform)
-
+from mirrorlab.gl.opengl import GL
 from mirrorlab.paths import shader_source
 
 

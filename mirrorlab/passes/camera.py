@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 
 from mirrorlab.gl.context import ResourceRegistry
+from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import MeshBuffer, Program, Texture2D
 from mirrorlab.passes.scene_draw import SceneDrawer
 from mirrorlab.scene.robot import Camera, Mirror
-from OpenGL import GL  # isort: skip
 
 MIRROR_BACKING = (0.33, 0.3, 0.27)
 

@@ -3,9 +3,9 @@ the framebuffer into the ENVIRONMENT texture with ``glCopyTexImage2D``."""
 
 from __future__ import annotations
 
+from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Texture2D
 from mirrorlab.passes.scene_draw import SceneDrawer
-from OpenGL import GL  # isort: skip
 
 
 class CapturePass:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from mirrorlab.gl.context import HeadlessContext
-from OpenGL import GL  # isort: skip
+from mirrorlab.gl.opengl import GL
 
 
 @pytest.fixture(scope="session")

@@ -8,6 +8,7 @@ import pytest
 
 from mirrorlab import math3d
 from mirrorlab.gl.context import check_gl_errors
+from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Framebuffer, read_pixels
 from mirrorlab.passes.camera import MIRROR_BACKING
 from mirrorlab.renderer import Renderer
@@ -29,7 +30,6 @@ from tests.imagecheck import (
     save_failure,
     viewer_matrix,
 )
-from OpenGL import GL  # isort: skip
 
 SIZE = 192
 VIEWERS = {

@@ -40,9 +40,9 @@ def test_vertex_normals_never_nan_for_degenerate_triangles():
 
 
 def test_missing_and_broken_mesh_files_name_the_file(tmp_path):
-    with pytest.raises(FileNotFoundError, match="nothere.obj"):
+    with pytest.raises(FileNotFoundError, match=r"nothere\.obj"):
         load_mesh(tmp_path / "nothere.obj")
     bad = tmp_path / "empty.obj"
     bad.write_text("# no faces\nv 0 0 0\n")
-    with pytest.raises(ValueError, match="empty.obj"):
+    with pytest.raises(ValueError, match=r"empty\.obj"):
         load_mesh(bad)

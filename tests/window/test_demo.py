@@ -1,0 +1,153 @@
+"""`mirrorlab demo` in a real glfw window on the X server: it draws both passes, answers
+key presses sent through XTEST, and quits on Esc."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from mirrorlab import math3d
+from mirrorlab.scene.robot import Camera, build_lab_scene
+from tests.imagecheck import (
+    assert_images_close,
+    mirror_image_point,
+    near,
+    red_dominant,
+    save_failure,
+    viewer_matrix,
+)
+
+WIDTH, HEIGHT = 320, 240
+
+
+@pytest.fixture
+def xdisplay():
+    from Xlib import display
+
+    d = display.Display()
+    yield d
+    d.close()
+
+
+def find_window(d, prefix: str, timeout: float = 30.0):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        stack = [d.screen().root]
+        while stack:
+            window = stack.pop()
+            name = window.get_wm_name()
+            if isinstance(name, bytes):
+                name = name.decode(errors="replace")
+            if name and name.startswith(prefix):
+                return window
+            stack.extend(window.query_tree().children)
+        time.sleep(0.1)
+    raise AssertionError(f"no window titled {prefix!r} appeared within {timeout} s")
+
+
+def title(window) -> str:
+    name = window.get_wm_name()
+    return name.decode(errors="replace") if isinstance(name, bytes) else (name or "")
+
+
+def screenshot(window) -> np.ndarray:
+    """The window's pixels as the X server has them, ``(h, w, 3)`` uint8 RGB."""
+    from Xlib import X
+
+    geometry = window.get_geometry()
+    raw = window.get_image(0, 0, geometry.width, geometry.height, X.ZPixmap, 0xFFFFFFFF)
+    pixels = np.frombuffer(raw.data, np.uint8).reshape(geometry.height, geometry.width, 4)
+    return pixels[..., [2, 1, 0]].copy()  # BGRX -> RGB
+
+
+def press(d, window, keysym_name: str) -> None:
+    from Xlib import XK, X
+    from Xlib.ext import xtest
+
+    window.set_input_focus(X.RevertToParent, X.CurrentTime)
+    d.sync()
+    keycode = d.keysym_to_keycode(XK.string_to_keysym(keysym_name))
+    xtest.fake_input(d, X.KeyPress, keycode)
+    xtest.fake_input(d, X.KeyRelease, keycode)
+    d.sync()
+
+
+def wait_for(condition, timeout: float, what: str):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        value = condition()
+        if value is not None:
+            return value
+        time.sleep(0.1)
+    raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+
+
+@pytest.fixture
+def demo():
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "mirrorlab.cli", "demo", "--size", f"{WIDTH}x{HEIGHT}"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    yield proc
+    if proc.poll() is None:
+        proc.kill()
+        proc.wait()
+
+
+def expected_hand_pixels(angles=None):
+    scene = build_lab_scene() if angles is None else build_lab_scene(angles)
+    vp = viewer_matrix(Camera(), WIDTH, HEIGHT)
+    hand = scene.hand_center()
+    real = math3d.project_to_pixels(vp, hand, WIDTH, HEIGHT)
+    reflected = math3d.project_to_pixels(vp, mirror_image_point(scene, hand), WIDTH, HEIGHT)
+    return real, reflected
+
+
+def test_demo_window_draws_both_passes_answers_keys_and_quits_on_escape(xdisplay, demo):
+    window = find_window(xdisplay, "mirrorlab demo")
+    real, reflected = expected_hand_pixels()
+
+    def drawn():
+        image = screenshot(window)
+        ok = image.shape == (HEIGHT, WIDTH, 3) and red_dominant(near(image, reflected, 2)).any()
+        return image if ok else None
+
+    try:
+        first = wait_for(drawn, 20, "the first frame with the reflected hand")
+    except AssertionError:
+        save_failure("demo_first", screen=screenshot(window))
+        raise
+    assert red_dominant(near(first, real, 2)).any(), "the robot's own hand is missing"
+
+    press(xdisplay, window, "Right")  # base joint +5 degrees
+    def changed():
+        image = screenshot(window)
+        moved_pixels = (np.abs(image.astype(int) - first.astype(int)).max(axis=-1) > 24).sum()
+        return image if moved_pixels > 50 else None
+
+    second = wait_for(changed, 10, "the frame to change after the Right key")
+    wait_for(lambda: "base -30" in title(window) or None, 5, "the title to show base -30")
+    _, moved = expected_hand_pixels((-30.0, 30.0, -75.0))
+    assert red_dominant(near(second, moved, 2)).any(), "reflection did not follow the joint"
+
+    press(xdisplay, window, "Escape")
+    assert demo.wait(timeout=15) == 0, demo.stderr.read()
+
+
+def test_demo_screenshot_matches_the_headless_render(tmp_path):
+    shot = tmp_path / "demo.png"
+    result = subprocess.run(
+        [sys.executable, "-m", "mirrorlab.cli", "demo", "--size", f"{WIDTH}x{HEIGHT}",
+         "--max-frames", "3", "--screenshot", str(shot)],
+        capture_output=True, text=True, timeout=60)
+    assert result.returncode == 0, result.stderr
+    window_frame = np.asarray(Image.open(shot).convert("RGB"))
+    import mirrorlab
+
+    headless = mirrorlab.render(size=(WIDTH, HEIGHT))  # EGL, in this test's own process
+    assert_images_close("demo_vs_headless", window_frame, headless, channel_tolerance=8,
+                        min_fraction_within=0.99, max_mean_abs=1.0)
