@@ -200,7 +200,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         from mirrorlab.gl.context import GLContextError
 
         if isinstance(exc, GLContextError):
-            print(f"mirrorlab {args.command}: OpenGL error: {exc}", file=sys.stderr)
+            print(f"mirrorlab {args.command}: error: {exc}", file=sys.stderr)
             return 1
         raise
 

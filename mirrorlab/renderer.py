@@ -60,6 +60,12 @@ class Renderer:
         self.last_frame = FrameStats(plan, draws)
         return self.last_frame
 
+    def release(self) -> None:
+        """Free every GL object the renderer made. Call with its context current."""
+        self.camera_pass.release()
+        self.drawer.release()
+        self.environment.release()
+
     def read_environment(self) -> np.ndarray:
         """The ENVIRONMENT texture as ``(h, w, 3)`` uint8, row 0 at the top."""
         return self.environment.read()

@@ -16,7 +16,7 @@ from __future__ import annotations
 import ctypes
 import os
 import sys
-from typing import Literal
+from typing import Literal, Self
 
 Platform = Literal["egl", "glx"]
 
@@ -102,10 +102,47 @@ def check_gl_errors(where: str) -> None:
         raise GLContextError(f"OpenGL error(s) {', '.join(errors)} after {where}")
 
 
+class _Context:
+    """What both contexts share: a resource registry, and a release that frees the
+    registered GL objects (with this context current) before the context itself."""
+
+    resources: ResourceRegistry
+
+    def __init__(self) -> None:
+        self.resources = ResourceRegistry()
+        self._released = False
+
+    def make_current(self) -> None:  # pragma: no cover - overridden
+        raise NotImplementedError
+
+    def info(self) -> dict[str, str]:
+        """GL version, renderer and vendor strings of this context."""
+        self.make_current()
+        return gl_info()
+
+    def release(self) -> None:
+        """Release the GL objects made in this context, then the context itself."""
+        if self._released:
+            return
+        self.make_current()
+        self.resources.release_all()
+        self._destroy()
+        self._released = True
+
+    def _destroy(self) -> None:  # pragma: no cover - overridden
+        raise NotImplementedError
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.release()
+
+
 _egl_display_users = 0  # eglTerminate ends every context on the shared display: count users
 
 
-class HeadlessContext:
+class HeadlessContext(_Context):
     """An OpenGL compatibility context with no window, on EGL's surfaceless platform.
 
     It has no default framebuffer: render into a
@@ -149,9 +186,8 @@ class HeadlessContext:
             raise GLContextError("eglCreateContext failed for desktop OpenGL")
         global _egl_display_users
         _egl_display_users += 1
+        super().__init__()
         self.make_current()
-        self.resources = ResourceRegistry()
-        self._released = False
 
     def make_current(self) -> None:
         egl = self._egl
@@ -159,15 +195,7 @@ class HeadlessContext:
                                   self.context):
             raise GLContextError("eglMakeCurrent failed (surfaceless contexts need Mesa)")
 
-    def info(self) -> dict[str, str]:
-        """GL version and renderer strings, e.g. for a report."""
-        return gl_info()
-
-    def release(self) -> None:
-        """Release the GL objects made in this context, then destroy it."""
-        if self._released:
-            return
-        self.resources.release_all()
+    def _destroy(self) -> None:
         egl = self._egl
         egl.eglMakeCurrent(self.display, egl.EGL_NO_SURFACE, egl.EGL_NO_SURFACE,
                            egl.EGL_NO_CONTEXT)
@@ -175,20 +203,14 @@ class HeadlessContext:
         global _egl_display_users
         _egl_display_users -= 1
         self._terminate_if_unused()
-        self._released = True
 
     def _terminate_if_unused(self) -> None:
         if _egl_display_users == 0:
             self._egl.eglTerminate(self.display)
 
-    def __enter__(self) -> HeadlessContext:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.release()
 
 
-class WindowContext:
+class WindowContext(_Context):
     """A glfw window with an OpenGL compatibility context (GLX on X11).
 
     Needs a display (``DISPLAY``; under Xvfb use ``xvfb-run -a``). Call
@@ -215,10 +237,9 @@ class WindowContext:
         if not self.window:
             glfw.terminate()
             raise GLContextError("glfw could not create an OpenGL window on this display")
+        super().__init__()
         self.make_current()
         glfw.swap_interval(1)
-        self.resources = ResourceRegistry()
-        self._released = False
 
     def make_current(self) -> None:
         self._glfw.make_context_current(self.window)
@@ -233,23 +254,9 @@ class WindowContext:
     def swap_buffers(self) -> None:
         self._glfw.swap_buffers(self.window)
 
-    def info(self) -> dict[str, str]:
-        return gl_info()
-
-    def release(self) -> None:
-        """Release the GL objects made in this context, close the window, stop glfw."""
-        if self._released:
-            return
-        self.resources.release_all()
+    def _destroy(self) -> None:
         self._glfw.destroy_window(self.window)
         self._glfw.terminate()
-        self._released = True
-
-    def __enter__(self) -> WindowContext:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.release()
 
 
 def gl_info() -> dict[str, str]:

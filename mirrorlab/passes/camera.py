@@ -36,6 +36,11 @@ class CameraPass:
         self.program.set_int("environment", 0)
         self.program.set_vec3("backing_color", MIRROR_BACKING)
 
+    def release(self) -> None:
+        """Free the mirror's program and quad (not the shared drawer or texture)."""
+        self.program.release()
+        self.quad.release()
+
     def run(self, target, camera: Camera) -> int:
         """Returns the number of draw calls."""
         width, height = target.size

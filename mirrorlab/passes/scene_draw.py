@@ -40,8 +40,28 @@ class SceneDrawer:
                 self.textures[node.texture] = Texture2D.from_image(
                     registry, load_texture_image(node.texture))
         self._drawn = [node for node in scene.graph.nodes() if node.mesh]
+        self._matrices: list[tuple[np.ndarray, np.ndarray]] = []
+        self._matrices_revision: int | None = None
         self.program.use()
         self.program.set_int("surface", 0)
+
+    def part_matrices(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Model ``(4, 4)`` and normal ``(3, 3)`` float32 matrices of each drawn part,
+        recomputed only when the scene graph's revision changes (both passes share them)."""
+        revision = self.scene.graph.revision
+        if revision != self._matrices_revision:
+            self._matrices = []
+            for node in self._drawn:
+                model = node.world_matrix()
+                self._matrices.append((model.astype(np.float32),
+                                       math3d.normal_matrix(model).astype(np.float32)))
+            self._matrices_revision = revision
+        return self._matrices
+
+    def release(self) -> None:
+        """Free the program, meshes and textures."""
+        for resource in (self.program, *self.meshes.values(), *self.textures.values()):
+            resource.release()
 
     def draw(self, view_projection: np.ndarray) -> int:
         """Draw all parts with the given ``(4, 4)`` projection @ view; returns the draw count."""
@@ -52,10 +72,9 @@ class SceneDrawer:
         program.set_vec3("light_direction", light / np.linalg.norm(light))
         program.set_float("ambient", scene.ambient)
         program.set_float("diffuse", scene.diffuse)
-        for node in self._drawn:
-            model = node.world_matrix()
+        for node, (model, normal) in zip(self._drawn, self.part_matrices(), strict=True):
             program.set_mat4("model", model)
-            program.set_mat3("normal_matrix", math3d.normal_matrix(model))
+            program.set_mat3("normal_matrix", normal)
             program.set_vec3("color", node.color)
             program.set_int("use_texture", node.texture is not None)
             if node.texture is not None:

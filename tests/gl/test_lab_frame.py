@@ -189,3 +189,13 @@ def test_non_square_frames_capture_at_the_frame_size(registry):
     image, renderer, _ = render(registry, scene, Camera(), size=(160, 96))
     assert image.shape == (96, 160, 3)
     assert renderer.read_environment().shape == (96, 160, 3)
+
+
+def test_renderer_release_frees_every_gl_object_it_made(gl_context):
+    before = len(gl_context.resources)
+    renderer = Renderer(gl_context.resources, build_lab_scene())
+    made = len(gl_context.resources) - before
+    assert made >= 8  # programs, meshes, METAL, ENVIRONMENT, mirror quad
+    renderer.release()
+    renderer.release()  # idempotent
+    assert len(gl_context.resources) == before
