@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mirrorlab.gl.context import ResourceRegistry
-from mirrorlab.gl.resources import Texture2D
+from mirrorlab.gl.resources import RenderTarget, Texture2D
 from mirrorlab.passes.camera import CameraPass
 from mirrorlab.passes.capture import CapturePass
 from mirrorlab.passes.scene_draw import SceneDrawer
@@ -44,7 +44,8 @@ class Renderer:
         self.captured = CaptureState()
         self.last_frame: FrameStats | None = None
 
-    def render(self, target, camera: Camera, force_capture: bool = False) -> FrameStats:
+    def render(self, target: RenderTarget, camera: Camera,
+               force_capture: bool = False) -> FrameStats:
         """Draw one frame of ``camera``'s view into ``target`` (Framebuffer or window)."""
         size = tuple(target.size)
         plan = plan_frame(self.scene, camera, size, self.captured, force_capture)

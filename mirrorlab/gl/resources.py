@@ -12,11 +12,27 @@ flip happens here, nowhere else.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Protocol
+
 import numpy as np
 
 from mirrorlab.gl.context import GLContextError, ResourceRegistry
 from mirrorlab.gl.opengl import GL
 from mirrorlab.paths import shader_source
+
+
+class RenderTarget(Protocol):
+    """Something a pass can draw into: :class:`Framebuffer` or :class:`DefaultFramebuffer`."""
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """(width, height) in pixels."""
+        ...
+
+    def bind(self) -> None: ...
+
+    def read(self) -> np.ndarray: ...
 
 
 class _Resource:
@@ -237,7 +253,7 @@ class DefaultFramebuffer:
     ``size`` is asked of the window each time, so it follows resizes.
     """
 
-    def __init__(self, size_source) -> None:
+    def __init__(self, size_source: Callable[[], tuple[int, int]]) -> None:
         self._size_source = size_source
 
     @property

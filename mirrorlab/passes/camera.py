@@ -7,7 +7,7 @@ import numpy as np
 
 from mirrorlab.gl.context import ResourceRegistry
 from mirrorlab.gl.opengl import GL
-from mirrorlab.gl.resources import MeshBuffer, Program, Texture2D
+from mirrorlab.gl.resources import MeshBuffer, Program, RenderTarget, Texture2D
 from mirrorlab.passes.scene_draw import SceneDrawer
 from mirrorlab.scene.robot import Camera, Mirror
 
@@ -41,7 +41,7 @@ class CameraPass:
         self.program.release()
         self.quad.release()
 
-    def run(self, target, camera: Camera) -> int:
+    def run(self, target: RenderTarget, camera: Camera) -> int:
         """Returns the number of draw calls."""
         width, height = target.size
         target.bind()

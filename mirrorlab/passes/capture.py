@@ -4,7 +4,7 @@ the framebuffer into the ENVIRONMENT texture with ``glCopyTexImage2D``."""
 from __future__ import annotations
 
 from mirrorlab.gl.opengl import GL
-from mirrorlab.gl.resources import Texture2D
+from mirrorlab.gl.resources import RenderTarget, Texture2D
 from mirrorlab.passes.scene_draw import SceneDrawer
 
 
@@ -21,7 +21,7 @@ class CapturePass:
         self.drawer = drawer
         self.environment = environment
 
-    def run(self, target) -> int:
+    def run(self, target: RenderTarget) -> int:
         """Returns the number of draw calls."""
         capture = self.drawer.scene.capture
         width, height = target.size
