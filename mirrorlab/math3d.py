@@ -141,3 +141,49 @@ def project_to_pixels(
     x = (ndc[..., 0] + 1.0) * 0.5 * width
     y = (1.0 - ndc[..., 1]) * 0.5 * height
     return np.stack([x, y, ndc[..., 2]], axis=-1)
+
+
+def plane_through(point: Vec3, normal: Vec3) -> np.ndarray:
+    """The plane ``(4,)`` = (a, b, c, d) with unit normal (a, b, c) through ``point``:
+    a point p lies on the normal's side when ``plane @ (p, 1) > 0``."""
+    n = np.asarray(normal, dtype=np.float64)
+    length = np.linalg.norm(n)
+    if not np.isfinite(length) or length == 0.0:
+        raise ValueError(f"plane normal must be a non-zero finite vector, got {normal!r}")
+    n = n / length
+    return np.append(n, -float(n @ np.asarray(point, dtype=np.float64)))
+
+
+def reflection_matrix(plane: np.ndarray) -> np.ndarray:
+    """``(4, 4)`` reflection in ``plane`` (a, b, c, d) with unit normal: p -> p - 2 (plane.p) n.
+
+    Its determinant is -1: it turns counter-clockwise triangles clockwise.
+    """
+    a, b, c, d = (float(v) for v in plane)
+    n = np.array([a, b, c])
+    matrix = identity()
+    matrix[:3, :3] -= 2.0 * np.outer(n, n)
+    matrix[:3, 3] = -2.0 * d * n
+    return matrix
+
+
+def oblique_projection(projection: np.ndarray, plane_in_eye_space: np.ndarray) -> np.ndarray:
+    """``projection`` ``(4, 4)`` with its near plane replaced by ``plane_in_eye_space`` (Lengyel).
+
+    The plane (a, b, c, d) must face away from the eye (the eye lies on its
+    negative side, d < 0), as a near plane does; what lies on its negative
+    side is clipped. The far plane tilts with it, so depth precision drops as
+    the plane turns away from the view axis. Raises ValueError when the plane
+    passes through the eye (d = 0), where no such projection exists.
+    """
+    clip_plane = np.asarray(plane_in_eye_space, dtype=np.float64)
+    if not clip_plane[3] < 0.0:
+        raise ValueError(
+            f"oblique near plane must have the eye strictly behind it (d < 0), got {clip_plane}")
+    matrix = np.array(projection, dtype=np.float64)
+    # The corner of the view volume opposite the plane, in eye space.
+    corner = np.linalg.inv(matrix) @ np.array(
+        [np.sign(clip_plane[0]), np.sign(clip_plane[1]), 1.0, 1.0])
+    scaled = clip_plane * (2.0 / (clip_plane @ corner))
+    matrix[2] = scaled - matrix[3]
+    return matrix

@@ -114,6 +114,10 @@ class Program(_Resource):
         x, y, z = (float(v) for v in value)
         GL.glUniform3f(self.location(uniform), x, y, z)
 
+    def set_vec4(self, uniform: str, value) -> None:
+        x, y, z, w = (float(v) for v in value)
+        GL.glUniform4f(self.location(uniform), x, y, z, w)
+
     def set_float(self, uniform: str, value: float) -> None:
         GL.glUniform1f(self.location(uniform), float(value))
 
@@ -178,6 +182,16 @@ class Texture2D(_Resource):
         """
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
         GL.glCopyTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB, 0, 0, int(width), int(height), 0)
+        self.width, self.height = int(width), int(height)
+
+    def allocate(self, width: int, height: int) -> None:
+        """Give level 0 fresh, undefined storage of ``width`` x ``height`` (for an FBO to draw
+        into); a no-op when it already has that size."""
+        if (int(width), int(height)) == (self.width, self.height):
+            return
+        GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
+        GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB8, int(width), int(height), 0,
+                        GL.GL_RGB, GL.GL_UNSIGNED_BYTE, None)
         self.width, self.height = int(width), int(height)
 
     def read(self) -> np.ndarray:
@@ -245,6 +259,76 @@ class Framebuffer(_Resource):
     def _free(self) -> None:
         GL.glDeleteRenderbuffers(2, self._renderbuffers)
         GL.glDeleteFramebuffers(1, [self.name])
+
+
+class TextureFramebuffer(_Resource):
+    """An offscreen target that draws straight into a :class:`Texture2D`'s level 0, with a
+    24-bit depth + 8-bit stencil renderbuffer of the same size.
+
+    The texture keeps its own lifetime; this frees only the framebuffer and
+    its depth buffer. Re-make it after the texture is re-allocated.
+    """
+
+    def __init__(self, registry: ResourceRegistry, texture: Texture2D) -> None:
+        self.texture = texture
+        self.width, self.height = texture.width, texture.height
+        self.name = int(GL.glGenFramebuffers(1))
+        self._depth = int(GL.glGenRenderbuffers(1))
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
+        GL.glFramebufferTexture2D(GL.GL_FRAMEBUFFER, GL.GL_COLOR_ATTACHMENT0, GL.GL_TEXTURE_2D,
+                                  texture.name, 0)
+        GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, self._depth)
+        GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, GL.GL_DEPTH24_STENCIL8, self.width,
+                                 self.height)
+        GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, GL.GL_DEPTH_STENCIL_ATTACHMENT,
+                                     GL.GL_RENDERBUFFER, self._depth)
+        status = GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
+        if status != GL.GL_FRAMEBUFFER_COMPLETE:
+            GL.glDeleteRenderbuffers(1, [self._depth])
+            GL.glDeleteFramebuffers(1, [self.name])
+            raise GLContextError(f"texture framebuffer {self.width}x{self.height} incomplete "
+                                 f"(status {status:#x})")
+        super().__init__(registry)
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return self.width, self.height
+
+    def bind(self) -> None:
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
+
+    def read(self) -> np.ndarray:
+        """Colour as ``(height, width, 3)`` uint8, row 0 at the top."""
+        self.bind()
+        return read_pixels(self.width, self.height)
+
+    def _free(self) -> None:
+        GL.glDeleteRenderbuffers(1, [self._depth])
+        GL.glDeleteFramebuffers(1, [self.name])
+
+
+class TimerQuery(_Resource):
+    """GPU time of the commands between :meth:`begin` and :meth:`end` (GL_TIME_ELAPSED)."""
+
+    def __init__(self, registry: ResourceRegistry) -> None:
+        self.name = int(np.asarray(GL.glGenQueries(1)).reshape(-1)[0])
+        super().__init__(registry)
+
+    def begin(self) -> None:
+        GL.glBeginQuery(GL.GL_TIME_ELAPSED, self.name)
+
+    def end(self) -> None:
+        GL.glEndQuery(GL.GL_TIME_ELAPSED)
+
+    def milliseconds(self) -> float:
+        """The elapsed time of the last begin/end pair; waits for it to be available."""
+        # The 32-bit query (PyOpenGL 3.1 cannot convert the 64-bit one's result type)
+        # holds up to 4.29 s, far more than a frame.
+        nanoseconds = GL.glGetQueryObjectuiv(self.name, GL.GL_QUERY_RESULT)
+        return float(np.asarray(nanoseconds).reshape(-1)[0]) / 1e6
+
+    def _free(self) -> None:
+        GL.glDeleteQueries(1, [self.name])
 
 
 class DefaultFramebuffer:

@@ -3,21 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
-from PIL import Image
 
 from mirrorlab import math3d
 from mirrorlab.gl.context import ResourceRegistry
 from mirrorlab.gl.resources import MeshBuffer, Program, Texture2D
-from mirrorlab.paths import asset_path
-from mirrorlab.scene.mesh import load_model
+from mirrorlab.scene.mesh import load_model, load_texture
 from mirrorlab.scene.robot import LabScene
-
-
-def load_texture_image(name: str) -> np.ndarray:
-    """``textures/<name>.png`` as ``(h, w, 3)`` uint8."""
-    path = asset_path("textures", f"{name}.png")
-    with Image.open(path) as image:
-        return np.asarray(image.convert("RGB"))
 
 
 class SceneDrawer:
@@ -38,7 +29,7 @@ class SceneDrawer:
                 self.meshes[node.mesh] = MeshBuffer(registry, data.interleaved(), data.indices)
             if node.texture and node.texture not in self.textures:
                 self.textures[node.texture] = Texture2D.from_image(
-                    registry, load_texture_image(node.texture))
+                    registry, load_texture(node.texture))
         self._drawn = [node for node in scene.graph.nodes() if node.mesh]
         self._matrices: list[tuple[np.ndarray, np.ndarray]] = []
         self._matrices_revision: int | None = None
@@ -63,11 +54,17 @@ class SceneDrawer:
         for resource in (self.program, *self.meshes.values(), *self.textures.values()):
             resource.release()
 
-    def draw(self, view_projection: np.ndarray) -> int:
-        """Draw all parts with the given ``(4, 4)`` projection @ view; returns the draw count."""
+    def draw(self, view_projection: np.ndarray, clip_plane: np.ndarray | None = None) -> int:
+        """Draw all parts with the given ``(4, 4)`` projection @ view; returns the draw count.
+
+        ``clip_plane`` ``(4,)`` (world space) cuts away whatever lies on its
+        negative side; the caller enables ``GL_CLIP_DISTANCE0`` for it to act.
+        """
         scene, program = self.scene, self.program
         program.use()
         program.set_mat4("view_projection", view_projection)
+        plane = (0.0, 0.0, 0.0, 1.0) if clip_plane is None else clip_plane
+        program.set_vec4("clip_plane", plane)
         light = np.asarray(scene.light_direction, dtype=np.float64)
         program.set_vec3("light_direction", light / np.linalg.norm(light))
         program.set_float("ambient", scene.ambient)

@@ -29,6 +29,8 @@ LOWER_ARM_COLOR = (0.95, 0.62, 0.12)
 UPPER_ARM_COLOR = (0.15, 0.42, 0.95)
 JOINT_COLOR = (0.72, 0.73, 0.76)
 FRAME_COLOR = (0.35, 0.27, 0.2)
+MIRROR_BACKING = (0.33, 0.3, 0.27)
+"""Colour of the mirror's back (unlit), seen from behind its plane."""
 HAND_OFFSET = (0.0, 3.2, 0.45)
 """Hand centre in the upper arm's frame: at its tip, pushed towards +z."""
 
@@ -161,6 +163,7 @@ class LabScene:
     ambient: float = 0.3
     diffuse: float = 0.7
     background: tuple[float, float, float] = (0.16, 0.18, 0.22)
+    mirror_backing: tuple[float, float, float] = MIRROR_BACKING
 
     @property
     def angles(self) -> tuple[float, float, float]:

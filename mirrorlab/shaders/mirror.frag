@@ -1,6 +1,6 @@
 #version 330
 // Unlit: the captured image is already lit. The back of the mirror shows its backing.
-in vec2 environment_uv;
+in vec4 environment_coord;
 
 uniform sampler2D environment;
 uniform vec3 backing_color;
@@ -9,7 +9,7 @@ out vec4 frag_color;
 
 void main() {
     if (gl_FrontFacing) {
-        frag_color = vec4(texture(environment, environment_uv).rgb, 1.0);
+        frag_color = vec4(textureProj(environment, environment_coord.xyw).rgb, 1.0);
     } else {
         frag_color = vec4(backing_color, 1.0);
     }

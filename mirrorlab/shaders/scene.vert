@@ -1,5 +1,8 @@
 #version 330
 // Scene parts: world-space normal and texture coordinate to the fragment stage.
+// view_projection may include a reflection (the stencil method draws the mirrored
+// scene that way); the normal and the clip distance stay in the unreflected world, so
+// shading matches the real part and clip_plane cuts away what lies behind the mirror.
 layout(location = 0) in vec3 position;
 layout(location = 1) in vec3 normal;
 layout(location = 2) in vec2 uv;
@@ -7,12 +10,15 @@ layout(location = 2) in vec2 uv;
 uniform mat4 model;
 uniform mat4 view_projection;
 uniform mat3 normal_matrix;
+uniform vec4 clip_plane;  // used only while GL_CLIP_DISTANCE0 is enabled
 
 out vec3 world_normal;
 out vec2 surface_uv;
 
 void main() {
+    vec4 world_position = model * vec4(position, 1.0);
     world_normal = normal_matrix * normal;
     surface_uv = uv;
-    gl_Position = view_projection * model * vec4(position, 1.0);
+    gl_ClipDistance[0] = dot(clip_plane, world_position);
+    gl_Position = view_projection * world_position;
 }

@@ -10,11 +10,11 @@ from mirrorlab import math3d
 from mirrorlab.gl.context import check_gl_errors
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Framebuffer, read_pixels
-from mirrorlab.passes.camera import MIRROR_BACKING
 from mirrorlab.renderer import Renderer
 from mirrorlab.scene.graph import SceneGraph
 from mirrorlab.scene.robot import (
     DEFAULT_ANGLES,
+    MIRROR_BACKING,
     Camera,
     LabScene,
     OrthoCapture,

@@ -67,3 +67,56 @@ def test_project_to_pixels_puts_view_centre_in_image_centre_and_y_down():
     pts = math3d.project_to_pixels(vp, np.array([[0, 0, 0], [0, 1, 0]], float), 200, 100)
     assert np.allclose(pts[0, :2], (100, 50))
     assert pts[1, 1] < 50  # world up is image up, i.e. smaller row
+
+
+def test_reflection_matrix_mirrors_points_across_the_lab_mirror():
+    plane = math3d.plane_through((-7.0, 0.0, 0.0), (1.0, 0.0, 0.0))
+    reflect = math3d.reflection_matrix(plane)
+    points = np.array([[0.0, 1.0, 2.0], [-7.0, 3.0, -1.0], [-9.5, 0.0, 0.0]])
+    moved = math3d.transform_points(reflect, points)[:, :3]
+    np.testing.assert_allclose(moved, [[-14.0, 1.0, 2.0], [-7.0, 3.0, -1.0], [-4.5, 0.0, 0.0]])
+    assert np.linalg.det(reflect) == pytest.approx(-1.0)
+    np.testing.assert_allclose(reflect @ reflect, np.eye(4), atol=1e-12)
+
+
+@given(st.lists(st.floats(-1, 1), min_size=3, max_size=3).filter(
+    lambda v: np.linalg.norm(v) > 1e-3), st.floats(-10, 10))
+def test_reflection_matrix_fixes_the_plane_and_flips_its_normal(normal, offset):
+    plane = math3d.plane_through(np.asarray(normal) * offset, normal)
+    reflect = math3d.reflection_matrix(plane)
+    n = plane[:3]
+    on_plane = -plane[3] * n
+    np.testing.assert_allclose(math3d.transform_points(reflect, on_plane)[:3], on_plane,
+                               atol=1e-9)
+    np.testing.assert_allclose(reflect[:3, :3] @ n, -n, atol=1e-12)
+
+
+def test_plane_through_rejects_a_zero_normal():
+    with pytest.raises(ValueError, match="non-zero"):
+        math3d.plane_through((0, 0, 0), (0, 0, 0))
+
+
+def test_oblique_projection_clips_exactly_on_the_plane_and_keeps_x_and_y():
+    projection = math3d.perspective(45.0, 1.5, 0.1, 100.0)
+    # A plane 5 units ahead, tilted: normal towards -z (away from the eye) and a bit +x.
+    normal = np.array([0.3, -0.1, -1.0])
+    normal /= np.linalg.norm(normal)
+    point = np.array([0.0, 0.0, -5.0])
+    plane = np.append(normal, -normal @ point)
+    oblique = math3d.oblique_projection(projection, plane)
+    np.testing.assert_allclose(oblique[[0, 1, 3]], projection[[0, 1, 3]])
+    # A point on the plane lands on the near clip plane: z_clip = -w_clip.
+    tangent = np.cross(normal, [0.0, 1.0, 0.0])
+    for p in (point, point + 0.7 * tangent):
+        clip = oblique @ np.append(p, 1.0)
+        assert clip[2] == pytest.approx(-clip[3], abs=1e-9)
+    beyond = oblique @ np.append(point + 0.5 * normal, 1.0)
+    before = oblique @ np.append(point - 0.5 * normal, 1.0)
+    assert -beyond[3] < beyond[2]  # kept (in front of the plane)
+    assert before[2] < -before[3]  # clipped
+
+
+def test_oblique_projection_refuses_a_plane_through_the_eye():
+    projection = math3d.perspective(45.0, 1.0, 0.1, 100.0)
+    with pytest.raises(ValueError, match="eye"):
+        math3d.oblique_projection(projection, np.array([1.0, 0.0, 0.0, 0.0]))

@@ -1,0 +1,363 @@
+"""Ground truth: a small ray tracer over the same triangles the rasteriser draws.
+
+One primary ray per pixel centre, one reflected ray where it meets a
+reflective surface, traced with trimesh's ray casting (which uses embreex by
+itself when it is installed). Shading repeats the rasteriser's model in
+numpy: ``albedo * (ambient + diffuse * max(n . l, 0))`` with the vertex
+normal interpolated across the triangle and the texture sampled bilinearly
+at level 0 with repeat wrap.
+
+It shares no code with the GL passes: the scene description (graph, meshes,
+camera matrices) is the only common ground, so it stays an independent check
+of every rasterised technique.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from mirrorlab import math3d
+from mirrorlab.scene.graph import SceneGraph
+from mirrorlab.scene.mesh import load_model, load_texture
+
+Environment = Callable[[np.ndarray], np.ndarray]
+"""``env(directions (n, 3) unit, world) -> (n, 3)`` RGB in [0, 1] for rays that escape."""
+
+_EPSILON = 1e-4  # scene units; pushes secondary rays off the surface they leave
+
+
+@dataclass
+class RaySurface:
+    """One triangle mesh in world space.
+
+    ``vertices`` ``(n, 3)`` and ``normals`` ``(n, 3)`` world space, ``uvs``
+    ``(n, 2)``, ``faces`` ``(m, 3)`` counter-clockwise seen from the front,
+    ``color`` the albedo RGB in [0, 1], ``texture`` ``(h, w, 3)`` uint8 with
+    row 0 at the top (t = 1) or None. A ``reflective`` surface is a perfect
+    mirror with smooth (interpolated) normals; ``backing`` is the unlit colour
+    of its back face, or None when both faces reflect.
+    """
+
+    vertices: np.ndarray
+    normals: np.ndarray
+    uvs: np.ndarray
+    faces: np.ndarray
+    color: Sequence[float] = (1.0, 1.0, 1.0)
+    texture: np.ndarray | None = None
+    reflective: bool = False
+    backing: Sequence[float] | None = None
+
+
+@dataclass(frozen=True)
+class RayImage:
+    """``image`` ``(h, w, 3)`` float64 in [0, 1], row 0 at the top; ``reflective_mask``
+    ``(h, w)`` bool, True where the pixel's primary ray met the front of a reflective
+    surface (the region every reflection technique is judged on)."""
+
+    image: np.ndarray
+    reflective_mask: np.ndarray
+
+    def to_uint8(self) -> np.ndarray:
+        """The image as ``(h, w, 3)`` uint8, rounded as GL's unorm conversion rounds."""
+        return np.round(np.clip(self.image, 0.0, 1.0) * 255.0).astype(np.uint8)
+
+
+def sample_bilinear(texture: np.ndarray, uv: np.ndarray) -> np.ndarray:
+    """Bilinear lookup with repeat wrap, like GL_LINEAR on one level.
+
+    ``texture`` ``(h, w, 3)`` with values 0..255 (uint8 or float) and row 0 at
+    t = 1; ``uv`` ``(n, 2)``; returns ``(n, 3)`` float64 in [0, 1].
+    """
+    height, width = texture.shape[:2]
+    gl_rows = np.asarray(texture, dtype=np.float64)[::-1] / 255.0  # row 0 now at t = 0
+    x = uv[:, 0] * width - 0.5
+    y = uv[:, 1] * height - 0.5
+    x0, y0 = np.floor(x), np.floor(y)
+    fx, fy = (x - x0)[:, None], (y - y0)[:, None]
+    x0, y0 = x0.astype(np.int64), y0.astype(np.int64)
+    xa, xb = x0 % width, (x0 + 1) % width
+    ya, yb = y0 % height, (y0 + 1) % height
+    top = gl_rows[ya, xa] * (1 - fx) + gl_rows[ya, xb] * fx
+    bottom = gl_rows[yb, xa] * (1 - fx) + gl_rows[yb, xb] * fx
+    return top * (1 - fy) + bottom * fy
+
+
+def surfaces_from_graph(graph: SceneGraph) -> list[RaySurface]:
+    """Every node with a mesh, moved to world space with its node's colour and texture."""
+    surfaces = []
+    for node in graph.nodes():
+        if not node.mesh:
+            continue
+        data = load_model(node.mesh)
+        model = node.world_matrix()
+        normals = data.normals.astype(np.float64) @ math3d.normal_matrix(model).T
+        surfaces.append(RaySurface(
+            vertices=math3d.transform_points(model, data.positions.astype(np.float64))[:, :3],
+            normals=normals,
+            uvs=data.uvs.astype(np.float64),
+            faces=data.indices.astype(np.int64),
+            color=node.color,
+            texture=load_texture(node.texture) if node.texture else None,
+        ))
+    return surfaces
+
+
+class RayScene:
+    """Surfaces, a directional light and what escaping rays see.
+
+    ``light_direction`` ``(3,)`` points towards the light; ``background`` is
+    a constant RGB or an :data:`Environment` function of the ray direction.
+    """
+
+    def __init__(self, surfaces: Sequence[RaySurface], light_direction: Sequence[float],
+                 ambient: float, diffuse: float,
+                 background: Sequence[float] | Environment) -> None:
+        import trimesh
+
+        if not surfaces:
+            raise ValueError("a ray scene needs at least one surface")
+        self.surfaces = list(surfaces)
+        light = np.asarray(light_direction, dtype=np.float64)
+        self.light = light / np.linalg.norm(light)
+        self.ambient, self.diffuse = float(ambient), float(diffuse)
+        self.background = background
+        offsets = np.cumsum([0] + [len(s.vertices) for s in self.surfaces])
+        vertices = np.vstack([s.vertices for s in self.surfaces])
+        faces = np.vstack([s.faces + off for s, off in zip(self.surfaces, offsets, strict=False)])
+        self._face_surface = np.concatenate(
+            [np.full(len(s.faces), i) for i, s in enumerate(self.surfaces)])
+        self._normals = np.vstack([s.normals for s in self.surfaces])
+        self._uvs = np.vstack([s.uvs for s in self.surfaces])
+        self._mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
+        self._triangles = vertices[faces]
+        self._faces = faces
+        self._mip_chains: dict[int, MipChain] = {}
+        self._face_normals = np.cross(self._triangles[:, 1] - self._triangles[:, 0],
+                                      self._triangles[:, 2] - self._triangles[:, 0])
+
+    @property
+    def uses_embree(self) -> bool:
+        """True when trimesh casts rays with embreex (fast), False for its numpy fallback."""
+        return type(self._mesh.ray).__module__.endswith("ray_pyembree")
+
+    def _escape(self, directions: np.ndarray) -> np.ndarray:
+        if callable(self.background):
+            return np.asarray(self.background(directions), dtype=np.float64)
+        return np.broadcast_to(np.asarray(self.background, dtype=np.float64),
+                               directions.shape).copy()
+
+    def trace(self, origins: np.ndarray, directions: np.ndarray,
+              bounces: int = 1) -> tuple[np.ndarray, np.ndarray]:
+        """Colour ``(n, 3)`` seen along each ray, and ``(n,)`` bool: the ray's first hit is
+        the front of a reflective surface. ``directions`` ``(n, 3)`` unit;
+        ``bounces`` is how many reflections are followed (beyond that a mirror
+        shows the background). Textures are read at level 0 (no footprint is known)."""
+        hits = self._resolve(np.asarray(origins, dtype=np.float64),
+                             np.asarray(directions, dtype=np.float64), bounces)
+        return self._shade(hits, np.zeros(len(hits.surface))), hits.on_mirror
+
+    def _resolve(self, origins: np.ndarray, directions: np.ndarray, bounces: int) -> _Hits:
+        """Follow each ray through up to ``bounces`` reflections to the surface it ends on."""
+        hits = _Hits.escaping(directions)
+        if len(origins) == 0:
+            return hits
+        faces, rays, points = self._mesh.ray.intersects_id(
+            origins, directions, multiple_hits=False, return_locations=True)
+        if len(rays) == 0:
+            return hits
+        faces, rays = np.asarray(faces), np.asarray(rays)
+        barycentric = _barycentric(self._triangles[faces], points)
+        corners = self._faces[faces]
+        normals = np.einsum("nk,nkd->nd", barycentric, self._normals[corners])
+        normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-300)
+        front = np.einsum("nd,nd->n", self._face_normals[faces], directions[rays]) < 0.0
+        surface_ids = self._face_surface[faces]
+        hits.surface[rays] = surface_ids
+        hits.uv[rays] = np.einsum("nk,nkd->nd", barycentric, self._uvs[corners])
+        hits.normal[rays] = normals
+        mirrors = np.array([s.reflective for s in self.surfaces])[surface_ids]
+        backed = np.array([s.backing is not None for s in self.surfaces])[surface_ids]
+        hits.backing[rays[mirrors & backed & ~front]] = True
+        hits.on_mirror[rays[mirrors & front]] = True
+        reflecting = mirrors & (front | ~backed)
+        if not reflecting.any():
+            return hits
+        rays, points, normals = rays[reflecting], points[reflecting], normals[reflecting]
+        incoming = directions[rays]
+        # A mirror reflects about its normal turned towards the incoming ray.
+        facing = np.where((np.einsum("nd,nd->n", normals, incoming) > 0)[:, None],
+                          -normals, normals)
+        if bounces <= 0:
+            hits.surface[rays] = -1
+            return hits
+        reflected = incoming - 2.0 * np.einsum("nd,nd->n", incoming, facing)[:, None] * facing
+        reflected /= np.linalg.norm(reflected, axis=1, keepdims=True)
+        onward = self._resolve(points + _EPSILON * facing, reflected, bounces - 1)
+        for name in ("surface", "uv", "normal", "direction", "backing"):
+            getattr(hits, name)[rays] = getattr(onward, name)
+        return hits
+
+    def _shade(self, hits: _Hits, lod: np.ndarray) -> np.ndarray:
+        """Colours ``(n, 3)`` of resolved hits; ``lod`` ``(n,)`` is log2 of the texel footprint."""
+        colors = np.zeros((len(hits.surface), 3))
+        escaped = hits.surface < 0
+        colors[escaped] = self._escape(hits.direction[escaped])
+        for index, surface in enumerate(self.surfaces):
+            mine = hits.surface == index
+            if surface.reflective:
+                backing = mine & hits.backing
+                if backing.any():
+                    colors[backing] = np.asarray(surface.backing, dtype=np.float64)
+                continue
+            if not mine.any():
+                continue
+            albedo = np.broadcast_to(np.asarray(surface.color, dtype=np.float64),
+                                     (int(mine.sum()), 3))
+            if surface.texture is not None:
+                albedo = albedo * self._mipmaps(index).sample(hits.uv[mine], lod[mine])
+            lambert = np.maximum(hits.normal[mine] @ self.light, 0.0)[:, None]
+            colors[mine] = albedo * (self.ambient + self.diffuse * lambert)
+        return np.clip(colors, 0.0, 1.0)
+
+    def _mipmaps(self, index: int) -> MipChain:
+        chain = self._mip_chains.get(index)
+        if chain is None:
+            chain = self._mip_chains[index] = MipChain(self.surfaces[index].texture)
+        return chain
+
+    def render(self, view: np.ndarray, projection: np.ndarray, size: Sequence[int],
+               bounces: int = 1) -> RayImage:
+        """Trace one ray through each pixel centre of a ``size`` (width, height) image seen
+        through ``projection @ view`` (both ``(4, 4)``, the rasteriser's matrices).
+
+        Rays start on the near plane, so nothing nearer than it shows, as in GL.
+        Textures are filtered like GL_LINEAR_MIPMAP_LINEAR, with the level chosen
+        from the texture-coordinate differences between neighbouring pixels
+        (as a GPU does across a 2 x 2 quad).
+        """
+        width, height = (int(v) for v in size)
+        columns = (np.arange(width) + 0.5) / width * 2.0 - 1.0
+        rows = 1.0 - (np.arange(height) + 0.5) / height * 2.0
+        ndc_x, ndc_y = np.meshgrid(columns, rows)
+        inverse = np.linalg.inv(np.asarray(projection, dtype=np.float64)
+                                @ np.asarray(view, dtype=np.float64))
+        flat = np.stack([ndc_x.ravel(), ndc_y.ravel()], axis=1)
+        near = _unproject(inverse, flat, -1.0)
+        far = _unproject(inverse, flat, 1.0)
+        directions = far - near
+        directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+        hits = self._resolve(near, directions, bounces)
+        lod = self._pixel_lod(hits, width, height)
+        colors = self._shade(hits, lod.ravel())
+        return RayImage(colors.reshape(height, width, 3), hits.on_mirror.reshape(height, width))
+
+    def _pixel_lod(self, hits: _Hits, width: int, height: int) -> np.ndarray:
+        """``(height, width)`` mip level per pixel from texel-space differences to the other
+        pixel of its 2 x 2 quad in x and in y (0 where the neighbour lies on another part)."""
+        lod = np.zeros((height, width))
+        surface = hits.surface.reshape(height, width)
+        uv = hits.uv.reshape(height, width, 2)
+        sizes = np.ones((height, width, 2))
+        for index, part in enumerate(self.surfaces):
+            if part.texture is not None:
+                sizes[surface == index] = (part.texture.shape[1], part.texture.shape[0])
+        texels = uv * sizes
+        partner_x = np.arange(width) ^ 1
+        partner_y = np.arange(height) ^ 1
+        partner_x[partner_x >= width] = width - 1
+        partner_y[partner_y >= height] = height - 1
+        dx = texels[:, partner_x] - texels
+        dy = texels[partner_y] - texels
+        dx[surface[:, partner_x] != surface] = 0.0
+        dy[surface[partner_y] != surface] = 0.0
+        rho = np.maximum(np.linalg.norm(dx, axis=2), np.linalg.norm(dy, axis=2))
+        lod[rho > 1.0] = np.log2(rho[rho > 1.0])
+        return lod
+
+
+@dataclass
+class _Hits:
+    """Where each ray's path ends: ``surface`` index (-1 escaped), ``uv`` and ``normal`` there,
+    the last ``direction`` travelled, whether it ended on a mirror's ``backing``, and
+    whether the first hit was a mirror's front (``on_mirror``)."""
+
+    surface: np.ndarray
+    uv: np.ndarray
+    normal: np.ndarray
+    direction: np.ndarray
+    backing: np.ndarray
+    on_mirror: np.ndarray
+
+    @classmethod
+    def escaping(cls, directions: np.ndarray) -> _Hits:
+        count = len(directions)
+        return cls(np.full(count, -1), np.zeros((count, 2)), np.zeros((count, 3)),
+                   directions.copy(), np.zeros(count, dtype=bool), np.zeros(count, dtype=bool))
+
+
+class MipChain:
+    """A texture's mipmap levels, each the 2 x 2 box average of the one above (as
+    ``glGenerateMipmap`` makes them), sampled like GL_LINEAR_MIPMAP_LINEAR."""
+
+    def __init__(self, texture: np.ndarray) -> None:
+        level = np.asarray(texture, dtype=np.float64)
+        self.levels = [level]
+        while min(level.shape[:2]) > 1:
+            h, w = level.shape[0] // 2 * 2, level.shape[1] // 2 * 2
+            level = level[:h, :w].reshape(h // 2, 2, w // 2, 2, 3).mean(axis=(1, 3))
+            self.levels.append(level)
+
+    def sample(self, uv: np.ndarray, lod: np.ndarray) -> np.ndarray:
+        """``(n, 3)`` colours in [0, 1] at ``uv`` ``(n, 2)`` and mip level ``lod`` ``(n,)``."""
+        lod = np.clip(lod, 0.0, len(self.levels) - 1)
+        lower = np.floor(lod).astype(np.int64)
+        blend = (lod - lower)[:, None]
+        colors = np.zeros((len(uv), 3))
+        for level in np.unique(lower):
+            pick = lower == level
+            upper = min(level + 1, len(self.levels) - 1)
+            a = sample_bilinear(self.levels[level], uv[pick])
+            b = sample_bilinear(self.levels[upper], uv[pick])
+            colors[pick] = a * (1 - blend[pick]) + b * blend[pick]
+        return colors
+
+
+def _unproject(inverse: np.ndarray, ndc_xy: np.ndarray, ndc_z: float) -> np.ndarray:
+    points = np.hstack([ndc_xy, np.full((len(ndc_xy), 1), ndc_z), np.ones((len(ndc_xy), 1))])
+    world = points @ inverse.T
+    return world[:, :3] / world[:, 3:4]
+
+
+def _barycentric(triangles: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Barycentric weights ``(n, 3)`` of ``points`` ``(n, 3)`` in ``triangles`` ``(n, 3, 3)``."""
+    a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
+    v0, v1, v2 = b - a, c - a, points - a
+    d00 = np.einsum("nd,nd->n", v0, v0)
+    d01 = np.einsum("nd,nd->n", v0, v1)
+    d11 = np.einsum("nd,nd->n", v1, v1)
+    d20 = np.einsum("nd,nd->n", v2, v0)
+    d21 = np.einsum("nd,nd->n", v2, v1)
+    denominator = d00 * d11 - d01 * d01
+    safe = np.where(np.abs(denominator) > 1e-300, denominator, 1.0)
+    v = (d11 * d20 - d01 * d21) / safe
+    w = (d00 * d21 - d01 * d20) / safe
+    return np.stack([1.0 - v - w, v, w], axis=1)
+
+
+def lab_ray_scene(scene) -> RayScene:
+    """The lab scene (a :class:`~mirrorlab.scene.robot.LabScene`) for the tracer: every mesh
+    of the graph plus the mirror quad as a reflective surface with its backing."""
+    mirror = scene.mirror
+    quad = RaySurface(
+        vertices=np.asarray(mirror.corners, dtype=np.float64),
+        normals=np.broadcast_to(mirror.normal, (4, 3)).copy(),
+        uvs=np.asarray(mirror.texcoords, dtype=np.float64),
+        faces=np.array([[0, 1, 2], [0, 2, 3]]),
+        reflective=True,
+        backing=scene.mirror_backing,
+    )
+    return RayScene([*surfaces_from_graph(scene.graph), quad], scene.light_direction,
+                    scene.ambient, scene.diffuse, scene.background)

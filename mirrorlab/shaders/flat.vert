@@ -1,0 +1,9 @@
+#version 330
+// World-space geometry in one flat colour (the stencil method's mirror masks).
+layout(location = 0) in vec3 position;
+
+uniform mat4 view_projection;
+
+void main() {
+    gl_Position = view_projection * vec4(position, 1.0);
+}
