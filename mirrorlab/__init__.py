@@ -21,6 +21,9 @@ def render(
     angles: Sequence[float] = DEFAULT_ANGLES,
     camera: Sequence[float] = DEFAULT_CAMERA,
     target: Sequence[float] = DEFAULT_TARGET,
+    method: str = "ortho",
+    capture: str = "copy",
+    environment_size: int | None = None,
 ) -> np.ndarray:
     """Render the lab scene headless and return the frame.
 
@@ -29,6 +32,11 @@ def render(
     size : (width, height) in pixels.
     angles : base, lower-arm and upper-arm joint angles in degrees.
     camera, target : viewer position and the point it looks at, world units.
+    method : ``"ortho"`` (the lab's capture), ``"reflected"``, ``"stencil"`` or
+        ``"raytrace"`` (the ground truth, no GL).
+    capture : ``"copy"`` (glCopyTexImage2D) or ``"fbo"`` (drawn into the texture).
+    environment_size : side of the square environment texture in pixels; None
+        makes it the frame's size.
 
     Returns
     -------
@@ -36,4 +44,5 @@ def render(
     """
     from mirrorlab.headless import render_lab_frame
 
-    return render_lab_frame(size, angles, camera, target).image
+    return render_lab_frame(size, angles, camera, target, method, capture,
+                            environment_size).image

@@ -325,9 +325,10 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
         temporary.unlink(missing_ok=True)
 
 
-def progress_bar(stream=sys.stderr, width: int = 28) -> Progress:
-    """A one-line text progress bar (redrawn in place on a terminal, one line per
-    step otherwise)."""
+def progress_bar(stream=None, width: int = 28) -> Progress:
+    """A one-line text progress bar on ``stream`` (default: standard error), redrawn in
+    place on a terminal, one line per step otherwise."""
+    stream = stream or sys.stderr
     interactive = stream.isatty()
     started = time.perf_counter()
 

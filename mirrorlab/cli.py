@@ -1,4 +1,4 @@
-"""Command line: ``mirrorlab render | demo``.
+"""Command line: ``mirrorlab render | plan | demo | bench``.
 
 Bad input ends with a one-line message naming the option and what was
 expected, exit status 2, and no output file written or clobbered.
@@ -7,6 +7,7 @@ expected, exit status 2, and no output file written or clobbered.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import re
 import sys
@@ -104,6 +105,35 @@ def build_parser() -> argparse.ArgumentParser:
                         help="point the viewer looks at X,Y,Z (default %(default)s)")
     render.add_argument("--save-env", metavar="PATH",
                         help="also write the captured environment texture as a PNG")
+    render.add_argument("--method", default="ortho",
+                        help="mirror technique: ortho (the lab), reflected, stencil or raytrace "
+                        "(default %(default)s)")
+    render.add_argument("--capture", default="copy",
+                        help="how a capture reaches its texture: copy (glCopyTexImage2D) or "
+                        "fbo (drawn into it) (default %(default)s)")
+    render.add_argument("--env-size", metavar="N",
+                        help="environment texture side in pixels (default: the frame's size)")
+
+    plan = commands.add_parser("plan", help="print the passes a frame would run, and why")
+    plan.add_argument("--size", default="512x512", help="WIDTHxHEIGHT (default %(default)s)")
+    plan.add_argument("--camera", default=_joined(DEFAULT_CAMERA),
+                      help="viewer position X,Y,Z (default %(default)s)")
+    plan.add_argument("--target", default=_joined(DEFAULT_TARGET),
+                      help="point the viewer looks at X,Y,Z (default %(default)s)")
+    plan.add_argument("--method", default="ortho",
+                      help="ortho, reflected or stencil (default %(default)s)")
+
+    bench = commands.add_parser("bench", help="measure error against the ray tracer, and time")
+    bench.add_argument("what", metavar="accuracy", help="the benchmark to run: accuracy")
+    bench.add_argument("--quick", action="store_true",
+                       help="a small sweep (128-pixel frames, maps 64 and 128, two viewpoints)")
+    bench.add_argument("--out-dir", default="out/bench",
+                       help="where accuracy.csv, accuracy.md and accuracy.png go "
+                       "(default %(default)s)")
+    bench.add_argument("--frame", metavar="N", help="frame side in pixels (default 512)")
+    bench.add_argument("--sizes", metavar="N,N,...",
+                       help="environment texture sides (default 64,128,256,512,1024,2048)")
+    bench.add_argument("--frames", metavar="N", help="timed frames per configuration (default 15)")
 
     demo = commands.add_parser("demo", help="open a window on the lab scene (needs a display)")
     demo.add_argument("--size", default="800x800", help="window WIDTHxHEIGHT (default %(default)s)")
@@ -116,8 +146,26 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def parse_count(option: str, text: str, low: int = 1, high: int = 8192) -> int:
+    """``'256'`` -> 256 when ``low <= value <= high``; UsageError naming ``option`` otherwise."""
+    if text.strip().isdigit() and low <= int(text) <= high:
+        return int(text)
+    raise UsageError(f"{option}: expected a whole number from {low} to {high}, got {text!r}")
+
+
+def parse_choice(option: str, text: str, choices: Sequence[str]) -> str:
+    if text not in choices:
+        raise UsageError(f"{option}: expected one of {', '.join(choices)}, got {text!r}")
+    return text
+
+
 def run_render(args: argparse.Namespace) -> int:
+    from mirrorlab.headless import RENDER_METHODS
+
     size = parse_size("--size", args.size)
+    method = parse_choice("--method", args.method, RENDER_METHODS)
+    capture = parse_choice("--capture", args.capture, ("copy", "fbo"))
+    env_size = parse_count("--env-size", args.env_size) if args.env_size else None
     angles = parse_floats("--angles", args.angles, 3, "BASE,LOWER,UPPER")
     camera = parse_floats("--camera", args.camera, 3, "X,Y,Z")
     target = parse_floats("--target", args.target, 3, "X,Y,Z")
@@ -129,15 +177,74 @@ def run_render(args: argparse.Namespace) -> int:
     from mirrorlab.headless import render_lab_frame
 
     start = time.perf_counter()
-    frame = render_lab_frame(size, angles, camera, target)
+    frame = render_lab_frame(size, angles, camera, target, method, capture, env_size)
     elapsed = time.perf_counter() - start
     write_png_atomic(out, frame.image)
-    print(f"wrote {out} ({size[0]}x{size[1]}, passes: {' + '.join(frame.passes)}, "
+    print(f"wrote {out} ({size[0]}x{size[1]}, {method}, passes: {' + '.join(frame.passes)}, "
           f"{elapsed * 1000:.0f} ms with start-up, {frame.gl_renderer})")
-    if env_out is not None:
+    if env_out is not None and frame.environment.size == 0:
+        print(f"no environment texture with --method {method}; {env_out} not written")
+    elif env_out is not None:
         write_png_atomic(env_out, frame.environment)
         print(f"wrote {env_out} (environment capture, "
               f"{frame.environment.shape[1]}x{frame.environment.shape[0]})")
+    return 0
+
+
+def run_plan(args: argparse.Namespace) -> int:
+    from mirrorlab.plan import METHODS, CaptureState, plan_frame
+    from mirrorlab.scene.robot import Camera, build_lab_scene
+
+    size = parse_size("--size", args.size)
+    camera = parse_floats("--camera", args.camera, 3, "X,Y,Z")
+    target = parse_floats("--target", args.target, 3, "X,Y,Z")
+    method = parse_choice("--method", args.method, METHODS)
+    if camera == target:
+        raise UsageError(f"--camera and --target: must differ, both are {args.camera!r}")
+    scene = build_lab_scene()
+    viewer = Camera(eye=camera, target=target)
+    first = plan_frame(scene, viewer, size, CaptureState(), method=method)
+    settled = CaptureState(scene.graph.revision, size, viewer)
+    second = plan_frame(scene, viewer, size, settled, method=method)
+    for title, plan in (("first frame", first), ("next frame, nothing changed", second)):
+        print(f"{title}:")
+        for planned in plan:
+            print(f"  {'run ' if planned.runs else 'skip'} {planned.name:<20} {planned.reason}")
+    return 0
+
+
+def run_bench(args: argparse.Namespace) -> int:
+    parse_choice("bench", args.what, ("accuracy",))
+    from mirrorlab import bench
+
+    settings = bench.SweepSettings.quick() if args.quick else bench.SweepSettings()
+    changes = {}
+    if args.frame:
+        changes["frame"] = parse_count("--frame", args.frame, 16, 4096)
+    if args.sizes:
+        parts = [p.strip() for p in args.sizes.split(",")]
+        changes["sizes"] = tuple(parse_count("--sizes", p, 1, 8192) for p in parts)
+    if args.frames:
+        changes["frames"] = parse_count("--frames", args.frames, 1, 10000)
+    if changes:
+        settings = dataclasses.replace(settings, **changes)
+    out_dir = Path(args.out_dir)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise UsageError(f"--out-dir: {args.out_dir!r} is a file, expected a directory")
+    rows = bench.run_accuracy(settings, bench.progress_bar())
+    table = bench.summary_table(bench.summarise(rows))
+    print(bench.format_text(table))
+    title = (f"mirror accuracy vs time: lab scene, {settings.frame}x{settings.frame} frames, "
+             f"{len({r.viewpoint for r in rows})} viewpoints")
+    bench.write_bytes_atomic(out_dir / "accuracy.csv", bench.rows_to_csv(rows).encode())
+    markdown = f"{title}\n\n{bench.format_markdown(table)}\n"
+    bench.write_bytes_atomic(out_dir / "accuracy.md", markdown.encode())
+    written = ["accuracy.csv", "accuracy.md"]
+    if bench.plot_summary(bench.summarise(rows), out_dir / "accuracy.png", title):
+        written.append("accuracy.png")
+    else:
+        print("matplotlib is not installed, so no plot (pip install 'mirrorlab[plot]')")
+    print(f"wrote {', '.join(str(out_dir / name) for name in written)}")
     return 0
 
 
@@ -182,9 +289,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(join_negative_vectors(sys.argv[1:] if argv is None else argv))
     try:
-        if args.command == "render":
-            return run_render(args)
-        return run_demo(args)
+        runners = {"render": run_render, "plan": run_plan, "bench": run_bench,
+                   "demo": run_demo}
+        return runners[args.command](args)
     except UsageError as exc:
         print(f"mirrorlab {args.command}: error: {exc}", file=sys.stderr)
         return 2

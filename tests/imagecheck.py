@@ -108,3 +108,28 @@ def assert_images_close(name: str, actual: np.ndarray, expected: np.ndarray,
             f"(need {min_fraction_within:.2%}), mean abs diff {mean_abs:.3f} "
             f"(max {max_mean_abs}); images in {folder}"
         )
+
+
+def share_within(actual: np.ndarray, expected: np.ndarray, mask: np.ndarray,
+                 channel_tolerance: int) -> float:
+    """Share of the pixels under ``mask`` ``(h, w)`` whose every channel is within
+    ``channel_tolerance`` (0-255 scale); 1.0 for an empty mask."""
+    if not mask.any():
+        return 1.0
+    diff = np.abs(actual.astype(np.int16) - expected.astype(np.int16)).max(axis=-1)
+    return float(np.mean(diff[mask] <= channel_tolerance))
+
+
+def assert_region_close(name: str, actual: np.ndarray, expected: np.ndarray,
+                        mask: np.ndarray, channel_tolerance: int,
+                        min_fraction_within: float) -> float:
+    """Like :func:`assert_images_close` but only over ``mask``; the diff image written on
+    failure shows the masked region only. Returns the share within."""
+    within = share_within(actual, expected, mask, channel_tolerance)
+    if within < min_fraction_within:
+        masked = diff_image(actual, expected) * mask[..., None].astype(np.uint8)
+        folder = save_failure(name, actual=actual, expected=expected, diff=masked)
+        raise AssertionError(
+            f"{name}: {within:.4%} of {int(mask.sum())} region pixels within "
+            f"{channel_tolerance}/255 (need {min_fraction_within:.2%}); images in {folder}")
+    return within

@@ -63,6 +63,8 @@ class SceneDrawer:
         scene, program = self.scene, self.program
         program.use()
         program.set_mat4("view_projection", view_projection)
+        # A plane every point is in front of, rather than none: Mesa 22.3's llvmpipe
+        # clips by the shader's gl_ClipDistance even while GL_CLIP_DISTANCE0 is disabled.
         plane = (0.0, 0.0, 0.0, 1.0) if clip_plane is None else clip_plane
         program.set_vec4("clip_plane", plane)
         light = np.asarray(scene.light_direction, dtype=np.float64)
