@@ -1,4 +1,6 @@
-"""Generate the robot's part meshes (models/*.obj) and the METAL texture (textures/metal.png).
+"""Generate the robot's part meshes (models/*.obj) and the METAL texture (textures/metal.png),
+and the environment-mapping assets: the reflective cone and sphere, the backdrop quad and
+the rocket-launch picture (textures/launch.png).
 
 Run from the repository root: ``python tools/make_assets.py``. The outputs are
 committed; this script is how they were made, so they can be re-made or changed.
@@ -75,10 +77,16 @@ def cylinder(radius: float, height: float, segments: int):
     return np.array(positions), np.array(normals), np.array(uvs, float), np.array(faces)
 
 
-def sphere(radius: float, subdivisions: int):
+def sphere(radius: float, subdivisions: int, spherical_uv: bool = False):
+    """Icosphere with exact unit normals; uv zero, or longitude/latitude with
+    ``spherical_uv`` (only to give the file real texture coordinates: no seam split)."""
     ico = trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)
     n = ico.vertices / np.linalg.norm(ico.vertices, axis=1, keepdims=True)
-    return ico.vertices, n, np.zeros((len(n), 2)), ico.faces
+    uv = np.zeros((len(n), 2))
+    if spherical_uv:
+        uv = np.stack([np.arctan2(n[:, 0], n[:, 2]) / (2 * np.pi) + 0.5,
+                       np.arcsin(np.clip(n[:, 1], -1, 1)) / np.pi + 0.5], axis=1)
+    return ico.vertices, n, uv, ico.faces
 
 
 def write_obj(path: Path, mesh, comment: str) -> None:
@@ -109,6 +117,135 @@ def metal_texture(size: int = 256) -> np.ndarray:
     return (np.clip(value, 0, 1)[..., None] * tint * 255).round().astype(np.uint8)
 
 
+def cone(radius: float, height: float, segments: int, rings: int):
+    """Cone on the y axis, base disc at y=0, apex at y=height; smooth side normals.
+
+    The side is split into ``rings`` bands so that per-vertex shading has more than the
+    apex and the rim to interpolate between; the apex is one vertex per segment, with
+    that segment's mid-angle normal, so no normal is undefined.
+    """
+    positions, normals, uvs, faces = [], [], [], []
+    slope = radius / height  # normal = (cos a, slope, -sin a), normalised
+    angles = np.linspace(0.0, 2.0 * np.pi, segments + 1)
+    for j in range(rings + 1):
+        f = j / rings  # 0 at the rim, 1 at the apex
+        for i, a in enumerate(angles):
+            if j == rings:
+                a = a + np.pi / segments  # apex: the mid-angle of the segment it closes
+            n = np.array([np.cos(a), slope, -np.sin(a)])
+            positions.append(((1 - f) * radius * np.cos(a), f * height,
+                              -(1 - f) * radius * np.sin(a)))
+            normals.append(n / np.linalg.norm(n))
+            uvs.append((i / segments, f))
+    row = segments + 1
+    for j in range(rings):
+        for i in range(segments):
+            a, b = j * row + i, j * row + i + 1
+            c, d = a + row, b + row
+            if j == rings - 1:  # the apex band: one triangle per segment
+                faces.append((a, b, c))
+            else:
+                faces += [(a, b, d), (a, d, c)]
+    centre = len(positions)  # base cap, facing -y
+    positions.append((0.0, 0.0, 0.0))
+    normals.append((0.0, -1.0, 0.0))
+    uvs.append((0.5, 0.5))
+    for a in angles[:-1]:
+        positions.append((radius * np.cos(a), 0.0, -radius * np.sin(a)))
+        normals.append((0.0, -1.0, 0.0))
+        uvs.append((0.5 + 0.5 * np.cos(a), 0.5 + 0.5 * np.sin(a)))
+    for i in range(segments):
+        a, b = centre + 1 + i, centre + 1 + (i + 1) % segments
+        faces.append((centre, b, a))
+    return np.array(positions), np.array(normals), np.array(uvs, float), np.array(faces)
+
+
+def quad(width: float, height: float):
+    """Rectangle in the z=0 plane facing +z, centred on the origin, uv (0,0) bottom left."""
+    w, h = width / 2, height / 2
+    positions = np.array([(-w, -h, 0.0), (w, -h, 0.0), (w, h, 0.0), (-w, h, 0.0)])
+    normals = np.tile([0.0, 0.0, 1.0], (4, 1))
+    uvs = np.array([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)])
+    return positions, normals, uvs, np.array([(0, 1, 2), (0, 2, 3)])
+
+
+def _smoothstep(edge0: float, edge1: float, x: np.ndarray) -> np.ndarray:
+    t = np.clip((x - edge0) / (edge1 - edge0), 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+def _value_noise(rng: np.random.Generator, shape: tuple[int, int], cells: int) -> np.ndarray:
+    """Smooth noise in [0, 1]: a ``cells`` x ``cells`` random grid, bicubically upsampled."""
+    grid = Image.fromarray((rng.random((cells + 1, cells + 1)) * 255).astype(np.uint8))
+    big = grid.resize((shape[1], shape[0]), Image.Resampling.BICUBIC)
+    return np.asarray(big, dtype=np.float64) / 255.0
+
+
+def launch_texture(size: int = 512) -> np.ndarray:
+    """A rocket launch at dusk, drawn from shapes and noise: sky, pad, service tower, the
+    stack (orbiter, tank, boosters), flame and billowing smoke. ``(size, size, 3)`` uint8,
+    row 0 at the top. Stands in for the textbook's photograph, which we may not ship."""
+    rng = np.random.default_rng(1312)
+    y, x = (np.mgrid[0:size, 0:size] + 0.5) / size  # y down, both in [0, 1]
+    # sky: deep blue at the top to orange at the horizon (y = 0.78)
+    horizon = 0.78
+    k = np.clip(y / horizon, 0, 1)[..., None]
+    sky = (1 - k) * np.array([0.10, 0.22, 0.52]) + k * np.array([0.98, 0.62, 0.32])
+    clouds = _value_noise(rng, (size, size), 6) * _value_noise(rng, (size, size), 14)
+    sky = sky + (0.25 * _smoothstep(0.25, 0.6, clouds) * (y < horizon))[..., None]
+    image = sky
+    # ground and water: dark olive land, a bluish strip of water reflecting the sky
+    land = np.array([0.16, 0.17, 0.10]) * (0.8 + 0.4 * _value_noise(rng, (size, size), 30)[
+        ..., None])
+    image = np.where((y > horizon)[..., None], land, image)
+    water = (y > 0.9) & (y < 0.96)
+    image = np.where(water[..., None], 0.5 * sky[::-1] + 0.1, image)
+    # stack, centred at x = 0.55: tank, two boosters, orbiter, all from y = 0.32 to 0.72
+    cx = 0.55
+    top, bottom = 0.30, 0.72
+
+    def rect(x0, x1, y0, y1):
+        return (x > x0) & (x < x1) & (y > y0) & (y < y1)
+
+    tank = rect(cx - 0.035, cx + 0.035, top + 0.03, bottom) | (
+        (np.abs(x - cx) < 0.035 * np.clip((y - top) / 0.03, 0, 1)) & (y > top) & (y < top + 0.03))
+    image = np.where(tank[..., None], np.array([0.85, 0.42, 0.12]) * (
+        0.75 + 0.35 * np.clip((x - cx + 0.035) / 0.07, 0, 1))[..., None], image)
+    for bx in (cx - 0.05, cx + 0.05):
+        booster = rect(bx - 0.014, bx + 0.014, top + 0.09, bottom + 0.01) | (
+            (np.abs(x - bx) < 0.014 * np.clip((y - top - 0.06) / 0.03, 0, 1))
+            & (y > top + 0.06) & (y < top + 0.09))
+        image = np.where(booster[..., None], np.array([0.93, 0.93, 0.9]), image)
+    orbiter = rect(cx + 0.035, cx + 0.07, top + 0.12, bottom - 0.03) | (
+        (x > cx + 0.035) & (x < cx + 0.07 + 0.08 * np.clip((y - 0.55) / 0.14, 0, 1))
+        & (y > 0.55) & (y < bottom - 0.03))
+    image = np.where(orbiter[..., None], np.array([0.95, 0.95, 0.97]), image)
+    nose = rect(cx + 0.035, cx + 0.07, top + 0.12, top + 0.16)
+    image = np.where(nose[..., None], np.array([0.12, 0.12, 0.14]), image)
+    # service tower to the left: dark lattice
+    tower = rect(0.36, 0.43, 0.22, horizon)
+    lattice = ((np.floor(y * 90) + np.floor(x * 90)) % 2 == 0) | (np.abs(x - 0.395) > 0.03)
+    image = np.where((tower & lattice)[..., None], np.array([0.22, 0.2, 0.2]), image)
+    image = np.where(rect(0.43, 0.5, 0.40, 0.42)[..., None], np.array([0.25, 0.22, 0.2]), image)
+    # flame below the stack, then smoke billowing sideways over the pad
+    smoke = np.zeros((size, size))
+    for _ in range(40):
+        side = rng.choice([-1.0, 1.0])
+        bx = cx + side * rng.uniform(0.02, 0.35)
+        by = horizon + rng.uniform(-0.07, 0.02) - 0.1 * max(0.0, 0.2 - abs(bx - cx))
+        radius = rng.uniform(0.03, 0.07) * (1.0 + abs(bx - cx) * 1.5)
+        smoke = np.maximum(smoke, np.exp(-(((x - bx) ** 2 + (y - by) ** 2) / radius**2) ** 2))
+    smoke_shade = 0.65 + 0.35 * _value_noise(rng, (size, size), 40)
+    lit = np.clip(1.0 - 0.8 * np.abs(x - cx), 0.55, 1.0)  # the flame lights it from within
+    smoke_color = (smoke_shade * lit)[..., None] * np.array([0.98, 0.93, 0.88])
+    a = _smoothstep(0.3, 0.6, smoke)[..., None]
+    image = image * (1 - a) + a * smoke_color
+    d_flame = ((x - cx) / 0.05) ** 2 + ((y - bottom - 0.05) / 0.06) ** 2
+    flame = np.exp(-d_flame * 1.5)[..., None]
+    image = image * (1 - flame) + flame * np.array([1.0, 0.95, 0.65])
+    return (np.clip(image, 0, 1) * 255).round().astype(np.uint8)
+
+
 def main() -> None:
     models = ROOT / "models"
     models.mkdir(exist_ok=True)
@@ -119,10 +256,17 @@ def main() -> None:
     write_obj(models / "mirror_frame.obj", box((0.25, 8.6, 8.6)), "frame behind the mirror")
     write_obj(models / "hand.obj", box((0.5, 0.5, 1.4), y0=-0.25),
               "hand (placed off-centre by its node)")
+    write_obj(models / "cone.obj", cone(1.0, 2.4, 64, 12),
+              "reflective rocket cone (environment mapping): base radius 1, height 2.4")
+    write_obj(models / "env_sphere.obj", sphere(1.0, 3, spherical_uv=True),
+              "reflective sphere, radius 1")
+    write_obj(models / "backdrop.obj", quad(16.0, 16.0), "backdrop quad for the launch picture")
     textures = ROOT / "textures"
     textures.mkdir(exist_ok=True)
     Image.fromarray(metal_texture()).save(textures / "metal.png")
     print("wrote textures/metal.png")
+    Image.fromarray(launch_texture()).save(textures / "launch.png")
+    print("wrote textures/launch.png")
 
 
 if __name__ == "__main__":

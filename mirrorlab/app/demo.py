@@ -8,6 +8,12 @@ H prints this help, Esc quits.
 The capture pass runs only when the robot moved or the window was resized:
 orbiting the camera re-uses the capture, since the lab's orthographic
 capture does not depend on the viewer.
+
+Environment-mapping scenes (``run(..., scene="cone")``, the textbook's
+sphere-mapping experiment, or ``scene="sphere"``): Up/Down move the reflective
+cone (or sphere) and its reflection changes; keys 1-7 choose the technique
+(sphere, sphere-vertex, sphere-texgen, cube, cube-live, latlong, normal);
+A/D and W/S orbit the camera, +/- zoom; R resets, H prints this help, Esc quits.
 """
 
 from __future__ import annotations
@@ -21,12 +27,21 @@ from pathlib import Path
 import numpy as np
 
 from mirrorlab.gl.context import WindowContext, check_gl_errors
+from mirrorlab.scene.envscenes import (
+    CONE_LIMITS,
+    ENV_SCENES,
+    ENVMAP_METHODS,
+    build_env_scene,
+    check_method,
+)
 from mirrorlab.scene.robot import DEFAULT_CAMERA, DEFAULT_TARGET, Camera, build_lab_scene
 
 JOINT_STEP_DEG = 5.0
 ORBIT_STEP_DEG = 5.0
 ZOOM_FACTOR = 1.1
 HELP = __doc__.split("\n\n")[1]
+ENV_HELP = __doc__.split("\n\n")[3]
+REFLECTOR_STEP = 0.25
 
 
 @dataclass
@@ -160,19 +175,126 @@ class DemoApp:
                 f"{fps:.0f} fps, {self.captures} captures - H for help")
 
 
+class EnvDemoApp:
+    """An environment-mapping scene in the window: the reflector moves under Up/Down, the
+    technique changes under 1-7, the camera orbits under A/D/W/S and +/-."""
+
+    def __init__(self, context: WindowContext, scene_name: str, envmap: str) -> None:
+        import glfw
+
+        from mirrorlab.gl.resources import DefaultFramebuffer
+
+        self.context = context
+        self.scene_name = scene_name
+        self.scene = build_env_scene(scene_name)
+        self.method = check_method(envmap)
+        self.initial_position = self.scene.reflector.position.copy()
+        camera = self.scene.camera
+        self.initial_orbit = Orbit.from_eye(camera.eye, camera.target)
+        self.orbit = Orbit.from_eye(camera.eye, camera.target)
+        self.target = DefaultFramebuffer(context.framebuffer_size)
+        self.renderer = self._make_renderer()
+        self.frames = 0
+        glfw.set_key_callback(context.window, self.on_key)
+
+    def _make_renderer(self):
+        from mirrorlab.envmap_renderer import EnvmapRenderer
+
+        return EnvmapRenderer(self.context.resources, self.scene, self.method)
+
+    def use_method(self, method: str) -> None:
+        """Switch to technique ``method`` (its maps are made afresh)."""
+        if method != self.method:
+            self.renderer.release()
+            self.method = check_method(method)
+            self.renderer = self._make_renderer()
+
+    def move_reflector(self, dy: float) -> None:
+        """Move the reflector up (``dy`` > 0) or down, within the scene's limits."""
+        low, high = CONE_LIMITS if self.scene_name == "cone" else (-1.0, 2.0)
+        y = float(self.scene.reflector.position[1])
+        new_y = min(high, max(low, y + dy))
+        self.scene.move_reflector((0.0, new_y - y, 0.0))
+
+    def reset(self) -> None:
+        self.scene.move_reflector(self.initial_position - self.scene.reflector.position)
+        self.orbit = Orbit(**vars(self.initial_orbit))
+
+    def camera(self) -> Camera:
+        fixed = self.scene.camera
+        orbit = self.orbit.camera()
+        return Camera(eye=orbit.eye, target=orbit.target, fovy=fixed.fovy, near=fixed.near,
+                      far=fixed.far)
+
+    def on_key(self, window, key: int, scancode: int, action: int, mods: int) -> None:
+        import glfw
+
+        if action not in (glfw.PRESS, glfw.REPEAT):
+            return
+        orbit_keys = {
+            glfw.KEY_A: (-ORBIT_STEP_DEG, 0.0), glfw.KEY_D: (ORBIT_STEP_DEG, 0.0),
+            glfw.KEY_W: (0.0, ORBIT_STEP_DEG), glfw.KEY_S: (0.0, -ORBIT_STEP_DEG),
+        }
+        method_keys = {glfw.KEY_1 + i: name for i, name in enumerate(ENVMAP_METHODS)}
+        if key == glfw.KEY_ESCAPE:
+            glfw.set_window_should_close(window, True)
+        elif key == glfw.KEY_UP:
+            self.move_reflector(REFLECTOR_STEP)
+        elif key == glfw.KEY_DOWN:
+            self.move_reflector(-REFLECTOR_STEP)
+        elif key in method_keys and action == glfw.PRESS:
+            self.use_method(method_keys[key])
+        elif key in orbit_keys:
+            self.orbit.turn(*orbit_keys[key])
+        elif key in (glfw.KEY_EQUAL, glfw.KEY_KP_ADD):
+            self.orbit.zoom(1.0 / ZOOM_FACTOR)
+        elif key in (glfw.KEY_MINUS, glfw.KEY_KP_SUBTRACT):
+            self.orbit.zoom(ZOOM_FACTOR)
+        elif key == glfw.KEY_R:
+            self.reset()
+        elif key == glfw.KEY_H and action == glfw.PRESS:
+            print(ENV_HELP, flush=True)
+
+    def draw(self) -> None:
+        """Render one frame into the window's back buffer."""
+        width, height = self.target.size
+        if width == 0 or height == 0:  # minimised
+            return
+        self.renderer.render(self.target, self.camera())
+        self.frames += 1
+
+    def title(self, fps: float) -> str:
+        y = float(self.scene.reflector.position[1])
+        return (f"mirrorlab demo - {self.scene_name} at height {y:.2f} - {self.method} - "
+                f"{fps:.0f} fps - H for help")
+
+
 def run(size: tuple[int, int], angles: Sequence[float], max_frames: int = 0,
         screenshot: Path | None = None,
-        save_png: Callable[[Path, np.ndarray], None] | None = None) -> int:
+        save_png: Callable[[Path, np.ndarray], None] | None = None,
+        scene: str = "lab", envmap: str = "sphere-texgen") -> int:
     """Open the window and run until Esc, the window closes, or ``max_frames`` frames.
 
-    With ``screenshot``, the last frame drawn is written there by ``save_png``.
+    ``scene`` is ``"lab"`` (the robot and its mirror; ``envmap`` is unused) or an
+    environment-mapping scene (``"cone"``, ``"sphere"``) drawn with technique
+    ``envmap``. With ``screenshot``, the last frame drawn is written there by ``save_png``.
     """
     import glfw
 
+    if scene != "lab" and scene not in ENV_SCENES:
+        raise ValueError(f"unknown demo scene {scene!r}; expected one of lab, "
+                         f"{', '.join(ENV_SCENES)}")
+    if scene != "lab":
+        check_method(envmap)
     context = WindowContext(size[0], size[1], "mirrorlab demo")
     try:
-        app = DemoApp(context, angles)
-        print(f"mirrorlab demo on {context.info()['renderer']}. {HELP}", flush=True)
+        if scene == "lab":
+            app: DemoApp | EnvDemoApp = DemoApp(context, angles)
+            help_text = HELP
+        else:
+            app = EnvDemoApp(context, scene, envmap)
+            help_text = ENV_HELP
+        print(f"mirrorlab demo on {context.info()['renderer']}. {help_text}", flush=True)
         last_image = None
         started, frames_at_title = time.perf_counter(), 0
         while not context.should_close():

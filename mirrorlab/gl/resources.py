@@ -394,3 +394,179 @@ class MeshBuffer(_Resource):
     def _free(self) -> None:
         GL.glDeleteVertexArrays(1, [self.vao])
         GL.glDeleteBuffers(2, [self.vbo, self.ebo])
+
+
+class TextureCube(_Resource):
+    """A cube-map RGB texture: six square faces in GL order +X, -X, +Y, -Y, +Z, -Z (face
+    ``k`` is ``GL_TEXTURE_CUBE_MAP_POSITIVE_X + k``), clamped to the edge, GL_LINEAR.
+
+    Face images cross this class as ``(size, size, 3)`` uint8 with row 0 at the top,
+    that is at face coordinate ``t = 1`` (as :func:`mirrorlab.envmap.bake_cube_faces`
+    makes them); the rows are flipped on upload and read-back, here only.
+    Sample it with ``GL_TEXTURE_CUBE_MAP_SEAMLESS`` enabled (a context-wide switch
+    the passes that sample cube maps turn on).
+    """
+
+    def __init__(self, registry: ResourceRegistry, size: int, faces: np.ndarray | None,
+                 mipmaps: bool) -> None:
+        if size < 1:
+            raise ValueError(f"cube-map size must be positive, got {size}")
+        if faces is not None:
+            faces = np.asarray(faces)
+            if faces.shape != (6, size, size, 3) or faces.dtype != np.uint8:
+                raise ValueError(f"cube faces must be (6, {size}, {size}, 3) uint8, got "
+                                 f"{faces.shape} {faces.dtype}")
+        self.name = int(GL.glGenTextures(1))
+        self.size = int(size)
+        self.mipmaps = mipmaps
+        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
+        for face in range(6):
+            data = None if faces is None else np.ascontiguousarray(faces[face, ::-1])
+            GL.glTexImage2D(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL.GL_RGB8,
+                            self.size, self.size, 0, GL.GL_RGB, GL.GL_UNSIGNED_BYTE, data)
+        for wrap in (GL.GL_TEXTURE_WRAP_S, GL.GL_TEXTURE_WRAP_T, GL.GL_TEXTURE_WRAP_R):
+            GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, wrap, GL.GL_CLAMP_TO_EDGE)
+        GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR)
+        min_filter = GL.GL_LINEAR_MIPMAP_LINEAR if mipmaps else GL.GL_LINEAR
+        GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MIN_FILTER, min_filter)
+        if mipmaps:
+            if faces is not None:
+                GL.glGenerateMipmap(GL.GL_TEXTURE_CUBE_MAP)
+        else:
+            GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MAX_LEVEL, 0)
+        super().__init__(registry)
+
+    @classmethod
+    def from_faces(cls, registry: ResourceRegistry, faces: np.ndarray,
+                   mipmaps: bool = True) -> TextureCube:
+        """A (by default mipmapped) cube map from ``faces`` ``(6, n, n, 3)`` uint8."""
+        faces = np.asarray(faces)
+        if faces.ndim != 4:
+            raise ValueError(f"cube faces must be (6, n, n, 3) uint8, got {faces.shape}")
+        return cls(registry, faces.shape[1], faces, mipmaps=mipmaps)
+
+    @classmethod
+    def blank(cls, registry: ResourceRegistry, size: int, mipmaps: bool = False) -> TextureCube:
+        """Six empty ``size`` x ``size`` faces for a live capture. With ``mipmaps``, call
+        :meth:`generate_mipmaps` after each capture."""
+        return cls(registry, size, None, mipmaps=mipmaps)
+
+    def bind(self, unit: int = 0) -> None:
+        GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
+        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+
+    def copy_face_from_framebuffer(self, face: int) -> None:
+        """Copy the bound read framebuffer's lower-left ``size`` x ``size`` square into level 0
+        of ``face`` (0..5): ``glCopyTexImage2D(GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, ...)``.
+        Window row 0 (the bottom) becomes the face's ``t = 0``."""
+        if not 0 <= face < 6:
+            raise ValueError(f"cube face must be 0..5, got {face}")
+        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        GL.glCopyTexImage2D(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL.GL_RGB, 0, 0,
+                            self.size, self.size, 0)
+
+    def generate_mipmaps(self) -> None:
+        """Rebuild the mipmap levels from level 0 (after a capture); needs ``mipmaps=True``."""
+        if not self.mipmaps:
+            raise ValueError("this cube map was made without mipmaps")
+        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        GL.glGenerateMipmap(GL.GL_TEXTURE_CUBE_MAP)
+
+    def read_face(self, face: int) -> np.ndarray:
+        """Level 0 of ``face`` as ``(size, size, 3)`` uint8, row 0 at the top (``t = 1``)."""
+        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
+        data = GL.glGetTexImage(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL.GL_RGB,
+                                GL.GL_UNSIGNED_BYTE)
+        pixels = np.frombuffer(data, dtype=np.uint8).reshape(self.size, self.size, 3)
+        return pixels[::-1].copy()
+
+    def _free(self) -> None:
+        GL.glDeleteTextures([self.name])
+
+
+class FloatFramebuffer(_Resource):
+    """An offscreen target with a 32-bit float RGBA colour buffer (and depth + stencil), for
+    checks that must see NaN, Inf or values outside [0, 1] that an 8-bit buffer would hide.
+    Same interface as :class:`Framebuffer`; :meth:`read` gives float32."""
+
+    def __init__(self, registry: ResourceRegistry, width: int, height: int) -> None:
+        if width < 1 or height < 1:
+            raise ValueError(f"framebuffer size must be positive, got {width}x{height}")
+        self.width, self.height = int(width), int(height)
+        self.name = int(GL.glGenFramebuffers(1))
+        self._renderbuffers = [int(n) for n in np.atleast_1d(GL.glGenRenderbuffers(2))]
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
+        for rb, fmt, attachment in zip(
+            self._renderbuffers,
+            (GL.GL_RGBA32F, GL.GL_DEPTH24_STENCIL8),
+            (GL.GL_COLOR_ATTACHMENT0, GL.GL_DEPTH_STENCIL_ATTACHMENT),
+            strict=True,
+        ):
+            GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, rb)
+            GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, fmt, self.width, self.height)
+            GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, attachment, GL.GL_RENDERBUFFER, rb)
+        status = GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
+        if status != GL.GL_FRAMEBUFFER_COMPLETE:
+            GL.glDeleteRenderbuffers(2, self._renderbuffers)
+            GL.glDeleteFramebuffers(1, [self.name])
+            raise GLContextError(f"float framebuffer {width}x{height} incomplete "
+                                 f"(status {status:#x})")
+        super().__init__(registry)
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return self.width, self.height
+
+    def bind(self) -> None:
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
+
+    def read(self) -> np.ndarray:
+        """Colour as ``(height, width, 3)`` float32, unclamped, row 0 at the top."""
+        return self.read_rgba()[..., :3].copy()
+
+    def read_rgba(self) -> np.ndarray:
+        """Colour and alpha as ``(height, width, 4)`` float32, unclamped, row 0 at the top."""
+        self.bind()
+        GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 4)
+        data = GL.glReadPixels(0, 0, self.width, self.height, GL.GL_RGBA, GL.GL_FLOAT)
+        pixels = np.frombuffer(data, dtype=np.float32).reshape(self.height, self.width, 4)
+        return pixels[::-1].copy()
+
+    def _free(self) -> None:
+        GL.glDeleteRenderbuffers(2, self._renderbuffers)
+        GL.glDeleteFramebuffers(1, [self.name])
+
+
+class FixedFunctionMesh(_Resource):
+    """A second VAO over a :class:`MeshBuffer`'s vertex and index buffers that feeds the
+    fixed-function pipeline (``glVertexPointer``/``glNormalPointer``/``glTexCoordPointer``)
+    instead of generic attributes: for drawing with no shader program, as GL_SPHERE_MAP
+    texgen needs. Compatibility profile only. It shares, and does not own, the buffers:
+    release it no later than the mesh."""
+
+    def __init__(self, registry: ResourceRegistry, mesh: MeshBuffer) -> None:
+        self.mesh = mesh
+        self.index_count = mesh.index_count
+        self.vao = int(GL.glGenVertexArrays(1))
+        GL.glBindVertexArray(self.vao)
+        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, mesh.vbo)
+        GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, mesh.ebo)
+        stride = MeshBuffer.STRIDE
+        GL.glEnableClientState(GL.GL_VERTEX_ARRAY)
+        GL.glVertexPointer(3, GL.GL_FLOAT, stride, GL.GLvoidp(0))
+        GL.glEnableClientState(GL.GL_NORMAL_ARRAY)
+        GL.glNormalPointer(GL.GL_FLOAT, stride, GL.GLvoidp(12))
+        GL.glEnableClientState(GL.GL_TEXTURE_COORD_ARRAY)
+        GL.glTexCoordPointer(2, GL.GL_FLOAT, stride, GL.GLvoidp(24))
+        GL.glBindVertexArray(0)
+        super().__init__(registry)
+
+    def draw(self) -> None:
+        """One ``glDrawElements`` call for the whole mesh (bind no program first)."""
+        GL.glBindVertexArray(self.vao)
+        GL.glDrawElements(GL.GL_TRIANGLES, self.index_count, GL.GL_UNSIGNED_INT, None)
+
+    def _free(self) -> None:
+        GL.glDeleteVertexArrays(1, [self.vao])

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -65,7 +66,11 @@ def load_mesh(path: str | Path) -> MeshData:
     if not path.is_file():
         raise FileNotFoundError(f"mesh file {path} does not exist")
     try:
-        mesh = trimesh.load_mesh(path, process=False, maintain_order=True)
+        with warnings.catch_warnings():
+            # trimesh's texture merge warns (an all-NaN median) on some files it then
+            # reads correctly; the warning says nothing to a mirrorlab user.
+            warnings.filterwarnings("ignore", category=RuntimeWarning, module="trimesh")
+            mesh = trimesh.load_mesh(path, process=False, maintain_order=True)
     except Exception as exc:
         raise ValueError(f"mesh file {path}: trimesh could not read it ({exc})") from exc
     positions = np.asarray(mesh.vertices, dtype=np.float64)

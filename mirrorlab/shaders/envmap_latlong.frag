@@ -1,0 +1,55 @@
+#version 330
+// Blinn-Newell latitude-longitude map: theta = angle from +z, phi = atan2(ry, rx),
+// s = phi / 2 pi wrapped into [0, 1), t = theta / pi (mirrorlab.envmap.latlong_map).
+// s jumps from 1 to 0 where phi crosses 0; the screen-space derivative of s is taken
+// from phi's analytic gradient instead, which has no jump, so the mipmap level stays
+// right along the seam (an implicit-derivative lookup would smear the coarsest level
+// over a line of pixels there).
+in vec3 world_position;
+in vec3 world_normal;
+
+uniform sampler2D latlong_texture;
+uniform vec3 eye_world;
+uniform int output_mode;  // 0: colour; 1: the lookup coordinates (s, t, 0)
+uniform bool seam_safe = true;  // false: let the hardware difference s (a test's control)
+
+out vec4 frag_color;
+
+const float PI = 3.14159265358979;
+
+vec3 safe_normalize(vec3 v, vec3 fallback) {
+    float len = length(v);
+    return len > 1e-30 ? v / len : fallback;
+}
+
+// d phi for a change dw of the direction w: (x dy - y dx) / (x^2 + y^2), with the
+// denominator held away from 0 at the poles (where phi is undefined anyway).
+float phi_change(vec3 w, vec3 dw) {
+    return (w.x * dw.y - w.y * dw.x) / max(dot(w.xy, w.xy), 1e-6);
+}
+
+void main() {
+    vec3 u = safe_normalize(world_position - eye_world, vec3(0.0));
+    vec3 n = safe_normalize(world_normal, vec3(0.0));
+    vec3 w = safe_normalize(u - 2.0 * dot(n, u) * n, vec3(0.0, 0.0, 1.0));
+    float rho = length(w.xy);
+    float theta = atan(rho, w.z);  // as accurate as acos(rz) can't be near the poles
+    float s = 0.0;
+    if (rho > 0.0) {
+        s = atan(w.y, w.x) / (2.0 * PI);
+        s = s < 0.0 ? s + 1.0 : s;
+        s = s >= 1.0 ? 0.0 : s;
+    }
+    float t = clamp(theta / PI, 0.0, 1.0);
+    vec3 dwdx = dFdx(w);
+    vec3 dwdy = dFdy(w);
+    vec2 grad_x = vec2(phi_change(w, dwdx) / (2.0 * PI), dFdx(t));
+    vec2 grad_y = vec2(phi_change(w, dwdy) / (2.0 * PI), dFdy(t));
+    if (output_mode == 1) {
+        frag_color = vec4(s, t, 0.0, 1.0);
+    } else if (seam_safe) {
+        frag_color = vec4(textureGrad(latlong_texture, vec2(s, t), grad_x, grad_y).rgb, 1.0);
+    } else {
+        frag_color = vec4(texture(latlong_texture, vec2(s, t)).rgb, 1.0);
+    }
+}

@@ -1,0 +1,75 @@
+"""The demo's cone mode (the textbook's sphere-mapping experiment) in a real glfw window:
+the first frame is the headless render, and the Down key moves the cone and changes what
+it reflects."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from mirrorlab.envmap_renderer import render_envmap_frame
+from tests.imagecheck import assert_images_close, save_failure
+from tests.window.test_demo import (  # noqa: F401  (xdisplay is a fixture)
+    find_window,
+    press,
+    screenshot,
+    title,
+    wait_for,
+    xdisplay,
+)
+
+WIDTH, HEIGHT = 256, 256
+RUN_CONE_DEMO = (
+    "from mirrorlab.gl.context import use_platform; use_platform('glx')\n"
+    "from mirrorlab.app.demo import run\n"
+    f"raise SystemExit(run(({WIDTH}, {HEIGHT}), (0, 0, 0), scene='cone', "
+    "envmap='sphere-texgen'))\n"
+)
+
+
+@pytest.fixture
+def cone_demo():
+    proc = subprocess.Popen([sys.executable, "-c", RUN_CONE_DEMO], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    yield proc
+    if proc.poll() is None:
+        proc.kill()
+        proc.wait()
+
+
+def test_cone_demo_moves_the_cone_and_its_reflection_changes(xdisplay, cone_demo):  # noqa: F811
+    window = find_window(xdisplay, "mirrorlab demo - cone")
+    headless = render_envmap_frame("cone", "sphere-texgen", (WIDTH, HEIGHT)).image
+
+    def drawn():
+        image = screenshot(window)
+        if image.shape != (HEIGHT, WIDTH, 3):
+            return None
+        return image if np.abs(image.astype(int) - headless.astype(int)).mean() < 2 else None
+
+    try:
+        first = wait_for(drawn, 20, "the first frame to match the headless render")
+    except AssertionError:
+        save_failure("cone_demo_first", screen=screenshot(window), headless=headless)
+        raise
+    assert_images_close("cone_demo_vs_headless", first, headless, channel_tolerance=8,
+                        min_fraction_within=0.99, max_mean_abs=1.0)
+    for height in ("0.75", "0.50", "0.25", "0.00"):  # one key at a time, as a user would
+        press(xdisplay, window, "Down")
+        try:
+            wait_for(lambda h=height: f"height {h}" in title(window) or None, 10,
+                     f"the cone to move down to {height}")
+        except AssertionError:
+            raise AssertionError(f"title is {title(window)!r}") from None
+    lowered = render_envmap_frame("cone", "sphere-texgen", (WIDTH, HEIGHT),
+                                  cone_height=0.0).image
+    second = wait_for(
+        lambda: (lambda img: img if np.abs(img.astype(int) - lowered.astype(int)).mean() < 2
+                 else None)(screenshot(window)), 10, "the frame with the cone lowered")
+    changed = np.abs(second.astype(int) - first.astype(int)).max(axis=-1) > 24
+    assert changed.sum() > 500, "the frame barely changed after Down"
+    press(xdisplay, window, "Escape")
+    assert cone_demo.wait(timeout=15) == 0, cone_demo.stderr.read()
