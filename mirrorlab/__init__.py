@@ -24,6 +24,9 @@ def render(
     method: str = "ortho",
     capture: str = "copy",
     environment_size: int | None = None,
+    scene: str = "lab",
+    envmap: str | None = None,
+    map_size: int = 256,
 ) -> np.ndarray:
     """Render the lab scene headless and return the frame.
 
@@ -37,11 +40,33 @@ def render(
     capture : ``"copy"`` (glCopyTexImage2D) or ``"fbo"`` (drawn into the texture).
     environment_size : side of the square environment texture in pixels; None
         makes it the frame's size.
+    scene : ``"lab"`` (the robot and its mirror; everything above applies), or an
+        environment-mapping scene, ``"cone"`` (the textbook's sphere-map experiment)
+        or ``"sphere"``, which use ``envmap``, ``map_size`` and the scene's own
+        camera unless ``camera``/``target`` differ from the lab's defaults.
+    envmap : ``"sphere"``, ``"sphere-vertex"``, ``"sphere-texgen"``, ``"cube"``,
+        ``"cube-live"``, ``"latlong"`` or ``"normal"``; None picks
+        ``"sphere-texgen"`` for the cone and ``"sphere"`` for the sphere.
+    map_size : environment map side in texels for ``envmap``.
 
     Returns
     -------
     ``(height, width, 3)`` uint8 RGB image, row 0 at the top.
     """
+    if scene != "lab":
+        from mirrorlab.envmap_renderer import render_envmap_frame
+        from mirrorlab.scene.envscenes import build_env_scene
+        from mirrorlab.scene.robot import Camera
+
+        viewer = None
+        if tuple(camera) != DEFAULT_CAMERA or tuple(target) != DEFAULT_TARGET:
+            own = build_env_scene(scene).camera
+            viewer = Camera(eye=tuple(float(v) for v in camera),
+                            target=tuple(float(v) for v in target), fovy=own.fovy)
+        chosen = envmap or ("sphere-texgen" if scene == "cone" else "sphere")
+        return render_envmap_frame(scene, chosen, size, viewer, map_size).image
+    if envmap is not None:
+        raise ValueError("envmap applies to the cone and sphere scenes, not the lab")
     from mirrorlab.headless import render_lab_frame
 
     return render_lab_frame(size, angles, camera, target, method, capture,

@@ -13,6 +13,7 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, fields
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -79,10 +80,13 @@ def image_error(image: np.ndarray, truth: np.ndarray, mask: np.ndarray) -> Image
 
 @dataclass(frozen=True)
 class SweepRow:
-    """One measured configuration. ``map_size`` 0 means the technique has no texture;
-    times are medians in milliseconds (``gpu_ms`` from GL timer queries, NaN where
-    there is no GL work)."""
+    """One measured configuration: ``scene`` ("lab" mirror, or "sphere-sky" and
+    "sphere-objects" for the environment maps),
+    technique, map size (0: the technique has no texture) and viewpoint; times are
+    medians in milliseconds (``gpu_ms`` from GL timer queries, NaN where there is no
+    GL work)."""
 
+    scene: str
     technique: str
     map_size: int
     viewpoint: str
@@ -129,7 +133,6 @@ def run_accuracy(settings: SweepSettings, progress: Progress | None = None) -> l
     """Run the sweep on the lab scene in a headless context; one row per configuration
     and viewpoint, the ray tracer's own rows included (zero error, its time)."""
     from mirrorlab.gl.context import HeadlessContext, check_gl_errors
-    from mirrorlab.gl.opengl import GL
     from mirrorlab.gl.resources import Framebuffer, TimerQuery
     from mirrorlab.raytrace import lab_ray_scene
     from mirrorlab.renderer import Renderer
@@ -157,7 +160,7 @@ def run_accuracy(settings: SweepSettings, progress: Progress | None = None) -> l
                 truth = ray_scene.render(camera.view(), camera.projection(1.0), size)
                 truth_times.append((time.perf_counter() - start) * 1e3)
             truth_image, mask = truth.to_uint8(), truth.reflective_mask
-            rows.append(SweepRow("raytrace", 0, name, 0.0, 0.0, math.inf, 0.0,
+            rows.append(SweepRow("lab", "raytrace", 0, name, 0.0, 0.0, math.inf, 0.0,
                                  float(np.median(truth_times)), math.nan))
             done += 1
             if progress:
@@ -165,30 +168,116 @@ def run_accuracy(settings: SweepSettings, progress: Progress | None = None) -> l
             for label, method, capture, map_size in techniques:
                 env = (map_size, map_size) if map_size else None
                 renderer = Renderer(context.resources, scene, method, capture, env)
-                walls, gpus = [], []
-                for frame in range(settings.warmup + settings.frames):
-                    start = time.perf_counter()
-                    timer.begin()
-                    renderer.render(framebuffer, camera, force_capture=True)
-                    # llvmpipe rasterises lazily, at the next flush: finish inside the
-                    # query, or it would time little more than the command recording.
-                    GL.glFinish()
-                    timer.end()
-                    wall = (time.perf_counter() - start) * 1e3
-                    gpu = timer.milliseconds()
-                    if frame >= settings.warmup:
-                        walls.append(wall)
-                        gpus.append(gpu)
+                wall, gpu = time_frames(
+                    partial(renderer.render, framebuffer, camera, force_capture=True),
+                    timer, settings)
                 image = framebuffer.read()
                 renderer.release()
                 check_gl_errors(f"sweep {label} {map_size} {name}")
                 error = image_error(image, truth_image, mask)
-                rows.append(SweepRow(label, map_size, name, error.mae, error.p95, error.psnr,
-                                     error.share_off, float(np.median(walls)),
-                                     float(np.median(gpus))))
+                rows.append(SweepRow("lab", label, map_size, name, error.mae, error.p95,
+                                     error.psnr, error.share_off, wall, gpu))
                 done += 1
                 if progress:
                     progress(done, total, f"{label} {map_size or ''} {name}")
+        timer.release()
+        framebuffer.release()
+    return rows
+
+
+def time_frames(render_frame: Callable[[], object], timer, settings: SweepSettings,
+                ) -> tuple[float, float]:
+    """Median wall and GL-timer milliseconds of ``settings.frames`` calls of
+    ``render_frame`` after ``settings.warmup`` untimed ones."""
+    from mirrorlab.gl.opengl import GL
+
+    walls, gpus = [], []
+    for frame in range(settings.warmup + settings.frames):
+        start = time.perf_counter()
+        timer.begin()
+        render_frame()
+        # llvmpipe rasterises lazily, at the next flush: finish inside the query, or
+        # it would time little more than the recording of the commands.
+        GL.glFinish()
+        timer.end()
+        wall = (time.perf_counter() - start) * 1e3
+        gpu = timer.milliseconds()
+        if frame >= settings.warmup:
+            walls.append(wall)
+            gpus.append(gpu)
+    return float(np.median(walls)), float(np.median(gpus))
+
+
+ENVMAP_MAX_SIZE = 1024
+"""Largest environment map in the sweep: a 2048 cube is 25 million numpy-baked texels."""
+
+
+def envmap_viewpoints() -> dict[tuple[str, str], Camera]:
+    """The environment-map rows' views of the sphere scene, keyed by (scene, viewpoint).
+
+    Scene ``sphere-sky`` is the sphere in the distant sky alone (what every map can
+    hold), seen from the scene's camera (``default``) and from close up; scene
+    ``sphere-objects`` adds the lit objects around it, which only ``cube-live`` can
+    reflect.
+    """
+    from mirrorlab.scene.envscenes import build_sphere_scene
+
+    default = build_sphere_scene(objects=False).camera
+    close = Camera(eye=(0.6, 0.8, 2.4), target=(0.0, 0.0, 0.0), fovy=40.0)
+    return {("sphere-sky", "default"): default, ("sphere-sky", "close"): close,
+            ("sphere-objects", "default"): default}
+
+
+def run_envmap_accuracy(settings: SweepSettings,
+                        progress: Progress | None = None) -> list[SweepRow]:
+    """Every environment-map technique and map size on the sphere scene, scored inside
+    the sphere (shrunk by one pixel) against a 4 x 4 supersampled ray-traced truth."""
+    from mirrorlab.envmap_renderer import ENVMAP_METHODS, EnvmapRenderer, erode, ground_truth
+    from mirrorlab.gl.context import HeadlessContext, check_gl_errors
+    from mirrorlab.gl.resources import Framebuffer, TimerQuery
+    from mirrorlab.scene.envscenes import build_sphere_scene
+
+    views = envmap_viewpoints()
+    names = list(views)
+    if settings.viewpoints is not None:  # the quick sweep: one view of each scene
+        names = [("sphere-sky", "default"), ("sphere-objects", "default")]
+    sizes = [size for size in settings.sizes if size <= ENVMAP_MAX_SIZE]
+    total = len(names) * (len(ENVMAP_METHODS) * len(sizes) + 1)
+    done = 0
+    rows: list[SweepRow] = []
+    size = (settings.frame, settings.frame)
+    with HeadlessContext() as context:
+        framebuffer = Framebuffer(context.resources, *size)
+        timer = TimerQuery(context.resources)
+        for scene_name, name in names:
+            camera = views[(scene_name, name)]
+            scene = build_sphere_scene(objects=scene_name == "sphere-objects")
+            start = time.perf_counter()
+            truth = ground_truth(scene, camera, size, supersample=4)
+            traced_ms = (time.perf_counter() - start) * 1e3
+            truth_image = truth.to_uint8()
+            mask = erode(truth.reflective_mask, 1)
+            rows.append(SweepRow(scene_name, "raytrace 4x4", 0, name, 0.0, 0.0, math.inf, 0.0,
+                                 traced_ms, math.nan))
+            done += 1
+            if progress:
+                progress(done, total, f"raytrace {scene_name} {name}")
+            for method in ENVMAP_METHODS:
+                for map_size in sizes:
+                    renderer = EnvmapRenderer(context.resources, scene, method, map_size)
+                    live = method == "cube-live"  # time its capture in every frame
+                    wall, gpu = time_frames(
+                        partial(renderer.render, framebuffer, camera, force_capture=live),
+                        timer, settings)
+                    image = framebuffer.read()
+                    renderer.release()
+                    check_gl_errors(f"sweep {method} {map_size} {name}")
+                    error = image_error(image, truth_image, mask)
+                    rows.append(SweepRow(scene_name, method, map_size, name, error.mae,
+                                         error.p95, error.psnr, error.share_off, wall, gpu))
+                    done += 1
+                    if progress:
+                        progress(done, total, f"{method} {map_size} {scene_name} {name}")
         timer.release()
         framebuffer.release()
     return rows
@@ -198,6 +287,7 @@ def run_accuracy(settings: SweepSettings, progress: Progress | None = None) -> l
 class SummaryRow:
     """A technique and size over all viewpoints: mean error figures, median times."""
 
+    scene: str
     technique: str
     map_size: int
     mae: float
@@ -209,16 +299,16 @@ class SummaryRow:
 
 
 def summarise(rows: Sequence[SweepRow]) -> list[SummaryRow]:
-    """Group rows by (technique, size) in first-seen order."""
-    groups: dict[tuple[str, int], list[SweepRow]] = {}
+    """Group rows by (scene, technique, size) in first-seen order."""
+    groups: dict[tuple[str, str, int], list[SweepRow]] = {}
     for row in rows:
-        groups.setdefault((row.technique, row.map_size), []).append(row)
+        groups.setdefault((row.scene, row.technique, row.map_size), []).append(row)
     summary = []
-    for (technique, map_size), group in groups.items():
+    for (scene, technique, map_size), group in groups.items():
         worst = max(group, key=lambda r: r.mae)
         gpu = [r.gpu_ms for r in group if not math.isnan(r.gpu_ms)]
         summary.append(SummaryRow(
-            technique, map_size,
+            scene, technique, map_size,
             float(np.mean([r.mae for r in group])),
             float(np.mean([r.p95 for r in group])),
             float(np.mean([r.share_off for r in group])),
@@ -274,11 +364,15 @@ def format_markdown(table: Sequence[Sequence[str]]) -> str:
     return "\n".join(lines)
 
 
-def plot_summary(summary: Sequence[SummaryRow], path: Path, title: str) -> bool:
-    """Error against time, one marker per technique and size, saved as PNG at ``path``.
+SCENE_TITLES = {"lab": "lab mirror (robot)",
+                "sphere-sky": "environment maps: sphere in the sky",
+                "sphere-objects": "environment maps: sphere among objects"}
 
-    Returns False (and writes nothing) when matplotlib is not installed.
-    """
+
+def plot_summary(summary: Sequence[SummaryRow], path: Path, title: str) -> bool:
+    """Error against time, one marker per technique and size, one panel per scene,
+    saved as PNG at ``path``. Returns False (and writes nothing) when matplotlib is
+    not installed."""
     try:
         import matplotlib
 
@@ -287,24 +381,29 @@ def plot_summary(summary: Sequence[SummaryRow], path: Path, title: str) -> bool:
     except ImportError:
         return False
     markers = "osD^v<>Px*"
-    figure, axes = plt.subplots(figsize=(8, 5.5), dpi=110)
-    techniques = list(dict.fromkeys(r.technique for r in summary))
-    for index, technique in enumerate(techniques):
-        group = [r for r in summary if r.technique == technique]
-        axes.plot([r.wall_ms for r in group], [max(r.mae, 1e-3) for r in group],
-                  marker=markers[index % len(markers)], linestyle="-" if len(group) > 1 else "",
-                  label=technique)
-        for r in group:
-            if r.map_size:
-                axes.annotate(str(r.map_size), (r.wall_ms, max(r.mae, 1e-3)), fontsize=7,
-                              textcoords="offset points", xytext=(4, 3))
-    axes.set_xscale("log")
-    axes.set_yscale("log")
-    axes.set_xlabel("median wall time per frame (ms, log)")
-    axes.set_ylabel("mean absolute error in the mirror (/255, log; 0 drawn at 0.001)")
-    axes.set_title(title)
-    axes.grid(True, which="both", alpha=0.3)
-    axes.legend(fontsize=8)
+    scenes = list(dict.fromkeys(r.scene for r in summary))
+    figure, panels = plt.subplots(1, len(scenes), figsize=(7.5 * len(scenes), 5.5), dpi=100,
+                                  squeeze=False)
+    for axes, scene in zip(panels[0], scenes, strict=True):
+        rows = [r for r in summary if r.scene == scene]
+        techniques = list(dict.fromkeys(r.technique for r in rows))
+        for index, technique in enumerate(techniques):
+            group = [r for r in rows if r.technique == technique]
+            axes.plot([r.wall_ms for r in group], [max(r.mae, 1e-3) for r in group],
+                      marker=markers[index % len(markers)],
+                      linestyle="-" if len(group) > 1 else "", label=technique)
+            for r in group:
+                if r.map_size:
+                    axes.annotate(str(r.map_size), (r.wall_ms, max(r.mae, 1e-3)), fontsize=7,
+                                  textcoords="offset points", xytext=(4, 3))
+        axes.set_xscale("log")
+        axes.set_yscale("log")
+        axes.set_xlabel("median wall time per frame (ms, log)")
+        axes.set_ylabel("mean absolute error, /255 (log; 0 drawn at 0.001)")
+        axes.set_title(SCENE_TITLES.get(scene, scene))
+        axes.grid(True, which="both", alpha=0.3)
+        axes.legend(fontsize=8)
+    figure.suptitle(title)
     figure.tight_layout()
     with io.BytesIO() as buffer:
         figure.savefig(buffer, format="png")

@@ -99,10 +99,23 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--size", default="512x512", help="WIDTHxHEIGHT (default %(default)s)")
     render.add_argument("--angles", default=_joined(DEFAULT_ANGLES),
                         help="joint angles in degrees BASE,LOWER,UPPER (default %(default)s)")
-    render.add_argument("--camera", default=_joined(DEFAULT_CAMERA),
-                        help="viewer position X,Y,Z (default %(default)s)")
-    render.add_argument("--target", default=_joined(DEFAULT_TARGET),
-                        help="point the viewer looks at X,Y,Z (default %(default)s)")
+    render.add_argument("--camera",
+                        help="viewer position X,Y,Z (default: the scene's, for the lab "
+                        f"{_joined(DEFAULT_CAMERA)})")
+    render.add_argument("--target",
+                        help="point the viewer looks at X,Y,Z (default: the scene's, for the "
+                        f"lab {_joined(DEFAULT_TARGET)})")
+    render.add_argument("--scene", default="lab",
+                        help="lab (the robot and its mirror), cone (the textbook's sphere-map "
+                        "experiment) or sphere (a reflective sphere) (default %(default)s)")
+    render.add_argument("--envmap",
+                        help="environment-map technique for the cone and sphere scenes: sphere, "
+                        "sphere-vertex, sphere-texgen, cube, cube-live, latlong, normal "
+                        "(default: sphere-texgen for cone, sphere for sphere)")
+    render.add_argument("--map-size", metavar="N",
+                        help="environment map side in texels for --envmap (default 256)")
+    render.add_argument("--cone-height", metavar="Y",
+                        help="height of the cone's base in the cone scene (default 1)")
     render.add_argument("--save-env", metavar="PATH",
                         help="also write the captured environment texture as a PNG")
     render.add_argument("--method", default="ortho",
@@ -134,6 +147,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--sizes", metavar="N,N,...",
                        help="environment texture sides (default 64,128,256,512,1024,2048)")
     bench.add_argument("--frames", metavar="N", help="timed frames per configuration (default 15)")
+    bench.add_argument("--scene", default="all",
+                       help="lab (the mirror techniques), sphere (the environment maps) or all "
+                       "(default %(default)s)")
 
     demo = commands.add_parser("demo", help="open a window on the lab scene (needs a display)")
     demo.add_argument("--size", default="800x800", help="window WIDTHxHEIGHT (default %(default)s)")
@@ -143,6 +159,12 @@ def build_parser() -> argparse.ArgumentParser:
                       help="close after this many frames (0: run until Esc or the window closes)")
     demo.add_argument("--screenshot", metavar="PATH",
                       help="write the last frame as a PNG when the demo ends")
+    demo.add_argument("--scene", default="lab", help="lab, cone or sphere (default %(default)s)")
+    demo.add_argument("--method", default="ortho",
+                      help="the lab's mirror technique: ortho, reflected or stencil "
+                      "(default %(default)s; M cycles them in the window)")
+    demo.add_argument("--envmap",
+                      help="technique for the cone and sphere scenes (keys 1-7 switch)")
     return parser
 
 
@@ -159,20 +181,54 @@ def parse_choice(option: str, text: str, choices: Sequence[str]) -> str:
     return text
 
 
+ENVMAP_DEFAULTS = {"cone": "sphere-texgen", "sphere": "sphere"}
+
+
+def check_scene_options(args: argparse.Namespace, lab_only: Sequence[str]) -> str:
+    """The scene name, after refusing options that do not fit it (UsageError naming them)."""
+    from mirrorlab.scene.envscenes import ENV_SCENES, ENVMAP_METHODS
+
+    scene = parse_choice("--scene", args.scene, ("lab", *ENV_SCENES))
+    if scene == "lab":
+        if args.envmap is not None:
+            raise UsageError("--envmap: applies to --scene cone or sphere, not the lab")
+        return scene
+    for option in lab_only:
+        if getattr(args, option.lstrip("-").replace("-", "_")) != _LAB_DEFAULTS[option]:
+            raise UsageError(f"{option}: applies to --scene lab only, not {scene}")
+    if args.envmap is None:
+        args.envmap = ENVMAP_DEFAULTS[scene]
+    parse_choice("--envmap", args.envmap, ENVMAP_METHODS)
+    return scene
+
+
+_LAB_DEFAULTS = {"--method": "ortho", "--capture": "copy", "--env-size": None,
+                 "--save-env": None, "--angles": _joined(DEFAULT_ANGLES)}
+
+
 def run_render(args: argparse.Namespace) -> int:
     from mirrorlab.headless import RENDER_METHODS
 
+    scene = check_scene_options(
+        args, ("--method", "--capture", "--env-size", "--save-env", "--angles"))
     size = parse_size("--size", args.size)
     method = parse_choice("--method", args.method, RENDER_METHODS)
     capture = parse_choice("--capture", args.capture, ("copy", "fbo"))
     env_size = parse_count("--env-size", args.env_size) if args.env_size else None
     angles = parse_floats("--angles", args.angles, 3, "BASE,LOWER,UPPER")
-    camera = parse_floats("--camera", args.camera, 3, "X,Y,Z")
-    target = parse_floats("--target", args.target, 3, "X,Y,Z")
+    camera = parse_floats("--camera", args.camera, 3, "X,Y,Z") if args.camera else None
+    target = parse_floats("--target", args.target, 3, "X,Y,Z") if args.target else None
     out = png_path("--out", args.out)
     env_out = png_path("--save-env", args.save_env) if args.save_env else None
+    if scene != "lab":
+        return render_env_scene(args, scene, size, camera, target, out)
+    if args.map_size or args.cone_height:
+        option = "--map-size" if args.map_size else "--cone-height"
+        raise UsageError(f"{option}: applies to --scene cone or sphere, not the lab")
+    camera = camera or DEFAULT_CAMERA
+    target = target or DEFAULT_TARGET
     if camera == target:
-        raise UsageError(f"--camera and --target: must differ, both are {args.camera!r}")
+        raise UsageError(f"--camera and --target: must differ, both are {_joined(camera)!r}")
 
     from mirrorlab.headless import render_lab_frame
 
@@ -188,6 +244,42 @@ def run_render(args: argparse.Namespace) -> int:
         write_png_atomic(env_out, frame.environment)
         print(f"wrote {env_out} (environment capture, "
               f"{frame.environment.shape[1]}x{frame.environment.shape[0]})")
+    return 0
+
+
+def render_env_scene(args: argparse.Namespace, scene: str, size: tuple[int, int],
+                     camera: tuple[float, ...] | None, target: tuple[float, ...] | None,
+                     out: Path) -> int:
+    from mirrorlab.envmap_renderer import DEFAULT_MAP_SIZE, render_envmap_frame
+    from mirrorlab.scene.envscenes import CONE_LIMITS, build_env_scene
+    from mirrorlab.scene.robot import Camera
+
+    map_size = parse_count("--map-size", args.map_size, 4, 4096) if args.map_size else (
+        DEFAULT_MAP_SIZE)
+    cone_height = None
+    if args.cone_height is not None:
+        if scene != "cone":
+            raise UsageError(f"--cone-height: applies to --scene cone, not {scene}")
+        (cone_height,) = parse_floats("--cone-height", args.cone_height, 1, "Y")
+        low, high = CONE_LIMITS
+        if not low <= cone_height <= high:
+            raise UsageError(f"--cone-height: expected a height from {low:g} to {high:g}, "
+                             f"got {args.cone_height!r}")
+    viewer = None
+    if camera or target:
+        own = build_env_scene(scene).camera
+        viewer = Camera(eye=camera or own.eye, target=target or own.target, fovy=own.fovy,
+                        near=own.near, far=own.far)
+        if viewer.eye == viewer.target:
+            raise UsageError(f"--camera and --target: must differ, both are "
+                             f"{_joined(viewer.eye)!r}")
+    start = time.perf_counter()
+    frame = render_envmap_frame(scene, args.envmap, size, viewer, map_size, cone_height)
+    elapsed = time.perf_counter() - start
+    write_png_atomic(out, frame.image)
+    print(f"wrote {out} ({size[0]}x{size[1]}, {scene} scene, {args.envmap} map of "
+          f"{map_size}, passes: {' + '.join(frame.passes)}, {elapsed * 1000:.0f} ms with "
+          f"start-up, {frame.gl_renderer})")
     return 0
 
 
@@ -231,16 +323,24 @@ def run_bench(args: argparse.Namespace) -> int:
     out_dir = Path(args.out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise UsageError(f"--out-dir: {args.out_dir!r} is a file, expected a directory")
-    rows = bench.run_accuracy(settings, bench.progress_bar())
-    table = bench.summary_table(bench.summarise(rows))
-    print(bench.format_text(table))
-    title = (f"mirror accuracy vs time: lab scene, {settings.frame}x{settings.frame} frames, "
-             f"{len({r.viewpoint for r in rows})} viewpoints")
+    parts = parse_choice("--scene", args.scene, ("lab", "sphere", "all"))
+    rows = []
+    if parts in ("lab", "all"):
+        rows += bench.run_accuracy(settings, bench.progress_bar())
+    if parts in ("sphere", "all"):
+        rows += bench.run_envmap_accuracy(settings, bench.progress_bar())
+    summary = bench.summarise(rows)
+    title = (f"accuracy vs time, {settings.frame}x{settings.frame} frames, llvmpipe; "
+             f"medians of {settings.frames} frames")
+    markdown = [title, ""]
+    for scene in dict.fromkeys(r.scene for r in summary):
+        table = bench.summary_table([r for r in summary if r.scene == scene])
+        print(f"\n{bench.SCENE_TITLES[scene]}:\n{bench.format_text(table)}")
+        markdown += [f"### {bench.SCENE_TITLES[scene]}", "", bench.format_markdown(table), ""]
     bench.write_bytes_atomic(out_dir / "accuracy.csv", bench.rows_to_csv(rows).encode())
-    markdown = f"{title}\n\n{bench.format_markdown(table)}\n"
-    bench.write_bytes_atomic(out_dir / "accuracy.md", markdown.encode())
+    bench.write_bytes_atomic(out_dir / "accuracy.md", "\n".join(markdown).encode())
     written = ["accuracy.csv", "accuracy.md"]
-    if bench.plot_summary(bench.summarise(rows), out_dir / "accuracy.png", title):
+    if bench.plot_summary(summary, out_dir / "accuracy.png", title):
         written.append("accuracy.png")
     else:
         print("matplotlib is not installed, so no plot (pip install 'mirrorlab[plot]')")
@@ -249,8 +349,12 @@ def run_bench(args: argparse.Namespace) -> int:
 
 
 def run_demo(args: argparse.Namespace) -> int:
+    from mirrorlab.plan import METHODS
+
+    scene = check_scene_options(args, ("--method", "--angles"))
     size = parse_size("--size", args.size)
     angles = parse_floats("--angles", args.angles, 3, "BASE,LOWER,UPPER")
+    method = parse_choice("--method", args.method, METHODS)
     screenshot = png_path("--screenshot", args.screenshot) if args.screenshot else None
     if args.max_frames < 0:
         raise UsageError(f"--max-frames: expected 0 or more, got {args.max_frames}")
@@ -261,7 +365,8 @@ def run_demo(args: argparse.Namespace) -> int:
     from mirrorlab.app.demo import run
 
     return run(size, angles, max_frames=args.max_frames, screenshot=screenshot,
-               save_png=write_png_atomic)
+               save_png=write_png_atomic, scene=scene, envmap=args.envmap or "sphere-texgen",
+               method=method)
 
 
 VECTOR_OPTIONS = ("--angles", "--camera", "--target")

@@ -178,9 +178,11 @@ class EnvmapRenderer:
             return PlannedPass("sphere-bake", True, "the view turned (sphere maps are eye-space)")
         return PlannedPass("sphere-bake", False, "the view direction is unchanged")
 
-    def _needs_capture(self) -> PlannedPass:
+    def _needs_capture(self, force: bool) -> PlannedPass:
         if self.method != "cube-live":
             return PlannedPass("cube-capture", False, f"{self.method} captures nothing live")
+        if force:
+            return PlannedPass("cube-capture", True, "capture forced (e.g. for a benchmark)")
         if self._captured_revision is None:
             return PlannedPass("cube-capture", True, "the live cube map is still blank")
         if self._captured_revision != self.scene.revision:
@@ -201,18 +203,20 @@ class EnvmapRenderer:
         GL.glGenerateMipmap(GL.GL_TEXTURE_2D)
         self._baked_rotation = rotation
 
-    def render(self, target: RenderTarget, camera: Camera, output: int = 0) -> EnvFrameStats:
+    def render(self, target: RenderTarget, camera: Camera, output: int = 0,
+               force_capture: bool = False) -> EnvFrameStats:
         """Draw one frame of ``camera``'s view into ``target`` (Framebuffer or window).
 
         ``output`` 1 makes the reflector show its lookup coordinates instead of colours
         (see :mod:`mirrorlab.passes.envmap`; for numerical checks in a float target).
+        ``force_capture`` re-captures a live cube map even when nothing changed.
         """
         from mirrorlab.gl.opengl import GL
 
         width, height = target.size
         view = camera.view()
         projection = camera.projection(width / height)
-        bake, capture = self._needs_sphere_bake(view), self._needs_capture()
+        bake, capture = self._needs_sphere_bake(view), self._needs_capture(force_capture)
         draws = 0
         if bake.runs:
             self.bake_sphere_map(view)

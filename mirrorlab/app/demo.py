@@ -2,12 +2,13 @@
 
 Keys: Left/Right turn the base, Up/Down the lower arm, Shift+Up/Down (or
 PageUp/PageDown) the upper arm; A/D and W/S orbit the camera, +/- or the
-scroll wheel zoom, dragging with the left mouse button orbits too; R resets,
-H prints this help, Esc quits.
+scroll wheel zoom, dragging with the left mouse button orbits too; M cycles the
+mirror technique (ortho, reflected, stencil); R resets, H prints this help, Esc quits.
 
-The capture pass runs only when the robot moved or the window was resized:
-orbiting the camera re-uses the capture, since the lab's orthographic
-capture does not depend on the viewer.
+With the lab's ortho technique the capture runs only when the robot moved or
+the window was resized: orbiting the camera re-uses the capture, since the
+orthographic capture does not depend on the viewer. The reflected technique
+re-captures whenever the viewer moves; stencil needs no capture.
 
 Environment-mapping scenes (``run(..., scene="cone")``, the textbook's
 sphere-mapping experiment, or ``scene="sphere"``): Up/Down move the reflective
@@ -84,18 +85,20 @@ class Orbit:
 class DemoApp:
     """Scene, orbit camera and renderer of one demo window; input handlers change them."""
 
-    def __init__(self, context: WindowContext, angles: Sequence[float]) -> None:
+    def __init__(self, context: WindowContext, angles: Sequence[float],
+                 method: str = "ortho") -> None:
         import glfw
 
         from mirrorlab.gl.resources import DefaultFramebuffer
         from mirrorlab.renderer import Renderer
 
         self.context = context
+        self.method = method
         self.initial_angles = tuple(float(a) for a in angles)
         self.scene = build_lab_scene(self.initial_angles)
         self.orbit = Orbit.from_eye(DEFAULT_CAMERA, DEFAULT_TARGET)
         self.target = DefaultFramebuffer(context.framebuffer_size)
-        self.renderer = Renderer(context.resources, self.scene)
+        self.renderer = Renderer(context.resources, self.scene, method)
         self._drag_from: tuple[float, float] | None = None
         self.frames = 0
         self.captures = 0
@@ -113,6 +116,15 @@ class DemoApp:
     def reset(self) -> None:
         self.scene.set_angles(self.initial_angles)
         self.orbit = Orbit.from_eye(DEFAULT_CAMERA, DEFAULT_TARGET)
+
+    def next_method(self) -> None:
+        """Switch to the next mirror technique (a fresh renderer; the old one is released)."""
+        from mirrorlab.plan import METHODS
+        from mirrorlab.renderer import Renderer
+
+        self.method = METHODS[(METHODS.index(self.method) + 1) % len(METHODS)]
+        self.renderer.release()
+        self.renderer = Renderer(self.context.resources, self.scene, self.method)
 
     def on_key(self, window, key: int, scancode: int, action: int, mods: int) -> None:
         import glfw
@@ -142,6 +154,8 @@ class DemoApp:
             self.orbit.zoom(ZOOM_FACTOR)
         elif key == glfw.KEY_R:
             self.reset()
+        elif key == glfw.KEY_M and action == glfw.PRESS:
+            self.next_method()
         elif key == glfw.KEY_H and action == glfw.PRESS:
             print(HELP, flush=True)
 
@@ -167,12 +181,12 @@ class DemoApp:
             return
         stats = self.renderer.render(self.target, self.orbit.camera())
         self.frames += 1
-        self.captures += "capture" in stats.ran
+        self.captures += bool({"capture", "reflected-capture"} & set(stats.ran))
 
     def title(self, fps: float) -> str:
         base, lower, upper = self.scene.angles
         return (f"mirrorlab demo - base {base:.0f} lower {lower:.0f} upper {upper:.0f} deg - "
-                f"{fps:.0f} fps, {self.captures} captures - H for help")
+                f"{self.method} - {fps:.0f} fps, {self.captures} captures - H for help")
 
 
 class EnvDemoApp:
@@ -272,12 +286,13 @@ class EnvDemoApp:
 def run(size: tuple[int, int], angles: Sequence[float], max_frames: int = 0,
         screenshot: Path | None = None,
         save_png: Callable[[Path, np.ndarray], None] | None = None,
-        scene: str = "lab", envmap: str = "sphere-texgen") -> int:
+        scene: str = "lab", envmap: str = "sphere-texgen", method: str = "ortho") -> int:
     """Open the window and run until Esc, the window closes, or ``max_frames`` frames.
 
-    ``scene`` is ``"lab"`` (the robot and its mirror; ``envmap`` is unused) or an
-    environment-mapping scene (``"cone"``, ``"sphere"``) drawn with technique
-    ``envmap``. With ``screenshot``, the last frame drawn is written there by ``save_png``.
+    ``scene`` is ``"lab"`` (the robot and its mirror, drawn with mirror technique
+    ``method``; ``envmap`` is unused) or an environment-mapping scene (``"cone"``,
+    ``"sphere"``) drawn with technique ``envmap``. With ``screenshot``, the last frame
+    drawn is written there by ``save_png``.
     """
     import glfw
 
@@ -289,7 +304,7 @@ def run(size: tuple[int, int], angles: Sequence[float], max_frames: int = 0,
     context = WindowContext(size[0], size[1], "mirrorlab demo")
     try:
         if scene == "lab":
-            app: DemoApp | EnvDemoApp = DemoApp(context, angles)
+            app: DemoApp | EnvDemoApp = DemoApp(context, angles, method)
             help_text = HELP
         else:
             app = EnvDemoApp(context, scene, envmap)

@@ -17,20 +17,27 @@ from tests.imagecheck import assert_images_close
 def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     assert main(["bench", "accuracy", "--quick", "--out-dir", str(tmp_path)]) == 0
     out = capsys.readouterr()
-    assert "technique" in out.out and "reflected-fbo" in out.out
-    assert "20/20" in out.err  # the progress bar reached the end
+    assert "technique" in out.out and "reflected-fbo" in out.out and "cube-live" in out.out
+    # the progress bars reached their ends: lab 2 viewpoints x (ray tracer + 2 methods x
+    # 2 captures x 2 sizes + stencil); spheres 2 views x (ray tracer + 7 maps x 2 sizes)
+    assert "20/20" in out.err and "30/30" in out.err
     with open(tmp_path / "accuracy.csv") as stream:
         table = list(csv.DictReader(stream))
-    # 2 viewpoints x (ray tracer + 2 methods x 2 captures x 2 sizes + stencil)
-    assert len(table) == 20
-    by_key = {(r["technique"], r["map_size"], r["viewpoint"]): r for r in table}
-    assert float(by_key[("raytrace", "0", "60 deg")]["mae"]) == 0.0
-    ortho = float(by_key[("ortho-copy", "128", "60 deg")]["mae"])
-    reflected = float(by_key[("reflected-copy", "128", "60 deg")]["mae"])
-    stencil = float(by_key[("stencil", "0", "60 deg")]["mae"])
+    assert len(table) == 50
+    by_key = {(r["scene"], r["technique"], r["map_size"], r["viewpoint"]): r for r in table}
+    assert float(by_key[("lab", "raytrace", "0", "60 deg")]["mae"]) == 0.0
+    ortho = float(by_key[("lab", "ortho-copy", "128", "60 deg")]["mae"])
+    reflected = float(by_key[("lab", "reflected-copy", "128", "60 deg")]["mae"])
+    stencil = float(by_key[("lab", "stencil", "0", "60 deg")]["mae"])
     assert reflected < 0.2 * ortho and stencil < 0.2 * ortho
+    sky = {r["technique"]: float(r["mae"]) for r in table
+           if r["scene"] == "sphere-sky" and r["map_size"] == "128"}
+    assert set(sky) == {"sphere", "sphere-vertex", "sphere-texgen", "cube", "cube-live",
+                        "latlong", "normal"}
+    assert sky["sphere"] < sky["normal"] and sky["cube"] < sky["normal"]
     assert all(float(r["wall_ms"]) > 0 for r in table)
-    assert "| technique |" in (tmp_path / "accuracy.md").read_text()
+    markdown = (tmp_path / "accuracy.md").read_text()
+    assert markdown.count("| technique |") == 3
     with Image.open(tmp_path / "accuracy.png") as plot:
         assert plot.size[0] > 400 and np.asarray(plot.convert("L")).std() > 10
 
@@ -80,6 +87,45 @@ def test_render_command_refuses_bad_technique_options(tmp_path, capsys, args, op
     error = capsys.readouterr().err.strip()
     assert error.count("\n") == 0 and option in error
     assert not out.exists()
+
+
+@pytest.mark.parametrize("args", [
+    ["--scene", "cone"],
+    ["--scene", "sphere", "--envmap", "cube-live", "--map-size", "32"],
+    ["--scene", "sphere", "--envmap", "latlong", "--camera", "0,0,5"],
+])
+def test_render_command_draws_the_environment_map_scenes(tmp_path, capsys, args):
+    out = tmp_path / "env.png"
+    assert main(["render", *args, "--size", "64x64", "--out", str(out)]) == 0
+    assert "scene" in capsys.readouterr().out
+    with Image.open(out) as image:
+        assert image.size == (64, 64) and np.asarray(image).std() > 5
+
+
+@pytest.mark.parametrize("args, option", [
+    (["--scene", "cone", "--method", "stencil"], "--method"),
+    (["--envmap", "cube"], "--envmap"),
+    (["--scene", "sphere", "--envmap", "mirror"], "--envmap"),
+    (["--scene", "sphere", "--cone-height", "1"], "--cone-height"),
+    (["--scene", "cone", "--cone-height", "7"], "--cone-height"),
+    (["--scene", "sphere", "--map-size", "2"], "--map-size"),
+    (["--scene", "moon"], "--scene"),
+])
+def test_render_command_refuses_options_that_do_not_fit_the_scene(tmp_path, capsys, args,
+                                                                  option):
+    out = tmp_path / "x.png"
+    assert main(["render", "--out", str(out), *args]) == 2
+    error = capsys.readouterr().err.strip()
+    assert error.count("\n") == 0 and option in error
+    assert not out.exists()
+
+
+def test_api_renders_the_environment_map_scenes():
+    sphere = mirrorlab.render(size=(48, 48), scene="sphere", envmap="cube")
+    cone = mirrorlab.render(size=(48, 48), scene="cone")
+    assert sphere.shape == cone.shape == (48, 48, 3) and not np.array_equal(sphere, cone)
+    with pytest.raises(ValueError, match="envmap"):
+        mirrorlab.render(size=(48, 48), envmap="cube")
 
 
 def test_plan_command_explains_what_runs(capsys):

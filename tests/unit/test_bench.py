@@ -35,20 +35,22 @@ def test_identical_images_and_empty_masks_score_zero():
 def rows():
     make = bench.SweepRow
     return [
-        make("ortho-copy", 64, "a", 4.0, 30.0, 20.0, 0.2, 5.0, 4.0),
-        make("ortho-copy", 64, "b", 2.0, 10.0, 25.0, 0.1, 7.0, 6.0),
-        make("stencil", 0, "a", 0.0, 0.0, math.inf, 0.0, 3.0, math.nan),
-        make("stencil", 0, "b", 0.1, 1.0, 50.0, 0.0, 4.0, math.nan),
+        make("lab", "ortho-copy", 64, "a", 4.0, 30.0, 20.0, 0.2, 5.0, 4.0),
+        make("lab", "ortho-copy", 64, "b", 2.0, 10.0, 25.0, 0.1, 7.0, 6.0),
+        make("lab", "stencil", 0, "a", 0.0, 0.0, math.inf, 0.0, 3.0, math.nan),
+        make("lab", "stencil", 0, "b", 0.1, 1.0, 50.0, 0.0, 4.0, math.nan),
+        make("sphere-sky", "stencil", 0, "a", 9.0, 9.0, 9.0, 0.9, 9.0, 9.0),
     ]
 
 
 def test_summary_averages_errors_and_takes_median_times_per_technique_and_size():
     summary = bench.summarise(rows())
-    assert [(s.technique, s.map_size) for s in summary] == [("ortho-copy", 64), ("stencil", 0)]
-    ortho, stencil = summary
+    assert [(s.scene, s.technique, s.map_size) for s in summary] == [
+        ("lab", "ortho-copy", 64), ("lab", "stencil", 0), ("sphere-sky", "stencil", 0)]
+    ortho, stencil, _ = summary
     assert ortho.mae == 3.0 and ortho.wall_ms == 6.0 and ortho.worst_viewpoint == "a"
     assert math.isnan(stencil.gpu_ms) and stencil.worst_viewpoint == "b"
-    table = bench.summary_table(summary)
+    table = bench.summary_table(summary[:2])
     assert table[2][1] == "-" and table[2][6] == "-"
     text = bench.format_text(table)
     assert text.splitlines()[0].startswith("technique") and "ortho-copy" in text
@@ -59,8 +61,8 @@ def test_summary_averages_errors_and_takes_median_times_per_technique_and_size()
 def test_csv_has_a_header_and_one_line_per_row():
     text = bench.rows_to_csv(rows())
     lines = text.strip().splitlines()
-    assert lines[0].startswith("technique,map_size,viewpoint,mae")
-    assert len(lines) == 5 and ",inf," in lines[3]
+    assert lines[0].startswith("scene,technique,map_size,viewpoint,mae")
+    assert len(lines) == 6 and ",inf," in lines[3]
 
 
 def test_without_matplotlib_no_plot_is_written(tmp_path, monkeypatch):

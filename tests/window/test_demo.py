@@ -134,20 +134,32 @@ def test_demo_window_draws_both_passes_answers_keys_and_quits_on_escape(xdisplay
     _, moved = expected_hand_pixels((-30.0, 30.0, -75.0))
     assert red_dominant(near(second, moved, 2)).any(), "reflection did not follow the joint"
 
+    press(xdisplay, window, "m")  # the next mirror technique: reflected
+    wait_for(lambda: " - reflected - " in title(window) or None, 5,
+             "the title to name the reflected technique")
+
+    def reflected_drawn():
+        image = screenshot(window)
+        return image if (np.abs(image.astype(int) - second.astype(int)).max(axis=-1)
+                         > 24).sum() > 50 else None
+
+    wait_for(reflected_drawn, 10, "the reflection to change with the technique")
+
     press(xdisplay, window, "Escape")
     assert demo.wait(timeout=15) == 0, demo.stderr.read()
 
 
-def test_demo_screenshot_matches_the_headless_render(tmp_path):
+@pytest.mark.parametrize("method", ["ortho", "stencil"])
+def test_demo_screenshot_matches_the_headless_render(tmp_path, method):
     shot = tmp_path / "demo.png"
     result = subprocess.run(
         [sys.executable, "-m", "mirrorlab.cli", "demo", "--size", f"{WIDTH}x{HEIGHT}",
-         "--max-frames", "3", "--screenshot", str(shot)],
+         "--method", method, "--max-frames", "3", "--screenshot", str(shot)],
         capture_output=True, text=True, timeout=60)
     assert result.returncode == 0, result.stderr
     window_frame = np.asarray(Image.open(shot).convert("RGB"))
     import mirrorlab
 
-    headless = mirrorlab.render(size=(WIDTH, HEIGHT))  # EGL, in this test's own process
-    assert_images_close("demo_vs_headless", window_frame, headless, channel_tolerance=8,
+    headless = mirrorlab.render(size=(WIDTH, HEIGHT), method=method)  # EGL, this process
+    assert_images_close(f"demo_vs_headless_{method}", window_frame, headless, channel_tolerance=8,
                         min_fraction_within=0.99, max_mean_abs=1.0)
