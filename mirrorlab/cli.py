@@ -147,6 +147,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--sizes", metavar="N,N,...",
                        help="environment texture sides (default 64,128,256,512,1024,2048)")
     bench.add_argument("--frames", metavar="N", help="timed frames per configuration (default 15)")
+    bench.add_argument("--from-csv", metavar="PATH",
+                       help="measure nothing: re-make the tables and plot from a saved "
+                       "accuracy.csv")
     bench.add_argument("--scene", default="all",
                        help="lab (the mirror techniques), sphere (the environment maps) or all "
                        "(default %(default)s)")
@@ -320,26 +323,37 @@ def run_bench(args: argparse.Namespace) -> int:
         changes["frames"] = parse_count("--frames", args.frames, 1, 10000)
     if changes:
         settings = dataclasses.replace(settings, **changes)
+    scenes = parse_choice("--scene", args.scene, ("lab", "sphere", "all"))
     out_dir = Path(args.out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise UsageError(f"--out-dir: {args.out_dir!r} is a file, expected a directory")
-    parts = parse_choice("--scene", args.scene, ("lab", "sphere", "all"))
-    rows = []
-    if parts in ("lab", "all"):
-        rows += bench.run_accuracy(settings, bench.progress_bar())
-    if parts in ("sphere", "all"):
-        rows += bench.run_envmap_accuracy(settings, bench.progress_bar())
+    if args.from_csv:
+        source = Path(args.from_csv)
+        try:
+            rows = bench.rows_from_csv(source.read_text())
+        except (OSError, UnicodeDecodeError) as exc:
+            raise UsageError(f"--from-csv: cannot read {source}: {exc}") from None
+        except ValueError as exc:
+            raise UsageError(f"--from-csv: {source}: {exc}") from None
+        title = f"accuracy vs time, from {source.name}"
+    else:
+        rows = []
+        if scenes in ("lab", "all"):
+            rows += bench.run_accuracy(settings, bench.progress_bar())
+        if scenes in ("sphere", "all"):
+            rows += bench.run_envmap_accuracy(settings, bench.progress_bar())
+        title = (f"accuracy vs time, {settings.frame}x{settings.frame} frames, llvmpipe; "
+                 f"medians of {settings.frames} frames")
+        bench.write_bytes_atomic(out_dir / "accuracy.csv", bench.rows_to_csv(rows).encode())
     summary = bench.summarise(rows)
-    title = (f"accuracy vs time, {settings.frame}x{settings.frame} frames, llvmpipe; "
-             f"medians of {settings.frames} frames")
     markdown = [title, ""]
     for scene in dict.fromkeys(r.scene for r in summary):
         table = bench.summary_table([r for r in summary if r.scene == scene])
-        print(f"\n{bench.SCENE_TITLES[scene]}:\n{bench.format_text(table)}")
-        markdown += [f"### {bench.SCENE_TITLES[scene]}", "", bench.format_markdown(table), ""]
-    bench.write_bytes_atomic(out_dir / "accuracy.csv", bench.rows_to_csv(rows).encode())
+        heading = bench.SCENE_TITLES.get(scene, scene)
+        print(f"\n{heading}:\n{bench.format_text(table)}")
+        markdown += [f"### {heading}", "", bench.format_markdown(table), ""]
     bench.write_bytes_atomic(out_dir / "accuracy.md", "\n".join(markdown).encode())
-    written = ["accuracy.csv", "accuracy.md"]
+    written = ["accuracy.md"] if args.from_csv else ["accuracy.csv", "accuracy.md"]
     if bench.plot_summary(summary, out_dir / "accuracy.png", title):
         written.append("accuracy.png")
     else:

@@ -120,7 +120,7 @@ class EnvmapRenderer:
         self.scene = scene
         self._registry = registry
         self._owned: list = []
-        self.drawer = SceneDrawer(registry, scene)  # type: ignore[arg-type]
+        self.drawer = SceneDrawer(registry, scene)
         self.sky_map = TextureCube.from_faces(registry, _cube_faces(scene, SKY_SIZE))
         self.sky_pass = SkyPass(registry, self.sky_map)
         self._owned += [self.drawer, self.sky_pass, self.sky_map]

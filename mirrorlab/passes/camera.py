@@ -10,7 +10,7 @@ from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import MeshBuffer, Program, RenderTarget, Texture2D
 from mirrorlab.passes.capture import clear_to_background
 from mirrorlab.passes.scene_draw import SceneDrawer
-from mirrorlab.scene.robot import Camera, Mirror
+from mirrorlab.scene.robot import Camera, LabScene, Mirror
 
 
 def mirror_vertices(mirror: Mirror) -> tuple[np.ndarray, np.ndarray]:
@@ -39,15 +39,16 @@ class CameraPass:
 
     name = "camera"
 
-    def __init__(self, registry: ResourceRegistry, drawer: SceneDrawer,
+    def __init__(self, registry: ResourceRegistry, scene: LabScene, drawer: SceneDrawer,
                  environment: Texture2D) -> None:
+        self.scene = scene
         self.drawer = drawer
         self.environment = environment
         self.program = Program(registry, "mirror.vert", "mirror.frag")
-        self.quad = MeshBuffer(registry, *mirror_vertices(drawer.scene.mirror))
+        self.quad = MeshBuffer(registry, *mirror_vertices(scene.mirror))
         self.program.use()
         self.program.set_int("environment", 0)
-        self.program.set_vec3("backing_color", drawer.scene.mirror_backing)
+        self.program.set_vec3("backing_color", scene.mirror_backing)
 
     def release(self) -> None:
         """Free the mirror's program and quad (not the shared drawer or texture)."""
@@ -60,7 +61,7 @@ class CameraPass:
         width, height = target.size
         target.bind()
         GL.glViewport(0, 0, width, height)
-        clear_to_background(self.drawer.scene.background)
+        clear_to_background(self.scene.background)
         view_projection = viewer_view_projection(camera, target)
         draws = self.drawer.draw(view_projection)
         if not draw_mirror:

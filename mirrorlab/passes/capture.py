@@ -10,6 +10,7 @@ from mirrorlab.gl.context import ResourceRegistry
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Framebuffer, RenderTarget, Texture2D, TextureFramebuffer
 from mirrorlab.passes.scene_draw import SceneDrawer
+from mirrorlab.scene.robot import LabScene
 
 CaptureMode = Literal["copy", "fbo"]
 CAPTURE_MODES: tuple[CaptureMode, ...] = ("copy", "fbo")
@@ -97,13 +98,15 @@ class CapturePass:
 
     name = "capture"
 
-    def __init__(self, drawer: SceneDrawer, capture: EnvironmentCapture) -> None:
+    def __init__(self, scene: LabScene, drawer: SceneDrawer,
+                 capture: EnvironmentCapture) -> None:
+        self.scene = scene
         self.drawer = drawer
         self.capture = capture
 
     def run(self, frame_target: RenderTarget) -> int:
         """Returns the number of draw calls."""
-        scene = self.drawer.scene
+        scene = self.scene
         target = self.capture.begin(frame_target)
         clear_to_background(scene.background)
         view_projection = scene.capture.projection() @ scene.capture.view()

@@ -10,7 +10,7 @@ from mirrorlab import math3d
 from mirrorlab.gl.resources import RenderTarget
 from mirrorlab.passes.capture import EnvironmentCapture, clear_to_background
 from mirrorlab.passes.scene_draw import SceneDrawer
-from mirrorlab.scene.robot import Camera, Mirror
+from mirrorlab.scene.robot import Camera, LabScene, Mirror
 
 # Clip space [-1, 1] to texture space [0, 1].
 _BIAS = np.array([[0.5, 0, 0, 0.5], [0, 0.5, 0, 0.5], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]])
@@ -55,7 +55,9 @@ class ReflectedCapturePass:
 
     name = "reflected-capture"
 
-    def __init__(self, drawer: SceneDrawer, capture: EnvironmentCapture) -> None:
+    def __init__(self, scene: LabScene, drawer: SceneDrawer,
+                 capture: EnvironmentCapture) -> None:
+        self.scene = scene
         self.drawer = drawer
         self.capture = capture
         self.texture_matrix = np.eye(4)
@@ -63,7 +65,7 @@ class ReflectedCapturePass:
     def run(self, frame_target: RenderTarget, camera: Camera) -> int:
         """Returns the number of draw calls. The capture uses the frame's aspect ratio
         whatever the texture's size, so texels stretch rather than the view."""
-        scene = self.drawer.scene
+        scene = self.scene
         width, height = frame_target.size
         view_projection = reflected_view_projection(camera, scene.mirror, width / height)
         target = self.capture.begin(frame_target)

@@ -2,13 +2,27 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import Protocol
+
 import numpy as np
 
 from mirrorlab import math3d
 from mirrorlab.gl.context import ResourceRegistry
 from mirrorlab.gl.resources import MeshBuffer, Program, Texture2D
+from mirrorlab.scene.graph import SceneGraph
 from mirrorlab.scene.mesh import load_model, load_texture
-from mirrorlab.scene.robot import LabScene
+
+
+class LitScene(Protocol):
+    """What the drawer needs of a scene: its graph and its light (the lab scene and the
+    environment-mapping scenes both have them). ``light_direction`` points towards a
+    directional light; ``ambient`` and ``diffuse`` weight it."""
+
+    graph: SceneGraph
+    light_direction: Sequence[float]
+    ambient: float
+    diffuse: float
 
 
 class SceneDrawer:
@@ -18,7 +32,7 @@ class SceneDrawer:
     call per node.
     """
 
-    def __init__(self, registry: ResourceRegistry, scene: LabScene) -> None:
+    def __init__(self, registry: ResourceRegistry, scene: LitScene) -> None:
         self.scene = scene
         self.program = Program(registry, "scene.vert", "scene.frag")
         self.meshes: dict[str, MeshBuffer] = {}

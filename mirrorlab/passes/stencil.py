@@ -12,6 +12,7 @@ from mirrorlab.gl.resources import MeshBuffer, Program
 from mirrorlab.passes.camera import mirror_vertices
 from mirrorlab.passes.reflected import mirror_plane
 from mirrorlab.passes.scene_draw import SceneDrawer
+from mirrorlab.scene.robot import LabScene
 
 
 class StencilReflectionPass:
@@ -29,11 +30,12 @@ class StencilReflectionPass:
 
     name = "stencil-reflection"
 
-    def __init__(self, registry: ResourceRegistry, drawer: SceneDrawer) -> None:
+    def __init__(self, registry: ResourceRegistry, scene: LabScene, drawer: SceneDrawer) -> None:
+        self.scene = scene
         self.drawer = drawer
         self.program = Program(registry, "flat.vert", "flat.frag")
-        self.quad = MeshBuffer(registry, *mirror_vertices(drawer.scene.mirror))
-        self.plane = mirror_plane(drawer.scene.mirror)
+        self.quad = MeshBuffer(registry, *mirror_vertices(scene.mirror))
+        self.plane = mirror_plane(scene.mirror)
         self.reflection = math3d.reflection_matrix(self.plane)
 
     def release(self) -> None:
@@ -52,13 +54,13 @@ class StencilReflectionPass:
         """The mirror's back face in its backing colour; returns the draw count (1)."""
         GL.glEnable(GL.GL_CULL_FACE)
         GL.glCullFace(GL.GL_FRONT)
-        self._flat_quad(view_projection, self.drawer.scene.mirror_backing, far_depth=False)
+        self._flat_quad(view_projection, self.scene.mirror_backing, far_depth=False)
         GL.glCullFace(GL.GL_BACK)
         return 1
 
     def run(self, view_projection: np.ndarray) -> int:
         """Draw the reflection into the bound target; returns the number of draw calls."""
-        scene = self.drawer.scene
+        scene = self.scene
         GL.glEnable(GL.GL_CULL_FACE)
         GL.glEnable(GL.GL_STENCIL_TEST)
         GL.glStencilMask(0xFF)

@@ -38,6 +38,13 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     assert all(float(r["wall_ms"]) > 0 for r in table)
     markdown = (tmp_path / "accuracy.md").read_text()
     assert markdown.count("| technique |") == 3
+    # Re-making the report from the CSV measures nothing and gives the same tables.
+    (tmp_path / "accuracy.md").unlink()
+    again = tmp_path / "again"
+    assert main(["bench", "accuracy", "--from-csv", str(tmp_path / "accuracy.csv"),
+                 "--out-dir", str(again)]) == 0
+    assert (again / "accuracy.md").read_text().split("\n", 1)[1] == markdown.split("\n", 1)[1]
+    assert (again / "accuracy.png").exists() and not (again / "accuracy.csv").exists()
     with Image.open(tmp_path / "accuracy.png") as plot:
         assert plot.size[0] > 400 and np.asarray(plot.convert("L")).std() > 10
 
@@ -48,9 +55,10 @@ def test_bench_refuses_a_file_as_its_folder_and_unknown_benchmarks(tmp_path, cap
     assert main(["bench", "accuracy", "--quick", "--out-dir", str(blocker)]) == 2
     assert main(["bench", "speed"]) == 2
     assert main(["bench", "accuracy", "--sizes", "64,zero"]) == 2
+    assert main(["bench", "accuracy", "--from-csv", str(blocker)]) == 2
     errors = capsys.readouterr().err.strip().splitlines()
-    assert len(errors) == 3 and "--out-dir" in errors[0] and "accuracy" in errors[1]
-    assert "--sizes" in errors[2]
+    assert len(errors) == 4 and "--out-dir" in errors[0] and "accuracy" in errors[1]
+    assert "--sizes" in errors[2] and "--from-csv" in errors[3]
     assert blocker.read_text() == "keep me"
 
 

@@ -75,3 +75,21 @@ def test_the_viewpoints_look_at_the_mirror_from_its_front():
     for name, camera in bench.lab_viewpoints().items():
         assert camera.eye[0] > -7.0, name
         assert camera.target == (-7.0, 1.0, -2.0)
+
+
+def test_csv_round_trip_keeps_every_field():
+    again = bench.rows_from_csv(bench.rows_to_csv(rows()))
+    assert len(again) == len(rows())
+    for before, after in zip(rows(), again, strict=True):
+        assert (before.scene, before.technique, before.map_size, before.viewpoint) == (
+            after.scene, after.technique, after.map_size, after.viewpoint)
+        for name in ("mae", "p95", "psnr", "share_off", "wall_ms", "gpu_ms"):
+            a, b = getattr(before, name), getattr(after, name)
+            assert (math.isnan(a) and math.isnan(b)) or a == pytest.approx(b, rel=1e-3)
+
+
+def test_a_csv_with_other_columns_is_refused():
+    with pytest.raises(ValueError, match="expected the columns"):
+        bench.rows_from_csv("technique,mae\nx,1\n")
+    with pytest.raises(ValueError, match="line 2"):
+        bench.rows_from_csv(bench.rows_to_csv(rows()).replace(",64,", ",sixty-four,", 1))
