@@ -132,7 +132,7 @@ def lab_techniques(sizes: Sequence[int]) -> list[tuple[str, str, str, int]]:
 def run_accuracy(settings: SweepSettings, progress: Progress | None = None) -> list[SweepRow]:
     """Run the sweep on the lab scene in a headless context; one row per configuration
     and viewpoint, the ray tracer's own rows included (zero error, its time)."""
-    from mirrorlab.gl.context import HeadlessContext, check_gl_errors
+    from mirrorlab.gl.context import HeadlessContext
     from mirrorlab.gl.resources import Framebuffer, TimerQuery
     from mirrorlab.raytrace import lab_ray_scene
     from mirrorlab.renderer import Renderer
@@ -168,13 +168,9 @@ def run_accuracy(settings: SweepSettings, progress: Progress | None = None) -> l
             for label, method, capture, map_size in techniques:
                 env = (map_size, map_size) if map_size else None
                 renderer = Renderer(context.resources, scene, method, capture, env)
-                wall, gpu = time_frames(
-                    partial(renderer.render, framebuffer, camera, force_capture=True),
-                    timer, settings)
-                image = framebuffer.read()
-                renderer.release()
-                check_gl_errors(f"sweep {label} {map_size} {name}")
-                error = image_error(image, truth_image, mask)
+                error, wall, gpu = measure(
+                    renderer, partial(renderer.render, framebuffer, camera, force_capture=True),
+                    framebuffer, timer, settings, truth_image, mask)
                 rows.append(SweepRow("lab", label, map_size, name, error.mae, error.p95,
                                      error.psnr, error.share_off, wall, gpu))
                 done += 1
@@ -208,6 +204,21 @@ def time_frames(render_frame: Callable[[], object], timer, settings: SweepSettin
     return float(np.median(walls)), float(np.median(gpus))
 
 
+def measure(renderer, render_frame: Callable[[], object], framebuffer, timer,
+            settings: SweepSettings, truth: np.ndarray, mask: np.ndarray,
+            ) -> tuple[ImageError, float, float]:
+    """Time ``render_frame`` (see :func:`time_frames`), then score the last frame in
+    ``framebuffer`` against ``truth`` ``(h, w, 3)`` uint8 under ``mask`` ``(h, w)``, and
+    release ``renderer``. Returns the error and the median wall and GL milliseconds."""
+    from mirrorlab.gl.context import check_gl_errors
+
+    wall, gpu = time_frames(render_frame, timer, settings)
+    image = framebuffer.read()
+    renderer.release()
+    check_gl_errors("a sweep frame")
+    return image_error(image, truth, mask), wall, gpu
+
+
 ENVMAP_MAX_SIZE = 1024
 """Largest environment map in the sweep: a 2048 cube is 25 million numpy-baked texels."""
 
@@ -233,7 +244,7 @@ def run_envmap_accuracy(settings: SweepSettings,
     """Every environment-map technique and map size on the sphere scene, scored inside
     the sphere (shrunk by one pixel) against a 4 x 4 supersampled ray-traced truth."""
     from mirrorlab.envmap_renderer import ENVMAP_METHODS, EnvmapRenderer, erode, ground_truth
-    from mirrorlab.gl.context import HeadlessContext, check_gl_errors
+    from mirrorlab.gl.context import HeadlessContext
     from mirrorlab.gl.resources import Framebuffer, TimerQuery
     from mirrorlab.scene.envscenes import build_sphere_scene
 
@@ -266,13 +277,10 @@ def run_envmap_accuracy(settings: SweepSettings,
                 for map_size in sizes:
                     renderer = EnvmapRenderer(context.resources, scene, method, map_size)
                     live = method == "cube-live"  # time its capture in every frame
-                    wall, gpu = time_frames(
-                        partial(renderer.render, framebuffer, camera, force_capture=live),
-                        timer, settings)
-                    image = framebuffer.read()
-                    renderer.release()
-                    check_gl_errors(f"sweep {method} {map_size} {name}")
-                    error = image_error(image, truth_image, mask)
+                    error, wall, gpu = measure(
+                        renderer, partial(renderer.render, framebuffer, camera,
+                                          force_capture=live),
+                        framebuffer, timer, settings, truth_image, mask)
                     rows.append(SweepRow(scene_name, method, map_size, name, error.mae,
                                          error.p95, error.psnr, error.share_off, wall, gpu))
                     done += 1

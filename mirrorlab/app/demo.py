@@ -82,6 +82,28 @@ class Orbit:
         return Camera(eye=eye, target=self.target)  # type: ignore[arg-type]
 
 
+def handle_view_key(orbit: Orbit, window, key: int) -> bool:
+    """The keys every demo scene shares: Esc closes the window, A/D and W/S orbit the
+    camera, +/- zoom. Returns True when ``key`` was one of them."""
+    import glfw
+
+    orbit_keys = {
+        glfw.KEY_A: (-ORBIT_STEP_DEG, 0.0), glfw.KEY_D: (ORBIT_STEP_DEG, 0.0),
+        glfw.KEY_W: (0.0, ORBIT_STEP_DEG), glfw.KEY_S: (0.0, -ORBIT_STEP_DEG),
+    }
+    if key == glfw.KEY_ESCAPE:
+        glfw.set_window_should_close(window, True)
+    elif key in orbit_keys:
+        orbit.turn(*orbit_keys[key])
+    elif key in (glfw.KEY_EQUAL, glfw.KEY_KP_ADD):
+        orbit.zoom(1.0 / ZOOM_FACTOR)
+    elif key in (glfw.KEY_MINUS, glfw.KEY_KP_SUBTRACT):
+        orbit.zoom(ZOOM_FACTOR)
+    else:
+        return False
+    return True
+
+
 class DemoApp:
     """Scene, orbit camera and renderer of one demo window; input handlers change them."""
 
@@ -138,20 +160,10 @@ class DemoApp:
             glfw.KEY_DOWN: (2 if shift else 1, -JOINT_STEP_DEG),
             glfw.KEY_PAGE_UP: (2, JOINT_STEP_DEG), glfw.KEY_PAGE_DOWN: (2, -JOINT_STEP_DEG),
         }
-        orbit_keys = {
-            glfw.KEY_A: (-ORBIT_STEP_DEG, 0.0), glfw.KEY_D: (ORBIT_STEP_DEG, 0.0),
-            glfw.KEY_W: (0.0, ORBIT_STEP_DEG), glfw.KEY_S: (0.0, -ORBIT_STEP_DEG),
-        }
-        if key == glfw.KEY_ESCAPE:
-            glfw.set_window_should_close(window, True)
-        elif key in joint_keys:
+        if handle_view_key(self.orbit, window, key):
+            return
+        if key in joint_keys:
             self.turn_joint(*joint_keys[key])
-        elif key in orbit_keys:
-            self.orbit.turn(*orbit_keys[key])
-        elif key in (glfw.KEY_EQUAL, glfw.KEY_KP_ADD):
-            self.orbit.zoom(1.0 / ZOOM_FACTOR)
-        elif key in (glfw.KEY_MINUS, glfw.KEY_KP_SUBTRACT):
-            self.orbit.zoom(ZOOM_FACTOR)
         elif key == glfw.KEY_R:
             self.reset()
         elif key == glfw.KEY_M and action == glfw.PRESS:
@@ -245,25 +257,15 @@ class EnvDemoApp:
 
         if action not in (glfw.PRESS, glfw.REPEAT):
             return
-        orbit_keys = {
-            glfw.KEY_A: (-ORBIT_STEP_DEG, 0.0), glfw.KEY_D: (ORBIT_STEP_DEG, 0.0),
-            glfw.KEY_W: (0.0, ORBIT_STEP_DEG), glfw.KEY_S: (0.0, -ORBIT_STEP_DEG),
-        }
         method_keys = {glfw.KEY_1 + i: name for i, name in enumerate(ENVMAP_METHODS)}
-        if key == glfw.KEY_ESCAPE:
-            glfw.set_window_should_close(window, True)
-        elif key == glfw.KEY_UP:
+        if handle_view_key(self.orbit, window, key):
+            return
+        if key == glfw.KEY_UP:
             self.move_reflector(REFLECTOR_STEP)
         elif key == glfw.KEY_DOWN:
             self.move_reflector(-REFLECTOR_STEP)
         elif key in method_keys and action == glfw.PRESS:
             self.use_method(method_keys[key])
-        elif key in orbit_keys:
-            self.orbit.turn(*orbit_keys[key])
-        elif key in (glfw.KEY_EQUAL, glfw.KEY_KP_ADD):
-            self.orbit.zoom(1.0 / ZOOM_FACTOR)
-        elif key in (glfw.KEY_MINUS, glfw.KEY_KP_SUBTRACT):
-            self.orbit.zoom(ZOOM_FACTOR)
         elif key == glfw.KEY_R:
             self.reset()
         elif key == glfw.KEY_H and action == glfw.PRESS:

@@ -214,8 +214,31 @@ def read_pixels(width: int, height: int) -> np.ndarray:
     return np.frombuffer(data, dtype=np.uint8).reshape(height, width, 3)[::-1].copy()
 
 
-class Framebuffer(_Resource):
+class _FramebufferObject(_Resource):
+    """What every framebuffer object offers: its size, binding and a colour readback.
+    Subclasses set ``name``, ``width`` and ``height``."""
+
+    name: int
+    width: int
+    height: int
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return self.width, self.height
+
+    def bind(self) -> None:
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
+
+    def read(self) -> np.ndarray:
+        """Colour as ``(height, width, 3)`` uint8, row 0 at the top."""
+        self.bind()
+        return read_pixels(self.width, self.height)
+
+
+class Framebuffer(_FramebufferObject):
     """An offscreen render target: RGBA8 colour and 24-bit depth + 8-bit stencil renderbuffers."""
+
+    COLOR_FORMAT = GL.GL_RGBA8
 
     def __init__(self, registry: ResourceRegistry, width: int, height: int) -> None:
         if width < 1 or height < 1:
@@ -230,7 +253,7 @@ class Framebuffer(_Resource):
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
         for rb, fmt, attachment in zip(
             self._renderbuffers,
-            (GL.GL_RGBA8, GL.GL_DEPTH24_STENCIL8),
+            (self.COLOR_FORMAT, GL.GL_DEPTH24_STENCIL8),
             (GL.GL_COLOR_ATTACHMENT0, GL.GL_DEPTH_STENCIL_ATTACHMENT),
             strict=True,
         ):
@@ -244,24 +267,12 @@ class Framebuffer(_Resource):
             raise GLContextError(f"framebuffer {width}x{height} incomplete (status {status:#x})")
         super().__init__(registry)
 
-    @property
-    def size(self) -> tuple[int, int]:
-        return self.width, self.height
-
-    def bind(self) -> None:
-        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
-
-    def read(self) -> np.ndarray:
-        """Colour as ``(height, width, 3)`` uint8, row 0 at the top."""
-        self.bind()
-        return read_pixels(self.width, self.height)
-
     def _free(self) -> None:
         GL.glDeleteRenderbuffers(2, self._renderbuffers)
         GL.glDeleteFramebuffers(1, [self.name])
 
 
-class TextureFramebuffer(_Resource):
+class TextureFramebuffer(_FramebufferObject):
     """An offscreen target that draws straight into a :class:`Texture2D`'s level 0, with a
     24-bit depth + 8-bit stencil renderbuffer of the same size.
 
@@ -289,18 +300,6 @@ class TextureFramebuffer(_Resource):
             raise GLContextError(f"texture framebuffer {self.width}x{self.height} incomplete "
                                  f"(status {status:#x})")
         super().__init__(registry)
-
-    @property
-    def size(self) -> tuple[int, int]:
-        return self.width, self.height
-
-    def bind(self) -> None:
-        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
-
-    def read(self) -> np.ndarray:
-        """Colour as ``(height, width, 3)`` uint8, row 0 at the top."""
-        self.bind()
-        return read_pixels(self.width, self.height)
 
     def _free(self) -> None:
         GL.glDeleteRenderbuffers(1, [self._depth])
@@ -486,41 +485,12 @@ class TextureCube(_Resource):
         GL.glDeleteTextures([self.name])
 
 
-class FloatFramebuffer(_Resource):
+class FloatFramebuffer(Framebuffer):
     """An offscreen target with a 32-bit float RGBA colour buffer (and depth + stencil), for
     checks that must see NaN, Inf or values outside [0, 1] that an 8-bit buffer would hide.
     Same interface as :class:`Framebuffer`; :meth:`read` gives float32."""
 
-    def __init__(self, registry: ResourceRegistry, width: int, height: int) -> None:
-        if width < 1 or height < 1:
-            raise ValueError(f"framebuffer size must be positive, got {width}x{height}")
-        self.width, self.height = int(width), int(height)
-        self.name = int(GL.glGenFramebuffers(1))
-        self._renderbuffers = [int(n) for n in np.atleast_1d(GL.glGenRenderbuffers(2))]
-        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
-        for rb, fmt, attachment in zip(
-            self._renderbuffers,
-            (GL.GL_RGBA32F, GL.GL_DEPTH24_STENCIL8),
-            (GL.GL_COLOR_ATTACHMENT0, GL.GL_DEPTH_STENCIL_ATTACHMENT),
-            strict=True,
-        ):
-            GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, rb)
-            GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, fmt, self.width, self.height)
-            GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, attachment, GL.GL_RENDERBUFFER, rb)
-        status = GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
-        if status != GL.GL_FRAMEBUFFER_COMPLETE:
-            GL.glDeleteRenderbuffers(2, self._renderbuffers)
-            GL.glDeleteFramebuffers(1, [self.name])
-            raise GLContextError(f"float framebuffer {width}x{height} incomplete "
-                                 f"(status {status:#x})")
-        super().__init__(registry)
-
-    @property
-    def size(self) -> tuple[int, int]:
-        return self.width, self.height
-
-    def bind(self) -> None:
-        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
+    COLOR_FORMAT = GL.GL_RGBA32F
 
     def read(self) -> np.ndarray:
         """Colour as ``(height, width, 3)`` float32, unclamped, row 0 at the top."""
@@ -533,10 +503,6 @@ class FloatFramebuffer(_Resource):
         data = GL.glReadPixels(0, 0, self.width, self.height, GL.GL_RGBA, GL.GL_FLOAT)
         pixels = np.frombuffer(data, dtype=np.float32).reshape(self.height, self.width, 4)
         return pixels[::-1].copy()
-
-    def _free(self) -> None:
-        GL.glDeleteRenderbuffers(2, self._renderbuffers)
-        GL.glDeleteFramebuffers(1, [self.name])
 
 
 class FixedFunctionMesh(_Resource):
