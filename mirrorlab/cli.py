@@ -114,6 +114,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "(default: sphere-texgen for cone, sphere for sphere)")
     render.add_argument("--map-size", metavar="N",
                         help="environment map side in texels for --envmap (default 256)")
+    render.add_argument("--cube-faces", metavar="DIR",
+                        help="six images DIR/{px,nx,py,ny,pz,nz}.png as the static cube map "
+                        "and the sky (sphere scene; e.g. textures/sky_cube)")
     render.add_argument("--cone-height", metavar="Y",
                         help="height of the cone's base in the cone scene (default 1)")
     render.add_argument("--save-env", metavar="PATH",
@@ -225,9 +228,9 @@ def run_render(args: argparse.Namespace) -> int:
     env_out = png_path("--save-env", args.save_env) if args.save_env else None
     if scene != "lab":
         return render_env_scene(args, scene, size, camera, target, out)
-    if args.map_size or args.cone_height:
-        option = "--map-size" if args.map_size else "--cone-height"
-        raise UsageError(f"{option}: applies to --scene cone or sphere, not the lab")
+    for option in ("--map-size", "--cone-height", "--cube-faces"):
+        if getattr(args, option[2:].replace("-", "_")) is not None:
+            raise UsageError(f"{option}: applies to --scene cone or sphere, not the lab")
     camera = camera or DEFAULT_CAMERA
     target = target or DEFAULT_TARGET
     if camera == target:
@@ -268,6 +271,16 @@ def render_env_scene(args: argparse.Namespace, scene: str, size: tuple[int, int]
         if not low <= cone_height <= high:
             raise UsageError(f"--cone-height: expected a height from {low:g} to {high:g}, "
                              f"got {args.cone_height!r}")
+    cube_faces = None
+    if args.cube_faces is not None:
+        from mirrorlab.scene.envscenes import load_cube_faces
+
+        if scene != "sphere":
+            raise UsageError(f"--cube-faces: applies to --scene sphere, not {scene}")
+        try:
+            cube_faces = load_cube_faces(args.cube_faces)
+        except ValueError as exc:
+            raise UsageError(f"--cube-faces: {exc}") from None
     viewer = None
     if camera or target:
         own = build_env_scene(scene).camera
@@ -277,12 +290,15 @@ def render_env_scene(args: argparse.Namespace, scene: str, size: tuple[int, int]
             raise UsageError(f"--camera and --target: must differ, both are "
                              f"{_joined(viewer.eye)!r}")
     start = time.perf_counter()
-    frame = render_envmap_frame(scene, args.envmap, size, viewer, map_size, cone_height)
+    frame = render_envmap_frame(scene, args.envmap, size, viewer, map_size, cone_height,
+                                cube_faces)
     elapsed = time.perf_counter() - start
     write_png_atomic(out, frame.image)
-    print(f"wrote {out} ({size[0]}x{size[1]}, {scene} scene, {args.envmap} map of "
-          f"{map_size}, passes: {' + '.join(frame.passes)}, {elapsed * 1000:.0f} ms with "
-          f"start-up, {frame.gl_renderer})")
+    source = (f"cube faces from {args.cube_faces}" if cube_faces is not None
+              and args.envmap == "cube" else f"{args.envmap} map of {map_size}")
+    print(f"wrote {out} ({size[0]}x{size[1]}, {scene} scene, {source}, passes: "
+          f"{' + '.join(frame.passes)}, {elapsed * 1000:.0f} ms with start-up, "
+          f"{frame.gl_renderer})")
     return 0
 
 

@@ -97,13 +97,19 @@ class EnvmapRenderer:
     - ``latlong``: one ``2 map_size`` x ``map_size`` map baked once.
 
     Baked maps see only the distant environment; ``cube-live`` also sees the lit objects.
+    ``cube_faces`` ``(6, n, n, 3)`` uint8 (e.g. from
+    :func:`~mirrorlab.scene.envscenes.load_cube_faces`) replaces the cube baked from the
+    environment, both as the ``cube`` method's map (whatever ``map_size``) and as the
+    sky drawn behind the scene: a static cube map from six images.
+
     Every map is mipmapped (trilinear); ``anisotropy`` > 1 adds anisotropic filtering up to
     that ratio. It is off by default: on llvmpipe it brings sphere maps closer to the ray
     tracer but cube and latitude-longitude maps further away (measured).
     """
 
     def __init__(self, registry: ResourceRegistry, scene: EnvScene, envmap: str,
-                 map_size: int = DEFAULT_MAP_SIZE, anisotropy: float = 1.0) -> None:
+                 map_size: int = DEFAULT_MAP_SIZE, anisotropy: float = 1.0,
+                 cube_faces: np.ndarray | None = None) -> None:
         from mirrorlab.envmap import bake_latlong
         from mirrorlab.gl.opengl import GL
         from mirrorlab.gl.resources import Framebuffer, Texture2D, TextureCube
@@ -121,7 +127,14 @@ class EnvmapRenderer:
         self._registry = registry
         self._owned: list = []
         self.drawer = SceneDrawer(registry, scene)
-        self.sky_map = TextureCube.from_faces(registry, _cube_faces(scene, SKY_SIZE))
+        if cube_faces is not None:
+            cube_faces = np.asarray(cube_faces)
+            if cube_faces.ndim != 4 or cube_faces.shape[0] != 6 or cube_faces.shape[3] != 3 \
+                    or cube_faces.shape[1] != cube_faces.shape[2] or cube_faces.dtype != np.uint8:
+                raise ValueError(f"cube_faces must be (6, n, n, 3) uint8, got "
+                                 f"{cube_faces.shape} {cube_faces.dtype}")
+        sky_faces = _cube_faces(scene, SKY_SIZE) if cube_faces is None else cube_faces
+        self.sky_map = TextureCube.from_faces(registry, sky_faces)
         self.sky_pass = SkyPass(registry, self.sky_map)
         self._owned += [self.drawer, self.sky_pass, self.sky_map]
         self.capture_pass: CubeCapturePass | None = None
@@ -138,7 +151,8 @@ class EnvmapRenderer:
             texture = Texture2D(registry, image.shape[1], image.shape[0], image, mipmaps=True,
                                 clamp=True)
         elif self.method == "cube":
-            texture = TextureCube.from_faces(registry, _cube_faces(scene, size))
+            faces = _cube_faces(scene, size) if cube_faces is None else cube_faces
+            texture = TextureCube.from_faces(registry, faces)
         elif self.method == "cube-live":
             texture = TextureCube.blank(registry, size, mipmaps=True)
             self.capture_target = Framebuffer(registry, size, size)
@@ -274,11 +288,13 @@ def resolve_scene(scene: str | EnvScene, cone_height: float | None = None) -> En
 def render_envmap_frame(scene: str | EnvScene = "sphere", envmap: str = "sphere",
                         size: Sequence[int] = (512, 512), camera: Camera | None = None,
                         map_size: int = DEFAULT_MAP_SIZE,
-                        cone_height: float | None = None) -> EnvmapFrame:
+                        cone_height: float | None = None,
+                        cube_faces: np.ndarray | None = None) -> EnvmapFrame:
     """Render an environment-mapping scene once, headless (EGL), and read the frame back.
 
     ``scene`` is a name from :data:`ENV_SCENES` (or an :class:`EnvScene`), ``envmap`` a
-    name from :data:`ENVMAP_METHODS`; ``camera`` defaults to the scene's own. Bad
+    name from :data:`ENVMAP_METHODS`; ``camera`` defaults to the scene's own;
+    ``cube_faces`` as in :class:`EnvmapRenderer`. Bad
     values raise ValueError with a one-line message naming them and the choices.
     """
     from mirrorlab.gl.context import HeadlessContext, check_gl_errors
@@ -292,7 +308,8 @@ def render_envmap_frame(scene: str | EnvScene = "sphere", envmap: str = "sphere"
     viewer.view()  # raises ValueError for a degenerate camera before any GL work
     with HeadlessContext() as context:
         target = Framebuffer(context.resources, width, height)
-        renderer = EnvmapRenderer(context.resources, env_scene, envmap, map_size)
+        renderer = EnvmapRenderer(context.resources, env_scene, envmap, map_size,
+                                  cube_faces=cube_faces)
         stats = renderer.render(target, viewer)
         image = target.read()
         check_gl_errors(f"rendering the {env_scene.name} scene with {envmap}")

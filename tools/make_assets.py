@@ -267,6 +267,19 @@ def main() -> None:
     print("wrote textures/metal.png")
     Image.fromarray(launch_texture()).save(textures / "launch.png")
     print("wrote textures/launch.png")
+    write_sky_cube(textures / "sky_cube", 256)
+
+
+def write_sky_cube(folder: Path, size: int) -> None:
+    """The sphere scene's sky as six upright face pictures (see load_cube_faces)."""
+    from mirrorlab.envmap import bake_cube_faces
+    from mirrorlab.scene.envscenes import CUBE_FACE_FILES, sky_environment
+
+    folder.mkdir(exist_ok=True)
+    faces = bake_cube_faces(sky_environment, size)
+    for stem, face in zip(CUBE_FACE_FILES, faces, strict=True):
+        Image.fromarray(np.ascontiguousarray(face[::-1])).save(folder / f"{stem}.png")
+    print(f"wrote {folder.relative_to(ROOT)}/{{{','.join(CUBE_FACE_FILES)}}}.png")
 
 
 if __name__ == "__main__":

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -265,6 +266,44 @@ def build_sphere_scene(objects: bool = True) -> EnvScene:
     return EnvScene(name="sphere", graph=SceneGraph(root), reflector=reflector,
                     environment=sky_environment, camera=SPHERE_CAMERA,
                     light_direction=tuple(float(v) for v in SUN_DIRECTION))  # type: ignore[arg-type]
+
+
+CUBE_FACE_FILES = ("px", "nx", "py", "ny", "pz", "nz")
+"""File stems of a cube map's six faces, in GL order +X, -X, +Y, -Y, +Z, -Z."""
+
+
+def load_cube_faces(folder: str | Path) -> np.ndarray:
+    """The six images ``folder/{px,nx,py,ny,pz,nz}.png`` as cube faces ``(6, n, n, 3)`` uint8
+    in mirrorlab's image convention (row 0 holds t = 1; see :mod:`mirrorlab.envmap`).
+
+    The files are upright pictures, as skybox images usually are: a file's top row
+    is its face's t = 0 edge, the edge the OpenGL cube-map table puts towards +y on
+    the four side faces (towards +z on +Y, -z on -Y). ValueError naming the file
+    when one is missing, unreadable, not square or not the size of the others.
+    """
+    from PIL import Image
+
+    folder = Path(folder)
+    faces = []
+    for stem in CUBE_FACE_FILES:
+        path = folder / f"{stem}.png"
+        if not path.is_file():
+            raise ValueError(f"cube face {path} is missing; a cube map needs "
+                             f"{', '.join(s + '.png' for s in CUBE_FACE_FILES)}")
+        try:
+            with Image.open(path) as image:
+                pixels = np.asarray(image.convert("RGB"))
+        except OSError as exc:
+            raise ValueError(f"cube face {path} cannot be read as an image ({exc})") from None
+        if pixels.shape[0] != pixels.shape[1]:
+            raise ValueError(f"cube face {path} is {pixels.shape[1]}x{pixels.shape[0]}, "
+                             f"expected a square")
+        if faces and pixels.shape != faces[0].shape:
+            raise ValueError(f"cube face {path} is {pixels.shape[1]}x{pixels.shape[0]}, "
+                             f"expected {faces[0].shape[1]}x{faces[0].shape[0]} like "
+                             f"{CUBE_FACE_FILES[0]}.png")
+        faces.append(pixels[::-1])  # upright file -> row 0 at t = 1
+    return np.ascontiguousarray(np.stack(faces))
 
 
 def check_method(method: str) -> str:

@@ -101,6 +101,7 @@ def test_render_command_refuses_bad_technique_options(tmp_path, capsys, args, op
     ["--scene", "cone"],
     ["--scene", "sphere", "--envmap", "cube-live", "--map-size", "32"],
     ["--scene", "sphere", "--envmap", "latlong", "--camera", "0,0,5"],
+    ["--scene", "sphere", "--envmap", "cube", "--cube-faces", "textures/sky_cube"],
 ])
 def test_render_command_draws_the_environment_map_scenes(tmp_path, capsys, args):
     out = tmp_path / "env.png"
@@ -118,6 +119,8 @@ def test_render_command_draws_the_environment_map_scenes(tmp_path, capsys, args)
     (["--scene", "cone", "--cone-height", "7"], "--cone-height"),
     (["--scene", "sphere", "--map-size", "2"], "--map-size"),
     (["--scene", "moon"], "--scene"),
+    (["--scene", "sphere", "--cube-faces", "models"], "--cube-faces"),
+    (["--scene", "cone", "--cube-faces", "textures/sky_cube"], "--cube-faces"),
 ])
 def test_render_command_refuses_options_that_do_not_fit_the_scene(tmp_path, capsys, args,
                                                                   option):
@@ -126,6 +129,21 @@ def test_render_command_refuses_options_that_do_not_fit_the_scene(tmp_path, caps
     error = capsys.readouterr().err.strip()
     assert error.count("\n") == 0 and option in error
     assert not out.exists()
+
+
+def test_a_cube_map_from_six_images_draws_what_the_baked_cube_draws(tmp_path):
+    """The shipped faces are the baked sky, so the two static cubes must agree exactly."""
+    from mirrorlab.envmap_renderer import render_envmap_frame
+    from mirrorlab.paths import REPO_DIR
+    from mirrorlab.scene.envscenes import load_cube_faces
+
+    faces = load_cube_faces(REPO_DIR / "textures" / "sky_cube")
+    from_files = render_envmap_frame("sphere", "cube", (96, 96), cube_faces=faces).image
+    baked = render_envmap_frame("sphere", "cube", (96, 96), map_size=256).image
+    assert np.array_equal(from_files, baked)
+    # Six other pictures change the reflection and the sky behind it.
+    rolled = render_envmap_frame("sphere", "cube", (96, 96), cube_faces=faces[::-1]).image
+    assert np.mean(np.abs(rolled.astype(int) - baked.astype(int)).max(axis=-1) > 30) > 0.3
 
 
 def test_api_renders_the_environment_map_scenes():

@@ -144,3 +144,44 @@ def test_scenes_and_the_renderer_module_import_no_opengl():
     loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                             check=True).stdout.split()
     assert not {m for m in loaded if m.split(".")[0] in ("OpenGL", "glfw")}
+
+
+def test_shipped_cube_faces_are_the_baked_sky_and_upright(tmp_path):
+    from PIL import Image
+
+    from mirrorlab.envmap import bake_cube_faces
+    from mirrorlab.paths import REPO_DIR
+    from mirrorlab.scene.envscenes import load_cube_faces, sky_environment
+
+    folder = REPO_DIR / "textures" / "sky_cube"
+    faces = load_cube_faces(folder)
+    assert faces.shape == (6, 256, 256, 3) and faces.dtype == np.uint8
+    assert np.array_equal(faces, bake_cube_faces(sky_environment, 256))
+    # Upright files: on the side faces the sky (blue) is at the top, the ground below.
+    for stem in ("px", "nx", "pz", "nz"):
+        picture = np.asarray(Image.open(folder / f"{stem}.png").convert("RGB")).astype(int)
+        top, bottom = picture[:40].mean(axis=(0, 1)), picture[-40:].mean(axis=(0, 1))
+        assert top[2] > top[0] + 40 and bottom[2] < bottom[0] + 10, stem
+
+
+def test_cube_faces_are_refused_with_the_file_named(tmp_path):
+    import shutil
+
+    from PIL import Image
+
+    from mirrorlab.paths import REPO_DIR
+    from mirrorlab.scene.envscenes import load_cube_faces
+
+    with pytest.raises(ValueError, match=r"px\.png is missing"):
+        load_cube_faces(tmp_path)
+    for stem in ("px", "nx", "py", "ny", "pz", "nz"):
+        shutil.copy(REPO_DIR / "textures" / "sky_cube" / f"{stem}.png", tmp_path)
+    Image.new("RGB", (64, 32)).save(tmp_path / "ny.png")
+    with pytest.raises(ValueError, match=r"ny\.png is 64x32, expected a square"):
+        load_cube_faces(tmp_path)
+    Image.new("RGB", (64, 64)).save(tmp_path / "ny.png")
+    with pytest.raises(ValueError, match=r"ny\.png is 64x64, expected 256x256"):
+        load_cube_faces(tmp_path)
+    (tmp_path / "ny.png").write_text("not a picture")
+    with pytest.raises(ValueError, match=r"ny\.png cannot be read"):
+        load_cube_faces(tmp_path)
