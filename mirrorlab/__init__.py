@@ -27,6 +27,7 @@ def render(
     scene: str = "lab",
     envmap: str | None = None,
     map_size: int = 256,
+    cube_faces: str | None = None,
 ) -> np.ndarray:
     """Render the lab scene headless and return the frame.
 
@@ -48,6 +49,8 @@ def render(
         ``"cube-live"``, ``"latlong"`` or ``"normal"``; None picks
         ``"sphere-texgen"`` for the cone and ``"sphere"`` for the sphere.
     map_size : environment map side in texels for ``envmap``.
+    cube_faces : a folder with six pictures ``{px,nx,py,ny,pz,nz}.png`` to use as the
+        static cube map and the sky (sphere scene), e.g. ``"textures/sky_cube"``.
 
     Returns
     -------
@@ -64,9 +67,15 @@ def render(
             viewer = Camera(eye=tuple(float(v) for v in camera),
                             target=tuple(float(v) for v in target), fovy=own.fovy)
         chosen = envmap or ("sphere-texgen" if scene == "cone" else "sphere")
-        return render_envmap_frame(scene, chosen, size, viewer, map_size).image
-    if envmap is not None:
-        raise ValueError("envmap applies to the cone and sphere scenes, not the lab")
+        faces = None
+        if cube_faces is not None:
+            from mirrorlab.scene.envscenes import load_cube_faces
+
+            faces = load_cube_faces(cube_faces)
+        return render_envmap_frame(scene, chosen, size, viewer, map_size,
+                                   cube_faces=faces).image
+    if envmap is not None or cube_faces is not None:
+        raise ValueError("envmap and cube_faces apply to the cone and sphere scenes, not the lab")
     from mirrorlab.headless import render_lab_frame
 
     return render_lab_frame(size, angles, camera, target, method, capture,

@@ -152,6 +152,11 @@ def test_api_renders_the_environment_map_scenes():
     assert sphere.shape == cone.shape == (48, 48, 3) and not np.array_equal(sphere, cone)
     with pytest.raises(ValueError, match="envmap"):
         mirrorlab.render(size=(48, 48), envmap="cube")
+    from mirrorlab.paths import REPO_DIR
+
+    faces = mirrorlab.render(size=(48, 48), scene="sphere", envmap="cube",
+                             cube_faces=str(REPO_DIR / "textures" / "sky_cube"))
+    assert np.array_equal(faces, sphere)
 
 
 def test_plan_command_explains_what_runs(capsys):
