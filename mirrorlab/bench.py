@@ -357,7 +357,7 @@ def rows_from_csv(text: str) -> list[SweepRow]:
 
 def _plain(value) -> str:
     if isinstance(value, float):
-        return "inf" if math.isinf(value) else ("" if math.isnan(value) else f"{value:.6g}")
+        return "inf" if math.isinf(value) else ("" if math.isnan(value) else repr(value))
     return str(value)
 
 
