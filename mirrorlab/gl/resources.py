@@ -110,6 +110,10 @@ class Program(_Resource):
         GL.glUniformMatrix3fv(self.location(uniform), 1, GL.GL_TRUE,
                               np.asarray(matrix, dtype=np.float32))
 
+    def set_vec2(self, uniform: str, value) -> None:
+        x, y = (float(v) for v in value)
+        GL.glUniform2f(self.location(uniform), x, y)
+
     def set_vec3(self, uniform: str, value) -> None:
         x, y, z = (float(v) for v in value)
         GL.glUniform3f(self.location(uniform), x, y, z)

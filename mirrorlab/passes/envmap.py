@@ -106,7 +106,7 @@ class EnvmapPass:
             program.set_vec3("eye_world", camera_position(view))
         if self.method == "normal":
             size = (self.texture.width, self.texture.height)  # type: ignore[union-attr]
-            GL.glUniform2f(program.location("map_size"), *(float(v) for v in size))
+            program.set_vec2("map_size", size)
         if self.method in CUBE_METHODS:
             GL.glEnable(GL.GL_TEXTURE_CUBE_MAP_SEAMLESS)
         self.texture.bind(0)
