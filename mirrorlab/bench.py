@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mirrorlab.plan import CAPTURE_MODES
 from mirrorlab.scene.robot import Camera, build_lab_scene
 
 FULL_SIZES = (64, 128, 256, 512, 1024, 2048)
@@ -123,7 +124,7 @@ def lab_techniques(sizes: Sequence[int]) -> list[tuple[str, str, str, int]]:
     """``(label, method, capture, map_size)`` for each rasterised configuration."""
     rows = []
     for method in ("ortho", "reflected"):
-        for capture in ("copy", "fbo"):
+        for capture in CAPTURE_MODES:
             rows += [(f"{method}-{capture}", method, capture, size) for size in sizes]
     rows.append(("stencil", "stencil", "copy", 0))
     return rows

@@ -214,12 +214,13 @@ _LAB_DEFAULTS = {"--method": "ortho", "--capture": "copy", "--env-size": None,
 
 def run_render(args: argparse.Namespace) -> int:
     from mirrorlab.headless import RENDER_METHODS
+    from mirrorlab.plan import CAPTURE_MODES
 
     scene = check_scene_options(
         args, ("--method", "--capture", "--env-size", "--save-env", "--angles"))
     size = parse_size("--size", args.size)
     method = parse_choice("--method", args.method, RENDER_METHODS)
-    capture = parse_choice("--capture", args.capture, ("copy", "fbo"))
+    capture = parse_choice("--capture", args.capture, CAPTURE_MODES)
     env_size = parse_count("--env-size", args.env_size) if args.env_size else None
     angles = parse_floats("--angles", args.angles, 3, "BASE,LOWER,UPPER")
     camera = parse_floats("--camera", args.camera, 3, "X,Y,Z") if args.camera else None

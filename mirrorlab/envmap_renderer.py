@@ -23,7 +23,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mirrorlab import math3d
 from mirrorlab.plan import PlannedPass
 from mirrorlab.scene.envscenes import (
     CONE_LIMITS,
@@ -324,16 +323,9 @@ def render_envmap_frame(scene: str | EnvScene = "sphere", envmap: str = "sphere"
 def reflector_surface(scene: EnvScene):
     """The scene's reflector as a perfect-mirror :class:`~mirrorlab.raytrace.RaySurface`
     (world space, smooth vertex normals, both faces reflect)."""
-    from mirrorlab.raytrace import RaySurface
-    from mirrorlab.scene.mesh import load_model
+    from mirrorlab.raytrace import mesh_surface
 
-    data = load_model(scene.reflector.mesh)
-    model = scene.reflector.model_matrix()
-    return RaySurface(
-        vertices=math3d.transform_points(model, data.positions.astype(np.float64))[:, :3],
-        normals=data.normals.astype(np.float64) @ math3d.normal_matrix(model).T,
-        uvs=data.uvs.astype(np.float64), faces=data.indices.astype(np.int64),
-        reflective=True)
+    return mesh_surface(scene.reflector.mesh, scene.reflector.model_matrix(), reflective=True)
 
 
 def ground_truth_scene(scene: EnvScene) -> RayScene:

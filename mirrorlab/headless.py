@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mirrorlab.plan import CAPTURE_MODES
 from mirrorlab.scene.robot import (
     DEFAULT_ANGLES,
     DEFAULT_CAMERA,
@@ -59,8 +60,8 @@ def render_lab_frame(
     """
     if method not in RENDER_METHODS:
         raise ValueError(f"method must be one of {', '.join(RENDER_METHODS)}, got {method!r}")
-    if capture not in ("copy", "fbo"):
-        raise ValueError(f"capture must be copy or fbo, got {capture!r}")
+    if capture not in CAPTURE_MODES:
+        raise ValueError(f"capture must be {' or '.join(CAPTURE_MODES)}, got {capture!r}")
     width, height = check_size(size)
     env_size = None
     if environment_size is not None:

@@ -17,6 +17,11 @@ METHODS = ("ortho", "reflected", "stencil")
 reflected-camera capture sampled projectively, and a stencil-masked reflected redraw."""
 
 
+CAPTURE_MODES = ("copy", "fbo")
+"""How a capture reaches its texture: ``glCopyTexImage2D`` (the lab) or drawn straight
+into it through a framebuffer."""
+
+
 @dataclass(frozen=True)
 class PlannedPass:
     """One pass of a frame: ``name``, whether it runs, and the ``reason`` in words."""

@@ -85,24 +85,24 @@ def sample_bilinear(texture: np.ndarray, uv: np.ndarray) -> np.ndarray:
     return top * (1 - fy) + bottom * fy
 
 
+def mesh_surface(mesh: str, model: np.ndarray, **appearance) -> RaySurface:
+    """``models/<mesh>.obj`` moved to world space by ``model`` ``(4, 4)`` (normals by its
+    inverse transpose); ``appearance`` gives the other :class:`RaySurface` fields."""
+    data = load_model(mesh)
+    return RaySurface(
+        vertices=math3d.transform_points(model, data.positions.astype(np.float64))[:, :3],
+        normals=data.normals.astype(np.float64) @ math3d.normal_matrix(model).T,
+        uvs=data.uvs.astype(np.float64),
+        faces=data.indices.astype(np.int64),
+        **appearance,
+    )
+
+
 def surfaces_from_graph(graph: SceneGraph) -> list[RaySurface]:
     """Every node with a mesh, moved to world space with its node's colour and texture."""
-    surfaces = []
-    for node in graph.nodes():
-        if not node.mesh:
-            continue
-        data = load_model(node.mesh)
-        model = node.world_matrix()
-        normals = data.normals.astype(np.float64) @ math3d.normal_matrix(model).T
-        surfaces.append(RaySurface(
-            vertices=math3d.transform_points(model, data.positions.astype(np.float64))[:, :3],
-            normals=normals,
-            uvs=data.uvs.astype(np.float64),
-            faces=data.indices.astype(np.int64),
-            color=node.color,
-            texture=load_texture(node.texture) if node.texture else None,
-        ))
-    return surfaces
+    return [mesh_surface(node.mesh, node.world_matrix(), color=node.color,
+                         texture=load_texture(node.texture) if node.texture else None)
+            for node in graph.nodes() if node.mesh]
 
 
 class RayScene:

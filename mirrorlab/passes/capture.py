@@ -10,10 +10,10 @@ from mirrorlab.gl.context import ResourceRegistry
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Framebuffer, RenderTarget, Texture2D, TextureFramebuffer
 from mirrorlab.passes.scene_draw import SceneDrawer
+from mirrorlab.plan import CAPTURE_MODES
 from mirrorlab.scene.robot import LabScene
 
-CaptureMode = Literal["copy", "fbo"]
-CAPTURE_MODES: tuple[CaptureMode, ...] = ("copy", "fbo")
+CaptureMode = Literal["copy", "fbo"]  # the names in mirrorlab.plan.CAPTURE_MODES
 
 
 class EnvironmentCapture:
