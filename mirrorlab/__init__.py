@@ -57,15 +57,16 @@ def render(
     ``(height, width, 3)`` uint8 RGB image, row 0 at the top.
     """
     if scene != "lab":
+        from dataclasses import replace
+
         from mirrorlab.envmap_renderer import render_envmap_frame
         from mirrorlab.scene.envscenes import build_env_scene
-        from mirrorlab.scene.robot import Camera
 
         viewer = None
         if tuple(camera) != DEFAULT_CAMERA or tuple(target) != DEFAULT_TARGET:
-            own = build_env_scene(scene).camera
-            viewer = Camera(eye=tuple(float(v) for v in camera),
-                            target=tuple(float(v) for v in target), fovy=own.fovy)
+            viewer = replace(build_env_scene(scene).camera,
+                             eye=tuple(float(v) for v in camera),
+                             target=tuple(float(v) for v in target))
         chosen = envmap or ("sphere-texgen" if scene == "cone" else "sphere")
         faces = None
         if cube_faces is not None:

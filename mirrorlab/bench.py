@@ -11,15 +11,21 @@ import io
 import math
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, fields
 from functools import partial
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from mirrorlab.plan import CAPTURE_MODES
 from mirrorlab.scene.robot import Camera, build_lab_scene
+
+if TYPE_CHECKING:
+    from mirrorlab.gl.context import ResourceRegistry
+    from mirrorlab.gl.resources import Framebuffer, TimerQuery
 
 FULL_SIZES = (64, 128, 256, 512, 1024, 2048)
 QUICK_SIZES = (64, 128)
@@ -133,8 +139,6 @@ def lab_techniques(sizes: Sequence[int]) -> list[tuple[str, str, str, int]]:
 def run_accuracy(settings: SweepSettings, progress: Progress | None = None) -> list[SweepRow]:
     """Run the sweep on the lab scene in a headless context; one row per configuration
     and viewpoint, the ray tracer's own rows included (zero error, its time)."""
-    from mirrorlab.gl.context import HeadlessContext
-    from mirrorlab.gl.resources import Framebuffer, TimerQuery
     from mirrorlab.raytrace import lab_ray_scene
     from mirrorlab.renderer import Renderer
 
@@ -150,9 +154,7 @@ def run_accuracy(settings: SweepSettings, progress: Progress | None = None) -> l
     done = 0
     rows: list[SweepRow] = []
     size = (settings.frame, settings.frame)
-    with HeadlessContext() as context:
-        framebuffer = Framebuffer(context.resources, *size)
-        timer = TimerQuery(context.resources)
+    with sweep_gl(size) as (registry, framebuffer, timer):
         for name in names:
             camera = viewpoints[name]
             truth_times, truth = [], None
@@ -168,7 +170,7 @@ def run_accuracy(settings: SweepSettings, progress: Progress | None = None) -> l
                 progress(done, total, f"raytrace {name}")
             for label, method, capture, map_size in techniques:
                 env = (map_size, map_size) if map_size else None
-                renderer = Renderer(context.resources, scene, method, capture, env)
+                renderer = Renderer(registry, scene, method, capture, env)
                 error, wall, gpu = measure(
                     renderer, partial(renderer.render, framebuffer, camera, force_capture=True),
                     framebuffer, timer, settings, truth_image, mask)
@@ -177,9 +179,25 @@ def run_accuracy(settings: SweepSettings, progress: Progress | None = None) -> l
                 done += 1
                 if progress:
                     progress(done, total, f"{label} {map_size or ''} {name}")
-        timer.release()
-        framebuffer.release()
     return rows
+
+
+@contextmanager
+def sweep_gl(size: tuple[int, int],
+             ) -> Iterator[tuple[ResourceRegistry, Framebuffer, TimerQuery]]:
+    """A headless context for a sweep: its resource registry, a ``size`` (width, height)
+    frame target and a GL timer query; all released on leaving."""
+    from mirrorlab.gl.context import HeadlessContext
+    from mirrorlab.gl.resources import Framebuffer, TimerQuery
+
+    with HeadlessContext() as context:
+        framebuffer = Framebuffer(context.resources, *size)
+        timer = TimerQuery(context.resources)
+        try:
+            yield context.resources, framebuffer, timer
+        finally:
+            timer.release()
+            framebuffer.release()
 
 
 def time_frames(render_frame: Callable[[], object], timer, settings: SweepSettings,
@@ -245,8 +263,6 @@ def run_envmap_accuracy(settings: SweepSettings,
     """Every environment-map technique and map size on the sphere scene, scored inside
     the sphere (shrunk by one pixel) against a 4 x 4 supersampled ray-traced truth."""
     from mirrorlab.envmap_renderer import ENVMAP_METHODS, EnvmapRenderer, erode, ground_truth
-    from mirrorlab.gl.context import HeadlessContext
-    from mirrorlab.gl.resources import Framebuffer, TimerQuery
     from mirrorlab.scene.envscenes import build_sphere_scene
 
     views = envmap_viewpoints()
@@ -258,9 +274,7 @@ def run_envmap_accuracy(settings: SweepSettings,
     done = 0
     rows: list[SweepRow] = []
     size = (settings.frame, settings.frame)
-    with HeadlessContext() as context:
-        framebuffer = Framebuffer(context.resources, *size)
-        timer = TimerQuery(context.resources)
+    with sweep_gl(size) as (registry, framebuffer, timer):
         for scene_name, name in names:
             camera = views[(scene_name, name)]
             scene = build_sphere_scene(objects=scene_name == "sphere-objects")
@@ -276,7 +290,7 @@ def run_envmap_accuracy(settings: SweepSettings,
                 progress(done, total, f"raytrace {scene_name} {name}")
             for method in ENVMAP_METHODS:
                 for map_size in sizes:
-                    renderer = EnvmapRenderer(context.resources, scene, method, map_size)
+                    renderer = EnvmapRenderer(registry, scene, method, map_size)
                     live = method == "cube-live"  # time its capture in every frame
                     error, wall, gpu = measure(
                         renderer, partial(renderer.render, framebuffer, camera,
@@ -287,8 +301,6 @@ def run_envmap_accuracy(settings: SweepSettings,
                     done += 1
                     if progress:
                         progress(done, total, f"{method} {map_size} {scene_name} {name}")
-        timer.release()
-        framebuffer.release()
     return rows
 
 

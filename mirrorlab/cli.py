@@ -259,7 +259,6 @@ def render_env_scene(args: argparse.Namespace, scene: str, size: tuple[int, int]
                      out: Path) -> int:
     from mirrorlab.envmap_renderer import DEFAULT_MAP_SIZE, render_envmap_frame
     from mirrorlab.scene.envscenes import CONE_LIMITS, build_env_scene
-    from mirrorlab.scene.robot import Camera
 
     map_size = parse_count("--map-size", args.map_size, 4, 4096) if args.map_size else (
         DEFAULT_MAP_SIZE)
@@ -285,8 +284,7 @@ def render_env_scene(args: argparse.Namespace, scene: str, size: tuple[int, int]
     viewer = None
     if camera or target:
         own = build_env_scene(scene).camera
-        viewer = Camera(eye=camera or own.eye, target=target or own.target, fovy=own.fovy,
-                        near=own.near, far=own.far)
+        viewer = dataclasses.replace(own, eye=camera or own.eye, target=target or own.target)
         if viewer.eye == viewer.target:
             raise UsageError(f"--camera and --target: must differ, both are "
                              f"{_joined(viewer.eye)!r}")

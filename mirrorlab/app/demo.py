@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -247,10 +247,9 @@ class EnvDemoApp:
         self.orbit = Orbit(**vars(self.initial_orbit))
 
     def camera(self) -> Camera:
-        fixed = self.scene.camera
+        """The scene's own camera (lens, clip planes) moved to the orbit's eye and target."""
         orbit = self.orbit.camera()
-        return Camera(eye=orbit.eye, target=orbit.target, fovy=fixed.fovy, near=fixed.near,
-                      far=fixed.far)
+        return replace(self.scene.camera, eye=orbit.eye, target=orbit.target)
 
     def on_key(self, window, key: int, scancode: int, action: int, mods: int) -> None:
         import glfw
