@@ -35,19 +35,33 @@ def xdisplay():
 
 
 def find_window(d, prefix: str, timeout: float = 30.0):
+    """The top-level window whose title starts with ``prefix``, once it is viewable.
+
+    glfw names its window before it maps it: the title is set when the X window is
+    made, the GLX context is made next, and only then is the window mapped, some
+    10-20 ms later on llvmpipe. A window found in between is not viewable, and
+    GetImage and SetInputFocus on it fail with BadMatch, so a named window counts as
+    found only once its map state is IsViewable.
+    """
+    from Xlib import X, error
+
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         stack = [d.screen().root]
         while stack:
             window = stack.pop()
-            name = window.get_wm_name()
-            if isinstance(name, bytes):
-                name = name.decode(errors="replace")
-            if name and name.startswith(prefix):
-                return window
-            stack.extend(window.query_tree().children)
+            try:
+                name = window.get_wm_name()
+                if isinstance(name, bytes):
+                    name = name.decode(errors="replace")
+                if (name and name.startswith(prefix)
+                        and window.get_attributes().map_state == X.IsViewable):
+                    return window
+                stack.extend(window.query_tree().children)
+            except error.BadWindow:  # destroyed since its parent listed it
+                continue
         time.sleep(0.1)
-    raise AssertionError(f"no window titled {prefix!r} appeared within {timeout} s")
+    raise AssertionError(f"no viewable window titled {prefix!r} appeared within {timeout} s")
 
 
 def title(window) -> str:
@@ -55,12 +69,34 @@ def title(window) -> str:
     return name.decode(errors="replace") if isinstance(name, bytes) else (name or "")
 
 
-def screenshot(window) -> np.ndarray:
-    """The window's pixels as the X server has them, ``(h, w, 3)`` uint8 RGB."""
+def screenshot(d, window) -> np.ndarray:
+    """The window's pixels as the X server has them, ``(h, w, 3)`` uint8 RGB.
+
+    GetImage on a window is a BadMatch unless the window is viewable and lies wholly on
+    the screen; both are checked with the server grabbed, so that nothing can change
+    between the check, the geometry and the read.
+    """
     from Xlib import X
 
-    geometry = window.get_geometry()
-    raw = window.get_image(0, 0, geometry.width, geometry.height, X.ZPixmap, 0xFFFFFFFF)
+    root = d.screen().root
+    d.grab_server()
+    try:
+        viewable = window.get_attributes().map_state == X.IsViewable
+        geometry = window.get_geometry()
+        origin = root.translate_coords(window, 0, 0)
+        screen = root.get_geometry()
+        on_screen = (origin.x >= 0 and origin.y >= 0
+                     and origin.x + geometry.width <= screen.width
+                     and origin.y + geometry.height <= screen.height)
+        raw = (window.get_image(0, 0, geometry.width, geometry.height, X.ZPixmap, 0xFFFFFFFF)
+               if viewable and on_screen else None)
+    finally:
+        d.ungrab_server()
+        d.flush()
+    assert viewable, f"window {window.id:#x} is not viewable (unmapped or closed)"
+    assert on_screen, (f"window {window.id:#x} ({geometry.width}x{geometry.height} at "
+                       f"{origin.x},{origin.y}) is not wholly on the "
+                       f"{screen.width}x{screen.height} screen")
     pixels = np.frombuffer(raw.data, np.uint8).reshape(geometry.height, geometry.width, 4)
     return pixels[..., [2, 1, 0]].copy()  # BGRX -> RGB
 
@@ -112,20 +148,20 @@ def test_demo_window_draws_both_passes_answers_keys_and_quits_on_escape(xdisplay
     real, reflected = expected_hand_pixels()
 
     def drawn():
-        image = screenshot(window)
+        image = screenshot(xdisplay, window)
         ok = image.shape == (HEIGHT, WIDTH, 3) and red_dominant(near(image, reflected, 2)).any()
         return image if ok else None
 
     try:
         first = wait_for(drawn, 20, "the first frame with the reflected hand")
     except AssertionError:
-        save_failure("demo_first", screen=screenshot(window))
+        save_failure("demo_first", screen=screenshot(xdisplay, window))
         raise
     assert red_dominant(near(first, real, 2)).any(), "the robot's own hand is missing"
 
     press(xdisplay, window, "Right")  # base joint +5 degrees
     def changed():
-        image = screenshot(window)
+        image = screenshot(xdisplay, window)
         moved_pixels = (np.abs(image.astype(int) - first.astype(int)).max(axis=-1) > 24).sum()
         return image if moved_pixels > 50 else None
 
@@ -139,7 +175,7 @@ def test_demo_window_draws_both_passes_answers_keys_and_quits_on_escape(xdisplay
              "the title to name the reflected technique")
 
     def reflected_drawn():
-        image = screenshot(window)
+        image = screenshot(xdisplay, window)
         return image if (np.abs(image.astype(int) - second.astype(int)).max(axis=-1)
                          > 24).sum() > 50 else None
 

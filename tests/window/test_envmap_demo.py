@@ -45,7 +45,7 @@ def test_cone_demo_moves_the_cone_and_its_reflection_changes(xdisplay, cone_demo
     headless = render_envmap_frame("cone", "sphere-texgen", (WIDTH, HEIGHT)).image
 
     def drawn():
-        image = screenshot(window)
+        image = screenshot(xdisplay, window)
         if image.shape != (HEIGHT, WIDTH, 3):
             return None
         return image if np.abs(image.astype(int) - headless.astype(int)).mean() < 2 else None
@@ -53,7 +53,7 @@ def test_cone_demo_moves_the_cone_and_its_reflection_changes(xdisplay, cone_demo
     try:
         first = wait_for(drawn, 20, "the first frame to match the headless render")
     except AssertionError:
-        save_failure("cone_demo_first", screen=screenshot(window), headless=headless)
+        save_failure("cone_demo_first", screen=screenshot(xdisplay, window), headless=headless)
         raise
     assert_images_close("cone_demo_vs_headless", first, headless, channel_tolerance=8,
                         min_fraction_within=0.99, max_mean_abs=1.0)
@@ -68,7 +68,7 @@ def test_cone_demo_moves_the_cone_and_its_reflection_changes(xdisplay, cone_demo
                                   cone_height=0.0).image
     second = wait_for(
         lambda: (lambda img: img if np.abs(img.astype(int) - lowered.astype(int)).mean() < 2
-                 else None)(screenshot(window)), 10, "the frame with the cone lowered")
+                 else None)(screenshot(xdisplay, window)), 10, "the frame with the cone lowered")
     changed = np.abs(second.astype(int) - first.astype(int)).max(axis=-1) > 24
     assert changed.sum() > 500, "the frame barely changed after Down"
     press(xdisplay, window, "Escape")
