@@ -13,6 +13,7 @@ import pytest
 from mirrorlab.envmap_renderer import render_envmap_frame
 from tests.imagecheck import assert_images_close, save_failure
 from tests.window.test_demo import (  # noqa: F401  (xdisplay is a fixture)
+    GIVE_UP_S,
     find_window,
     press,
     screenshot,
@@ -51,7 +52,7 @@ def test_cone_demo_moves_the_cone_and_its_reflection_changes(xdisplay, cone_demo
         return image if np.abs(image.astype(int) - headless.astype(int)).mean() < 2 else None
 
     try:
-        first = wait_for(drawn, 20, "the first frame to match the headless render")
+        first = wait_for(drawn, "the first frame to match the headless render")
     except AssertionError:
         save_failure("cone_demo_first", screen=screenshot(xdisplay, window), headless=headless)
         raise
@@ -60,7 +61,7 @@ def test_cone_demo_moves_the_cone_and_its_reflection_changes(xdisplay, cone_demo
     for height in ("0.75", "0.50", "0.25", "0.00"):  # one key at a time, as a user would
         press(xdisplay, window, "Down")
         try:
-            wait_for(lambda h=height: f"height {h}" in title(window) or None, 10,
+            wait_for(lambda h=height: f"height {h}" in title(window) or None,
                      f"the cone to move down to {height}")
         except AssertionError:
             raise AssertionError(f"title is {title(window)!r}") from None
@@ -68,8 +69,8 @@ def test_cone_demo_moves_the_cone_and_its_reflection_changes(xdisplay, cone_demo
                                   cone_height=0.0).image
     second = wait_for(
         lambda: (lambda img: img if np.abs(img.astype(int) - lowered.astype(int)).mean() < 2
-                 else None)(screenshot(xdisplay, window)), 10, "the frame with the cone lowered")
+                 else None)(screenshot(xdisplay, window)), "the frame with the cone lowered")
     changed = np.abs(second.astype(int) - first.astype(int)).max(axis=-1) > 24
     assert changed.sum() > 500, "the frame barely changed after Down"
     press(xdisplay, window, "Escape")
-    assert cone_demo.wait(timeout=15) == 0, cone_demo.stderr.read()
+    assert cone_demo.wait(timeout=GIVE_UP_S) == 0, cone_demo.stderr.read()
