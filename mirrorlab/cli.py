@@ -1,404 +1,224 @@
-"""Command line: ``mirrorlab render | plan | demo | bench``.
+"""Command line: ``mirrorlab render | plan | bench | demo | techniques``.
 
-Bad input ends with a one-line message naming the option and what was
-expected, exit status 2, and no output file written or clobbered.
+Argument parsing only: each command's work lives in its own module. Bad input ends
+with a one-line message naming the option or file and what was expected, exit status
+2, and no output file written or clobbered.
 """
 
 from __future__ import annotations
 
 import argparse
-import dataclasses
-import os
 import re
 import sys
-import tempfile
-import time
 from collections.abc import Sequence
 from pathlib import Path
 
-import numpy as np
-
-from mirrorlab.scene.robot import DEFAULT_ANGLES, DEFAULT_CAMERA, DEFAULT_TARGET
+from mirrorlab.files import OutputError, check_output
+from mirrorlab.options import (
+    OPTIONS,
+    OptionError,
+    apply_options,
+    parse_choice,
+    parse_count,
+    parse_size,
+)
+from mirrorlab.scene.loader import DEFAULT_SCENE, SceneError, load_scene, shipped_scene_names
+from mirrorlab.scene.model import Scene
 
 
 class UsageError(Exception):
     """Bad input from the command line; the message is shown as is."""
 
 
-def parse_floats(option: str, text: str, count: int, names: str) -> tuple[float, ...]:
-    """``'1,2,3'`` -> (1.0, 2.0, 3.0); UsageError naming ``option`` otherwise."""
-    parts = [p.strip() for p in text.split(",")]
-    try:
-        values = tuple(float(p) for p in parts)
-    except ValueError:
-        values = ()
-    if len(values) != count or not all(np.isfinite(v) for v in values):
-        raise UsageError(f"{option}: expected {count} finite numbers {names}, got {text!r}")
-    return values
-
-
-def parse_size(option: str, text: str) -> tuple[int, int]:
-    """``'640x480'`` -> (640, 480); UsageError naming ``option`` otherwise."""
-    parts = text.lower().split("x")
-    if len(parts) == 2 and all(p.strip().isdigit() for p in parts):
-        width, height = int(parts[0]), int(parts[1])
-        if 1 <= width <= 8192 and 1 <= height <= 8192:
-            return width, height
-    raise UsageError(f"{option}: expected WIDTHxHEIGHT with each from 1 to 8192, got {text!r}")
-
-
-def png_path(option: str, text: str) -> Path:
-    path = Path(text)
-    if path.suffix.lower() != ".png":
-        raise UsageError(f"{option}: expected a file name ending in .png, got {text!r}")
-    if path.exists() and path.is_dir():
-        raise UsageError(f"{option}: {text!r} is a directory, expected a .png file name")
-    existing = next(p for p in path.absolute().parents if p.exists())
-    if not existing.is_dir():
-        raise UsageError(f"{option}: {existing} is a file, so {text!r} cannot be written")
-    return path
-
-
-def write_png_atomic(path: Path, image: np.ndarray) -> None:
-    """Write ``image`` ``(h, w, 3)`` uint8 to ``path`` via a temporary file and a rename,
-    so that a failure never leaves a partial or clobbered file."""
-    from PIL import Image
-
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temp_name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(handle, "wb") as stream:
-            Image.fromarray(image).save(stream, format="PNG")
-        os.chmod(temp_name, 0o666 & ~_umask())  # mkstemp makes 0600; give the usual mode
-        os.replace(temp_name, path)
-    except BaseException:
-        Path(temp_name).unlink(missing_ok=True)
-        raise
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-def _joined(values: Sequence[float]) -> str:
-    return ",".join(f"{v:g}" for v in values)
+def _add_scene_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("scene_file", nargs="?", metavar="SCENE",
+                        help=f"a scene file (.toml) or a shipped scene: "
+                        f"{', '.join(shipped_scene_names())} (default {DEFAULT_SCENE})")
+    parser.add_argument("--scene", help="the same as SCENE (kept for older command lines)")
+    group = parser.add_argument_group("scene changes (override the scene file)")
+    for option in OPTIONS:
+        extra = {"action": "append"} if option.repeat else {}
+        group.add_argument(option.flag, dest=f"option_{option.name}", metavar=option.metavar,
+                           help=option.help, **extra)
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mirrorlab",
-        description="The CS370 multipass mirror: capture the scene from the mirror, "
-        "then texture the mirror with it.",
-    )
+        description="Mirrors and environment maps, rendered headless or in a window and "
+        "measured against a ray tracer. A scene is a TOML file (see README: Scenes).")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    render = commands.add_parser("render", help="render the lab scene headless to a PNG")
-    render.add_argument("--out", default="out/robot.png", help="output PNG (default %(default)s)")
+    render = commands.add_parser("render", help="render a scene headless to a PNG")
+    _add_scene_arguments(render)
+    render.add_argument("--out", help="output PNG (default out/SCENE.png)")
     render.add_argument("--size", default="512x512", help="WIDTHxHEIGHT (default %(default)s)")
-    render.add_argument("--angles", default=_joined(DEFAULT_ANGLES),
-                        help="joint angles in degrees BASE,LOWER,UPPER (default %(default)s)")
-    render.add_argument("--camera",
-                        help="viewer position X,Y,Z (default: the scene's, for the lab "
-                        f"{_joined(DEFAULT_CAMERA)})")
-    render.add_argument("--target",
-                        help="point the viewer looks at X,Y,Z (default: the scene's, for the "
-                        f"lab {_joined(DEFAULT_TARGET)})")
-    render.add_argument("--scene", default="lab",
-                        help="lab (the robot and its mirror), cone (the textbook's sphere-map "
-                        "experiment) or sphere (a reflective sphere) (default %(default)s)")
-    render.add_argument("--envmap",
-                        help="environment-map technique for the cone and sphere scenes: sphere, "
-                        "sphere-vertex, sphere-texgen, cube, cube-live, latlong, normal "
-                        "(default: sphere-texgen for cone, sphere for sphere)")
-    render.add_argument("--map-size", metavar="N",
-                        help="environment map side in texels for --envmap (default 256)")
-    render.add_argument("--cube-faces", metavar="DIR",
-                        help="six images DIR/{px,nx,py,ny,pz,nz}.png as the static cube map "
-                        "and the sky (sphere scene; e.g. textures/sky_cube)")
-    render.add_argument("--cone-height", metavar="Y",
-                        help="height of the cone's base in the cone scene (default 1)")
+    render.add_argument("--frame", metavar="N", help="the animation frame to render "
+                        "(default 0)")
+    render.add_argument("--frames", metavar="N", help="render frames 0 to N-1 (the last is "
+                        "written to --out)")
+    render.add_argument("--out-dir", metavar="DIR", help="also write every frame as "
+                        "DIR/SCENE_NNNN.png")
+    render.add_argument("--stats", action="store_true", help="print the passes each frame "
+                        "ran and skipped, and the time planning saved against --no-plan")
+    render.add_argument("--no-plan", action="store_true",
+                        help="run every pass of every frame (for comparison)")
     render.add_argument("--save-env", metavar="PATH",
-                        help="also write the captured environment texture as a PNG")
-    render.add_argument("--method", default="ortho",
-                        help="mirror technique: ortho (the lab), reflected, stencil or raytrace "
-                        "(default %(default)s)")
-    render.add_argument("--capture", default="copy",
-                        help="how a capture reaches its texture: copy (glCopyTexImage2D) or "
-                        "fbo (drawn into it) (default %(default)s)")
-    render.add_argument("--env-size", metavar="N",
-                        help="environment texture side in pixels (default: the frame's size)")
+                        help="also write the first planar mirror's capture texture as a PNG")
+    render.add_argument("--raytrace", action="store_true",
+                        help="draw the ray-traced ground truth instead (no OpenGL; slow)")
 
-    plan = commands.add_parser("plan", help="print the passes a frame would run, and why")
+    plan = commands.add_parser("plan", help="print the passes each frame would run, and why")
+    _add_scene_arguments(plan)
     plan.add_argument("--size", default="512x512", help="WIDTHxHEIGHT (default %(default)s)")
-    plan.add_argument("--camera", default=_joined(DEFAULT_CAMERA),
-                      help="viewer position X,Y,Z (default %(default)s)")
-    plan.add_argument("--target", default=_joined(DEFAULT_TARGET),
-                      help="point the viewer looks at X,Y,Z (default %(default)s)")
-    plan.add_argument("--method", default="ortho",
-                      help="ortho, reflected or stencil (default %(default)s)")
+    plan.add_argument("--frames", metavar="N", default="2",
+                      help="frames to plan (default %(default)s; later frames reuse what "
+                      "earlier ones captured)")
+    plan.add_argument("--json", action="store_true", help="print the plans as JSON")
+    plan.add_argument("--no-plan", action="store_true", help="plan every pass to run")
 
     bench = commands.add_parser("bench", help="measure error against the ray tracer, and time")
     bench.add_argument("what", metavar="accuracy", help="the benchmark to run: accuracy")
     bench.add_argument("--quick", action="store_true",
-                       help="a small sweep (128-pixel frames, maps 64 and 128, two viewpoints)")
+                       help="a small sweep (128-pixel frames, maps 64 and 128, few viewpoints)")
     bench.add_argument("--out-dir", default="out/bench",
                        help="where accuracy.csv, accuracy.md and accuracy.png go "
                        "(default %(default)s)")
     bench.add_argument("--frame", metavar="N", help="frame side in pixels (default 512)")
     bench.add_argument("--sizes", metavar="N,N,...",
-                       help="environment texture sides (default 64,128,256,512,1024,2048)")
-    bench.add_argument("--frames", metavar="N", help="timed frames per configuration (default 15)")
+                       help="texture sides (default 64,128,256,512,1024,2048)")
+    bench.add_argument("--frames", metavar="N", help="timed frames per configuration "
+                       "(default 15)")
     bench.add_argument("--from-csv", metavar="PATH",
                        help="measure nothing: re-make the tables and plot from a saved "
                        "accuracy.csv")
     bench.add_argument("--scene", default="all",
-                       help="lab (the mirror techniques), sphere (the environment maps) or all "
-                       "(default %(default)s)")
+                       help="lab (the mirror techniques), sphere (the environment maps), all "
+                       "(default), or a scene file: every technique its reflectors can use")
 
-    demo = commands.add_parser("demo", help="open a window on the lab scene (needs a display)")
-    demo.add_argument("--size", default="800x800", help="window WIDTHxHEIGHT (default %(default)s)")
-    demo.add_argument("--angles", default=_joined(DEFAULT_ANGLES),
-                      help="starting joint angles BASE,LOWER,UPPER (default %(default)s)")
-    demo.add_argument("--max-frames", type=int, default=0,
-                      help="close after this many frames (0: run until Esc or the window closes)")
+    demo = commands.add_parser("demo", help="open a window on a scene (needs a display)")
+    _add_scene_arguments(demo)
+    demo.add_argument("--size", default="800x800", help="window WIDTHxHEIGHT (default "
+                      "%(default)s)")
+    demo.add_argument("--max-frames", metavar="N", default="0",
+                      help="close after this many frames (0: run until Esc or the window "
+                      "closes)")
     demo.add_argument("--screenshot", metavar="PATH",
                       help="write the last frame as a PNG when the demo ends")
-    demo.add_argument("--scene", default="lab", help="lab, cone or sphere (default %(default)s)")
-    demo.add_argument("--method", default="ortho",
-                      help="the lab's mirror technique: ortho, reflected or stencil "
-                      "(default %(default)s; M cycles them in the window)")
-    demo.add_argument("--envmap",
-                      help="technique for the cone and sphere scenes (keys 1-7 switch)")
+
+    commands.add_parser("techniques", help="list the reflection techniques")
     return parser
 
 
-def parse_count(option: str, text: str, low: int = 1, high: int = 8192) -> int:
-    """``'256'`` -> 256 when ``low <= value <= high``; UsageError naming ``option`` otherwise."""
-    if text.strip().isdigit() and low <= int(text) <= high:
-        return int(text)
-    raise UsageError(f"{option}: expected a whole number from {low} to {high}, got {text!r}")
-
-
-def parse_choice(option: str, text: str, choices: Sequence[str]) -> str:
-    if text not in choices:
-        raise UsageError(f"{option}: expected one of {', '.join(choices)}, got {text!r}")
-    return text
-
-
-ENVMAP_DEFAULTS = {"cone": "sphere-texgen", "sphere": "sphere"}
-
-
-def check_scene_options(args: argparse.Namespace, lab_only: Sequence[str]) -> str:
-    """The scene name, after refusing options that do not fit it (UsageError naming them)."""
-    from mirrorlab.scene.envscenes import ENV_SCENES, ENVMAP_METHODS
-
-    scene = parse_choice("--scene", args.scene, ("lab", *ENV_SCENES))
-    if scene == "lab":
-        if args.envmap is not None:
-            raise UsageError("--envmap: applies to --scene cone or sphere, not the lab")
-        return scene
-    for option in lab_only:
-        if getattr(args, option.lstrip("-").replace("-", "_")) != _LAB_DEFAULTS[option]:
-            raise UsageError(f"{option}: applies to --scene lab only, not {scene}")
-    if args.envmap is None:
-        args.envmap = ENVMAP_DEFAULTS[scene]
-    parse_choice("--envmap", args.envmap, ENVMAP_METHODS)
-    return scene
-
-
-_LAB_DEFAULTS = {"--method": "ortho", "--capture": "copy", "--env-size": None,
-                 "--save-env": None, "--angles": _joined(DEFAULT_ANGLES)}
+def scene_from_args(args: argparse.Namespace) -> Scene:
+    """The scene the arguments name, with the scene options applied."""
+    if args.scene is not None and args.scene_file is not None and args.scene != args.scene_file:
+        raise UsageError(f"--scene: give the scene once, got {args.scene_file!r} and "
+                         f"{args.scene!r}")
+    scene = load_scene(args.scene_file or args.scene or DEFAULT_SCENE)
+    values = {option.name: getattr(args, f"option_{option.name}") for option in OPTIONS}
+    parsed = {}
+    for option in OPTIONS:
+        text = values[option.name]
+        if text is None:
+            continue
+        if option.repeat:
+            parsed[option.name] = tuple(item for t in text for item in option.parse(option.flag, t))
+        else:
+            parsed[option.name] = option.parse(option.flag, text)
+    return apply_options(scene, parsed)
 
 
 def run_render(args: argparse.Namespace) -> int:
-    from mirrorlab.headless import RENDER_METHODS
-    from mirrorlab.plan import CAPTURE_MODES
+    from mirrorlab.commands.render import run_render as render
 
-    scene = check_scene_options(
-        args, ("--method", "--capture", "--env-size", "--save-env", "--angles"))
     size = parse_size("--size", args.size)
-    method = parse_choice("--method", args.method, RENDER_METHODS)
-    capture = parse_choice("--capture", args.capture, CAPTURE_MODES)
-    env_size = parse_count("--env-size", args.env_size) if args.env_size else None
-    angles = parse_floats("--angles", args.angles, 3, "BASE,LOWER,UPPER")
-    camera = parse_floats("--camera", args.camera, 3, "X,Y,Z") if args.camera else None
-    target = parse_floats("--target", args.target, 3, "X,Y,Z") if args.target else None
-    out = png_path("--out", args.out)
-    env_out = png_path("--save-env", args.save_env) if args.save_env else None
-    if scene != "lab":
-        return render_env_scene(args, scene, size, camera, target, out)
-    for option in ("--map-size", "--cone-height", "--cube-faces"):
-        if getattr(args, option[2:].replace("-", "_")) is not None:
-            raise UsageError(f"{option}: applies to --scene cone or sphere, not the lab")
-    camera = camera or DEFAULT_CAMERA
-    target = target or DEFAULT_TARGET
-    if camera == target:
-        raise UsageError(f"--camera and --target: must differ, both are {_joined(camera)!r}")
-
-    from mirrorlab.headless import render_lab_frame
-
-    start = time.perf_counter()
-    frame = render_lab_frame(size, angles, camera, target, method, capture, env_size)
-    elapsed = time.perf_counter() - start
-    write_png_atomic(out, frame.image)
-    print(f"wrote {out} ({size[0]}x{size[1]}, {method}, passes: {' + '.join(frame.passes)}, "
-          f"{elapsed * 1000:.0f} ms with start-up, {frame.gl_renderer})")
-    if env_out is not None and frame.environment.size == 0:
-        print(f"no environment texture with --method {method}; {env_out} not written")
-    elif env_out is not None:
-        write_png_atomic(env_out, frame.environment)
-        print(f"wrote {env_out} (environment capture, "
-              f"{frame.environment.shape[1]}x{frame.environment.shape[0]})")
-    return 0
+    out = check_output("--out", args.out) if args.out else None
+    save_env = check_output("--save-env", args.save_env) if args.save_env else None
+    out_dir = Path(args.out_dir) if args.out_dir else None
+    if out_dir is not None and out_dir.exists() and not out_dir.is_dir():
+        raise UsageError(f"--out-dir: {args.out_dir!r} is a file, expected a folder")
+    scene = scene_from_args(args)
+    if out is None:
+        out = check_output("--out", Path("out") / f"{scene.name}.png")
+    frames = frame_list(args, scene)
+    return render(scene, size, out, frames, out_dir, args.stats, not args.no_plan, save_env,
+                  args.raytrace)
 
 
-def render_env_scene(args: argparse.Namespace, scene: str, size: tuple[int, int],
-                     camera: tuple[float, ...] | None, target: tuple[float, ...] | None,
-                     out: Path) -> int:
-    from mirrorlab.envmap_renderer import DEFAULT_MAP_SIZE, render_envmap_frame
-    from mirrorlab.scene.envscenes import CONE_LIMITS, build_env_scene
-
-    map_size = parse_count("--map-size", args.map_size, 4, 4096) if args.map_size else (
-        DEFAULT_MAP_SIZE)
-    cone_height = None
-    if args.cone_height is not None:
-        if scene != "cone":
-            raise UsageError(f"--cone-height: applies to --scene cone, not {scene}")
-        (cone_height,) = parse_floats("--cone-height", args.cone_height, 1, "Y")
-        low, high = CONE_LIMITS
-        if not low <= cone_height <= high:
-            raise UsageError(f"--cone-height: expected a height from {low:g} to {high:g}, "
-                             f"got {args.cone_height!r}")
-    cube_faces = None
-    if args.cube_faces is not None:
-        from mirrorlab.scene.envscenes import load_cube_faces
-
-        if scene != "sphere":
-            raise UsageError(f"--cube-faces: applies to --scene sphere, not {scene}")
-        try:
-            cube_faces = load_cube_faces(args.cube_faces)
-        except ValueError as exc:
-            raise UsageError(f"--cube-faces: {exc}") from None
-    viewer = None
-    if camera or target:
-        own = build_env_scene(scene).camera
-        viewer = dataclasses.replace(own, eye=camera or own.eye, target=target or own.target)
-        if viewer.eye == viewer.target:
-            raise UsageError(f"--camera and --target: must differ, both are "
-                             f"{_joined(viewer.eye)!r}")
-    start = time.perf_counter()
-    frame = render_envmap_frame(scene, args.envmap, size, viewer, map_size, cone_height,
-                                cube_faces)
-    elapsed = time.perf_counter() - start
-    write_png_atomic(out, frame.image)
-    source = (f"cube faces from {args.cube_faces}" if cube_faces is not None
-              and args.envmap == "cube" else f"{args.envmap} map of {map_size}")
-    print(f"wrote {out} ({size[0]}x{size[1]}, {scene} scene, {source}, passes: "
-          f"{' + '.join(frame.passes)}, {elapsed * 1000:.0f} ms with start-up, "
-          f"{frame.gl_renderer})")
-    return 0
+def frame_list(args: argparse.Namespace, scene: Scene) -> list[int]:
+    if args.frame is not None and args.frames is not None:
+        raise UsageError("--frame and --frames: give one or the other")
+    if args.frames is not None:
+        count = parse_count("--frames", args.frames, 1, 100_000)
+        if scene.animation is not None and count > scene.frame_count:
+            raise UsageError(f"--frames: scene {scene.name} has {scene.frame_count} frames, "
+                             f"got {count}")
+        return list(range(count))
+    frame = parse_count("--frame", args.frame, 0, 100_000) if args.frame is not None else 0
+    if frame >= scene.frame_count and scene.animation is not None:
+        raise UsageError(f"--frame: scene {scene.name} has frames 0 to "
+                         f"{scene.frame_count - 1}, got {frame}")
+    return [frame]
 
 
 def run_plan(args: argparse.Namespace) -> int:
-    from mirrorlab.plan import METHODS, CaptureState, plan_frame
-    from mirrorlab.scene.robot import Camera, build_lab_scene
+    from mirrorlab.commands.plan import run_plan as plan
 
     size = parse_size("--size", args.size)
-    camera = parse_floats("--camera", args.camera, 3, "X,Y,Z")
-    target = parse_floats("--target", args.target, 3, "X,Y,Z")
-    method = parse_choice("--method", args.method, METHODS)
-    if camera == target:
-        raise UsageError(f"--camera and --target: must differ, both are {args.camera!r}")
-    scene = build_lab_scene()
-    viewer = Camera(eye=camera, target=target)
-    first = plan_frame(scene, viewer, size, CaptureState(), method=method)
-    settled = CaptureState(scene.graph.revision, size, viewer)
-    second = plan_frame(scene, viewer, size, settled, method=method)
-    for title, plan in (("first frame", first), ("next frame, nothing changed", second)):
-        print(f"{title}:")
-        for planned in plan:
-            print(f"  {'run ' if planned.runs else 'skip'} {planned.name:<20} {planned.reason}")
-    return 0
+    frames = parse_count("--frames", args.frames, 1, 10_000)
+    return plan(scene_from_args(args), size, frames, args.json, not args.no_plan)
 
 
 def run_bench(args: argparse.Namespace) -> int:
     parse_choice("bench", args.what, ("accuracy",))
-    from mirrorlab import bench
+    from mirrorlab.accuracy import SweepSettings, run_command
 
-    settings = bench.SweepSettings.quick() if args.quick else bench.SweepSettings()
-    changes = {}
+    changes: dict = {}
     if args.frame:
         changes["frame"] = parse_count("--frame", args.frame, 16, 4096)
     if args.sizes:
-        parts = [p.strip() for p in args.sizes.split(",")]
-        changes["sizes"] = tuple(parse_count("--sizes", p, 1, 8192) for p in parts)
+        changes["sizes"] = tuple(parse_count("--sizes", p.strip(), 1, 8192)
+                                 for p in args.sizes.split(","))
     if args.frames:
         changes["frames"] = parse_count("--frames", args.frames, 1, 10000)
-    if changes:
-        settings = dataclasses.replace(settings, **changes)
-    scenes = parse_choice("--scene", args.scene, ("lab", "sphere", "all"))
     out_dir = Path(args.out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise UsageError(f"--out-dir: {args.out_dir!r} is a file, expected a directory")
-    if args.from_csv:
-        source = Path(args.from_csv)
-        try:
-            rows = bench.rows_from_csv(source.read_text())
-        except (OSError, UnicodeDecodeError) as exc:
-            raise UsageError(f"--from-csv: cannot read {source}: {exc}") from None
-        except ValueError as exc:
-            raise UsageError(f"--from-csv: {source}: {exc}") from None
-        title = f"accuracy vs time, from {source.name}"
-    else:
-        rows = []
-        if scenes in ("lab", "all"):
-            rows += bench.run_accuracy(settings, bench.progress_bar())
-        if scenes in ("sphere", "all"):
-            rows += bench.run_envmap_accuracy(settings, bench.progress_bar())
-        title = (f"accuracy vs time, {settings.frame}x{settings.frame} frames, llvmpipe; "
-                 f"medians of {settings.frames} frames")
-        bench.write_bytes_atomic(out_dir / "accuracy.csv", bench.rows_to_csv(rows).encode())
-    summary = bench.summarise(rows)
-    markdown = [title, ""]
-    for scene in dict.fromkeys(r.scene for r in summary):
-        table = bench.summary_table([r for r in summary if r.scene == scene])
-        heading = bench.SCENE_TITLES.get(scene, scene)
-        print(f"\n{heading}:\n{bench.format_text(table)}")
-        markdown += [f"### {heading}", "", bench.format_markdown(table), ""]
-    bench.write_bytes_atomic(out_dir / "accuracy.md", "\n".join(markdown).encode())
-    written = ["accuracy.md"] if args.from_csv else ["accuracy.csv", "accuracy.md"]
-    if bench.plot_summary(summary, out_dir / "accuracy.png", title):
-        written.append("accuracy.png")
-    else:
-        print("matplotlib is not installed, so no plot (pip install 'mirrorlab[plot]')")
-    print(f"wrote {', '.join(str(out_dir / name) for name in written)}")
-    return 0
+    settings = SweepSettings.quick() if args.quick else SweepSettings()
+    from dataclasses import replace
+
+    settings = replace(settings, **changes)
+    scenes: str | Scene = args.scene
+    if args.scene not in ("lab", "sphere", "all"):
+        scenes = load_scene(args.scene)
+    return run_command(settings, scenes, out_dir, Path(args.from_csv) if args.from_csv
+                       else None)
 
 
 def run_demo(args: argparse.Namespace) -> int:
-    from mirrorlab.plan import METHODS
-
-    scene = check_scene_options(args, ("--method", "--angles"))
     size = parse_size("--size", args.size)
-    angles = parse_floats("--angles", args.angles, 3, "BASE,LOWER,UPPER")
-    method = parse_choice("--method", args.method, METHODS)
-    screenshot = png_path("--screenshot", args.screenshot) if args.screenshot else None
-    if args.max_frames < 0:
-        raise UsageError(f"--max-frames: expected 0 or more, got {args.max_frames}")
+    max_frames = parse_count("--max-frames", args.max_frames, 0, 10**9)
+    screenshot = check_output("--screenshot", args.screenshot) if args.screenshot else None
+    scene = scene_from_args(args)
 
     from mirrorlab.gl.context import use_platform
 
     use_platform("glx")  # before anything imports OpenGL in this process
     from mirrorlab.app.demo import run
 
-    return run(size, angles, max_frames=args.max_frames, screenshot=screenshot,
-               save_png=write_png_atomic, scene=scene, envmap=args.envmap or "sphere-texgen",
-               method=method)
+    return run(scene, size, max_frames=max_frames, screenshot=screenshot)
 
 
-VECTOR_OPTIONS = ("--angles", "--camera", "--target")
+def run_techniques(args: argparse.Namespace) -> int:
+    from mirrorlab.techniques import TECHNIQUES
+
+    for name, entry in TECHNIQUES.items():
+        print(f"{name:<14} {entry.kind:<7} {entry.summary}")
+    return 0
+
+
+_VECTOR_FLAGS = (*tuple(o.flag for o in OPTIONS if "," in o.metavar), "--fovy")
 
 
 def join_negative_vectors(argv: Sequence[str]) -> list[str]:
@@ -410,7 +230,7 @@ def join_negative_vectors(argv: Sequence[str]) -> list[str]:
     while i < len(tokens):
         token = tokens[i]
         following = tokens[i + 1] if i + 1 < len(tokens) else ""
-        if token in VECTOR_OPTIONS and re.match(r"^-[\d.]", following):
+        if token in _VECTOR_FLAGS and re.match(r"^-[\d.]", following):
             out.append(f"{token}={following}")
             i += 2
         else:
@@ -422,14 +242,12 @@ def join_negative_vectors(argv: Sequence[str]) -> list[str]:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(join_negative_vectors(sys.argv[1:] if argv is None else argv))
+    runners = {"render": run_render, "plan": run_plan, "bench": run_bench, "demo": run_demo,
+               "techniques": run_techniques}
     try:
-        runners = {"render": run_render, "plan": run_plan, "bench": run_bench,
-                   "demo": run_demo}
         return runners[args.command](args)
-    except UsageError as exc:
-        print(f"mirrorlab {args.command}: error: {exc}", file=sys.stderr)
-        return 2
-    except (ValueError, FileNotFoundError) as exc:
+    except (UsageError, OptionError, OutputError, SceneError, ValueError,
+            FileNotFoundError) as exc:
         print(f"mirrorlab {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:

@@ -170,20 +170,24 @@ def reflection_matrix(plane: np.ndarray) -> np.ndarray:
 def oblique_projection(projection: np.ndarray, plane_in_eye_space: np.ndarray) -> np.ndarray:
     """``projection`` ``(4, 4)`` with its near plane replaced by ``plane_in_eye_space`` (Lengyel).
 
-    The plane (a, b, c, d) must face away from the eye (the eye lies on its
-    negative side, d < 0), as a near plane does; what lies on its negative
-    side is clipped. The far plane tilts with it, so depth precision drops as
-    the plane turns away from the view axis. Raises ValueError when the plane
-    passes through the eye (d = 0), where no such projection exists.
+    What lies on the plane's negative side is clipped. For a perspective projection the
+    eye must lie strictly behind the plane (d < 0), as it does behind a near plane; for
+    an orthographic one the view box's far corner must lie in front of it. The far plane
+    tilts with the near one, so depth precision drops as the plane turns away from the
+    view axis. Raises ValueError where no such projection exists.
     """
     clip_plane = np.asarray(plane_in_eye_space, dtype=np.float64)
-    if not clip_plane[3] < 0.0:
+    matrix = np.array(projection, dtype=np.float64)
+    perspective = not np.allclose(matrix[3], (0.0, 0.0, 0.0, 1.0))
+    if perspective and not clip_plane[3] < 0.0:
         raise ValueError(
             f"oblique near plane must have the eye strictly behind it (d < 0), got {clip_plane}")
-    matrix = np.array(projection, dtype=np.float64)
     # The corner of the view volume opposite the plane, in eye space.
     corner = np.linalg.inv(matrix) @ np.array(
         [np.sign(clip_plane[0]), np.sign(clip_plane[1]), 1.0, 1.0])
-    scaled = clip_plane * (2.0 / (clip_plane @ corner))
+    reach = float(clip_plane @ corner)
+    if not reach > 0.0:
+        raise ValueError(f"oblique near plane {clip_plane} leaves nothing of the view volume")
+    scaled = clip_plane * (2.0 / reach)
     matrix[2] = scaled - matrix[3]
     return matrix

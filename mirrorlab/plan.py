@@ -1,111 +1,396 @@
 """Which passes a frame needs, and why: simulate only the effects the scene calls for.
 
-Pure numpy/python; the renderer runs what this decides.
+:func:`plan_frame` takes a scene, the viewer, the frame size and what each reflector's
+textures hold now, and returns the frame's ordered passes, each with its reason:
+captures first (a capture's own sub-captures before it), then the camera pass. For every
+view it also says how each reflector is drawn there (:class:`ReflectorDraw`): not at
+all (out of view, facing away), as a plain surface (bounces used up, or too small on
+screen to be worth a capture), with its map, with a capture, or, for a stencil mirror,
+as the world seen through it.
+
+Reflections of reflections: a reflector seen in another's capture is drawn with a
+texture one bounce lower, made for that capture's camera; at bounce 0 it is plain. A
+reflector never appears in its own capture. Each capture key (what was drawn, from
+where, at which bounce, of which scene) gets a texture slot of its own within a frame;
+a slot that already holds the key from an earlier frame is reused, not drawn again.
+
+Pure numpy; the renderer (:mod:`mirrorlab.renderer`) runs what this decides.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+from typing import Literal
 
 import numpy as np
 
 from mirrorlab import math3d
-from mirrorlab.scene.robot import Camera, LabScene
+from mirrorlab.scene.model import CurvedReflector, PlanarReflector, Reflector, Scene
+from mirrorlab.techniques import technique
+from mirrorlab.views import (
+    View,
+    camera_view,
+    cube_face_views,
+    is_orthographic,
+    ortho_capture_view,
+    reflected_capture_view,
+    stencil_view,
+)
 
-METHODS = ("ortho", "reflected", "stencil")
-"""The rasterised mirror techniques: the lab's fixed orthographic capture, a per-frame
-reflected-camera capture sampled projectively, and a stencil-masked reflected redraw."""
+TINY_PIXELS = 16.0
+"""A reflector covering fewer pixels than this on screen is drawn plain (no capture)."""
 
-
-CAPTURE_MODES = ("copy", "fbo")
-"""How a capture reaches its texture: ``glCopyTexImage2D`` (the lab) or drawn straight
-into it through a framebuffer."""
+DrawMode = Literal["hidden", "back", "plain", "map", "texture", "stencil"]
+"""``hidden``: not drawn (out of view); ``back``: only a planar mirror's backing shows;
+``plain``: a lit surface; ``map``: with its map; ``texture``: with its capture;
+``stencil``: the world seen through it, drawn in place."""
 
 
 @dataclass(frozen=True)
 class PlannedPass:
-    """One pass of a frame: ``name``, whether it runs, and the ``reason`` in words."""
+    """One pass of a frame: ``name`` (``capture``, ``bake`` or ``camera``), the
+    ``reflector`` it serves and its ``technique``, the ``bounce`` whose texture it makes,
+    the view it is made ``for``, whether it ``runs`` and the ``reason`` in words.
+    ``views`` are the capture's cameras, each with its :class:`ViewPlan`; ``slot`` the
+    texture slot it fills."""
 
     name: str
     runs: bool
     reason: str
+    reflector: str | None = None
+    technique: str | None = None
+    bounce: int = 0
+    for_view: str = ""
+    slot: int = 0
+    key: tuple = ()
+    views: tuple[ViewPlan, ...] = ()
+
+    def describe(self) -> str:
+        what = self.name if self.reflector is None else (
+            f"{self.name} {self.reflector} ({self.technique}, bounce {self.bounce}, "
+            f"for {self.for_view})")
+        return f"{'run ' if self.runs else 'skip'} {what}: {self.reason}"
+
+    def as_dict(self) -> dict:
+        return {"pass": self.name, "runs": self.runs, "reason": self.reason,
+                "reflector": self.reflector, "technique": self.technique,
+                "bounce": self.bounce, "for": self.for_view}
 
 
 @dataclass(frozen=True)
-class CaptureState:
-    """What the environment texture currently holds: the scene revision, the size it was
-    captured at and, for a viewer-dependent capture, the viewer; None for never captured."""
+class ReflectorDraw:
+    """How ``reflector`` is drawn in one view: ``mode`` (see :data:`DrawMode`), the
+    texture ``slot`` it samples, the capture ``source`` view (a reflected capture's
+    camera, for its projective lookup), the ``nested`` plan of a stencil mirror's
+    world, and the ``reason``."""
 
-    revision: int | None = None
-    size: tuple[int, int] | None = None
-    viewer: Camera | None = None
-
-
-def check_method(method: str) -> str:
-    """``method`` if it names a technique in :data:`METHODS`, else ValueError listing them."""
-    if method not in METHODS:
-        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
-    return method
+    reflector: Reflector
+    mode: DrawMode
+    reason: str
+    slot: int = 0
+    source: View | None = None
+    nested: ViewPlan | None = None
 
 
-def mirror_faces_viewer(scene: LabScene, camera: Camera) -> bool:
-    """True when the viewer is strictly on the reflecting side of the mirror's plane."""
-    mirror = scene.mirror
-    offset = np.asarray(camera.eye, dtype=np.float64) - mirror.center
-    return bool(offset @ mirror.normal > 0.0)
+@dataclass(frozen=True)
+class ViewPlan:
+    """A view and how each reflector (but the ``excluded`` one) is drawn in it."""
+
+    view: View
+    draws: tuple[ReflectorDraw, ...]
+    excluded: str | None = None
 
 
-def mirror_in_view(scene: LabScene, camera: Camera, aspect: float) -> bool:
-    """False when all four mirror corners lie outside one and the same side of the
-    viewer's view volume (so no part of the mirror can be on screen); conservative."""
-    clip = math3d.transform_points(camera.projection(aspect) @ camera.view(),
-                                   scene.mirror.corners)
+@dataclass
+class TextureState:
+    """What the renderer's textures hold: ``(reflector, slot) -> key`` of the capture or
+    bake in it. The planner reads it; the renderer records each capture it runs."""
+
+    held: dict[tuple[str, int], tuple] = field(default_factory=dict)
+
+    def slot_holding(self, reflector: str, key: tuple) -> int | None:
+        for (name, slot), held in self.held.items():
+            if name == reflector and held == key:
+                return slot
+        return None
+
+    def record(self, step: PlannedPass) -> None:
+        assert step.reflector is not None
+        self.held[(step.reflector, step.slot)] = step.key
+
+    def clear(self) -> None:
+        self.held.clear()
+
+
+@dataclass(frozen=True)
+class FramePlan:
+    """The passes of one frame in the order they run, and the camera's :class:`ViewPlan`."""
+
+    passes: tuple[PlannedPass, ...]
+    top: ViewPlan
+
+    @property
+    def ran(self) -> list[PlannedPass]:
+        return [p for p in self.passes if p.runs]
+
+    @property
+    def skipped(self) -> list[PlannedPass]:
+        return [p for p in self.passes if not p.runs]
+
+    def describe(self) -> list[str]:
+        lines = [p.describe() for p in self.passes]
+        lines += [f"     draw {d.reflector.name} in camera: {d.mode} ({d.reason})"
+                  for d in self.top.draws]
+        return lines
+
+
+def plan_frame(scene: Scene, size: tuple[int, int], state: TextureState | None = None,
+               use_plan: bool = True, tiny_pixels: float = TINY_PIXELS,
+               view: View | None = None) -> FramePlan:
+    """The passes for one frame of ``scene`` seen by its camera (or ``view``) at ``size``
+    (width, height) pixels, given what ``state`` says the textures hold.
+
+    With ``use_plan`` False every pass runs: every reflector is captured at every bounce
+    for every view, nothing is reused and no reflector is drawn plain for being small
+    (for comparison: the frame must come out the same). ``tiny_pixels`` 0 turns the
+    small-reflector rule off.
+    """
+    planner = _Planner(scene, state or TextureState(), use_plan,
+                       tiny_pixels if use_plan else 0.0)
+    top_view = view or camera_view(scene.camera, size)
+    top = planner.plan_view(top_view, scene.max_bounces, None)
+    camera = PlannedPass("camera", True, "the frame itself", for_view="camera")
+    return FramePlan(tuple([*planner.passes, camera]), top)
+
+
+class _Planner:
+    def __init__(self, scene: Scene, state: TextureState, use_plan: bool,
+                 tiny_pixels: float) -> None:
+        self.scene = scene
+        self.state = state
+        self.use_plan = use_plan
+        self.tiny_pixels = tiny_pixels
+        self.passes: list[PlannedPass] = []
+        self.content = scene.content_key()
+        self.assigned: dict[tuple[str, tuple], int] = {}  # this frame's (reflector, key) slots
+        self.used: dict[str, set[int]] = {}
+
+    def plan_view(self, view: View, bounce: int, excluded: str | None) -> ViewPlan:
+        draws = []
+        for reflector in self.scene.reflectors:
+            if reflector.name == excluded:
+                continue
+            draws.append(self.draw(reflector, view, bounce))
+        return ViewPlan(view, tuple(draws), excluded)
+
+    def draw(self, reflector: Reflector, view: View, bounce: int) -> ReflectorDraw:
+        entry = technique(reflector.technique)
+        if self.use_plan:
+            hidden = hidden_reason(reflector, view)
+            if hidden:
+                mode = "back" if hidden.startswith("seen from behind") else "hidden"
+                return ReflectorDraw(reflector, mode, hidden)
+        if bounce <= 0:
+            return ReflectorDraw(reflector, "plain", "no bounces left: a plain surface")
+        if self.tiny_pixels > 0 and entry.texture != "static":
+            area = screen_area(reflector, view)
+            if area < self.tiny_pixels:
+                return ReflectorDraw(reflector, "plain", f"covers about {area:.1f} pixels "
+                                     f"(under {self.tiny_pixels:g}): drawn plain, no capture")
+        if entry.texture == "inline":
+            assert isinstance(reflector, PlanarReflector)
+            nested = self.plan_view(stencil_view(view, reflector), bounce - 1, reflector.name)
+            return ReflectorDraw(reflector, "stencil", "the mirrored world, drawn in place",
+                                 nested=nested)
+        if entry.texture == "static":
+            return ReflectorDraw(reflector, "map", "its static map")
+        if entry.texture == "baked":
+            slot = self.bake(reflector, view)
+            return ReflectorDraw(reflector, "map", "its sphere map for this view", slot=slot)
+        slot, source = self.capture(reflector, view, bounce)
+        if source is None:
+            return ReflectorDraw(reflector, "plain", "no capture camera from here")
+        return ReflectorDraw(reflector, "texture", "its capture", slot=slot, source=source)
+
+    # ------------------------------------------------------------- textures
+
+    def slot_for(self, reflector: str, key: tuple) -> tuple[int, bool]:
+        """The slot for ``key`` and whether it already holds it (so nothing need run)."""
+        if (reflector, key) in self.assigned:
+            return self.assigned[(reflector, key)], True
+        used = self.used.setdefault(reflector, set())
+        held = self.state.slot_holding(reflector, key) if self.use_plan else None
+        if held is not None and held not in used:
+            slot, fresh = held, True
+        else:
+            slot = next(i for i in range(len(used) + 1) if i not in used)
+            fresh = False
+        used.add(slot)
+        self.assigned[(reflector, key)] = slot
+        return slot, fresh
+
+    def bake(self, reflector: Reflector, view: View) -> int:
+        if isinstance(reflector, CurvedReflector) and reflector.source is not None:
+            key: tuple = ("picture", str(reflector.source), reflector.map_size)
+            reason = "the picture is the map, as it is"
+        else:
+            rotation = tuple(np.round(np.asarray(view.view)[:3, :3], 12).ravel())
+            key = ("bake", self.scene.background, reflector.map_size, rotation)
+            reason = "the view turned (sphere maps live in eye space)"
+        slot, held = self.slot_for(reflector.name, key)
+        if held and (reflector.name, key) in self._planned_keys():
+            return slot
+        runs = not held
+        self.passes.append(PlannedPass(
+            "bake", runs, reason if runs else "the map for this view is already made",
+            reflector.name, reflector.technique, 0, view.label, slot, key))
+        return slot
+
+    def _planned_keys(self) -> set[tuple[str, tuple]]:
+        return {(p.reflector, p.key) for p in self.passes if p.reflector is not None}
+
+    def capture(self, reflector: Reflector, view: View,
+                bounce: int) -> tuple[int, View | None]:
+        entry = technique(reflector.technique)
+        if isinstance(reflector, PlanarReflector):
+            size = reflector.texture_size
+            texture_size = (size, size) if size else view.size
+            if entry.texture == "viewer":
+                camera = reflected_capture_view(view, reflector, texture_size)
+                if camera is None:
+                    return 0, None
+                cameras = [camera]
+                key: tuple = ("viewer", bounce, camera.key, self.content)
+            else:
+                cameras = [ortho_capture_view(reflector, texture_size)]
+                key = ("fixed", bounce, texture_size, self.content)
+        else:
+            cameras = cube_face_views(reflector)
+            key = ("fixed", bounce, (reflector.map_size,), self.content)
+        slot, held = self.slot_for(reflector.name, key)
+        source = cameras[0]
+        if held and (reflector.name, key) in self._planned_keys():
+            return slot, source  # already captured earlier in this frame
+        if held:
+            self.passes.append(PlannedPass(
+                "capture", False, "nothing it shows changed since it was captured",
+                reflector.name, reflector.technique, bounce, view.label, slot, key))
+            return slot, source
+        plans = tuple(self.plan_view(camera, bounce - 1, reflector.name) for camera in cameras)
+        reason = ("every pass runs (--no-plan)" if not self.use_plan
+                  else self.what_changed(reflector.name, key))
+        self.passes.append(PlannedPass("capture", True, reason, reflector.name,
+                                       reflector.technique, bounce, view.label, slot, key,
+                                       plans))
+        return slot, source
+
+
+    def what_changed(self, reflector: str, key: tuple) -> str:
+        """Why a capture must run: what differs from the nearest capture its textures hold
+        (keys are (kind, bounce, camera or size, scene content))."""
+        held = [k for (name, _), k in self.state.held.items()
+                if name == reflector and k[:2] == key[:2]]
+        if not held:
+            return "its texture is still blank"
+        previous = min(held, key=lambda k: (k[2] != key[2]) + (k[3] != key[3]))
+        moved, changed = previous[2] != key[2], previous[3] != key[3]
+        if key[0] == "viewer":
+            what = "the viewer moved" if moved else ""
+        else:
+            what = "its texture's size changed" if moved else ""
+        if changed:
+            what = f"{what} and the scene changed" if what else (
+                "the scene changed since the last capture")
+        return what or "its texture was used for another capture"
+
+
+# --------------------------------------------------------------------------- geometry
+
+
+def hidden_reason(reflector: Reflector, view: View) -> str | None:
+    """Why ``reflector`` cannot show in ``view`` (conservatively), or None."""
+    if isinstance(reflector, PlanarReflector):
+        if view.eye is not None:
+            facing = float((view.eye - reflector.center) @ reflector.normal)
+        else:
+            facing = float(-view.forward @ reflector.normal)
+        if not facing > 0.0:
+            return "seen from behind or edge-on: only its back shows"
+        points = reflector.corner_array
+    else:
+        center, radius = bounding_sphere(reflector)
+        return None if _sphere_in_view(center, radius, view) else "out of view"
+    if view.clip_plane is not None and np.all(
+            math3d.transform_points(np.eye(4), points) @ view.clip_plane <= 0.0):
+        return "behind the mirror it would be seen in"
+    clip = math3d.transform_points(view.view_projection, points)
     x, y, z, w = clip[:, 0], clip[:, 1], clip[:, 2], clip[:, 3]
-    outside = (x < -w, x > w, y < -w, y > w, z < -w, z > w)
-    return not any(bool(np.all(side)) for side in outside)
-
-
-def _reflection_skip(scene: LabScene, camera: Camera, size: tuple[int, int]) -> str | None:
-    if not mirror_faces_viewer(scene, camera):
-        return "viewer is behind or in the mirror's plane"
-    if not mirror_in_view(scene, camera, size[0] / size[1]):
-        return "the mirror is out of view"
+    if not is_orthographic(view.projection) and np.all(w <= 0.0):
+        return "out of view (behind the viewer)"
+    for outside, where in ((x < -w, "left of"), (x > w, "right of"), (y < -w, "below"),
+                           (y > w, "above"), (z < -w, "behind"), (z > w, "beyond")):
+        if np.all(outside):
+            what = "the viewer" if where == "behind" else "the view"
+            return f"out of view ({where} {what})"
     return None
 
 
-def plan_frame(scene: LabScene, camera: Camera, size: tuple[int, int],
-               captured: CaptureState, force_capture: bool = False,
-               method: str = "ortho") -> list[PlannedPass]:
-    """The ordered passes for one frame of ``size`` (width, height) pixels.
+def _sphere_in_view(center: np.ndarray, radius: float, view: View) -> bool:
+    if view.clip_plane is not None and float(np.append(center, 1.0) @ view.clip_plane) < -radius:
+        return False
+    matrix = view.view_projection
+    planes = (matrix[3] + matrix[0], matrix[3] - matrix[0], matrix[3] + matrix[1],
+              matrix[3] - matrix[1], matrix[3] + matrix[2], matrix[3] - matrix[2])
+    point = np.append(center, 1.0)
+    for plane in planes:
+        length = float(np.linalg.norm(plane[:3]))
+        if length > 0 and float(plane @ point) / length < -radius:
+            return False
+    return True
 
-    - ``ortho``: the capture does not depend on the viewer, so it is redone
-      only when the scene or the frame size changed since ``captured``, and
-      skipped while the mirror is out of view or seen from behind.
-    - ``reflected``: the capture follows the viewer; it is redone when the
-      viewer, the scene or the size changed, with the same skips.
-    - ``stencil``: no capture; the reflection pass runs when the mirror's
-      front can be seen.
-    """
-    check_method(method)
-    skip = _reflection_skip(scene, camera, size)
-    camera_pass = PlannedPass("camera", True, "the frame itself")
-    if method == "stencil":
-        reflection = (PlannedPass("stencil-reflection", False, skip) if skip else
-                      PlannedPass("stencil-reflection", True, "the mirror's front is in view"))
-        return [camera_pass, reflection]
-    name = "capture" if method == "ortho" else "reflected-capture"
-    if force_capture:
-        return [PlannedPass(name, True, "capture forced (e.g. for a benchmark)"), camera_pass]
-    if skip:
-        return [PlannedPass(name, False, skip), camera_pass]
-    if captured.revision is None:
-        capture = PlannedPass(name, True, "environment texture is still blank")
-    elif captured.size != tuple(size):
-        capture = PlannedPass(name, True, f"frame size changed to {size[0]}x{size[1]}")
-    elif captured.revision != scene.graph.revision:
-        capture = PlannedPass(name, True, "the scene changed since the last capture")
-    elif method == "reflected" and captured.viewer != camera:
-        capture = PlannedPass(name, True, "the viewer moved since the last capture")
-    else:
-        capture = PlannedPass(name, False, "nothing changed since the last capture")
-    return [capture, camera_pass]
+
+@lru_cache(maxsize=64)
+def _mesh_sphere(mesh: Path) -> tuple[np.ndarray, float]:
+    from mirrorlab.scene.mesh import load_mesh
+
+    positions = load_mesh(mesh).positions.astype(np.float64)
+    center = (positions.min(axis=0) + positions.max(axis=0)) / 2.0
+    return center, float(np.linalg.norm(positions - center, axis=1).max())
+
+
+def bounding_sphere(reflector: CurvedReflector) -> tuple[np.ndarray, float]:
+    """World centre ``(3,)`` and radius of a sphere around the reflector's mesh."""
+    center, radius = _mesh_sphere(reflector.mesh)
+    model = reflector.model_matrix()
+    world = math3d.transform_points(model, center)[:3]
+    stretch = float(np.linalg.svd(model[:3, :3], compute_uv=False).max())
+    return world, radius * stretch
+
+
+def screen_area(reflector: Reflector, view: View) -> float:
+    """About how many pixels ``reflector`` covers in ``view`` (inf when it reaches behind
+    the eye, where a projection says nothing)."""
+    width, height = view.size
+    if isinstance(reflector, PlanarReflector):
+        clip = math3d.transform_points(view.view_projection, reflector.corner_array)
+        if np.any(clip[:, 3] <= 1e-9):
+            return float("inf")
+        ndc = clip[:, :2] / clip[:, 3:4]
+        pixels = np.clip(ndc, -1.0, 1.0) * [width / 2.0, height / 2.0]
+        x, y = pixels[:, 0], pixels[:, 1]
+        return float(abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))) / 2.0)
+    center, radius = bounding_sphere(reflector)
+    if is_orthographic(view.projection):
+        scale = abs(view.projection[1, 1]) * height / 2.0
+        return float(np.pi * (radius * scale) ** 2)
+    depth = float(-(view.view @ np.append(center, 1.0))[2])
+    if depth <= radius:
+        return float("inf")
+    scale = abs(view.projection[1, 1]) * height / 2.0
+    return float(np.pi * (radius * scale / depth) ** 2)
+
+
+def describe_steps(plan: FramePlan) -> list[str]:
+    return plan.describe()

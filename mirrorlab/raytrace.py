@@ -1,27 +1,30 @@
 """Ground truth: a small ray tracer over the same triangles the rasteriser draws.
 
-One primary ray per pixel centre, one reflected ray where it meets a
-reflective surface, traced with trimesh's ray casting (which uses embreex by
-itself when it is installed). Shading repeats the rasteriser's model in
-numpy: ``albedo * (ambient + diffuse * max(n . l, 0))`` with the vertex
-normal interpolated across the triangle and the texture sampled bilinearly
-at level 0 with repeat wrap.
+One primary ray per pixel centre, and a reflected ray wherever a ray meets a
+reflective surface, up to the scene's ``max_bounces`` (a reflector met when the
+bounces are used up shows as a plain lit surface, as the rasteriser draws it), traced
+with trimesh's ray casting (which uses embreex by itself when it is installed).
+Shading repeats the rasteriser's model in numpy:
+``albedo * (ambient + sum of light * max(n . l, 0))`` with the vertex normal
+interpolated across the triangle and the texture sampled with its mipmaps.
 
-It shares no code with the GL passes: the scene description (graph, meshes,
-camera matrices) is the only common ground, so it stays an independent check
-of every rasterised technique.
+It shares no code with the GL passes: the scene (:class:`~mirrorlab.scene.model.Scene`,
+its meshes and the camera's matrices) is the only common ground, so it stays an
+independent check of every rasterised technique. :func:`trace_scene` traces any scene.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from mirrorlab import math3d
-from mirrorlab.scene.graph import SceneGraph
-from mirrorlab.scene.mesh import load_model, load_texture
+from mirrorlab.scene.backgrounds import environment_of, load_picture
+from mirrorlab.scene.mesh import load_mesh
+from mirrorlab.scene.model import CurvedReflector, PlanarReflector, Scene
 
 Environment = Callable[[np.ndarray], np.ndarray]
 """``env(directions (n, 3) unit, world) -> (n, 3)`` RGB in [0, 1] for rays that escape."""
@@ -37,8 +40,9 @@ class RaySurface:
     ``(n, 2)``, ``faces`` ``(m, 3)`` counter-clockwise seen from the front,
     ``color`` the albedo RGB in [0, 1], ``texture`` ``(h, w, 3)`` uint8 with
     row 0 at the top (t = 1) or None. A ``reflective`` surface is a perfect
-    mirror with smooth (interpolated) normals; ``backing`` is the unlit colour
-    of its back face, or None when both faces reflect.
+    mirror with smooth (interpolated) normals, lit in ``color`` when the bounces are
+    used up; ``backing`` is the unlit colour of its back face, or None when both faces
+    reflect.
     """
 
     vertices: np.ndarray
@@ -55,10 +59,13 @@ class RaySurface:
 class RayImage:
     """``image`` ``(h, w, 3)`` float64 in [0, 1], row 0 at the top; ``reflective_mask``
     ``(h, w)`` bool, True where the pixel's primary ray met the front of a reflective
-    surface (the region every reflection technique is judged on)."""
+    surface (the region every reflection technique is judged on); ``reflector`` ``(h, w)``
+    int, the index in the scene's reflectors of the pixel's first hit (-1: none), when
+    traced by :func:`trace_scene`."""
 
     image: np.ndarray
     reflective_mask: np.ndarray
+    reflector: np.ndarray | None = None
 
     def to_uint8(self) -> np.ndarray:
         """The image as ``(h, w, 3)`` uint8, rounded as GL's unorm conversion rounds."""
@@ -85,10 +92,10 @@ def sample_bilinear(texture: np.ndarray, uv: np.ndarray) -> np.ndarray:
     return top * (1 - fy) + bottom * fy
 
 
-def mesh_surface(mesh: str, model: np.ndarray, **appearance) -> RaySurface:
-    """``models/<mesh>.obj`` moved to world space by ``model`` ``(4, 4)`` (normals by its
+def mesh_surface(mesh: Path, model: np.ndarray, **appearance) -> RaySurface:
+    """The mesh file ``mesh`` moved to world space by ``model`` ``(4, 4)`` (normals by its
     inverse transpose); ``appearance`` gives the other :class:`RaySurface` fields."""
-    data = load_model(mesh)
+    data = load_mesh(mesh)
     return RaySurface(
         vertices=math3d.transform_points(model, data.positions.astype(np.float64))[:, :3],
         normals=data.normals.astype(np.float64) @ math3d.normal_matrix(model).T,
@@ -98,31 +105,25 @@ def mesh_surface(mesh: str, model: np.ndarray, **appearance) -> RaySurface:
     )
 
 
-def surfaces_from_graph(graph: SceneGraph) -> list[RaySurface]:
-    """Every node with a mesh, moved to world space with its node's colour and texture."""
-    return [mesh_surface(node.mesh, node.world_matrix(), color=node.color,
-                         texture=load_texture(node.texture) if node.texture else None)
-            for node in graph.nodes() if node.mesh]
-
-
 class RayScene:
-    """Surfaces, a directional light and what escaping rays see.
+    """Surfaces, directional lights and what escaping rays see.
 
-    ``light_direction`` ``(3,)`` points towards the light; ``background`` is
-    a constant RGB or an :data:`Environment` function of the ray direction.
+    ``lights`` are ``(direction (3,) towards the light, colour (3,) times intensity)``
+    pairs; ``background`` is a constant RGB or an :data:`Environment` function of the
+    ray direction.
     """
 
-    def __init__(self, surfaces: Sequence[RaySurface], light_direction: Sequence[float],
-                 ambient: float, diffuse: float,
-                 background: Sequence[float] | Environment) -> None:
+    def __init__(self, surfaces: Sequence[RaySurface],
+                 lights: Sequence[tuple[Sequence[float], Sequence[float]]],
+                 ambient: float, background: Sequence[float] | Environment) -> None:
         import trimesh
 
         if not surfaces:
             raise ValueError("a ray scene needs at least one surface")
         self.surfaces = list(surfaces)
-        light = np.asarray(light_direction, dtype=np.float64)
-        self.light = light / np.linalg.norm(light)
-        self.ambient, self.diffuse = float(ambient), float(diffuse)
+        self.lights = [(np.asarray(d, dtype=np.float64) / np.linalg.norm(d),
+                        np.asarray(c, dtype=np.float64)) for d, c in lights]
+        self.ambient = float(ambient)
         self.background = background
         offsets = np.cumsum([0] + [len(s.vertices) for s in self.surfaces])
         vertices = np.vstack([s.vertices for s in self.surfaces])
@@ -138,11 +139,6 @@ class RayScene:
         self._face_normals = np.cross(self._triangles[:, 1] - self._triangles[:, 0],
                                       self._triangles[:, 2] - self._triangles[:, 0])
 
-    @property
-    def uses_embree(self) -> bool:
-        """True when trimesh casts rays with embreex (fast), False for its numpy fallback."""
-        return type(self._mesh.ray).__module__.endswith("ray_pyembree")
-
     def _escape(self, directions: np.ndarray) -> np.ndarray:
         if callable(self.background):
             return np.asarray(self.background(directions), dtype=np.float64)
@@ -153,8 +149,8 @@ class RayScene:
               bounces: int = 1) -> tuple[np.ndarray, np.ndarray]:
         """Colour ``(n, 3)`` seen along each ray, and ``(n,)`` bool: the ray's first hit is
         the front of a reflective surface. ``directions`` ``(n, 3)`` unit;
-        ``bounces`` is how many reflections are followed (beyond that a mirror
-        shows the background). Textures are read at level 0 (no footprint is known)."""
+        ``bounces`` is how many reflections are followed (beyond that a mirror is a
+        plain lit surface). Textures are read at level 0 (no footprint is known)."""
         hits = self._resolve(np.asarray(origins, dtype=np.float64),
                              np.asarray(directions, dtype=np.float64), bounces)
         return self._shade(hits, np.zeros(len(hits.surface))), hits.on_mirror
@@ -176,6 +172,7 @@ class RayScene:
         front = np.einsum("nd,nd->n", self._face_normals[faces], directions[rays]) < 0.0
         surface_ids = self._face_surface[faces]
         hits.surface[rays] = surface_ids
+        hits.first[rays] = surface_ids
         hits.uv[rays] = np.einsum("nk,nkd->nd", barycentric, self._uvs[corners])
         hits.normal[rays] = normals
         mirrors = np.array([s.reflective for s in self.surfaces])[surface_ids]
@@ -185,18 +182,18 @@ class RayScene:
         reflecting = mirrors & (front | ~backed)
         if not reflecting.any():
             return hits
+        if bounces <= 0:  # bounces used up: the mirror is a plain surface
+            hits.plain[rays[reflecting]] = True
+            return hits
         rays, points, normals = rays[reflecting], points[reflecting], normals[reflecting]
         incoming = directions[rays]
         # A mirror reflects about its normal turned towards the incoming ray.
         facing = np.where((np.einsum("nd,nd->n", normals, incoming) > 0)[:, None],
                           -normals, normals)
-        if bounces <= 0:
-            hits.surface[rays] = -1
-            return hits
         reflected = incoming - 2.0 * np.einsum("nd,nd->n", incoming, facing)[:, None] * facing
         reflected /= np.linalg.norm(reflected, axis=1, keepdims=True)
         onward = self._resolve(points + _EPSILON * facing, reflected, bounces - 1)
-        for name in ("surface", "uv", "normal", "direction", "backing"):
+        for name in ("surface", "uv", "normal", "direction", "backing", "plain"):
             getattr(hits, name)[rays] = getattr(onward, name)
         return hits
 
@@ -211,15 +208,17 @@ class RayScene:
                 backing = mine & hits.backing
                 if backing.any():
                     colors[backing] = np.asarray(surface.backing, dtype=np.float64)
-                continue
+                mine = mine & hits.plain
             if not mine.any():
                 continue
             albedo = np.broadcast_to(np.asarray(surface.color, dtype=np.float64),
                                      (int(mine.sum()), 3))
-            if surface.texture is not None:
+            if surface.texture is not None and not surface.reflective:
                 albedo = albedo * self._mipmaps(index).sample(hits.uv[mine], lod[mine])
-            lambert = np.maximum(hits.normal[mine] @ self.light, 0.0)[:, None]
-            colors[mine] = albedo * (self.ambient + self.diffuse * lambert)
+            light = np.full((int(mine.sum()), 3), self.ambient)
+            for direction, color in self.lights:
+                light += np.maximum(hits.normal[mine] @ direction, 0.0)[:, None] * color
+            colors[mine] = albedo * light
         return np.clip(colors, 0.0, 1.0)
 
     def _mipmaps(self, index: int) -> MipChain:
@@ -252,7 +251,8 @@ class RayScene:
         hits = self._resolve(near, directions, bounces)
         lod = self._pixel_lod(hits, width, height)
         colors = self._shade(hits, lod.ravel())
-        return RayImage(colors.reshape(height, width, 3), hits.on_mirror.reshape(height, width))
+        return RayImage(colors.reshape(height, width, 3), hits.on_mirror.reshape(height, width),
+                        hits.first.reshape(height, width))
 
     def _pixel_lod(self, hits: _Hits, width: int, height: int) -> np.ndarray:
         """``(height, width)`` mip level per pixel from texel-space differences to the other
@@ -281,21 +281,25 @@ class RayScene:
 @dataclass
 class _Hits:
     """Where each ray's path ends: ``surface`` index (-1 escaped), ``uv`` and ``normal`` there,
-    the last ``direction`` travelled, whether it ended on a mirror's ``backing``, and
-    whether the first hit was a mirror's front (``on_mirror``)."""
+    the last ``direction`` travelled, whether it ended on a mirror's ``backing``, on a
+    mirror with no bounces left (``plain``), and whether the first hit was a mirror's
+    front (``on_mirror``)."""
 
     surface: np.ndarray
     uv: np.ndarray
     normal: np.ndarray
     direction: np.ndarray
     backing: np.ndarray
+    plain: np.ndarray
     on_mirror: np.ndarray
+    first: np.ndarray
 
     @classmethod
     def escaping(cls, directions: np.ndarray) -> _Hits:
         count = len(directions)
         return cls(np.full(count, -1), np.zeros((count, 2)), np.zeros((count, 3)),
-                   directions.copy(), np.zeros(count, dtype=bool), np.zeros(count, dtype=bool))
+                   directions.copy(), np.zeros(count, dtype=bool), np.zeros(count, dtype=bool),
+                   np.zeros(count, dtype=bool), np.full(count, -1))
 
 
 class MipChain:
@@ -347,17 +351,59 @@ def _barycentric(triangles: np.ndarray, points: np.ndarray) -> np.ndarray:
     return np.stack([1.0 - v - w, v, w], axis=1)
 
 
-def lab_ray_scene(scene) -> RayScene:
-    """The lab scene (a :class:`~mirrorlab.scene.robot.LabScene`) for the tracer: every mesh
-    of the graph plus the mirror quad as a reflective surface with its backing."""
-    mirror = scene.mirror
-    quad = RaySurface(
-        vertices=np.asarray(mirror.corners, dtype=np.float64),
-        normals=np.broadcast_to(mirror.normal, (4, 3)).copy(),
-        uvs=np.asarray(mirror.texcoords, dtype=np.float64),
-        faces=np.array([[0, 1, 2], [0, 2, 3]]),
-        reflective=True,
-        backing=scene.mirror_backing,
-    )
-    return RayScene([*surfaces_from_graph(scene.graph), quad], scene.light_direction,
-                    scene.ambient, scene.diffuse, scene.background)
+def ray_scene(scene: Scene) -> RayScene:
+    """The tracer's model of ``scene``: every object's parts, each planar mirror as a
+    reflective quad with its backing, each curved reflector as a perfect mirror (both
+    faces reflect), the lights, and the background for rays that escape."""
+    from mirrorlab.scene.robot import scene_parts
+
+    surfaces = [mesh_surface(part.mesh, part.model, color=part.color,
+                             texture=load_picture(part.texture) if part.texture else None)
+                for part in scene_parts(scene)]
+    for reflector in scene.reflectors:
+        if isinstance(reflector, PlanarReflector):
+            surfaces.append(RaySurface(
+                vertices=reflector.corner_array.copy(),
+                normals=np.broadcast_to(reflector.normal, (4, 3)).copy(),
+                uvs=reflector.texcoords(), faces=np.array([[0, 1, 2], [0, 2, 3]]),
+                color=reflector.color, reflective=True, backing=reflector.backing))
+        else:
+            assert isinstance(reflector, CurvedReflector)
+            surfaces.append(mesh_surface(reflector.mesh, reflector.model_matrix(),
+                                         color=reflector.color, reflective=True))
+    lights = [(light.direction, np.asarray(light.color) * light.intensity)
+              for light in scene.lights]
+    background = (scene.background.color if not scene.background.is_environment
+                  else environment_of(scene.background))
+    return RayScene(surfaces, lights, scene.ambient, background)
+
+
+def trace_scene(scene: Scene, size: Sequence[int], supersample: int = 1,
+                camera_view: np.ndarray | None = None,
+                projection: np.ndarray | None = None) -> RayImage:
+    """Ray-traced image and reflective mask of ``scene`` seen by its camera (or the given
+    ``camera_view`` and ``projection``) at ``size`` (width, height), following
+    ``scene.max_bounces`` reflections.
+
+    With ``supersample`` k > 1, k x k rays per pixel are traced and averaged (a box
+    filter over the pixel, which is what a mipmapped texture lookup approximates, while
+    one ray per pixel aliases wherever a reflection compresses what it shows); a pixel's
+    mask is then True only when all its k x k rays meet a reflector's front.
+    """
+    width, height = (int(v) for v in size)
+    k = int(supersample)
+    if k < 1:
+        raise ValueError(f"supersample must be a positive whole number, got {supersample!r}")
+    view = scene.camera.view() if camera_view is None else camera_view
+    proj = scene.camera.projection(width / height) if projection is None else projection
+    rays = ray_scene(scene)
+    traced = rays.render(view, proj, (k * width, k * height), bounces=scene.max_bounces)
+    first_reflector = len(rays.surfaces) - len(scene.reflectors)
+    assert traced.reflector is not None
+    surface = traced.reflector.reshape(height, k, width, k)[:, k // 2, :, k // 2]
+    reflector = np.where(surface >= first_reflector, surface - first_reflector, -1)
+    if k == 1:
+        return RayImage(traced.image, traced.reflective_mask, reflector)
+    image = traced.image.reshape(height, k, width, k, 3).mean(axis=(1, 3))
+    mask = traced.reflective_mask.reshape(height, k, width, k).all(axis=(1, 3))
+    return RayImage(image, mask, reflector)

@@ -1,95 +1,200 @@
-"""Runs a frame's plan for the lab scene with one mirror technique. It is handed a
-context's resource registry and a render target; it never creates a context or a window."""
+"""The one renderer: draws any scene, every reflector with its own technique, by running
+the frame's plan (:mod:`mirrorlab.plan`).
+
+A :class:`SceneRenderer` is handed a context's resource registry and, each frame, a
+target to draw into; it never creates a context or a window (:class:`mirrorlab.Renderer`
+does that for headless use, the demo for its window). It keeps GL objects across
+frames and scenes: shared meshes, pictures and programs, and one pass per reflector,
+made only when a scene has a reflector that needs it and released when no scene
+being drawn has it any more.
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
-import numpy as np
+import time
+from dataclasses import dataclass, field, replace
 
 from mirrorlab.gl.context import ResourceRegistry
-from mirrorlab.gl.resources import RenderTarget, Texture2D
-from mirrorlab.passes.camera import CameraPass, viewer_view_projection
-from mirrorlab.passes.capture import CaptureMode, CapturePass, EnvironmentCapture
-from mirrorlab.passes.reflected import ReflectedCapturePass
+from mirrorlab.gl.opengl import GL
+from mirrorlab.gl.resources import RenderTarget
+from mirrorlab.passes.base import (
+    ReflectorPass,
+    SharedResources,
+    apply_view_state,
+    reset_state,
+)
 from mirrorlab.passes.scene_draw import SceneDrawer
-from mirrorlab.passes.stencil import StencilReflectionPass
-from mirrorlab.plan import CaptureState, PlannedPass, check_method, plan_frame
-from mirrorlab.scene.robot import Camera, LabScene
+from mirrorlab.passes.sky import SkyPass
+from mirrorlab.plan import TINY_PIXELS, FramePlan, TextureState, ViewPlan, plan_frame
+from mirrorlab.scene.model import Background, CurvedReflector, Reflector, Scene, Transform
+from mirrorlab.techniques import technique
+from mirrorlab.views import View
 
 
 @dataclass
 class FrameStats:
-    """What the last frame did: passes run and skipped (with reasons), draw calls."""
+    """What the last frame did: its plan (passes run and skipped, with reasons), the
+    number of draw calls, and the wall time of the frame's GL calls in milliseconds
+    (without waiting for the GPU to finish)."""
 
-    passes: list[PlannedPass]
+    plan: FramePlan
     draw_calls: int
+    milliseconds: float = 0.0
+    passes_run: list[str] = field(default_factory=list)
 
     @property
     def ran(self) -> list[str]:
-        return [p.name for p in self.passes if p.runs]
+        """``name`` or ``name:reflector`` of every pass that ran, in order."""
+        return [p.name if p.reflector is None else f"{p.name}:{p.reflector}"
+                for p in self.plan.ran]
+
+    @property
+    def skipped(self) -> list[str]:
+        return [p.name if p.reflector is None else f"{p.name}:{p.reflector}"
+                for p in self.plan.skipped]
 
 
-class Renderer:
-    """Draws the :class:`LabScene` with one of :data:`~mirrorlab.plan.METHODS`.
+def _pass_key(reflector: Reflector, background: Background) -> tuple:
+    """What a reflector's pass is made from: everything but where a curved one is (it may
+    move every frame), and the background for the maps baked from it."""
+    if isinstance(reflector, CurvedReflector):
+        still = replace(reflector, transform=Transform())
+        baked = technique(reflector.technique).texture in ("static", "baked")
+        return (still, background if baked else None)
+    return (reflector, None)
 
-    ``capture`` chooses how a capture reaches the ENVIRONMENT texture
-    (``"copy"``: glCopyTexImage2D, the lab; ``"fbo"``: drawn straight into
-    it). ``environment_size`` (width, height) fixes the texture's size; None
-    makes it the frame's size, as in the lab. The texture starts blank (1 x 1).
-    """
 
-    def __init__(self, registry: ResourceRegistry, scene: LabScene, method: str = "ortho",
-                 capture: CaptureMode = "copy",
-                 environment_size: tuple[int, int] | None = None) -> None:
-        self.method = check_method(method)
-        self.scene = scene
-        self.drawer = SceneDrawer(registry, scene)
-        self.environment = Texture2D.blank(registry, 1, 1)
-        self.capture = EnvironmentCapture(registry, self.environment, capture, environment_size)
-        self.capture_pass = CapturePass(scene, self.drawer, self.capture)
-        self.reflected_pass = ReflectedCapturePass(scene, self.drawer, self.capture)
-        self.camera_pass = CameraPass(registry, scene, self.drawer, self.environment)
-        self.stencil_pass = (StencilReflectionPass(registry, scene, self.drawer)
-                             if method == "stencil" else None)
-        self.captured = CaptureState()
+class SceneRenderer:
+    """Runs frame plans: captures and bakes first, then the camera's view."""
+
+    def __init__(self, registry: ResourceRegistry) -> None:
+        self.registry = registry
+        self.shared = SharedResources(registry)
+        self.drawer = SceneDrawer(self.shared)
+        self.state = TextureState()
+        self.scene: Scene | None = None
+        self._passes: dict[str, tuple[tuple, ReflectorPass]] = {}
+        self._sky: SkyPass | None = None
         self.last_frame: FrameStats | None = None
 
-    def render(self, target: RenderTarget, camera: Camera,
-               force_capture: bool = False) -> FrameStats:
-        """Draw one frame of ``camera``'s view into ``target`` (Framebuffer or window)."""
+    # ------------------------------------------------------------- passes
+
+    def _pass(self, reflector: Reflector) -> ReflectorPass:
+        assert self.scene is not None
+        key = _pass_key(reflector, self.scene.background)
+        held = self._passes.get(reflector.name)
+        if held is not None and held[0] == key:
+            return held[1]
+        if held is not None:
+            self._drop(reflector.name)
+        cls = technique(reflector.technique).load()
+        made = cls(self.shared, reflector, self.scene.background)
+        self._passes[reflector.name] = (key, made)
+        return made
+
+    def _drop(self, name: str) -> None:
+        _, old = self._passes.pop(name)
+        old.release()
+        for held in [k for k in self.state.held if k[0] == name]:
+            del self.state.held[held]
+
+    def _sky_for(self, background: Background) -> SkyPass | None:
+        if not background.is_environment:
+            if self._sky is not None:
+                self._sky.release()
+                self._sky = None
+            return None
+        if self._sky is None or self._sky.background != background:
+            if self._sky is not None:
+                self._sky.release()
+            self._sky = SkyPass(self.shared, background)
+        return self._sky
+
+    def _use_scene(self, scene: Scene) -> None:
+        self.scene = scene
+        names = {r.name: r for r in scene.reflectors}
+        for name in list(self._passes):
+            if name not in names or self._passes[name][0] != _pass_key(names[name],
+                                                                       scene.background):
+                self._drop(name)
+        self._sky_for(scene.background)
+
+    # ------------------------------------------------------------- frames
+
+    def plan(self, scene: Scene, size: tuple[int, int], use_plan: bool = True,
+             tiny_pixels: float = TINY_PIXELS, view: View | None = None) -> FramePlan:
+        """The plan the next frame of ``scene`` at ``size`` would run (nothing is drawn)."""
+        return plan_frame(scene, size, self.state, use_plan, tiny_pixels, view)
+
+    def render(self, scene: Scene, target: RenderTarget, use_plan: bool = True,
+               tiny_pixels: float = TINY_PIXELS, view: View | None = None) -> FrameStats:
+        """Draw one frame of ``scene`` (as seen by its camera, or ``view``) into ``target``.
+
+        ``use_plan`` False runs every pass (see :func:`~mirrorlab.plan.plan_frame`);
+        ``tiny_pixels`` 0 keeps small reflectors reflecting.
+        """
+        start = time.perf_counter()
+        self._use_scene(scene)
         size = tuple(target.size)
-        plan = plan_frame(self.scene, camera, size, self.captured, force_capture, self.method)
-        runs = {p.name for p in plan if p.runs}
+        plan = plan_frame(scene, (int(size[0]), int(size[1])), self.state, use_plan,
+                          tiny_pixels, view)
         draws = 0
-        texture_matrix = None
-        if "capture" in runs:
-            draws += self.capture_pass.run(target)
-            self.captured = CaptureState(self.scene.graph.revision, size)
-        if "reflected-capture" in runs:
-            draws += self.reflected_pass.run(target, camera)
-            self.captured = CaptureState(self.scene.graph.revision, size, camera)
-        if self.method == "reflected":
-            texture_matrix = self.reflected_pass.texture_matrix
-        draws += self.camera_pass.run(target, camera, texture_matrix,
-                                      draw_mirror=self.stencil_pass is None)
-        if self.stencil_pass is not None:
-            view_projection = viewer_view_projection(camera, target)
-            draws += self.stencil_pass.draw_backing(view_projection)
-            if "stencil-reflection" in runs:
-                draws += self.stencil_pass.run(view_projection)
-        self.last_frame = FrameStats(plan, draws)
+        for step in plan.passes:
+            if not step.runs or step.name == "camera":
+                continue
+            reflector = scene.reflector(step.reflector)  # type: ignore[arg-type]
+            draws += self._pass(reflector).update(step, reflector, self, target)
+            self.state.record(step)
+        draws += self.draw_view(plan.top, target)
+        reset_state()
+        self.last_frame = FrameStats(plan, draws, (time.perf_counter() - start) * 1e3)
         return self.last_frame
+
+    def draw_view(self, plan: ViewPlan, target: RenderTarget, stencil_level: int = 0) -> int:
+        """Draw ``plan``'s view into ``target``: the whole target at ``stencil_level`` 0
+        (cleared first), else only where a stencil mirror marked that level. Returns the
+        number of draw calls."""
+        scene = self.scene
+        assert scene is not None
+        view = plan.view
+        if stencil_level == 0:
+            target.bind()
+            GL.glViewport(0, 0, *view.size)
+            GL.glStencilMask(0xFF)
+            GL.glClearColor(*scene.background.color, 1.0)
+            GL.glClearStencil(0)
+            GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT
+                       | GL.GL_STENCIL_BUFFER_BIT)
+        apply_view_state(view, stencil_level)
+        draws = 0
+        sky = self._sky_for(scene.background)
+        if sky is not None:
+            draws += sky.run(view)
+            apply_view_state(view, stencil_level)
+        draws += self.drawer.draw(scene, view)
+        later = []
+        for draw in plan.draws:
+            if draw.mode == "hidden":
+                continue
+            if draw.mode == "stencil":
+                later.append(draw)
+                continue
+            draws += self._pass(draw.reflector).draw(draw, view, self, target, stencil_level)
+        for draw in later:
+            draws += self._pass(draw.reflector).draw(draw, view, self, target, stencil_level)
+        return draws
 
     def release(self) -> None:
         """Free every GL object the renderer made. Call with its context current."""
-        if self.stencil_pass is not None:
-            self.stencil_pass.release()
-        self.camera_pass.release()
-        self.capture.release()
-        self.drawer.release()
-        self.environment.release()
+        for name in list(self._passes):
+            self._drop(name)
+        if self._sky is not None:
+            self._sky.release()
+            self._sky = None
+        self.shared.release()
+        self.state.clear()
 
-    def read_environment(self) -> np.ndarray:
-        """The ENVIRONMENT texture as ``(h, w, 3)`` uint8, row 0 at the top."""
-        return self.environment.read()
+    def pass_for(self, name: str) -> ReflectorPass:
+        """The pass of the current scene's reflector ``name`` (for checks and the demo)."""
+        assert self.scene is not None
+        return self._pass(self.scene.reflector(name))

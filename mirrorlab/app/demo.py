@@ -1,48 +1,48 @@
-"""The desktop demo: the lab scene in a glfw window, robot and camera under the keyboard.
+"""The desktop demo: any scene in a glfw window, under the keyboard and the mouse.
 
-Keys: Left/Right turn the base, Up/Down the lower arm, Shift+Up/Down (or
-PageUp/PageDown) the upper arm; A/D and W/S orbit the camera, +/- or the
-scroll wheel zoom, dragging with the left mouse button orbits too; M cycles the
-mirror technique (ortho, reflected, stencil); R resets, H prints this help, Esc quits.
+Keys:
+  Left/Right        turn the robot's base (a scene with a robot)
+  Up/Down           the robot's lower arm; with Shift (or PageUp/PageDown) the upper arm;
+                    in a scene without a robot, move the first curved reflector up and down
+  1-9               the technique of the first reflector (its kind's techniques in order)
+  M                 the next technique of the first reflector
+  A/D, W/S          orbit the camera; dragging with the left mouse button orbits too
+  +/-, mouse wheel  zoom
+  R                 reset the scene and the camera
+  H                 print this help
+  Esc               quit
 
-With the lab's ortho technique the capture runs only when the robot moved or
-the window was resized: orbiting the camera re-uses the capture, since the
-orthographic capture does not depend on the viewer. The reflected technique
-re-captures whenever the viewer moves; stencil needs no capture.
-
-Environment-mapping scenes (``run(..., scene="cone")``, the textbook's
-sphere-mapping experiment, or ``scene="sphere"``): Up/Down move the reflective
-cone (or sphere) and its reflection changes; keys 1-7 choose the technique
-(sphere, sphere-vertex, sphere-texgen, cube, cube-live, latlong, normal);
-A/D and W/S orbit the camera, +/- zoom; R resets, H prints this help, Esc quits.
+The title shows the technique, the frame rate and how many captures have run: the
+planner captures only when something the capture shows has changed.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from mirrorlab.gl.context import WindowContext, check_gl_errors
-from mirrorlab.scene.envscenes import (
-    CONE_LIMITS,
-    ENV_SCENES,
-    ENVMAP_METHODS,
-    build_env_scene,
-    check_method,
+from mirrorlab.scene.model import (
+    CURVED_TECHNIQUES,
+    PLANAR_TECHNIQUES,
+    Camera,
+    CurvedReflector,
+    Scene,
+    Transform,
 )
-from mirrorlab.scene.robot import DEFAULT_CAMERA, DEFAULT_TARGET, Camera, build_lab_scene
 
 JOINT_STEP_DEG = 5.0
 ORBIT_STEP_DEG = 5.0
 ZOOM_FACTOR = 1.1
-HELP = __doc__.split("\n\n")[1]
-ENV_HELP = __doc__.split("\n\n")[3]
 REFLECTOR_STEP = 0.25
+REFLECTOR_RANGE = 3.0
+"""How far (world units) Up/Down may move a curved reflector from where the file puts it."""
+HELP = __doc__.split("\n\n")[1]
 
 
 @dataclass
@@ -71,56 +71,32 @@ class Orbit:
         self.elevation = min(85.0, max(-85.0, self.elevation + d_elevation))
 
     def zoom(self, factor: float) -> None:
-        self.distance = min(60.0, max(2.0, self.distance * factor))
+        self.distance = min(60.0, max(1.0, self.distance * factor))
 
-    def camera(self) -> Camera:
+    def eye(self) -> tuple[float, float, float]:
         az, el = math.radians(self.azimuth), math.radians(self.elevation)
         offset = self.distance * np.array(
-            [math.cos(el) * math.cos(az), math.sin(el), math.cos(el) * math.sin(az)]
-        )
-        eye = tuple(float(v) for v in np.asarray(self.target) + offset)
-        return Camera(eye=eye, target=self.target)  # type: ignore[arg-type]
-
-
-def handle_view_key(orbit: Orbit, window, key: int) -> bool:
-    """The keys every demo scene shares: Esc closes the window, A/D and W/S orbit the
-    camera, +/- zoom. Returns True when ``key`` was one of them."""
-    import glfw
-
-    orbit_keys = {
-        glfw.KEY_A: (-ORBIT_STEP_DEG, 0.0), glfw.KEY_D: (ORBIT_STEP_DEG, 0.0),
-        glfw.KEY_W: (0.0, ORBIT_STEP_DEG), glfw.KEY_S: (0.0, -ORBIT_STEP_DEG),
-    }
-    if key == glfw.KEY_ESCAPE:
-        glfw.set_window_should_close(window, True)
-    elif key in orbit_keys:
-        orbit.turn(*orbit_keys[key])
-    elif key in (glfw.KEY_EQUAL, glfw.KEY_KP_ADD):
-        orbit.zoom(1.0 / ZOOM_FACTOR)
-    elif key in (glfw.KEY_MINUS, glfw.KEY_KP_SUBTRACT):
-        orbit.zoom(ZOOM_FACTOR)
-    else:
-        return False
-    return True
+            [math.cos(el) * math.cos(az), math.sin(el), math.cos(el) * math.sin(az)])
+        x, y, z = (float(v) for v in np.asarray(self.target) + offset)
+        return (x, y, z)
 
 
 class DemoApp:
-    """Scene, orbit camera and renderer of one demo window; input handlers change them."""
+    """One scene in the window: the scene as the file gives it, the changes the keys make,
+    the orbit camera, and the renderer."""
 
-    def __init__(self, context: WindowContext, angles: Sequence[float],
-                 method: str = "ortho") -> None:
+    def __init__(self, context: WindowContext, scene: Scene) -> None:
         import glfw
 
         from mirrorlab.gl.resources import DefaultFramebuffer
-        from mirrorlab.renderer import Renderer
+        from mirrorlab.renderer import SceneRenderer
 
         self.context = context
-        self.method = method
-        self.initial_angles = tuple(float(a) for a in angles)
-        self.scene = build_lab_scene(self.initial_angles)
-        self.orbit = Orbit.from_eye(DEFAULT_CAMERA, DEFAULT_TARGET)
+        self.initial = scene
+        self.scene = scene
+        self.orbit = Orbit.from_eye(scene.camera.eye, scene.camera.target)
         self.target = DefaultFramebuffer(context.framebuffer_size)
-        self.renderer = Renderer(context.resources, self.scene, method)
+        self.renderer = SceneRenderer(context.resources)
         self._drag_from: tuple[float, float] | None = None
         self.frames = 0
         self.captures = 0
@@ -130,23 +106,56 @@ class DemoApp:
         glfw.set_mouse_button_callback(window, self.on_mouse_button)
         glfw.set_cursor_pos_callback(window, self.on_cursor)
 
+    # ------------------------------------------------------------- changes
+
+    def camera(self) -> Camera:
+        """The scene's camera (lens, clip planes) moved to the orbit's eye and target."""
+        return replace(self.scene.camera, eye=self.orbit.eye(), target=self.orbit.target)
+
     def turn_joint(self, index: int, delta: float) -> None:
-        angles = list(self.scene.angles)
+        robot = self.scene.robot
+        if robot is None:
+            return
+        angles = list(robot.angles)
         angles[index] += delta
-        self.scene.set_angles(angles)
+        self.scene = self.scene.with_angles(angles)
+
+    def move_reflector(self, dy: float) -> None:
+        """Move the first curved reflector up (``dy`` > 0) or down, within
+        :data:`REFLECTOR_RANGE` of where the scene file puts it."""
+        curved = [r for r in self.scene.reflectors if isinstance(r, CurvedReflector)]
+        if not curved:
+            return
+        reflector = curved[0]
+        home = self.initial.reflector(reflector.name).transform.position[1]
+        x, y, z = reflector.transform.position
+        new_y = min(home + REFLECTOR_RANGE, max(home - REFLECTOR_RANGE, y + dy))
+        transform: Transform = replace(reflector.transform, position=(x, new_y, z))
+        self.scene = self.scene.with_reflector(reflector.name, transform=transform)
+
+    def techniques(self) -> tuple[str, ...]:
+        """The techniques the first reflector can take."""
+        if not self.scene.reflectors:
+            return ()
+        first = self.scene.reflectors[0]
+        return PLANAR_TECHNIQUES if first.kind == "planar" else CURVED_TECHNIQUES
+
+    def use_technique(self, name: str) -> None:
+        if self.scene.reflectors and name in self.techniques():
+            first = self.scene.reflectors[0]
+            self.scene = self.scene.with_reflector(first.name, technique=name)
+
+    def next_technique(self) -> None:
+        names = self.techniques()
+        if names:
+            current = self.scene.reflectors[0].technique
+            self.use_technique(names[(names.index(current) + 1) % len(names)])
 
     def reset(self) -> None:
-        self.scene.set_angles(self.initial_angles)
-        self.orbit = Orbit.from_eye(DEFAULT_CAMERA, DEFAULT_TARGET)
+        self.scene = self.initial
+        self.orbit = Orbit.from_eye(self.initial.camera.eye, self.initial.camera.target)
 
-    def next_method(self) -> None:
-        """Switch to the next mirror technique (a fresh renderer; the old one is released)."""
-        from mirrorlab.plan import METHODS
-        from mirrorlab.renderer import Renderer
-
-        self.method = METHODS[(METHODS.index(self.method) + 1) % len(METHODS)]
-        self.renderer.release()
-        self.renderer = Renderer(self.context.resources, self.scene, self.method)
+    # ------------------------------------------------------------- input
 
     def on_key(self, window, key: int, scancode: int, action: int, mods: int) -> None:
         import glfw
@@ -154,20 +163,37 @@ class DemoApp:
         if action not in (glfw.PRESS, glfw.REPEAT):
             return
         shift = bool(mods & glfw.MOD_SHIFT)
+        orbit_keys = {
+            glfw.KEY_A: (-ORBIT_STEP_DEG, 0.0), glfw.KEY_D: (ORBIT_STEP_DEG, 0.0),
+            glfw.KEY_W: (0.0, ORBIT_STEP_DEG), glfw.KEY_S: (0.0, -ORBIT_STEP_DEG),
+        }
         joint_keys = {
             glfw.KEY_LEFT: (0, -JOINT_STEP_DEG), glfw.KEY_RIGHT: (0, JOINT_STEP_DEG),
             glfw.KEY_UP: (2 if shift else 1, JOINT_STEP_DEG),
             glfw.KEY_DOWN: (2 if shift else 1, -JOINT_STEP_DEG),
             glfw.KEY_PAGE_UP: (2, JOINT_STEP_DEG), glfw.KEY_PAGE_DOWN: (2, -JOINT_STEP_DEG),
         }
-        if handle_view_key(self.orbit, window, key):
-            return
-        if key in joint_keys:
+        number_keys = {glfw.KEY_1 + i: i for i in range(9)}
+        if key == glfw.KEY_ESCAPE:
+            glfw.set_window_should_close(window, True)
+        elif key in orbit_keys:
+            self.orbit.turn(*orbit_keys[key])
+        elif key in (glfw.KEY_EQUAL, glfw.KEY_KP_ADD):
+            self.orbit.zoom(1.0 / ZOOM_FACTOR)
+        elif key in (glfw.KEY_MINUS, glfw.KEY_KP_SUBTRACT):
+            self.orbit.zoom(ZOOM_FACTOR)
+        elif key in (glfw.KEY_UP, glfw.KEY_DOWN) and self.scene.robot is None:
+            self.move_reflector(REFLECTOR_STEP if key == glfw.KEY_UP else -REFLECTOR_STEP)
+        elif key in joint_keys:
             self.turn_joint(*joint_keys[key])
+        elif key in number_keys and action == glfw.PRESS:
+            names = self.techniques()
+            if number_keys[key] < len(names):
+                self.use_technique(names[number_keys[key]])
+        elif key == glfw.KEY_M and action == glfw.PRESS:
+            self.next_technique()
         elif key == glfw.KEY_R:
             self.reset()
-        elif key == glfw.KEY_M and action == glfw.PRESS:
-            self.next_method()
         elif key == glfw.KEY_H and action == glfw.PRESS:
             print(HELP, flush=True)
 
@@ -186,131 +212,49 @@ class DemoApp:
             self.orbit.turn((x - x0) * 0.4, (y - y0) * 0.4)
             self._drag_from = (x, y)
 
-    def draw(self) -> None:
-        """Render one frame into the window's back buffer."""
-        width, height = self.target.size
-        if width == 0 or height == 0:  # minimised
-            return
-        stats = self.renderer.render(self.target, self.orbit.camera())
-        self.frames += 1
-        self.captures += bool({"capture", "reflected-capture"} & set(stats.ran))
-
-    def title(self, fps: float) -> str:
-        base, lower, upper = self.scene.angles
-        return (f"mirrorlab demo - base {base:.0f} lower {lower:.0f} upper {upper:.0f} deg - "
-                f"{self.method} - {fps:.0f} fps, {self.captures} captures - H for help")
-
-
-class EnvDemoApp:
-    """An environment-mapping scene in the window: the reflector moves under Up/Down, the
-    technique changes under 1-7, the camera orbits under A/D/W/S and +/-."""
-
-    def __init__(self, context: WindowContext, scene_name: str, envmap: str) -> None:
-        import glfw
-
-        from mirrorlab.gl.resources import DefaultFramebuffer
-
-        self.context = context
-        self.scene_name = scene_name
-        self.scene = build_env_scene(scene_name)
-        self.method = check_method(envmap)
-        self.initial_position = self.scene.reflector.position.copy()
-        camera = self.scene.camera
-        self.initial_orbit = Orbit.from_eye(camera.eye, camera.target)
-        self.orbit = Orbit.from_eye(camera.eye, camera.target)
-        self.target = DefaultFramebuffer(context.framebuffer_size)
-        self.renderer = self._make_renderer()
-        self.frames = 0
-        glfw.set_key_callback(context.window, self.on_key)
-
-    def _make_renderer(self):
-        from mirrorlab.envmap_renderer import EnvmapRenderer
-
-        return EnvmapRenderer(self.context.resources, self.scene, self.method)
-
-    def use_method(self, method: str) -> None:
-        """Switch to technique ``method`` (its maps are made afresh)."""
-        if method != self.method:
-            self.renderer.release()
-            self.method = check_method(method)
-            self.renderer = self._make_renderer()
-
-    def move_reflector(self, dy: float) -> None:
-        """Move the reflector up (``dy`` > 0) or down, within the scene's limits."""
-        low, high = CONE_LIMITS if self.scene_name == "cone" else (-1.0, 2.0)
-        y = float(self.scene.reflector.position[1])
-        new_y = min(high, max(low, y + dy))
-        self.scene.move_reflector((0.0, new_y - y, 0.0))
-
-    def reset(self) -> None:
-        self.scene.move_reflector(self.initial_position - self.scene.reflector.position)
-        self.orbit = Orbit(**vars(self.initial_orbit))
-
-    def camera(self) -> Camera:
-        """The scene's own camera (lens, clip planes) moved to the orbit's eye and target."""
-        orbit = self.orbit.camera()
-        return replace(self.scene.camera, eye=orbit.eye, target=orbit.target)
-
-    def on_key(self, window, key: int, scancode: int, action: int, mods: int) -> None:
-        import glfw
-
-        if action not in (glfw.PRESS, glfw.REPEAT):
-            return
-        method_keys = {glfw.KEY_1 + i: name for i, name in enumerate(ENVMAP_METHODS)}
-        if handle_view_key(self.orbit, window, key):
-            return
-        if key == glfw.KEY_UP:
-            self.move_reflector(REFLECTOR_STEP)
-        elif key == glfw.KEY_DOWN:
-            self.move_reflector(-REFLECTOR_STEP)
-        elif key in method_keys and action == glfw.PRESS:
-            self.use_method(method_keys[key])
-        elif key == glfw.KEY_R:
-            self.reset()
-        elif key == glfw.KEY_H and action == glfw.PRESS:
-            print(ENV_HELP, flush=True)
+    # ------------------------------------------------------------- frames
 
     def draw(self) -> None:
         """Render one frame into the window's back buffer."""
         width, height = self.target.size
         if width == 0 or height == 0:  # minimised
             return
-        self.renderer.render(self.target, self.camera())
+        scene = replace(self.scene, camera=self.camera())
+        stats = self.renderer.render(scene, self.target)
         self.frames += 1
+        self.captures += sum(1 for p in stats.plan.ran if p.name == "capture")
 
     def title(self, fps: float) -> str:
-        y = float(self.scene.reflector.position[1])
-        return (f"mirrorlab demo - {self.scene_name} at height {y:.2f} - {self.method} - "
-                f"{fps:.0f} fps - H for help")
+        parts = [f"mirrorlab demo - {self.scene.name}"]
+        robot = self.scene.robot
+        if robot is not None:
+            base, lower, upper = robot.angles
+            parts.append(f"base {base:.0f} lower {lower:.0f} upper {upper:.0f} deg")
+        curved = [r for r in self.scene.reflectors if isinstance(r, CurvedReflector)]
+        if robot is None and curved:
+            parts.append(f"height {curved[0].transform.position[1]:.2f}")
+        if self.scene.reflectors:
+            parts.append(self.scene.reflectors[0].technique)
+        parts.append(f"{fps:.0f} fps, {self.captures} captures - H for help")
+        return " - ".join(parts)
+
+    def release(self) -> None:
+        self.renderer.release()
 
 
-def run(size: tuple[int, int], angles: Sequence[float], max_frames: int = 0,
-        screenshot: Path | None = None,
-        save_png: Callable[[Path, np.ndarray], None] | None = None,
-        scene: str = "lab", envmap: str = "sphere-texgen", method: str = "ortho") -> int:
-    """Open the window and run until Esc, the window closes, or ``max_frames`` frames.
-
-    ``scene`` is ``"lab"`` (the robot and its mirror, drawn with mirror technique
-    ``method``; ``envmap`` is unused) or an environment-mapping scene (``"cone"``,
-    ``"sphere"``) drawn with technique ``envmap``. With ``screenshot``, the last frame
-    drawn is written there by ``save_png``.
-    """
+def run(scene: Scene, size: tuple[int, int], max_frames: int = 0,
+        screenshot: Path | None = None) -> int:
+    """Open the window on ``scene`` and run until Esc, the window closes, or ``max_frames``
+    frames; with ``screenshot``, the last frame drawn is written there as a PNG."""
     import glfw
 
-    if scene != "lab" and scene not in ENV_SCENES:
-        raise ValueError(f"unknown demo scene {scene!r}; expected one of lab, "
-                         f"{', '.join(ENV_SCENES)}")
-    if scene != "lab":
-        check_method(envmap)
-    context = WindowContext(size[0], size[1], "mirrorlab demo")
+    from mirrorlab.files import write_png_atomic
+
+    context = WindowContext(size[0], size[1], f"mirrorlab demo - {scene.name}")
     try:
-        if scene == "lab":
-            app: DemoApp | EnvDemoApp = DemoApp(context, angles, method)
-            help_text = HELP
-        else:
-            app = EnvDemoApp(context, scene, envmap)
-            help_text = ENV_HELP
-        print(f"mirrorlab demo on {context.info()['renderer']}. {help_text}", flush=True)
+        app = DemoApp(context, scene)
+        print(f"mirrorlab demo of {scene.name} on {context.info()['renderer']}.\n{HELP}",
+              flush=True)
         last_image = None
         started, frames_at_title = time.perf_counter(), 0
         while not context.should_close():
@@ -327,8 +271,9 @@ def run(size: tuple[int, int], angles: Sequence[float], max_frames: int = 0,
                 started, frames_at_title = now, app.frames
             if max_frames and app.frames >= max_frames:
                 break
-        if screenshot is not None and last_image is not None and save_png is not None:
-            save_png(screenshot, last_image)
+        app.release()
+        if screenshot is not None and last_image is not None:
+            write_png_atomic(screenshot, last_image)
             print(f"wrote {screenshot}", flush=True)
         return 0
     finally:

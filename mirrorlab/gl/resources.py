@@ -12,6 +12,7 @@ flip happens here, nowhere else.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from typing import Protocol
 
@@ -56,14 +57,31 @@ class _Resource:
         raise NotImplementedError
 
 
-class Program(_Resource):
-    """A linked shader program built from package shader files."""
+_INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.MULTILINE)
 
-    def __init__(self, registry: ResourceRegistry, vertex: str, fragment: str) -> None:
+
+def expand_includes(name: str, seen: tuple[str, ...] = ()) -> str:
+    """The shader file ``name`` with every ``#include "other.glsl"`` line replaced by that
+    package shader file's text (recursively; an include cycle is a ValueError)."""
+    if name in seen:
+        raise ValueError(f"shader include cycle: {' -> '.join((*seen, name))}")
+    return _INCLUDE.sub(lambda match: expand_includes(match.group(1), (*seen, name)),
+                        shader_source(name))
+
+
+class Program(_Resource):
+    """A linked shader program built from package shader files. Lines ``#include
+    "file.glsl"`` pull in shared GLSL from the same folder; ``defines`` are added as
+    ``#define NAME VALUE`` lines after the ``#version`` line."""
+
+    def __init__(self, registry: ResourceRegistry, vertex: str, fragment: str,
+                 defines: dict[str, str | int] | None = None) -> None:
+        header = "".join(f"#define {key} {value}\n" for key, value in (defines or {}).items())
         shaders = []
         for name, kind in ((vertex, GL.GL_VERTEX_SHADER), (fragment, GL.GL_FRAGMENT_SHADER)):
+            version, _, body = expand_includes(name).partition("\n")
             shader = GL.glCreateShader(kind)
-            GL.glShaderSource(shader, shader_source(name))
+            GL.glShaderSource(shader, f"{version}\n{header}{body}")
             GL.glCompileShader(shader)
             if not GL.glGetShaderiv(shader, GL.GL_COMPILE_STATUS):
                 log = GL.glGetShaderInfoLog(shader).decode(errors="replace").strip()

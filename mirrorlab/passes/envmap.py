@@ -1,131 +1,145 @@
-"""Drawing the environment-mapped object (the scene's reflector) with one of the
-techniques: sphere map per fragment, per vertex, or by fixed-function GL_SPHERE_MAP
-texgen; cube map (static or live); latitude-longitude map; "demo style" normal map.
-
-The pass only draws; the maps it samples are made and kept up to date by the
-renderer (:mod:`mirrorlab.envmap_renderer`).
+"""Environment-mapped (curved) reflectors with maps that hold only the background: sphere
+maps (per fragment, per vertex, by fixed-function GL_SPHERE_MAP texgen, and the "demo
+style" normal lookup), a static cube map and a latitude-longitude map. :class:`CurvedPass`
+is what every curved technique shares, the live cube map (:mod:`.cube_live`) included.
 """
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from mirrorlab import math3d
-from mirrorlab.gl.context import ResourceRegistry
+from mirrorlab.envmap import bake_cube_faces, bake_latlong, bake_sphere_map
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import (
     FixedFunctionMesh,
-    MeshBuffer,
     Program,
+    RenderTarget,
     Texture2D,
     TextureCube,
 )
-from mirrorlab.scene.envscenes import Reflector, check_method
-from mirrorlab.scene.mesh import load_model
-
-SPHERE_METHODS = ("sphere", "sphere-vertex", "sphere-texgen")
-CUBE_METHODS = ("cube", "cube-live")
-
-_FRAGMENT_SHADERS = {
-    "sphere": "envmap_sphere.frag", "sphere-vertex": "envmap_sphere.frag",
-    "cube": "envmap_cube.frag", "cube-live": "envmap_cube.frag",
-    "latlong": "envmap_latlong.frag", "normal": "envmap_normal.frag",
-}
-_SAMPLERS = {
-    "envmap_sphere.frag": "sphere_map_texture", "envmap_cube.frag": "cube_map_texture",
-    "envmap_latlong.frag": "latlong_texture", "envmap_normal.frag": "normal_map_texture",
-}
+from mirrorlab.passes.base import NO_CLIP, SharedResources, ViewDrawer
+from mirrorlab.plan import PlannedPass, ReflectorDraw
+from mirrorlab.scene.backgrounds import environment_of, load_cube_faces, load_picture
+from mirrorlab.scene.model import Background, CurvedReflector
+from mirrorlab.views import View, eye_position, is_orthographic
 
 OUTPUT_COLOR = 0
 OUTPUT_COORDINATES = 1
 """What the shader paths write: the colour, or (for checks) the lookup coordinates: (s, t, 0)
 for sphere, latlong and normal maps, the unit direction for cube maps."""
 
+_FRAGMENT = {"sphere": "envmap_sphere.frag", "sphere-vertex": "envmap_sphere.frag",
+             "normal": "envmap_normal.frag", "cube": "envmap_cube.frag",
+             "cube-live": "envmap_cube.frag", "latlong": "envmap_latlong.frag"}
+_SAMPLER = {"envmap_sphere.frag": "sphere_map_texture", "envmap_cube.frag": "cube_map_texture",
+            "envmap_latlong.frag": "latlong_texture", "envmap_normal.frag": "normal_map_texture"}
 
-class EnvmapPass:
-    """Draws ``reflector`` environment-mapped by ``method`` (see :data:`ENVMAP_METHODS`)
-    into the bound target, depth-tested against what is already there.
 
-    ``texture`` is what the method samples: a :class:`Texture2D` sphere map for the
-    sphere methods and ``normal``, a :class:`TextureCube` for the cube methods, a
-    :class:`Texture2D` latitude-longitude map (repeating in s) for ``latlong``. It can
-    be swapped between frames (:attr:`texture`).
-    """
+@lru_cache(maxsize=16)
+def baked_cube(background: Background, size: int) -> np.ndarray:
+    """Six faces of the background at ``size`` (remembered: baking is numpy work)."""
+    return bake_cube_faces(environment_of(background), size)
 
-    name = "envmap"
 
-    def __init__(self, registry: ResourceRegistry, reflector: Reflector, method: str,
-                 texture: Texture2D | TextureCube) -> None:
-        self.method = check_method(method)
-        self.reflector = reflector
-        self.texture = texture
-        data = load_model(reflector.mesh)
-        self.mesh = MeshBuffer(registry, data.interleaved(), data.indices)
-        self.program: Program | None = None
+@lru_cache(maxsize=8)
+def baked_latlong(background: Background, size: int) -> np.ndarray:
+    return bake_latlong(environment_of(background), 2 * size, size)
+
+
+class CurvedPass:
+    """A curved reflector drawn by a shader (or, for ``sphere-texgen``, fixed-function
+    texgen) that samples a map; plain when bounces run out. ``output_mode`` chooses colour
+    or lookup coordinates (for numerical checks)."""
+
+    def __init__(self, shared: SharedResources, reflector: CurvedReflector,
+                 background: Background | None = None) -> None:
+        self.shared = shared
+        self.technique = reflector.technique
+        self.output_mode = OUTPUT_COLOR
+        self.mesh = shared.mesh(reflector.mesh)
         self.fixed_mesh: FixedFunctionMesh | None = None
-        if method == "sphere-texgen":
-            self.fixed_mesh = FixedFunctionMesh(registry, self.mesh)
+        self.program: Program | None = None
+        if self.technique == "sphere-texgen":
+            self.fixed_mesh = FixedFunctionMesh(shared.registry, self.mesh)
         else:
-            fragment = _FRAGMENT_SHADERS[method]
-            self.program = Program(registry, "envmap.vert", fragment)
+            fragment = _FRAGMENT[self.technique]
+            self.program = shared.program("envmap.vert", fragment)
             self.program.use()
-            self.program.set_int(_SAMPLERS[fragment], 0)
-            if fragment == "envmap_sphere.frag":
-                self.program.set_int("per_vertex", method == "sphere-vertex")
+            self.program.set_int(_SAMPLER[fragment], 0)
 
     def release(self) -> None:
-        """Free the mesh and program (not the texture, which the renderer owns)."""
         if self.fixed_mesh is not None:
             self.fixed_mesh.release()
-        if self.program is not None:
-            self.program.release()
-        self.mesh.release()
 
-    def run(self, view: np.ndarray, projection: np.ndarray,
-            output: int = OUTPUT_COLOR) -> int:
-        """Draw the reflector with world-to-eye ``view`` (rigid) and ``projection`` ``(4, 4)``
-        into the bound target; returns the number of draw calls (1). ``output`` chooses
-        colour or lookup coordinates (not for ``sphere-texgen``, which has no shader)."""
-        model = self.reflector.model_matrix()
+    def update(self, step: PlannedPass, reflector: CurvedReflector, renderer: ViewDrawer,
+               frame_target: RenderTarget) -> int:
+        raise ValueError(f"{self.technique} has no texture to update")
+
+    def map_for(self, draw: ReflectorDraw) -> Texture2D | TextureCube:  # pragma: no cover
+        raise NotImplementedError
+
+    def draw(self, draw: ReflectorDraw, view: View, renderer: ViewDrawer,
+             target: RenderTarget, stencil_level: int) -> int:
+        reflector = draw.reflector
+        assert isinstance(reflector, CurvedReflector)
+        if draw.mode == "plain":
+            return renderer.drawer.draw_plain(  # type: ignore[attr-defined]
+                renderer.scene, reflector, view)
+        return self.draw_mapped(reflector, view, self.map_for(draw))
+
+    def draw_mapped(self, reflector: CurvedReflector, view: View,
+                    texture: Texture2D | TextureCube) -> int:
+        """Draw the reflector sampling ``texture`` into the bound target; returns 1."""
+        model = reflector.model_matrix()
         GL.glEnable(GL.GL_DEPTH_TEST)
         GL.glEnable(GL.GL_CULL_FACE)
-        if self.method == "sphere-texgen":
-            if output != OUTPUT_COLOR:
+        if self.technique == "sphere-texgen":
+            if self.output_mode != OUTPUT_COLOR:
                 raise ValueError("sphere-texgen is fixed-function: it can only output colour")
-            self._draw_texgen(view @ model, projection)
+            self._draw_texgen(view, model, texture)
             return 1
-        assert self.program is not None
         program = self.program
+        assert program is not None
         program.use()
         program.set_mat4("model", model)
-        program.set_mat4("view", view)
-        program.set_mat4("projection", projection)
+        program.set_mat4("view", view.view)
+        program.set_mat4("projection", view.projection)
         program.set_mat3("normal_matrix", math3d.normal_matrix(model))
-        program.set_int("output_mode", output)
-        if self.method in CUBE_METHODS or self.method == "latlong":
-            program.set_vec3("eye_world", camera_position(view))
-        if self.method == "normal":
-            size = (self.texture.width, self.texture.height)  # type: ignore[union-attr]
-            program.set_vec2("map_size", size)
-        if self.method in CUBE_METHODS:
+        program.set_int("output_mode", self.output_mode)
+        program.set_vec4("clip_plane", NO_CLIP if view.clip_plane is None else view.clip_plane)
+        orthographic = is_orthographic(view.projection)
+        program.set_int("orthographic", orthographic)
+        if self.technique in ("cube", "cube-live", "latlong"):
+            program.set_vec3("eye_world", eye_position(view.view))
+            program.set_vec3("view_direction", view.forward)
+        if self.technique == "normal":
+            program.set_vec2("map_size", (texture.width, texture.height))  # type: ignore
+        if isinstance(texture, TextureCube):
             GL.glEnable(GL.GL_TEXTURE_CUBE_MAP_SEAMLESS)
-        self.texture.bind(0)
+        texture.bind(0)
         self.mesh.draw()
         return 1
 
-    def _draw_texgen(self, model_view: np.ndarray, projection: np.ndarray) -> None:
+    def _draw_texgen(self, view: View, model: np.ndarray, texture) -> None:
         """The textbook's way: no shader, GL_SPHERE_MAP texgen for s and t, the sphere map
         replacing the fragment colour. GL_NORMALIZE makes the eye-space normals unit, as
-        the numpy reference assumes."""
+        the numpy reference assumes. A clip plane is given in world space while the
+        modelview is the view alone, as glClipPlane takes it in eye space."""
         assert self.fixed_mesh is not None
         GL.glUseProgram(0)
         GL.glMatrixMode(GL.GL_PROJECTION)
-        GL.glLoadMatrixd(np.ascontiguousarray(projection.T, dtype=np.float64))
+        GL.glLoadMatrixd(np.ascontiguousarray(view.projection.T, dtype=np.float64))
         GL.glMatrixMode(GL.GL_MODELVIEW)
-        GL.glLoadMatrixd(np.ascontiguousarray(model_view.T, dtype=np.float64))
+        GL.glLoadMatrixd(np.ascontiguousarray(view.view.T, dtype=np.float64))
+        if view.clip_plane is not None:
+            GL.glClipPlane(GL.GL_CLIP_PLANE0, np.asarray(view.clip_plane, dtype=np.float64))
+        GL.glLoadMatrixd(np.ascontiguousarray((view.view @ model).T, dtype=np.float64))
         GL.glDisable(GL.GL_LIGHTING)
         GL.glEnable(GL.GL_NORMALIZE)
-        self.texture.bind(0)
+        texture.bind(0)
         GL.glEnable(GL.GL_TEXTURE_2D)
         GL.glTexEnvi(GL.GL_TEXTURE_ENV, GL.GL_TEXTURE_ENV_MODE, GL.GL_REPLACE)
         for coordinate in (GL.GL_S, GL.GL_T):
@@ -143,7 +157,92 @@ class EnvmapPass:
         GL.glMatrixMode(GL.GL_MODELVIEW)
 
 
-def camera_position(view: np.ndarray) -> np.ndarray:
-    """The eye's world position ``(3,)`` from a rigid world-to-eye ``view`` ``(4, 4)``."""
-    view = np.asarray(view, dtype=np.float64)
-    return -view[:3, :3].T @ view[:3, 3]
+class SphereMapped(CurvedPass):
+    """Sphere maps (``sphere``, ``sphere-vertex``, ``sphere-texgen``, ``normal``): the
+    reflector's picture as it is, or the background baked for each view's rotation
+    (sphere maps live in eye space), one slot texture per bake."""
+
+    def __init__(self, shared: SharedResources, reflector: CurvedReflector,
+                 background: Background | None = None) -> None:
+        super().__init__(shared, reflector, background)
+        if self.program is not None and self.technique != "normal":
+            self.program.use()
+            self.program.set_int("per_vertex", self.technique == "sphere-vertex")
+        self.textures: dict[int, Texture2D] = {}
+
+    def release(self) -> None:
+        for texture in self.textures.values():
+            texture.release()
+        self.textures.clear()
+        super().release()
+
+    def update(self, step: PlannedPass, reflector: CurvedReflector, renderer: ViewDrawer,
+               frame_target: RenderTarget) -> int:
+        """Bake (or load) the map the ``bake`` step's key names into its slot."""
+        if reflector.source is not None:
+            image = load_picture(reflector.source)
+        else:
+            rotation = np.asarray(step.key[3], dtype=np.float64).reshape(3, 3)
+            image = bake_sphere_map(environment_of(renderer.scene.background),
+                                    reflector.map_size, rotation)
+        old = self.textures.pop(step.slot, None)
+        if old is not None and (old.width, old.height) == (image.shape[1], image.shape[0]):
+            old.bind(0)
+            GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
+            GL.glTexSubImage2D(GL.GL_TEXTURE_2D, 0, 0, 0, old.width, old.height, GL.GL_RGB,
+                               GL.GL_UNSIGNED_BYTE, np.ascontiguousarray(image[::-1]))
+            GL.glGenerateMipmap(GL.GL_TEXTURE_2D)
+            self.textures[step.slot] = old
+            return 0
+        if old is not None:
+            old.release()
+        self.textures[step.slot] = Texture2D(self.shared.registry, image.shape[1],
+                                             image.shape[0], image, mipmaps=True, clamp=True)
+        return 0
+
+    def map_for(self, draw: ReflectorDraw) -> Texture2D:
+        return self.textures[draw.slot]
+
+
+class CubeMapped(CurvedPass):
+    """A static cube map: the reflector's six pictures, the background's own pictures, or
+    six faces baked from the background, made once."""
+
+    def __init__(self, shared: SharedResources, reflector: CurvedReflector,
+                 background: Background) -> None:
+        super().__init__(shared, reflector, background)
+        if reflector.source is not None:
+            faces = load_cube_faces(reflector.source)
+        elif background.kind == "cube_faces":
+            assert background.path is not None
+            faces = load_cube_faces(background.path)
+        else:
+            faces = baked_cube(background, reflector.map_size)
+        self.cube = TextureCube.from_faces(shared.registry, faces)
+
+    def release(self) -> None:
+        self.cube.release()
+        super().release()
+
+    def map_for(self, draw: ReflectorDraw) -> TextureCube:
+        return self.cube
+
+
+class LatlongMapped(CurvedPass):
+    """A latitude-longitude map baked once from the background, ``2 map_size`` x
+    ``map_size``: repeating across the phi seam, clamped at the poles."""
+
+    def __init__(self, shared: SharedResources, reflector: CurvedReflector,
+                 background: Background) -> None:
+        super().__init__(shared, reflector, background)
+        image = baked_latlong(background, reflector.map_size)
+        self.texture = Texture2D(shared.registry, image.shape[1], image.shape[0], image,
+                                 mipmaps=True, clamp=False)
+        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, GL.GL_CLAMP_TO_EDGE)
+
+    def release(self) -> None:
+        self.texture.release()
+        super().release()
+
+    def map_for(self, draw: ReflectorDraw) -> Texture2D:
+        return self.texture

@@ -1,96 +1,76 @@
-"""Drawing the scene graph's parts: the piece both the capture and the camera pass use."""
+"""Drawing the scene's objects, and reflectors as plain lit surfaces: the lit shader every
+view uses."""
 
 from __future__ import annotations
-
-from collections.abc import Sequence
-from typing import Protocol
 
 import numpy as np
 
 from mirrorlab import math3d
-from mirrorlab.gl.context import ResourceRegistry
-from mirrorlab.gl.resources import MeshBuffer, Program, Texture2D
-from mirrorlab.scene.graph import SceneGraph
-from mirrorlab.scene.mesh import load_model, load_texture
-
-
-class LitScene(Protocol):
-    """What the drawer needs of a scene: its graph and its light (the lab scene and the
-    environment-mapping scenes both have them). ``light_direction`` points towards a
-    directional light; ``ambient`` and ``diffuse`` weight it."""
-
-    graph: SceneGraph
-    light_direction: Sequence[float]
-    ambient: float
-    diffuse: float
+from mirrorlab.gl.opengl import GL
+from mirrorlab.gl.resources import Program
+from mirrorlab.passes.base import SharedResources, light_uniforms, set_view_uniforms
+from mirrorlab.scene.model import CurvedReflector, PlanarReflector, Scene
+from mirrorlab.scene.robot import Part, scene_parts
+from mirrorlab.views import View
 
 
 class SceneDrawer:
-    """GPU copies of the scene's meshes and textures, and the lit shader that draws them.
+    """Draws every part of a scene's objects (never its reflectors) with Lambert lighting,
+    one ``glDrawElements`` call per part; and a reflector as a plain surface."""
 
-    Draws every node with a mesh (never the mirror) in one ``glDrawElements``
-    call per node.
-    """
-
-    def __init__(self, registry: ResourceRegistry, scene: LitScene) -> None:
-        self.scene = scene
-        self.program = Program(registry, "scene.vert", "scene.frag")
-        self.meshes: dict[str, MeshBuffer] = {}
-        self.textures: dict[str, Texture2D] = {}
-        for node in scene.graph.nodes():
-            if node.mesh and node.mesh not in self.meshes:
-                data = load_model(node.mesh)
-                self.meshes[node.mesh] = MeshBuffer(registry, data.interleaved(), data.indices)
-            if node.texture and node.texture not in self.textures:
-                self.textures[node.texture] = Texture2D.from_image(
-                    registry, load_texture(node.texture))
-        self._drawn = [node for node in scene.graph.nodes() if node.mesh]
-        self._matrices: list[tuple[np.ndarray, np.ndarray]] = []
-        self._matrices_revision: int | None = None
+    def __init__(self, shared: SharedResources) -> None:
+        self.shared = shared
+        self.program: Program = shared.program("scene.vert", "scene.frag")
         self.program.use()
         self.program.set_int("surface", 0)
+        self._parts_of: Scene | None = None
+        self._parts: list[tuple[Part, np.ndarray, np.ndarray]] = []
 
-    def part_matrices(self) -> list[tuple[np.ndarray, np.ndarray]]:
-        """Model ``(4, 4)`` and normal ``(3, 3)`` float32 matrices of each drawn part,
-        recomputed only when the scene graph's revision changes (both passes share them)."""
-        revision = self.scene.graph.revision
-        if revision != self._matrices_revision:
-            self._matrices = []
-            for node in self._drawn:
-                model = node.world_matrix()
-                self._matrices.append((model.astype(np.float32),
-                                       math3d.normal_matrix(model).astype(np.float32)))
-            self._matrices_revision = revision
-        return self._matrices
+    def _prepared(self, scene: Scene) -> list[tuple[Part, np.ndarray, np.ndarray]]:
+        """Each part with its float32 model and normal matrices, worked out once per scene."""
+        if scene is not self._parts_of:
+            self._parts = [(part, part.model.astype(np.float32),
+                            math3d.normal_matrix(part.model).astype(np.float32))
+                           for part in scene_parts(scene)]
+            self._parts_of = scene
+        return self._parts
 
-    def release(self) -> None:
-        """Free the program, meshes and textures."""
-        for resource in (self.program, *self.meshes.values(), *self.textures.values()):
-            resource.release()
-
-    def draw(self, view_projection: np.ndarray, clip_plane: np.ndarray | None = None) -> int:
-        """Draw all parts with the given ``(4, 4)`` projection @ view; returns the draw count.
-
-        ``clip_plane`` ``(4,)`` (world space) cuts away whatever lies on its
-        negative side; the caller enables ``GL_CLIP_DISTANCE0`` for it to act.
-        """
-        scene, program = self.scene, self.program
+    def begin(self, scene: Scene, view: View) -> Program:
+        program = self.program
         program.use()
-        program.set_mat4("view_projection", view_projection)
-        # A plane every point is in front of, rather than none: Mesa 22.3's llvmpipe
-        # clips by the shader's gl_ClipDistance even while GL_CLIP_DISTANCE0 is disabled.
-        plane = (0.0, 0.0, 0.0, 1.0) if clip_plane is None else clip_plane
-        program.set_vec4("clip_plane", plane)
-        light = np.asarray(scene.light_direction, dtype=np.float64)
-        program.set_vec3("light_direction", light / np.linalg.norm(light))
-        program.set_float("ambient", scene.ambient)
-        program.set_float("diffuse", scene.diffuse)
-        for node, (model, normal) in zip(self._drawn, self.part_matrices(), strict=True):
+        set_view_uniforms(program, view)
+        light_uniforms(program, scene)
+        return program
+
+    def draw(self, scene: Scene, view: View) -> int:
+        """Draw the objects into the bound target; returns the number of draw calls."""
+        program = self.begin(scene, view)
+        parts = self._prepared(scene)
+        for part, model, normal in parts:
             program.set_mat4("model", model)
             program.set_mat3("normal_matrix", normal)
-            program.set_vec3("color", node.color)
-            program.set_int("use_texture", node.texture is not None)
-            if node.texture is not None:
-                self.textures[node.texture].bind(0)
-            self.meshes[node.mesh].draw()
-        return len(self._drawn)
+            program.set_vec3("color", part.color)
+            program.set_int("use_texture", part.texture is not None)
+            if part.texture is not None:
+                self.shared.texture(part.texture).bind(0)
+            self.shared.mesh(part.mesh).draw()
+        return len(parts)
+
+    def draw_plain(self, scene: Scene, reflector: CurvedReflector | PlanarReflector,
+                   view: View, quad=None) -> int:
+        """The reflector as a lit surface in its plain colour: a curved one's mesh, or a
+        planar one's front (``quad``, its mesh buffer). Returns the draw count (1)."""
+        program = self.begin(scene, view)
+        if isinstance(reflector, CurvedReflector):
+            model = reflector.model_matrix()
+            mesh = self.shared.mesh(reflector.mesh)
+        else:
+            model = np.eye(4)
+            mesh = quad
+        program.set_mat4("model", model)
+        program.set_mat3("normal_matrix", math3d.normal_matrix(model))
+        program.set_vec3("color", reflector.color)
+        program.set_int("use_texture", False)
+        GL.glEnable(GL.GL_CULL_FACE)
+        mesh.draw()
+        return 1

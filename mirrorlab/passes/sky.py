@@ -1,55 +1,82 @@
-"""The distant environment drawn behind an environment-mapping scene, from a cube map."""
+"""The distant background drawn behind everything, from a cube map of it."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from mirrorlab.gl.context import ResourceRegistry
+from mirrorlab.envmap import bake_cube_faces
 from mirrorlab.gl.opengl import GL
-from mirrorlab.gl.resources import MeshBuffer, Program, TextureCube
+from mirrorlab.gl.resources import MeshBuffer, TextureCube
+from mirrorlab.passes.base import SharedResources
+from mirrorlab.scene.backgrounds import environment_of, load_cube_faces
+from mirrorlab.scene.model import Background
+from mirrorlab.views import View, is_orthographic
+
+SKY_SIZE = 256
+"""Edge of the cube map a baked background is drawn from."""
 
 _SCREEN_TRIANGLE = np.array(
     [(-1.0, -1.0, 0.0, 0, 0, 1, 0, 0), (3.0, -1.0, 0.0, 0, 0, 1, 0, 0),
      (-1.0, 3.0, 0.0, 0, 0, 1, 0, 0)], dtype=np.float32)
 
 
-def rotation_only(view: np.ndarray) -> np.ndarray:
-    """``view`` ``(4, 4)`` with its translation dropped: directions, not points."""
-    rotation = np.eye(4)
-    rotation[:3, :3] = np.asarray(view, dtype=np.float64)[:3, :3]
-    return rotation
+def background_faces(background: Background, size: int = SKY_SIZE) -> np.ndarray:
+    """Six cube faces ``(6, n, n, 3)`` uint8 of an environment background: its own
+    pictures, or baked from it at ``size``."""
+    if background.kind == "cube_faces":
+        assert background.path is not None
+        return load_cube_faces(background.path)
+    return bake_cube_faces(environment_of(background), size)
+
+
+def ray_directions(view: View) -> np.ndarray:
+    """``(3, 3)``: (ndc x, ndc y, 1) to the world direction of the view ray through that
+    point. Only the projection's x, y and w rows enter, so an oblique near plane (which
+    changes only the z row) does not disturb it."""
+    projection = np.asarray(view.projection, dtype=np.float64)
+    rotation = np.asarray(view.view, dtype=np.float64)[:3, :3]
+    if is_orthographic(projection):
+        to_eye = np.zeros((3, 3))
+        to_eye[2, 2] = -1.0
+    else:  # eye direction d = (dx, dy, -1): w = 1, and rows x, y give dx, dy
+        a = projection[:2, :2]
+        inverse = np.linalg.inv(a)
+        to_eye = np.zeros((3, 3))
+        to_eye[:2, :2] = inverse
+        to_eye[:2, 2] = inverse @ projection[:2, 2]
+        to_eye[2, 2] = -1.0
+    return rotation.T @ to_eye
 
 
 class SkyPass:
-    """Fills the bound target with the environment seen in each pixel's direction, without
-    touching depth: draw it first, then the scene over it. ``sky`` is a cube map of the
-    environment (the renderer's static one)."""
+    """Fills the view with the background seen in each pixel's direction, without touching
+    depth: draw it first, then the scene over it."""
 
-    name = "sky"
-
-    def __init__(self, registry: ResourceRegistry, sky: TextureCube) -> None:
-        self.sky = sky
-        self.program = Program(registry, "envmap_sky.vert", "envmap_sky.frag")
-        self.triangle = MeshBuffer(registry, _SCREEN_TRIANGLE, np.arange(3, dtype=np.uint32))
+    def __init__(self, shared: SharedResources, background: Background) -> None:
+        self.background = background
+        self.cube = TextureCube.from_faces(shared.registry, background_faces(background))
+        self.program = shared.program("envmap_sky.vert", "envmap_sky.frag")
+        self.triangle = MeshBuffer(shared.registry, _SCREEN_TRIANGLE,
+                                   np.arange(3, dtype=np.uint32))
         self.program.use()
         self.program.set_int("sky_texture", 0)
 
     def release(self) -> None:
-        """Free the program and the triangle (not the shared cube map)."""
-        self.program.release()
+        """Free the cube map and the triangle (the program is shared)."""
+        self.cube.release()
         self.triangle.release()
 
-    def run(self, view: np.ndarray, projection: np.ndarray) -> int:
-        """Draw into the bound target with ``view`` and ``projection`` ``(4, 4)``; returns the
-        number of draw calls (1)."""
-        inverse = np.linalg.inv(projection @ rotation_only(view))
+    def run(self, view: View) -> int:
+        """Draw into the bound target; returns the number of draw calls (1)."""
         GL.glEnable(GL.GL_TEXTURE_CUBE_MAP_SEAMLESS)
         GL.glDisable(GL.GL_DEPTH_TEST)
         GL.glDepthMask(GL.GL_FALSE)
+        GL.glDisable(GL.GL_CULL_FACE)
         self.program.use()
-        self.program.set_mat4("inverse_rotation_projection", inverse)
-        self.sky.bind(0)
+        self.program.set_mat3("ndc_to_direction", ray_directions(view))
+        self.cube.bind(0)
         self.triangle.draw()
+        GL.glEnable(GL.GL_CULL_FACE)
         GL.glDepthMask(GL.GL_TRUE)
         GL.glEnable(GL.GL_DEPTH_TEST)
         return 1

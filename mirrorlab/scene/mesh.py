@@ -8,8 +8,6 @@ from pathlib import Path
 
 import numpy as np
 
-from mirrorlab.paths import asset_path
-
 
 @dataclass(frozen=True)
 class MeshData:
@@ -85,16 +83,3 @@ def load_mesh(path: str | Path) -> MeshData:
         uvs=uvs.astype(np.float32),
         indices=indices.astype(np.uint32),
     )
-
-
-def load_texture(name: str) -> np.ndarray:
-    """``textures/<name>.png`` as ``(h, w, 3)`` uint8, row 0 at the top."""
-    from PIL import Image
-
-    with Image.open(asset_path("textures", f"{name}.png")) as image:
-        return np.asarray(image.convert("RGB"))
-
-
-def load_model(name: str) -> MeshData:
-    """Load ``models/<name>.obj`` from the repository's model folder."""
-    return load_mesh(asset_path("models", f"{name}.obj"))

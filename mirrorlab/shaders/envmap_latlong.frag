@@ -5,22 +5,18 @@
 // from phi's analytic gradient instead, which has no jump, so the mipmap level stays
 // right along the seam (an implicit-derivative lookup would smear the coarsest level
 // over a line of pixels there).
+#include "common.glsl"
+#include "view_ray.glsl"
 in vec3 world_position;
 in vec3 world_normal;
 
 uniform sampler2D latlong_texture;
-uniform vec3 eye_world;
 uniform int output_mode;  // 0: colour; 1: the lookup coordinates (s, t, 0)
 uniform bool seam_safe = true;  // false: let the hardware difference s (a test's control)
 
 out vec4 frag_color;
 
 const float PI = 3.14159265358979;
-
-vec3 safe_normalize(vec3 v, vec3 fallback) {
-    float len = length(v);
-    return len > 1e-30 ? v / len : fallback;
-}
 
 // d phi for a change dw of the direction w: (x dy - y dx) / (x^2 + y^2), with the
 // denominator held away from 0 at the poles (where phi is undefined anyway).
@@ -29,7 +25,7 @@ float phi_change(vec3 w, vec3 dw) {
 }
 
 void main() {
-    vec3 u = safe_normalize(world_position - eye_world, vec3(0.0));
+    vec3 u = view_ray(world_position);
     vec3 n = safe_normalize(world_normal, vec3(0.0));
     vec3 w = safe_normalize(u - 2.0 * dot(n, u) * n, vec3(0.0, 0.0, 1.0));
     float rho = length(w.xy);

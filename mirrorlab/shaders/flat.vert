@@ -1,9 +1,12 @@
 #version 330
-// World-space geometry in one flat colour (the stencil method's mirror masks).
+// World-space geometry in one flat colour (mirror backings and stencil masks).
+#include "clip.glsl"
 layout(location = 0) in vec3 position;
 
 uniform mat4 view_projection;
 
 void main() {
-    gl_Position = view_projection * vec4(position, 1.0);
+    vec4 world_position = vec4(position, 1.0);
+    clip_world(world_position);
+    gl_Position = view_projection * world_position;
 }

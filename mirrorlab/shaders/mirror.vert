@@ -1,7 +1,8 @@
 #version 330
-// The mirror quad: positions in world space. Its environment coordinate is either the
-// quad's own texture coordinate (the lab's fixed capture) or the world position seen
-// through a capture camera (projective, divided per fragment).
+// A planar mirror: positions in world space. Its environment coordinate is either the
+// quad's own texture coordinate (the lab's fixed orthographic capture) or the world
+// position seen through the capture's camera (projective, divided per fragment).
+#include "clip.glsl"
 layout(location = 0) in vec3 position;
 layout(location = 2) in vec2 uv;
 
@@ -12,10 +13,12 @@ uniform mat4 texture_matrix;
 out vec4 environment_coord;
 
 void main() {
+    vec4 world_position = vec4(position, 1.0);
     if (projective) {
-        environment_coord = texture_matrix * vec4(position, 1.0);
+        environment_coord = texture_matrix * world_position;
     } else {
         environment_coord = vec4(uv, 0.0, 1.0);
     }
-    gl_Position = view_projection * vec4(position, 1.0);
+    clip_world(world_position);
+    gl_Position = view_projection * world_position;
 }

@@ -1,14 +1,12 @@
 #version 330
-// Lambert lighting from one directional light plus ambient, optionally textured.
+// A lit part, optionally textured.
+#include "lighting.glsl"
 in vec3 world_normal;
 in vec2 surface_uv;
 
 uniform vec3 color;
 uniform bool use_texture;
 uniform sampler2D surface;
-uniform vec3 light_direction;  // unit, from the surface towards the light
-uniform float ambient;
-uniform float diffuse;
 
 out vec4 frag_color;
 
@@ -17,6 +15,5 @@ void main() {
     if (use_texture) {
         albedo *= texture(surface, surface_uv).rgb;
     }
-    float lambert = max(dot(normalize(world_normal), light_direction), 0.0);
-    frag_color = vec4(albedo * (ambient + diffuse * lambert), 1.0);
+    frag_color = vec4(lit(albedo, world_normal), 1.0);
 }

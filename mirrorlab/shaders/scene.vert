@@ -1,8 +1,9 @@
 #version 330
 // Scene parts: world-space normal and texture coordinate to the fragment stage.
-// view_projection may include a reflection (the stencil method draws the mirrored
-// scene that way); the normal and the clip distance stay in the unreflected world, so
-// shading matches the real part and clip_plane cuts away what lies behind the mirror.
+// view_projection may show the world seen in a mirror; the normal and the clip distance
+// stay in the unreflected world, so shading matches the real part and the clip plane
+// cuts away what lies behind the mirror.
+#include "clip.glsl"
 layout(location = 0) in vec3 position;
 layout(location = 1) in vec3 normal;
 layout(location = 2) in vec2 uv;
@@ -10,7 +11,6 @@ layout(location = 2) in vec2 uv;
 uniform mat4 model;
 uniform mat4 view_projection;
 uniform mat3 normal_matrix;
-uniform vec4 clip_plane;  // used only while GL_CLIP_DISTANCE0 is enabled
 
 out vec3 world_normal;
 out vec2 surface_uv;
@@ -19,6 +19,6 @@ void main() {
     vec4 world_position = model * vec4(position, 1.0);
     world_normal = normal_matrix * normal;
     surface_uv = uv;
-    gl_ClipDistance[0] = dot(clip_plane, world_position);
+    clip_world(world_position);
     gl_Position = view_projection * world_position;
 }

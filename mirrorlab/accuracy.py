@@ -1,7 +1,8 @@
-"""The accuracy-against-time sweep: every mirror technique, environment-texture size and
-viewpoint, scored against the ray-traced ground truth inside the mirror, and timed.
+"""The accuracy-against-time sweep (``mirrorlab bench accuracy``): every reflection
+technique, texture size and viewpoint, scored against the ray-traced ground truth inside
+the reflector, and timed; then a table, a CSV and a plot.
 
-Numbers only; the command line prints and saves what :func:`run_accuracy` returns.
+:func:`run_panels` measures; :func:`run_command` is the command's whole work.
 """
 
 from __future__ import annotations
@@ -13,19 +14,20 @@ import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass, fields
-from functools import partial
+from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mirrorlab.plan import CAPTURE_MODES
-from mirrorlab.scene.robot import Camera, build_lab_scene
+from mirrorlab.files import write_bytes_atomic
+from mirrorlab.options import apply_options
+from mirrorlab.scene.loader import load_scene
+from mirrorlab.scene.model import CAPTURE_MODES, CURVED_TECHNIQUES, Camera, Scene
 
 if TYPE_CHECKING:
-    from mirrorlab.gl.context import ResourceRegistry
     from mirrorlab.gl.resources import Framebuffer, TimerQuery
+    from mirrorlab.renderer import SceneRenderer
 
 FULL_SIZES = (64, 128, 256, 512, 1024, 2048)
 QUICK_SIZES = (64, 128)
@@ -123,81 +125,143 @@ class SweepSettings:
                    viewpoints=("head-on far", "60 deg"))
 
 
-Progress = Callable[[int, int, str], None]
-
-
-def lab_techniques(sizes: Sequence[int]) -> list[tuple[str, str, str, int]]:
-    """``(label, method, capture, map_size)`` for each rasterised configuration."""
+def lab_techniques(sizes: Sequence[int]) -> list[tuple[str, dict]]:
+    """``(label, options)`` for each planar configuration: every capturing technique with
+    each capture mode and texture size, and the stencil mirror."""
     rows = []
     for method in ("ortho", "reflected"):
         for capture in CAPTURE_MODES:
-            rows += [(f"{method}-{capture}", method, capture, size) for size in sizes]
-    rows.append(("stencil", "stencil", "copy", 0))
+            rows += [(f"{method}-{capture}", {"method": method, "capture": capture,
+                                               "env_size": size}) for size in sizes]
+    rows.append(("stencil", {"method": "stencil"}))
     return rows
 
 
-def run_accuracy(settings: SweepSettings, progress: Progress | None = None) -> list[SweepRow]:
-    """Run the sweep on the lab scene in a headless context; one row per configuration
-    and viewpoint, the ray tracer's own rows included (zero error, its time)."""
-    from mirrorlab.raytrace import lab_ray_scene
-    from mirrorlab.renderer import Renderer
+def curved_techniques(sizes: Sequence[int]) -> list[tuple[str, dict]]:
+    """``(label, options)`` for every curved technique at each map size."""
+    return [(method, {"method": method, "map_size": size}) for method in CURVED_TECHNIQUES
+            for size in sizes if size <= ENVMAP_MAX_SIZE]
 
-    scene = build_lab_scene()
-    ray_scene = lab_ray_scene(scene)
+
+def scene_techniques(scene: Scene, sizes: Sequence[int]) -> list[tuple[str, dict]]:
+    """The configurations a scene's reflectors can take: the planar ones when it has a
+    planar mirror, the curved ones when it has a curved reflector."""
+    kinds = {reflector.kind for reflector in scene.reflectors}
+    rows = lab_techniques(sizes) if "planar" in kinds else []
+    return rows + (curved_techniques(sizes) if "curved" in kinds else [])
+
+
+@dataclass(frozen=True)
+class Panel:
+    """One scene of the sweep: ``name`` in the table, the ``scene``, its viewpoints, and
+    how the truth is traced: ``supersample`` rays per pixel side, the reflective region
+    shrunk by ``inset`` pixels (curved reflectors: leave out the silhouette)."""
+
+    name: str
+    scene: Scene
+    viewpoints: dict[str, Camera]
+    supersample: int = 1
+    inset: int = 0
+
+
+def lab_panel(settings: SweepSettings) -> Panel:
     viewpoints = lab_viewpoints()
     names = settings.viewpoints or tuple(viewpoints)
     unknown = [n for n in names if n not in viewpoints]
     if unknown:
         raise ValueError(f"unknown viewpoint {unknown[0]!r}; known: {', '.join(viewpoints)}")
-    techniques = lab_techniques(settings.sizes)
-    total = len(names) * (len(techniques) + 1)
-    done = 0
-    rows: list[SweepRow] = []
+    return Panel("lab", load_scene("lab20"), {n: viewpoints[n] for n in names})
+
+
+def sphere_panels(settings: SweepSettings) -> list[Panel]:
+    """The chrome sphere in the sky alone (what every map can hold), from the scene's
+    camera and close up; and among its lit objects (only ``cube-live`` reflects them)."""
+    scene = load_scene("chrome_sphere")
+    default = scene.camera
+    close = Camera(eye=(0.6, 0.8, 2.4), target=(0.0, 0.0, 0.0), fovy=40.0)
+    sky_views = {"default": default, "close": close}
+    if settings.viewpoints is not None:  # the quick sweep: one view of each scene
+        sky_views = {"default": default}
+    return [Panel("sphere-sky", replace(scene, objects=()), sky_views, 4, 1),
+            Panel("sphere-objects", scene, {"default": default}, 4, 1)]
+
+
+def file_panel(scene: Scene) -> Panel:
+    """Any scene file: its own camera, traced 4 x 4 when it has a curved reflector."""
+    curved = any(r.kind == "curved" for r in scene.reflectors)
+    return Panel(scene.name, scene, {"camera": scene.camera}, 4 if curved else 1,
+                 1 if curved else 0)
+
+
+def run_panels(panels: Sequence[Panel], settings: SweepSettings,
+               progress: bool = True) -> list[SweepRow]:
+    """Measure every technique of every panel at every viewpoint, in one headless context:
+    one row per configuration and viewpoint, the ray tracer's own rows included (zero
+    error, its time)."""
+    from tqdm import tqdm
+
+    from mirrorlab.raytrace import trace_scene
+
     size = (settings.frame, settings.frame)
-    with sweep_gl(size) as (registry, framebuffer, timer):
-        for name in names:
-            camera = viewpoints[name]
+    jobs = [(panel, name, camera) for panel in panels
+            for name, camera in panel.viewpoints.items()]
+    total = sum(1 + len(scene_techniques(panel.scene, settings.sizes))
+                for panel, _, _ in jobs)
+    rows: list[SweepRow] = []
+    bar = tqdm(total=total, desc="accuracy", unit="config", disable=not progress,
+               file=sys.stderr, dynamic_ncols=True, mininterval=0.5)
+    with sweep_gl(size) as (renderer, framebuffer, timer), bar:
+        for panel, name, camera in jobs:
+            scene = replace(panel.scene, camera=camera)
+            repeats = max(1, settings.frames // 5) if panel.supersample == 1 else 1
             truth_times, truth = [], None
-            for _ in range(max(1, settings.frames // 5)):
+            for _ in range(repeats):
                 start = time.perf_counter()
-                truth = ray_scene.render(camera.view(), camera.projection(1.0), size)
+                truth = trace_scene(scene, size, panel.supersample)
                 truth_times.append((time.perf_counter() - start) * 1e3)
-            truth_image, mask = truth.to_uint8(), truth.reflective_mask
-            rows.append(SweepRow("lab", "raytrace", 0, name, 0.0, 0.0, math.inf, 0.0,
+            assert truth is not None
+            truth_image = truth.to_uint8()
+            mask = erode(truth.reflective_mask, panel.inset)
+            label = "raytrace" if panel.supersample == 1 else (
+                f"raytrace {panel.supersample}x{panel.supersample}")
+            rows.append(SweepRow(panel.name, label, 0, name, 0.0, 0.0, math.inf, 0.0,
                                  float(np.median(truth_times)), math.nan))
-            done += 1
-            if progress:
-                progress(done, total, f"raytrace {name}")
-            for label, method, capture, map_size in techniques:
-                env = (map_size, map_size) if map_size else None
-                renderer = Renderer(registry, scene, method, capture, env)
-                error, wall, gpu = measure(
-                    renderer, partial(renderer.render, framebuffer, camera, force_capture=True),
-                    framebuffer, timer, settings, truth_image, mask)
-                rows.append(SweepRow("lab", label, map_size, name, error.mae, error.p95,
-                                     error.psnr, error.share_off, wall, gpu))
-                done += 1
-                if progress:
-                    progress(done, total, f"{label} {map_size or ''} {name}")
+            bar.set_postfix_str(f"{label} {panel.name} {name}", refresh=False)
+            bar.update()
+            for technique_label, options in scene_techniques(scene, settings.sizes):
+                configured = apply_options(scene, options)
+                map_size = int(options.get("env_size", options.get("map_size", 0)))
+                if technique_label == "stencil":
+                    map_size = 0
+                error, wall, gpu = measure(renderer, configured, framebuffer, timer,
+                                           settings, truth_image, mask)
+                rows.append(SweepRow(panel.name, technique_label, map_size, name, error.mae,
+                                     error.p95, error.psnr, error.share_off, wall, gpu))
+                bar.set_postfix_str(f"{technique_label} {map_size or ''} {panel.name} {name}",
+                                    refresh=False)
+                bar.update()
     return rows
 
 
 @contextmanager
 def sweep_gl(size: tuple[int, int],
-             ) -> Iterator[tuple[ResourceRegistry, Framebuffer, TimerQuery]]:
-    """A headless context for a sweep: its resource registry, a ``size`` (width, height)
-    frame target and a GL timer query; all released on leaving."""
+             ) -> Iterator[tuple[SceneRenderer, Framebuffer, TimerQuery]]:
+    """A headless context for a sweep: a renderer, a ``size`` (width, height) frame target
+    and a GL timer query; all released on leaving."""
     from mirrorlab.gl.context import HeadlessContext
     from mirrorlab.gl.resources import Framebuffer, TimerQuery
+    from mirrorlab.renderer import SceneRenderer
 
     with HeadlessContext() as context:
+        renderer = SceneRenderer(context.resources)
         framebuffer = Framebuffer(context.resources, *size)
         timer = TimerQuery(context.resources)
         try:
-            yield context.resources, framebuffer, timer
+            yield renderer, framebuffer, timer
         finally:
             timer.release()
             framebuffer.release()
+            renderer.release()
 
 
 def time_frames(render_frame: Callable[[], object], timer, settings: SweepSettings,
@@ -223,17 +287,23 @@ def time_frames(render_frame: Callable[[], object], timer, settings: SweepSettin
     return float(np.median(walls)), float(np.median(gpus))
 
 
-def measure(renderer, render_frame: Callable[[], object], framebuffer, timer,
+def measure(renderer: SceneRenderer, scene: Scene, framebuffer, timer,
             settings: SweepSettings, truth: np.ndarray, mask: np.ndarray,
             ) -> tuple[ImageError, float, float]:
-    """Time ``render_frame`` (see :func:`time_frames`), then score the last frame in
-    ``framebuffer`` against ``truth`` ``(h, w, 3)`` uint8 under ``mask`` ``(h, w)``, and
-    release ``renderer``. Returns the error and the median wall and GL milliseconds."""
+    """Time frames of ``scene`` (see :func:`time_frames`), each capturing its reflectors
+    afresh as a moving scene would (maps baked from the background are kept), then score
+    the last frame against ``truth`` ``(h, w, 3)`` uint8 under ``mask`` ``(h, w)``.
+    Returns the error and the median wall and GL milliseconds."""
     from mirrorlab.gl.context import check_gl_errors
 
-    wall, gpu = time_frames(render_frame, timer, settings)
+    def frame() -> None:
+        held = renderer.state.held
+        for key in [k for k, v in held.items() if v[0] not in ("bake", "picture")]:
+            del held[key]
+        renderer.render(scene, framebuffer)
+
+    wall, gpu = time_frames(frame, timer, settings)
     image = framebuffer.read()
-    renderer.release()
     check_gl_errors("a sweep frame")
     return image_error(image, truth, mask), wall, gpu
 
@@ -242,66 +312,14 @@ ENVMAP_MAX_SIZE = 1024
 """Largest environment map in the sweep: a 2048 cube is 25 million numpy-baked texels."""
 
 
-def envmap_viewpoints() -> dict[tuple[str, str], Camera]:
-    """The environment-map rows' views of the sphere scene, keyed by (scene, viewpoint).
-
-    Scene ``sphere-sky`` is the sphere in the distant sky alone (what every map can
-    hold), seen from the scene's camera (``default``) and from close up; scene
-    ``sphere-objects`` adds the lit objects around it, which only ``cube-live`` can
-    reflect.
-    """
-    from mirrorlab.scene.envscenes import build_sphere_scene
-
-    default = build_sphere_scene(objects=False).camera
-    close = Camera(eye=(0.6, 0.8, 2.4), target=(0.0, 0.0, 0.0), fovy=40.0)
-    return {("sphere-sky", "default"): default, ("sphere-sky", "close"): close,
-            ("sphere-objects", "default"): default}
-
-
-def run_envmap_accuracy(settings: SweepSettings,
-                        progress: Progress | None = None) -> list[SweepRow]:
-    """Every environment-map technique and map size on the sphere scene, scored inside
-    the sphere (shrunk by one pixel) against a 4 x 4 supersampled ray-traced truth."""
-    from mirrorlab.envmap_renderer import ENVMAP_METHODS, EnvmapRenderer, erode, ground_truth
-    from mirrorlab.scene.envscenes import build_sphere_scene
-
-    views = envmap_viewpoints()
-    names = list(views)
-    if settings.viewpoints is not None:  # the quick sweep: one view of each scene
-        names = [("sphere-sky", "default"), ("sphere-objects", "default")]
-    sizes = [size for size in settings.sizes if size <= ENVMAP_MAX_SIZE]
-    total = len(names) * (len(ENVMAP_METHODS) * len(sizes) + 1)
-    done = 0
-    rows: list[SweepRow] = []
-    size = (settings.frame, settings.frame)
-    with sweep_gl(size) as (registry, framebuffer, timer):
-        for scene_name, name in names:
-            camera = views[(scene_name, name)]
-            scene = build_sphere_scene(objects=scene_name == "sphere-objects")
-            start = time.perf_counter()
-            truth = ground_truth(scene, camera, size, supersample=4)
-            traced_ms = (time.perf_counter() - start) * 1e3
-            truth_image = truth.to_uint8()
-            mask = erode(truth.reflective_mask, 1)
-            rows.append(SweepRow(scene_name, "raytrace 4x4", 0, name, 0.0, 0.0, math.inf, 0.0,
-                                 traced_ms, math.nan))
-            done += 1
-            if progress:
-                progress(done, total, f"raytrace {scene_name} {name}")
-            for method in ENVMAP_METHODS:
-                for map_size in sizes:
-                    renderer = EnvmapRenderer(registry, scene, method, map_size)
-                    live = method == "cube-live"  # time its capture in every frame
-                    error, wall, gpu = measure(
-                        renderer, partial(renderer.render, framebuffer, camera,
-                                          force_capture=live),
-                        framebuffer, timer, settings, truth_image, mask)
-                    rows.append(SweepRow(scene_name, method, map_size, name, error.mae,
-                                         error.p95, error.psnr, error.share_off, wall, gpu))
-                    done += 1
-                    if progress:
-                        progress(done, total, f"{method} {map_size} {scene_name} {name}")
-    return rows
+def erode(mask: np.ndarray, pixels: int) -> np.ndarray:
+    """``mask`` ``(h, w)`` bool shrunk by ``pixels`` (4-neighbour steps); outside is False."""
+    out = np.asarray(mask, dtype=bool).copy()
+    for _ in range(int(pixels)):
+        padded = np.pad(out, 1, constant_values=False)
+        out = (padded[1:-1, 1:-1] & padded[:-2, 1:-1] & padded[2:, 1:-1]
+               & padded[1:-1, :-2] & padded[1:-1, 2:])
+    return out
 
 
 @dataclass(frozen=True)
@@ -460,33 +478,40 @@ def plot_summary(summary: Sequence[SummaryRow], path: Path, title: str) -> bool:
     return True
 
 
-def write_bytes_atomic(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file and a rename."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = path.with_name(f".{path.name}.tmp")
-    try:
-        temporary.write_bytes(data)
-        temporary.replace(path)
-    finally:
-        temporary.unlink(missing_ok=True)
-
-
-def progress_bar(stream=None, width: int = 28) -> Progress:
-    """A one-line text progress bar on ``stream`` (default: standard error), redrawn in
-    place on a terminal, one line per step otherwise."""
-    stream = stream or sys.stderr
-    interactive = stream.isatty()
-    started = time.perf_counter()
-
-    def show(done: int, total: int, label: str) -> None:
-        filled = int(width * done / total)
-        elapsed = time.perf_counter() - started
-        line = (f"[{'#' * filled}{'.' * (width - filled)}] {done}/{total} "
-                f"{elapsed:5.1f}s  {label}")
-        if interactive:
-            stream.write("\r" + line.ljust(100)[:100] + ("\n" if done == total else ""))
+def run_command(settings: SweepSettings, scenes: str | Scene, out_dir: Path,
+                from_csv: Path | None = None, say: Callable[[str], None] = print) -> int:
+    """``mirrorlab bench accuracy``: measure (or read ``from_csv``), print the tables, and
+    write accuracy.csv, accuracy.md and accuracy.png into ``out_dir``."""
+    if from_csv is not None:
+        try:
+            rows = rows_from_csv(from_csv.read_text())
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ValueError(f"--from-csv: cannot read {from_csv}: {exc}") from None
+        except ValueError as exc:
+            raise ValueError(f"--from-csv: {from_csv}: {exc}") from None
+        title = f"accuracy vs time, from {from_csv.name}"
+    else:
+        if isinstance(scenes, Scene):
+            panels = [file_panel(scenes)]
         else:
-            stream.write(line + "\n")
-        stream.flush()
-
-    return show
+            panels = ([lab_panel(settings)] if scenes in ("lab", "all") else []) + (
+                sphere_panels(settings) if scenes in ("sphere", "all") else [])
+        rows = run_panels(panels, settings)
+        title = (f"accuracy vs time, {settings.frame}x{settings.frame} frames, llvmpipe; "
+                 f"medians of {settings.frames} frames")
+        write_bytes_atomic(out_dir / "accuracy.csv", rows_to_csv(rows).encode())
+    summary = summarise(rows)
+    markdown = [title, ""]
+    for scene in dict.fromkeys(r.scene for r in summary):
+        table = summary_table([r for r in summary if r.scene == scene])
+        heading = SCENE_TITLES.get(scene, scene)
+        say(f"\n{heading}:\n{format_text(table)}")
+        markdown += [f"### {heading}", "", format_markdown(table), ""]
+    write_bytes_atomic(out_dir / "accuracy.md", "\n".join(markdown).encode())
+    written = ["accuracy.md"] if from_csv is not None else ["accuracy.csv", "accuracy.md"]
+    if plot_summary(summary, out_dir / "accuracy.png", title):
+        written.append("accuracy.png")
+    else:
+        say("matplotlib is not installed, so no plot (pip install 'mirrorlab[plot]')")
+    say(f"wrote {', '.join(str(out_dir / name) for name in written)}")
+    return 0

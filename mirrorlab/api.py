@@ -1,0 +1,188 @@
+"""The Python API: :class:`Renderer` keeps one headless OpenGL context and its GL objects
+across frames and scenes; :func:`render` is the one-shot built on it.
+
+Importing this module loads no OpenGL; a Renderer does when it opens.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from mirrorlab.options import apply_options, check_size
+from mirrorlab.plan import TINY_PIXELS
+from mirrorlab.scene.loader import load_scene
+from mirrorlab.scene.model import Scene
+
+if TYPE_CHECKING:
+    from mirrorlab.gl.context import HeadlessContext
+    from mirrorlab.gl.resources import Framebuffer
+    from mirrorlab.plan import FramePlan
+    from mirrorlab.renderer import FrameStats, SceneRenderer
+
+SceneLike = Scene | str | Path
+
+
+def resolve_scene(scene: SceneLike, **options: Any) -> Scene:
+    """A Scene from a Scene, a scene file or a shipped scene's name, with ``options``
+    (see :mod:`mirrorlab.options`) applied."""
+    loaded = scene if isinstance(scene, Scene) else load_scene(scene)
+    return apply_options(loaded, options)
+
+
+class Renderer:
+    """Headless rendering that keeps its context: make one, draw many frames::
+
+        with mirrorlab.Renderer(size=(512, 512)) as renderer:
+            image = renderer.render("lab20")
+
+    ``size`` (width, height) is the default frame size in pixels. Everything is freed on
+    leaving the ``with`` block (or by :meth:`close`).
+    """
+
+    def __init__(self, size: Sequence[int] | str = (512, 512)) -> None:
+        self.size = check_size(size)
+        self._context: HeadlessContext | None = None
+        self._renderer: SceneRenderer | None = None
+        self._target: Framebuffer | None = None
+        self.last_stats: FrameStats | None = None
+
+    def __enter__(self) -> Renderer:
+        self.open()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def open(self) -> None:
+        """Make the context (done by ``with`` or the first :meth:`render`)."""
+        if self._context is not None:
+            return
+        from mirrorlab.gl.context import HeadlessContext
+        from mirrorlab.renderer import SceneRenderer
+
+        self._context = HeadlessContext()
+        try:
+            self._renderer = SceneRenderer(self._context.resources)
+        except BaseException:
+            self.close()
+            raise
+
+    def close(self) -> None:
+        """Free the GL objects and the context; the renderer can be opened again."""
+        if self._context is None:
+            return
+        self._context.make_current()
+        try:
+            if self._renderer is not None:
+                self._renderer.release()
+        finally:
+            self._renderer = None
+            self._target = None
+            self._context.release()
+            self._context = None
+
+    @property
+    def gl_renderer(self) -> str:
+        """The GL renderer string (e.g. ``llvmpipe (LLVM 15.0.6, 256 bits)``)."""
+        self.open()
+        assert self._context is not None
+        return self._context.info()["renderer"]
+
+    @property
+    def scene_renderer(self) -> SceneRenderer:
+        """The GL-side renderer (for checks and benchmarks)."""
+        self.open()
+        assert self._renderer is not None
+        return self._renderer
+
+    def _target_of(self, size: tuple[int, int]) -> Framebuffer:
+        from mirrorlab.gl.resources import Framebuffer
+
+        if self._target is None or self._target.size != size:
+            if self._target is not None:
+                self._target.release()
+            assert self._context is not None
+            self._target = Framebuffer(self._context.resources, *size)
+        return self._target
+
+    def render(self, scene: SceneLike, frame: int = 0, size: Sequence[int] | str | None = None,
+               use_plan: bool = True, tiny_pixels: float = TINY_PIXELS,
+               **options: Any) -> np.ndarray:
+        """Draw ``scene`` (a Scene, a file or a shipped name) posed at animation ``frame``,
+        with ``options`` applied (``camera=(x, y, z)``, ``method="stencil"``, ...: see
+        :mod:`mirrorlab.options`). ``use_plan`` False runs every pass. Returns the frame
+        as ``(height, width, 3)`` uint8 RGB, row 0 at the top; :attr:`last_stats` says
+        what ran."""
+        from mirrorlab.gl.context import check_gl_errors
+
+        posed = resolve_scene(scene, **options).at_frame(frame)
+        self.open()
+        assert self._context is not None and self._renderer is not None
+        self._context.make_current()
+        target = self._target_of(check_size(size) if size is not None else self.size)
+        self.last_stats = self._renderer.render(posed, target, use_plan, tiny_pixels)
+        image = target.read()
+        check_gl_errors(f"rendering scene {posed.name!r}")
+        return image
+
+    def frames(self, scene: SceneLike, frames: Sequence[int] | None = None,
+               size: Sequence[int] | str | None = None, use_plan: bool = True,
+               tiny_pixels: float = TINY_PIXELS,
+               **options: Any) -> Iterator[tuple[int, np.ndarray, FrameStats]]:
+        """``(frame, image, stats)`` for each frame of the animation (or ``frames``)."""
+        loaded = resolve_scene(scene, **options)
+        for frame in frames if frames is not None else range(loaded.frame_count):
+            image = self.render(loaded, frame, size, use_plan, tiny_pixels)
+            assert self.last_stats is not None
+            yield frame, image, self.last_stats
+
+    def plan(self, scene: SceneLike, frame: int = 0, size: Sequence[int] | str | None = None,
+             use_plan: bool = True, **options: Any) -> FramePlan:
+        """The plan the next :meth:`render` of this frame would run (nothing is drawn)."""
+        from mirrorlab.plan import plan_frame
+
+        posed = resolve_scene(scene, **options).at_frame(frame)
+        state = self._renderer.state if self._renderer is not None else None
+        return plan_frame(posed, check_size(size) if size is not None else self.size, state,
+                          use_plan)
+
+    def read_texture(self, reflector: str, slot: int = 0) -> np.ndarray:
+        """A planar reflector's capture texture from the last frame, ``(h, w, 3)`` uint8."""
+        renderer = self.scene_renderer
+        capture = renderer.pass_for(reflector)
+        textures = getattr(capture, "captures", None)
+        if textures is None or slot not in textures.textures:
+            raise ValueError(f"reflector {reflector!r} holds no capture texture")
+        return textures.textures[slot].read()
+
+
+def raytrace(scene: SceneLike, frame: int = 0, size: Sequence[int] | str = (512, 512),
+             **options: Any) -> np.ndarray:
+    """The ray-traced ground truth of ``scene`` (see :mod:`mirrorlab.raytrace`), as
+    ``(height, width, 3)`` uint8. Needs no OpenGL."""
+    from mirrorlab.raytrace import trace_scene
+
+    posed = resolve_scene(scene, **options).at_frame(frame)
+    return trace_scene(posed, check_size(size)).to_uint8()
+
+
+def render(scene: SceneLike = "lab20", size: Sequence[int] | str = (512, 512), frame: int = 0,
+           use_plan: bool = True, **options: Any) -> np.ndarray:
+    """Draw one frame headless and return it as ``(height, width, 3)`` uint8 RGB.
+
+    ``scene`` is a Scene, a scene file or a shipped scene's name (``lab20``, ``lab``,
+    ``cone``, ``sphere``, ...); ``options`` change it (``camera``, ``target``,
+    ``angles``, ``method``, ``capture``, ``env_size``, ``map_size``, ``max_bounces``,
+    ``cube_faces``, ``set``: see :mod:`mirrorlab.options`). ``method="raytrace"`` draws
+    the ray-traced ground truth instead. Each call makes and frees its own context;
+    keep a :class:`Renderer` for many frames.
+    """
+    if options.get("method") == "raytrace":
+        options.pop("method")
+        return raytrace(scene, frame, size, **options)
+    with Renderer(size) as renderer:
+        return renderer.render(scene, frame, use_plan=use_plan, **options)

@@ -1,0 +1,1 @@
+"""The work of each command-line command (``mirrorlab.cli`` only parses arguments)."""

@@ -1,0 +1,133 @@
+"""``mirrorlab render``: frames of a scene to PNG files, with what the planner ran and
+saved."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from mirrorlab.files import Outputs
+from mirrorlab.scene.model import Scene
+
+
+def frame_name(out_dir: Path, scene: Scene, frame: int) -> Path:
+    return out_dir / f"{scene.name}_{frame:04d}.png"
+
+
+def run_render(scene: Scene, size: tuple[int, int], out: Path, frames: list[int],
+               out_dir: Path | None = None, stats: bool = False, use_plan: bool = True,
+               save_env: Path | None = None, raytrace: bool = False,
+               say: Callable[[str], None] = print) -> int:
+    """Render ``frames`` of ``scene``; the last goes to ``out``, every one to ``out_dir``
+    too; all files are written together at the end, or none."""
+    start = time.perf_counter()
+    with Outputs() as outputs:
+        if raytrace:
+            from mirrorlab.raytrace import trace_scene
+
+            for frame in frames:
+                image = trace_scene(scene.at_frame(frame), size).to_uint8()
+                if out_dir is not None:
+                    outputs.add_png(frame_name(out_dir, scene, frame), image)
+            outputs.add_png(out, image)
+            if save_env is not None:
+                say(f"no capture texture with --method raytrace; {save_env} not written")
+            say(f"wrote {out} ({size[0]}x{size[1]}, {scene.name}, ray traced, "
+                f"{(time.perf_counter() - start) * 1e3:.0f} ms)")
+            return 0
+        from mirrorlab.api import Renderer
+
+        with Renderer(size) as renderer:
+            records = []
+            image = None
+            for frame in frames:
+                began = time.perf_counter()
+                image = renderer.render(scene, frame, use_plan=use_plan)
+                elapsed = (time.perf_counter() - began) * 1e3
+                assert renderer.last_stats is not None
+                records.append((frame, renderer.last_stats, elapsed))
+                if out_dir is not None:
+                    outputs.add_png(frame_name(out_dir, scene, frame), image)
+            assert image is not None
+            outputs.add_png(out, image)
+            environment = _environment(renderer, scene) if save_env is not None else None
+            if save_env is not None and environment is not None:
+                outputs.add_png(save_env, environment)
+            comparison = _unplanned_times(renderer, scene, frames) if stats and use_plan \
+                else None
+            gl_renderer = renderer.gl_renderer
+    last = records[-1][1]
+    total = (time.perf_counter() - start) * 1e3
+    say(f"wrote {out} ({size[0]}x{size[1]}, {scene.name}, "
+        f"{'frame' if len(frames) == 1 else 'frames'} {_span(frames)}, last frame's passes: "
+        f"{' + '.join(last.ran)}, {total:.0f} ms with start-up, {gl_renderer})")
+    if out_dir is not None:
+        say(f"wrote {len(frames)} frames to {out_dir}")
+    if save_env is not None:
+        if environment is None:
+            say(f"scene {scene.name} has no capture texture to save; {save_env} not written")
+        else:
+            say(f"wrote {save_env} (capture texture, {environment.shape[1]}x"
+                f"{environment.shape[0]})")
+    if stats:
+        _report(records, comparison, use_plan, say)
+    return 0
+
+
+def _span(frames: list[int]) -> str:
+    return str(frames[0]) if len(frames) == 1 else f"{frames[0]}-{frames[-1]}"
+
+
+def _environment(renderer, scene: Scene) -> np.ndarray | None:
+    """The capture texture the camera's view of the first capturing planar mirror used."""
+    from mirrorlab.scene.model import PlanarReflector
+
+    plan = renderer.last_stats.plan
+    for draw in plan.top.draws:
+        if isinstance(draw.reflector, PlanarReflector) and draw.mode == "texture":
+            return renderer.read_texture(draw.reflector.name, draw.slot)
+    for reflector in scene.reflectors:
+        if isinstance(reflector, PlanarReflector) and reflector.technique != "stencil":
+            try:
+                return renderer.read_texture(reflector.name)
+            except ValueError:
+                return None
+    return None
+
+
+def _unplanned_times(renderer, scene: Scene, frames: list[int]) -> list[tuple[int, float]]:
+    """Passes run and milliseconds of the same frames with every pass run (--no-plan)."""
+    times = []
+    for frame in frames:
+        began = time.perf_counter()
+        renderer.render(scene, frame, use_plan=False)
+        times.append((len(renderer.last_stats.plan.ran), (time.perf_counter() - began) * 1e3))
+    return times
+
+
+def _report(records, comparison, use_plan: bool, say: Callable[[str], None]) -> None:
+    for frame, stats, elapsed in records:
+        skipped = f"; skipped {', '.join(stats.skipped)}" if stats.skipped else ""
+        say(f"frame {frame}: ran {', '.join(stats.ran)}{skipped} ({elapsed:.1f} ms)")
+    ran = [len(stats.plan.ran) for _, stats, _ in records]
+    skipped = [len(stats.plan.skipped) for _, stats, _ in records]
+    times = [elapsed for _, _, elapsed in records]
+    label = "planned" if use_plan else "every pass (--no-plan)"
+    say(f"{label}: {sum(ran)} passes run and {sum(skipped)} skipped over {len(records)} "
+        f"frames; median {np.median(times):.2f} ms a frame")
+    if comparison:
+        passes = sum(count for count, _ in comparison)
+        unplanned = float(np.median([ms for _, ms in comparison]))
+        planned = float(np.median(times))
+        say(f"--no-plan on the same frames: {passes} passes run; median {unplanned:.2f} ms "
+            f"a frame; planning saved {passes - sum(ran)} passes and "
+            f"{unplanned - planned:.2f} ms a frame ({_share(planned, unplanned)})")
+
+
+def _share(planned: float, unplanned: float) -> str:
+    if unplanned <= 0:
+        return "no time to compare"
+    return f"{100.0 * (1.0 - planned / unplanned):.0f}% of the unplanned frame time"

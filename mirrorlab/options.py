@@ -1,0 +1,294 @@
+"""Options that change a scene, declared once: the command line makes a flag of each, the
+Python API takes each as a keyword (``mirrorlab.render(scene, camera=(1, 2, 3))``) and the
+demo takes the same flags. An option edits the scene's TOML document, and the scene is
+then read again, so an overridden value is checked exactly as a value in a file is.
+
+Also here: the parsing of sizes and numbers that every entry point shares. Numpy only.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import re
+import tomllib
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from mirrorlab.scene.loader import SceneError, from_document, scene_to_document
+from mirrorlab.scene.model import CAPTURE_MODES, CURVED_TECHNIQUES, PLANAR_TECHNIQUES, Scene
+
+MAX_SIZE = 8192
+"""Largest render or window side accepted, in pixels."""
+
+
+class OptionError(ValueError):
+    """A bad option value: ``option`` names it (``--camera``), ``problem`` says what was
+    expected."""
+
+    def __init__(self, option: str, problem: str) -> None:
+        self.option, self.problem = option, problem
+        super().__init__(f"{option}: {problem}")
+
+
+# --------------------------------------------------------------------------- parsing
+
+
+def parse_floats(option: str, text: str, count: int, names: str) -> tuple[float, ...]:
+    """``'1,2,3'`` -> (1.0, 2.0, 3.0); OptionError naming ``option`` otherwise."""
+    parts = [p.strip() for p in str(text).split(",")]
+    try:
+        values = tuple(float(p) for p in parts)
+    except ValueError:
+        values = ()
+    if len(values) != count:
+        raise OptionError(option, f"expected {count} numbers {names}, got {text!r}")
+    if not all(math.isfinite(v) for v in values):
+        raise OptionError(option, f"expected finite numbers {names}, got {text!r}")
+    return values
+
+
+def parse_size(option: str, text: str) -> tuple[int, int]:
+    """``'640x480'`` -> (640, 480); OptionError naming ``option`` otherwise."""
+    match = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", str(text))
+    if match:
+        width, height = int(match.group(1)), int(match.group(2))
+        if 1 <= width <= MAX_SIZE and 1 <= height <= MAX_SIZE:
+            return width, height
+    raise OptionError(option, f"expected WIDTHxHEIGHT with each from 1 to {MAX_SIZE}, "
+                      f"got {text!r}")
+
+
+def check_size(size: Sequence[int] | str, option: str = "size") -> tuple[int, int]:
+    """A (width, height) pair of whole numbers from 1 to :data:`MAX_SIZE` (or its
+    ``'WxH'`` text); OptionError naming ``option`` otherwise."""
+    if isinstance(size, str):
+        return parse_size(option, size)
+    try:
+        width, height = size
+    except (TypeError, ValueError):
+        raise OptionError(option, f"expected (width, height), got {size!r}") from None
+    for value in (width, height):
+        if isinstance(value, bool) or not isinstance(value, int | float) or value != int(
+                value) or not 1 <= value <= MAX_SIZE:
+            raise OptionError(option, f"expected two whole numbers from 1 to {MAX_SIZE}, "
+                              f"got {tuple(size)!r}")
+    return int(width), int(height)
+
+
+def parse_count(option: str, text: str, low: int = 1, high: int = MAX_SIZE) -> int:
+    """``'256'`` -> 256 when ``low <= value <= high``; OptionError naming ``option``."""
+    text = str(text).strip()
+    if text.isdigit() and low <= int(text) <= high:
+        return int(text)
+    raise OptionError(option, f"expected a whole number from {low} to {high}, got {text!r}")
+
+
+def parse_choice(option: str, text: str, choices: Sequence[str]) -> str:
+    if text not in choices:
+        raise OptionError(option, f"expected one of {', '.join(choices)}, got {text!r}")
+    return text
+
+
+# --------------------------------------------------------------------------- scene options
+
+
+@dataclass(frozen=True)
+class Option:
+    """A scene change: ``name`` (the API keyword; the flag is ``--name`` with dashes),
+    ``metavar`` and ``help`` for the command line, ``parse`` from command-line text to a
+    value, ``apply`` to write the value into a scene document."""
+
+    name: str
+    metavar: str
+    help: str
+    parse: Callable[[str, str], Any]
+    apply: Callable[[dict, Any, str], None]
+    writes: str = ""
+    """The start of the key paths it writes (to name it when the scene refuses a value)."""
+    repeat: bool = False
+
+    @property
+    def flag(self) -> str:
+        return "--" + self.name.replace("_", "-")
+
+
+def _vec3(names: str) -> Callable[[str, str], tuple[float, ...]]:
+    return lambda flag, text: parse_floats(flag, text, 3, names)
+
+
+def _set_camera(field: str) -> Callable[[dict, Any, str], None]:
+    def apply(document: dict, value: Any, flag: str) -> None:
+        document.setdefault("camera", {})[field] = _plain(value)
+    return apply
+
+
+def _apply_angles(document: dict, value: Any, flag: str) -> None:
+    robots = [o for o in document.get("objects", []) if o.get("type") == "robot"]
+    if not robots:
+        raise OptionError(flag, f"scene {document.get('name')!r} has no robot to pose")
+    for robot in robots:
+        robot["angles"] = _plain(value)
+
+
+def _apply_technique(document: dict, value: Any, flag: str) -> None:
+    planar = value in PLANAR_TECHNIQUES
+    kind = "planar mirror" if planar else "curved reflector"
+    targets = [r for r in document.get("reflectors", [])
+               if (r.get("technique") in PLANAR_TECHNIQUES) == planar]
+    if not targets:
+        raise OptionError(flag, f"{value} is a technique for a {kind}, and scene "
+                          f"{document.get('name')!r} has none")
+    for reflector in targets:
+        reflector["technique"] = value
+        if not planar and "source" in reflector and value not in (
+                "cube", "sphere", "sphere-vertex", "sphere-texgen", "normal"):
+            del reflector["source"]
+        if planar and value != "ortho":
+            reflector.pop("ortho", None)
+
+
+def _apply_to(kind: str, key: str) -> Callable[[dict, Any, str], None]:
+    def apply(document: dict, value: Any, flag: str) -> None:
+        planar = kind == "planar"
+        targets = [r for r in document.get("reflectors", [])
+                   if (r.get("technique") in PLANAR_TECHNIQUES) == planar]
+        if not targets:
+            raise OptionError(flag, f"scene {document.get('name')!r} has no "
+                              f"{'planar mirror' if planar else 'curved reflector'}")
+        for reflector in targets:
+            reflector[key] = value
+    return apply
+
+
+def _apply_cube_faces(document: dict, value: Any, flag: str) -> None:
+    folder = Path(value).resolve()
+    if not folder.is_dir():
+        raise OptionError(flag, f"{value!r} is not a folder of six cube faces")
+    document["background"] = {"cube_faces": str(folder)}
+
+
+def _apply_set(document: dict, value: Any, flag: str) -> None:
+    for key, item in value:
+        set_key(document, key, item, flag)
+
+
+def _parse_set(flag: str, text: str) -> tuple[tuple[str, Any], ...]:
+    key, sep, raw = str(text).partition("=")
+    if not sep or not key.strip():
+        raise OptionError(flag, f"expected KEY=VALUE (e.g. camera.fovy=30), got {text!r}")
+    try:
+        value = tomllib.loads(f"value = {raw}")["value"]
+    except tomllib.TOMLDecodeError:
+        value = raw.strip()  # a bare word: a string
+    return ((key.strip(), value),)
+
+
+_TECHNIQUE_NAMES = PLANAR_TECHNIQUES + CURVED_TECHNIQUES
+
+OPTIONS: tuple[Option, ...] = (
+    Option("camera", "X,Y,Z", "viewer position (the scene's camera.eye)",
+           _vec3("X,Y,Z"), _set_camera("eye"), "camera.eye"),
+    Option("target", "X,Y,Z", "point the viewer looks at (camera.target)",
+           _vec3("X,Y,Z"), _set_camera("target"), "camera.target"),
+    Option("fovy", "DEGREES", "vertical field of view (camera.fovy)",
+           lambda flag, text: parse_floats(flag, text, 1, "DEGREES")[0], _set_camera("fovy"),
+           "camera.fovy"),
+    Option("angles", "BASE,LOWER,UPPER", "the robot's joint angles in degrees",
+           _vec3("BASE,LOWER,UPPER"), _apply_angles, "objects"),
+    Option("method", "NAME", "technique for every reflector of its kind: planar "
+           f"{', '.join(PLANAR_TECHNIQUES)}; curved {', '.join(CURVED_TECHNIQUES)}",
+           lambda flag, text: parse_choice(flag, text, _TECHNIQUE_NAMES), _apply_technique,
+           "reflectors"),
+    Option("capture", "MODE", "how planar captures reach their texture: copy "
+           "(glCopyTexImage2D) or fbo (drawn into it)",
+           lambda flag, text: parse_choice(flag, text, CAPTURE_MODES),
+           _apply_to("planar", "capture"), "reflectors"),
+    Option("env_size", "N", "planar capture texture side in pixels (default: the view's)",
+           lambda flag, text: parse_count(flag, text, 1, 4096),
+           _apply_to("planar", "texture_size"), "reflectors"),
+    Option("map_size", "N", "curved reflectors' map side in texels",
+           lambda flag, text: parse_count(flag, text, 4, 4096),
+           _apply_to("curved", "map_size"), "reflectors"),
+    Option("max_bounces", "N", "how deep reflections of reflections go (0: plain)",
+           lambda flag, text: parse_count(flag, text, 0, 6),
+           lambda document, value, flag: document.__setitem__("max_bounces", value),
+           "max_bounces"),
+    Option("cube_faces", "DIR", "six pictures DIR/{px,nx,py,ny,pz,nz}.png as the background "
+           "(and the static cube maps)", lambda flag, text: text, _apply_cube_faces,
+           "background"),
+    Option("set", "KEY=VALUE", "set any scene key, as in the file (e.g. camera.fovy=30, "
+           "'reflectors[0].technique=\"stencil\"'); repeatable", _parse_set, _apply_set,
+           repeat=True),
+)
+OPTION_NAMES = {option.name: option for option in OPTIONS}
+
+
+def apply_options(scene: Scene, values: Mapping[str, Any]) -> Scene:
+    """``scene`` with the options ``values`` (by :attr:`Option.name`) applied; the result is
+    checked like a scene file. OptionError naming the option for a bad value."""
+    chosen = {name: value for name, value in values.items() if value is not None}
+    if not chosen:
+        return scene
+    document = scene_to_document(scene)
+    for name, value in chosen.items():
+        option = OPTION_NAMES.get(name)
+        if option is None:
+            raise TypeError(f"unknown option {name!r}; options are {', '.join(OPTION_NAMES)}")
+        if name == "set" and value and isinstance(value[0], str):
+            value = tuple(_parse_set(option.flag, item)[0] for item in value)
+        option.apply(document, value, option.flag)
+    try:
+        return from_document(document, scene.source)
+    except SceneError as exc:
+        raise OptionError(_blame(chosen, exc.key), f"{exc.key}: {exc.problem}" if exc.key
+                          else exc.problem) from None
+
+
+def _blame(chosen: Mapping[str, Any], key: str) -> str:
+    """The flags of the chosen options that wrote ``key`` (all of them if none did)."""
+    named = [OPTION_NAMES[name].flag for name in chosen
+             if OPTION_NAMES[name].writes and key.startswith(OPTION_NAMES[name].writes)]
+    return " / ".join(named or [OPTION_NAMES[name].flag for name in chosen])
+
+
+def set_key(document: dict, key: str, value: Any, flag: str = "--set") -> None:
+    """Set ``key`` (``camera.eye``, ``reflectors[1].technique``) in ``document``."""
+    if not re.fullmatch(r"[A-Za-z_][\w-]*(\[\d+\])*(\.[A-Za-z_][\w-]*(\[\d+\])*)*", key):
+        raise OptionError(flag, f"expected a key path such as camera.eye or "
+                          f"reflectors[0].technique, got {key!r}")
+    parts = re.findall(r"([A-Za-z_][\w-]*)|\[(\d+)\]", key)
+    node: Any = document
+    path = [name if name else int(index) for name, index in parts]
+    if not path:
+        raise OptionError(flag, f"expected a key path such as camera.eye, got {key!r}")
+    for step, following in itertools.pairwise(path):
+        if isinstance(step, int):
+            if not isinstance(node, list) or step >= len(node):
+                raise OptionError(flag, f"{key}: no item [{step}] there")
+            node = node[step]
+        else:
+            if not isinstance(node, dict):
+                raise OptionError(flag, f"{key}: {step!r} is not inside a table")
+            node = node.setdefault(step, [] if isinstance(following, int) else {})
+    last = path[-1]
+    if isinstance(last, int):
+        if not isinstance(node, list) or last >= len(node):
+            raise OptionError(flag, f"{key}: no item [{last}] there")
+        node[last] = value
+    elif isinstance(node, dict):
+        node[last] = value
+    else:
+        raise OptionError(flag, f"{key}: {last!r} is not inside a table")
+
+
+def _plain(value: Any) -> Any:
+    if hasattr(value, "tolist"):  # numpy arrays and scalars
+        value = value.tolist()
+    if isinstance(value, tuple | list):
+        return [_plain(v) for v in value]
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        return float(value)
+    return value

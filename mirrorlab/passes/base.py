@@ -1,0 +1,164 @@
+"""What every pass shares: GL copies of meshes, pictures and programs made once per
+context (:class:`SharedResources`), the per-view GL state (:func:`apply_view_state`), and
+the protocol a reflector's technique follows (:class:`ReflectorPass`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
+
+from mirrorlab.gl.context import ResourceRegistry
+from mirrorlab.gl.opengl import GL
+from mirrorlab.gl.resources import Framebuffer, MeshBuffer, Program, Texture2D
+from mirrorlab.scene.backgrounds import load_picture
+from mirrorlab.scene.mesh import MeshData, load_mesh
+
+if TYPE_CHECKING:
+    from mirrorlab.gl.resources import RenderTarget
+    from mirrorlab.plan import PlannedPass, ReflectorDraw, ViewPlan
+    from mirrorlab.scene.model import Reflector, Scene
+    from mirrorlab.views import View
+
+NO_CLIP = (0.0, 0.0, 0.0, 1.0)
+"""A plane every point is in front of: what the shaders get when nothing is clipped."""
+
+
+class SharedResources:
+    """GL objects that many passes and scenes use, made on first use and kept until
+    :meth:`release`: meshes by file, textures by picture file, programs by shader pair,
+    and scratch framebuffers by size."""
+
+    def __init__(self, registry: ResourceRegistry) -> None:
+        self.registry = registry
+        self._meshes: dict[Path, tuple[MeshData, MeshBuffer]] = {}
+        self._textures: dict[Path, Texture2D] = {}
+        self._programs: dict[tuple, Program] = {}
+        self._scratch: dict[tuple[int, int], Framebuffer] = {}
+
+    def mesh(self, path: Path) -> MeshBuffer:
+        return self.mesh_data(path)[1]
+
+    def mesh_data(self, path: Path) -> tuple[MeshData, MeshBuffer]:
+        if path not in self._meshes:
+            data = load_mesh(path)
+            self._meshes[path] = (data, MeshBuffer(self.registry, data.interleaved(),
+                                                   data.indices))
+        return self._meshes[path]
+
+    def texture(self, path: Path) -> Texture2D:
+        """A mipmapped, repeating texture of the picture file ``path``."""
+        if path not in self._textures:
+            self._textures[path] = Texture2D.from_image(self.registry, load_picture(path))
+        return self._textures[path]
+
+    def program(self, vertex: str, fragment: str, **defines: str | int) -> Program:
+        key = (vertex, fragment, tuple(sorted(defines.items())))
+        if key not in self._programs:
+            self._programs[key] = Program(self.registry, vertex, fragment, defines)
+        return self._programs[key]
+
+    def scratch(self, size: tuple[int, int]) -> Framebuffer:
+        """A colour + depth/stencil framebuffer of ``size`` to draw a capture into."""
+        if size not in self._scratch:
+            self._scratch[size] = Framebuffer(self.registry, *size)
+        return self._scratch[size]
+
+    def release(self) -> None:
+        for _, mesh in self._meshes.values():
+            mesh.release()
+        for resource in (*self._textures.values(), *self._programs.values(),
+                         *self._scratch.values()):
+            resource.release()
+        self._meshes.clear()
+        self._textures.clear()
+        self._programs.clear()
+        self._scratch.clear()
+
+
+def set_view_uniforms(program: Program, view: View) -> None:
+    """``view_projection`` and ``clip_plane`` of ``view`` on the bound ``program``."""
+    program.set_mat4("view_projection", view.view_projection)
+    program.set_vec4("clip_plane", NO_CLIP if view.clip_plane is None else view.clip_plane)
+
+
+def apply_view_state(view: View, stencil_level: int) -> None:
+    """Winding, clipping and stencil test for drawing ``view`` at ``stencil_level`` (0: the
+    whole target; k > 0: only where a stencil mirror k levels deep marked it)."""
+    GL.glFrontFace(GL.GL_CW if view.mirrored else GL.GL_CCW)
+    if view.clip_plane is None:
+        GL.glDisable(GL.GL_CLIP_DISTANCE0)
+    else:
+        GL.glEnable(GL.GL_CLIP_DISTANCE0)
+    if stencil_level == 0:
+        GL.glDisable(GL.GL_STENCIL_TEST)
+    else:
+        GL.glEnable(GL.GL_STENCIL_TEST)
+        GL.glStencilFunc(GL.GL_EQUAL, stencil_level, 0xFF)
+        GL.glStencilOp(GL.GL_KEEP, GL.GL_KEEP, GL.GL_KEEP)
+    GL.glEnable(GL.GL_DEPTH_TEST)
+    GL.glDepthFunc(GL.GL_LESS)
+    GL.glEnable(GL.GL_CULL_FACE)
+    GL.glCullFace(GL.GL_BACK)
+
+
+def reset_state() -> None:
+    """Leave GL as a frame found it: default winding, no clipping, no stencil test."""
+    GL.glFrontFace(GL.GL_CCW)
+    GL.glDisable(GL.GL_CLIP_DISTANCE0)
+    GL.glDisable(GL.GL_STENCIL_TEST)
+    GL.glStencilMask(0xFF)
+    GL.glColorMask(GL.GL_TRUE, GL.GL_TRUE, GL.GL_TRUE, GL.GL_TRUE)
+    GL.glDepthMask(GL.GL_TRUE)
+    GL.glDepthFunc(GL.GL_LESS)
+    GL.glCullFace(GL.GL_BACK)
+
+
+class ViewDrawer(Protocol):
+    """What a pass may ask of the renderer: draw a planned view into a target, at a stencil
+    level, and the scene being drawn."""
+
+    scene: Scene
+    shared: SharedResources
+
+    def draw_view(self, plan: ViewPlan, target: RenderTarget, stencil_level: int = 0) -> int:
+        ...
+
+
+class ReflectorPass(Protocol):
+    """A reflector's technique: made for one reflector (its geometry may move between
+    frames, so each call gets the current one through ``step`` or ``draw``), it keeps
+    the reflector's textures up to date and draws the reflector into a view."""
+
+    def update(self, step: PlannedPass, reflector: Reflector, renderer: ViewDrawer,
+               frame_target: RenderTarget) -> int:
+        """Make the texture ``step`` asks for (a capture or a bake) in ``step.slot``;
+        ``frame_target`` may be drawn into first (nothing of the frame is there yet).
+        Returns the number of draw calls."""
+        ...
+
+    def draw(self, draw: ReflectorDraw, view: View, renderer: ViewDrawer,
+             target: RenderTarget, stencil_level: int) -> int:
+        """Draw the reflector into the bound ``target`` as ``draw`` says; returns the number
+        of draw calls."""
+        ...
+
+    def release(self) -> None:
+        """Free every GL object this pass made (not the shared ones)."""
+        ...
+
+
+def light_uniforms(program: Program, scene: Scene) -> None:
+    """The scene's lights on the bound ``program`` (see lighting.glsl)."""
+    count = len(scene.lights)
+    directions = np.zeros((4, 3), dtype=np.float32)
+    colors = np.zeros((4, 3), dtype=np.float32)
+    for i, light in enumerate(scene.lights):
+        direction = np.asarray(light.direction, dtype=np.float64)
+        directions[i] = direction / np.linalg.norm(direction)
+        colors[i] = np.asarray(light.color, dtype=np.float64) * light.intensity
+    program.set_int("light_count", count)
+    GL.glUniform3fv(program.location("light_directions"), 4, directions)
+    GL.glUniform3fv(program.location("light_colors"), 4, colors)
+    program.set_float("ambient", scene.ambient)

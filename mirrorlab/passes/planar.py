@@ -1,0 +1,133 @@
+"""What the planar techniques share: the mirror's quad (textured front, unlit backing,
+plain surface, stencil mask) and the slot textures a capture is copied or drawn into."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mirrorlab.gl.opengl import GL
+from mirrorlab.gl.resources import MeshBuffer, RenderTarget, Texture2D, TextureFramebuffer
+from mirrorlab.passes.base import SharedResources, ViewDrawer, set_view_uniforms
+from mirrorlab.plan import ReflectorDraw, ViewPlan
+from mirrorlab.scene.model import Background, PlanarReflector
+from mirrorlab.views import View
+
+
+def mirror_vertices(reflector: PlanarReflector) -> tuple[np.ndarray, np.ndarray]:
+    """The quad as ``(4, 8)`` interleaved vertices (its ortho-capture texture coordinates
+    at the corners) and ``(2, 3)`` triangle indices."""
+    normals = np.broadcast_to(reflector.normal, (4, 3))
+    vertices = np.hstack([reflector.corner_array, normals, reflector.texcoords()])
+    return vertices.astype(np.float32), np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32)
+
+
+class PlanarPass:
+    """The parts of a planar technique that do not depend on the technique: drawing the
+    mirror plain, its back alone, or its front with a texture."""
+
+    def __init__(self, shared: SharedResources, reflector: PlanarReflector,
+                 background: Background | None = None) -> None:
+        self.shared = shared
+        self.reflector = reflector
+        self.quad = MeshBuffer(shared.registry, *mirror_vertices(reflector))
+        self.mirror_program = shared.program("mirror.vert", "mirror.frag")
+        self.flat_program = shared.program("flat.vert", "flat.frag")
+        self.mirror_program.use()
+        self.mirror_program.set_int("environment", 0)
+
+    def release(self) -> None:
+        self.quad.release()
+
+    def flat_quad(self, view: View, color, far_depth: bool) -> None:
+        """The quad in one flat colour (``far_depth``: at the far plane's depth)."""
+        program = self.flat_program
+        program.use()
+        set_view_uniforms(program, view)
+        program.set_vec3("color", color)
+        program.set_int("far_depth", far_depth)
+        self.quad.draw()
+
+    def draw_backing(self, view: View) -> int:
+        """The mirror's back face in its unlit backing colour; returns the draw count."""
+        GL.glEnable(GL.GL_CULL_FACE)
+        GL.glCullFace(GL.GL_FRONT)
+        self.flat_quad(view, self.reflector.backing, far_depth=False)
+        GL.glCullFace(GL.GL_BACK)
+        return 1
+
+    def draw_textured(self, view: View, texture: Texture2D,
+                      texture_matrix: np.ndarray | None) -> int:
+        """Front textured (by the quad's own coordinates, or projectively through
+        ``texture_matrix`` ``(4, 4)``), back in its backing colour; returns 1."""
+        program = self.mirror_program
+        GL.glDisable(GL.GL_CULL_FACE)
+        program.use()
+        set_view_uniforms(program, view)
+        program.set_vec3("backing_color", self.reflector.backing)
+        program.set_int("projective", texture_matrix is not None)
+        if texture_matrix is not None:
+            program.set_mat4("texture_matrix", texture_matrix)
+        texture.bind(0)
+        self.quad.draw()
+        GL.glEnable(GL.GL_CULL_FACE)
+        return 1
+
+    def draw(self, draw: ReflectorDraw, view: View, renderer: ViewDrawer,
+             target: RenderTarget, stencil_level: int) -> int:
+        """The modes every planar technique shares: ``plain`` and ``back``."""
+        if draw.mode == "back":
+            return self.draw_backing(view)
+        if draw.mode == "plain":
+            drawer = renderer.drawer  # type: ignore[attr-defined]
+            return drawer.draw_plain(renderer.scene, draw.reflector, view,
+                                     self.quad) + self.draw_backing(view)
+        return self.draw_own(draw, view, renderer, target, stencil_level)
+
+    def draw_own(self, draw: ReflectorDraw, view: View, renderer: ViewDrawer,
+                 target: RenderTarget, stencil_level: int) -> int:  # pragma: no cover
+        raise NotImplementedError
+
+
+class CaptureTextures:
+    """The slot textures of a planar capture (blank, level 0 only, GL_LINEAR, clamped:
+    the lab's ENVIRONMENT texture) and how a capture reaches them: ``copy`` draws into a
+    colour framebuffer and ``glCopyTexImage2D``-s it (the frame's own when the sizes
+    match, as the lab does), ``fbo`` draws straight into the texture."""
+
+    def __init__(self, shared: SharedResources, mode: str) -> None:
+        self.shared = shared
+        self.mode = mode
+        self.textures: dict[int, Texture2D] = {}
+        self._framebuffers: dict[int, TextureFramebuffer] = {}
+
+    def texture(self, slot: int) -> Texture2D:
+        if slot not in self.textures:
+            self.textures[slot] = Texture2D.blank(self.shared.registry, 1, 1)
+        return self.textures[slot]
+
+    def capture(self, slot: int, plan: ViewPlan, renderer: ViewDrawer,
+                frame_target: RenderTarget) -> int:
+        """Draw ``plan`` into slot ``slot``'s texture; returns the number of draw calls."""
+        size = plan.view.size
+        texture = self.texture(slot)
+        if self.mode == "copy":
+            target: RenderTarget = (frame_target if tuple(frame_target.size) == size
+                                    else self.shared.scratch(size))
+            draws = renderer.draw_view(plan, target)
+            target.bind()
+            texture.copy_from_framebuffer(*size)
+            return draws
+        framebuffer = self._framebuffers.get(slot)
+        if framebuffer is None or framebuffer.size != size:
+            if framebuffer is not None:
+                framebuffer.release()
+            texture.allocate(*size)
+            framebuffer = self._framebuffers[slot] = TextureFramebuffer(self.shared.registry,
+                                                                        texture)
+        return renderer.draw_view(plan, framebuffer)
+
+    def release(self) -> None:
+        for resource in (*self._framebuffers.values(), *self.textures.values()):
+            resource.release()
+        self._framebuffers.clear()
+        self.textures.clear()

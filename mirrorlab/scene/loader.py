@@ -1,0 +1,775 @@
+"""Scene files: TOML to :class:`~mirrorlab.scene.model.Scene` and back.
+
+A scene file is read with :mod:`tomllib` into a plain document (nested dicts and lists),
+checked key by key, and turned into a Scene. Every problem is a :class:`SceneError`
+whose one-line message names the file, the key path (``reflectors[1].corners``) and what
+was expected. :func:`scene_to_document` and :func:`dumps` write a Scene back; reading
+that again gives an equal Scene.
+
+File names in a scene (meshes, textures, cube-face folders) are relative to the scene
+file's folder. The format is described key by key in README.md ("Scenes").
+Numpy only.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import tomllib
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mirrorlab.paths import REPO_DIR
+from mirrorlab.scene.animation import CAMERA_FIELDS, OBJECT_FIELDS, REFLECTOR_FIELDS
+from mirrorlab.scene.model import (
+    CAPTURE_MODES,
+    CURVED_TECHNIQUES,
+    DEFAULT_BACKING,
+    DEFAULT_PLAIN_COLOR,
+    PLANAR_TECHNIQUES,
+    Animation,
+    Background,
+    Camera,
+    CurvedReflector,
+    Keyframe,
+    Light,
+    MeshObject,
+    OrthoCapture,
+    PlanarReflector,
+    RobotObject,
+    Scene,
+    Transform,
+)
+
+SCENES_DIR = REPO_DIR / "scenes"
+"""The shipped scene files."""
+DEFAULT_SCENE = "lab20"
+SCENE_ALIASES = {"lab": "lab20", "cone": "spheremap_cone", "sphere": "chrome_sphere"}
+"""Short names kept from before scenes were files."""
+MAX_LIGHTS = 4
+"""Directional lights the scene shader takes."""
+MAX_BOUNCES = 6
+MAX_MAP_SIZE = 4096
+MAX_FRAMES = 100_000
+
+_TOP_KEYS = ("name", "description", "max_bounces", "ambient", "camera", "background",
+             "lights", "objects", "reflectors", "animation")
+_CAMERA_KEYS = ("eye", "target", "up", "fovy", "near", "far")
+_BACKGROUND_SOURCES = ("color", "sky", "cube_faces", "sphere_map")
+_LIGHT_KEYS = ("direction", "intensity", "color")
+_TRANSFORM_KEYS = ("position", "rotation", "scale")
+_MESH_KEYS = ("name", "type", "mesh", *_TRANSFORM_KEYS, "color", "texture")
+_ROBOT_KEYS = ("name", "type", "angles", *_TRANSFORM_KEYS)
+_PLANAR_KEYS = ("name", "technique", "corners", "center", "normal", "width", "height", "up",
+                "capture", "texture_size", "ortho", "color", "backing")
+_CURVED_KEYS = ("name", "technique", "mesh", *_TRANSFORM_KEYS, "map_size", "source",
+                "capture_center", "color")
+_ORTHO_KEYS = ("eye", "target", "up", "extents")
+_KEYFRAME_KEYS = ("frame", "camera", "objects", "reflectors")
+CUBE_FACE_FILES = ("px", "nx", "py", "ny", "pz", "nz")
+
+
+class SceneError(ValueError):
+    """A scene file, or a change to a scene, that cannot be used: ``file``, ``key`` (a key
+    path such as ``reflectors[1].corners``, empty for the whole file) and ``problem``."""
+
+    def __init__(self, file: str, key: str, problem: str) -> None:
+        self.file, self.key, self.problem = file, key, problem
+        where = f"{file}: {key}" if key else file
+        super().__init__(f"{where}: {problem}")
+
+
+# --------------------------------------------------------------------------- reading
+
+
+def scene_path(name_or_path: str | Path) -> Path:
+    """The file a scene name stands for: a path to a file as it is, or a shipped scene's
+    name (``lab20``, or a short name ``lab``/``cone``/``sphere``). SceneError when there
+    is no such file."""
+    text = str(name_or_path)
+    candidate = Path(text)
+    if candidate.suffix == ".toml" or candidate.is_file() or "/" in text:
+        if not candidate.is_file():
+            raise SceneError(text, "", "no such scene file")
+        return candidate
+    stem = SCENE_ALIASES.get(text, text)
+    shipped = SCENES_DIR / f"{stem}.toml"
+    if shipped.is_file():
+        return shipped
+    raise SceneError(text, "", f"unknown scene; expected a .toml file or one of "
+                     f"{', '.join(shipped_scene_names())}")
+
+
+def shipped_scene_names() -> list[str]:
+    """Names of the scene files in ``scenes/``, and the short names."""
+    names = sorted(p.stem for p in SCENES_DIR.glob("*.toml"))
+    return names + sorted(SCENE_ALIASES)
+
+
+def load_scene(name_or_path: str | Path) -> Scene:
+    """Read a scene file (or a shipped scene by name); SceneError on any problem."""
+    path = scene_path(name_or_path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneError(str(path), "", f"cannot be read ({exc})") from None
+    return loads(text, path)
+
+
+def loads(text: str, source: Path | str | None = None) -> Scene:
+    """A scene from TOML ``text``; ``source`` names the file for messages and relative
+    paths (None: ``<string>``, paths relative to the working folder)."""
+    label = str(source) if source is not None else "<string>"
+    try:
+        document = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(label, "", f"not valid TOML ({exc})") from None
+    except (ValueError, RecursionError) as exc:
+        raise SceneError(label, "", f"not valid TOML ({exc})") from None
+    return from_document(document, Path(source) if source is not None else None)
+
+
+def from_document(document: Mapping[str, Any], source: Path | None = None) -> Scene:
+    """A scene from a TOML document (nested dicts and lists, as :mod:`tomllib` gives)."""
+    return _Reader(source).scene(document)
+
+
+# --------------------------------------------------------------------------- writing
+
+
+def scene_to_document(scene: Scene, base: Path | None = None) -> dict[str, Any]:
+    """``scene`` as a TOML document, file names relative to ``base`` (default: the folder
+    of the scene's own file, else the working folder). Every value is written out, so
+    nothing depends on defaults."""
+    folder = base if base is not None else (
+        scene.source.parent if scene.source is not None else Path.cwd())
+
+    def rel(path: Path) -> str:
+        return _relative(path, folder)
+
+    document: dict[str, Any] = {"name": scene.name}
+    if scene.description:
+        document["description"] = scene.description
+    document["max_bounces"] = scene.max_bounces
+    document["ambient"] = scene.ambient
+    document["camera"] = _camera_document(scene.camera)
+    background = scene.background
+    if background.kind == "color":
+        document["background"] = {"color": list(background.color)}
+    elif background.kind == "sky":
+        document["background"] = {"sky": "procedural"}
+    else:
+        assert background.path is not None
+        document["background"] = {background.kind: rel(background.path)}
+        if background.sphere_map_camera is not None:
+            camera = background.sphere_map_camera
+            document["background"]["sphere_map_camera"] = {
+                "eye": list(camera.eye), "target": list(camera.target), "up": list(camera.up)}
+    document["lights"] = [{"direction": list(light.direction), "intensity": light.intensity,
+                           "color": list(light.color)} for light in scene.lights]
+    objects = []
+    for item in scene.objects:
+        if isinstance(item, RobotObject):
+            entry: dict[str, Any] = {"name": item.name, "type": "robot",
+                                     "angles": list(item.angles)}
+        else:
+            entry = {"name": item.name, "type": "mesh", "mesh": rel(item.mesh),
+                     "color": list(item.color)}
+            if item.texture is not None:
+                entry["texture"] = rel(item.texture)
+        entry.update(_transform_document(item.transform))
+        objects.append(entry)
+    document["objects"] = objects
+    reflectors = []
+    for reflector in scene.reflectors:
+        if isinstance(reflector, PlanarReflector):
+            entry = {"name": reflector.name, "technique": reflector.technique,
+                     "corners": [list(c) for c in reflector.corners],
+                     "capture": reflector.capture}
+            if reflector.texture_size is not None:
+                entry["texture_size"] = reflector.texture_size
+            if reflector.ortho is not None:
+                ortho = reflector.ortho
+                entry["ortho"] = {"eye": list(ortho.eye), "target": list(ortho.target),
+                                  "up": list(ortho.up), "extents": list(ortho.extents)}
+            entry["color"] = list(reflector.color)
+            entry["backing"] = list(reflector.backing)
+        else:
+            entry = {"name": reflector.name, "technique": reflector.technique,
+                     "mesh": rel(reflector.mesh), **_transform_document(reflector.transform),
+                     "map_size": reflector.map_size,
+                     "capture_center": list(reflector.capture_center),
+                     "color": list(reflector.color)}
+            if reflector.source is not None:
+                entry["source"] = rel(reflector.source)
+        reflectors.append(entry)
+    document["reflectors"] = reflectors
+    if scene.animation is not None:
+        keyframes = []
+        for key in scene.animation.keyframes:
+            entry = {"frame": key.frame}
+            for group in ("camera", "objects", "reflectors"):
+                values = getattr(key, group)
+                if values:
+                    entry[group] = _plain(values)
+            keyframes.append(entry)
+        document["animation"] = {"frames": scene.animation.frames, "keyframes": keyframes}
+    return document
+
+
+def dumps(scene: Scene, base: Path | None = None) -> str:
+    """``scene`` as TOML text (see :func:`scene_to_document`)."""
+    import tomlkit
+
+    return tomlkit.dumps(scene_to_document(scene, base))
+
+
+def _camera_document(camera: Camera) -> dict[str, Any]:
+    return {"eye": list(camera.eye), "target": list(camera.target), "up": list(camera.up),
+            "fovy": camera.fovy, "near": camera.near, "far": camera.far}
+
+
+def _transform_document(transform: Transform) -> dict[str, Any]:
+    return {"position": list(transform.position), "rotation": list(transform.rotation),
+            "scale": list(transform.scale)}
+
+
+def _plain(value):
+    if isinstance(value, Mapping):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, tuple | list):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _relative(path: Path, folder: Path) -> str:
+    try:
+        return Path(path).resolve().relative_to(folder.resolve()).as_posix()
+    except ValueError:
+        import os
+
+        return Path(os.path.relpath(Path(path).resolve(), folder.resolve())).as_posix()
+
+
+# --------------------------------------------------------------------------- checking
+
+
+class _Reader:
+    """Turns a document into a Scene, raising SceneError at the first problem."""
+
+    def __init__(self, source: Path | None) -> None:
+        self.source = source
+        self.label = str(source) if source is not None else "<string>"
+        self.folder = source.parent if source is not None else Path.cwd()
+
+    def fail(self, key: str, problem: str) -> SceneError:
+        return SceneError(self.label, key, problem)
+
+    # ------------------------------------------------------------- value checks
+
+    def table(self, value: Any, key: str, known: tuple[str, ...]) -> Mapping[str, Any]:
+        if not isinstance(value, Mapping):
+            raise self.fail(key, f"expected a table, got {_kind(value)}")
+        for name in value:
+            if name not in known:
+                where = f"{key}.{name}" if key else str(name)
+                close = difflib.get_close_matches(str(name), known, n=1, cutoff=0.6)
+                hint = f"; did you mean {close[0]!r}?" if close else (
+                    f"; expected one of {', '.join(known)}")
+                raise self.fail(where, f"unknown key{hint}")
+        return value
+
+    def array(self, value: Any, key: str) -> list[Any]:
+        if not isinstance(value, list):
+            raise self.fail(key, f"expected an array, got {_kind(value)}")
+        return value
+
+    def number(self, value: Any, key: str, low: float | None = None,
+               high: float | None = None, low_open: bool = False) -> float:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise self.fail(key, f"expected a number, got {_kind(value)}")
+        try:
+            number = float(value)
+        except OverflowError:
+            raise self.fail(key, f"number {value} is too large") from None
+        if not math.isfinite(number):
+            raise self.fail(key, f"expected a finite number, got {value}")
+        if low is not None and (number < low or (low_open and number == low)):
+            bound = f"greater than {low:g}" if low_open else f"at least {low:g}"
+            raise self.fail(key, f"expected a number {bound}, got {value}")
+        if high is not None and number > high:
+            raise self.fail(key, f"expected a number at most {high:g}, got {value}")
+        return number
+
+    def integer(self, value: Any, key: str, low: int, high: int) -> int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self.fail(key, f"expected a whole number, got {_kind(value)}")
+        if not low <= value <= high:
+            raise self.fail(key, f"expected a whole number from {low} to {high}, got {value}")
+        return int(value)
+
+    def text(self, value: Any, key: str) -> str:
+        if not isinstance(value, str):
+            raise self.fail(key, f"expected a string, got {_kind(value)}")
+        return value
+
+    def choice(self, value: Any, key: str, choices: tuple[str, ...]) -> str:
+        text = self.text(value, key)
+        if text not in choices:
+            close = difflib.get_close_matches(text, choices, n=1, cutoff=0.6)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise self.fail(key, f"expected one of {', '.join(choices)}, got {text!r}{hint}")
+        return text
+
+    def vector(self, value: Any, key: str, count: int = 3) -> tuple[float, ...]:
+        items = self.array(value, key)
+        if len(items) != count:
+            raise self.fail(key, f"expected {count} numbers, got {len(items)}")
+        return tuple(self.number(v, f"{key}[{i}]") for i, v in enumerate(items))
+
+    def vec3(self, value: Any, key: str) -> tuple[float, float, float]:
+        x, y, z = self.vector(value, key, 3)
+        return (x, y, z)
+
+    def direction(self, value: Any, key: str) -> tuple[float, float, float]:
+        vector = self.vec3(value, key)
+        if not 0.0 < float(np.linalg.norm(vector)) < math.inf:
+            raise self.fail(key, f"expected a non-zero direction, got {list(vector)}")
+        return vector
+
+    def color(self, value: Any, key: str) -> tuple[float, float, float]:
+        rgb = self.vec3(value, key)
+        for i, channel in enumerate(rgb):
+            if not 0.0 <= channel <= 1.0:
+                raise self.fail(f"{key}[{i}]", f"expected a colour channel from 0 to 1, "
+                                f"got {channel:g}")
+        return rgb
+
+    def file(self, value: Any, key: str, what: str) -> Path:
+        path = self.folder / self.text(value, key)
+        if not path.is_file():
+            raise self.fail(key, f"{what} {path} does not exist")
+        return path.resolve()
+
+    def folder_of_faces(self, value: Any, key: str) -> Path:
+        folder = self.folder / self.text(value, key)
+        if not folder.is_dir():
+            raise self.fail(key, f"cube-face folder {folder} does not exist")
+        missing = [f"{stem}.png" for stem in CUBE_FACE_FILES
+                   if not (folder / f"{stem}.png").is_file()]
+        if missing:
+            raise self.fail(key, f"cube-face folder {folder} lacks {', '.join(missing)}; "
+                            f"expected {', '.join(s + '.png' for s in CUBE_FACE_FILES)}")
+        return folder.resolve()
+
+    # ------------------------------------------------------------- sections
+
+    def scene(self, document: Mapping[str, Any]) -> Scene:
+        document = self.table(document, "", _TOP_KEYS)
+        default_name = self.source.stem if self.source is not None else "scene"
+        name = self.text(document.get("name", default_name), "name")
+        description = self.text(document.get("description", ""), "description")
+        max_bounces = self.integer(document.get("max_bounces", 1), "max_bounces", 0,
+                                   MAX_BOUNCES)
+        ambient = self.number(document.get("ambient", 0.3), "ambient", 0.0, 1.0)
+        camera = self.camera(document.get("camera", {}), "camera")
+        background = self.background(document.get("background", {}), camera)
+        lights = self.lights(document.get("lights", [{}]))
+        objects = self.objects(document.get("objects", []))
+        reflectors = self.reflectors(document.get("reflectors", []))
+        scene = Scene(name=name, description=description, max_bounces=max_bounces,
+                      ambient=ambient, camera=camera, background=background, lights=lights,
+                      objects=objects, reflectors=reflectors, source=self.source)
+        if "animation" in document:
+            from dataclasses import replace
+
+            scene = replace(scene, animation=self.animation(document["animation"], scene))
+        return scene
+
+    def camera(self, value: Any, key: str) -> Camera:
+        table = self.table(value, key, _CAMERA_KEYS)
+        default = Camera()
+        eye = self.vec3(table.get("eye", list(default.eye)), f"{key}.eye")
+        target = self.vec3(table.get("target", list(default.target)), f"{key}.target")
+        up = self.direction(table.get("up", list(default.up)), f"{key}.up")
+        fovy = self.number(table.get("fovy", default.fovy), f"{key}.fovy", 0.0, 179.0,
+                           low_open=True)
+        near = self.number(table.get("near", default.near), f"{key}.near", 0.0, low_open=True)
+        far = self.number(table.get("far", default.far), f"{key}.far")
+        if not far > near:
+            raise self.fail(f"{key}.far", f"expected more than near ({near:g}), got {far:g}")
+        self.check_view(eye, target, up, key)
+        return Camera(eye=eye, target=target, up=up, fovy=fovy, near=near, far=far)
+
+    def check_view(self, eye, target, up, key: str) -> None:
+        with np.errstate(over="ignore", invalid="ignore"):
+            offset = np.subtract(target, eye)
+            length = float(np.linalg.norm(offset))
+        if not length > 0.0:
+            raise self.fail(f"{key}.target", f"must differ from {key}.eye, both are "
+                            f"{list(eye)}")
+        if not math.isfinite(length):
+            raise self.fail(f"{key}.target", f"too far from {key}.eye (the distance overflows)")
+        side = np.cross(offset / length, np.asarray(up) / np.linalg.norm(up))
+        if float(np.linalg.norm(side)) < 1e-9:
+            raise self.fail(f"{key}.up", f"must not be parallel to the view direction "
+                            f"from eye to target, got {list(up)}")
+
+    def background(self, value: Any, camera: Camera) -> Background:
+        table = self.table(value, "background", (*_BACKGROUND_SOURCES, "sphere_map_camera"))
+        sources = [k for k in _BACKGROUND_SOURCES if k in table]
+        if len(sources) > 1:
+            raise self.fail(f"background.{sources[1]}", f"a background has one source; "
+                            f"remove {sources[1]!r} or {sources[0]!r}")
+        if "sphere_map_camera" in table and sources != ["sphere_map"]:
+            raise self.fail("background.sphere_map_camera", "applies to a sphere_map "
+                            "background only")
+        kind = sources[0] if sources else "color"
+        if kind == "color":
+            color = self.color(table.get("color", list(Background().color)),
+                               "background.color")
+            return Background(kind="color", color=color)
+        if kind == "sky":
+            self.choice(table["sky"], "background.sky", ("procedural",))
+            return Background(kind="sky")
+        if kind == "cube_faces":
+            return Background(kind="cube_faces",
+                              path=self.folder_of_faces(table["cube_faces"],
+                                                        "background.cube_faces"))
+        path = self.file(table["sphere_map"], "background.sphere_map", "picture")
+        if "sphere_map_camera" in table:
+            key = "background.sphere_map_camera"
+            seen = self.table(table["sphere_map_camera"], key, ("eye", "target", "up"))
+            eye = self.vec3(seen.get("eye", list(camera.eye)), f"{key}.eye")
+            target = self.vec3(seen.get("target", list(camera.target)), f"{key}.target")
+            up = self.direction(seen.get("up", list(camera.up)), f"{key}.up")
+            self.check_view(eye, target, up, key)
+            seen_from = Camera(eye=eye, target=target, up=up)
+        else:
+            seen_from = Camera(eye=camera.eye, target=camera.target, up=camera.up)
+        return Background(kind="sphere_map", path=path, sphere_map_camera=seen_from)
+
+    def lights(self, value: Any) -> tuple[Light, ...]:
+        items = self.array(value, "lights")
+        if len(items) > MAX_LIGHTS:
+            raise self.fail("lights", f"expected at most {MAX_LIGHTS} lights, got {len(items)}")
+        lights = []
+        for i, item in enumerate(items):
+            key = f"lights[{i}]"
+            table = self.table(item, key, _LIGHT_KEYS)
+            default = Light()
+            lights.append(Light(
+                direction=self.direction(table.get("direction", list(default.direction)),
+                                         f"{key}.direction"),
+                intensity=self.number(table.get("intensity", default.intensity),
+                                      f"{key}.intensity", 0.0, 10.0),
+                color=self.color(table.get("color", list(default.color)), f"{key}.color")))
+        return tuple(lights)
+
+    def transform(self, table: Mapping[str, Any], key: str) -> Transform:
+        position = self.vec3(table.get("position", [0, 0, 0]), f"{key}.position")
+        rotation = self.vec3(table.get("rotation", [0, 0, 0]), f"{key}.rotation")
+        raw_scale = table.get("scale", [1, 1, 1])
+        if isinstance(raw_scale, int | float) and not isinstance(raw_scale, bool):
+            factor = self.number(raw_scale, f"{key}.scale")
+            scale = (factor, factor, factor)
+        else:
+            scale = self.vec3(raw_scale, f"{key}.scale")
+        for i, factor in enumerate(scale):
+            if not 1e-6 <= abs(factor) <= 1e6:
+                raise self.fail(f"{key}.scale", f"expected scale factors from 1e-6 to 1e6 "
+                                f"in size, got {scale[i]:g}")
+        return Transform(position=position, rotation=rotation, scale=scale)
+
+    def objects(self, value: Any) -> tuple:
+        items = self.array(value, "objects")
+        objects: list = []
+        for i, item in enumerate(items):
+            key = f"objects[{i}]"
+            if not isinstance(item, Mapping):
+                raise self.fail(key, f"expected a table, got {_kind(item)}")
+            kind = self.choice(item.get("type", "robot" if "angles" in item else "mesh"),
+                               f"{key}.type", ("mesh", "robot"))
+            if kind == "robot":
+                table = self.table(item, key, _ROBOT_KEYS)
+                name = self.text(table.get("name", "robot"), f"{key}.name")
+                angles = self.vec3(table.get("angles", [-35.0, 30.0, -75.0]), f"{key}.angles")
+                objects.append(RobotObject(name=name, angles=angles,
+                                           transform=self.transform(table, key)))
+                continue
+            table = self.table(item, key, _MESH_KEYS)
+            if "mesh" not in table:
+                raise self.fail(f"{key}.mesh", "missing: a mesh object needs a mesh file")
+            mesh = self.file(table["mesh"], f"{key}.mesh", "mesh file")
+            texture = (self.file(table["texture"], f"{key}.texture", "texture picture")
+                       if "texture" in table else None)
+            objects.append(MeshObject(
+                name=self.text(table.get("name", mesh.stem), f"{key}.name"), mesh=mesh,
+                transform=self.transform(table, key),
+                color=self.color(table.get("color", [1, 1, 1]), f"{key}.color"),
+                texture=texture))
+        self.unique([o.name for o in objects], "objects")
+        return tuple(objects)
+
+    def unique(self, names: list[str], group: str) -> None:
+        seen: dict[str, int] = {}
+        for i, name in enumerate(names):
+            if name in seen:
+                raise self.fail(f"{group}[{i}].name", f"{name!r} is already the name of "
+                                f"{group}[{seen[name]}]; give each a name of its own")
+            seen[name] = i
+
+    def reflectors(self, value: Any) -> tuple:
+        items = self.array(value, "reflectors")
+        reflectors: list = []
+        for i, item in enumerate(items):
+            key = f"reflectors[{i}]"
+            if not isinstance(item, Mapping):
+                raise self.fail(key, f"expected a table, got {_kind(item)}")
+            if "technique" not in item:
+                raise self.fail(f"{key}.technique", "missing; expected one of "
+                                f"{', '.join(PLANAR_TECHNIQUES + CURVED_TECHNIQUES)}")
+            technique = self.choice(item["technique"], f"{key}.technique",
+                                    PLANAR_TECHNIQUES + CURVED_TECHNIQUES)
+            if technique in PLANAR_TECHNIQUES:
+                reflectors.append(self.planar(item, key, technique))
+            else:
+                reflectors.append(self.curved(item, key, technique))
+        self.unique([r.name for r in reflectors], "reflectors")
+        return tuple(reflectors)
+
+    def planar(self, item: Mapping[str, Any], key: str, technique: str) -> PlanarReflector:
+        table = self.table(item, key, _PLANAR_KEYS)
+        shape_keys = ("center", "normal", "width", "height", "up")
+        given = [k for k in shape_keys if k in table]
+        if "corners" in table:
+            if given:
+                raise self.fail(f"{key}.{given[0]}", "give corners, or center, normal, "
+                                "width and height, not both")
+            corners = self.corners(table["corners"], f"{key}.corners")
+        else:
+            missing = [k for k in ("center", "normal", "width", "height") if k not in table]
+            if missing:
+                raise self.fail(f"{key}.{missing[0]}", "missing: a planar mirror needs "
+                                "corners, or center, normal, width and height")
+            corners = self.rectangle(table, key)
+        texture_size = None
+        if "texture_size" in table:
+            texture_size = self.integer(table["texture_size"], f"{key}.texture_size", 1,
+                                        MAX_MAP_SIZE)
+        ortho = self.ortho(table["ortho"], f"{key}.ortho") if "ortho" in table else None
+        if ortho is not None and technique != "ortho":
+            raise self.fail(f"{key}.ortho", f"applies to technique 'ortho', not {technique!r}")
+        return PlanarReflector(
+            name=self.text(table.get("name", "mirror"), f"{key}.name"), corners=corners,
+            technique=technique,
+            capture=self.choice(table.get("capture", "copy"), f"{key}.capture", CAPTURE_MODES),
+            texture_size=texture_size, ortho=ortho,
+            color=self.color(table.get("color", list(DEFAULT_PLAIN_COLOR)), f"{key}.color"),
+            backing=self.color(table.get("backing", list(DEFAULT_BACKING)), f"{key}.backing"))
+
+    def corners(self, value: Any, key: str):
+        items = self.array(value, key)
+        if len(items) != 4:
+            raise self.fail(key, f"expected 4 corners of 3 numbers, got {len(items)} corners")
+        points = np.array([self.vec3(p, f"{key}[{i}]") for i, p in enumerate(items)])
+        check_quad(points, lambda problem: self.fail(key, problem))
+        return tuple((float(x), float(y), float(z)) for x, y, z in points)
+
+    def rectangle(self, table: Mapping[str, Any], key: str):
+        center = np.array(self.vec3(table["center"], f"{key}.center"))
+        normal = np.array(self.direction(table["normal"], f"{key}.normal"))
+        width = self.number(table["width"], f"{key}.width", 0.0, low_open=True)
+        height = self.number(table["height"], f"{key}.height", 0.0, low_open=True)
+        normal /= np.linalg.norm(normal)
+        up_hint = np.array(self.direction(table.get("up", [0, 1, 0]), f"{key}.up"))
+        up = up_hint - (up_hint @ normal) * normal
+        if np.linalg.norm(up) < 1e-9 * np.linalg.norm(up_hint):
+            raise self.fail(f"{key}.up", f"must not be parallel to the normal "
+                            f"{list(table['normal'])}; give an up direction along the glass")
+        up /= np.linalg.norm(up)
+        right = np.cross(normal, up)
+        w, h = width / 2.0, height / 2.0
+        points = np.array([center - w * right - h * up, center - w * right + h * up,
+                           center + w * right + h * up, center + w * right - h * up])
+        check_quad(points, lambda problem: self.fail(f"{key}.width", problem))
+        return tuple((float(x), float(y), float(z)) for x, y, z in points)
+
+    def ortho(self, value: Any, key: str) -> OrthoCapture:
+        table = self.table(value, key, _ORTHO_KEYS)
+        for required in _ORTHO_KEYS:
+            if required not in table:
+                raise self.fail(f"{key}.{required}", "missing: an ortho capture needs eye, "
+                                "target, up and extents")
+        eye = self.vec3(table["eye"], f"{key}.eye")
+        target = self.vec3(table["target"], f"{key}.target")
+        up = self.direction(table["up"], f"{key}.up")
+        self.check_view(eye, target, up, key)
+        extents = self.vector(table["extents"], f"{key}.extents", 6)
+        left, right, bottom, top, near, far = extents
+        if left == right or bottom == top or near == far:
+            raise self.fail(f"{key}.extents", f"expected left != right, bottom != top and "
+                            f"near != far, got {list(extents)}")
+        return OrthoCapture(eye=eye, target=target, up=up,
+                            extents=(left, right, bottom, top, near, far))
+
+    def curved(self, item: Mapping[str, Any], key: str, technique: str) -> CurvedReflector:
+        table = self.table(item, key, _CURVED_KEYS)
+        if "mesh" not in table:
+            raise self.fail(f"{key}.mesh", "missing: a curved reflector needs a mesh file")
+        mesh = self.file(table["mesh"], f"{key}.mesh", "mesh file")
+        source = None
+        if "source" in table:
+            if technique == "cube":
+                source = self.folder_of_faces(table["source"], f"{key}.source")
+            elif technique in ("sphere", "sphere-vertex", "sphere-texgen", "normal"):
+                source = self.file(table["source"], f"{key}.source", "sphere-map picture")
+            else:
+                raise self.fail(f"{key}.source", f"technique {technique!r} takes no source "
+                                "(cube-live captures the scene; latlong is baked from the "
+                                "background)")
+        return CurvedReflector(
+            name=self.text(table.get("name", mesh.stem), f"{key}.name"), mesh=mesh,
+            transform=self.transform(table, key), technique=technique,
+            map_size=self.integer(table.get("map_size", 256), f"{key}.map_size", 4,
+                                  MAX_MAP_SIZE),
+            source=source,
+            capture_center=self.vec3(table.get("capture_center", [0, 0, 0]),
+                                     f"{key}.capture_center"),
+            color=self.color(table.get("color", list(DEFAULT_PLAIN_COLOR)), f"{key}.color"))
+
+    def animation(self, value: Any, scene: Scene) -> Animation:
+        table = self.table(value, "animation", ("frames", "keyframes"))
+        items = self.array(table.get("keyframes", []), "animation.keyframes")
+        if not items:
+            raise self.fail("animation.keyframes", "expected at least one keyframe")
+        keyframes = [self.keyframe(item, f"animation.keyframes[{i}]", scene)
+                     for i, item in enumerate(items)]
+        last = max(k.frame for k in keyframes)
+        frames = self.integer(table.get("frames", last + 1), "animation.frames", 1, MAX_FRAMES)
+        if last >= frames:
+            index = next(i for i, k in enumerate(keyframes) if k.frame == last)
+            raise self.fail(f"animation.keyframes[{index}].frame", f"frame {last} is past "
+                            f"the animation's last frame {frames - 1}")
+        frames_seen: dict[int, int] = {}
+        for i, key in enumerate(keyframes):
+            if key.frame in frames_seen:
+                raise self.fail(f"animation.keyframes[{i}].frame", f"frame {key.frame} is "
+                                f"already keyframes[{frames_seen[key.frame]}]")
+            frames_seen[key.frame] = i
+        ordered = tuple(sorted(keyframes, key=lambda k: k.frame))
+        animation = Animation(frames=frames, keyframes=ordered)
+        from dataclasses import replace
+
+        for frame in sorted(frames_seen):  # every posed camera must be a camera
+            camera = replace(scene, animation=animation).at_frame(frame).camera
+            index = frames_seen[frame]
+            self.check_view(camera.eye, camera.target, camera.up,
+                            f"animation.keyframes[{index}].camera")
+        return animation
+
+    def keyframe(self, value: Any, key: str, scene: Scene) -> Keyframe:
+        table = self.table(value, key, _KEYFRAME_KEYS)
+        if "frame" not in table:
+            raise self.fail(f"{key}.frame", "missing: a keyframe needs its frame number")
+        frame = self.integer(table["frame"], f"{key}.frame", 0, MAX_FRAMES - 1)
+        camera: dict[str, Any] = {}
+        if "camera" in table:
+            values = self.table(table["camera"], f"{key}.camera", CAMERA_FIELDS)
+            for field, raw in values.items():
+                where = f"{key}.camera.{field}"
+                if field == "fovy":
+                    camera[field] = self.number(raw, where, 0.0, 179.0, low_open=True)
+                elif field == "up":
+                    camera[field] = self.direction(raw, where)
+                else:
+                    camera[field] = self.vec3(raw, where)
+        objects = self.keyed(table.get("objects", {}), f"{key}.objects", scene, "objects")
+        reflectors = self.keyed(table.get("reflectors", {}), f"{key}.reflectors", scene,
+                                "reflectors")
+        return Keyframe(frame=frame, camera=camera, objects=objects, reflectors=reflectors)
+
+    def keyed(self, value: Any, key: str, scene: Scene, group: str) -> dict[str, dict]:
+        items = {o.name: o for o in (scene.objects if group == "objects"
+                                     else scene.reflectors)}
+        table = self.table(value, key, tuple(items))
+        result: dict[str, dict] = {}
+        for name, raw in table.items():
+            item = items[name]
+            where = f"{key}.{name}"
+            if group == "reflectors" and not isinstance(item, CurvedReflector):
+                raise self.fail(where, "a planar mirror cannot be animated; only curved "
+                                "reflectors and objects move")
+            fields = OBJECT_FIELDS if group == "objects" else REFLECTOR_FIELDS
+            if isinstance(item, MeshObject):
+                fields = tuple(f for f in fields if f != "angles")
+            values = self.table(raw, where, fields)
+            posed: dict[str, Any] = {}
+            for field, entry in values.items():
+                if field == "scale":
+                    posed[field] = self.transform({"scale": entry}, where).scale
+                else:
+                    posed[field] = self.vec3(entry, f"{where}.{field}")
+            result[name] = posed
+        return result
+
+
+def check_quad(points: np.ndarray, fail: Callable[[str], Exception]) -> None:
+    """Raise ``fail(problem)`` unless ``points`` ``(4, 3)`` form a flat, convex quadrilateral
+    of non-zero area, corners in order around it (counter-clockwise from the front)."""
+    if not np.all(np.isfinite(points)):
+        raise fail("expected finite corners")
+    size = float(np.max(np.linalg.norm(points - points.mean(axis=0), axis=1)))
+    if not math.isfinite(size) or size == 0.0:
+        raise fail("corners overflow or coincide: the mirror has no area" if size == 0.0
+                   else "corners are too far apart: their distances overflow")
+    edges = np.roll(points, -1, axis=0) - points
+    turns = np.cross(edges, np.roll(edges, -1, axis=0))  # at corners 1, 2, 3, 0
+    normal = turns.sum(axis=0)
+    area = float(np.linalg.norm(np.cross(points[2] - points[0], points[3] - points[1]))) / 2
+    if not area > 1e-12 * size * size:
+        raise fail("corners span no area (they lie on a line or coincide)")
+    unit = normal / np.linalg.norm(normal) if np.linalg.norm(normal) > 0 else None
+    if unit is None:
+        raise fail("corners cross over each other: the quadrilateral is self-crossing")
+    off_plane = np.abs((points - points.mean(axis=0)) @ unit)
+    if float(off_plane.max()) > 1e-6 * size:
+        raise fail(f"corners are not in one plane (one lies {float(off_plane.max()):.3g} "
+                   f"off it)")
+    signs = turns @ unit
+    if np.all(signs > 0):
+        return
+    if _segments_cross(points[0], points[1], points[2], points[3], unit) or _segments_cross(
+            points[1], points[2], points[3], points[0], unit):
+        raise fail("corners cross over each other: the quadrilateral is self-crossing; "
+                   "list them in order around the mirror")
+    raise fail("corners do not form a convex quadrilateral")
+
+
+def _segments_cross(a, b, c, d, normal) -> bool:
+    def side(p, q, r):
+        return float(np.cross(q - p, r - p) @ normal)
+
+    return side(a, b, c) * side(a, b, d) < 0 and side(c, d, a) * side(c, d, b) < 0
+
+
+def _kind(value: Any) -> str:
+    if isinstance(value, bool):
+        return f"the boolean {str(value).lower()}"
+    if isinstance(value, int | float):
+        return f"the number {value}"
+    if isinstance(value, str):
+        return f"the string {value!r}"
+    if isinstance(value, list):
+        return "an array"
+    if isinstance(value, Mapping):
+        return "a table"
+    return type(value).__name__
+
+
+__all__ = ["DEFAULT_SCENE", "SCENES_DIR", "SceneError", "check_quad", "dumps",
+           "from_document", "load_scene", "loads", "scene_path", "scene_to_document",
+           "shipped_scene_names"]

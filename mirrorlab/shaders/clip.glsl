@@ -1,0 +1,9 @@
+// The clip plane of the world seen in a mirror, pulled in with #include "clip.glsl".
+// Every vertex shader writes gl_ClipDistance[0]: Mesa 22.3's llvmpipe clips by it even
+// while GL_CLIP_DISTANCE0 is disabled, so "no plane" is (0, 0, 0, 1), which every point
+// is in front of.
+uniform vec4 clip_plane;  // world space; what lies on its negative side is cut away
+
+void clip_world(vec4 world_position) {
+    gl_ClipDistance[0] = dot(clip_plane, world_position);
+}

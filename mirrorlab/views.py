@@ -1,0 +1,162 @@
+"""Views: the ways a pass looks at the scene (the viewer, a mirror's capture camera, a
+cube face, the world seen through a stencil mirror), as numpy matrices.
+
+A :class:`View` is everything a pass needs to draw the scene from somewhere: a rigid
+world-to-eye ``view``, a ``projection`` (which may flip x, for the world seen in a
+mirror), the target ``size``, the eye's world position (None for an orthographic
+view) and an optional world-space ``clip_plane``. Numpy only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from mirrorlab import math3d
+from mirrorlab.scene.model import Camera, CurvedReflector, PlanarReflector
+
+_FLIP_X = np.diag([-1.0, 1.0, 1.0, 1.0])
+_BIAS = np.array([[0.5, 0, 0, 0.5], [0, 0.5, 0, 0.5], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]])
+"""Clip space [-1, 1] to texture space [0, 1]."""
+
+CUBE_FACES = (
+    # (look direction, up) per face in GL order +X, -X, +Y, -Y, +Z, -Z: with these, the
+    # target's x and y run along the face's s and t as the cube-map spec's table has them
+    # (+X: s along -z, t along -y; ...), so a copy of the target is the face as it is.
+    ((1.0, 0.0, 0.0), (0.0, -1.0, 0.0)),
+    ((-1.0, 0.0, 0.0), (0.0, -1.0, 0.0)),
+    ((0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
+    ((0.0, -1.0, 0.0), (0.0, 0.0, -1.0)),
+    ((0.0, 0.0, 1.0), (0.0, -1.0, 0.0)),
+    ((0.0, 0.0, -1.0), (0.0, -1.0, 0.0)),
+)
+CUBE_FACE_NAMES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
+CUBE_NEAR, CUBE_FAR = 0.05, 200.0
+
+
+@dataclass(frozen=True, eq=False)
+class View:
+    """One way of looking at the scene.
+
+    ``view`` ``(4, 4)`` rigid world-to-eye; ``projection`` ``(4, 4)``; ``size`` (width,
+    height) of the target in pixels; ``eye`` ``(3,)`` world position of the viewpoint,
+    None for an orthographic view (which looks along ``-z`` of its eye space);
+    ``mirrored`` True when ``projection @ view`` turns counter-clockwise triangles
+    clockwise (the world seen in a mirror); ``clip_plane`` ``(4,)`` world-space plane
+    whose negative side is cut away, or None; ``label`` names the view in plans.
+    """
+
+    view: np.ndarray
+    projection: np.ndarray
+    size: tuple[int, int]
+    eye: np.ndarray | None
+    label: str
+    mirrored: bool = False
+    clip_plane: np.ndarray | None = None
+
+    @cached_property
+    def view_projection(self) -> np.ndarray:
+        return self.projection @ self.view
+
+    @cached_property
+    def forward(self) -> np.ndarray:
+        """Unit world direction ``(3,)`` the view looks along."""
+        return -np.asarray(self.view, dtype=np.float64)[2, :3]
+
+    @cached_property
+    def key(self) -> tuple:
+        """Equal for views that draw the same picture (for reusing captures)."""
+        clip = () if self.clip_plane is None else tuple(np.round(self.clip_plane, 12))
+        return (tuple(np.round(self.view, 12).ravel()),
+                tuple(np.round(self.projection, 12).ravel()), self.size, clip)
+
+    @property
+    def aspect(self) -> float:
+        return self.size[0] / self.size[1]
+
+    def texture_matrix(self) -> np.ndarray:
+        """``(4, 4)``: world point to homogeneous texture coordinate of this view's image
+        (for projective lookups of a capture drawn with it)."""
+        return _BIAS @ self.view_projection
+
+
+def camera_view(camera: Camera, size: tuple[int, int], label: str = "camera") -> View:
+    """The viewer's view of a ``size`` (width, height) target."""
+    return View(view=camera.view(), projection=camera.projection(size[0] / size[1]),
+                size=(int(size[0]), int(size[1])),
+                eye=np.asarray(camera.eye, dtype=np.float64), label=label)
+
+
+def eye_position(view: np.ndarray) -> np.ndarray:
+    """The eye's world position ``(3,)`` of a rigid world-to-eye ``view`` ``(4, 4)``."""
+    view = np.asarray(view, dtype=np.float64)
+    return -view[:3, :3].T @ view[:3, 3]
+
+
+def is_orthographic(projection: np.ndarray) -> bool:
+    return bool(np.allclose(np.asarray(projection)[3], (0.0, 0.0, 0.0, 1.0)))
+
+
+def _mirror_of(view: View, plane: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """The rigid view of ``view`` reflected in ``plane`` (``F @ view @ R``, F flipping the
+    eye's x so the matrix stays a rotation) and the reflected eye."""
+    reflection = math3d.reflection_matrix(plane)
+    mirrored = _FLIP_X @ view.view @ reflection
+    eye = None if view.eye is None else math3d.transform_points(reflection, view.eye)[:3]
+    return mirrored, eye
+
+
+def reflected_capture_view(view: View, reflector: PlanarReflector,
+                           size: tuple[int, int] | None = None) -> View | None:
+    """The capture camera of a ``reflected`` mirror for ``view``: the view reflected in the
+    mirror's plane, its near plane moved onto the glass (Lengyel's oblique projection),
+    drawn at ``size`` (default: ``view``'s). Its :meth:`View.texture_matrix` maps a point
+    on the glass to where ``view`` sees it. None when the viewer is in or behind the
+    mirror's plane, where no such camera exists (nothing of the glass's front is seen).
+    """
+    plane = reflector.plane
+    rigid, eye = _mirror_of(view, plane)
+    # Flip clip-space x back as well: the capture keeps view's winding, and x runs the
+    # other way across the image, which the projective lookup undoes.
+    projection = _FLIP_X @ view.projection @ _FLIP_X
+    plane_in_eye = plane @ np.linalg.inv(rigid)
+    try:
+        projection = math3d.oblique_projection(projection, plane_in_eye)
+    except ValueError:
+        return None
+    if not np.all(np.isfinite(projection)):
+        return None
+    return View(view=rigid, projection=projection, size=size or view.size, eye=eye,
+                label=f"{reflector.name} seen from {view.label}", mirrored=view.mirrored)
+
+
+def stencil_view(view: View, reflector: PlanarReflector) -> View:
+    """The world seen in a stencil mirror from ``view``: drawn straight into ``view``'s
+    target through ``view_projection @ reflection``, clipped by the mirror's plane."""
+    rigid, eye = _mirror_of(view, reflector.plane)
+    return View(view=rigid, projection=view.projection @ _FLIP_X, size=view.size, eye=eye,
+                label=f"{reflector.name} (stencil) in {view.label}",
+                mirrored=not view.mirrored, clip_plane=reflector.plane)
+
+
+def ortho_capture_view(reflector: PlanarReflector, size: tuple[int, int]) -> View:
+    """The ``ortho`` technique's capture camera (the lab's pass 1) on a ``size`` target."""
+    capture = reflector.ortho_capture
+    return View(view=capture.view(), projection=capture.projection(),
+                size=(int(size[0]), int(size[1])), eye=None,
+                label=f"{reflector.name} ortho capture")
+
+
+def cube_face_views(reflector: CurvedReflector) -> list[View]:
+    """The six 90-degree views of a live cube map from the reflector's capture centre."""
+    center = reflector.center()
+    projection = math3d.perspective(90.0, 1.0, CUBE_NEAR, CUBE_FAR)
+    size = (reflector.map_size, reflector.map_size)
+    views = []
+    for name, (direction, up) in zip(CUBE_FACE_NAMES, CUBE_FACES, strict=True):
+        view = math3d.look_at(center, center + np.asarray(direction), up)
+        views.append(View(view=view, projection=projection, size=size, eye=center,
+                          label=f"{reflector.name} cube {name}"))
+    return views
