@@ -21,7 +21,8 @@ from mirrorlab.passes.base import (
     ReflectorPass,
     SharedResources,
     apply_view_state,
-    reset_state,
+    gl_state,
+    restore_state,
 )
 from mirrorlab.passes.scene_draw import SceneDrawer
 from mirrorlab.passes.sky import SkyPass
@@ -134,6 +135,7 @@ class SceneRenderer:
         ``tiny_pixels`` 0 keeps small reflectors reflecting.
         """
         start = time.perf_counter()
+        found = gl_state()
         self._use_scene(scene)
         size = tuple(target.size)
         plan = plan_frame(scene, (int(size[0]), int(size[1])), self.state, use_plan,
@@ -146,7 +148,7 @@ class SceneRenderer:
             draws += self._pass(reflector).update(step, reflector, self, target)
             self.state.record(step)
         draws += self.draw_view(plan.top, target)
-        reset_state()
+        restore_state(found)
         self.last_frame = FrameStats(plan, draws, (time.perf_counter() - start) * 1e3)
         return self.last_frame
 

@@ -103,16 +103,52 @@ def apply_view_state(view: View, stencil_level: int) -> None:
     GL.glCullFace(GL.GL_BACK)
 
 
-def reset_state() -> None:
-    """Leave GL as a frame found it: default winding, no clipping, no stencil test."""
-    GL.glFrontFace(GL.GL_CCW)
-    GL.glDisable(GL.GL_CLIP_DISTANCE0)
-    GL.glDisable(GL.GL_STENCIL_TEST)
-    GL.glStencilMask(0xFF)
-    GL.glColorMask(GL.GL_TRUE, GL.GL_TRUE, GL.GL_TRUE, GL.GL_TRUE)
-    GL.glDepthMask(GL.GL_TRUE)
-    GL.glDepthFunc(GL.GL_LESS)
-    GL.glCullFace(GL.GL_BACK)
+_SWITCHES = ("GL_DEPTH_TEST", "GL_CULL_FACE", "GL_STENCIL_TEST", "GL_CLIP_DISTANCE0",
+             "GL_TEXTURE_CUBE_MAP_SEAMLESS", "GL_BLEND")
+_VALUES = ("GL_FRONT_FACE", "GL_CULL_FACE_MODE", "GL_DEPTH_FUNC", "GL_DEPTH_WRITEMASK",
+           "GL_STENCIL_WRITEMASK", "GL_STENCIL_FUNC", "GL_STENCIL_REF", "GL_STENCIL_VALUE_MASK",
+           "GL_STENCIL_FAIL", "GL_STENCIL_PASS_DEPTH_FAIL", "GL_STENCIL_PASS_DEPTH_PASS",
+           "GL_CURRENT_PROGRAM", "GL_VERTEX_ARRAY_BINDING", "GL_ACTIVE_TEXTURE",
+           "GL_DRAW_FRAMEBUFFER_BINDING", "GL_READ_FRAMEBUFFER_BINDING")
+
+
+def gl_state() -> dict[str, object]:
+    """The GL state a frame changes: switches, winding, depth and stencil settings, masks,
+    bindings, viewport and clear colour (to restore it, and for tests)."""
+    state: dict[str, object] = {name: bool(GL.glIsEnabled(getattr(GL, name)))
+                                for name in _SWITCHES}
+    for name in _VALUES:
+        state[name] = int(np.asarray(GL.glGetIntegerv(getattr(GL, name))).reshape(-1)[0])
+    state["GL_COLOR_WRITEMASK"] = tuple(
+        bool(v) for v in np.asarray(GL.glGetBooleanv(GL.GL_COLOR_WRITEMASK)).reshape(-1))
+    state["GL_VIEWPORT"] = tuple(int(v) for v in np.asarray(
+        GL.glGetIntegerv(GL.GL_VIEWPORT)).reshape(-1))
+    state["GL_COLOR_CLEAR_VALUE"] = tuple(round(float(v), 6) for v in np.asarray(
+        GL.glGetFloatv(GL.GL_COLOR_CLEAR_VALUE)).reshape(-1))
+    return state
+
+
+def restore_state(state: dict[str, object]) -> None:
+    """Put back what :func:`gl_state` read: leave GL as a frame found it."""
+    for name in _SWITCHES:
+        (GL.glEnable if state[name] else GL.glDisable)(getattr(GL, name))
+    GL.glFrontFace(state["GL_FRONT_FACE"])
+    GL.glCullFace(state["GL_CULL_FACE_MODE"])
+    GL.glDepthFunc(state["GL_DEPTH_FUNC"])
+    GL.glDepthMask(bool(state["GL_DEPTH_WRITEMASK"]))
+    GL.glStencilMask(state["GL_STENCIL_WRITEMASK"])
+    GL.glStencilFunc(state["GL_STENCIL_FUNC"], state["GL_STENCIL_REF"],
+                     state["GL_STENCIL_VALUE_MASK"])
+    GL.glStencilOp(state["GL_STENCIL_FAIL"], state["GL_STENCIL_PASS_DEPTH_FAIL"],
+                   state["GL_STENCIL_PASS_DEPTH_PASS"])
+    GL.glColorMask(*state["GL_COLOR_WRITEMASK"])  # type: ignore[misc]
+    GL.glUseProgram(state["GL_CURRENT_PROGRAM"])
+    GL.glBindVertexArray(state["GL_VERTEX_ARRAY_BINDING"])
+    GL.glActiveTexture(state["GL_ACTIVE_TEXTURE"])
+    GL.glBindFramebuffer(GL.GL_DRAW_FRAMEBUFFER, state["GL_DRAW_FRAMEBUFFER_BINDING"])
+    GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, state["GL_READ_FRAMEBUFFER_BINDING"])
+    GL.glViewport(*state["GL_VIEWPORT"])  # type: ignore[misc]
+    GL.glClearColor(*state["GL_COLOR_CLEAR_VALUE"])  # type: ignore[misc]
 
 
 class ViewDrawer(Protocol):

@@ -37,3 +37,15 @@ def registry(gl_context):
     """The context's resource registry; whatever a test makes in it is released after."""
     yield gl_context.resources
     gl_context.resources.release_all()
+
+
+@pytest.fixture
+def scene_renderer(registry):
+    """A :class:`mirrorlab.renderer.SceneRenderer` on the session's context, released
+    after the test (with everything else the test made in the registry)."""
+    from mirrorlab.renderer import SceneRenderer
+
+    renderer = SceneRenderer(registry)
+    yield renderer
+    renderer.release()
+

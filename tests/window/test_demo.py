@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
+import mirrorlab
 from mirrorlab import math3d
-from mirrorlab.scene.robot import Camera, build_lab_scene
+from mirrorlab.scene.robot import hand_center
 from tests.imagecheck import (
     assert_images_close,
     mirror_image_point,
@@ -139,11 +140,16 @@ def demo():
 
 
 def expected_hand_pixels(angles=None):
-    scene = build_lab_scene() if angles is None else build_lab_scene(angles)
-    vp = viewer_matrix(Camera(), WIDTH, HEIGHT)
-    hand = scene.hand_center()
+    """Where the lab scene's camera sees the hand and, in the ortho capture, its image."""
+    scene = mirrorlab.load_scene("lab20")
+    if angles is not None:
+        scene = scene.with_angles(angles)
+    vp = viewer_matrix(scene.camera, WIDTH, HEIGHT)
+    assert scene.robot is not None
+    hand = hand_center(scene.robot)
     real = math3d.project_to_pixels(vp, hand, WIDTH, HEIGHT)
-    reflected = math3d.project_to_pixels(vp, mirror_image_point(scene, hand), WIDTH, HEIGHT)
+    reflected = math3d.project_to_pixels(
+        vp, mirror_image_point(scene.reflector("mirror"), hand), WIDTH, HEIGHT)
     return real, reflected
 
 
@@ -201,8 +207,6 @@ def test_demo_screenshot_matches_the_headless_render(tmp_path, method):
         capture_output=True, text=True, timeout=2 * GIVE_UP_S)
     assert result.returncode == 0, result.stderr
     window_frame = np.asarray(Image.open(shot).convert("RGB"))
-    import mirrorlab
-
-    headless = mirrorlab.render(size=(WIDTH, HEIGHT), method=method)  # EGL, this process
+    headless = mirrorlab.render("lab20", size=(WIDTH, HEIGHT), method=method)  # EGL, this process
     assert_images_close(f"demo_vs_headless_{method}", window_frame, headless, channel_tolerance=8,
                         min_fraction_within=0.99, max_mean_abs=1.0)

@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 
-from mirrorlab.envmap_renderer import render_envmap_frame
+import mirrorlab
 from tests.imagecheck import assert_images_close, save_failure
 from tests.window.test_demo import (  # noqa: F401  (xdisplay is a fixture)
     GIVE_UP_S,
@@ -23,17 +23,12 @@ from tests.window.test_demo import (  # noqa: F401  (xdisplay is a fixture)
 )
 
 WIDTH, HEIGHT = 256, 256
-RUN_CONE_DEMO = (
-    "from mirrorlab.gl.context import use_platform; use_platform('glx')\n"
-    "from mirrorlab.app.demo import run\n"
-    f"raise SystemExit(run(({WIDTH}, {HEIGHT}), (0, 0, 0), scene='cone', "
-    "envmap='sphere-texgen'))\n"
-)
 
 
 @pytest.fixture
 def cone_demo():
-    proc = subprocess.Popen([sys.executable, "-c", RUN_CONE_DEMO], stdout=subprocess.PIPE,
+    proc = subprocess.Popen([sys.executable, "-m", "mirrorlab.cli", "demo", "cone", "--size",
+                             f"{WIDTH}x{HEIGHT}"], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     yield proc
     if proc.poll() is None:
@@ -42,8 +37,8 @@ def cone_demo():
 
 
 def test_cone_demo_moves_the_cone_and_its_reflection_changes(xdisplay, cone_demo):  # noqa: F811
-    window = find_window(xdisplay, "mirrorlab demo - cone")
-    headless = render_envmap_frame("cone", "sphere-texgen", (WIDTH, HEIGHT)).image
+    window = find_window(xdisplay, "mirrorlab demo - spheremap_cone")
+    headless = mirrorlab.render("cone", size=(WIDTH, HEIGHT))
 
     def drawn():
         image = screenshot(xdisplay, window)
@@ -65,8 +60,8 @@ def test_cone_demo_moves_the_cone_and_its_reflection_changes(xdisplay, cone_demo
                      f"the cone to move down to {height}")
         except AssertionError:
             raise AssertionError(f"title is {title(window)!r}") from None
-    lowered = render_envmap_frame("cone", "sphere-texgen", (WIDTH, HEIGHT),
-                                  cone_height=0.0).image
+    lowered = mirrorlab.render("cone", size=(WIDTH, HEIGHT),
+                               set=["reflectors[0].position=[0.0, 0.0, 0.0]"])
     second = wait_for(
         lambda: (lambda img: img if np.abs(img.astype(int) - lowered.astype(int)).mean() < 2
                  else None)(screenshot(xdisplay, window)), "the frame with the cone lowered")
