@@ -9,21 +9,21 @@ Everything runs in one process and one headless (EGL) context, so both sides sha
 the same driver, PyOpenGL configuration and CPU. Three variants are timed:
 
 ``mirrorlab``
-    ``Renderer.render(framebuffer, camera, force_capture=True)`` (capture pass and
-    camera pass) followed by ``Framebuffer.read()`` into numpy: the real renderer on
-    ``build_lab_scene()`` and the default ``Camera()``.
+    ``SceneRenderer.render(scene, framebuffer)`` with the capture forced (its texture
+    marked stale before each frame: capture pass and camera pass) followed by
+    ``Framebuffer.read()`` into numpy: the real renderer on ``scenes/lab20.toml``.
 ``minimal``
     The same two passes written directly against PyOpenGL in this file: its own
     framebuffer of the same size, one VBO + EBO + VAO per mesh (loaded with
-    ``mirrorlab.scene.mesh.load_model``) plus one for the mirror quad, one shader
+    ``mirrorlab.scene.mesh.load_mesh``) plus one for the mirror quad, one shader
     program (lit parts, textured base, mirror quad chosen by a uniform), the same
-    world matrices from the scene graph, pass 1 = orthographic capture copied with
+    world matrices (``mirrorlab.scene.robot.scene_parts``), pass 1 = orthographic
+    capture copied with
     ``glCopyTexImage2D``, pass 2 = perspective view plus the mirror textured with the
-    capture, then ``glReadPixels`` into numpy. Per-part uniforms are recomputed only
-    when the scene graph's revision changes. None of mirrorlab's passes, renderer or
-    GL resource classes is used.
+    capture, then ``glReadPixels`` into numpy. Per-part uniforms are worked out once.
+    None of mirrorlab's passes, renderer or GL resource classes is used.
 ``mirrorlab, capture skipped``
-    ``Renderer.render(framebuffer, camera)`` without forcing the capture: nothing
+    ``SceneRenderer.render(scene, framebuffer)`` without forcing the capture: nothing
     changed since the last capture, so the planner runs only the camera pass. This
     is what the frame plan saves.
 
@@ -57,10 +57,12 @@ from PIL import Image
 from mirrorlab.gl.context import HeadlessContext, check_gl_errors
 from mirrorlab.gl.opengl import GL  # after mirrorlab.gl.context chose the platform
 from mirrorlab.gl.resources import Framebuffer
-from mirrorlab.paths import asset_path
-from mirrorlab.renderer import Renderer
-from mirrorlab.scene.mesh import load_model
-from mirrorlab.scene.robot import Camera, LabScene, build_lab_scene
+from mirrorlab.renderer import SceneRenderer
+from mirrorlab.scene.backgrounds import load_picture
+from mirrorlab.scene.loader import load_scene
+from mirrorlab.scene.mesh import load_mesh
+from mirrorlab.scene.model import Camera, Scene
+from mirrorlab.scene.robot import scene_parts
 
 VERTEX_SHADER = """#version 330
 layout(location = 0) in vec3 position;
@@ -108,7 +110,6 @@ void main() {
 """
 
 MODE_LIT, MODE_TEXTURED, MODE_MIRROR = 0, 1, 2
-MIRROR_BACKING = (0.33, 0.3, 0.27)  # the value mirrorlab's camera pass uses
 IDENTITY = np.eye(4, dtype=np.float32)
 
 
@@ -194,8 +195,9 @@ class MinimalRenderer:
     UNIFORMS = ("model", "view_projection", "normal_matrix", "mode", "image", "color",
                 "light_direction", "ambient", "diffuse", "backing_color")
 
-    def __init__(self, scene: LabScene, width: int, height: int) -> None:
+    def __init__(self, scene: Scene, width: int, height: int) -> None:
         self.scene = scene
+        self.mirror = scene.reflector("mirror")
         self.width, self.height = width, height
         self.draw_calls = 0  # glDrawElements calls in the last frame
         self.triangles = 0  # triangles submitted in the last frame
@@ -222,49 +224,37 @@ class MinimalRenderer:
         if GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER) != GL.GL_FRAMEBUFFER_COMPLETE:
             raise RuntimeError("minimal framebuffer is incomplete")
 
-        self.meshes: dict[str, tuple[int, int]] = {}  # mesh name -> (vao, index count)
-        self.textures: dict[str, int] = {}
+        self.meshes: dict[Path, tuple[int, int]] = {}  # mesh file -> (vao, index count)
+        self.textures: dict[Path, int] = {}
         self.buffers: list[int] = []
-        for node in scene.graph.nodes():
-            if node.mesh and node.mesh not in self.meshes:
-                data = load_model(node.mesh)
+        for part in scene_parts(scene):
+            if part.mesh not in self.meshes:
+                data = load_mesh(part.mesh)
                 vao, buffers = upload_mesh(data.interleaved(), data.indices)
-                self.meshes[node.mesh] = (vao, int(data.indices.size))
+                self.meshes[part.mesh] = (vao, int(data.indices.size))
                 self.buffers += buffers
-            if node.texture and node.texture not in self.textures:
-                with Image.open(asset_path("textures", f"{node.texture}.png")) as file:
-                    pixels = np.asarray(file.convert("RGB"))
-                self.textures[node.texture] = make_texture(
+            if part.texture and part.texture not in self.textures:
+                pixels = load_picture(part.texture)
+                self.textures[part.texture] = make_texture(
                     pixels.shape[1], pixels.shape[0], np.ascontiguousarray(pixels[::-1]))
         self.environment = make_texture(width, height, None)
 
-        mirror = scene.mirror
-        quad = np.hstack([mirror.corners, np.broadcast_to(mirror.normal, (4, 3)),
-                          mirror.texcoords])
+        mirror = self.mirror
+        quad = np.hstack([mirror.corner_array, np.broadcast_to(mirror.normal, (4, 3)),
+                          mirror.texcoords()])
         self.quad_vao, buffers = upload_mesh(quad, np.array([0, 1, 2, 0, 2, 3]))
         self.buffers += buffers
 
         GL.glUseProgram(self.program)
         GL.glUniform1i(self.loc["image"], 0)
-        GL.glUniform3f(self.loc["backing_color"], *MIRROR_BACKING)
+        GL.glUniform3f(self.loc["backing_color"], *self.mirror.backing)
         self.parts: list[Part] = []
-        self.revision: int | None = None
-
-    def _update_parts(self) -> None:
-        """Recompute per-part uniforms, only when the scene graph has changed."""
-        if self.revision == self.scene.graph.revision:
-            return
-        self.parts = []
-        for node in self.scene.graph.nodes():
-            if not node.mesh:
-                continue
-            vao, count = self.meshes[node.mesh]
-            world = node.world_matrix()
+        for part in scene_parts(scene):
+            vao, count = self.meshes[part.mesh]
             self.parts.append(Part(
-                vao, count, world.astype(np.float32),
-                np.linalg.inv(world[:3, :3]).T.astype(np.float32), node.color,
-                self.textures[node.texture] if node.texture else 0))
-        self.revision = self.scene.graph.revision
+                vao, count, part.model.astype(np.float32),
+                np.linalg.inv(part.model[:3, :3]).T.astype(np.float32), part.color,
+                self.textures[part.texture] if part.texture else 0))
 
     def _draw_parts(self, view_projection: np.ndarray) -> None:
         loc = self.loc
@@ -285,23 +275,24 @@ class MinimalRenderer:
     def draw(self, camera: Camera) -> None:
         """Both passes into this renderer's framebuffer."""
         scene, loc = self.scene, self.loc
-        self._update_parts()
         self.draw_calls = self.triangles = 0
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.fbo)
         GL.glViewport(0, 0, self.width, self.height)
         GL.glEnable(GL.GL_DEPTH_TEST)
         GL.glEnable(GL.GL_CULL_FACE)
-        GL.glClearColor(*scene.background, 1.0)
+        GL.glClearColor(*scene.background.color, 1.0)
         GL.glActiveTexture(GL.GL_TEXTURE0)
         GL.glUseProgram(self.program)
-        light = np.asarray(scene.light_direction, dtype=np.float64)
-        GL.glUniform3f(loc["light_direction"], *(light / np.linalg.norm(light)))
+        (light,) = scene.lights  # the lab has one white light
+        direction = np.asarray(light.direction, dtype=np.float64)
+        GL.glUniform3f(loc["light_direction"], *(direction / np.linalg.norm(direction)))
         GL.glUniform1f(loc["ambient"], scene.ambient)
-        GL.glUniform1f(loc["diffuse"], scene.diffuse)
+        GL.glUniform1f(loc["diffuse"], light.intensity)
 
         # Pass 1: the mirror's orthographic view, copied into the environment texture.
         GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT)
-        self._draw_parts(scene.capture.projection() @ scene.capture.view())
+        capture = self.mirror.ortho_capture
+        self._draw_parts(capture.projection() @ capture.view())
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.environment)
         GL.glCopyTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB, 0, 0, self.width, self.height, 0)
 
@@ -495,20 +486,17 @@ def markdown_table(rows: list[dict[str, Any]]) -> str:
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     width, height = args.size
-    scene = build_lab_scene()
-    camera = Camera()
+    scene = load_scene("lab20")
+    camera = scene.camera
 
     with HeadlessContext() as context:
         info = context.info()
         framebuffer = Framebuffer(context.resources, width, height)
-        renderer = Renderer(context.resources, scene)
+        renderer = SceneRenderer(context.resources)
         minimal = MinimalRenderer(scene, width, height)
         check_gl_errors("setting up both renderers")
-
-        # Triangles mirrorlab submits: the parts once per pass that runs, plus the mirror quad.
-        part_triangles = sum(renderer.drawer.meshes[node.mesh].index_count // 3
-                             for node in scene.graph.nodes() if node.mesh)
-        quad_triangles = renderer.camera_pass.quad.index_count // 3
+        part_triangles = sum(int(minimal.meshes[part.mesh][1]) // 3
+                             for part in scene_parts(scene))
 
         def mirrorlab_frame(expected: list[str]) -> Callable[[], tuple[int, int]]:
             """Checks that mirrorlab's last frame ran ``expected`` passes; the camera pass
@@ -518,17 +506,20 @@ def main(argv: list[str] | None = None) -> int:
                 if stats is None or stats.ran != expected:
                     raise RuntimeError(f"mirrorlab ran passes {stats and stats.ran}, "
                                        f"expected {expected}")
-                return stats.draw_calls, part_triangles * len(expected) + quad_triangles
+                return stats.draw_calls, part_triangles * len(expected) + 2
             return last_frame
 
-        full = Variant("mirrorlab", "mirrorlab (capture + camera)",
-                       lambda: renderer.render(framebuffer, camera, force_capture=True),
-                       framebuffer.read, mirrorlab_frame(["capture", "camera"]))
+        def forced() -> None:
+            renderer.state.clear()  # the capture's texture counts as stale: capture again
+            renderer.render(scene, framebuffer)
+
+        full = Variant("mirrorlab", "mirrorlab (capture + camera)", forced,
+                       framebuffer.read, mirrorlab_frame(["capture:mirror", "camera"]))
         small = Variant("minimal", "minimal PyOpenGL (capture + camera)",
                         lambda: minimal.draw(camera), minimal.read,
                         lambda: (minimal.draw_calls, minimal.triangles))
         skipped = Variant("skipped", "mirrorlab, capture skipped (camera only)",
-                          lambda: renderer.render(framebuffer, camera),
+                          lambda: renderer.render(scene, framebuffer),
                           framebuffer.read, mirrorlab_frame(["camera"]))
         variants = [full, small, skipped]
 

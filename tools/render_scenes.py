@@ -1,0 +1,33 @@
+"""Render every shipped scene file to docs/scenes/NAME.png (headless; from the checkout):
+
+    .venv/bin/python tools/render_scenes.py
+
+An animated scene is shown at its first, middle and last frames side by side.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+import mirrorlab
+from mirrorlab.files import write_png_atomic
+from mirrorlab.scene.loader import SCENES_DIR
+
+DOCS = Path(__file__).resolve().parent.parent / "docs" / "scenes"
+SIZE = (384, 384)
+
+
+def main() -> None:
+    with mirrorlab.Renderer(SIZE) as renderer:
+        for path in sorted(SCENES_DIR.glob("*.toml")):
+            scene = mirrorlab.load_scene(path)
+            frames = sorted({0, scene.frame_count // 2, scene.frame_count - 1})
+            image = np.hstack([renderer.render(scene, frame) for frame in frames])
+            write_png_atomic(DOCS / f"{scene.name}.png", image)
+            print(f"wrote {DOCS / scene.name}.png (frames {frames})")
+
+
+if __name__ == "__main__":
+    main()
