@@ -351,6 +351,14 @@ class Scene:
                              f"got {angles!r}")
         return self.with_object(robot.name, angles=values)
 
+    def to_toml(self) -> str:
+        """The scene as a scene file's text; reading it back gives an equal scene (file
+        names are written relative to the scene's own file, see
+        :func:`mirrorlab.scene.loader.dumps`)."""
+        from mirrorlab.scene.loader import dumps
+
+        return dumps(self)
+
     def at_frame(self, frame: int) -> Scene:
         """The scene posed for animation frame ``frame`` (the scene itself when still)."""
         if self.animation is None:
