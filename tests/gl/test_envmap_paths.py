@@ -2,6 +2,10 @@
 the hard inputs, in agreement with each other where they compute the same thing, and
 measured against the ray tracer (an independent model of the same scene).
 
+Scenes are the shipped ``chrome_sphere`` (with and without its lit objects) and
+``spheremap_cone``, each technique chosen with the ``method`` option and drawn by the one
+renderer (:class:`mirrorlab.renderer.SceneRenderer`, the ``scene_renderer`` fixture).
+
 Ground truth is traced with 4 x 4 rays per pixel and averaged: a mipmapped lookup
 filters the environment over the pixel, one ray per pixel would alias where the
 reflection squeezes it (towards the silhouette), and the tolerances would then measure
@@ -15,26 +19,29 @@ room; the numbers are in the module's constants and in the report printed on fai
 from __future__ import annotations
 
 import itertools
+from dataclasses import replace
 from functools import cache
 
 import numpy as np
 import pytest
 
-from mirrorlab.envmap_renderer import (
-    ENVMAP_METHODS,
-    EnvmapRenderer,
-    erode,
-    ground_truth,
-    render_envmap_frame,
-)
+import mirrorlab
+from mirrorlab import load_scene
+from mirrorlab.accuracy import erode
 from mirrorlab.gl.context import check_gl_errors
 from mirrorlab.gl.resources import FloatFramebuffer, Framebuffer
-from mirrorlab.passes.envmap import OUTPUT_COORDINATES
-from mirrorlab.scene.envscenes import build_cone_scene, build_sphere_scene
-from mirrorlab.scene.mesh import load_model
-from mirrorlab.scene.robot import Camera
-from tests.imagecheck import diff_image, save_failure
+from mirrorlab.options import apply_options
+from mirrorlab.passes.envmap import OUTPUT_COLOR, OUTPUT_COORDINATES
+from mirrorlab.passes.sky import background_faces
+from mirrorlab.raytrace import trace_scene
+from mirrorlab.renderer import SceneRenderer
+from mirrorlab.scene.mesh import load_mesh
+from mirrorlab.scene.model import CURVED_TECHNIQUES, Camera, Scene
+from mirrorlab.testing import difference_image
+from tests.gl.frames import draw
+from tests.imagecheck import save_failure
 
+ENVMAP_METHODS = CURVED_TECHNIQUES
 SIZE = 192
 SMALL = 96
 SUPERSAMPLE = 4
@@ -55,25 +62,59 @@ TOLERANCE_NO_OBJECTS = {  # method: (max mean abs error /255, max share of pixel
 TOLERANCE_CUBE_LIVE = (18.0, 0.40)  # measured 13.4, 0.308
 
 
+def sphere_scene(objects: bool = True, method: str | None = None,
+                 camera: Camera | None = None, map_size: int = 256) -> Scene:
+    """The shipped chrome sphere (without its lit objects when ``objects`` is False), its
+    reflector drawn by ``method`` with a ``map_size`` map, seen by ``camera``."""
+    scene = load_scene("chrome_sphere")
+    if not objects:
+        scene = replace(scene, objects=())
+    scene = apply_options(scene, {"method": method, "map_size": map_size})
+    return scene if camera is None else replace(scene, camera=camera)
+
+
+def cone_scene(height: float = 1.0) -> Scene:
+    """The textbook's cone with its base at (0, ``height``, 0)."""
+    scene = load_scene("spheremap_cone")
+    cone = scene.reflector("cone")
+    return scene.with_reflector("cone", transform=replace(cone.transform,
+                                                          position=(0.0, height, 0.0)))
+
+
 @cache
-def traced(scene_name: str, camera: Camera, size: int, cone_height: float = 1.0):
+def traced(scene_name: str, camera: Camera | None, size: int, cone_height: float = 1.0):
     """(image uint8, compared-region mask) of the ray-traced truth, computed once."""
     if scene_name == "cone":
-        scene = build_cone_scene(cone_height)
+        scene = cone_scene(cone_height)
     else:
-        scene = build_sphere_scene(objects=scene_name == "sphere")
-    truth = ground_truth(scene, camera, (size, size), supersample=SUPERSAMPLE)
+        scene = sphere_scene(objects=scene_name == "sphere")
+    if camera is not None:
+        scene = replace(scene, camera=camera)
+    truth = trace_scene(scene, (size, size), supersample=SUPERSAMPLE)
     return truth.to_uint8(), erode(truth.reflective_mask, 1)
 
 
-def render(registry, scene, method, camera, size=SIZE, map_size=256, float_target=False,
-           output=0):
-    target = (FloatFramebuffer if float_target else Framebuffer)(registry, size, size)
-    renderer = EnvmapRenderer(registry, scene, method, map_size)
-    stats = renderer.render(target, camera, output=output)
-    image = target.read()
-    check_gl_errors(f"a {method} frame")
-    return image, renderer, stats
+def render(renderer: SceneRenderer, scene: Scene, size: int = SIZE, float_target: bool = False,
+           output: int = OUTPUT_COLOR, reflector: str = "sphere"):
+    """(image, stats) of one frame of ``scene`` in a ``size`` square target (float32 RGB
+    for ``float_target``, else uint8). ``output`` OUTPUT_COORDINATES draws the
+    reflector's lookup coordinates instead of its colours (after a first frame has made
+    its pass); the pass is put back to colour afterwards."""
+    target = (FloatFramebuffer if float_target else Framebuffer)(renderer.registry, size, size)
+    try:
+        stats = renderer.render(scene, target)
+        if output != OUTPUT_COLOR:
+            curved = renderer.pass_for(reflector)
+            curved.output_mode = output
+            try:
+                stats = renderer.render(scene, target)
+            finally:
+                curved.output_mode = OUTPUT_COLOR
+        image = target.read()
+        check_gl_errors(f"a frame of {scene.name}")
+        return image, stats
+    finally:
+        target.release()
 
 
 def region_error(image: np.ndarray, truth: np.ndarray, mask: np.ndarray) -> tuple[float, float]:
@@ -86,27 +127,32 @@ def assert_close_to_truth(name, image, truth, mask, max_mean, max_share):
     mean, share = region_error(image, truth, mask)
     if mean > max_mean or share > max_share:
         folder = save_failure(name, actual=image, expected=truth,
-                              diff=diff_image(image, truth))
+                              diff=difference_image(image, truth))
         pytest.fail(f"{name}: mean abs error {mean:.2f}/255 (max {max_mean}), "
                     f"{share:.1%} of pixels off by > 10 (max {max_share:.0%}); images in {folder}")
     return mean, share
+
+
+def drawn_mode(stats, reflector: str = "sphere") -> str:
+    """How the camera's view drew ``reflector`` in the frame of ``stats``."""
+    return next(d.mode for d in stats.plan.top.draws if d.reflector.name == reflector)
 
 
 # ------------------------------------------------------------------- numerically safe
 
 
 @pytest.mark.parametrize("method", ENVMAP_METHODS)
-def test_each_path_draws_finite_colours_and_in_range_lookups(registry, method):
-    scene = build_sphere_scene()
-    colour, _, stats = render(registry, scene, method, scene.camera, SMALL, float_target=True)
-    assert stats.ran[-1] == "envmap"
+def test_each_path_draws_finite_colours_and_in_range_lookups(scene_renderer, method):
+    scene = sphere_scene(method=method)
+    colour, stats = render(scene_renderer, scene, SMALL, float_target=True)
+    assert drawn_mode(stats) in ("map", "texture")  # drawn by its technique, not plain
     assert np.isfinite(colour).all() and colour.min() >= 0.0 and colour.max() <= 1.0
-    _, mask = traced("sphere", scene.camera, SMALL)
+    _, mask = traced("sphere", None, SMALL)
     assert mask.sum() > 300
     if method == "sphere-texgen":
         return  # fixed function: there are no shader coordinates to read back
-    coords, _, _ = render(registry, scene, method, scene.camera, SMALL, float_target=True,
-                          output=OUTPUT_COORDINATES)
+    coords, _ = render(scene_renderer, scene, SMALL, float_target=True,
+                       output=OUTPUT_COORDINATES)
     inside = coords[mask]
     assert np.isfinite(inside).all()
     if method in ("cube", "cube-live"):
@@ -126,7 +172,9 @@ def rim_camera() -> Camera:
 def vertex_on_axis_camera() -> Camera:
     """Puts a mesh vertex of the sphere exactly on the optical axis with the view ray
     perpendicular to its normal: there r = u - 2 (n.u) n is (0, 0, -1) to rounding."""
-    data = load_model("env_sphere")
+    reflector = load_scene("chrome_sphere").reflector("sphere")
+    data = load_mesh(reflector.mesh)
+    assert np.allclose(reflector.model_matrix(), np.eye(4))  # mesh frame = world frame
     vertex = data.positions[7].astype(np.float64)
     normal = data.normals[7].astype(np.float64)
     tangent = np.cross(normal, (0.3, 1.0, 0.2))
@@ -137,16 +185,17 @@ def vertex_on_axis_camera() -> Camera:
 
 @pytest.mark.parametrize("camera_name", ["rim", "vertex-on-axis"])
 @pytest.mark.parametrize("method", ENVMAP_METHODS)
-def test_singular_sphere_map_direction_in_view_stays_finite(registry, method, camera_name):
+def test_singular_sphere_map_direction_in_view_stays_finite(scene_renderer, method,
+                                                            camera_name):
     camera = rim_camera() if camera_name == "rim" else vertex_on_axis_camera()
-    scene = build_sphere_scene(objects=False)
-    colour, _, _ = render(registry, scene, method, camera, SMALL, float_target=True)
+    scene = sphere_scene(objects=False, method=method, camera=camera)
+    colour, _ = render(scene_renderer, scene, SMALL, float_target=True)
     assert np.isfinite(colour).all(), f"{method}: NaN/Inf pixels near r = (0, 0, -1)"
     assert colour.min() >= 0.0 and colour.max() <= 1.0
     if method == "sphere-texgen":
         return
-    coords, _, _ = render(registry, scene, method, camera, SMALL, float_target=True,
-                          output=OUTPUT_COORDINATES)
+    coords, _ = render(scene_renderer, scene, SMALL, float_target=True,
+                       output=OUTPUT_COORDINATES)
     assert np.isfinite(coords).all(), f"{method}: NaN/Inf lookup coordinates"
     if method == "sphere":
         # the singular region is really in view: lookups reach the map's rim
@@ -159,65 +208,63 @@ def test_singular_sphere_map_direction_in_view_stays_finite(registry, method, ca
 # ------------------------------------------------------------------- paths against paths
 
 
-def test_texgen_and_vertex_shader_give_the_same_per_vertex_sphere_map(registry):
-    scene = build_sphere_scene()
-    texgen, _, _ = render(registry, scene, "sphere-texgen", scene.camera)
-    shader, _, _ = render(registry, scene, "sphere-vertex", scene.camera)
-    _, mask = traced("sphere", scene.camera, SIZE)
+def test_texgen_and_vertex_shader_give_the_same_per_vertex_sphere_map(scene_renderer):
+    texgen, _ = render(scene_renderer, sphere_scene(method="sphere-texgen"))
+    shader, _ = render(scene_renderer, sphere_scene(method="sphere-vertex"))
+    _, mask = traced("sphere", None, SIZE)
     diff = np.abs(texgen.astype(int) - shader.astype(int)).max(axis=-1)[mask]
     if not (diff.mean() < 0.5 and np.mean(diff > 3) < 0.01):  # measured: identical
         save_failure("texgen_vs_vertex", texgen=texgen, shader=shader,
-                     diff=diff_image(texgen, shader))
+                     diff=difference_image(texgen, shader))
         pytest.fail(f"texgen vs vertex shader: mean {diff.mean():.2f}, "
                     f"{np.mean(diff > 3):.2%} of pixels off by > 3")
 
 
-def test_live_cube_of_an_empty_scene_is_the_static_cube(registry):
+def test_live_cube_of_an_empty_scene_is_the_static_cube(scene_renderer):
     # With no objects the six captures see only the sky: this checks every face's
     # camera orientation against the baked faces (a wrong up vector flips a face).
-    scene = build_sphere_scene(objects=False)
-    live, renderer, _ = render(registry, scene, "cube-live", scene.camera)
-    static, _, _ = render(registry, scene, "cube", scene.camera)
-    _, mask = traced("sphere-empty", scene.camera, SIZE)
+    scene = sphere_scene(objects=False, method="cube-live")
+    live, stats = render(scene_renderer, scene)
+    assert "capture:sphere" in stats.ran
+    captured_cube = scene_renderer.pass_for("sphere").cube(stats.plan.top.draws[0].slot)
+    captured = [captured_cube.read_face(face).astype(int) for face in range(6)]
+    static, _ = render(scene_renderer, sphere_scene(objects=False, method="cube"))
+    _, mask = traced("sphere-empty", None, SIZE)
     mean, share = region_error(live, static, mask)
     assert mean < 1.0 and share < 0.01, (mean, share)
+    baked = background_faces(scene.background, scene.reflector("sphere").map_size)
     for face in range(6):
-        captured = renderer.texture.read_face(face).astype(int)
-        baked = renderer.sky_map.read_face(face).astype(int)
-        assert np.abs(captured - baked).mean() < 2.0, f"face {face}"
+        assert np.abs(captured[face] - baked[face].astype(int)).mean() < 2.0, f"face {face}"
 
 
 # ------------------------------------------------------------------- against the ray tracer
 
 
 @pytest.mark.parametrize("method", sorted(TOLERANCE_NO_OBJECTS))
-def test_path_agrees_with_ray_tracer_on_the_distant_environment(registry, method):
-    scene = build_sphere_scene(objects=False)
-    truth, mask = traced("sphere-empty", scene.camera, SIZE)
-    image, _, _ = render(registry, scene, method, scene.camera)
+def test_path_agrees_with_ray_tracer_on_the_distant_environment(scene_renderer, method):
+    truth, mask = traced("sphere-empty", None, SIZE)
+    image, _ = render(scene_renderer, sphere_scene(objects=False, method=method))
     assert mask.sum() > 3000
     assert_close_to_truth(f"truth_{method}", image, truth, mask,
                           *TOLERANCE_NO_OBJECTS[method])
 
 
-def test_normal_method_is_further_from_the_truth_than_the_sphere_map(registry):
+def test_normal_method_is_further_from_the_truth_than_the_sphere_map(scene_renderer):
     # "demo style" ignores where the eye is: exact only for a viewer infinitely far away
-    scene = build_sphere_scene(objects=False)
-    truth, mask = traced("sphere-empty", scene.camera, SIZE)
-    sphere, _, _ = render(registry, scene, "sphere", scene.camera)
-    normal, _, _ = render(registry, scene, "normal", scene.camera)
+    truth, mask = traced("sphere-empty", None, SIZE)
+    sphere, _ = render(scene_renderer, sphere_scene(objects=False, method="sphere"))
+    normal, _ = render(scene_renderer, sphere_scene(objects=False, method="normal"))
     sphere_error, _ = region_error(sphere, truth, mask)
     normal_error, _ = region_error(normal, truth, mask)
     assert normal_error > 2.0 * sphere_error, (normal_error, sphere_error)  # 7.5 vs 2.0
 
 
-def test_live_cube_reflects_the_objects_around_the_sphere(registry):
-    scene = build_sphere_scene()
-    truth, mask = traced("sphere", scene.camera, SIZE)
-    empty_truth, _ = traced("sphere-empty", scene.camera, SIZE)
-    live, _, stats = render(registry, scene, "cube-live", scene.camera)
-    static, _, _ = render(registry, scene, "cube", scene.camera)
-    assert "cube-capture" in stats.ran
+def test_live_cube_reflects_the_objects_around_the_sphere(scene_renderer):
+    truth, mask = traced("sphere", None, SIZE)
+    empty_truth, _ = traced("sphere-empty", None, SIZE)
+    live, stats = render(scene_renderer, sphere_scene(method="cube-live"))
+    static, _ = render(scene_renderer, sphere_scene(method="cube"))
+    assert "capture:sphere" in stats.ran
     assert_close_to_truth("truth_cube-live_objects", live, truth, mask, *TOLERANCE_CUBE_LIVE)
     # where the ray tracer sees an object in the sphere (not the sky), the live cube
     # map must be far closer to it than the sky-only static cube map
@@ -230,15 +277,15 @@ def test_live_cube_reflects_the_objects_around_the_sphere(registry):
         pytest.fail(f"object reflections: live {live_error:.1f} vs static {static_error:.1f}")
 
 
-def test_per_vertex_sphere_map_is_less_accurate_than_per_pixel(registry):
+def test_per_vertex_sphere_map_is_less_accurate_than_per_pixel(scene_renderer):
     # Close up, the sphere's triangles are large on screen and interpolating (s, t)
     # across them shows; measured MAE 0.75 (vertex, texgen) vs 0.39 (pixel), share off
     # by > 10/255: 1.4 % vs 0.2 %.
-    scene = build_sphere_scene(objects=False)
     truth, mask = traced("sphere-empty", CLOSE_UP, SIZE)
     errors = {}
     for method in ("sphere", "sphere-vertex", "sphere-texgen"):
-        image, _, _ = render(registry, scene, method, CLOSE_UP)
+        image, _ = render(scene_renderer, sphere_scene(objects=False, method=method,
+                                                       camera=CLOSE_UP))
         errors[method] = region_error(image, truth, mask)
     assert errors["sphere-vertex"][0] > 1.5 * errors["sphere"][0], errors
     assert errors["sphere-texgen"][0] > 1.5 * errors["sphere"][0], errors
@@ -246,16 +293,16 @@ def test_per_vertex_sphere_map_is_less_accurate_than_per_pixel(registry):
 
 
 @pytest.mark.parametrize("method", ["sphere", "cube", "latlong"])
-def test_larger_maps_reduce_the_error(registry, method):
+def test_larger_maps_reduce_the_error(scene_renderer, method):
     # Measured close up (MAE at 16/32/64/128/256): sphere 10.7/5.6/2.4/0.95/0.39, cube
     # 4.3/1.9/0.83/0.74/0.97, latlong 6.9/3.4/1.4/0.71/0.87. Past that, texture filtering,
     # not resolution, limits the error, so the ordering is asserted only where it is robust.
-    scene = build_sphere_scene(objects=False)
     truth, mask = traced("sphere-empty", CLOSE_UP, SIZE)
     sizes = (16, 32, 64) if method == "cube" else (16, 32, 64, 128)
     errors = []
     for map_size in sizes:
-        image, _, _ = render(registry, scene, method, CLOSE_UP, map_size=map_size)
+        scene = sphere_scene(objects=False, method=method, camera=CLOSE_UP, map_size=map_size)
+        image, _ = render(scene_renderer, scene)
         errors.append(region_error(image, truth, mask)[0])
     assert all(a > 1.3 * b for a, b in itertools.pairwise(errors)), errors
 
@@ -263,10 +310,9 @@ def test_larger_maps_reduce_the_error(registry, method):
 # ------------------------------------------------------------------- latlong seam
 
 
-def seam_pixels(registry, scene) -> np.ndarray:
+def seam_pixels(renderer: SceneRenderer, scene: Scene) -> np.ndarray:
     """Reflector pixels next to the phi = 0 seam (s wraps between them and a neighbour)."""
-    coords, _, _ = render(registry, scene, "latlong", SEAM_VIEW, float_target=True,
-                          output=OUTPUT_COORDINATES)
+    coords, _ = render(renderer, scene, float_target=True, output=OUTPUT_COORDINATES)
     s = coords[..., 0]
     jump = np.zeros(s.shape, bool)
     vertical = np.abs(np.diff(s, axis=0)) > 0.5
@@ -278,21 +324,24 @@ def seam_pixels(registry, scene) -> np.ndarray:
     return jump
 
 
-def test_latlong_seam_shows_no_smeared_line(registry):
-    scene = build_sphere_scene(objects=False)
+def test_latlong_seam_shows_no_smeared_line(scene_renderer):
+    scene = sphere_scene(objects=False, method="latlong", camera=SEAM_VIEW)
     truth, mask = traced("sphere-empty", SEAM_VIEW, SIZE)
-    seam = seam_pixels(registry, scene) & mask
+    seam = seam_pixels(scene_renderer, scene) & mask
     assert seam.sum() >= 40, "the seam is not in view"
-    image, renderer, _ = render(registry, scene, "latlong", SEAM_VIEW)
+    image, _ = render(scene_renderer, scene)
     seam_error, _ = region_error(image, truth, seam)
     rest_error, _ = region_error(image, truth, mask & ~seam)
     # control: the same lookup with hardware derivatives of s picks the coarsest mip
     # level along the seam; the check below must catch that
-    target = Framebuffer(registry, SIZE, SIZE)
-    renderer.envmap_pass.program.use()
-    renderer.envmap_pass.program.set_int("seam_safe", 0)
-    renderer.render(target, SEAM_VIEW)
-    smeared = target.read()
+    program = scene_renderer.pass_for("sphere").program
+    program.use()
+    program.set_int("seam_safe", 0)
+    try:
+        smeared, _ = render(scene_renderer, scene)
+    finally:
+        program.use()
+        program.set_int("seam_safe", 1)
     smeared_error, _ = region_error(smeared, truth, seam)
     if seam_error > rest_error + 4.0:
         save_failure("latlong_seam", actual=image, expected=truth, smeared=smeared,
@@ -305,16 +354,21 @@ def test_latlong_seam_shows_no_smeared_line(registry):
 # ------------------------------------------------------------------- the textbook's cone
 
 
-def test_moving_the_cone_changes_its_reflection_as_the_ray_tracer_does(registry):
+def test_moving_the_cone_changes_its_reflection_as_the_ray_tracer_does(scene_renderer):
     # Guha's experiment: texgen sphere map with the launch picture as the map. The cone
     # scene's environment is defined so that the picture is its exact sphere map for the
     # fixed viewer, so the ray tracer (which also sees the backdrop) is the reference.
     frames, masks = [], []
     for height in (1.0, -1.0):
-        scene = build_cone_scene(height)
-        truth, mask = traced("cone", scene.camera, SIZE, height)
-        image, _, stats = render(registry, scene, "sphere-texgen", scene.camera)
-        assert stats.ran == ["sky", "scene", "envmap"]  # the picture is used as it is
+        scene = cone_scene(height)
+        assert scene.reflector("cone").technique == "sphere-texgen"
+        truth, mask = traced("cone", None, SIZE, height)
+        image, stats = render(scene_renderer, scene, reflector="cone")
+        # the picture is used as it is: loaded, not baked from the background
+        bakes = [p for p in stats.plan.passes if p.name == "bake"]
+        assert [p.reflector for p in bakes] == ["cone"]
+        assert bakes[0].key[0] == "picture"
+        assert drawn_mode(stats, "cone") == "map"
         assert mask.sum() > 1500
         # measured MAE 4.99 / 4.82, share > 10/255: 19.0 % / 16.6 % (heights 1, -1)
         assert_close_to_truth(f"cone_{height}", image, truth, mask, 7.0, 0.27)
@@ -336,59 +390,83 @@ def test_moving_the_cone_changes_its_reflection_as_the_ray_tracer_does(registry)
 # ------------------------------------------------------------------- renderer behaviour
 
 
-def test_live_capture_reruns_only_when_the_scene_changes(registry):
-    scene = build_sphere_scene()
-    target = Framebuffer(registry, SMALL, SMALL)
-    renderer = EnvmapRenderer(registry, scene, "cube-live", 64)
-    assert "cube-capture" in renderer.render(target, scene.camera).ran
-    assert "cube-capture" not in renderer.render(target, CLOSE_UP).ran  # viewer moved only
-    scene.move_reflector((0.0, 0.3, 0.0))
-    assert "cube-capture" in renderer.render(target, scene.camera).ran
-    assert "cube-capture" not in renderer.render(target, scene.camera).ran
+def test_live_capture_reruns_only_when_the_scene_changes(scene_renderer):
+    scene = sphere_scene(method="cube-live", map_size=64)
+    size = (SMALL, SMALL)
+    _, stats = draw(scene_renderer, scene, size)
+    assert "capture:sphere" in stats.ran
+    _, stats = draw(scene_renderer, replace(scene, camera=CLOSE_UP), size)  # viewer moved only
+    assert "capture:sphere" not in stats.ran and "capture:sphere" in stats.skipped
+    sphere = scene.reflector("sphere")
+    moved = scene.with_reflector("sphere", transform=replace(sphere.transform,
+                                                             position=(0.0, 0.3, 0.0)))
+    _, stats = draw(scene_renderer, moved, size)
+    assert "capture:sphere" in stats.ran
+    _, stats = draw(scene_renderer, moved, size)
+    assert "capture:sphere" not in stats.ran and "capture:sphere" in stats.skipped
 
 
-def test_sphere_map_is_rebaked_only_when_the_view_turns(registry):
-    scene = build_sphere_scene()
-    target = Framebuffer(registry, SMALL, SMALL)
-    renderer = EnvmapRenderer(registry, scene, "sphere", 64)
-    assert "sphere-bake" in renderer.render(target, scene.camera).ran
-    assert "sphere-bake" not in renderer.render(target, scene.camera).ran
-    assert "sphere-bake" in renderer.render(target, CLOSE_UP).ran
+def test_sphere_map_is_rebaked_only_when_the_view_turns(scene_renderer):
+    scene = sphere_scene(method="sphere", map_size=64)
+    size = (SMALL, SMALL)
+    _, stats = draw(scene_renderer, scene, size)
+    assert "bake:sphere" in stats.ran
+    _, stats = draw(scene_renderer, scene, size)
+    assert "bake:sphere" not in stats.ran and "bake:sphere" in stats.skipped
+    _, stats = draw(scene_renderer, replace(scene, camera=CLOSE_UP), size)
+    assert "bake:sphere" in stats.ran
 
 
 def test_renderer_release_frees_every_gl_object_it_made(gl_context):
     before = len(gl_context.resources)
     for method in ENVMAP_METHODS:
-        renderer = EnvmapRenderer(gl_context.resources, build_sphere_scene(), method, 32)
-        assert len(gl_context.resources) > before
-        renderer.release()
+        renderer = SceneRenderer(gl_context.resources)
+        try:
+            draw(renderer, sphere_scene(method=method, map_size=32), (32, 32))
+            assert len(gl_context.resources) > before
+        finally:
+            renderer.release()
         renderer.release()  # idempotent
         assert len(gl_context.resources) == before, method
 
 
 def test_headless_one_shot_renders_each_scene(gl_context):
-    frame = render_envmap_frame("cone", "sphere-texgen", (64, 48), map_size=32)
-    assert frame.image.shape == (48, 64, 3) and frame.passes[-1] == "envmap"
+    image = mirrorlab.render("cone", (64, 48), method="sphere-texgen", map_size=32)
+    assert image.shape == (48, 64, 3) and image.dtype == np.uint8
     gl_context.make_current()  # the one-shot made (and released) its own context
+    with mirrorlab.Renderer(size=(64, 48)) as renderer:
+        for name in ("cone", "sphere"):
+            image = renderer.render(name, map_size=32)
+            assert image.shape == (48, 64, 3)
+            assert renderer.last_stats is not None and renderer.last_stats.ran[-1] == "camera"
+            reflector = load_scene(name).reflectors[0].name
+            assert drawn_mode(renderer.last_stats, reflector) == "map"
+    gl_context.make_current()
 
 
 @pytest.mark.parametrize(("kwargs", "message"), [
-    ({"scene": "teapot"}, "unknown environment-mapping scene 'teapot'; expected one of cone"),
-    ({"envmap": "spheer"}, "unknown environment-map method 'spheer'; expected one of sphere"),
-    ({"map_size": 3}, "map_size must be a whole number from 4 to 4096, got 3"),
-    ({"scene": "sphere", "cone_height": 1.0}, "cone_height applies to the cone scene only"),
+    ({"scene": "teapot"}, "teapot: unknown scene; expected a .toml file or one of "
+                          "chrome_sphere"),
+    ({"scene": "sphere", "method": "spheer"},
+     "--method: reflectors[0].technique: expected one of ortho, reflected, stencil, sphere"),
+    # the lab has no curved reflector, but an unknown name is still an unknown name
+    ({"scene": "lab", "method": "spheer"}, "expected one of ortho, reflected, stencil, sphere"),
+    ({"scene": "sphere", "map_size": 3},
+     "--map-size: reflectors[0].map_size: expected a whole number from 4 to 4096, got 3"),
+    ({"scene": "sphere", "angles": (0.0, 10.0, 20.0)},
+     "--angles: scene 'chrome_sphere' has no robot to pose"),
 ])
 def test_bad_names_fail_with_a_message_naming_them(gl_context, kwargs, message):
-    with pytest.raises(ValueError, match=message.replace("(", r"\(")) as info:
-        render_envmap_frame(**{"size": (16, 16), **kwargs})
+    with pytest.raises(ValueError) as info:
+        mirrorlab.render(**{"size": (16, 16), **kwargs})
+    assert message in str(info.value)
     assert "\n" not in str(info.value)
     gl_context.make_current()
 
 
-def test_sky_behind_the_sphere_is_the_environment(registry):
-    scene = build_sphere_scene(objects=False)
-    image, _, _ = render(registry, scene, "cube", scene.camera, SMALL)
-    truth, mask = traced("sphere-empty", scene.camera, SMALL)
+def test_sky_behind_the_sphere_is_the_environment(scene_renderer):
+    image, _ = render(scene_renderer, sphere_scene(objects=False, method="cube"), SMALL)
+    truth, mask = traced("sphere-empty", None, SMALL)
     background = erode(~mask, 3)  # well away from the sphere's silhouette
     mean, share = region_error(image, truth, background)
     assert mean < 2.0 and share < 0.02, f"sky vs environment: {mean:.2f}/255, {share:.1%}"
