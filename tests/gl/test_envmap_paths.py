@@ -28,8 +28,6 @@ import pytest
 import mirrorlab
 from mirrorlab import load_scene
 from mirrorlab.accuracy import erode
-from mirrorlab.gl.context import check_gl_errors
-from mirrorlab.gl.resources import FloatFramebuffer, Framebuffer
 from mirrorlab.options import apply_options
 from mirrorlab.passes.envmap import OUTPUT_COLOR, OUTPUT_COORDINATES
 from mirrorlab.passes.sky import background_faces
@@ -38,6 +36,9 @@ from mirrorlab.renderer import SceneRenderer
 from mirrorlab.scene.mesh import load_mesh
 from mirrorlab.scene.model import CURVED_TECHNIQUES, Camera, Scene
 from mirrorlab.testing import difference_image
+from tests.gl import envmap_frames
+from tests.gl.envmap_frames import assert_close_to_truth, region_error
+from tests.gl.envmap_frames import render as render_frame
 from tests.gl.frames import draw
 from tests.imagecheck import save_failure
 
@@ -95,47 +96,15 @@ def traced(scene_name: str, camera: Camera | None, size: int, cone_height: float
 
 
 def render(renderer: SceneRenderer, scene: Scene, size: int = SIZE, float_target: bool = False,
-           output: int = OUTPUT_COLOR, reflector: str = "sphere"):
+           output: int = OUTPUT_COLOR):
     """(image, stats) of one frame of ``scene`` in a ``size`` square target (float32 RGB
-    for ``float_target``, else uint8). ``output`` OUTPUT_COORDINATES draws the
-    reflector's lookup coordinates instead of its colours (after a first frame has made
-    its pass); the pass is put back to colour afterwards."""
-    target = (FloatFramebuffer if float_target else Framebuffer)(renderer.registry, size, size)
-    try:
-        stats = renderer.render(scene, target)
-        if output != OUTPUT_COLOR:
-            curved = renderer.pass_for(reflector)
-            curved.output_mode = output
-            try:
-                stats = renderer.render(scene, target)
-            finally:
-                curved.output_mode = OUTPUT_COLOR
-        image = target.read()
-        check_gl_errors(f"a frame of {scene.name}")
-        return image, stats
-    finally:
-        target.release()
-
-
-def region_error(image: np.ndarray, truth: np.ndarray, mask: np.ndarray) -> tuple[float, float]:
-    """Mean absolute channel error (0-255) and share of pixels with a channel off by > 10."""
-    diff = np.abs(image.astype(np.int32) - truth.astype(np.int32))[mask]
-    return float(diff.mean()), float(np.mean(diff.max(axis=-1) > 10))
-
-
-def assert_close_to_truth(name, image, truth, mask, max_mean, max_share):
-    mean, share = region_error(image, truth, mask)
-    if mean > max_mean or share > max_share:
-        folder = save_failure(name, actual=image, expected=truth,
-                              diff=difference_image(image, truth))
-        pytest.fail(f"{name}: mean abs error {mean:.2f}/255 (max {max_mean}), "
-                    f"{share:.1%} of pixels off by > 10 (max {max_share:.0%}); images in {folder}")
-    return mean, share
+    for ``float_target``, else uint8); ``output`` OUTPUT_COORDINATES draws the
+    reflector's lookup coordinates instead of its colours."""
+    return render_frame(renderer, scene, size, float_target, output)
 
 
 def drawn_mode(stats, reflector: str = "sphere") -> str:
-    """How the camera's view drew ``reflector`` in the frame of ``stats``."""
-    return next(d.mode for d in stats.plan.top.draws if d.reflector.name == reflector)
+    return envmap_frames.drawn_mode(stats, reflector)
 
 
 # ------------------------------------------------------------------- numerically safe
@@ -363,7 +332,7 @@ def test_moving_the_cone_changes_its_reflection_as_the_ray_tracer_does(scene_ren
         scene = cone_scene(height)
         assert scene.reflector("cone").technique == "sphere-texgen"
         truth, mask = traced("cone", None, SIZE, height)
-        image, stats = render(scene_renderer, scene, reflector="cone")
+        image, stats = render(scene_renderer, scene)
         # the picture is used as it is: loaded, not baked from the background
         bakes = [p for p in stats.plan.passes if p.name == "bake"]
         assert [p.reflector for p in bakes] == ["cone"]
