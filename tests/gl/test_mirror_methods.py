@@ -1,5 +1,9 @@
 """The three rasterised mirrors against the ray-traced ground truth, on llvmpipe.
 
+The scene is the shipped ``lab20``, its mirror's technique chosen with the ``method``
+option and drawn by the one renderer (the ``scene_renderer`` fixture); the truth is
+:func:`mirrorlab.raytrace.trace_scene` of the same scene.
+
 Tolerance throughout: a pixel agrees when every channel is within 10/255 of
 the tracer's. Both sample pixel centres with the same shading, so the exact
 techniques (reflected, stencil) agree almost everywhere; what is left is
@@ -9,22 +13,26 @@ texture filtering and silhouette pixels.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from mirrorlab import math3d
+import mirrorlab
 from mirrorlab.gl.context import check_gl_errors
-from mirrorlab.gl.resources import Framebuffer
-from mirrorlab.passes.reflected import reflected_view_projection
-from mirrorlab.raytrace import lab_ray_scene
-from mirrorlab.renderer import Renderer
-from mirrorlab.scene.graph import Node, SceneGraph
-from mirrorlab.scene.robot import Camera, LabScene, build_lab_scene, build_world
+from mirrorlab.options import apply_options
+from mirrorlab.paths import REPO_DIR
+from mirrorlab.raytrace import trace_scene
+from mirrorlab.scene.model import Camera, MeshObject, PlanarReflector, Scene, Transform
+from mirrorlab.scene.robot import hand_center
+from mirrorlab.views import camera_view, reflected_capture_view
+from tests.gl.frames import draw
 from tests.imagecheck import assert_region_close, red_dominant, save_failure, share_within
 
 SIZE = 160
 MIRROR_CENTER = np.array([-7.0, 1.0, -2.0])
+HAND_MESH = Path(REPO_DIR) / "models" / "hand.obj"
 
 
 def viewer_at(degrees: float, distance: float, fovy: float = 45.0, height: float = 0.0):
@@ -32,24 +40,34 @@ def viewer_at(degrees: float, distance: float, fovy: float = 45.0, height: float
     about the vertical towards +z), looking at the centre."""
     angle = math.radians(degrees)
     eye = MIRROR_CENTER + distance * np.array([math.cos(angle), height, math.sin(angle)])
-    return Camera(eye=tuple(eye), target=tuple(MIRROR_CENTER), fovy=fovy)
+    return Camera(eye=tuple(float(v) for v in eye),
+                  target=tuple(float(v) for v in MIRROR_CENTER), fovy=fovy)
 
 
-def render(registry, scene, camera, method, capture="copy", env_size=None, size=SIZE):
-    framebuffer = Framebuffer(registry, size, size)
-    renderer = Renderer(registry, scene, method, capture,
-                        None if env_size is None else (env_size, env_size))
-    stats = renderer.render(framebuffer, camera)
-    image = framebuffer.read()
-    environment = renderer.read_environment()
+def lab(camera: Camera | None = None, angles=None) -> Scene:
+    """The shipped lab scene seen by ``camera``, its robot posed at ``angles``."""
+    scene = mirrorlab.load_scene("lab20")
+    if angles is not None:
+        scene = scene.with_angles(angles)
+    return scene if camera is None else replace(scene, camera=camera)
+
+
+def render(renderer, scene, method, capture="copy", env_size=None, size=SIZE):
+    """``scene`` with its mirror drawn by ``method``: the frame, the capture texture the
+    frame used (None for stencil) and the frame's stats."""
+    configured = apply_options(scene, {"method": method, "capture": capture,
+                                       "env_size": env_size})
+    image, stats = draw(renderer, configured, (size, size))
     check_gl_errors(f"{method} frame")
-    renderer.release()
-    framebuffer.release()
+    environment = None
+    (mirror_draw,) = stats.plan.top.draws
+    if mirror_draw.mode == "texture":
+        environment = renderer.pass_for("mirror").captures.texture(mirror_draw.slot).read()
     return image, environment, stats
 
 
-def trace(scene, camera, size=SIZE):
-    return lab_ray_scene(scene).render(camera.view(), camera.projection(1.0), (size, size))
+def trace(scene, size=SIZE):
+    return trace_scene(scene, (size, size))
 
 
 OFF_NORMAL = {
@@ -63,28 +81,27 @@ OFF_NORMAL = {
 
 @pytest.mark.parametrize("method", ["reflected", "stencil"])
 @pytest.mark.parametrize("view", sorted(OFF_NORMAL))
-def test_exact_methods_agree_with_the_ray_tracer(registry, method, view):
+def test_exact_methods_agree_with_the_ray_tracer(scene_renderer, method, view):
     """99% of mirror pixels within 10/255 (texture size = frame size for reflected)."""
-    scene, camera = build_lab_scene(), OFF_NORMAL[view]
-    truth = trace(scene, camera)
+    scene = lab(OFF_NORMAL[view])
+    truth = trace(scene)
     assert truth.reflective_mask.sum() > 200, "the mirror should fill part of the frame"
-    image, _, _ = render(registry, scene, camera, method)
+    image, _, _ = render(scene_renderer, scene, method)
     assert_region_close(f"{method}_{view}", image, truth.to_uint8(), truth.reflective_mask,
                         channel_tolerance=10, min_fraction_within=0.99)
     # Outside the mirror every method draws the same scene as the tracer.
     assert share_within(image, truth.to_uint8(), ~truth.reflective_mask, 10) > 0.995
 
 
-def test_ortho_is_right_head_on_from_afar_and_wrong_at_sixty_degrees(registry):
-    scene = build_lab_scene()
-    far = viewer_at(0, 80, fovy=8)
-    truth = trace(scene, far)
-    image, _, _ = render(registry, scene, far, "ortho")
+def test_ortho_is_right_head_on_from_afar_and_wrong_at_sixty_degrees(scene_renderer):
+    far = lab(viewer_at(0, 80, fovy=8))
+    truth = trace(far)
+    image, _, _ = render(scene_renderer, far, "ortho")
     assert_region_close("ortho_head_on_far", image, truth.to_uint8(), truth.reflective_mask,
                         channel_tolerance=10, min_fraction_within=0.98)
-    oblique = viewer_at(60, 16)
-    truth = trace(scene, oblique)
-    image, _, _ = render(registry, scene, oblique, "ortho")
+    oblique = lab(viewer_at(60, 16))
+    truth = trace(oblique)
+    image, _, _ = render(scene_renderer, oblique, "ortho")
     within = share_within(image, truth.to_uint8(), truth.reflective_mask, 10)
     assert within < 0.95, f"ortho at 60 deg should visibly differ, but {within:.1%} agree"
 
@@ -100,16 +117,17 @@ def mirror_point_of_pixel(camera: Camera, xy: np.ndarray, size: int) -> np.ndarr
 
 
 @pytest.mark.parametrize("degrees", [-20, -35])
-def test_ortho_displaces_the_reflected_hand_by_d_tan_theta(registry, degrees):
+def test_ortho_displaces_the_reflected_hand_by_d_tan_theta(scene_renderer, degrees):
     """The ortho capture shows the hand where a perpendicular from it meets the mirror;
     the true reflection (ray tracer) is d * tan(theta) further along the mirror, for a
     viewer far away at theta off the normal and the hand d in front of the glass."""
-    scene = build_lab_scene((-60.0, 40.0, -70.0))  # hand 6.1 in front of the glass
-    hand = scene.hand_center()
-    distance = hand[0] + 7.0
     camera = viewer_at(degrees, 90, fovy=9)
-    truth = trace(scene, camera, size=256)
-    image, _, _ = render(registry, scene, camera, "ortho", size=256)
+    scene = lab(camera, angles=(-60.0, 40.0, -70.0))  # hand 6.1 in front of the glass
+    assert scene.robot is not None
+    hand = hand_center(scene.robot)
+    distance = hand[0] + 7.0
+    truth = trace(scene, size=256)
+    image, _, _ = render(scene_renderer, scene, "ortho", size=256)
     centres = {}
     for name, picture in (("ortho", image), ("truth", truth.to_uint8())):
         red = red_dominant(picture) & truth.reflective_mask
@@ -126,17 +144,17 @@ def test_ortho_displaces_the_reflected_hand_by_d_tan_theta(registry, degrees):
     assert shift == pytest.approx(expected, rel=0.12), (distance, degrees)
 
 
-def scene_with_intruders() -> LabScene:
+def scene_with_intruders(camera: Camera) -> Scene:
     """The lab scene plus a green box straddling the mirror plane and a magenta box wholly
     behind it (both from the hand mesh, a box, scaled up)."""
-    world = build_world()
-    world.add(Node("straddler", offset=math3d.translate((-7.0, -1.0, -4.0))
-                   @ math3d.scale((2.5, 2.5, 2.5)), mesh="hand", color=(0.1, 0.9, 0.1)))
-    world.add(Node("behind", offset=math3d.translate((-9.5, 1.0, -1.0))
-                   @ math3d.scale((3.0, 3.0, 3.0)), mesh="hand", color=(0.9, 0.1, 0.9)))
-    scene = LabScene(graph=SceneGraph(world))
-    scene.set_angles((-35.0, 30.0, -75.0))
-    return scene
+    scene = lab(camera)
+    straddler = MeshObject("straddler", HAND_MESH, Transform(position=(-7.0, -1.0, -4.0),
+                                                             scale=(2.5, 2.5, 2.5)),
+                           color=(0.1, 0.9, 0.1))
+    behind = MeshObject("behind", HAND_MESH, Transform(position=(-9.5, 1.0, -1.0),
+                                                       scale=(3.0, 3.0, 3.0)),
+                        color=(0.9, 0.1, 0.9))
+    return replace(scene, objects=(*scene.objects, straddler, behind))
 
 
 def magenta(image: np.ndarray) -> np.ndarray:
@@ -145,12 +163,11 @@ def magenta(image: np.ndarray) -> np.ndarray:
 
 
 @pytest.mark.parametrize("method", ["ortho", "reflected", "stencil"])
-def test_nothing_behind_the_mirror_shows_in_its_reflection(registry, method):
-    scene = scene_with_intruders()
-    camera = viewer_at(40, 14)
-    truth = trace(scene, camera)
+def test_nothing_behind_the_mirror_shows_in_its_reflection(scene_renderer, method):
+    scene = scene_with_intruders(viewer_at(40, 14))
+    truth = trace(scene)
     mask = truth.reflective_mask
-    image, _, _ = render(registry, scene, camera, method)
+    image, _, _ = render(scene_renderer, scene, method)
     behind = magenta(image) & mask
     if behind.any():
         save_failure(f"behind_{method}", image=image, truth=truth.to_uint8())
@@ -164,55 +181,65 @@ def test_nothing_behind_the_mirror_shows_in_its_reflection(registry, method):
 
 
 @pytest.mark.parametrize("method", ["ortho", "reflected", "stencil"])
-def test_a_viewer_behind_the_mirror_sees_only_its_backing(registry, method):
-    scene = build_lab_scene()
-    camera = Camera(eye=(-15.0, 2.0, -1.0), target=(-7.0, 1.0, -2.0))
-    truth = trace(scene, camera)
+def test_a_viewer_behind_the_mirror_sees_only_its_backing(scene_renderer, method):
+    scene = lab(Camera(eye=(-15.0, 2.0, -1.0), target=(-7.0, 1.0, -2.0)))
+    truth = trace(scene)
     assert not truth.reflective_mask.any()
-    image, _, stats = render(registry, scene, camera, method)
-    assert [p.name for p in stats.passes if not p.runs] == (
-        ["stencil-reflection"] if method == "stencil" else [stats.passes[0].name])
+    image, _, stats = render(scene_renderer, scene, method)
+    # No capture is planned at all (nor skipped), and the mirror draws only its back.
+    assert [p.name for p in stats.plan.passes] == ["camera"]
+    assert [d.mode for d in stats.plan.top.draws] == ["back"]
     assert share_within(image, truth.to_uint8(), np.ones((SIZE, SIZE), bool), 10) > 0.995
 
 
 @pytest.mark.parametrize("method", ["ortho", "reflected", "stencil"])
 @pytest.mark.parametrize("offset", [0.0, 1e-7, 1e-3])
-def test_a_viewer_in_or_next_to_the_mirror_plane_is_harmless(registry, method, offset):
+def test_a_viewer_in_or_next_to_the_mirror_plane_is_harmless(scene_renderer, method, offset):
     """No GL error, no exception, a normal-looking frame: in the plane the reflection
     is skipped; a hair in front, the oblique projection still has finite entries."""
-    scene = build_lab_scene()
     camera = Camera(eye=(-7.0 + offset, 1.5, 9.0), target=(-7.0 + offset, 1.0, -2.0))
+    scene = lab(camera)
+    mirror = scene.reflector("mirror")
+    assert isinstance(mirror, PlanarReflector)
+    capture = reflected_capture_view(camera_view(camera, (SIZE, SIZE)), mirror)
     if offset > 0:
-        matrix = reflected_view_projection(camera, scene.mirror, 1.0)
-        assert np.all(np.isfinite(matrix))
-    image, _, _ = render(registry, scene, camera, method)
-    truth = trace(scene, camera)
+        assert capture is not None
+        assert np.all(np.isfinite(capture.projection))
+        assert np.all(np.isfinite(capture.texture_matrix()))
+    else:
+        assert capture is None
+    image, _, _ = render(scene_renderer, scene, method)
+    truth = trace(scene)
     assert share_within(image, truth.to_uint8(), np.ones((SIZE, SIZE), bool), 10) > 0.99
 
 
 def test_reflected_view_refuses_the_eye_in_the_mirror_plane():
+    """No capture camera exists for an eye in the mirror's plane: the view says None
+    (and the planner then draws no capture), never a matrix of NaN or infinity."""
     camera = Camera(eye=(-7.0, 1.5, 9.0), target=(-7.0, 1.0, -2.0))
-    with pytest.raises(ValueError, match="eye"):
-        reflected_view_projection(camera, build_lab_scene().mirror, 1.0)
+    mirror = lab().reflector("mirror")
+    assert isinstance(mirror, PlanarReflector)
+    assert reflected_capture_view(camera_view(camera, (SIZE, SIZE)), mirror) is None
 
 
 @pytest.mark.parametrize("method", ["ortho", "reflected"])
 @pytest.mark.parametrize("env_size", [None, 96, 256])
-def test_copy_and_fbo_capture_give_the_same_image(registry, method, env_size):
-    scene, camera = build_lab_scene(), viewer_at(35, 15)
-    copied, copied_env, _ = render(registry, scene, camera, method, "copy", env_size)
-    drawn, drawn_env, _ = render(registry, scene, camera, method, "fbo", env_size)
+def test_copy_and_fbo_capture_give_the_same_image(scene_renderer, method, env_size):
+    scene = lab(viewer_at(35, 15))
+    copied, copied_env, _ = render(scene_renderer, scene, method, "copy", env_size)
+    drawn, drawn_env, _ = render(scene_renderer, scene, method, "fbo", env_size)
     expected_side = env_size or SIZE
+    assert copied_env is not None and drawn_env is not None
     assert copied_env.shape == drawn_env.shape == (expected_side, expected_side, 3)
     assert np.array_equal(copied_env, drawn_env)
     assert np.array_equal(copied, drawn)
 
 
-def test_a_larger_reflected_texture_is_closer_to_the_truth(registry):
-    scene, camera = build_lab_scene(), viewer_at(30, 16)
-    truth = trace(scene, camera)
+def test_a_larger_reflected_texture_is_closer_to_the_truth(scene_renderer):
+    scene = lab(viewer_at(30, 16))
+    truth = trace(scene)
     shares = []
     for env_size in (32, 64, SIZE):
-        image, _, _ = render(registry, scene, camera, "reflected", env_size=env_size)
+        image, _, _ = render(scene_renderer, scene, "reflected", env_size=env_size)
         shares.append(share_within(image, truth.to_uint8(), truth.reflective_mask, 10))
     assert shares[0] < shares[1] < shares[2], shares
