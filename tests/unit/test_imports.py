@@ -1,7 +1,11 @@
-"""The layering rules that can be checked by importing."""
+"""The layering rules that can be checked by importing, each in a fresh interpreter."""
 
 import subprocess
 import sys
+
+import pytest
+
+GL_PACKAGES = ("OpenGL", "glfw")
 
 
 def modules_loaded_by(statement: str) -> set[str]:
@@ -11,21 +15,41 @@ def modules_loaded_by(statement: str) -> set[str]:
     return set(out.split())
 
 
-def test_importing_mirrorlab_loads_neither_opengl_nor_glfw():
-    loaded = modules_loaded_by("import mirrorlab, mirrorlab.cli")
-    assert not {m for m in loaded if m.split(".")[0] in ("OpenGL", "glfw")}
+def gl_of(loaded: set[str]) -> set[str]:
+    return {m for m in loaded if m.split(".")[0] in GL_PACKAGES}
 
 
-def test_math_scene_and_plan_import_no_opengl():
+@pytest.mark.parametrize("module", [
+    "mirrorlab", "mirrorlab.techniques", "mirrorlab.plan", "mirrorlab.scene.loader",
+    "mirrorlab.options", "mirrorlab.api", "mirrorlab.testing", "mirrorlab.cli"])
+def test_public_modules_load_neither_opengl_nor_glfw(module):
+    loaded = modules_loaded_by(f"import {module}")
+    assert module in loaded
+    assert not gl_of(loaded)
+
+
+def test_math_scene_and_plan_layers_import_no_opengl_and_no_gl_layer():
     loaded = modules_loaded_by(
-        "import mirrorlab.math3d, mirrorlab.scene.graph, mirrorlab.scene.robot, "
-        "mirrorlab.scene.mesh, mirrorlab.plan")
-    assert not {m for m in loaded if m.split(".")[0] in ("OpenGL", "glfw")}
+        "import mirrorlab.math3d, mirrorlab.envmap, mirrorlab.views, mirrorlab.plan, "
+        "mirrorlab.raytrace, mirrorlab.scene.model, mirrorlab.scene.loader, "
+        "mirrorlab.scene.animation, mirrorlab.scene.backgrounds, mirrorlab.scene.graph, "
+        "mirrorlab.scene.robot, mirrorlab.scene.mesh, mirrorlab.accuracy")
+    assert not gl_of(loaded)
+    assert not {m for m in loaded if m == "mirrorlab.gl" or m.startswith("mirrorlab.gl.")}
+    assert not {m for m in loaded if m.startswith(("mirrorlab.passes", "mirrorlab.renderer"))}
+
+
+def test_listing_the_techniques_loads_no_pass_module():
+    loaded = modules_loaded_by(
+        "from mirrorlab.techniques import TECHNIQUES\n"
+        "names = [t.name for t in TECHNIQUES.values()]")
+    assert not {m for m in loaded if m.startswith("mirrorlab.passes")}
+    assert not gl_of(loaded)
 
 
 def test_gl_modules_choose_egl_before_opengl_loads():
     loaded = modules_loaded_by(
         "import os; os.environ.pop('PYOPENGL_PLATFORM', None)\n"
-        "import mirrorlab.passes.capture\n"
+        "import mirrorlab.passes.ortho\n"
         "assert os.environ['PYOPENGL_PLATFORM'] == 'egl'")
     assert "OpenGL.GL" in loaded

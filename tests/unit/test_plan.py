@@ -1,85 +1,383 @@
-"""Frame planning: capture only when the scene, the size or the side of the mirror call for it."""
+"""Frame planning on the shipped scene files: which captures a frame runs, which it
+reuses, how each reflector is drawn, and why. Numpy only: the textures are simulated by
+recording each capture that runs, as the renderer does."""
+
+from __future__ import annotations
+
+from dataclasses import replace
 
 import pytest
 
-from mirrorlab.plan import CaptureState, mirror_in_view, plan_frame
-from mirrorlab.scene.robot import Camera, build_lab_scene
+from mirrorlab.plan import (
+    TINY_PIXELS,
+    FramePlan,
+    TextureState,
+    ViewPlan,
+    hidden_reason,
+    plan_frame,
+    screen_area,
+)
+from mirrorlab.scene.loader import load_scene, shipped_scene_names
+from mirrorlab.scene.model import Camera, Scene, Transform
+from mirrorlab.views import camera_view
 
-FRONT = Camera(eye=(10, 4, 3), target=(-7, 1, -2))
-BEHIND = Camera(eye=(-12, 2, -2), target=(0, 0, 0))
-IN_PLANE = Camera(eye=(-7, 2, 10), target=(-7, 1, -2))
-
-
-def capture_of(plan):
-    (capture,) = [p for p in plan if p.name == "capture"]
-    return capture
-
-
-def test_first_frame_captures_then_reuses_until_the_scene_changes():
-    scene = build_lab_scene()
-    assert capture_of(plan_frame(scene, FRONT, (64, 64), CaptureState())).runs
-    done = CaptureState(scene.graph.revision, (64, 64))
-    same = capture_of(plan_frame(scene, FRONT, (64, 64), done))
-    assert not same.runs and "nothing changed" in same.reason
-    other_viewer = Camera(eye=(9, 1, -1), target=(-7, 1, -2))
-    assert not capture_of(plan_frame(scene, other_viewer, (64, 64), done)).runs
-    assert capture_of(plan_frame(scene, FRONT, (80, 64), done)).runs
-    scene.set_angles((0, 0, 0))
-    changed = capture_of(plan_frame(scene, FRONT, (64, 64), done))
-    assert changed.runs and "scene changed" in changed.reason
+SIZE = (64, 64)
+LAB_CENTER = (-7.0, 1.0, -2.0)
+FRONT = Camera(eye=(10.0, 4.0, 3.0), target=LAB_CENTER)
+ELSEWHERE = Camera(eye=(9.0, 1.0, -1.0), target=LAB_CENTER)
 
 
-def test_no_capture_when_the_viewer_is_behind_or_in_the_mirror_plane():
-    scene = build_lab_scene()
-    for camera in (BEHIND, IN_PLANE):
-        capture = capture_of(plan_frame(scene, camera, (64, 64), CaptureState()))
-        assert not capture.runs and "behind" in capture.reason
+def run(scene: Scene, state: TextureState, size=SIZE, **options) -> FramePlan:
+    """Plan a frame and record what its captures leave in the textures (the renderer's
+    part), so that the next frame sees them."""
+    plan = plan_frame(scene, size, state, **options)
+    for step in plan.ran:
+        if step.reflector is not None:
+            state.record(step)
+    return plan
 
 
-def test_forced_capture_and_camera_pass_always_run():
-    scene = build_lab_scene()
-    done = CaptureState(scene.graph.revision, (64, 64))
-    plan = plan_frame(scene, BEHIND, (64, 64), done, force_capture=True)
-    assert [p.name for p in plan] == ["capture", "camera"] and all(p.runs for p in plan)
+def captures(plan: FramePlan) -> list:
+    return [p for p in plan.passes if p.name in ("capture", "bake")]
 
 
-def plan_names(plan):
-    return [(p.name, p.runs) for p in plan]
+def ran_captures(plan: FramePlan) -> list[tuple[str, int]]:
+    return [(p.reflector, p.bounce) for p in plan.ran if p.reflector is not None]
 
 
-def test_reflected_capture_follows_the_viewer_and_the_scene():
-    scene = build_lab_scene()
-    first = plan_frame(scene, FRONT, (64, 64), CaptureState(), method="reflected")
-    assert plan_names(first) == [("reflected-capture", True), ("camera", True)]
-    done = CaptureState(scene.graph.revision, (64, 64), FRONT)
-    assert not plan_frame(scene, FRONT, (64, 64), done, method="reflected")[0].runs
-    moved = Camera(eye=(9, 1, -1), target=(-7, 1, -2))
-    again = plan_frame(scene, moved, (64, 64), done, method="reflected")[0]
-    assert again.runs and "viewer moved" in again.reason
-    for camera in (BEHIND, IN_PLANE):
-        skipped = plan_frame(scene, camera, (64, 64), CaptureState(), method="reflected")[0]
-        assert not skipped.runs and "behind" in skipped.reason
+def draw_of(view_plan: ViewPlan, name: str):
+    (draw,) = [d for d in view_plan.draws if d.reflector.name == name]
+    return draw
 
 
-def test_stencil_needs_no_capture_and_reflects_only_when_the_front_shows():
-    scene = build_lab_scene()
-    assert plan_names(plan_frame(scene, FRONT, (64, 64), CaptureState(), method="stencil")) == [
-        ("camera", True), ("stencil-reflection", True)]
-    behind = plan_frame(scene, BEHIND, (64, 64), CaptureState(), method="stencil")
-    assert plan_names(behind) == [("camera", True), ("stencil-reflection", False)]
+def with_camera(scene: Scene, camera: Camera) -> Scene:
+    return replace(scene, camera=camera)
 
 
-def test_no_capture_while_the_mirror_is_out_of_view():
-    scene = build_lab_scene()
-    # In front of the mirror but looking away from it, along +x.
-    away = Camera(eye=(0, 1, 0), target=(10, 1, 0))
-    assert not mirror_in_view(scene, away, 1.0)
-    assert mirror_in_view(scene, FRONT, 1.0)
-    for method in ("ortho", "reflected"):
-        capture = plan_frame(scene, away, (64, 64), CaptureState(), method=method)[0]
-        assert not capture.runs and "out of view" in capture.reason
+# --------------------------------------------------------------------------- no capture
 
 
-def test_unknown_method_is_refused_with_the_names():
-    with pytest.raises(ValueError, match="ortho, reflected, stencil"):
-        plan_frame(build_lab_scene(), FRONT, (64, 64), CaptureState(), method="magic")
+def test_a_scene_without_reflectors_is_one_camera_pass():
+    scene = load_scene("no_mirror")
+    state = TextureState()
+    for _ in range(2):
+        plan = run(scene, state)
+        assert [(p.name, p.runs) for p in plan.passes] == [("camera", True)]
+        assert plan.top.draws == ()
+    assert state.held == {}
+
+
+@pytest.mark.parametrize("technique", ["ortho", "reflected", "stencil"])
+@pytest.mark.parametrize("camera, mode, words", [
+    # In front of the glass, looking along +z past its side.
+    (Camera(eye=(0.0, 1.0, -2.0), target=(0.0, 1.0, 10.0)), "hidden", "out of view"),
+    # Behind the glass (x < -7), looking at the robot: only the back shows.
+    (Camera(eye=(-12.0, 2.0, -2.0), target=(0.0, 0.0, 0.0)), "back", "seen from behind"),
+    # In the mirror's plane: edge-on.
+    (Camera(eye=(-7.0, 2.0, 10.0), target=(-7.0, 1.0, -2.0)), "back", "edge-on"),
+    # In front of the glass with the glass behind the viewer.
+    (Camera(eye=(0.0, 1.0, 0.0), target=(10.0, 1.0, 0.0)), "hidden", "behind the viewer"),
+])
+def test_no_capture_for_a_mirror_out_of_view_facing_away_or_behind(technique, camera, mode,
+                                                                    words):
+    scene = with_camera(load_scene("lab20"), camera).with_reflector(
+        "mirror", technique=technique, ortho=None)
+    plan = run(scene, TextureState())
+    assert captures(plan) == []
+    assert [p.name for p in plan.passes] == ["camera"]
+    draw = draw_of(plan.top, "mirror")
+    assert draw.mode == mode and words in draw.reason
+    assert hidden_reason(scene.reflector("mirror"), camera_view(camera, SIZE)) == draw.reason
+
+
+def test_the_shipped_mirror_behind_the_camera_is_never_captured():
+    scene = load_scene("mirror_behind_camera")
+    state = TextureState()
+    for _ in range(3):
+        plan = run(scene, state)
+        assert [p.name for p in plan.passes] == ["camera"]
+        assert draw_of(plan.top, "mirror").mode == "hidden"
+    assert state.held == {}
+
+
+def test_a_curved_reflector_out_of_view_gets_no_capture():
+    scene = load_scene("chrome_sphere").with_reflector("sphere", technique="cube-live")
+    away = with_camera(scene, Camera(eye=(0.0, 0.0, 6.0), target=(0.0, 0.0, 20.0)))
+    plan = run(away, TextureState())
+    assert captures(plan) == []
+    assert draw_of(plan.top, "sphere").mode == "hidden"
+    assert "out of view" in draw_of(plan.top, "sphere").reason
+    assert captures(run(scene, TextureState()))  # seen from the scene's camera: captured
+
+
+# --------------------------------------------------------------------------- reuse
+
+
+def test_ortho_capture_is_reused_until_a_joint_moves():
+    scene = load_scene("lab20")
+    state = TextureState()
+    first = run(scene, state)
+    assert ran_captures(first) == [("mirror", 1)]
+    assert "blank" in captures(first)[0].reason
+    again = run(scene, state)
+    (skipped,) = captures(again)
+    assert not skipped.runs and "nothing it shows changed" in skipped.reason
+    assert draw_of(again.top, "mirror").mode == "texture"
+    # The orthographic capture does not depend on the viewer.
+    assert ran_captures(run(with_camera(scene, ELSEWHERE), state)) == []
+    moved = run(scene.with_angles((0.0, 10.0, -20.0)), state)
+    (capture,) = captures(moved)
+    assert capture.runs and "scene changed" in capture.reason
+    # The same size of texture but a frame of another size: the lab's capture follows it.
+    resized = run(scene.with_angles((0.0, 10.0, -20.0)), state, size=(80, 64))
+    assert ran_captures(resized) == [("mirror", 1)]
+    assert "size changed" in captures(resized)[0].reason
+
+
+def test_robot_wave_captures_in_the_first_frame_and_whenever_a_joint_moves():
+    scene = load_scene("robot_wave")
+    state = TextureState()
+    ran = [bool(ran_captures(run(scene.at_frame(f), state))) for f in range(scene.frame_count)]
+    # Frames 0 to 4 hold the pose; from frame 5 the joints move every frame.
+    assert [f for f, r in enumerate(ran) if r] == [0, *range(5, scene.frame_count)]
+
+
+def test_reflected_capture_runs_again_when_the_viewer_moves():
+    scene = with_camera(load_scene("lab20"), FRONT).with_reflector(
+        "mirror", technique="reflected", ortho=None)
+    state = TextureState()
+    assert ran_captures(run(scene, state)) == [("mirror", 1)]
+    (same,) = captures(run(scene, state))
+    assert not same.runs
+    moved = run(with_camera(scene, ELSEWHERE), state)
+    (capture,) = captures(moved)
+    assert capture.runs and "viewer moved" in capture.reason
+    changed = run(with_camera(scene, ELSEWHERE).with_angles((5.0, 5.0, 5.0)), state)
+    assert captures(changed)[0].runs and "scene changed" in captures(changed)[0].reason
+
+
+def test_live_cube_map_follows_the_objects_not_the_viewer():
+    scene = load_scene("chrome_sphere").with_reflector("sphere", technique="cube-live")
+    state = TextureState()
+    first = run(scene, state)
+    (capture,) = captures(first)
+    assert capture.runs and capture.reflector == "sphere" and len(capture.views) == 6
+    viewer_moved = with_camera(scene, replace(scene.camera, eye=(2.5, 1.0, 6.8)))
+    (reused,) = captures(run(viewer_moved, state))
+    assert not reused.runs and "nothing it shows changed" in reused.reason
+    block = viewer_moved.object("red_block")
+    moved = viewer_moved.with_object(
+        "red_block", transform=replace(block.transform, position=(2.3, 0.1, 0.9)))
+    (again,) = captures(run(moved, state))
+    assert again.runs and "scene changed" in again.reason
+
+
+def test_a_static_map_is_never_captured_and_a_sphere_map_is_baked_per_view_rotation():
+    cube = load_scene("chrome_sphere").with_reflector("sphere", technique="cube")
+    plan = run(cube, TextureState())
+    assert captures(plan) == [] and draw_of(plan.top, "sphere").mode == "map"
+    sphere = load_scene("chrome_sphere")
+    state = TextureState()
+    assert ran_captures(run(sphere, state)) == [("sphere", 0)]
+    assert ran_captures(run(sphere, state)) == []
+    turned = with_camera(sphere, replace(sphere.camera, eye=(4.0, 2.0, 6.0)))
+    assert ran_captures(run(turned, state)) == [("sphere", 0)]
+
+
+# --------------------------------------------------------------------------- tiny
+
+
+def test_a_reflector_of_a_few_pixels_is_drawn_plain_unless_the_rule_is_off():
+    far = Camera(eye=(300.0, 1.0, -2.0), target=LAB_CENTER, far=1000.0)
+    scene = with_camera(load_scene("lab20"), far)
+    area = screen_area(scene.reflector("mirror"), camera_view(far, SIZE))
+    assert 0.0 < area < TINY_PIXELS
+    plan = run(scene, TextureState())
+    assert captures(plan) == []
+    draw = draw_of(plan.top, "mirror")
+    assert draw.mode == "plain"
+    assert f"{area:.1f} pixels" in draw.reason and "under 16" in draw.reason
+    kept = run(scene, TextureState(), tiny_pixels=0)
+    assert ran_captures(kept) == [("mirror", 1)]
+    assert draw_of(kept.top, "mirror").mode == "texture"
+    # Seen large enough, the rule changes nothing.
+    assert draw_of(run(load_scene("lab20"), TextureState()).top, "mirror").mode == "texture"
+
+
+# --------------------------------------------------------------------------- bounces
+
+
+def test_two_facing_mirrors_two_bounces_deep():
+    scene = load_scene("two_mirrors")
+    assert scene.max_bounces == 2
+    plan = run(scene, TextureState())
+    ran = [p for p in plan.ran if p.reflector is not None]
+    assert [(p.reflector, p.bounce) for p in ran] == [("east", 1), ("west", 2)]
+    east, west = ran
+    assert east.for_view == "west seen from camera" and west.for_view == "camera"
+    assert draw_of(plan.top, "west").mode == "texture"
+    assert draw_of(plan.top, "east").mode == "hidden"  # behind the viewer's right shoulder
+    (west_view,) = west.views
+    assert west_view.excluded == "west"
+    assert draw_of(west_view, "east").mode == "texture"
+    assert draw_of(west_view, "east").slot == east.slot
+    (east_view,) = east.views
+    assert draw_of(east_view, "west").mode in ("plain", "hidden", "back")
+
+
+def test_no_bounces_means_no_captures_and_plain_reflectors():
+    for name in ("lab20", "two_mirrors", "mirror_and_sphere"):
+        scene = replace(load_scene(name), max_bounces=0)
+        plan = run(scene, TextureState())
+        assert [p.name for p in plan.passes] == ["camera"], name
+        visible = [d for d in plan.top.draws if d.mode not in ("hidden", "back")]
+        assert visible, name
+        for draw in visible:
+            assert draw.mode == "plain" and "no bounces left" in draw.reason
+
+
+def test_mirror_and_sphere_see_each_other():
+    scene = load_scene("mirror_and_sphere")
+    state = TextureState()
+    plan = run(scene, state)
+    assert draw_of(plan.top, "mirror").mode == "texture"
+    assert draw_of(plan.top, "sphere").mode == "texture"
+    ran = [p for p in plan.ran if p.reflector is not None]
+    top_mirror = [p for p in ran if p.reflector == "mirror" and p.for_view == "camera"]
+    top_sphere = [p for p in ran if p.reflector == "sphere" and p.for_view == "camera"]
+    assert [p.bounce for p in top_mirror] == [2] and [p.bounce for p in top_sphere] == [2]
+    # In the mirror's capture the sphere shows with a capture of its own, one bounce less...
+    (mirror_view,) = top_mirror[0].views
+    inner = draw_of(mirror_view, "sphere")
+    assert inner.mode == "texture"
+    (inner_capture,) = [p for p in ran if p.reflector == "sphere" and p.bounce == 1]
+    assert inner.slot == inner_capture.slot != draw_of(plan.top, "sphere").slot
+    # ...in which the mirror, at bounce 0, is plain.
+    assert {draw_of(v, "mirror").mode for v in inner_capture.views} <= {"plain", "hidden",
+                                                                        "back"}
+    # The sphere's six faces see the mirror where it faces them, with bounce-1 captures.
+    face_draws = [draw_of(v, "mirror") for v in top_sphere[0].views]
+    assert len(face_draws) == 6 and any(d.mode == "texture" for d in face_draws)
+    for draw in face_draws:
+        if draw.mode == "texture":
+            (made,) = [p for p in ran if p.reflector == "mirror" and p.bounce == 1
+                       and p.slot == draw.slot]
+            assert made.for_view.startswith("sphere cube")
+    # Nothing moves: the next frame runs only the camera pass.
+    assert [p.name for p in run(scene, state).ran] == ["camera"]
+
+
+def test_each_capture_key_gets_its_own_slot_within_a_frame():
+    plan = run(load_scene("two_mirrors"), TextureState(), use_plan=False)
+    seen: dict[str, dict[int, tuple]] = {}
+    for step in plan.ran:
+        if step.reflector is not None:
+            slots = seen.setdefault(step.reflector, {})
+            assert step.slot not in slots or slots[step.slot] == step.key
+            slots[step.slot] = step.key
+
+
+# --------------------------------------------------------------------------- --no-plan
+
+
+def test_without_the_plan_every_capture_runs_every_frame():
+    # From the middle of the room both mirrors show; each mirror's capture sees the other
+    # only through its full (unclipped) view, which the planner leaves out.
+    scene = with_camera(load_scene("two_mirrors"),
+                        Camera(eye=(0.0, 3.0, 12.0), target=(0.0, 1.0, -2.0), fovy=70.0))
+    planned_state, state = TextureState(), TextureState()
+    planned = run(scene, planned_state)
+    assert sorted(ran_captures(planned)) == [("east", 2), ("west", 2)]
+    assert ran_captures(run(scene, planned_state)) == []
+    for _ in range(2):
+        plan = run(scene, state, use_plan=False)
+        assert plan.skipped == []
+        assert sorted(ran_captures(plan)) == [("east", 1), ("east", 2), ("west", 1),
+                                              ("west", 2)]
+        assert all("every pass runs" in p.reason for p in plan.ran if p.reflector)
+    # The lab's mirror behind the viewer, and one of a few pixels, are captured too.
+    away = with_camera(load_scene("lab20"), Camera(eye=(0.0, 1.0, 0.0), target=(10.0, 1.0, 0.0)))
+    assert ran_captures(run(away, TextureState())) == []
+    assert ran_captures(run(away, TextureState(), use_plan=False)) == [("mirror", 1)]
+    far = with_camera(load_scene("lab20"),
+                      Camera(eye=(300.0, 1.0, -2.0), target=LAB_CENTER, far=1000.0))
+    assert ran_captures(run(far, TextureState(), use_plan=False)) == [("mirror", 1)]
+
+
+def test_without_the_plan_a_mirror_with_no_capture_camera_is_drawn_plain():
+    # two_mirrors' east mirror is behind the viewer: no reflected camera can see through
+    # it, so even --no-plan has nothing to capture for it.
+    plan = run(load_scene("two_mirrors"), TextureState(), use_plan=False)
+    assert ran_captures(plan) == [("east", 1), ("west", 2)]
+    east = draw_of(plan.top, "east")
+    assert east.mode == "plain" and "no capture camera" in east.reason
+
+
+# --------------------------------------------------------------------------- invariants
+
+
+def view_plans(plan: FramePlan):
+    """Every view plan of a frame with the reflector it was made for (None: the camera)."""
+    pending = [(plan.top, None)]
+    for step in plan.passes:
+        pending += [(view, step.reflector) for view in step.views]
+    while pending:
+        view, owner = pending.pop()
+        yield view, owner
+        pending += [(d.nested, d.reflector.name) for d in view.draws if d.nested is not None]
+
+
+SCENE_FILES = [name for name in shipped_scene_names() if name not in ("lab", "cone", "sphere")]
+
+
+@pytest.mark.parametrize("name", SCENE_FILES)
+@pytest.mark.parametrize("use_plan", [True, False])
+def test_a_reflector_never_appears_in_its_own_capture(name, use_plan):
+    scene = load_scene(name)
+    variants = [scene]
+    if any(r.kind == "planar" for r in scene.reflectors):
+        variants.append(replace(scene, reflectors=tuple(
+            replace(r, technique="stencil", ortho=None) if r.kind == "planar" else r
+            for r in scene.reflectors), max_bounces=3))
+    for variant in variants:
+        plan = run(variant, TextureState(), use_plan=use_plan)
+        checked = 0
+        for view, owner in view_plans(plan):
+            if owner is None:
+                assert view.excluded is None
+                continue
+            assert view.excluded == owner
+            assert owner not in {d.reflector.name for d in view.draws}
+            checked += 1
+        has_capture = any(p.views for p in plan.passes) or any(
+            d.nested for d in plan.top.draws)
+        assert checked > 0 or not has_capture
+
+
+def test_stencil_mirrors_nest_as_deep_as_the_bounces_go():
+    scene = load_scene("two_mirrors")
+    stencil = replace(scene, reflectors=tuple(replace(r, technique="stencil")
+                                              for r in scene.reflectors))
+    plan = run(stencil, TextureState())
+    assert captures(plan) == []
+    draw = draw_of(plan.top, "west")
+    depth = 0
+    while draw is not None and draw.mode == "stencil":
+        depth += 1
+        others = [d for d in draw.nested.draws if d.mode == "stencil"]
+        draw = others[0] if others else None
+    assert depth == scene.max_bounces
+
+
+def test_a_moved_curved_reflector_is_captured_again_from_its_new_centre():
+    scene = load_scene("mirror_and_sphere")
+    state = TextureState()
+    run(scene, state)
+    sphere = scene.reflector("sphere")
+    moved = scene.with_reflector("sphere", transform=Transform(
+        position=(-2.0, 2.5, 0.0), scale=sphere.transform.scale))
+    plan = run(moved, state)
+    assert ("sphere", 2) in ran_captures(plan)
+    (capture,) = [p for p in plan.ran if p.reflector == "sphere" and p.bounce == 2]
+    assert all(v.view.eye is not None for v in capture.views)
+    assert all(abs(v.view.eye[1] - 2.5) < 1e-9 for v in capture.views)
