@@ -1,4 +1,6 @@
-"""The public API and the command line, end to end on llvmpipe, and a golden frame."""
+"""The public API and the command line, end to end on llvmpipe, and a golden frame; the
+Renderer that keeps its context across frames and scenes; and the ``mirrorlab.testing``
+pytest plugin (its ``renderer`` fixture and ``assert_image_close``)."""
 
 from __future__ import annotations
 
@@ -11,9 +13,11 @@ import pytest
 from PIL import Image
 
 import mirrorlab
+from mirrorlab.testing import assert_image_close
 from tests.imagecheck import assert_images_close
 
 GOLDEN = Path(__file__).parent / "golden"
+GOLDEN_LAB = GOLDEN / "lab_default_128.png"
 
 
 def test_render_api_returns_an_rgb_frame_of_the_asked_size():
@@ -34,10 +38,102 @@ def test_default_frame_matches_the_golden_image():
     (re-made by tools/make_golden.py). Tolerance: 99.5% of pixels within 8/255 on every
     channel and mean difference under 0.5/255, room for another Mesa's rounding but
     not for a moved part or a flipped reflection."""
-    expected = np.asarray(Image.open(GOLDEN / "lab_default_128.png").convert("RGB"))
+    expected = np.asarray(Image.open(GOLDEN_LAB).convert("RGB"))
     actual = mirrorlab.render(size=(128, 128))
     assert_images_close("golden_lab_default_128", actual, expected, channel_tolerance=8,
                         min_fraction_within=0.995, max_mean_abs=0.5)
+
+
+# --------------------------------------------------------------------------- Renderer
+
+# Scenes in an order that makes one renderer switch techniques, reflectors and
+# backgrounds, and come back to a scene it drew before.
+SEQUENCE = [
+    ("lab20", 0, {}),
+    ("chrome_sphere", 0, {}),
+    ("lab20", 0, {"method": "stencil"}),
+    ("two_mirrors", 0, {}),
+    ("spheremap_cone", 0, {}),
+    ("mirror_and_sphere", 0, {}),
+    ("robot_wave", 6, {}),
+    ("chrome_sphere", 0, {"method": "cube-live", "map_size": 64}),
+    ("no_mirror", 0, {}),
+    ("lab20", 0, {}),
+]
+
+
+def test_one_renderer_draws_many_scenes_as_one_shot_renders_do():
+    """One Renderer keeps one context (and its GL side) across frames and scenes, and
+    every frame is what a fresh one-shot ``mirrorlab.render`` of it gives."""
+    size = (96, 80)
+    with mirrorlab.Renderer(size=size) as renderer:
+        gl_side = renderer.scene_renderer
+        kept = []
+        for name, frame, options in SEQUENCE:
+            kept.append(renderer.render(name, frame, **options))
+            assert renderer.scene_renderer is gl_side, "the renderer changed its GL side"
+    for (name, frame, options), image in zip(SEQUENCE, kept, strict=True):
+        fresh = mirrorlab.render(name, size=size, frame=frame, **options)
+        assert image.shape == (80, 96, 3)
+        label = f"kept_renderer_{name}_{'_'.join(map(str, options.values())) or 'default'}"
+        if not np.array_equal(image, fresh):
+            assert_image_close(image, fresh, tolerance=0, name=label)
+
+
+def test_renderer_frees_its_gl_objects_on_exit_and_opens_again():
+    with mirrorlab.Renderer(size=(64, 64)) as renderer:
+        renderer.render("mirror_and_sphere")
+        registry = renderer.scene_renderer.registry
+        assert len(registry) > 0
+    assert len(registry) == 0, f"{len(registry)} GL objects left after close"
+    renderer.close()  # closing twice is harmless
+    image = renderer.render("lab20")  # and it opens again on use
+    try:
+        assert image.shape == (64, 64, 3)
+        assert renderer.scene_renderer.registry is not registry
+    finally:
+        renderer.close()
+
+
+# --------------------------------------------------------------------------- testing plugin
+
+
+def test_the_plugin_renderer_fixture_draws_the_golden_frame(renderer):
+    """A user's test as the mirrorlab.testing docstring shows it: the session's
+    ``renderer`` fixture, compared with a PNG file by ``assert_image_close``."""
+    assert isinstance(renderer, mirrorlab.Renderer)
+    image = renderer.render("lab20", size=(128, 128))
+    assert_image_close(image, GOLDEN_LAB, tolerance=8, fraction=0.995, max_mean=0.5)
+    assert renderer.last_stats is not None and renderer.last_stats.ran[-1] == "camera"
+
+
+def test_assert_image_close_writes_actual_expected_and_diff_on_failure(tmp_path, monkeypatch):
+    folder = tmp_path / "failures"
+    monkeypatch.setenv("MIRRORLAB_FAILURES", str(folder))
+    expected = np.zeros((8, 10, 3), np.uint8)
+    actual = expected.copy()
+    actual[2:4, 3:6] = (200, 10, 30)
+    assert_image_close(actual, actual.copy(), tolerance=0)  # equal images pass
+    assert not folder.exists(), "a passing comparison wrote images"
+    with pytest.raises(AssertionError) as failure:
+        assert_image_close(actual, expected, tolerance=2, name="probe")
+    message = str(failure.value)
+    assert str(folder) in message and "probe" in message
+    written = sorted(p.name for p in folder.iterdir())
+    assert written == ["probe_actual.png", "probe_diff.png", "probe_expected.png"]
+    assert np.array_equal(np.asarray(Image.open(folder / "probe_actual.png")), actual)
+    assert np.array_equal(np.asarray(Image.open(folder / "probe_expected.png")), expected)
+    diff = np.asarray(Image.open(folder / "probe_diff.png"))
+    assert diff.shape == actual.shape
+    assert (diff.max(axis=-1) > 0).sum() == 6  # the 2 x 3 changed pixels, nothing else
+    # Without a name, the images are named after the running test.
+    with pytest.raises(AssertionError, match=str(folder)):
+        assert_image_close(actual, expected, tolerance=2, fraction=0.99)
+    named = "test_assert_image_close_writes_actual_expected_and_diff_on_failure"
+    assert (folder / f"{named}_diff.png").exists()
+
+
+# --------------------------------------------------------------------------- command line
 
 
 def run_cli(*args, cwd):
