@@ -1,0 +1,193 @@
+"""The accuracy sweep's scoring, configurations and reporting, on made-up numbers and the
+scene files (no GL)."""
+
+from __future__ import annotations
+
+import math
+import sys
+
+import numpy as np
+import pytest
+
+from mirrorlab import accuracy
+from mirrorlab.options import apply_options
+from mirrorlab.scene.loader import load_scene
+from mirrorlab.scene.model import CURVED_TECHNIQUES
+
+
+def test_image_error_scores_only_the_masked_pixels():
+    truth = np.zeros((4, 4, 3), dtype=np.uint8)
+    image = truth.copy()
+    image[0, 0] = (20, 0, 0)  # off by 20 in one channel
+    image[3, 3] = (255, 255, 255)  # outside the mask: ignored
+    mask = np.zeros((4, 4), dtype=bool)
+    mask[:2, :2] = True
+    error = accuracy.image_error(image, truth, mask)
+    assert error.mae == pytest.approx(20 / 12)  # 4 pixels x 3 channels
+    assert error.share_off == pytest.approx(0.25)
+    assert error.psnr == pytest.approx(10 * math.log10(255 ** 2 / (400 / 12)))
+    assert error.p95 == pytest.approx(np.percentile([20, 0, 0, 0], 95))
+
+
+def test_a_pixel_is_off_only_beyond_ten_levels():
+    truth = np.zeros((1, 2, 3), dtype=np.uint8)
+    image = truth.copy()
+    image[0, 0] = (accuracy.OFF_BY, 0, 0)
+    image[0, 1] = (0, 0, accuracy.OFF_BY + 1)
+    error = accuracy.image_error(image, truth, np.ones((1, 2), bool))
+    assert error.share_off == pytest.approx(0.5)
+
+
+def test_identical_images_and_empty_masks_score_zero():
+    image = np.full((3, 3, 3), 7, dtype=np.uint8)
+    assert accuracy.image_error(image, image, np.ones((3, 3), bool)).psnr == math.inf
+    empty = accuracy.image_error(image, image * 0, np.zeros((3, 3), bool))
+    assert (empty.mae, empty.share_off) == (0.0, 0.0)
+
+
+def rows():
+    make = accuracy.SweepRow
+    return [
+        make("lab", "ortho-copy", 64, "a", 4.0, 30.0, 20.0, 0.2, 5.0, 4.0),
+        make("lab", "ortho-copy", 64, "b", 2.0, 10.0, 25.0, 0.1, 7.0, 6.0),
+        make("lab", "stencil", 0, "a", 0.0, 0.0, math.inf, 0.0, 3.0, math.nan),
+        make("lab", "stencil", 0, "b", 0.1, 1.0, 50.0, 0.0, 4.0, math.nan),
+        make("sphere-sky", "stencil", 0, "a", 9.0, 9.0, 9.0, 0.9, 9.0, 9.0),
+    ]
+
+
+def test_summary_averages_errors_and_takes_median_times_per_technique_and_size():
+    summary = accuracy.summarise(rows())
+    assert [(s.scene, s.technique, s.map_size) for s in summary] == [
+        ("lab", "ortho-copy", 64), ("lab", "stencil", 0), ("sphere-sky", "stencil", 0)]
+    ortho, stencil, _ = summary
+    assert ortho.mae == 3.0 and ortho.wall_ms == 6.0 and ortho.worst_viewpoint == "a"
+    assert math.isnan(stencil.gpu_ms) and stencil.worst_viewpoint == "b"
+    table = accuracy.summary_table(summary[:2])
+    assert table[2][1] == "-" and table[2][6] == "-"
+    text = accuracy.format_text(table)
+    assert text.splitlines()[0].startswith("technique") and "ortho-copy" in text
+    markdown = accuracy.format_markdown(table)
+    assert markdown.count("\n") == 3 and markdown.splitlines()[1].startswith("|---")
+
+
+def test_csv_has_a_header_and_one_line_per_row():
+    text = accuracy.rows_to_csv(rows())
+    lines = text.strip().splitlines()
+    assert lines[0].startswith("scene,technique,map_size,viewpoint,mae")
+    assert len(lines) == 6 and ",inf," in lines[3]
+
+
+def test_without_matplotlib_no_plot_is_written(tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)
+    assert not accuracy.plot_summary(accuracy.summarise(rows()), tmp_path / "p.png", "t")
+    assert not (tmp_path / "p.png").exists()
+
+
+def test_the_viewpoints_look_at_the_mirror_from_its_front():
+    mirror = load_scene("lab20").reflector("mirror")
+    for name, camera in accuracy.lab_viewpoints().items():
+        assert camera.eye[0] > -7.0, name
+        assert camera.target == (-7.0, 1.0, -2.0)
+        assert np.allclose(camera.target, mirror.center)
+        assert float((np.asarray(camera.eye) - mirror.center) @ mirror.normal) > 0, name
+
+
+def test_csv_round_trip_keeps_every_field():
+    again = accuracy.rows_from_csv(accuracy.rows_to_csv(rows()))
+    assert len(again) == len(rows())
+    for before, after in zip(rows(), again, strict=True):
+        assert (before.scene, before.technique, before.map_size, before.viewpoint) == (
+            after.scene, after.technique, after.map_size, after.viewpoint)
+        for name in ("mae", "p95", "psnr", "share_off", "wall_ms", "gpu_ms"):
+            a, b = getattr(before, name), getattr(after, name)
+            assert (math.isnan(a) and math.isnan(b)) or a == b  # exact: shortest repr
+
+
+def test_a_csv_with_other_columns_is_refused():
+    with pytest.raises(ValueError, match="expected the columns"):
+        accuracy.rows_from_csv("technique,mae\nx,1\n")
+    with pytest.raises(ValueError, match="line 2"):
+        accuracy.rows_from_csv(accuracy.rows_to_csv(rows()).replace(",64,", ",sixty-four,", 1))
+
+
+def test_erode_shrinks_a_mask_by_whole_pixels():
+    mask = np.zeros((9, 9), dtype=bool)
+    mask[1:8, 1:8] = True  # a 7 x 7 square
+    assert np.array_equal(accuracy.erode(mask, 0), mask)
+    once = accuracy.erode(mask, 1)
+    assert once.sum() == 25 and once[2:7, 2:7].all()
+    assert accuracy.erode(mask, 3).sum() == 1 and accuracy.erode(mask, 3)[4, 4]
+    assert not accuracy.erode(mask, 4).any()
+    edge = np.ones((3, 3), dtype=bool)  # outside the image counts as False
+    assert accuracy.erode(edge, 1).sum() == 1
+
+
+def test_planar_configurations_cover_every_capture_mode_and_size_plus_stencil():
+    configs = accuracy.lab_techniques((64, 128))
+    labels = [label for label, _ in configs]
+    assert labels == ["ortho-copy"] * 2 + ["ortho-fbo"] * 2 + ["reflected-copy"] * 2 + [
+        "reflected-fbo"] * 2 + ["stencil"]
+    assert [o.get("env_size") for _, o in configs[:2]] == [64, 128]
+    lab = load_scene("lab20")
+    for label, options in configs:
+        mirror = apply_options(lab, options).reflector("mirror")
+        assert mirror.technique == label.split("-")[0]
+        if label != "stencil":
+            assert mirror.capture == options["capture"]
+            assert mirror.texture_size == options["env_size"]
+
+
+def test_curved_configurations_stop_at_the_largest_map_the_sweep_bakes():
+    configs = accuracy.curved_techniques((64, 2048))
+    assert [label for label, _ in configs] == list(CURVED_TECHNIQUES)
+    assert all(o["map_size"] == 64 for _, o in configs)
+    assert accuracy.ENVMAP_MAX_SIZE < 2048
+    sphere = load_scene("chrome_sphere")
+    for label, options in configs:
+        assert apply_options(sphere, options).reflector("sphere").technique == label
+
+
+def test_a_scene_gets_the_configurations_of_its_kinds_of_reflector():
+    sizes = (64,)
+    labels = {name: [label for label, _ in accuracy.scene_techniques(load_scene(name), sizes)]
+              for name in ("lab20", "chrome_sphere", "mirror_and_sphere", "no_mirror")}
+    assert labels["lab20"] == [label for label, _ in accuracy.lab_techniques(sizes)]
+    assert labels["chrome_sphere"] == list(CURVED_TECHNIQUES)
+    assert labels["mirror_and_sphere"] == labels["lab20"] + labels["chrome_sphere"]
+    assert labels["no_mirror"] == []
+
+
+def test_panels_of_the_sweep():
+    quick = accuracy.SweepSettings.quick()
+    lab = accuracy.lab_panel(quick)
+    assert list(lab.viewpoints) == list(quick.viewpoints)
+    assert lab.scene == load_scene("lab20") and lab.supersample == 1
+    with pytest.raises(ValueError, match="unknown viewpoint 'nowhere'"):
+        accuracy.lab_panel(accuracy.SweepSettings(viewpoints=("nowhere",)))
+    sky, objects = accuracy.sphere_panels(accuracy.SweepSettings())
+    assert sky.scene.objects == () and objects.scene.objects != ()
+    assert list(sky.viewpoints) == ["default", "close"] and sky.supersample == 4
+    assert list(accuracy.sphere_panels(quick)[0].viewpoints) == ["default"]
+    cone = accuracy.file_panel(load_scene("cone"))
+    assert (cone.supersample, cone.inset) == (4, 1)
+    assert cone.viewpoints == {"camera": load_scene("cone").camera}
+    assert accuracy.file_panel(load_scene("two_mirrors")).supersample == 1
+
+
+def test_the_report_is_remade_from_a_saved_csv_without_measuring(tmp_path):
+    saved = tmp_path / "saved.csv"
+    saved.write_text(accuracy.rows_to_csv(rows()))
+    said: list[str] = []
+    out = tmp_path / "report"
+    assert accuracy.run_command(accuracy.SweepSettings.quick(), "all", out, saved,
+                                say=said.append) == 0
+    markdown = (out / "accuracy.md").read_text()
+    assert "from saved.csv" in markdown and markdown.count("| ortho-copy | 64 |") == 1
+    assert not (out / "accuracy.csv").exists()  # nothing measured, nothing re-written
+    assert said[-1].startswith("wrote ") and "accuracy.md" in said[-1]
+    (tmp_path / "bad.csv").write_text("technique,mae\n")
+    with pytest.raises(ValueError, match=r"--from-csv: .*bad\.csv: expected the columns"):
+        accuracy.run_command(accuracy.SweepSettings.quick(), "all", out, tmp_path / "bad.csv")
+    with pytest.raises(ValueError, match="--from-csv: cannot read"):
+        accuracy.run_command(accuracy.SweepSettings.quick(), "all", out, tmp_path / "none.csv")
