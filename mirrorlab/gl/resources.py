@@ -118,6 +118,14 @@ class Program(_Resource):
             self._locations[uniform] = loc
         return loc
 
+    def has_uniform(self, uniform: str) -> bool:
+        """True when the linked program uses ``uniform`` (the compiler drops unused ones)."""
+        try:
+            self.location(uniform)
+        except KeyError:
+            return False
+        return True
+
     def set_mat4(self, uniform: str, matrix: np.ndarray) -> None:
         """Set a ``(4, 4)`` row-major (numpy) matrix."""
         GL.glUniformMatrix4fv(self.location(uniform), 1, GL.GL_TRUE,

@@ -110,8 +110,8 @@ class CurvedPass:
         program.set_mat3("normal_matrix", math3d.normal_matrix(model))
         program.set_int("output_mode", self.output_mode)
         program.set_vec4("clip_plane", NO_CLIP if view.clip_plane is None else view.clip_plane)
-        orthographic = is_orthographic(view.projection)
-        program.set_int("orthographic", orthographic)
+        if program.has_uniform("orthographic"):  # "normal" ignores where the eye is
+            program.set_int("orthographic", is_orthographic(view.projection))
         if self.technique in ("cube", "cube-live", "latlong"):
             program.set_vec3("eye_world", eye_position(view.view))
             program.set_vec3("view_direction", view.forward)
