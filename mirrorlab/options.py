@@ -133,7 +133,26 @@ def _apply_angles(document: dict, value: Any, flag: str) -> None:
         robot["angles"] = _plain(value)
 
 
+_PICTURE_SOURCE = ("sphere", "sphere-vertex", "sphere-texgen", "normal")
+"""Curved techniques whose ``source`` is a picture (``cube``'s is a folder of faces)."""
+
+
+def _source_kind(technique: Any) -> str | None:
+    return "picture" if technique in _PICTURE_SOURCE else (
+        "faces" if technique == "cube" else None)
+
+
 def _apply_technique(document: dict, value: Any, flag: str) -> None:
+    if value not in _TECHNIQUE_NAMES:
+        # A value from the Python API, not parsed: no kind of reflector to pick by it.
+        # Given to every reflector, it is refused by the scene check with its key path
+        # and the names (or here, when there is no reflector at all).
+        reflectors = document.get("reflectors", [])
+        if not reflectors:
+            parse_choice(flag, value, _TECHNIQUE_NAMES)
+        for reflector in reflectors:
+            reflector["technique"] = value
+        return
     planar = value in PLANAR_TECHNIQUES
     kind = "planar mirror" if planar else "curved reflector"
     targets = [r for r in document.get("reflectors", [])
@@ -142,10 +161,12 @@ def _apply_technique(document: dict, value: Any, flag: str) -> None:
         raise OptionError(flag, f"{value} is a technique for a {kind}, and scene "
                           f"{document.get('name')!r} has none")
     for reflector in targets:
-        reflector["technique"] = value
-        if not planar and "source" in reflector and value not in (
-                "cube", "sphere", "sphere-vertex", "sphere-texgen", "normal"):
+        # A source is kept only where it means the same: a picture for the sphere maps,
+        # a folder of faces for a static cube map.
+        if not planar and "source" in reflector and _source_kind(
+                value) != _source_kind(reflector.get("technique")):
             del reflector["source"]
+        reflector["technique"] = value
         if planar and value != "ortho":
             reflector.pop("ortho", None)
 
@@ -237,6 +258,8 @@ def apply_options(scene: Scene, values: Mapping[str, Any]) -> Scene:
         option = OPTION_NAMES.get(name)
         if option is None:
             raise TypeError(f"unknown option {name!r}; options are {', '.join(OPTION_NAMES)}")
+        if name == "set" and isinstance(value, str):
+            value = (value,)  # one KEY=VALUE from the Python API
         if name == "set" and value and isinstance(value[0], str):
             value = tuple(_parse_set(option.flag, item)[0] for item in value)
         option.apply(document, value, option.flag)

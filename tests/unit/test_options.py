@@ -1,0 +1,237 @@
+"""Scene options (the CLI's flags, the API's keywords): each changes the key it names and
+nothing else, and a bad value is refused with the flag named."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import pytest
+
+from mirrorlab.options import (
+    OPTION_NAMES,
+    OPTIONS,
+    OptionError,
+    apply_options,
+    check_size,
+    parse_count,
+    parse_floats,
+    parse_size,
+    set_key,
+)
+from mirrorlab.paths import REPO_DIR
+from mirrorlab.scene.loader import load_scene
+
+SKY_CUBE = REPO_DIR / "textures" / "sky_cube"
+
+
+def changed_fields(before, after) -> set[str]:
+    return {name for name in before.__dataclass_fields__
+            if getattr(before, name) != getattr(after, name)}
+
+
+def test_no_option_gives_the_scene_back():
+    lab = load_scene("lab20")
+    assert apply_options(lab, {}) is lab
+    assert apply_options(lab, {"camera": None, "method": None}) is lab
+
+
+@pytest.mark.parametrize("name, value, field, expected", [
+    ("camera", (1.0, 2.0, 3.0), "eye", (1.0, 2.0, 3.0)),
+    ("target", (-1.0, 0.5, 0.0), "target", (-1.0, 0.5, 0.0)),
+    ("fovy", 30, "fovy", 30.0),
+])
+def test_camera_options_change_only_their_camera_field(name, value, field, expected):
+    lab = load_scene("lab20")
+    moved = apply_options(lab, {name: value})
+    assert getattr(moved.camera, field) == expected
+    assert changed_fields(lab.camera, moved.camera) == {field}
+    assert changed_fields(lab, moved) == {"camera"}
+    assert moved.source == lab.source
+
+
+def test_angles_pose_every_robot_and_nothing_else():
+    lab = load_scene("lab20")
+    posed = apply_options(lab, {"angles": (10.0, -20.0, 30.0)})
+    assert posed.robot.angles == (10.0, -20.0, 30.0)
+    assert posed == lab.with_angles((10.0, -20.0, 30.0))
+    with pytest.raises(OptionError, match=r"^--angles: scene 'spheremap_cone' has no robot"):
+        apply_options(load_scene("cone"), {"angles": (1.0, 2.0, 3.0)})
+
+
+def test_method_changes_the_reflectors_of_its_kind_only():
+    both = load_scene("mirror_and_sphere")
+    stencil = apply_options(both, {"method": "stencil"})
+    assert stencil.reflector("mirror").technique == "stencil"
+    assert stencil.reflector("sphere") == both.reflector("sphere")
+    latlong = apply_options(both, {"method": "latlong"})
+    assert latlong.reflector("sphere").technique == "latlong"
+    assert latlong.reflector("mirror") == both.reflector("mirror")
+    two = apply_options(load_scene("two_mirrors"), {"method": "ortho"})
+    assert [r.technique for r in two.reflectors] == ["ortho", "ortho"]
+    with pytest.raises(OptionError, match=r"^--method: latlong is a technique for a curved "
+                       "reflector, and scene 'lab20' has none"):
+        apply_options(load_scene("lab20"), {"method": "latlong"})
+
+
+def test_leaving_ortho_drops_the_labs_capture_camera():
+    lab = load_scene("lab20")
+    assert lab.reflector("mirror").ortho is not None
+    reflected = apply_options(lab, {"method": "reflected"}).reflector("mirror")
+    assert reflected.technique == "reflected" and reflected.ortho is None
+    assert apply_options(lab, {"method": "ortho"}) == lab
+
+
+def test_a_reflectors_source_is_kept_only_where_it_means_the_same():
+    cone = load_scene("cone")
+    picture = cone.reflector("cone").source
+    assert apply_options(cone, {"method": "sphere"}).reflector("cone").source == picture
+    assert apply_options(cone, {"method": "normal"}).reflector("cone").source == picture
+    # A picture is no folder of cube faces, and latlong takes no source: baked instead.
+    for method in ("cube", "latlong", "cube-live"):
+        assert apply_options(cone, {"method": method}).reflector("cone").source is None
+    faces = apply_options(load_scene("sphere"), {"set": ['reflectors[0].technique="cube"',
+                                                         f'reflectors[0].source="{SKY_CUBE}"']})
+    assert faces.reflector("sphere").source == SKY_CUBE
+    assert apply_options(faces, {"method": "sphere"}).reflector("sphere").source is None
+    assert apply_options(faces, {"method": "cube"}).reflector("sphere").source == SKY_CUBE
+
+
+@pytest.mark.parametrize("name, value, field, expected", [
+    ("capture", "fbo", "capture", "fbo"),
+    ("env_size", 128, "texture_size", 128),
+])
+def test_planar_options_set_every_planar_mirror(name, value, field, expected):
+    two = apply_options(load_scene("two_mirrors"), {name: value})
+    assert [getattr(r, field) for r in two.reflectors] == [expected, expected]
+    both = apply_options(load_scene("mirror_and_sphere"), {name: value})
+    assert getattr(both.reflector("mirror"), field) == expected
+    assert both.reflector("sphere") == load_scene("mirror_and_sphere").reflector("sphere")
+    with pytest.raises(OptionError, match=f"^--{name.replace('_', '-')}: scene "
+                       "'chrome_sphere' has no planar mirror"):
+        apply_options(load_scene("sphere"), {name: value})
+
+
+def test_map_size_sets_curved_reflectors_only():
+    both = apply_options(load_scene("mirror_and_sphere"), {"map_size": 64})
+    assert both.reflector("sphere").map_size == 64
+    assert both.reflector("mirror") == load_scene("mirror_and_sphere").reflector("mirror")
+    with pytest.raises(OptionError, match=r"^--map-size: scene 'lab20' has no curved reflector"):
+        apply_options(load_scene("lab20"), {"map_size": 64})
+
+
+def test_max_bounces_and_cube_faces():
+    assert apply_options(load_scene("lab20"), {"max_bounces": 0}).max_bounces == 0
+    sky = apply_options(load_scene("lab20"), {"cube_faces": str(SKY_CUBE)})
+    assert sky.background.kind == "cube_faces" and sky.background.path == SKY_CUBE
+    assert changed_fields(load_scene("lab20"), sky) == {"background"}
+
+
+def test_set_changes_any_key_path_as_a_file_would():
+    lab = load_scene("lab20")
+    fovy = apply_options(lab, {"set": ["camera.fovy=30"]})
+    assert fovy.camera == replace(lab.camera, fovy=30.0)
+    one = apply_options(lab, {"set": "camera.fovy=30"})  # one string from the API
+    assert one == fovy
+    deep = apply_options(lab, {"set": ["camera.eye[1]=3", "objects[0].angles=[0, 0, 0]",
+                                       'reflectors[0].backing=[0.1, 0.2, 0.3]']})
+    assert deep.camera.eye == (12.0, 3.0, 9.0)
+    assert deep.robot.angles == (0.0, 0.0, 0.0)
+    assert deep.reflector("mirror").backing == (0.1, 0.2, 0.3)
+    parsed = apply_options(lab, {"set": (("max_bounces", 2), ("description", "x"))})
+    assert (parsed.max_bounces, parsed.description) == (2, "x")
+    bare = apply_options(lab, {"set": ["name=my_lab"]})  # a bare word is a string
+    assert bare.name == "my_lab"
+
+
+@pytest.mark.parametrize("values, message", [
+    ({"camera": (1.0, 2.0, 3.0), "target": (1.0, 2.0, 3.0)},
+     "--target: camera.target: must differ from camera.eye, both are [1.0, 2.0, 3.0]"),
+    ({"fovy": 200}, "--fovy: camera.fovy: expected a number at most 179, got 200.0"),
+    ({"camera": "1,2,3"}, "--camera: camera.eye: expected an array, got the string '1,2,3'"),
+    ({"camera": (1.0, float("nan"), 3.0)},
+     "--camera: camera.eye[1]: expected a finite number, got nan"),
+    ({"capture": "fbx"}, "--capture: reflectors[0].capture: expected one of copy, fbo, "
+                         "got 'fbx' (did you mean 'fbo'?)"),
+    ({"env_size": 0}, "--env-size: reflectors[0].texture_size: expected a whole number "
+                      "from 1 to 4096, got 0"),
+    ({"max_bounces": 9}, "--max-bounces: max_bounces: expected a whole number from 0 to 6, "
+                         "got 9"),
+    ({"method": "spheer"}, "--method: reflectors[0].technique: expected one of ortho, "
+                           "reflected, stencil, sphere, sphere-vertex, sphere-texgen, cube, "
+                           "cube-live, latlong, normal, got 'spheer' (did you mean 'sphere'?)"),
+    ({"method": 5}, "--method: reflectors[0].technique: expected a string, got the number 5"),
+    ({"cube_faces": "/no/such/folder"},
+     "--cube-faces: '/no/such/folder' is not a folder of six cube faces"),
+    ({"set": ["camera.fvoy=30"]}, "--set: camera.fvoy: unknown key; did you mean 'fovy'?"),
+    ({"set": ["camera..eye=3"]}, "--set: expected a key path such as camera.eye or "
+                                 "reflectors[0].technique, got 'camera..eye'"),
+    ({"set": ['reflectors[3].technique="stencil"']},
+     "--set: reflectors[3].technique: no item [3] there"),
+    ({"set": ["name.x=3"]}, "--set: name.x: 'x' is not inside a table"),
+    ({"set": ["fovy"]}, "--set: expected KEY=VALUE (e.g. camera.fovy=30), got 'fovy'"),
+    ({"set": ["camera.eye=[1, 2]"]}, "--set: camera.eye: expected 3 numbers, got 2"),
+])
+def test_bad_values_are_refused_in_one_line_naming_the_flag(values, message):
+    with pytest.raises(OptionError) as info:
+        apply_options(load_scene("lab20"), values)
+    assert str(info.value) == message
+    assert info.value.option == message.split(":")[0]
+
+
+def test_cube_faces_folder_lacking_a_face_is_named(tmp_path):
+    with pytest.raises(OptionError, match=r"^--cube-faces: background\.cube_faces: cube-face "
+                       r"folder .* lacks px\.png, nx\.png"):
+        apply_options(load_scene("lab20"), {"cube_faces": str(tmp_path)})
+
+
+def test_an_unknown_option_name_is_a_programming_error():
+    with pytest.raises(TypeError, match="unknown option 'zoom'; options are camera, target"):
+        apply_options(load_scene("lab20"), {"zoom": 2})
+
+
+def test_every_option_has_a_flag_and_parses_its_text():
+    assert [o.flag for o in OPTIONS] == ["--" + o.name.replace("_", "-") for o in OPTIONS]
+    lab = load_scene("lab20")
+    texts = {"camera": "1,2,3", "target": "-4,1,-2", "fovy": "30", "angles": "0,10,20",
+             "method": "stencil", "capture": "fbo", "env_size": "128", "max_bounces": "2",
+             "cube_faces": str(SKY_CUBE), "set": "camera.near=0.5"}
+    for name, option in OPTION_NAMES.items():
+        if name == "map_size":
+            continue
+        value = option.parse(option.flag, texts[name])
+        assert apply_options(lab, {name: value}) != lab, name
+    assert apply_options(load_scene("sphere"), {"map_size": OPTION_NAMES["map_size"].parse(
+        "--map-size", "64")}).reflector("sphere").map_size == 64
+
+
+def test_set_key_walks_into_nested_tables_and_arrays():
+    document: dict = {"reflectors": [{"technique": "ortho"}]}
+    set_key(document, "reflectors[0].technique", "stencil")
+    set_key(document, "camera.eye", [1, 2, 3])
+    assert document == {"reflectors": [{"technique": "stencil"}], "camera": {"eye": [1, 2, 3]}}
+    with pytest.raises(OptionError, match=r"^--x: reflectors\[1\]\.name: no item \[1\] there"):
+        set_key(document, "reflectors[1].name", "a", "--x")
+
+
+# --------------------------------------------------------------------------- parsing
+
+
+def test_parse_size_floats_and_counts():
+    assert parse_size("--size", " 640 x 480 ") == (640, 480)
+    assert parse_floats("--camera", "1, -2.5,3e1", 3, "X,Y,Z") == (1.0, -2.5, 30.0)
+    assert parse_count("--frames", "12") == 12
+    assert check_size((32, 16.0)) == (32, 16) and check_size("8x4") == (8, 4)
+
+
+@pytest.mark.parametrize("size", [(0, 10), (10,), "ten", (True, 4), (8.5, 4), (9000, 10),
+                                  None])
+def test_check_size_refuses_what_is_not_two_whole_numbers_in_range(size):
+    with pytest.raises(OptionError, match=r"^size: expected"):
+        check_size(size)
+
+
+@pytest.mark.parametrize("text", ["-1", "1.5", "x", "", "100001"])
+def test_parse_count_refuses_what_is_not_a_whole_number_in_range(text):
+    with pytest.raises(OptionError, match=r"^--frames: expected a whole number from 1 to "
+                       r"100000"):
+        parse_count("--frames", text, 1, 100_000)
