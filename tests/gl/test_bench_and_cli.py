@@ -1,30 +1,59 @@
-"""``mirrorlab bench accuracy --quick`` and the render command's technique options, end to
-end on llvmpipe."""
+"""``mirrorlab bench accuracy --quick``, ``mirrorlab render`` with each technique and the
+scene options, ``mirrorlab plan`` and ``render --frames --stats``, end to end on llvmpipe
+(the CLI through :func:`mirrorlab.cli.main`)."""
 
 from __future__ import annotations
 
 import csv
+import json
+import re
+import shutil
 
 import numpy as np
 import pytest
 from PIL import Image
 
 import mirrorlab
+from mirrorlab.accuracy import SweepSettings, curved_techniques, lab_techniques, lab_viewpoints
 from mirrorlab.cli import main
+from mirrorlab.paths import REPO_DIR
+from mirrorlab.scene.backgrounds import CUBE_FACE_FILES
+from mirrorlab.scene.model import CURVED_TECHNIQUES, PLANAR_TECHNIQUES
 from tests.imagecheck import assert_images_close
+
+SKY_CUBE = REPO_DIR / "textures" / "sky_cube"
+
+
+def png(path) -> np.ndarray:
+    with Image.open(path) as image:
+        return np.asarray(image.convert("RGB"))
+
+
+# --------------------------------------------------------------------------- bench
 
 
 def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     assert main(["bench", "accuracy", "--quick", "--out-dir", str(tmp_path)]) == 0
     out = capsys.readouterr()
     assert "technique" in out.out and "reflected-fbo" in out.out and "cube-live" in out.out
-    # the progress bars reached their ends: lab 2 viewpoints x (ray tracer + 2 methods x
-    # 2 captures x 2 sizes + stencil); spheres 2 views x (ray tracer + 7 maps x 2 sizes)
-    assert "20/20" in out.err and "30/30" in out.err
+    # What the quick sweep measures, from its settings: the lab mirror at 2 viewpoints x
+    # (ray tracer + ortho and reflected x 2 captures x 2 sizes + stencil); the sphere alone
+    # in the sky and among its objects, 1 view each x (ray tracer + 7 maps x 2 sizes).
+    quick = SweepSettings.quick()
+    assert quick.sizes == (64, 128) and quick.viewpoints == ("head-on far", "60 deg")
+    lab_rows = 2 * (1 + len(lab_techniques(quick.sizes)))
+    sphere_rows = 2 * (1 + len(curved_techniques(quick.sizes)))
+    assert (lab_rows, sphere_rows) == (2 * (1 + 2 * 2 * 2 + 1), 2 * (1 + 7 * 2))
+    total = lab_rows + sphere_rows
+    # one progress bar (tqdm, on stderr), and it reached its end
+    assert f"{total}/{total}" in out.err, out.err[-400:]
     with open(tmp_path / "accuracy.csv") as stream:
         table = list(csv.DictReader(stream))
-    assert len(table) == 50
+    assert len(table) == total
     by_key = {(r["scene"], r["technique"], r["map_size"], r["viewpoint"]): r for r in table}
+    assert len(by_key) == total  # one row per configuration and viewpoint
+    assert {r["viewpoint"] for r in table if r["scene"] == "lab"} == set(quick.viewpoints)
+    assert set(quick.viewpoints) <= set(lab_viewpoints())
     assert float(by_key[("lab", "raytrace", "0", "60 deg")]["mae"]) == 0.0
     ortho = float(by_key[("lab", "ortho-copy", "128", "60 deg")]["mae"])
     reflected = float(by_key[("lab", "reflected-copy", "128", "60 deg")]["mae"])
@@ -32,12 +61,11 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     assert reflected < 0.2 * ortho and stencil < 0.2 * ortho
     sky = {r["technique"]: float(r["mae"]) for r in table
            if r["scene"] == "sphere-sky" and r["map_size"] == "128"}
-    assert set(sky) == {"sphere", "sphere-vertex", "sphere-texgen", "cube", "cube-live",
-                        "latlong", "normal"}
+    assert set(sky) == set(CURVED_TECHNIQUES)
     assert sky["sphere"] < sky["normal"] and sky["cube"] < sky["normal"]
     assert all(float(r["wall_ms"]) > 0 for r in table)
     markdown = (tmp_path / "accuracy.md").read_text()
-    assert markdown.count("| technique |") == 3
+    assert markdown.count("| technique |") == 3  # lab, sphere-sky, sphere-objects
     # Re-making the report from the CSV measures nothing and gives the same tables.
     (tmp_path / "accuracy.md").unlink()
     again = tmp_path / "again"
@@ -49,6 +77,31 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
         assert plot.size[0] > 400 and np.asarray(plot.convert("L")).std() > 10
 
 
+def test_accuracy_sweep_of_a_scene_file(tmp_path, capsys, monkeypatch):
+    """``--scene FILE`` measures every technique the file's reflectors can take, from its
+    own camera: two_mirrors has planar mirrors only."""
+    monkeypatch.chdir(REPO_DIR)
+    assert main(["bench", "accuracy", "--quick", "--scene", "scenes/two_mirrors.toml",
+                 "--out-dir", str(tmp_path)]) == 0
+    out = capsys.readouterr()
+    total = 1 + len(lab_techniques(SweepSettings.quick().sizes))
+    assert f"{total}/{total}" in out.err, out.err[-400:]
+    with open(tmp_path / "accuracy.csv") as stream:
+        table = list(csv.DictReader(stream))
+    assert len(table) == total
+    assert {r["scene"] for r in table} == {"two_mirrors"}
+    assert {r["viewpoint"] for r in table} == {"camera"}
+    techniques = {r["technique"] for r in table}
+    assert techniques == {"raytrace", "stencil"} | {f"{m}-{c}" for m in ("ortho", "reflected")
+                                                     for c in ("copy", "fbo")}
+    # The exact techniques, two bounces deep, at the frame's size: 99% of the mirrors'
+    # pixels within 10/255 of the ray tracer.
+    rows = {(r["technique"], r["map_size"]): r for r in table}
+    for key in (("stencil", "0"), ("reflected-copy", "128"), ("reflected-fbo", "128")):
+        assert float(rows[key]["share_off"]) <= 0.01, (key, rows[key])
+    assert (tmp_path / "accuracy.md").exists() and (tmp_path / "accuracy.png").exists()
+
+
 def test_bench_refuses_a_file_as_its_folder_and_unknown_benchmarks(tmp_path, capsys):
     blocker = tmp_path / "taken"
     blocker.write_text("keep me")
@@ -56,19 +109,45 @@ def test_bench_refuses_a_file_as_its_folder_and_unknown_benchmarks(tmp_path, cap
     assert main(["bench", "speed"]) == 2
     assert main(["bench", "accuracy", "--sizes", "64,zero"]) == 2
     assert main(["bench", "accuracy", "--from-csv", str(blocker)]) == 2
+    assert main(["bench", "accuracy", "--scene", "moon"]) == 2
     errors = capsys.readouterr().err.strip().splitlines()
-    assert len(errors) == 4 and "--out-dir" in errors[0] and "accuracy" in errors[1]
+    assert len(errors) == 5 and "--out-dir" in errors[0] and "accuracy" in errors[1]
     assert "--sizes" in errors[2] and "--from-csv" in errors[3]
+    assert "moon" in errors[4] and "unknown scene" in errors[4]
     assert blocker.read_text() == "keep me"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["taken"]
 
 
-@pytest.mark.parametrize("method", ["reflected", "stencil", "raytrace"])
-def test_render_command_draws_each_method(tmp_path, method, capsys):
+# --------------------------------------------------------------------------- render
+
+
+@pytest.mark.parametrize("scene, method", [
+    *(("lab20", m) for m in PLANAR_TECHNIQUES),
+    *(("chrome_sphere", m) for m in CURVED_TECHNIQUES),
+])
+def test_render_command_draws_each_technique(tmp_path, capsys, scene, method):
     out = tmp_path / f"{method}.png"
-    assert main(["render", "--method", method, "--size", "96x96", "--out", str(out)]) == 0
-    assert method in capsys.readouterr().out
-    with Image.open(out) as image:
-        assert image.size == (96, 96)
+    assert main(["render", scene, "--method", method, "--size", "64x48", "--out", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert str(out) in said and scene in said and "camera" in said
+    image = png(out)
+    assert image.shape == (48, 64, 3) and image.std() > 5
+    # the command draws what the API draws
+    assert np.array_equal(image, mirrorlab.render(scene, size=(64, 48), method=method))
+
+
+def test_render_command_draws_the_ray_traced_truth(tmp_path, capsys):
+    out = tmp_path / "truth.png"
+    assert main(["render", "--raytrace", "--size", "64x48", "--out", str(out)]) == 0
+    assert "ray traced" in capsys.readouterr().out
+    truth = png(out)
+    assert np.array_equal(truth, mirrorlab.render(size=(64, 48), method="raytrace"))
+    # and the exact techniques agree with it
+    for method in ("reflected", "stencil"):
+        assert_images_close(f"cli_truth_{method}", mirrorlab.render(size=(64, 48),
+                                                                    method=method),
+                            truth, channel_tolerance=10, min_fraction_within=0.99,
+                            max_mean_abs=1.0)
 
 
 def test_exact_methods_through_the_api_match_the_ray_tracer():
@@ -77,9 +156,8 @@ def test_exact_methods_through_the_api_match_the_ray_tracer():
         image = mirrorlab.render(size=(96, 96), method=method)
         assert_images_close(f"api_{method}", image, truth, channel_tolerance=10,
                             min_fraction_within=0.99, max_mean_abs=1.0)
-    fbo = mirrorlab.render(size=(96, 96), method="reflected", capture="fbo",
-                           environment_size=64)
-    copy = mirrorlab.render(size=(96, 96), method="reflected", environment_size=64)
+    fbo = mirrorlab.render(size=(96, 96), method="reflected", capture="fbo", env_size=64)
+    copy = mirrorlab.render(size=(96, 96), method="reflected", env_size=64)
     assert np.array_equal(fbo, copy)
 
 
@@ -88,6 +166,11 @@ def test_exact_methods_through_the_api_match_the_ray_tracer():
     (["--capture", "blit"], "--capture"),
     (["--env-size", "-3"], "--env-size"),
     (["--env-size", "9000"], "--env-size"),
+    (["sphere", "--map-size", "2"], "--map-size"),
+    (["sphere", "--method", "mirror"], "--method"),
+    (["sphere", "--cube-faces", str(REPO_DIR / "models")], "--cube-faces"),
+    (["cone", "--set", "camera.fovy=0"], "--set"),
+    (["robot_wave", "--frames", "30"], "--frames"),
 ])
 def test_render_command_refuses_bad_technique_options(tmp_path, capsys, args, option):
     out = tmp_path / "x.png"
@@ -97,71 +180,164 @@ def test_render_command_refuses_bad_technique_options(tmp_path, capsys, args, op
     assert not out.exists()
 
 
-@pytest.mark.parametrize("args", [
-    ["--scene", "cone"],
-    ["--scene", "sphere", "--envmap", "cube-live", "--map-size", "32"],
-    ["--scene", "sphere", "--envmap", "latlong", "--camera", "0,0,5"],
-    ["--scene", "sphere", "--envmap", "cube", "--cube-faces", "textures/sky_cube"],
-])
-def test_render_command_draws_the_environment_map_scenes(tmp_path, capsys, args):
-    out = tmp_path / "env.png"
-    assert main(["render", *args, "--size", "64x64", "--out", str(out)]) == 0
-    assert "scene" in capsys.readouterr().out
-    with Image.open(out) as image:
-        assert image.size == (64, 64) and np.asarray(image).std() > 5
-
-
 @pytest.mark.parametrize("args, option", [
-    (["--scene", "cone", "--method", "stencil"], "--method"),
-    (["--envmap", "cube"], "--envmap"),
-    (["--scene", "sphere", "--envmap", "mirror"], "--envmap"),
-    (["--scene", "sphere", "--cone-height", "1"], "--cone-height"),
-    (["--scene", "cone", "--cone-height", "7"], "--cone-height"),
-    (["--scene", "sphere", "--map-size", "2"], "--map-size"),
-    (["--scene", "moon"], "--scene"),
-    (["--scene", "sphere", "--cube-faces", "models"], "--cube-faces"),
-    (["--scene", "cone", "--cube-faces", "textures/sky_cube"], "--cube-faces"),
+    (["no_mirror", "--method", "stencil"], "--method"),
+    (["no_mirror", "--env-size", "64"], "--env-size"),
+    (["cone", "--method", "stencil"], "--method"),
+    (["cone", "--capture", "fbo"], "--capture"),
+    (["lab20", "--method", "cube"], "--method"),
+    (["lab20", "--map-size", "64"], "--map-size"),
+    (["sphere", "--angles", "0,0,0"], "--angles"),
 ])
-def test_render_command_refuses_options_that_do_not_fit_the_scene(tmp_path, capsys, args,
+def test_render_command_refuses_options_the_scene_has_nothing_for(tmp_path, capsys, args,
                                                                   option):
     out = tmp_path / "x.png"
     assert main(["render", "--out", str(out), *args]) == 2
     error = capsys.readouterr().err.strip()
     assert error.count("\n") == 0 and option in error
+    scene = mirrorlab.load_scene(args[0]).name
+    assert scene in error, "the message should say which scene lacks it"
     assert not out.exists()
 
 
-def test_a_cube_map_from_six_images_draws_what_the_baked_cube_draws(tmp_path):
-    """The shipped faces are the baked sky, so the two static cubes must agree exactly."""
-    from mirrorlab.envmap_renderer import render_envmap_frame
-    from mirrorlab.paths import REPO_DIR
-    from mirrorlab.scene.envscenes import load_cube_faces
+@pytest.mark.parametrize("args", [["--scene", "moon"], ["moon"]])
+def test_render_command_refuses_an_unknown_scene(tmp_path, capsys, args):
+    out = tmp_path / "x.png"
+    assert main(["render", "--out", str(out), *args]) == 2
+    error = capsys.readouterr().err.strip()
+    assert error.count("\n") == 0 and "moon" in error and "unknown scene" in error
+    assert "lab20" in error  # and names the scenes there are
+    assert not out.exists()
 
-    faces = load_cube_faces(REPO_DIR / "textures" / "sky_cube")
-    from_files = render_envmap_frame("sphere", "cube", (96, 96), cube_faces=faces).image
-    baked = render_envmap_frame("sphere", "cube", (96, 96), map_size=256).image
-    assert np.array_equal(from_files, baked)
+
+@pytest.mark.parametrize("args", [
+    ["cone"],
+    ["sphere", "--method", "cube-live", "--map-size", "32"],
+    ["sphere", "--method", "latlong", "--camera", "0,0,5"],
+    ["sphere", "--method", "cube", "--cube-faces", str(SKY_CUBE)],
+    ["mirror_and_sphere"],
+])
+def test_render_command_draws_the_environment_map_scenes(tmp_path, capsys, args):
+    out = tmp_path / "env.png"
+    assert main(["render", *args, "--size", "64x64", "--out", str(out)]) == 0
+    assert "wrote" in capsys.readouterr().out
+    image = png(out)
+    assert image.shape == (64, 64, 3) and image.std() > 5
+
+
+def rolled_faces(folder):
+    """The sky cube's six pictures in reverse order (px <- nz, nx <- pz, ...)."""
+    folder.mkdir()
+    for stem, other in zip(CUBE_FACE_FILES, reversed(CUBE_FACE_FILES), strict=True):
+        shutil.copy(SKY_CUBE / f"{other}.png", folder / f"{stem}.png")
+    return folder
+
+
+def test_a_cube_map_from_six_images_draws_what_the_baked_cube_draws(tmp_path, monkeypatch):
+    """The shipped faces are the baked sky, so the two static cubes must agree exactly."""
+    monkeypatch.chdir(REPO_DIR)
+    from_files, baked, rolled = (tmp_path / f"{n}.png" for n in ("files", "baked", "rolled"))
+    common = ["--method", "cube", "--size", "96x96"]
+    assert main(["render", "sphere", *common, "--cube-faces", "textures/sky_cube",
+                 "--out", str(from_files)]) == 0
+    assert main(["render", "sphere", *common, "--map-size", "256", "--out", str(baked)]) == 0
+    assert np.array_equal(png(from_files), png(baked))
     # Six other pictures change the reflection and the sky behind it.
-    rolled = render_envmap_frame("sphere", "cube", (96, 96), cube_faces=faces[::-1]).image
-    assert np.mean(np.abs(rolled.astype(int) - baked.astype(int)).max(axis=-1) > 30) > 0.3
+    assert main(["render", "sphere", *common, "--cube-faces",
+                 str(rolled_faces(tmp_path / "rolled_faces")), "--out", str(rolled)]) == 0
+    changed = np.abs(png(rolled).astype(int) - png(baked).astype(int)).max(axis=-1) > 30
+    assert np.mean(changed) > 0.3
 
 
 def test_api_renders_the_environment_map_scenes():
-    sphere = mirrorlab.render(size=(48, 48), scene="sphere", envmap="cube")
+    sphere = mirrorlab.render(size=(48, 48), scene="sphere", method="cube")
     cone = mirrorlab.render(size=(48, 48), scene="cone")
     assert sphere.shape == cone.shape == (48, 48, 3) and not np.array_equal(sphere, cone)
-    with pytest.raises(ValueError, match="envmap"):
-        mirrorlab.render(size=(48, 48), envmap="cube")
-    from mirrorlab.paths import REPO_DIR
-
-    faces = mirrorlab.render(size=(48, 48), scene="sphere", envmap="cube",
-                             cube_faces=str(REPO_DIR / "textures" / "sky_cube"))
+    assert sphere.std() > 5 and cone.std() > 5
+    with pytest.raises(ValueError, match="method"):
+        mirrorlab.render(size=(48, 48), method="cube")  # the lab has no curved reflector
+    faces = mirrorlab.render(size=(48, 48), scene="sphere", method="cube",
+                             cube_faces=str(SKY_CUBE))
     assert np.array_equal(faces, sphere)
+
+
+# --------------------------------------------------------------------------- plan, stats
 
 
 def test_plan_command_explains_what_runs(capsys):
     assert main(["plan", "--method", "reflected"]) == 0
+    text = capsys.readouterr().out
+    # frame 0 captures the mirror for the viewer; frame 1 (nothing moved) reuses it
+    frames = re.split(r"^frame \d+: ", text, flags=re.M)[1:]
+    assert len(frames) == 2
+    assert "run  capture mirror (reflected" in frames[0]
+    assert "skip capture mirror (reflected" in frames[1]
+    assert "run  camera" in frames[0] and "run  camera" in frames[1]
     assert main(["plan", "--camera", "-12,2,-2", "--target", "0,0,0"]) == 0
     text = capsys.readouterr().out
-    assert "run  reflected-capture" in text and "skip reflected-capture" in text
-    assert "behind" in text
+    assert "capture" not in text and "behind" in text
+    assert "draw mirror in camera: back" in text
+
+
+def test_plan_command_json_parses_and_matches_the_scene(capsys):
+    assert main(["plan", "robot_wave", "--frames", "8", "--json", "--size", "64x64"]) == 0
+    document = json.loads(capsys.readouterr().out)
+    assert document["scene"] == "robot_wave" and document["size"] == [64, 64]
+    frames = document["frames"]
+    assert [f["frame"] for f in frames] == list(range(8))
+    for frame in frames:
+        assert frame["passes"][-1]["pass"] == "camera" and frame["passes"][-1]["runs"]
+        assert [d["reflector"] for d in frame["draws"]] == ["mirror"]
+    captured = [f["frame"] for f in frames
+                if any(p["pass"] == "capture" and p["runs"] for p in f["passes"])]
+    assert captured == capture_frames(8)
+
+
+def capture_frames(count: int) -> list[int]:
+    """The robot_wave frames among the first ``count`` whose mirror must be captured: the
+    first, and each whose pose differs from the one before (from the scene file)."""
+    scene = mirrorlab.load_scene("robot_wave")
+    poses = [scene.at_frame(f).content_key() for f in range(count)]
+    return [f for f in range(count) if f == 0 or poses[f] != poses[f - 1]]
+
+
+def test_render_stats_report_the_passes_of_each_frame(tmp_path, capsys):
+    expected = capture_frames(8)
+    # still for frames 0-4 (keyframes 0 and 4 agree), moving from frame 5 on
+    assert expected[:2] == [0, 5] and 1 not in expected and 4 not in expected
+    out = tmp_path / "last.png"
+    assert main(["render", "robot_wave", "--frames", "8", "--stats", "--size", "64x64",
+                 "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    reported = dict(re.findall(r"^frame (\d+): ran (.*?) \(", text, flags=re.M))
+    assert sorted(int(f) for f in reported) == list(range(8))
+    for frame in range(8):
+        ran = reported[str(frame)]
+        if frame in expected:
+            assert ran == "capture:mirror, camera", (frame, ran)
+        else:
+            assert ran == "camera; skipped capture:mirror", (frame, ran)
+    runs = len(expected) * 2 + (8 - len(expected))
+    assert f"planned: {runs} passes run and {8 - len(expected)} skipped over 8 frames" in text
+    comparison = [line for line in text.splitlines() if line.startswith("--no-plan")]
+    assert len(comparison) == 1
+    assert f"{2 * 8} passes run" in comparison[0]
+    assert f"saved {8 - len(expected)} passes" in comparison[0]
+    assert png(out).shape == (64, 64, 3)
+
+
+def test_render_out_dir_writes_one_png_per_frame(tmp_path, capsys):
+    out_dir = tmp_path / "frames"
+    out = tmp_path / "last.png"
+    assert main(["render", "robot_wave", "--frames", "8", "--size", "64x64", "--out",
+                 str(out), "--out-dir", str(out_dir)]) == 0
+    assert "wrote 8 frames" in capsys.readouterr().out
+    names = sorted(p.name for p in out_dir.iterdir())
+    assert names == [f"robot_wave_{f:04d}.png" for f in range(8)]
+    pictures = [png(out_dir / name) for name in names]
+    assert np.array_equal(pictures[-1], png(out))
+    # the robot holds still to frame 4 and moves after
+    assert np.array_equal(pictures[0], pictures[4])
+    assert not np.array_equal(pictures[4], pictures[5])
+    with mirrorlab.Renderer(size=(64, 64)) as renderer:
+        assert np.array_equal(pictures[6], renderer.render("robot_wave", frame=6))
