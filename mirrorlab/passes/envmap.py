@@ -64,6 +64,9 @@ class CurvedPass:
         self.program: Program | None = None
         if self.technique == "sphere-texgen":
             self.fixed_mesh = FixedFunctionMesh(shared.registry, self.mesh)
+            # Texgen takes the view ray from the eye to each vertex; an orthographic view
+            # has no eye point, so there the same per-vertex formula runs in the shader.
+            self.ortho_program = shared.program("envmap.vert", "envmap_sphere.frag")
         else:
             fragment = _FRAGMENT[self.technique]
             self.program = shared.program("envmap.vert", fragment)
@@ -96,14 +99,19 @@ class CurvedPass:
         model = reflector.model_matrix()
         GL.glEnable(GL.GL_DEPTH_TEST)
         GL.glEnable(GL.GL_CULL_FACE)
+        program = self.program
         if self.technique == "sphere-texgen":
             if self.output_mode != OUTPUT_COLOR:
                 raise ValueError("sphere-texgen is fixed-function: it can only output colour")
-            self._draw_texgen(view, model, texture)
-            return 1
-        program = self.program
+            if not is_orthographic(view.projection):
+                self._draw_texgen(view, model, texture)
+                return 1
+            program = self.ortho_program
         assert program is not None
         program.use()
+        if program.has_uniform("per_vertex"):  # the sphere-map program, shared by three
+            program.set_int("sphere_map_texture", 0)
+            program.set_int("per_vertex", self.technique != "sphere")
         program.set_mat4("model", model)
         program.set_mat4("view", view.view)
         program.set_mat4("projection", view.projection)
@@ -165,9 +173,6 @@ class SphereMapped(CurvedPass):
     def __init__(self, shared: SharedResources, reflector: CurvedReflector,
                  background: Background | None = None) -> None:
         super().__init__(shared, reflector, background)
-        if self.program is not None and self.technique != "normal":
-            self.program.use()
-            self.program.set_int("per_vertex", self.technique == "sphere-vertex")
         self.textures: dict[int, Texture2D] = {}
 
     def release(self) -> None:

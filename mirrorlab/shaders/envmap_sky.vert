@@ -7,5 +7,6 @@ out vec2 ndc;
 
 void main() {
     ndc = position.xy;
+    gl_ClipDistance[0] = 1.0;  // never clipped (see clip.glsl: every vertex shader writes it)
     gl_Position = vec4(position.xy, 1.0, 1.0);
 }

@@ -288,3 +288,23 @@ def test_the_renderer_makes_a_pass_only_for_reflectors_that_need_one(scene_rende
     draw(scene_renderer, mirrorlab.load_scene("no_mirror"), SIZE)
     assert scene_renderer._passes == {} and scene_renderer._sky is None
     assert len(scene_renderer.registry) < live
+
+
+def test_two_reflectors_sharing_a_program_each_keep_their_technique(scene_renderer):
+    """``sphere`` and ``sphere-vertex`` draw with one shared program: a scene with one of
+    each draws each as it is drawn alone."""
+    from mirrorlab.scene.model import Transform
+
+    scene = mirrorlab.load_scene("chrome_sphere")
+    left = replace(scene.reflector("sphere"), name="left", technique="sphere",
+                   transform=Transform(position=(-1.1, 0.0, 0.0), scale=(0.8, 0.8, 0.8)))
+    right = replace(left, name="right", technique="sphere-vertex",
+                    transform=Transform(position=(1.1, 0.0, 0.0), scale=(0.8, 0.8, 0.8)))
+    both = draw(scene_renderer, replace(scene, objects=(), reflectors=(left, right)))[0]
+    alone_left = draw(scene_renderer, replace(scene, objects=(), reflectors=(left,)))[0]
+    alone_right = draw(scene_renderer, replace(scene, objects=(), reflectors=(right,)))[0]
+    half = SIZE[0] // 2
+    assert np.array_equal(both[:, :half], alone_left[:, :half])
+    assert np.array_equal(both[:, half:], alone_right[:, half:])
+    assert not np.array_equal(alone_left[:, :half], draw(scene_renderer, replace(
+        scene, objects=(), reflectors=(replace(left, technique="sphere-vertex"),)))[0][:, :half])
