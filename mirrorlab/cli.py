@@ -66,7 +66,8 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--save-env", metavar="PATH",
                         help="also write the first planar mirror's capture texture as a PNG")
     render.add_argument("--raytrace", action="store_true",
-                        help="draw the ray-traced ground truth instead (no OpenGL; slow)")
+                        help="draw the ray-traced ground truth instead (no OpenGL; slow; "
+                        "--method raytrace says the same)")
 
     plan = commands.add_parser("plan", help="print the passes each frame would run, and why")
     _add_scene_arguments(plan)
@@ -138,6 +139,8 @@ def run_render(args: argparse.Namespace) -> int:
     out_dir = Path(args.out_dir) if args.out_dir else None
     if out_dir is not None and out_dir.exists() and not out_dir.is_dir():
         raise UsageError(f"--out-dir: {args.out_dir!r} is a file, expected a folder")
+    if args.option_method == "raytrace":  # the ray tracer, as the API's method="raytrace"
+        args.option_method, args.raytrace = None, True
     scene = scene_from_args(args)
     if out is None:
         out = check_output("--out", Path("out") / f"{scene.name}.png")

@@ -36,7 +36,7 @@ def run_render(scene: Scene, size: tuple[int, int], out: Path, frames: list[int]
                     outputs.add_png(frame_name(out_dir, scene, frame), image)
             outputs.add_png(out, image)
             if save_env is not None:
-                say(f"no capture texture with --method raytrace; {save_env} not written")
+                say(f"no capture texture when ray tracing; {save_env} not written")
             say(f"wrote {out} ({size[0]}x{size[1]}, {scene.name}, ray traced, "
                 f"{(time.perf_counter() - start) * 1e3:.0f} ms)")
             return 0
@@ -46,7 +46,14 @@ def run_render(scene: Scene, size: tuple[int, int], out: Path, frames: list[int]
             records = []
             comparison: list[tuple[int, float]] = []
             image = None
-            for frame in frames:
+            compare = stats and use_plan
+            if compare:  # one untimed frame each: start-up work (shaders, meshes) is paid
+                for warm in (renderer, unplanned):
+                    warm.render(scene, frames[0], use_plan=False)
+                    warm.scene_renderer.state.clear()  # and forgotten: frame 0 captures
+            for index, frame in enumerate(frames):
+                if compare and index % 2:  # take turns at going first
+                    comparison.append(_unplanned(unplanned, scene, frame))
                 began = time.perf_counter()
                 image = renderer.render(scene, frame, use_plan=use_plan)
                 elapsed = (time.perf_counter() - began) * 1e3
@@ -54,12 +61,8 @@ def run_render(scene: Scene, size: tuple[int, int], out: Path, frames: list[int]
                 records.append((frame, renderer.last_stats, elapsed))
                 if out_dir is not None:
                     outputs.add_png(frame_name(out_dir, scene, frame), image)
-                if stats and use_plan:  # the same frame with every pass, in turn with it
-                    began = time.perf_counter()
-                    unplanned.render(scene, frame, use_plan=False)
-                    assert unplanned.last_stats is not None
-                    comparison.append((len(unplanned.last_stats.plan.ran),
-                                       (time.perf_counter() - began) * 1e3))
+                if compare and not index % 2:
+                    comparison.append(_unplanned(unplanned, scene, frame))
             assert image is not None
             outputs.add_png(out, image)
             environment = _environment(renderer, scene) if save_env is not None else None
@@ -103,6 +106,13 @@ def _environment(renderer, scene: Scene) -> np.ndarray | None:
             except ValueError:
                 return None
     return None
+
+
+def _unplanned(renderer, scene: Scene, frame: int) -> tuple[int, float]:
+    """Passes run and milliseconds of ``frame`` drawn with every pass (--no-plan)."""
+    began = time.perf_counter()
+    renderer.render(scene, frame, use_plan=False)
+    return len(renderer.last_stats.plan.ran), (time.perf_counter() - began) * 1e3
 
 
 def _report(records, comparison, use_plan: bool, say: Callable[[str], None]) -> None:
