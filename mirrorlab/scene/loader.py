@@ -14,7 +14,9 @@ Numpy only.
 from __future__ import annotations
 
 import difflib
+import json
 import math
+import re
 import tomllib
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -79,7 +81,15 @@ class SceneError(ValueError):
     def __init__(self, file: str, key: str, problem: str) -> None:
         self.file, self.key, self.problem = file, key, problem
         where = f"{file}: {key}" if key else file
-        super().__init__(f"{where}: {problem}")
+        super().__init__(_one_line(f"{where}: {problem}"))
+
+
+def _one_line(text: str) -> str:
+    """``text`` with line breaks and other control characters (from file names or keys
+    in the file) written as escapes, so that a message stays one line."""
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() or c == " " else repr(c)[1:-1] for c in text)
 
 
 # --------------------------------------------------------------------------- reading
@@ -91,16 +101,31 @@ def scene_path(name_or_path: str | Path) -> Path:
     is no such file."""
     text = str(name_or_path)
     candidate = Path(text)
-    if candidate.suffix == ".toml" or candidate.is_file() or "/" in text:
-        if not candidate.is_file():
+    if candidate.suffix == ".toml" or _is_file(candidate) or "/" in text:
+        if not _is_file(candidate):
             raise SceneError(text, "", "no such scene file")
         return candidate
     stem = SCENE_ALIASES.get(text, text)
     shipped = SCENES_DIR / f"{stem}.toml"
-    if shipped.is_file():
+    if _is_file(shipped):
         return shipped
     raise SceneError(text, "", f"unknown scene; expected a .toml file or one of "
                      f"{', '.join(shipped_scene_names())}")
+
+
+def _is_file(path: Path) -> bool:
+    """``path.is_file()``, False where the name cannot be a file at all (too long, say)."""
+    try:
+        return path.is_file()
+    except (OSError, ValueError):
+        return False
+
+
+def _is_dir(path: Path) -> bool:
+    try:
+        return path.is_dir()
+    except (OSError, ValueError):
+        return False
 
 
 def shipped_scene_names() -> list[str]:
@@ -275,7 +300,7 @@ class _Reader:
             raise self.fail(key, f"expected a table, got {_kind(value)}")
         for name in value:
             if name not in known:
-                where = f"{key}.{name}" if key else str(name)
+                where = f"{key}.{key_name(name)}" if key else key_name(name)
                 close = difflib.get_close_matches(str(name), known, n=1, cutoff=0.6)
                 hint = f"; did you mean {close[0]!r}?" if close else (
                     f"; expected one of {', '.join(known)}")
@@ -336,8 +361,13 @@ class _Reader:
 
     def direction(self, value: Any, key: str) -> tuple[float, float, float]:
         vector = self.vec3(value, key)
-        if not 0.0 < float(np.linalg.norm(vector)) < math.inf:
+        with np.errstate(over="ignore"):
+            length = float(np.linalg.norm(vector))
+        if not length > 0.0:
             raise self.fail(key, f"expected a non-zero direction, got {list(vector)}")
+        if not math.isfinite(length):
+            raise self.fail(key, f"expected a direction whose length is a finite number, "
+                            f"got {list(vector)}")
         return vector
 
     def color(self, value: Any, key: str) -> tuple[float, float, float]:
@@ -350,16 +380,16 @@ class _Reader:
 
     def file(self, value: Any, key: str, what: str) -> Path:
         path = self.folder / self.text(value, key)
-        if not path.is_file():
+        if not _is_file(path):
             raise self.fail(key, f"{what} {path} does not exist")
         return path.resolve()
 
     def folder_of_faces(self, value: Any, key: str) -> Path:
         folder = self.folder / self.text(value, key)
-        if not folder.is_dir():
+        if not _is_dir(folder):
             raise self.fail(key, f"cube-face folder {folder} does not exist")
         missing = [f"{stem}.png" for stem in CUBE_FACE_FILES
-                   if not (folder / f"{stem}.png").is_file()]
+                   if not _is_file(folder / f"{stem}.png")]
         if missing:
             raise self.fail(key, f"cube-face folder {folder} lacks {', '.join(missing)}; "
                             f"expected {', '.join(s + '.png' for s in CUBE_FACE_FILES)}")
@@ -417,6 +447,9 @@ class _Reader:
         if float(np.linalg.norm(side)) < 1e-9:
             raise self.fail(f"{key}.up", f"must not be parallel to the view direction "
                             f"from eye to target, got {list(up)}")
+        if float(np.linalg.norm(np.cross(offset / length, up))) < 1e-12:  # as look_at does
+            raise self.fail(f"{key}.up", f"is too short to orient the camera, got "
+                            f"{list(up)}; expected a direction of length 1 or so")
 
     def background(self, value: Any, camera: Camera) -> Background:
         table = self.table(value, "background", (*_BACKGROUND_SOURCES, "sphere_map_camera"))
@@ -661,15 +694,82 @@ class _Reader:
                                 f"already keyframes[{frames_seen[key.frame]}]")
             frames_seen[key.frame] = i
         ordered = tuple(sorted(keyframes, key=lambda k: k.frame))
-        animation = Animation(frames=frames, keyframes=ordered)
-        from dataclasses import replace
+        self.check_camera_frames(scene.camera, ordered, frames, frames_seen)
+        self.check_placement_frames(ordered, frames, frames_seen)
+        return Animation(frames=frames, keyframes=ordered)
 
-        for frame in sorted(frames_seen):  # every posed camera must be a camera
-            camera = replace(scene, animation=animation).at_frame(frame).camera
-            index = frames_seen[frame]
-            self.check_view(camera.eye, camera.target, camera.up,
-                            f"animation.keyframes[{index}].camera")
-        return animation
+    def check_camera_frames(self, camera: Camera, keyframes: tuple[Keyframe, ...],
+                            frames: int, index_of: dict[int, int]) -> None:
+        """The camera must be a camera at every frame, not only at its keyframes: between
+        them eye, target and up are interpolated and can meet (an eye moving through
+        its target, an up turning over)."""
+        keyed = [k.frame for k in keyframes if k.camera]
+        if not keyed:
+            return
+        tracks = {}
+        for field in ("eye", "target", "up"):
+            keys = [(k.frame, k.camera[field]) for k in keyframes if field in k.camera]
+            tracks[field] = (_track_values(keys, frames) if keys else
+                             np.broadcast_to(np.asarray(getattr(camera, field), float),
+                                             (frames, 3)))
+        eye, target, up = tracks["eye"], tracks["target"], tracks["up"]
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            offset = target - eye
+            length = np.linalg.norm(offset, axis=1)
+            up_length = np.linalg.norm(up, axis=1)
+            forward = offset / length[:, None]
+            turned = np.linalg.norm(np.cross(forward, up / up_length[:, None]), axis=1)
+            side = np.linalg.norm(np.cross(forward, up), axis=1)  # as look_at measures it
+        finite = (np.isfinite(eye).all(axis=1) & np.isfinite(target).all(axis=1)
+                  & np.isfinite(up).all(axis=1) & np.isfinite(length) & np.isfinite(up_length))
+        problems = (
+            (~finite, "the camera's eye, target or up is not a finite number (interpolating "
+                      "between keyframes overflows)"),
+            (finite & ~(length > 0.0), "the camera's eye reaches its target; keep them apart "
+                                       "at every frame"),
+            (finite & (length > 0.0) & ~((turned >= 1e-9) & (side >= 1e-12)),
+             "the camera's up is zero or along its view direction; keep it off the line of "
+             "sight at every frame"),
+        )
+        self._first_bad_frame(problems, keyed, index_of, "camera")
+
+    def check_placement_frames(self, keyframes: tuple[Keyframe, ...], frames: int,
+                               index_of: dict[int, int]) -> None:
+        """Every animated position, rotation, scale and joint angle must stay finite at
+        every frame, and scales within range (interpolating from -1 to 1 passes 0)."""
+        for group in ("objects", "reflectors"):
+            names = dict.fromkeys(name for k in keyframes for name in getattr(k, group))
+            for name in names:
+                for field in OBJECT_FIELDS:
+                    keys = [(k.frame, getattr(k, group)[name][field]) for k in keyframes
+                            if field in getattr(k, group).get(name, {})]
+                    if not keys:
+                        continue
+                    values = _track_values(keys, frames)
+                    finite = np.isfinite(values).all(axis=1)
+                    problems = [(~finite, f"{field} is not a finite number (interpolating "
+                                          f"between keyframes overflows)")]
+                    if field == "scale":
+                        size = np.abs(values)
+                        problems.append((finite & ~((size >= 1e-6) & (size <= 1e6)).all(
+                            axis=1), "a scale factor leaves 1e-6 to 1e6 in size (it is "
+                                     "interpolated between keyframes); keep each factor's "
+                                     "sign at every keyframe"))
+                    self._first_bad_frame(problems, [f for f, _ in keys], index_of,
+                                          f"{group}.{key_name(name)}.{field}")
+
+    def _first_bad_frame(self, problems, keyed: list[int], index_of: dict[int, int],
+                         where: str) -> None:
+        """Raise for the earliest frame any of ``problems`` ``(mask (frames,), words)``
+        marks, blaming the keyframe (of the frames ``keyed``) it follows."""
+        bad = [(int(np.argmax(mask)), words) for mask, words in problems if mask.any()]
+        if not bad:
+            return
+        frame, words = min(bad, key=lambda item: item[0])
+        before = [f for f in keyed if f <= frame]
+        blamed = max(before) if before else min(keyed)
+        raise self.fail(f"animation.keyframes[{index_of[blamed]}].{where}",
+                        f"at frame {frame} {words}")
 
     def keyframe(self, value: Any, key: str, scene: Scene) -> Keyframe:
         table = self.table(value, key, _KEYFRAME_KEYS)
@@ -695,11 +795,15 @@ class _Reader:
     def keyed(self, value: Any, key: str, scene: Scene, group: str) -> dict[str, dict]:
         items = {o.name: o for o in (scene.objects if group == "objects"
                                      else scene.reflectors)}
+        if not items and isinstance(value, Mapping) and value:
+            name = next(iter(value))
+            raise self.fail(f"{key}.{key_name(name)}", f"unknown name: the scene has no "
+                            f"{group} to animate")
         table = self.table(value, key, tuple(items))
         result: dict[str, dict] = {}
         for name, raw in table.items():
             item = items[name]
-            where = f"{key}.{name}"
+            where = f"{key}.{key_name(name)}"
             if group == "reflectors" and not isinstance(item, CurvedReflector):
                 raise self.fail(where, "a planar mirror cannot be animated; only curved "
                                 "reflectors and objects move")
@@ -719,34 +823,63 @@ class _Reader:
 
 def check_quad(points: np.ndarray, fail: Callable[[str], Exception]) -> None:
     """Raise ``fail(problem)`` unless ``points`` ``(4, 3)`` form a flat, convex quadrilateral
-    of non-zero area, corners in order around it (counter-clockwise from the front)."""
+    of non-zero area, corners in order around it (counter-clockwise from the front).
+
+    Worked out on the corners scaled to unit size around their centre, so that the
+    answer is the same at any scale and distance from the origin."""
+    points = np.asarray(points, dtype=np.float64)
     if not np.all(np.isfinite(points)):
         raise fail("expected finite corners")
-    size = float(np.max(np.linalg.norm(points - points.mean(axis=0), axis=1)))
-    if not math.isfinite(size) or size == 0.0:
-        raise fail("corners overflow or coincide: the mirror has no area" if size == 0.0
-                   else "corners are too far apart: their distances overflow")
-    edges = np.roll(points, -1, axis=0) - points
-    turns = np.cross(edges, np.roll(edges, -1, axis=0))  # at corners 1, 2, 3, 0
-    normal = turns.sum(axis=0)
-    area = float(np.linalg.norm(np.cross(points[2] - points[0], points[3] - points[1]))) / 2
-    if not area > 1e-12 * size * size:
+    reach = float(np.abs(points).max())
+    if reach == 0.0:
+        raise fail("corners coincide: the mirror has no area")
+    scaled = points / reach  # within [-1, 1]: nothing below overflows
+    offsets = scaled - scaled.mean(axis=0)
+    size = float(np.linalg.norm(offsets, axis=1).max())
+    if not size > 1e-12:  # closer than float precision at this distance from the origin
+        raise fail("corners coincide: the mirror has no area")
+    unit_points = offsets / size
+    # The plane of the largest triangle of three corners (none: all on a line).
+    triangles = [np.cross(unit_points[j] - unit_points[i], unit_points[k] - unit_points[i])
+                 for i, j, k in ((0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3))]
+    normal = max(triangles, key=lambda n: float(np.linalg.norm(n)))
+    if not float(np.linalg.norm(normal)) > 1e-12:
         raise fail("corners span no area (they lie on a line or coincide)")
-    unit = normal / np.linalg.norm(normal) if np.linalg.norm(normal) > 0 else None
-    if unit is None:
-        raise fail("corners cross over each other: the quadrilateral is self-crossing")
-    off_plane = np.abs((points - points.mean(axis=0)) @ unit)
-    if float(off_plane.max()) > 1e-6 * size:
-        raise fail(f"corners are not in one plane (one lies {float(off_plane.max()):.3g} "
+    unit = normal / np.linalg.norm(normal)
+    off_plane = float(np.abs(unit_points @ unit).max())
+    if off_plane > 1e-6:
+        raise fail(f"corners are not in one plane (one lies {off_plane * size * reach:.3g} "
                    f"off it)")
-    signs = turns @ unit
-    if np.all(signs > 0):
+    edges = np.roll(unit_points, -1, axis=0) - unit_points
+    signs = np.cross(edges, np.roll(edges, -1, axis=0)) @ unit  # turns at corners 1, 2, 3, 0
+    if np.all(signs > 0) or np.all(signs < 0):
         return
-    if _segments_cross(points[0], points[1], points[2], points[3], unit) or _segments_cross(
-            points[1], points[2], points[3], points[0], unit):
+    q = unit_points
+    if _segments_cross(q[0], q[1], q[2], q[3], unit) or _segments_cross(q[1], q[2], q[3], q[0],
+                                                                        unit):
         raise fail("corners cross over each other: the quadrilateral is self-crossing; "
                    "list them in order around the mirror")
     raise fail("corners do not form a convex quadrilateral")
+
+
+def _track_values(keys: list[tuple[int, Any]], count: int) -> np.ndarray:
+    """A keyframe track, ``(frame, value)`` pairs sorted by frame, at every frame
+    0 .. ``count`` - 1 as ``(count, n)``: the same float operations as
+    :func:`mirrorlab.scene.animation.interpolate`, for all frames at once."""
+    frames = np.arange(count, dtype=np.float64)
+    values = np.array([np.atleast_1d(np.asarray(v, dtype=np.float64)) for _, v in keys])
+    out = np.empty((count, values.shape[1]))
+    out[:] = values[-1]
+    with np.errstate(over="ignore", invalid="ignore"):
+        # Later segments first, so that a frame on a shared key takes the earlier one's
+        # value, as interpolate does.
+        segments = list(zip(keys, keys[1:], values, values[1:], strict=False))
+        for (f0, _), (f1, _), v0, v1 in reversed(segments):
+            pick = (frames >= f0) & (frames <= f1)
+            w = (frames[pick] - f0) / (f1 - f0)
+            out[pick] = v0 + (v1 - v0) * w[:, None]
+    out[frames <= keys[0][0]] = values[0]
+    return out
 
 
 def _segments_cross(a, b, c, d, normal) -> bool:
@@ -754,6 +887,16 @@ def _segments_cross(a, b, c, d, normal) -> bool:
         return float(np.cross(q - p, r - p) @ normal)
 
     return side(a, b, c) * side(a, b, d) < 0 and side(c, d, a) * side(c, d, b) < 0
+
+
+_BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
+
+
+def key_name(name: Any) -> str:
+    """``name`` as it is written in a key path: bare when TOML allows, else quoted
+    (``objects."my robot"``)."""
+    text = str(name)
+    return text if _BARE_KEY.fullmatch(text) else json.dumps(text, ensure_ascii=False)
 
 
 def _kind(value: Any) -> str:
