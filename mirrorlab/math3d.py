@@ -68,7 +68,11 @@ def look_at(eye: Vec3, target: Vec3, up: Vec3) -> np.ndarray:
     if f_len == 0.0 or not np.isfinite(f_len):
         raise ValueError(f"camera position {tuple(eye_v)} must differ from its target")
     forward /= f_len
-    side = np.cross(forward, np.asarray(up, dtype=np.float64))
+    up_v = np.asarray(up, dtype=np.float64)
+    up_len = np.linalg.norm(up_v)
+    if not 0.0 < up_len < np.inf:
+        raise ValueError(f"up vector {tuple(up)} must be a non-zero finite vector")
+    side = np.cross(forward, up_v / up_len)
     s_len = np.linalg.norm(side)
     if s_len < 1e-12:
         raise ValueError(f"up vector {tuple(up)} is parallel to the view direction")

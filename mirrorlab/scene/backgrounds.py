@@ -143,7 +143,6 @@ def load_picture(path: str | Path) -> np.ndarray:
         raise ValueError(f"picture {path} cannot be read as an image ({exc})") from None
 
 
-@lru_cache(maxsize=8)
 def load_cube_faces(folder: str | Path) -> np.ndarray:
     """The six images ``folder/{px,nx,py,ny,pz,nz}.png`` as cube faces ``(6, n, n, 3)``
     uint8 in mirrorlab's image convention (row 0 holds t = 1; see :mod:`mirrorlab.envmap`).
@@ -154,6 +153,14 @@ def load_cube_faces(folder: str | Path) -> np.ndarray:
     when one is missing, unreadable, not square or not the size of the others.
     """
     folder = Path(folder)
+    stamps = tuple((folder / f"{stem}.png").stat().st_mtime_ns
+                   if (folder / f"{stem}.png").is_file() else None for stem in CUBE_FACE_FILES)
+    return _load_cube_faces(folder.resolve(), stamps)
+
+
+@lru_cache(maxsize=8)
+def _load_cube_faces(folder: Path, stamps: tuple) -> np.ndarray:
+    """:func:`load_cube_faces`, remembered per folder and the files' modification times."""
     faces: list[np.ndarray] = []
     for stem in CUBE_FACE_FILES:
         path = folder / f"{stem}.png"
