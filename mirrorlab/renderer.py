@@ -77,6 +77,7 @@ class SceneRenderer:
         self._passes: dict[str, tuple[tuple, ReflectorPass]] = {}
         self._sky: SkyPass | None = None
         self.last_frame: FrameStats | None = None
+        self._last_plan: tuple[tuple, FramePlan] | None = None
 
     # ------------------------------------------------------------- passes
 
@@ -137,9 +138,8 @@ class SceneRenderer:
         start = time.perf_counter()
         found = gl_state()
         self._use_scene(scene)
-        size = tuple(target.size)
-        plan = plan_frame(scene, (int(size[0]), int(size[1])), self.state, use_plan,
-                          tiny_pixels, view)
+        width, height = target.size
+        plan = self._plan(scene, (int(width), int(height)), use_plan, tiny_pixels, view)
         draws = 0
         for step in plan.passes:
             if not step.runs or step.name == "camera":
@@ -151,6 +151,17 @@ class SceneRenderer:
         restore_state(found)
         self.last_frame = FrameStats(plan, draws, (time.perf_counter() - start) * 1e3)
         return self.last_frame
+
+    def _plan(self, scene: Scene, size: tuple[int, int], use_plan: bool, tiny_pixels: float,
+              view: View | None) -> FramePlan:
+        """The frame's plan; the last one again when the scene, the size and what the
+        textures hold are all as they were (a still scene: planning is pure Python)."""
+        key = (scene, size, use_plan, tiny_pixels, tuple(self.state.held.items()))
+        if view is None and self._last_plan is not None and self._last_plan[0] == key:
+            return self._last_plan[1]
+        plan = plan_frame(scene, size, self.state, use_plan, tiny_pixels, view)
+        self._last_plan = (key, plan) if view is None else None
+        return plan
 
     def draw_view(self, plan: ViewPlan, target: RenderTarget, stencil_level: int = 0) -> int:
         """Draw ``plan``'s view into ``target``: the whole target at ``stencil_level`` 0
@@ -195,6 +206,7 @@ class SceneRenderer:
             self._sky = None
         self.shared.release()
         self.state.clear()
+        self._last_plan = None
 
     def pass_for(self, name: str) -> ReflectorPass:
         """The pass of the current scene's reflector ``name`` (for checks and the demo)."""
