@@ -273,7 +273,7 @@ def main() -> None:
 def write_sky_cube(folder: Path, size: int) -> None:
     """The sphere scene's sky as six upright face pictures (see load_cube_faces)."""
     from mirrorlab.envmap import bake_cube_faces
-    from mirrorlab.scene.envscenes import CUBE_FACE_FILES, sky_environment
+    from mirrorlab.scene.backgrounds import CUBE_FACE_FILES, sky_environment
 
     folder.mkdir(exist_ok=True)
     faces = bake_cube_faces(sky_environment, size)
