@@ -154,13 +154,8 @@ def _apply_technique(document: dict, value: Any, flag: str) -> None:
             reflector["technique"] = value
         return
     planar = value in PLANAR_TECHNIQUES
-    kind = "planar mirror" if planar else "curved reflector"
-    targets = [r for r in document.get("reflectors", [])
-               if (r.get("technique") in PLANAR_TECHNIQUES) == planar]
-    if not targets:
-        raise OptionError(flag, f"{value} is a technique for a {kind}, and scene "
-                          f"{document.get('name')!r} has none")
-    for reflector in targets:
+    for reflector in _reflectors_of_kind(document, planar, flag, f"{value} is a technique "
+                                         f"for a {_KIND_NAMES[planar]}, and "):
         # A source is kept only where it means the same: a picture for the sphere maps,
         # a folder of faces for a static cube map.
         if not planar and "source" in reflector and _source_kind(
@@ -171,15 +166,23 @@ def _apply_technique(document: dict, value: Any, flag: str) -> None:
             reflector.pop("ortho", None)
 
 
+_KIND_NAMES = {True: "planar mirror", False: "curved reflector"}
+
+
+def _reflectors_of_kind(document: dict, planar: bool, flag: str,
+                        why: str = "") -> list[dict]:
+    """The document's planar (or curved) reflectors; OptionError when it has none."""
+    targets = [r for r in document.get("reflectors", [])
+               if (r.get("technique") in PLANAR_TECHNIQUES) == planar]
+    if not targets:
+        what = "none" if why else f"no {_KIND_NAMES[planar]}"
+        raise OptionError(flag, f"{why}scene {document.get('name')!r} has {what}")
+    return targets
+
+
 def _apply_to(kind: str, key: str) -> Callable[[dict, Any, str], None]:
     def apply(document: dict, value: Any, flag: str) -> None:
-        planar = kind == "planar"
-        targets = [r for r in document.get("reflectors", [])
-                   if (r.get("technique") in PLANAR_TECHNIQUES) == planar]
-        if not targets:
-            raise OptionError(flag, f"scene {document.get('name')!r} has no "
-                              f"{'planar mirror' if planar else 'curved reflector'}")
-        for reflector in targets:
+        for reflector in _reflectors_of_kind(document, kind == "planar", flag):
             reflector[key] = value
     return apply
 

@@ -8,7 +8,7 @@ import numpy as np
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import MeshBuffer, RenderTarget, Texture2D, TextureFramebuffer
 from mirrorlab.passes.base import SharedResources, ViewDrawer, set_view_uniforms
-from mirrorlab.plan import ReflectorDraw, ViewPlan
+from mirrorlab.plan import PlannedPass, ReflectorDraw, ViewPlan
 from mirrorlab.scene.model import Background, PlanarReflector
 from mirrorlab.views import View
 
@@ -86,6 +86,25 @@ class PlanarPass:
     def draw_own(self, draw: ReflectorDraw, view: View, renderer: ViewDrawer,
                  target: RenderTarget, stencil_level: int) -> int:  # pragma: no cover
         raise NotImplementedError
+
+
+class CapturingMirror(PlanarPass):
+    """A planar technique that captures the scene into slot textures (``ortho``,
+    ``reflected``): one capture camera, its picture copied or drawn into the slot."""
+
+    def __init__(self, shared: SharedResources, reflector: PlanarReflector,
+                 background: Background | None = None) -> None:
+        super().__init__(shared, reflector, background)
+        self.captures = CaptureTextures(shared, reflector.capture)
+
+    def release(self) -> None:
+        self.captures.release()
+        super().release()
+
+    def update(self, step: PlannedPass, reflector: PlanarReflector, renderer: ViewDrawer,
+               frame_target: RenderTarget) -> int:
+        (plan,) = step.views
+        return self.captures.capture(step.slot, plan, renderer, frame_target)
 
 
 class CaptureTextures:

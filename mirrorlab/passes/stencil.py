@@ -7,10 +7,10 @@ from __future__ import annotations
 
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import RenderTarget
-from mirrorlab.passes.base import SharedResources, ViewDrawer, apply_view_state
+from mirrorlab.passes.base import ViewDrawer, apply_view_state
 from mirrorlab.passes.planar import PlanarPass
 from mirrorlab.plan import PlannedPass, ReflectorDraw
-from mirrorlab.scene.model import Background, PlanarReflector
+from mirrorlab.scene.model import PlanarReflector
 from mirrorlab.views import View
 
 
@@ -26,10 +26,6 @@ class StencilMirror(PlanarPass):
     4. the glass's depth is put back and the stencil lowered to k again;
     5. its back face shows the backing.
     """
-
-    def __init__(self, shared: SharedResources, reflector: PlanarReflector,
-                 background: Background | None = None) -> None:
-        super().__init__(shared, reflector, background)
 
     def update(self, step: PlannedPass, reflector: PlanarReflector, renderer: ViewDrawer,
                frame_target: RenderTarget) -> int:
