@@ -164,9 +164,10 @@ def distance_lookup(origin, direction, center, inverse_distance: InverseDistance
     ``t``; wherever ``H`` turns from positive to not, ``secant`` regula-falsi steps narrow
     the crossing. The stored distances are a height field seen from the centre, so a ray
     that passes behind an object (from the centre's view) crosses its surface without
-    meeting it: a crossing counts as a hit only when the last point looked at lies within
-    ``thickness`` (relative to its distance from the centre) of the stored surface, and
-    short of infinity; else the search goes on. A hit is the secant point of its last
+    meeting it: a crossing counts as a hit only when it is short of infinity and the
+    last secant point lies within ``thickness`` (relative to its distance from the
+    centre) of the stored surface (with no secant steps, every crossing short of
+    infinity is a hit); else the search goes on. A hit is the secant point of its last
     bracket; a ray with no hit leaves for the background.
 
     Falls back to the plain direction (in the capture) when the origin is at the centre
@@ -227,7 +228,8 @@ def distance_lookup(origin, direction, center, inverse_distance: InverseDistance
                 behind = h <= 0
                 high, h_high = np.where(behind, t, high), np.where(behind, h, h_high)
                 low, h_low = np.where(behind, low, t), np.where(behind, h_low, h)
-            accept = crossing & (t < 1) & (np.abs(mismatch) <= thickness)
+            judged = np.abs(mismatch) <= thickness if secant else True
+            accept = crossing & (t < 1) & judged
             with np.errstate(divide="ignore", invalid="ignore"):
                 hit = np.where(accept, low + (high - low) * h_low / (h_low - h_high), hit)
             found |= accept

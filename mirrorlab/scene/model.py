@@ -253,7 +253,8 @@ class DistanceSearch:
     """The capture also keeps each texel's distance; the lookup searches the reflected
     ray in ``steps`` linear steps, with ``secant`` secant steps at each crossing of the
     stored surface, which counts as a hit when the ray lies within ``thickness`` of it
-    (relative to the distance; else the ray passed behind an object)."""
+    (relative to the distance; else the ray passed behind an object; with no secant
+    steps every crossing is a hit)."""
 
     steps: int = 8
     secant: int = 2

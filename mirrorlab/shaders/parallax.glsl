@@ -53,7 +53,8 @@ vec3 sphere_lookup(vec3 origin, vec3 r) {
 // are a height field seen from the centre: what lies behind a surface is hidden, and a
 // ray that passes behind an object (without meeting it) crosses its stored surface too.
 // Such a crossing is told from a hit by the depth mismatch left after the secant steps
-// (more than thickness, relative): the search goes on past it. A ray that meets nothing
+// (more than thickness, relative): the search goes on past it. Without secant steps
+// every crossing is a hit. A ray that meets nothing
 // leaves for the background, which is looked up in background_map, not in the capture
 // (where an object may hide it from the centre).
 uniform samplerCube distance_map;
@@ -122,7 +123,9 @@ vec3 distance_lookup(vec3 origin, vec3 r, out bool background) {
                     h_low = h;
                 }
             }
-            if (t < 1.0 && abs(mismatch) <= thickness) {
+            // without secant steps there is no refined point to judge: every crossing
+            // short of infinity is taken for a hit (the height-field assumption)
+            if (t < 1.0 && (secant_steps == 0 || abs(mismatch) <= thickness)) {
                 t = low + (high - low) * h_low / (h_low - h_high);
                 return safe_normalize((1.0 - t) * offset + (t * size) * r, r);
             }

@@ -229,10 +229,12 @@ def test_distance_search_passes_behind_an_object_it_does_not_meet():
     look, background = parallax.distance_lookup(over, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0], ledge,
                                                 steps=16, secant=4)
     assert background and np.allclose(look, [1.0, 0.0, 0.0])
-    # with a thickness that takes every crossing for a hit, the ledge is "hit"
-    look, background = parallax.distance_lookup(over, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0],
-                                                ledge, steps=16, secant=4, thickness=1.0)
-    assert not background
+    # with a thickness that takes every crossing for a hit, or with no secant steps to
+    # judge by, the ledge is "hit"
+    for secant, thickness in ((4, 1.0), (0, 0.1)):
+        look, background = parallax.distance_lookup(over, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0],
+                                                    ledge, 16, secant, thickness)
+        assert not background
     under = np.array([0.0, 0.5, 0.0])  # this one meets the wall at (3, 0.5, 0)
     look, background = parallax.distance_lookup(under, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0],
                                                 ledge, steps=16, secant=4)
