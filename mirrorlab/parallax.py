@@ -162,13 +162,15 @@ def distance_lookup(origin, direction, center, inverse_distance: InverseDistance
     the captured surface while ``H(t) = s (1 - t) / |l(t)| - s w(l(t))`` is positive
     (``w`` the stored inverse distance). A linear search takes ``steps`` equal steps of
     ``t``; wherever ``H`` turns from positive to not, ``secant`` regula-falsi steps narrow
-    the crossing. The stored distances are a height field seen from the centre, so a ray
-    that passes behind an object (from the centre's view) crosses its surface without
-    meeting it: a crossing counts as a hit only when it is short of infinity and the
-    last secant point lies within ``thickness`` (relative to its distance from the
-    centre) of the stored surface (with no secant steps, every crossing short of
-    infinity is a hit); else the search goes on. A hit is the secant point of its last
-    bracket; a ray with no hit leaves for the background.
+    the crossing (each secant point written from the bracket's far end, so that a
+    crossing at ``H = 0`` exactly, the background at ``t = 1``, stays there). The stored
+    distances are a height field seen from the centre, so a ray that passes behind an
+    object (from the centre's view) crosses its surface without meeting it: a crossing
+    counts as a hit only when its secant point is short of infinity and the last point
+    probed lies within ``thickness`` (relative to its distance from the centre) of the
+    stored surface (with no secant steps, every crossing short of infinity is a hit);
+    else the search goes on. A hit is the secant point of its last bracket; a ray with
+    no hit leaves for the background.
 
     Falls back to the plain direction (in the capture) when the origin is at the centre
     (within :data:`AT_CENTER`, where the plain lookup is exact) or already behind the
@@ -220,24 +222,29 @@ def distance_lookup(origin, direction, center, inverse_distance: InverseDistance
         if crossing.any():
             low, h_low = t_before.copy(), h_before.copy()
             high, h_high = t_after.copy(), h_after.copy()
-            t = high.copy()
             for _ in range(int(secant)):
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    t = np.where(crossing, low + (high - low) * h_low / (h_low - h_high), t)
+                t = np.where(crossing, _secant(low, h_low, high, h_high), high)
                 h, mismatch = probe(t)
                 behind = h <= 0
                 high, h_high = np.where(behind, t, high), np.where(behind, h, h_high)
                 low, h_low = np.where(behind, low, t), np.where(behind, h_low, h)
+            t = np.where(crossing, _secant(low, h_low, high, h_high), high)
             judged = np.abs(mismatch) <= thickness if secant else True
             accept = crossing & (t < 1) & judged
-            with np.errstate(divide="ignore", invalid="ignore"):
-                hit = np.where(accept, low + (high - low) * h_low / (h_low - h_high), hit)
+            hit = np.where(accept, t, hit)
             found |= accept
             done |= accept
         t_before, h_before = t_after, h_after
     background = usable & ~done
     look = _towards(towards(hit), plain, found)
     return look, background
+
+
+def _secant(low, h_low, high, h_high):
+    """Where ``H`` (positive at ``low``, not at ``high``) is zero if linear between them,
+    written from ``high`` so that ``H(high) = 0`` gives ``high`` exactly."""
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        return high + (high - low) * h_high / (h_low - h_high)
 
 
 def inverse_distance_from_depth(depth, directions, near: float, far: float) -> np.ndarray:

@@ -88,6 +88,12 @@ float in_front(vec3 offset, float size, vec3 r, float t, out float mismatch) {
     return size * (1.0 - t) / len - size * inverse;
 }
 
+// Where H, positive at low and not at high, is zero if it is linear between them;
+// written from high, so that H(high) = 0 gives high exactly.
+float secant(float low, float h_low, float high, float h_high) {
+    return high + (high - low) * h_high / (h_low - h_high);  // h_low > 0 >= h_high
+}
+
 // The lookup direction, and in background whether it is to be looked up in the
 // background rather than the capture.
 vec3 distance_lookup(vec3 origin, vec3 r, out bool background) {
@@ -111,9 +117,8 @@ vec3 distance_lookup(vec3 origin, vec3 r, out bool background) {
             float h_low = h_before;
             float high = t_after;
             float h_high = h_after;
-            float t = high;
             for (int i = 0; i < secant_steps; ++i) {
-                t = low + (high - low) * h_low / (h_low - h_high);  // h_low > 0 >= h_high
+                float t = secant(low, h_low, high, h_high);
                 float h = in_front(offset, size, r, t, mismatch);
                 if (h <= 0.0) {
                     high = t;
@@ -123,10 +128,11 @@ vec3 distance_lookup(vec3 origin, vec3 r, out bool background) {
                     h_low = h;
                 }
             }
-            // without secant steps there is no refined point to judge: every crossing
-            // short of infinity is taken for a hit (the height-field assumption)
+            // A hit short of infinity (t = 1 exactly where the ray meets nothing but the
+            // background there). Without secant steps there is no refined point to judge:
+            // every such crossing is a hit (the height-field assumption).
+            float t = secant(low, h_low, high, h_high);
             if (t < 1.0 && (secant_steps == 0 || abs(mismatch) <= thickness)) {
-                t = low + (high - low) * h_low / (h_low - h_high);
                 return safe_normalize((1.0 - t) * offset + (t * size) * r, r);
             }
         }
