@@ -569,11 +569,14 @@ def plot_summary(summary: Sequence[SummaryRow], path: Path, title: str) -> bool:
         # panel's title rather than drawn, so that the techniques keep the axes.
         traced = [r for r in summary if r.scene == scene and r.technique.startswith("raytrace")]
         rows = [r for r in summary if r.scene == scene and r not in traced]
+        palette = plt.get_cmap("tab20")
         for index, (name, points) in enumerate(_series(rows).items()):
             times = [row.wall_ms for row, _ in points]
             errors = [max(row.mae, 1e-3) for row, _ in points]
             dashed = " by steps " in name
-            axes.plot(times, errors, marker=markers[index % len(markers)],
+            # a colour of its own each (tab20's dark shades), the steps of a search black
+            colour = "black" if dashed else palette((2 * index) % 20 + (2 * index) // 20 % 2)
+            axes.plot(times, errors, marker=markers[index % len(markers)], color=colour,
                       linestyle=("--" if dashed else "-") if len(points) > 1 else "",
                       label=name)
             for (_, note), x, y in zip(points, times, errors, strict=True):
