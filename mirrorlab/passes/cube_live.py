@@ -32,7 +32,6 @@ BACKGROUND_UNIT = 2
 colour cube is on unit 0)."""
 
 
-
 class LiveCubeMapped(CurvedPass):
     """The ``cube-live`` technique, one mipmapped cube per slot (and, for a distance
     search, one depth cube per slot). The planner captures it again when something it
