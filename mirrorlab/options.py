@@ -239,6 +239,8 @@ def _apply_parallax(document: dict, value: Any, flag: str) -> None:
 
 
 def _plain_table(value: Any) -> Any:
+    """A table from the API as TOML values: numpy arrays and tuples become lists, and whole
+    numbers stay whole (``steps``), unlike :func:`_plain`."""
     if isinstance(value, Mapping):
         return {str(k): _plain_table(v) for k, v in value.items()}
     if hasattr(value, "tolist"):
