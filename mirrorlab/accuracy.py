@@ -10,6 +10,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import re
 import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
@@ -23,7 +24,14 @@ import numpy as np
 from mirrorlab.files import write_bytes_atomic
 from mirrorlab.options import apply_options
 from mirrorlab.scene.loader import load_scene
-from mirrorlab.scene.model import CAPTURE_MODES, CURVED_TECHNIQUES, Camera, Scene
+from mirrorlab.scene.model import (
+    CAPTURE_MODES,
+    CURVED_TECHNIQUES,
+    Camera,
+    CurvedReflector,
+    DistanceSearch,
+    Scene,
+)
 
 if TYPE_CHECKING:
     from mirrorlab.gl.resources import Framebuffer, TimerQuery
@@ -89,8 +97,8 @@ def image_error(image: np.ndarray, truth: np.ndarray, mask: np.ndarray) -> Image
 
 @dataclass(frozen=True)
 class SweepRow:
-    """One measured configuration: ``scene`` ("lab" mirror, or "sphere-sky" and
-    "sphere-objects" for the environment maps),
+    """One measured configuration: ``scene`` ("lab" mirror, or "sphere-sky",
+    "sphere-objects" and "sphere-room" for the environment maps),
     technique, map size (0: the technique has no texture) and viewpoint; times are
     medians in milliseconds (``gpu_ms`` from GL timer queries, NaN where there is no
     GL work)."""
@@ -107,22 +115,31 @@ class SweepRow:
     gpu_ms: float
 
 
+DEFAULT_STEPS = f"{DistanceSearch().steps}+{DistanceSearch().secant}"
+DISTANCE_STEPS = ("2+0", "4+1", DEFAULT_STEPS, "16+2", "32+4")
+"""Linear + secant steps of the distance search, measured at one map size (see
+:func:`search_map_size`); the default steps (8+2) are measured at every size."""
+
+
 @dataclass(frozen=True)
 class SweepSettings:
     """``frame`` side in pixels, texture ``sizes``, ``frames`` timed per configuration
-    after ``warmup`` frames, and which viewpoints to use (None: all)."""
+    after ``warmup`` frames, which viewpoints to use (None: all), and the distance
+    search's ``steps`` (linear+secant) compared at one map size."""
 
     frame: int = 512
     sizes: tuple[int, ...] = FULL_SIZES
     frames: int = 15
     warmup: int = 3
     viewpoints: tuple[str, ...] | None = None
+    steps: tuple[str, ...] = DISTANCE_STEPS
 
     @classmethod
     def quick(cls) -> SweepSettings:
-        """A small sweep for tests: 128-pixel frames, two sizes, two viewpoints."""
+        """A small sweep for tests: 128-pixel frames, two sizes, two viewpoints, the
+        distance search with its default steps only."""
         return cls(frame=128, sizes=QUICK_SIZES, frames=3, warmup=1,
-                   viewpoints=("head-on far", "60 deg"))
+                   viewpoints=("head-on far", "60 deg"), steps=())
 
 
 def lab_techniques(sizes: Sequence[int]) -> list[tuple[str, dict]]:
@@ -137,31 +154,95 @@ def lab_techniques(sizes: Sequence[int]) -> list[tuple[str, dict]]:
     return rows
 
 
-def curved_techniques(sizes: Sequence[int]) -> list[tuple[str, dict]]:
-    """``(label, options)`` for every curved technique at each map size."""
-    return [(method, {"method": method, "map_size": size}) for method in CURVED_TECHNIQUES
-            for size in sizes if size <= ENVMAP_MAX_SIZE]
+def search_map_size(sizes: Sequence[int]) -> int:
+    """The map size the distance search's steps are compared at: 256, or the largest
+    of ``sizes`` below it."""
+    below = [size for size in sizes if size <= 256]
+    return max(below) if below else min(sizes)
 
 
-def scene_techniques(scene: Scene, sizes: Sequence[int]) -> list[tuple[str, dict]]:
+def curved_techniques(sizes: Sequence[int], proxies: Sequence[tuple[str, str]] = (),
+                      steps: Sequence[str] = DISTANCE_STEPS) -> list[tuple[str, dict]]:
+    """``(label, options)`` for every curved technique at each map size, and the live cube
+    map with each parallax correction: the ``proxies`` (``(label, --parallax text)``), and
+    the distance search at every size and with each other of ``steps`` (linear+secant)
+    at the :func:`search_map_size` (labelled ``cube-live distance STEPS``)."""
+    sizes = [size for size in sizes if size <= ENVMAP_MAX_SIZE]
+    rows = []
+    for method in CURVED_TECHNIQUES:
+        plain = {"parallax": "none"} if method == "cube-live" else {}
+        rows += [(method, {"method": method, "map_size": size, **plain}) for size in sizes]
+    corrections = [(f"cube-live {label}", text) for label, text in proxies]
+    corrections.append(("cube-live distance", "distance"))
+    for label, text in corrections:
+        rows += [(label, {"method": "cube-live", "map_size": size, "parallax": text})
+                 for size in sizes]
+    searched = search_map_size(sizes)
+    rows += [(f"cube-live distance {other}", {"method": "cube-live", "map_size": searched,
+                                              "parallax": f"distance:{other}"})
+             for other in steps if other != DEFAULT_STEPS]
+    return rows
+
+
+def scene_techniques(scene: Scene, sizes: Sequence[int],
+                     proxies: Sequence[tuple[str, str]] = (),
+                     steps: Sequence[str] = DISTANCE_STEPS) -> list[tuple[str, dict]]:
     """The configurations a scene's reflectors can take: the planar ones when it has a
-    planar mirror, the curved ones when it has a curved reflector."""
+    planar mirror, the curved ones (see :func:`curved_techniques`) when it has a curved
+    reflector."""
     kinds = {reflector.kind for reflector in scene.reflectors}
     rows = lab_techniques(sizes) if "planar" in kinds else []
-    return rows + (curved_techniques(sizes) if "curved" in kinds else [])
+    return rows + (curved_techniques(sizes, proxies, steps) if "curved" in kinds else [])
+
+
+def surroundings_box(scene: Scene) -> tuple[np.ndarray, np.ndarray] | None:
+    """World min and max ``(3,)`` corners of the box around the scene's objects (None
+    without objects)."""
+    from mirrorlab import math3d
+    from mirrorlab.scene.mesh import load_mesh
+    from mirrorlab.scene.robot import scene_parts
+
+    points = [math3d.transform_points(part.model, load_mesh(part.mesh).positions.astype(
+        np.float64))[:, :3] for part in scene_parts(scene)]
+    if not points:
+        return None
+    every = np.vstack(points)
+    return every.min(axis=0), every.max(axis=0)
+
+
+def proxies_for(scene: Scene) -> tuple[tuple[str, str], ...]:
+    """The box and sphere proxies the sweep gives a scene's live cube maps, as
+    ``(label, --parallax text)``: the box around the scene's objects (a room's walls, or
+    everything around a sphere outdoors) and the largest sphere around the first curved
+    reflector's capture centre inside that box. None when the box does not hold that
+    centre."""
+    curved = [r for r in scene.reflectors if isinstance(r, CurvedReflector)]
+    box = surroundings_box(scene)
+    if not curved or box is None:
+        return ()
+    low, high = box
+    center = curved[0].center()
+    radius = float(min((center - low).min(), (high - center).min()))
+    if not radius > 0:
+        return ()
+    corners = ",".join(f"{v:.6g}" for v in (*low, *high))
+    return (("box", f"box:{corners}"), ("sphere", f"sphere:{radius:.6g}"))
 
 
 @dataclass(frozen=True)
 class Panel:
-    """One scene of the sweep: ``name`` in the table, the ``scene``, its viewpoints, and
-    how the truth is traced: ``supersample`` rays per pixel side, the reflective region
-    shrunk by ``inset`` pixels (curved reflectors: leave out the silhouette)."""
+    """One scene of the sweep: ``name`` in the table, the ``scene``, its viewpoints, how
+    the truth is traced (``supersample`` rays per pixel side, the reflective region
+    shrunk by ``inset`` pixels: curved reflectors leave out the silhouette), and the
+    ``proxies`` of its live cube maps."""
 
     name: str
     scene: Scene
     viewpoints: dict[str, Camera]
     supersample: int = 1
     inset: int = 0
+    proxies: tuple[tuple[str, str], ...] = ()
+    """The parallax proxies its live cube maps are measured with (see :func:`proxies_for`)."""
 
 
 def lab_panel(settings: SweepSettings) -> Panel:
@@ -175,22 +256,28 @@ def lab_panel(settings: SweepSettings) -> Panel:
 
 def sphere_panels(settings: SweepSettings) -> list[Panel]:
     """The chrome sphere in the sky alone (what every map can hold), from the scene's
-    camera and close up; and among its lit objects (only ``cube-live`` reflects them)."""
+    camera and close up; among its lit objects (only ``cube-live`` reflects them); and
+    in a room (``sphere_room``: indoors, where a box proxy is exact). The live cube map
+    is measured with the proxies of the scene with its objects (:func:`proxies_for`)."""
     scene = load_scene("chrome_sphere")
     default = scene.camera
     close = Camera(eye=(0.6, 0.8, 2.4), target=(0.0, 0.0, 0.0), fovy=40.0)
     sky_views = {"default": default, "close": close}
     if settings.viewpoints is not None:  # the quick sweep: one view of each scene
         sky_views = {"default": default}
-    return [Panel("sphere-sky", replace(scene, objects=()), sky_views, 4, 1),
-            Panel("sphere-objects", scene, {"default": default}, 4, 1)]
+    proxies = proxies_for(scene)
+    room = load_scene("sphere_room")
+    return [Panel("sphere-sky", replace(scene, objects=()), sky_views, 4, 1, proxies),
+            Panel("sphere-objects", scene, {"default": default}, 4, 1, proxies),
+            Panel("sphere-room", room, {"default": room.camera}, 4, 1, proxies_for(room))]
 
 
 def file_panel(scene: Scene) -> Panel:
-    """Any scene file: its own camera, traced 4 x 4 when it has a curved reflector."""
+    """Any scene file: its own camera, traced 4 x 4 when it has a curved reflector, whose
+    live cube map is measured with the proxies of :func:`proxies_for`."""
     curved = any(r.kind == "curved" for r in scene.reflectors)
     return Panel(scene.name, scene, {"camera": scene.camera}, 4 if curved else 1,
-                 1 if curved else 0)
+                 1 if curved else 0, proxies_for(scene) if curved else ())
 
 
 def run_panels(panels: Sequence[Panel], settings: SweepSettings,
@@ -205,7 +292,8 @@ def run_panels(panels: Sequence[Panel], settings: SweepSettings,
     size = (settings.frame, settings.frame)
     jobs = [(panel, name, camera) for panel in panels
             for name, camera in panel.viewpoints.items()]
-    total = sum(1 + len(scene_techniques(panel.scene, settings.sizes))
+    total = sum(1 + len(scene_techniques(panel.scene, settings.sizes, panel.proxies,
+                                         settings.steps))
                 for panel, _, _ in jobs)
     rows: list[SweepRow] = []
     bar = tqdm(total=total, desc="accuracy", unit="config", disable=not progress,
@@ -228,7 +316,8 @@ def run_panels(panels: Sequence[Panel], settings: SweepSettings,
                                  float(np.median(truth_times)), math.nan))
             bar.set_postfix_str(f"{label} {panel.name} {name}", refresh=False)
             bar.update()
-            for technique_label, options in scene_techniques(scene, settings.sizes):
+            for technique_label, options in scene_techniques(scene, settings.sizes,
+                                                             panel.proxies, settings.steps):
                 configured = apply_options(scene, options)
                 map_size = int(options.get("env_size", options.get("map_size", 0)))
                 if technique_label == "stencil":
@@ -424,13 +513,41 @@ def format_markdown(table: Sequence[Sequence[str]]) -> str:
 
 SCENE_TITLES = {"lab": "lab mirror (robot)",
                 "sphere-sky": "environment maps: sphere in the sky",
-                "sphere-objects": "environment maps: sphere among objects"}
+                "sphere-objects": "environment maps: sphere among objects",
+                "sphere-room": "environment maps: sphere in a room"}
+
+
+_STEPS_LABEL = re.compile(r"^(?P<series>.+ distance) (?P<steps>\d+\+\d+)$")
+"""A distance search with other steps than the default: one point of a "steps" series."""
+
+
+def _series(summary: Sequence[SummaryRow]) -> dict[str, list[tuple[SummaryRow, str]]]:
+    """The lines of one panel's plot: each technique over its map sizes, and the distance
+    search over its steps (its default steps joining at their map size), each point with
+    its annotation."""
+    series: dict[str, list[tuple[SummaryRow, str]]] = {}
+    stepped = {m.group("series"): r for r in summary if (m := _STEPS_LABEL.match(r.technique))}
+    for row in summary:
+        match = _STEPS_LABEL.match(row.technique)
+        if match:
+            series.setdefault(f"{match.group('series')} by steps (map {row.map_size})",
+                              []).append((row, match.group("steps")))
+            continue
+        series.setdefault(row.technique, []).append((row, str(row.map_size or "")))
+        single = stepped.get(row.technique)
+        if single is not None and row.map_size == single.map_size:
+            name = f"{row.technique} by steps (map {row.map_size})"
+            series.setdefault(name, []).append((row, DEFAULT_STEPS))
+    for name, points in series.items():
+        if name.endswith(")") and " by steps " in name:
+            points.sort(key=lambda point: int(point[1].split("+")[0]))
+    return series
 
 
 def plot_summary(summary: Sequence[SummaryRow], path: Path, title: str) -> bool:
-    """Error against time, one marker per technique and size, one panel per scene,
-    saved as PNG at ``path``. Returns False (and writes nothing) when matplotlib is
-    not installed."""
+    """Error against time, one marker per technique and size (and per step count of a
+    distance search), one panel per scene, saved as PNG at ``path``. Returns False (and
+    writes nothing) when matplotlib is not installed."""
     try:
         import matplotlib
 
@@ -438,25 +555,34 @@ def plot_summary(summary: Sequence[SummaryRow], path: Path, title: str) -> bool:
         import matplotlib.pyplot as plt
     except ImportError:
         return False
-    markers = "osD^v<>Px*"
+    markers = "osD^v<>Px*hX"
     scenes = list(dict.fromkeys(r.scene for r in summary))
-    figure, panels = plt.subplots(1, len(scenes), figsize=(7.5 * len(scenes), 5.5), dpi=100,
+    columns = min(2, len(scenes))
+    rows_of_panels = math.ceil(len(scenes) / columns)
+    figure, panels = plt.subplots(rows_of_panels, columns,
+                                  figsize=(8.0 * columns, 6.0 * rows_of_panels), dpi=100,
                                   squeeze=False)
-    for axes, scene in zip(panels[0], scenes, strict=True):
+    for axes in panels.flat[len(scenes):]:
+        axes.set_visible(False)
+    for axes, scene in zip(panels.flat, scenes, strict=False):
         # The ray tracer has no error by definition and is far slower: named in the
         # panel's title rather than drawn, so that the techniques keep the axes.
         traced = [r for r in summary if r.scene == scene and r.technique.startswith("raytrace")]
         rows = [r for r in summary if r.scene == scene and r not in traced]
-        techniques = list(dict.fromkeys(r.technique for r in rows))
-        for index, technique in enumerate(techniques):
-            group = [r for r in rows if r.technique == technique]
-            axes.plot([r.wall_ms for r in group], [max(r.mae, 1e-3) for r in group],
-                      marker=markers[index % len(markers)],
-                      linestyle="-" if len(group) > 1 else "", label=technique)
-            for r in group:
-                if r.map_size:
-                    axes.annotate(str(r.map_size), (r.wall_ms, max(r.mae, 1e-3)), fontsize=7,
-                                  textcoords="offset points", xytext=(4, 3))
+        palette = plt.get_cmap("tab20")
+        for index, (name, points) in enumerate(_series(rows).items()):
+            times = [row.wall_ms for row, _ in points]
+            errors = [max(row.mae, 1e-3) for row, _ in points]
+            dashed = " by steps " in name
+            # a colour of its own each (tab20's dark shades), the steps of a search black
+            colour = "black" if dashed else palette((2 * index) % 20 + (2 * index) // 20 % 2)
+            axes.plot(times, errors, marker=markers[index % len(markers)], color=colour,
+                      linestyle=("--" if dashed else "-") if len(points) > 1 else "",
+                      label=name)
+            for (_, note), x, y in zip(points, times, errors, strict=True):
+                if note:
+                    axes.annotate(note, (x, y), fontsize=7, textcoords="offset points",
+                                  xytext=(4, 3))
         axes.set_xscale("log")
         axes.set_yscale("log")
         axes.set_xlabel("median wall time per frame (ms, log)")
@@ -467,7 +593,7 @@ def plot_summary(summary: Sequence[SummaryRow], path: Path, title: str) -> bool:
             heading += f"\n(ground truth: {truth.technique}, {truth.wall_ms:.0f} ms a frame)"
         axes.set_title(heading, fontsize=10)
         axes.grid(True, which="both", alpha=0.3)
-        axes.legend(fontsize=8)
+        axes.legend(fontsize=7, ncol=2)
     figure.suptitle(title)
     figure.tight_layout()
     with io.BytesIO() as buffer:

@@ -107,7 +107,8 @@ class Option:
     parse: Callable[[str, str], Any]
     apply: Callable[[dict, Any, str], None]
     writes: str = ""
-    """The start of the key paths it writes (to name it when the scene refuses a value)."""
+    """A regular expression for the start of the key paths it writes (to name it when the
+    scene refuses a value; the most specific match is named)."""
     repeat: bool = False
 
     @property
@@ -164,6 +165,8 @@ def _apply_technique(document: dict, value: Any, flag: str) -> None:
         reflector["technique"] = value
         if planar and value != "ortho":
             reflector.pop("ortho", None)
+        if value != "cube-live":
+            reflector.pop("parallax", None)  # a correction of live cube-map lookups only
 
 
 _KIND_NAMES = {True: "planar mirror", False: "curved reflector"}
@@ -185,6 +188,66 @@ def _apply_to(kind: str, key: str) -> Callable[[dict, Any, str], None]:
         for reflector in _reflectors_of_kind(document, kind == "planar", flag):
             reflector[key] = value
     return apply
+
+
+PARALLAX_FORMS = ("none", "box:X0,Y0,Z0,X1,Y1,Z1", "sphere:RADIUS",
+                  "distance[:STEPS[+SECANT]]")
+"""How ``--parallax`` is written on a command line."""
+
+
+def parse_parallax(flag: str, text: str) -> dict[str, Any] | str:
+    """``--parallax`` text -> a scene file's ``parallax`` table, or ``"none"``:
+    ``box:-4,-1,-4,4,3,4`` (the box's min and max corners), ``sphere:5`` (the radius),
+    ``distance``, ``distance:16`` or ``distance:16+3`` (linear and secant steps).
+    OptionError naming ``flag`` when the text has none of these forms; the values are
+    checked as the scene file's would be."""
+    proxy, _, rest = str(text).strip().partition(":")
+    if proxy == "none" and not rest:
+        return "none"
+    if proxy == "box":
+        values = parse_floats(flag, rest, 6, "X0,Y0,Z0,X1,Y1,Z1 after box:")
+        return {"proxy": "box", "min": list(values[:3]), "max": list(values[3:])}
+    if proxy == "sphere":
+        return {"proxy": "sphere", "radius": parse_floats(flag, rest, 1, "RADIUS after "
+                                                          "sphere:")[0]}
+    match = re.fullmatch(r"(?::(\d+)(?:\+(\d+))?)?", f":{rest}" if rest else "")
+    if proxy == "distance" and match:
+        table: dict[str, Any] = {"proxy": "distance"}
+        if match.group(1):
+            table["steps"] = int(match.group(1))
+        if match.group(2):
+            table["secant"] = int(match.group(2))
+        return table
+    raise OptionError(flag, f"expected one of {', '.join(PARALLAX_FORMS)}, got {text!r}")
+
+
+def _apply_parallax(document: dict, value: Any, flag: str) -> None:
+    """Give every ``cube-live`` reflector the ``parallax`` ``value``: a ``parallax`` table as
+    in a scene file, or its ``--parallax`` text; ``"none"`` removes the correction."""
+    if isinstance(value, str):
+        value = parse_parallax(flag, value)
+    live = [r for r in _reflectors_of_kind(document, False, flag)
+            if r.get("technique") == "cube-live"]
+    if not live:
+        raise OptionError(flag, f"scene {document.get('name')!r} has no cube-live reflector "
+                          "(--method cube-live makes every curved reflector one)")
+    for reflector in live:
+        if value == "none":
+            reflector.pop("parallax", None)
+        else:
+            reflector["parallax"] = _plain_table(value)
+
+
+def _plain_table(value: Any) -> Any:
+    """A table from the API as TOML values: numpy arrays and tuples become lists, and whole
+    numbers stay whole (``steps``), unlike :func:`_plain`."""
+    if isinstance(value, Mapping):
+        return {str(k): _plain_table(v) for k, v in value.items()}
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    if isinstance(value, tuple):
+        return [_plain_table(v) for v in value]
+    return value
 
 
 def _apply_cube_faces(document: dict, value: Any, flag: str) -> None:
@@ -214,18 +277,21 @@ _TECHNIQUE_NAMES = PLANAR_TECHNIQUES + CURVED_TECHNIQUES
 
 OPTIONS: tuple[Option, ...] = (
     Option("camera", "X,Y,Z", "viewer position (the scene's camera.eye)",
-           _vec3("X,Y,Z"), _set_camera("eye"), "camera.eye"),
+           _vec3("X,Y,Z"), _set_camera("eye"), r"camera\.eye"),
     Option("target", "X,Y,Z", "point the viewer looks at (camera.target)",
-           _vec3("X,Y,Z"), _set_camera("target"), "camera.target"),
+           _vec3("X,Y,Z"), _set_camera("target"), r"camera\.target"),
     Option("fovy", "DEGREES", "vertical field of view (camera.fovy)",
            lambda flag, text: parse_floats(flag, text, 1, "DEGREES")[0], _set_camera("fovy"),
-           "camera.fovy"),
+           r"camera\.fovy"),
     Option("angles", "BASE,LOWER,UPPER", "the robot's joint angles in degrees",
            _vec3("BASE,LOWER,UPPER"), _apply_angles, "objects"),
     Option("method", "NAME", "technique for every reflector of its kind: planar "
            f"{', '.join(PLANAR_TECHNIQUES)}; curved {', '.join(CURVED_TECHNIQUES)}",
            lambda flag, text: parse_choice(flag, text, _TECHNIQUE_NAMES), _apply_technique,
            "reflectors"),
+    Option("parallax", "PROXY", "how cube-live lookups correct for nearby surroundings: "
+           f"{', '.join(PARALLAX_FORMS)}", parse_parallax, _apply_parallax,
+           r"reflectors\[\d+\]\.parallax"),
     Option("capture", "MODE", "how planar captures reach their texture: copy "
            "(glCopyTexImage2D) or fbo (drawn into it)",
            lambda flag, text: parse_choice(flag, text, CAPTURE_MODES),
@@ -256,11 +322,14 @@ def apply_options(scene: Scene, values: Mapping[str, Any]) -> Scene:
     chosen = {name: value for name, value in values.items() if value is not None}
     if not chosen:
         return scene
+    unknown = [name for name in chosen if name not in OPTION_NAMES]
+    if unknown:
+        raise TypeError(f"unknown option {unknown[0]!r}; options are "
+                        f"{', '.join(OPTION_NAMES)}")
     document = scene_to_document(scene)
-    for name, value in chosen.items():
-        option = OPTION_NAMES.get(name)
-        if option is None:
-            raise TypeError(f"unknown option {name!r}; options are {', '.join(OPTION_NAMES)}")
+    # In the declared order, whatever the order given: --method before --parallax.
+    for option in (option for option in OPTIONS if option.name in chosen):
+        name, value = option.name, chosen[option.name]
         if name == "set" and isinstance(value, str):
             value = (value,)  # one KEY=VALUE from the Python API
         if name == "set" and value and isinstance(value[0], str):
@@ -275,8 +344,13 @@ def apply_options(scene: Scene, values: Mapping[str, Any]) -> Scene:
 
 def _blame(chosen: Mapping[str, Any], key: str) -> str:
     """The flags of the chosen options that wrote ``key`` (all of them if none did)."""
-    named = [OPTION_NAMES[name].flag for name in chosen
-             if OPTION_NAMES[name].writes and key.startswith(OPTION_NAMES[name].writes)]
+    matched = {}
+    for name in chosen:
+        writes = OPTION_NAMES[name].writes
+        found = re.match(writes, key) if writes else None
+        if found:
+            matched[OPTION_NAMES[name].flag] = found.end()
+    named = [flag for flag, length in matched.items() if length == max(matched.values())]
     return " / ".join(named or [OPTION_NAMES[name].flag for name in chosen])
 
 

@@ -19,7 +19,7 @@ Pure numpy; the renderer (:mod:`mirrorlab.renderer`) runs what this decides.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from pathlib import Path
 from typing import Literal
@@ -268,7 +268,7 @@ class _Planner:
                 key = ("fixed", bounce, texture_size, self.content)
         else:
             cameras = cube_face_views(reflector)
-            key = ("fixed", bounce, (reflector.map_size,), self.content)
+            key = ("fixed", bounce, (reflector.map_size,), self.own_content(reflector))
         slot, held = self.slot_for(reflector.name, key)
         source = cameras[0]
         if held and (reflector.name, key) in self._planned_keys():
@@ -286,6 +286,17 @@ class _Planner:
                                        plans))
         return slot, source
 
+    def own_content(self, reflector: CurvedReflector) -> tuple:
+        """What a live cube map of ``reflector`` shows: the scene's content, but of the
+        reflector's own parallax correction only its kind (a distance search captures
+        depths too). A proxy's size or a search's steps change how the map is read, not
+        what it holds."""
+        if reflector.parallax is None:
+            return self.content
+        background, ambient, lights, objects, reflectors, bounces = self.content
+        own = (replace(reflector, parallax=None), reflector.parallax.kind)
+        return (background, ambient, lights, objects,
+                tuple(own if r.name == reflector.name else r for r in reflectors), bounces)
 
     def what_changed(self, reflector: str, key: tuple) -> str:
         """Why a capture must run: what differs from the nearest capture its textures hold

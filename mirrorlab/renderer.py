@@ -27,7 +27,14 @@ from mirrorlab.passes.base import (
 from mirrorlab.passes.scene_draw import SceneDrawer
 from mirrorlab.passes.sky import SkyPass
 from mirrorlab.plan import TINY_PIXELS, FramePlan, TextureState, ViewPlan, plan_frame
-from mirrorlab.scene.model import Background, CurvedReflector, Reflector, Scene, Transform
+from mirrorlab.scene.model import (
+    Background,
+    CurvedReflector,
+    DistanceSearch,
+    Reflector,
+    Scene,
+    Transform,
+)
 from mirrorlab.techniques import technique
 from mirrorlab.views import View
 
@@ -57,12 +64,17 @@ class FrameStats:
 
 def _pass_key(reflector: Reflector, background: Background) -> tuple:
     """What a reflector's pass is made from: everything but where a curved one is (it may
-    move every frame), and the background for the maps baked from it."""
+    move every frame) and the sizes of its parallax correction (read at each draw; the
+    kind chooses the shader), and the background for the maps baked from it."""
     if isinstance(reflector, CurvedReflector):
-        still = replace(reflector, transform=Transform())
-        baked = technique(reflector.technique).texture in ("static", "baked")
-        return (still, background if baked else None)
-    return (reflector, None)
+        parallax = reflector.parallax
+        still = replace(reflector, transform=Transform(), parallax=None)
+        # a distance search looks up the rays that meet nothing in the background itself
+        baked = (technique(reflector.technique).texture in ("static", "baked")
+                 or isinstance(parallax, DistanceSearch))
+        return (still, None if parallax is None else parallax.kind,
+                background if baked else None)
+    return (reflector, None, None)
 
 
 class SceneRenderer:

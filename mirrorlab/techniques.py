@@ -71,7 +71,8 @@ TECHNIQUES: dict[str, Technique] = {t.name: t for t in (
     Technique("cube", "curved", "static", "mirrorlab.passes.envmap:CubeMapped",
               "static cube map, from six pictures or baked from the background"),
     Technique("cube-live", "curved", "fixed", "mirrorlab.passes.cube_live:LiveCubeMapped",
-              "cube map captured live from the reflector's centre, six passes"),
+              "cube map captured live from the reflector's centre, six passes; its "
+              "lookups optionally corrected for parallax (box, sphere, distance search)"),
     Technique("latlong", "curved", "static", "mirrorlab.passes.envmap:LatlongMapped",
               "Blinn-Newell latitude-longitude map, per fragment"),
 )}

@@ -1,6 +1,7 @@
 """Generate the robot's part meshes (models/*.obj) and the METAL texture (textures/metal.png),
-and the environment-mapping assets: the reflective cone and sphere, the backdrop quad and
-the rocket-launch picture (textures/launch.png).
+and the environment-mapping assets: the reflective cone and sphere, the backdrop quad, the
+unit panel the room's walls are made of, and the rocket-launch picture
+(textures/launch.png).
 
 Run from the repository root: ``python tools/make_assets.py``. The outputs are
 committed; this script is how they were made, so they can be re-made or changed.
@@ -246,6 +247,17 @@ def launch_texture(size: int = 512) -> np.ndarray:
     return (np.clip(image, 0, 1) * 255).round().astype(np.uint8)
 
 
+def wall_texture(size: int = 256) -> np.ndarray:
+    """A wall's shading: white in the middle, darkening smoothly to 0.2 towards every edge
+    (over the outer fifth), so that where two walls of different colours meet they meet
+    in the same dark tone, without a hard edge. Grey ``(size, size, 3)`` uint8."""
+    coordinate = (np.arange(size) + 0.5) / size
+    to_edge = np.minimum(coordinate, 1.0 - coordinate)  # 0 at an edge, 0.5 in the middle
+    ramp = 0.2 + 0.8 * _smoothstep(0.0, 0.2, to_edge)
+    value = np.minimum(ramp[:, None], ramp[None, :])
+    return np.repeat((value * 255).round().astype(np.uint8)[..., None], 3, axis=2)
+
+
 def main() -> None:
     models = ROOT / "models"
     models.mkdir(exist_ok=True)
@@ -261,12 +273,16 @@ def main() -> None:
     write_obj(models / "env_sphere.obj", sphere(1.0, 3, spherical_uv=True),
               "reflective sphere, radius 1")
     write_obj(models / "backdrop.obj", quad(16.0, 16.0), "backdrop quad for the launch picture")
+    write_obj(models / "panel.obj", quad(1.0, 1.0),
+              "unit square facing +z: a room's walls, floor and ceiling, placed and scaled")
     textures = ROOT / "textures"
     textures.mkdir(exist_ok=True)
     Image.fromarray(metal_texture()).save(textures / "metal.png")
     print("wrote textures/metal.png")
     Image.fromarray(launch_texture()).save(textures / "launch.png")
     print("wrote textures/launch.png")
+    Image.fromarray(wall_texture()).save(textures / "wall.png")
+    print("wrote textures/wall.png")
     write_sky_cube(textures / "sky_cube", 256)
 
 

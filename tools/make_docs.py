@@ -1,17 +1,21 @@
 """Re-make the README's comparison pictures in docs/ (headless; run from the checkout):
 
-    .venv/bin/python tools/make_docs.py
+    .venv/bin/python tools/make_docs.py [methods] [envmaps] [cone] [parallax]
 
-docs/methods.png: the lab scene (lab20) 30 degrees off the mirror's normal, by each
-mirror technique and the ray tracer. docs/envmaps.png: the sphere scene (chrome_sphere)
-by each environment-map technique and the ray tracer (4 x 4 rays a pixel). docs/cone.png:
-the textbook's cone (spheremap_cone) at two heights (texgen sphere map). The accuracy
-plot comes from `mirrorlab bench accuracy`.
+(all of them when none is named). docs/methods.png: the lab scene (lab20) 30 degrees off
+the mirror's normal, by each mirror technique and the ray tracer. docs/envmaps.png: the
+sphere scene (chrome_sphere) by each environment-map technique and the ray tracer (4 x 4
+rays a pixel). docs/cone.png: the textbook's cone (spheremap_cone) at two heights (texgen
+sphere map). docs/parallax.png: the live cube map without and with its parallax
+corrections against the ray tracer, among chrome_sphere's objects and in sphere_room, and
+where the pixels that still differ lie. The accuracy plot comes from `mirrorlab bench
+accuracy`.
 """
 
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -19,6 +23,7 @@ import numpy as np
 from PIL import Image, ImageDraw
 
 import mirrorlab
+from mirrorlab.accuracy import erode
 from mirrorlab.options import apply_options
 from mirrorlab.raytrace import trace_scene
 from mirrorlab.scene.model import CURVED_TECHNIQUES, PLANAR_TECHNIQUES
@@ -42,34 +47,122 @@ def grid(tiles: list[np.ndarray], columns: int) -> np.ndarray:
     return np.vstack(rows)
 
 
-def main() -> None:
+RIM, EDGE, OTHER = (255, 220, 0), (0, 200, 255), (255, 0, 255)
+"""Colours of the differing pixels in docs/parallax.png, by where they lie."""
+
+
+def differences(image: np.ndarray, truth: np.ndarray, reflective: np.ndarray,
+                ) -> tuple[np.ndarray, dict[str, float]]:
+    """The pixels of ``image`` off by more than 10/255 inside the reflector (shrunk by a
+    pixel, as the sweep compares it), coloured by where they lie: within 3 pixels of the
+    reflector's silhouette (RIM), where the truth itself changes by more than 20/255 from
+    a neighbouring pixel (EDGE: outlines, texture detail) or elsewhere (OTHER); the rest of
+    the reflector dimmed. Returns the picture and each kind's share of the reflector."""
+    mask = erode(reflective, 1)
+    expected = truth.astype(int)
+    off = (np.abs(image.astype(int) - expected).max(axis=-1) > 10) & mask
+    rim = mask & ~erode(reflective, 4)
+    change = np.zeros(mask.shape, dtype=int)
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            moved = np.roll(np.roll(expected, dy, axis=0), dx, axis=1)
+            change = np.maximum(change, np.abs(moved - expected).max(axis=-1))
+    edge = change > 20
+    picture = truth // 4
+    picture[mask] = image[mask] // 2
+    kinds = {"rim": off & rim, "edge": off & ~rim & edge, "other": off & ~rim & ~edge}
+    for kind, colour in zip(kinds.values(), (RIM, EDGE, OTHER), strict=True):
+        picture[kind] = colour
+    return picture, {name: float(kind.sum() / mask.sum()) for name, kind in kinds.items()}
+
+
+def crop_to(reflective: np.ndarray, margin: int = 6) -> tuple[slice, slice]:
+    rows, columns = np.nonzero(reflective)
+    return (slice(max(rows.min() - margin, 0), rows.max() + margin + 1),
+            slice(max(columns.min() - margin, 0), columns.max() + margin + 1))
+
+
+def parallax_picture(renderer) -> None:
+    """docs/parallax.png: one row per scene: the truth, the plain live cube map and where
+    it differs, the corrected one and where it still differs (see :func:`differences`)."""
+    rows = []
+    for name, correction, label in (("chrome_sphere", "distance", "distance 8+2"),
+                                    ("sphere_room", "box:-4,-2,-4,4,4,4", "box proxy")):
+        scene = apply_options(mirrorlab.load_scene(name), {"method": "cube-live"})
+        traced = trace_scene(scene, (512, 512), supersample=4)
+        truth = traced.to_uint8()
+        plain = renderer.render(scene, size=(512, 512), parallax="none")
+        corrected = renderer.render(scene, size=(512, 512), parallax=correction)
+        plain_where, plain_shares = differences(plain, truth, traced.reflective_mask)
+        where, shares = differences(corrected, truth, traced.reflective_mask)
+        window = crop_to(traced.reflective_mask)
+        tiles = [truth, plain, plain_where, corrected, where]
+        names = ["raytrace 4x4", "cube-live",
+                 "off >10: " + ", ".join(f"{k} {v:.1%}" for k, v in plain_shares.items()),
+                 f"cube-live, {label}",
+                 "off >10: " + ", ".join(f"{k} {v:.1%}" for k, v in shares.items())]
+        side = max(t[window].shape[0] for t in tiles)
+        row = []
+        for tile, text in zip(tiles, names, strict=True):
+            part = Image.fromarray(np.ascontiguousarray(tile[window]))
+            part = part.resize((part.width * 300 // side, part.height * 300 // side),
+                               Image.Resampling.NEAREST)
+            row.append(labelled(np.asarray(part), text))
+        rows.append(np.hstack(row))
+        print(f"{name}: plain off {sum(plain_shares.values()):.1%} ({plain_shares}); "
+              f"{label} off {sum(shares.values()):.1%} ({shares})")
+    width = max(r.shape[1] for r in rows)
+    rows = [np.pad(r, ((0, 0), (0, width - r.shape[1]), (0, 0))) for r in rows]
+    Image.fromarray(np.vstack(rows)).save(DOCS / "parallax.png")
+
+
+def main(pictures: list[str]) -> None:
+    chosen = set(pictures) or {"methods", "envmaps", "cone", "parallax"}
+    unknown = chosen - {"methods", "envmaps", "cone", "parallax"}
+    if unknown:
+        raise SystemExit(f"make_docs.py: unknown picture {sorted(unknown)[0]!r}; expected "
+                         "methods, envmaps, cone or parallax")
+    with mirrorlab.Renderer(size=(SIZE, SIZE)) as renderer:
+        if "methods" in chosen:
+            methods_picture(renderer)
+        if "envmaps" in chosen:
+            envmaps_picture(renderer)
+        if "cone" in chosen:
+            cone_picture(renderer)
+        if "parallax" in chosen:
+            parallax_picture(renderer)
+    print(f"wrote {', '.join(f'{DOCS}/{name}.png' for name in sorted(chosen))}")
+
+
+def methods_picture(renderer) -> None:
     angle = math.radians(-30)  # 16 units out, 30 degrees off the normal, a little above
     eye = (-7 + 16 * math.cos(angle), 1.0 + 4.8, -2 + 16 * math.sin(angle))
     view = {"camera": eye, "target": (-7.0, 1.0, -2.0)}
-    with mirrorlab.Renderer(size=(SIZE, SIZE)) as renderer:
-        methods = [labelled(renderer.render("lab20", method=m, **view), m)
-                   for m in PLANAR_TECHNIQUES]
-        methods.append(labelled(mirrorlab.render("lab20", (SIZE, SIZE), method="raytrace",
-                                                 **view), "raytrace"))
-        Image.fromarray(grid(methods, 4)).save(DOCS / "methods.png")
+    methods = [labelled(renderer.render("lab20", method=m, **view), m)
+               for m in PLANAR_TECHNIQUES]
+    methods.append(labelled(mirrorlab.render("lab20", (SIZE, SIZE), method="raytrace",
+                                             **view), "raytrace"))
+    Image.fromarray(grid(methods, 4)).save(DOCS / "methods.png")
 
-        sphere = mirrorlab.load_scene("chrome_sphere")
-        maps = [labelled(renderer.render(sphere, method=m), m) for m in CURVED_TECHNIQUES]
-        truth = trace_scene(sphere, (SIZE, SIZE), supersample=4).to_uint8()
-        Image.fromarray(grid([*maps, labelled(truth, "raytrace 4x4")], 4)).save(
-            DOCS / "envmaps.png")
 
-        cone = apply_options(mirrorlab.load_scene("spheremap_cone"),
-                             {"method": "sphere-texgen"})
-        placed = cone.reflector("cone").transform
-        cones = []
-        for height in (1.0, -1.0):
-            moved = cone.with_reflector("cone", transform=replace(
-                placed, position=(placed.position[0], height, placed.position[2])))
-            cones.append(labelled(renderer.render(moved), f"cone at height {height:g}"))
-        Image.fromarray(grid(cones, 2)).save(DOCS / "cone.png")
-    print(f"wrote {DOCS}/methods.png, envmaps.png, cone.png")
+def envmaps_picture(renderer) -> None:
+    sphere = mirrorlab.load_scene("chrome_sphere")
+    maps = [labelled(renderer.render(sphere, method=m), m) for m in CURVED_TECHNIQUES]
+    truth = trace_scene(sphere, (SIZE, SIZE), supersample=4).to_uint8()
+    Image.fromarray(grid([*maps, labelled(truth, "raytrace 4x4")], 4)).save(
+        DOCS / "envmaps.png")
+
+
+def cone_picture(renderer) -> None:
+    cone = apply_options(mirrorlab.load_scene("spheremap_cone"), {"method": "sphere-texgen"})
+    placed = cone.reflector("cone").transform
+    cones = []
+    for height in (1.0, -1.0):
+        moved = cone.with_reflector("cone", transform=replace(
+            placed, position=(placed.position[0], height, placed.position[2])))
+        cones.append(labelled(renderer.render(moved), f"cone at height {height:g}"))
+    Image.fromarray(grid(cones, 2)).save(DOCS / "cone.png")
 
 
 if __name__ == "__main__":
-    main()
+    main(sys.argv[1:])

@@ -1,4 +1,5 @@
-"""GL object wrappers with explicit lifetimes: Program, Texture2D, Framebuffer, MeshBuffer.
+"""GL object wrappers with explicit lifetimes: Program, Texture2D, TextureCube,
+DepthTextureCube, Framebuffer, MeshBuffer.
 
 Each wrapper registers with the context's
 :class:`~mirrorlab.gl.context.ResourceRegistry` and frees its GL name in
@@ -510,6 +511,57 @@ class TextureCube(_Resource):
                                 GL.GL_UNSIGNED_BYTE)
         pixels = np.frombuffer(data, dtype=np.uint8).reshape(self.size, self.size, 3)
         return pixels[::-1].copy()
+
+    def _free(self) -> None:
+        GL.glDeleteTextures([self.name])
+
+
+class DepthTextureCube(_Resource):
+    """A cube map of depths (``GL_DEPTH_COMPONENT24``): six square faces in GL order, each
+    copied from a capture's depth buffer, sampled ``GL_NEAREST`` (a depth between two
+    surfaces would be a surface that is not there), clamped, no mipmaps, no depth
+    comparison: a lookup returns the stored depth in ``.r``."""
+
+    def __init__(self, registry: ResourceRegistry, size: int) -> None:
+        if size < 1:
+            raise ValueError(f"cube-map size must be positive, got {size}")
+        self.name = int(GL.glGenTextures(1))
+        self.size = int(size)
+        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        for face in range(6):
+            GL.glTexImage2D(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0,
+                            GL.GL_DEPTH_COMPONENT24, self.size, self.size, 0,
+                            GL.GL_DEPTH_COMPONENT, GL.GL_FLOAT, None)
+        for wrap in (GL.GL_TEXTURE_WRAP_S, GL.GL_TEXTURE_WRAP_T, GL.GL_TEXTURE_WRAP_R):
+            GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, wrap, GL.GL_CLAMP_TO_EDGE)
+        GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MAG_FILTER, GL.GL_NEAREST)
+        GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MIN_FILTER, GL.GL_NEAREST)
+        GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MAX_LEVEL, 0)
+        GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_COMPARE_MODE, GL.GL_NONE)
+        super().__init__(registry)
+
+    def bind(self, unit: int = 0) -> None:
+        GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
+        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+
+    def copy_face_from_framebuffer(self, face: int) -> None:
+        """Copy the bound read framebuffer's lower-left ``size`` x ``size`` depths into
+        ``face`` (0..5), as :meth:`TextureCube.copy_face_from_framebuffer` copies colour."""
+        if not 0 <= face < 6:
+            raise ValueError(f"cube face must be 0..5, got {face}")
+        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        GL.glCopyTexImage2D(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0,
+                            GL.GL_DEPTH_COMPONENT24, 0, 0, self.size, self.size, 0)
+
+    def read_face(self, face: int) -> np.ndarray:
+        """``face``'s depths as ``(size, size)`` float32 in [0, 1], row 0 at the top
+        (``t = 1``)."""
+        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 4)
+        data = GL.glGetTexImage(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0,
+                                GL.GL_DEPTH_COMPONENT, GL.GL_FLOAT)
+        depths = np.frombuffer(data, dtype=np.float32).reshape(self.size, self.size)
+        return depths[::-1].copy()
 
     def _free(self) -> None:
         GL.glDeleteTextures([self.name])

@@ -1,30 +1,72 @@
 """A live cube map: six 90-degree captures of the scene from the reflector's centre, each
 copied into a face with ``glCopyTexImage2D`` (the lab's capture, six times); the
-reflector never appears in its own capture."""
+reflector never appears in its own capture.
+
+Its lookups may be corrected for surroundings that are not far away (the reflector's
+``parallax``): through a box or a sphere proxy, or by a search along the reflected ray
+in the distances the capture saw, for which each face's depth buffer is copied too
+(``shaders/parallax.glsl``; the numpy reference is :mod:`mirrorlab.parallax`).
+"""
 
 from __future__ import annotations
 
-from mirrorlab.gl.resources import RenderTarget, TextureCube
+from mirrorlab.gl.resources import DepthTextureCube, Program, RenderTarget, TextureCube
 from mirrorlab.passes.base import SharedResources, ViewDrawer
 from mirrorlab.passes.envmap import CurvedPass
+from mirrorlab.passes.sky import background_faces
 from mirrorlab.plan import PlannedPass, ReflectorDraw
-from mirrorlab.scene.model import Background, CurvedReflector
+from mirrorlab.scene.model import (
+    Background,
+    BoxProxy,
+    CurvedReflector,
+    DistanceSearch,
+    SphereProxy,
+)
+from mirrorlab.views import CUBE_FAR, CUBE_NEAR
+
+PARALLAX_CODES = {None: 0, "box": 1, "sphere": 2, "distance": 3}
+"""The ``PARALLAX`` define of ``envmap_cube.frag`` for each kind of correction."""
+DISTANCE_UNIT = 1
+BACKGROUND_UNIT = 2
+"""Texture units of a distance search's depth cube and background cube (the capture's
+colour cube is on unit 0)."""
 
 
 class LiveCubeMapped(CurvedPass):
-    """The ``cube-live`` technique, one mipmapped cube per slot. The planner captures it
-    again when something it sees changes, not when only the viewer moves."""
+    """The ``cube-live`` technique, one mipmapped cube per slot (and, for a distance
+    search, one depth cube per slot). The planner captures it again when something it
+    sees changes, not when only the viewer moves."""
 
     def __init__(self, shared: SharedResources, reflector: CurvedReflector,
                  background: Background | None = None) -> None:
         super().__init__(shared, reflector, background)
         self.size = reflector.map_size
         self.cubes: dict[int, TextureCube] = {}
+        self.depths: dict[int, DepthTextureCube] = {}
+        self.background: TextureCube | None = None
+        if isinstance(reflector.parallax, DistanceSearch):
+            assert background is not None
+            self.background = TextureCube.from_faces(shared.registry,
+                                                     background_faces(background))
+
+    def make_program(self, shared: SharedResources, reflector: CurvedReflector) -> Program:
+        kind = None if reflector.parallax is None else reflector.parallax.kind
+        program = shared.program("envmap.vert", "envmap_cube.frag",
+                                 PARALLAX=PARALLAX_CODES[kind])
+        program.use()
+        program.set_int("cube_map_texture", 0)
+        if kind == "distance":
+            program.set_int("distance_map", DISTANCE_UNIT)
+            program.set_int("background_map", BACKGROUND_UNIT)
+        return program
 
     def release(self) -> None:
-        for cube in self.cubes.values():
-            cube.release()
+        for texture in (*self.cubes.values(), *self.depths.values()):
+            texture.release()
+        if self.background is not None:
+            self.background.release()
         self.cubes.clear()
+        self.depths.clear()
         super().release()
 
     def cube(self, slot: int) -> TextureCube:
@@ -32,18 +74,47 @@ class LiveCubeMapped(CurvedPass):
             self.cubes[slot] = TextureCube.blank(self.shared.registry, self.size, mipmaps=True)
         return self.cubes[slot]
 
+    def depth(self, slot: int) -> DepthTextureCube:
+        """The depth cube of ``slot`` (distance search only)."""
+        if slot not in self.depths:
+            self.depths[slot] = DepthTextureCube(self.shared.registry, self.size)
+        return self.depths[slot]
+
     def update(self, step: PlannedPass, reflector: CurvedReflector, renderer: ViewDrawer,
                frame_target: RenderTarget) -> int:
-        """Capture the six faces (each view's plan leaves this reflector out)."""
+        """Capture the six faces (each view's plan leaves this reflector out), and their
+        depths for a distance search."""
         cube = self.cube(step.slot)
+        depth = self.depth(step.slot) if isinstance(reflector.parallax, DistanceSearch) else None
         target = self.shared.scratch((self.size, self.size))
         draws = 0
         for face, plan in enumerate(step.views):
             draws += renderer.draw_view(plan, target)
             target.bind()
             cube.copy_face_from_framebuffer(face)
+            if depth is not None:
+                depth.copy_face_from_framebuffer(face)
         cube.generate_mipmaps()
         return draws
 
     def map_for(self, draw: ReflectorDraw) -> TextureCube:
         return self.cube(draw.slot)
+
+    def lookup_uniforms(self, program: Program, reflector: CurvedReflector, slot: int) -> None:
+        parallax = reflector.parallax
+        if parallax is None:
+            return
+        program.set_vec3("capture_center", reflector.center())
+        if isinstance(parallax, BoxProxy):
+            program.set_vec3("proxy_min", parallax.min)
+            program.set_vec3("proxy_max", parallax.max)
+        elif isinstance(parallax, SphereProxy):
+            program.set_float("proxy_radius", parallax.radius)
+        else:
+            program.set_int("search_steps", parallax.steps)
+            program.set_int("secant_steps", parallax.secant)
+            program.set_vec2("capture_depth_range", (CUBE_NEAR, CUBE_FAR))
+            program.set_float("thickness", parallax.thickness)
+            self.depth(slot).bind(DISTANCE_UNIT)
+            assert self.background is not None
+            self.background.bind(BACKGROUND_UNIT)

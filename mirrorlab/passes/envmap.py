@@ -28,8 +28,12 @@ from mirrorlab.views import View, eye_position, is_orthographic
 
 OUTPUT_COLOR = 0
 OUTPUT_COORDINATES = 1
+OUTPUT_RAY_ORIGIN = 2
+OUTPUT_RAY_DIRECTION = 3
 """What the shader paths write: the colour, or (for checks) the lookup coordinates: (s, t, 0)
-for sphere, latlong and normal maps, the unit direction for cube maps."""
+for sphere, latlong and normal maps, the unit direction for cube maps (after any parallax
+correction). The cube maps' shader also writes, for checks of the parallax corrections,
+the reflected ray each fragment looks along: its world origin and unit direction."""
 
 _FRAGMENT = {"sphere": "envmap_sphere.frag", "sphere-vertex": "envmap_sphere.frag",
              "normal": "envmap_normal.frag", "cube": "envmap_cube.frag",
@@ -68,10 +72,15 @@ class CurvedPass:
             # has no eye point, so there the same per-vertex formula runs in the shader.
             self.ortho_program = shared.program("envmap.vert", "envmap_sphere.frag")
         else:
-            fragment = _FRAGMENT[self.technique]
-            self.program = shared.program("envmap.vert", fragment)
-            self.program.use()
-            self.program.set_int(_SAMPLER[fragment], 0)
+            self.program = self.make_program(shared, reflector)
+
+    def make_program(self, shared: SharedResources, reflector: CurvedReflector) -> Program:
+        """The technique's shader program, its map on texture unit 0."""
+        fragment = _FRAGMENT[self.technique]
+        program = shared.program("envmap.vert", fragment)
+        program.use()
+        program.set_int(_SAMPLER[fragment], 0)
+        return program
 
     def release(self) -> None:
         if self.fixed_mesh is not None:
@@ -91,11 +100,15 @@ class CurvedPass:
         if draw.mode == "plain":
             return renderer.drawer.draw_plain(  # type: ignore[attr-defined]
                 renderer.scene, reflector, view)
-        return self.draw_mapped(reflector, view, self.map_for(draw))
+        return self.draw_mapped(reflector, view, self.map_for(draw), draw.slot)
+
+    def lookup_uniforms(self, program: Program, reflector: CurvedReflector, slot: int) -> None:
+        """Set what the lookup needs besides the map and the view (bound ``program``)."""
 
     def draw_mapped(self, reflector: CurvedReflector, view: View,
-                    texture: Texture2D | TextureCube) -> int:
-        """Draw the reflector sampling ``texture`` into the bound target; returns 1."""
+                    texture: Texture2D | TextureCube, slot: int = 0) -> int:
+        """Draw the reflector sampling ``texture`` (the map of ``slot``) into the bound
+        target; returns 1."""
         model = reflector.model_matrix()
         GL.glEnable(GL.GL_DEPTH_TEST)
         GL.glEnable(GL.GL_CULL_FACE)
@@ -127,6 +140,7 @@ class CurvedPass:
             program.set_vec2("map_size", (texture.width, texture.height))  # type: ignore
         if isinstance(texture, TextureCube):
             GL.glEnable(GL.GL_TEXTURE_CUBE_MAP_SEAMLESS)
+        self.lookup_uniforms(program, reflector, slot)
         texture.bind(0)
         self.mesh.draw()
         return 1

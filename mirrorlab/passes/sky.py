@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from mirrorlab.envmap import bake_cube_faces
@@ -20,9 +22,12 @@ _SCREEN_TRIANGLE = np.array(
      (-1.0, 3.0, 0.0, 0, 0, 1, 0, 0)], dtype=np.float32)
 
 
+@lru_cache(maxsize=8)
 def background_faces(background: Background, size: int = SKY_SIZE) -> np.ndarray:
-    """Six cube faces ``(6, n, n, 3)`` uint8 of an environment background: its own
-    pictures, or baked from it at ``size``."""
+    """Six cube faces ``(6, n, n, 3)`` uint8 of a background: its own pictures, or baked
+    from it at ``size`` (a plain colour at 1 x 1). Remembered: do not change the array."""
+    if not background.is_environment:
+        size = 1
     if background.kind == "cube_faces":
         assert background.path is not None
         return load_cube_faces(background.path)

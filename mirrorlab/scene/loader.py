@@ -19,6 +19,7 @@ import math
 import re
 import tomllib
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -31,18 +32,23 @@ from mirrorlab.scene.model import (
     CURVED_TECHNIQUES,
     DEFAULT_BACKING,
     DEFAULT_PLAIN_COLOR,
+    PARALLAX_PROXIES,
     PLANAR_TECHNIQUES,
     Animation,
     Background,
+    BoxProxy,
     Camera,
     CurvedReflector,
+    DistanceSearch,
     Keyframe,
     Light,
     MeshObject,
     OrthoCapture,
+    Parallax,
     PlanarReflector,
     RobotObject,
     Scene,
+    SphereProxy,
     Transform,
 )
 
@@ -56,6 +62,8 @@ MAX_LIGHTS = 4
 MAX_BOUNCES = 6
 MAX_MAP_SIZE = 4096
 MAX_FRAMES = 100_000
+MAX_SEARCH_STEPS = 64
+"""Most linear-search steps (and secant steps) a distance-search lookup may take."""
 
 _TOP_KEYS = ("name", "description", "max_bounces", "ambient", "camera", "background",
              "lights", "objects", "reflectors", "animation")
@@ -68,7 +76,10 @@ _ROBOT_KEYS = ("name", "type", "angles", *_TRANSFORM_KEYS)
 _PLANAR_KEYS = ("name", "technique", "corners", "center", "normal", "width", "height", "up",
                 "capture", "texture_size", "ortho", "color", "backing")
 _CURVED_KEYS = ("name", "technique", "mesh", *_TRANSFORM_KEYS, "map_size", "source",
-                "capture_center", "color")
+                "capture_center", "color", "parallax")
+_PARALLAX_KEYS = {"box": ("min", "max"), "sphere": ("radius",),
+                  "distance": ("steps", "secant", "thickness")}
+"""The keys of each proxy in a ``parallax`` table, besides ``proxy``."""
 _ORTHO_KEYS = ("eye", "target", "up", "extents")
 _KEYFRAME_KEYS = ("frame", "camera", "objects", "reflectors")
 CUBE_FACE_FILES = ("px", "nx", "py", "ny", "pz", "nz")
@@ -230,6 +241,8 @@ def scene_to_document(scene: Scene, base: Path | None = None) -> dict[str, Any]:
                      "color": list(reflector.color)}
             if reflector.source is not None:
                 entry["source"] = rel(reflector.source)
+            if reflector.parallax is not None:
+                entry["parallax"] = parallax_document(reflector.parallax)
         reflectors.append(entry)
     document["reflectors"] = reflectors
     if scene.animation is not None:
@@ -250,6 +263,16 @@ def dumps(scene: Scene, base: Path | None = None) -> str:
     import tomlkit
 
     return tomlkit.dumps(scene_to_document(scene, base))
+
+
+def parallax_document(parallax: Parallax) -> dict[str, Any]:
+    """A curved reflector's ``parallax`` table."""
+    if isinstance(parallax, BoxProxy):
+        return {"proxy": "box", "min": list(parallax.min), "max": list(parallax.max)}
+    if isinstance(parallax, SphereProxy):
+        return {"proxy": "sphere", "radius": parallax.radius}
+    return {"proxy": "distance", "steps": parallax.steps, "secant": parallax.secant,
+            "thickness": parallax.thickness}
 
 
 def _camera_document(camera: Camera) -> dict[str, Any]:
@@ -414,8 +437,6 @@ class _Reader:
                       ambient=ambient, camera=camera, background=background, lights=lights,
                       objects=objects, reflectors=reflectors, source=self.source)
         if "animation" in document:
-            from dataclasses import replace
-
             scene = replace(scene, animation=self.animation(document["animation"], scene))
         return scene
 
@@ -664,7 +685,7 @@ class _Reader:
                 raise self.fail(f"{key}.source", f"technique {technique!r} takes no source "
                                 "(cube-live captures the scene; latlong is baked from the "
                                 "background)")
-        return CurvedReflector(
+        reflector = CurvedReflector(
             name=self.text(table.get("name", mesh.stem), f"{key}.name"), mesh=mesh,
             transform=self.transform(table, key), technique=technique,
             map_size=self.integer(table.get("map_size", 256), f"{key}.map_size", 4,
@@ -673,6 +694,56 @@ class _Reader:
             capture_center=self.vec3(table.get("capture_center", [0, 0, 0]),
                                      f"{key}.capture_center"),
             color=self.color(table.get("color", list(DEFAULT_PLAIN_COLOR)), f"{key}.color"))
+        if "parallax" not in table:
+            return reflector
+        if technique != "cube-live":
+            raise self.fail(f"{key}.parallax", f"applies to technique 'cube-live', not "
+                            f"{technique!r}")
+        parallax = self.parallax(table["parallax"], f"{key}.parallax")
+        if isinstance(parallax, BoxProxy):
+            center = reflector.center()
+            if not (np.all(center >= parallax.min) and np.all(center <= parallax.max)):
+                raise self.fail(f"{key}.parallax", "the reflector's capture centre "
+                                f"{[round(float(v), 6) for v in center]} is outside the box "
+                                "proxy; the box must enclose the reflector")
+        return replace(reflector, parallax=parallax)
+
+    def parallax(self, value: Any, key: str) -> Parallax:
+        known = ("proxy", *dict.fromkeys(k for keys in _PARALLAX_KEYS.values() for k in keys))
+        table = self.table(value, key, known)
+        if "proxy" not in table:
+            raise self.fail(f"{key}.proxy", f"missing; expected one of "
+                            f"{', '.join(PARALLAX_PROXIES)}")
+        proxy = self.choice(table["proxy"], f"{key}.proxy", PARALLAX_PROXIES)
+        for name in table:
+            owner = next((p for p, keys in _PARALLAX_KEYS.items() if name in keys), proxy)
+            if owner != proxy:
+                raise self.fail(f"{key}.{name}", f"applies to proxy {owner!r}, not {proxy!r}")
+        if proxy == "box":
+            for required in ("min", "max"):
+                if required not in table:
+                    raise self.fail(f"{key}.{required}", "missing: a box proxy needs its "
+                                    "world corners min and max")
+            low = self.vec3(table["min"], f"{key}.min")
+            high = self.vec3(table["max"], f"{key}.max")
+            for i in range(3):
+                if not low[i] < high[i]:
+                    raise self.fail(f"{key}.max[{i}]", f"expected more than min[{i}] = "
+                                    f"{low[i]:g}, got {high[i]:g}")
+            return BoxProxy(min=low, max=high)
+        if proxy == "sphere":
+            if "radius" not in table:
+                raise self.fail(f"{key}.radius", "missing: a sphere proxy needs its radius")
+            return SphereProxy(radius=self.number(table["radius"], f"{key}.radius", 0.0,
+                                                  low_open=True))
+        default = DistanceSearch()
+        return DistanceSearch(
+            steps=self.integer(table.get("steps", default.steps), f"{key}.steps", 1,
+                               MAX_SEARCH_STEPS),
+            secant=self.integer(table.get("secant", default.secant), f"{key}.secant", 0,
+                                MAX_SEARCH_STEPS),
+            thickness=self.number(table.get("thickness", default.thickness),
+                                  f"{key}.thickness", 0.0, 1.0, low_open=True))
 
     def animation(self, value: Any, scene: Scene) -> Animation:
         table = self.table(value, "animation", ("frames", "keyframes"))

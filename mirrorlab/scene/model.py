@@ -224,13 +224,56 @@ def ortho_capture_for(corners: np.ndarray, normal: np.ndarray) -> OrthoCapture:
                                  ORTHO_DEPTH))
 
 
+PARALLAX_PROXIES = ("box", "sphere", "distance")
+"""How a ``cube-live`` lookup can correct for surroundings that are not far away (see
+:mod:`mirrorlab.parallax`)."""
+
+
+@dataclass(frozen=True)
+class BoxProxy:
+    """The surroundings as an axis-aligned box (a room): world corners ``min`` and ``max``."""
+
+    min: Vec3
+    max: Vec3
+
+    kind = "box"
+
+
+@dataclass(frozen=True)
+class SphereProxy:
+    """The surroundings as a sphere of ``radius`` (world units) around the capture centre."""
+
+    radius: float
+
+    kind = "sphere"
+
+
+@dataclass(frozen=True)
+class DistanceSearch:
+    """The capture also keeps each texel's distance; the lookup searches the reflected
+    ray in ``steps`` linear steps, with ``secant`` secant steps at each crossing of the
+    stored surface, which counts as a hit when the ray lies within ``thickness`` of it
+    (relative to the distance; else the ray passed behind an object; with no secant
+    steps every crossing is a hit)."""
+
+    steps: int = 8
+    secant: int = 2
+    thickness: float = 0.1
+
+    kind = "distance"
+
+
+Parallax = BoxProxy | SphereProxy | DistanceSearch
+
+
 @dataclass(frozen=True)
 class CurvedReflector:
     """An environment-mapped mesh. ``technique`` is one of :data:`CURVED_TECHNIQUES`;
     ``map_size`` the map's side in texels; ``source`` a picture used as the sphere map
     as it is, or a folder of six cube faces for ``cube`` (None: baked from the
     background); ``capture_center`` the point, in the mesh's own frame, a live cube
-    map is captured from."""
+    map is captured from; ``parallax`` (``cube-live`` only) how its lookups correct for
+    nearby surroundings (None: everything is taken as infinitely far away)."""
 
     name: str
     mesh: Path
@@ -240,6 +283,7 @@ class CurvedReflector:
     source: Path | None = None
     capture_center: Vec3 = (0.0, 0.0, 0.0)
     color: Vec3 = DEFAULT_PLAIN_COLOR
+    parallax: Parallax | None = None
 
     kind = "curved"
 

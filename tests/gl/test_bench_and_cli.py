@@ -14,7 +14,13 @@ import pytest
 from PIL import Image
 
 import mirrorlab
-from mirrorlab.accuracy import SweepSettings, curved_techniques, lab_techniques, lab_viewpoints
+from mirrorlab.accuracy import (
+    SweepSettings,
+    curved_techniques,
+    lab_techniques,
+    lab_viewpoints,
+    sphere_panels,
+)
 from mirrorlab.cli import main
 from mirrorlab.paths import REPO_DIR
 from mirrorlab.scene.backgrounds import CUBE_FACE_FILES
@@ -38,12 +44,16 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     assert "technique" in out.out and "reflected-fbo" in out.out and "cube-live" in out.out
     # What the quick sweep measures, from its settings: the lab mirror at 2 viewpoints x
     # (ray tracer + ortho and reflected x 2 captures x 2 sizes + stencil); the sphere alone
-    # in the sky and among its objects, 1 view each x (ray tracer + 7 maps x 2 sizes).
+    # in the sky, among its objects and in the room, 1 view each x (ray tracer + 7 maps x
+    # 2 sizes + the live cube map with a box proxy, a sphere proxy and a distance search
+    # x 2 sizes).
     quick = SweepSettings.quick()
     assert quick.sizes == (64, 128) and quick.viewpoints == ("head-on far", "60 deg")
+    assert quick.steps == ()
     lab_rows = 2 * (1 + len(lab_techniques(quick.sizes)))
-    sphere_rows = 2 * (1 + len(curved_techniques(quick.sizes)))
-    assert (lab_rows, sphere_rows) == (2 * (1 + 2 * 2 * 2 + 1), 2 * (1 + 7 * 2))
+    sphere_rows = sum(1 + len(curved_techniques(quick.sizes, panel.proxies, quick.steps))
+                      for panel in sphere_panels(quick))
+    assert (lab_rows, sphere_rows) == (2 * (1 + 2 * 2 * 2 + 1), 3 * (1 + 7 * 2 + 3 * 2))
     total = lab_rows + sphere_rows
     # one progress bar (tqdm, on stderr), and it reached its end
     assert f"{total}/{total}" in out.err, out.err[-400:]
@@ -61,11 +71,16 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     assert reflected < 0.2 * ortho and stencil < 0.2 * ortho
     sky = {r["technique"]: float(r["mae"]) for r in table
            if r["scene"] == "sphere-sky" and r["map_size"] == "128"}
-    assert set(sky) == set(CURVED_TECHNIQUES)
+    assert set(sky) == {*CURVED_TECHNIQUES, "cube-live box", "cube-live sphere",
+                        "cube-live distance"}
     assert sky["sphere"] < sky["normal"] and sky["cube"] < sky["normal"]
+    room = {r["technique"]: float(r["share_off"]) for r in table
+            if r["scene"] == "sphere-room" and r["map_size"] == "128"}
+    assert room["cube-live box"] < 0.01 and room["cube-live distance"] < 0.01
+    assert room["cube-live"] > 0.2
     assert all(float(r["wall_ms"]) > 0 for r in table)
     markdown = (tmp_path / "accuracy.md").read_text()
-    assert markdown.count("| technique |") == 3  # lab, sphere-sky, sphere-objects
+    assert markdown.count("| technique |") == 4  # lab, sphere-sky, -objects, -room
     # Re-making the report from the CSV measures nothing and gives the same tables.
     (tmp_path / "accuracy.md").unlink()
     again = tmp_path / "again"

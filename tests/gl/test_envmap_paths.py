@@ -246,6 +246,22 @@ def test_live_cube_reflects_the_objects_around_the_sphere(scene_renderer):
         pytest.fail(f"object reflections: live {live_error:.1f} vs static {static_error:.1f}")
 
 
+def test_distance_search_puts_the_objects_where_the_ray_tracer_sees_them(scene_renderer):
+    # The live cube map with its depths, searched along each reflected ray (8 linear and
+    # 2 secant steps): measured MAE 5.0, 15.2 % of pixels off by > 10/255, against 13.4 and
+    # 30.8 % without the search. What remains is mostly edges: the objects' outlines, the
+    # silhouette, texture detail (see README, "Parallax").
+    truth, mask = traced("sphere", None, SIZE)
+    live = sphere_scene(method="cube-live")
+    searched, stats = render(scene_renderer, apply_options(live, {"parallax": "distance"}))
+    assert "capture:sphere" in stats.ran
+    mean, _ = assert_close_to_truth("truth_cube-live_distance", searched, truth, mask, 7.0,
+                                    0.21)
+    plain, _ = render(scene_renderer, live)
+    plain_mean, plain_share = region_error(plain, truth, mask)
+    assert mean < 0.5 * plain_mean and plain_share > 0.25, (mean, plain_mean, plain_share)
+
+
 def test_per_vertex_sphere_map_is_less_accurate_than_per_pixel(scene_renderer):
     # Close up, the sphere's triangles are large on screen and interpolating (s, t)
     # across them shows; measured MAE 0.75 (vertex, texgen) vs 0.39 (pixel), share off

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import sys
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -12,7 +13,7 @@ import pytest
 from mirrorlab import accuracy
 from mirrorlab.options import apply_options
 from mirrorlab.scene.loader import load_scene
-from mirrorlab.scene.model import CURVED_TECHNIQUES
+from mirrorlab.scene.model import CURVED_TECHNIQUES, BoxProxy, DistanceSearch
 
 
 def test_image_error_scores_only_the_masked_pixels():
@@ -69,6 +70,22 @@ def test_summary_averages_errors_and_takes_median_times_per_technique_and_size()
     assert text.splitlines()[0].startswith("technique") and "ortho-copy" in text
     markdown = accuracy.format_markdown(table)
     assert markdown.count("\n") == 3 and markdown.splitlines()[1].startswith("|---")
+
+
+def test_the_plot_draws_the_distance_search_over_its_steps_as_one_line():
+    make = accuracy.SweepRow
+    sweep = [make("s", technique, size, "v", mae, 0.0, 30.0, 0.1, ms, ms)
+             for technique, size, mae, ms in (
+                 ("cube-live", 256, 14.0, 30.0), ("cube-live distance", 64, 5.0, 20.0),
+                 ("cube-live distance", 256, 4.0, 40.0), ("cube-live distance 16+2", 256,
+                                                           3.5, 60.0),
+                 ("cube-live distance 2+0", 256, 9.0, 33.0))]
+    series = accuracy._series(accuracy.summarise(sweep))
+    assert list(series) == ["cube-live", "cube-live distance",
+                            "cube-live distance by steps (map 256)"]
+    steps = series["cube-live distance by steps (map 256)"]
+    assert [note for _, note in steps] == ["2+0", "8+2", "16+2"]
+    assert [note for _, note in series["cube-live distance"]] == ["64", "256"]
 
 
 def test_csv_has_a_header_and_one_line_per_row():
@@ -140,20 +157,55 @@ def test_planar_configurations_cover_every_capture_mode_and_size_plus_stencil():
 
 def test_curved_configurations_stop_at_the_largest_map_the_sweep_bakes():
     configs = accuracy.curved_techniques((64, 2048))
-    assert [label for label, _ in configs] == list(CURVED_TECHNIQUES)
+    assert [label for label, _ in configs] == [
+        *CURVED_TECHNIQUES, "cube-live distance", "cube-live distance 2+0",
+        "cube-live distance 4+1", "cube-live distance 16+2", "cube-live distance 32+4"]
     assert all(o["map_size"] == 64 for _, o in configs)
     assert accuracy.ENVMAP_MAX_SIZE < 2048
     sphere = load_scene("chrome_sphere")
     for label, options in configs:
-        assert apply_options(sphere, options).reflector("sphere").technique == label
+        reflector = apply_options(sphere, options).reflector("sphere")
+        assert reflector.technique == label.split()[0]
+        if label == "cube-live":  # the plain live cube map has no correction
+            assert reflector.parallax is None
+        elif "distance" in label:
+            steps = label.split()[-1] if label[-1].isdigit() else accuracy.DEFAULT_STEPS
+            assert reflector.parallax == DistanceSearch(*map(int, steps.split("+")))
+
+
+def test_the_live_cube_map_is_measured_with_each_proxy_and_each_step_count():
+    proxies = (("box", "box:-4,-2,-4,4,4,4"), ("sphere", "sphere:3"))
+    configs = accuracy.curved_techniques((64, 256, 512), proxies, ("4+1", "8+2"))
+    labels = [(label, o["map_size"]) for label, o in configs if label.startswith("cube-live ")]
+    assert labels == [("cube-live box", 64), ("cube-live box", 256), ("cube-live box", 512),
+                      ("cube-live sphere", 64), ("cube-live sphere", 256),
+                      ("cube-live sphere", 512), ("cube-live distance", 64),
+                      ("cube-live distance", 256), ("cube-live distance", 512),
+                      ("cube-live distance 4+1", 256)]
+    assert accuracy.search_map_size((64, 128)) == 128
+    assert accuracy.search_map_size((512, 1024)) == 512
+    room = load_scene("sphere_room")
+    boxed = apply_options(room, dict(configs[-10][1]))
+    assert boxed.reflector("sphere").parallax == BoxProxy((-4.0, -2.0, -4.0), (4.0, 4.0, 4.0))
+
+
+def test_proxies_are_the_box_around_the_objects_and_the_sphere_inside_it():
+    assert accuracy.proxies_for(load_scene("sphere_room")) == (
+        ("box", "box:-4,-2,-4,4,4,4"), ("sphere", "sphere:3"))  # the room; 3 to the floor
+    box, sphere = accuracy.proxies_for(load_scene("chrome_sphere"))
+    assert box[1].startswith("box:-2.81") and sphere == ("sphere", "sphere:2")
+    bare = load_scene("chrome_sphere")
+    assert accuracy.proxies_for(replace(bare, objects=())) == ()
+    assert accuracy.proxies_for(load_scene("lab20")) == ()
 
 
 def test_a_scene_gets_the_configurations_of_its_kinds_of_reflector():
     sizes = (64,)
-    labels = {name: [label for label, _ in accuracy.scene_techniques(load_scene(name), sizes)]
+    labels = {name: [label for label, _ in accuracy.scene_techniques(load_scene(name), sizes,
+                                                                     steps=())]
               for name in ("lab20", "chrome_sphere", "mirror_and_sphere", "no_mirror")}
     assert labels["lab20"] == [label for label, _ in accuracy.lab_techniques(sizes)]
-    assert labels["chrome_sphere"] == list(CURVED_TECHNIQUES)
+    assert labels["chrome_sphere"] == [*CURVED_TECHNIQUES, "cube-live distance"]
     assert labels["mirror_and_sphere"] == labels["lab20"] + labels["chrome_sphere"]
     assert labels["no_mirror"] == []
 
@@ -165,13 +217,19 @@ def test_panels_of_the_sweep():
     assert lab.scene == load_scene("lab20") and lab.supersample == 1
     with pytest.raises(ValueError, match="unknown viewpoint 'nowhere'"):
         accuracy.lab_panel(accuracy.SweepSettings(viewpoints=("nowhere",)))
-    sky, objects = accuracy.sphere_panels(accuracy.SweepSettings())
+    sky, objects, room = accuracy.sphere_panels(accuracy.SweepSettings())
     assert sky.scene.objects == () and objects.scene.objects != ()
     assert list(sky.viewpoints) == ["default", "close"] and sky.supersample == 4
     assert list(accuracy.sphere_panels(quick)[0].viewpoints) == ["default"]
+    # the sky alone is measured with the proxies of the sphere among its objects
+    assert sky.proxies == objects.proxies == accuracy.proxies_for(load_scene("sphere"))
+    assert room.scene == load_scene("sphere_room") and room.name == "sphere-room"
+    assert room.proxies == accuracy.proxies_for(room.scene) and (room.supersample,
+                                                                 room.inset) == (4, 1)
     cone = accuracy.file_panel(load_scene("cone"))
     assert (cone.supersample, cone.inset) == (4, 1)
     assert cone.viewpoints == {"camera": load_scene("cone").camera}
+    assert cone.proxies == accuracy.proxies_for(load_scene("cone"))
     assert accuracy.file_panel(load_scene("two_mirrors")).supersample == 1
 
 

@@ -35,14 +35,18 @@ from mirrorlab.scene.loader import (
 from mirrorlab.scene.model import (
     CAPTURE_MODES,
     CURVED_TECHNIQUES,
+    PARALLAX_PROXIES,
     PLANAR_TECHNIQUES,
+    BoxProxy,
     Camera,
     CurvedReflector,
+    DistanceSearch,
     Light,
     MeshObject,
     PlanarReflector,
     RobotObject,
     Scene,
+    SphereProxy,
     Transform,
 )
 
@@ -237,7 +241,25 @@ def curved_reflectors(draw, name: str) -> dict[str, Any]:
     elif technique in ("sphere", "sphere-vertex", "sphere-texgen", "normal") and draw(
             st.booleans()):
         entry["source"] = str(draw(st.sampled_from(PICTURES)))
+    elif technique == "cube-live" and draw(st.booleans()):
+        entry["parallax"] = draw(parallax_tables())
     return entry
+
+
+@st.composite
+def parallax_tables(draw) -> dict[str, Any]:
+    proxy = draw(st.sampled_from(PARALLAX_PROXIES))
+    if proxy == "box":  # wide enough to hold any capture centre drawn here
+        return {"proxy": "box", "min": draw(vec(st.floats(-1e35, -1e30))),
+                "max": draw(vec(st.floats(1e30, 1e35)))}
+    if proxy == "sphere":
+        return {"proxy": "sphere", "radius": draw(st.floats(1e-6, 1e6))}
+    table: dict[str, Any] = {"proxy": "distance"}
+    for key, values in (("steps", st.integers(1, 64)), ("secant", st.integers(0, 64)),
+                        ("thickness", st.floats(1e-6, 1.0))):
+        if draw(st.booleans()):
+            table[key] = draw(values)
+    return table
 
 
 @st.composite
@@ -374,6 +396,19 @@ def test_a_scene_built_in_python_round_trips():
                                     source=SKY_CUBE.resolve(), map_size=32),),
         max_bounces=3, description="made in Python")
     assert loads(dumps(scene, GENERATED.parent), GENERATED) == scene
+
+
+def test_each_parallax_correction_reads_and_round_trips():
+    room = load_scene("sphere_room")
+    assert room.reflector("sphere").parallax == BoxProxy((-4.0, -2.0, -4.0), (4.0, 4.0, 4.0))
+    for parallax in (BoxProxy((-4.0, -2.0, -4.0), (4.0, 4.0, 4.0)), SphereProxy(2.5),
+                     DistanceSearch(), DistanceSearch(steps=16, secant=0, thickness=0.25),
+                     None):
+        scene = room.with_reflector("sphere", parallax=parallax)
+        assert loads(scene.to_toml(), room.source) == scene
+    table = {"proxy": "distance", "steps": 4}
+    document = {"reflectors": [{"technique": "cube-live", "mesh": MESH, "parallax": table}]}
+    assert from_document(document).reflectors[0].parallax == DistanceSearch(steps=4)
 
 
 # --------------------------------------------------------------------------- bad input
@@ -919,3 +954,52 @@ def test_a_document_that_is_not_a_table_is_refused():
         with pytest.raises(SceneError, match="expected a table"):
             from_document(value)
     assert replace(from_document({}), name="x") == Scene("x")
+
+
+@pytest.mark.parametrize(("parallax", "key", "words"), [
+    ("box", "reflectors[1].parallax", "expected a table, got the string 'box'"),
+    ({"min": [0, 0, 0]}, "reflectors[1].parallax.proxy",
+     "missing; expected one of box, sphere, distance"),
+    ({"proxy": "cone"}, "reflectors[1].parallax.proxy",
+     "expected one of box, sphere, distance, got 'cone'"),
+    ({"proxy": "box", "size": 3}, "reflectors[1].parallax.size", "unknown key"),
+    ({"proxy": "box", "min": [-1, -1, -1], "max": [1, 1, 1], "radius": 2},
+     "reflectors[1].parallax.radius", "applies to proxy 'sphere', not 'box'"),
+    ({"proxy": "distance", "max": [1, 1, 1]}, "reflectors[1].parallax.max",
+     "applies to proxy 'box', not 'distance'"),
+    ({"proxy": "box", "min": [-1, -1, -1]}, "reflectors[1].parallax.max",
+     "missing: a box proxy needs its world corners min and max"),
+    ({"proxy": "box", "min": [-1, 2, -1], "max": [1, 2, 1]}, "reflectors[1].parallax.max[1]",
+     "expected more than min[1] = 2, got 2"),
+    ({"proxy": "box", "min": [1, 1, 1], "max": [2, 2, 2]}, "reflectors[1].parallax",
+     "the reflector's capture centre [0.0, 0.0, 0.0] is outside the box proxy"),
+    ({"proxy": "box", "min": [-1, -1, -1], "max": [1, "2", 1]},
+     "reflectors[1].parallax.max[1]", "expected a number, got the string '2'"),
+    ({"proxy": "sphere"}, "reflectors[1].parallax.radius", "missing: a sphere proxy needs"),
+    ({"proxy": "sphere", "radius": 0.0}, "reflectors[1].parallax.radius",
+     "expected a number greater than 0, got 0.0"),
+    ({"proxy": "distance", "steps": 0}, "reflectors[1].parallax.steps",
+     "expected a whole number from 1 to 64, got 0"),
+    ({"proxy": "distance", "steps": 8.0}, "reflectors[1].parallax.steps",
+     "expected a whole number, got the number 8.0"),
+    ({"proxy": "distance", "secant": 65}, "reflectors[1].parallax.secant",
+     "expected a whole number from 0 to 64, got 65"),
+    ({"proxy": "distance", "thickness": 0.0}, "reflectors[1].parallax.thickness",
+     "expected a number greater than 0, got 0.0"),
+    ({"proxy": "distance", "thickness": 2}, "reflectors[1].parallax.thickness",
+     "expected a number at most 1, got 2"),
+])
+def test_a_bad_parallax_table_is_named(tmp_path, parallax, key, words):
+    document = base_document()
+    document["reflectors"][1]["parallax"] = parallax
+    assert_refused(tmp_path, document, key, words)
+
+
+def test_parallax_belongs_to_live_cube_maps_only(tmp_path):
+    document = base_document()
+    document["reflectors"][1].update(technique="cube", parallax={"proxy": "distance"})
+    assert_refused(tmp_path, document, "reflectors[1].parallax",
+                   "applies to technique 'cube-live', not 'cube'")
+    document = base_document()
+    document["reflectors"][0]["parallax"] = {"proxy": "distance"}
+    assert_refused(tmp_path, document, "reflectors[0].parallax", "unknown key")

@@ -3,6 +3,7 @@ nothing else, and a bad value is refused with the flag named."""
 
 from __future__ import annotations
 
+import re
 from dataclasses import replace
 
 import pytest
@@ -20,6 +21,7 @@ from mirrorlab.options import (
 )
 from mirrorlab.paths import REPO_DIR
 from mirrorlab.scene.loader import load_scene
+from mirrorlab.scene.model import BoxProxy, DistanceSearch, SphereProxy
 
 SKY_CUBE = REPO_DIR / "textures" / "sky_cube"
 
@@ -94,6 +96,67 @@ def test_a_reflectors_source_is_kept_only_where_it_means_the_same():
     assert faces.reflector("sphere").source == SKY_CUBE
     assert apply_options(faces, {"method": "sphere"}).reflector("sphere").source is None
     assert apply_options(faces, {"method": "cube"}).reflector("sphere").source == SKY_CUBE
+
+
+def test_parallax_sets_every_live_cube_map_in_any_form():
+    sphere = apply_options(load_scene("sphere"), {"method": "cube-live"})
+    room = load_scene("sphere_room")
+    forms = {"box:-3,-2,-3,3,3,3": BoxProxy((-3.0, -2.0, -3.0), (3.0, 3.0, 3.0)),
+             "sphere:4": SphereProxy(4.0), "distance": DistanceSearch(),
+             "distance:16": DistanceSearch(steps=16),
+             "distance:4+0": DistanceSearch(steps=4, secant=0),
+             # the API also takes the scene file's table
+             "table": DistanceSearch(steps=3, thickness=0.5)}
+    for text, expected in forms.items():
+        value = {"proxy": "distance", "steps": 3, "thickness": 0.5} if text == "table" else text
+        assert apply_options(sphere, {"parallax": value}).reflector("sphere").parallax == expected
+    # given before --method in the API, it still applies after it
+    both = apply_options(load_scene("sphere"), {"parallax": "sphere:2", "method": "cube-live"})
+    assert both.reflector("sphere").parallax == SphereProxy(2.0)
+    off = apply_options(room, {"parallax": "none"})
+    assert off.reflector("sphere").parallax is None
+    assert changed_fields(room.reflector("sphere"), off.reflector("sphere")) == {"parallax"}
+    # the planar mirror of a mixed scene is left alone
+    mixed = apply_options(load_scene("mirror_and_sphere"), {"parallax": "distance"})
+    assert mixed.reflector("mirror") == load_scene("mirror_and_sphere").reflector("mirror")
+
+
+def test_leaving_cube_live_drops_the_parallax_correction():
+    room = load_scene("sphere_room")
+    for method in ("cube", "sphere", "latlong"):
+        assert apply_options(room, {"method": method}).reflector("sphere").parallax is None
+    assert apply_options(room, {"method": "cube-live"}) == room
+
+
+@pytest.mark.parametrize(("scene", "text", "message"), [
+    ("sphere_room", "cone", "--parallax: expected one of none, box:X0,Y0,Z0,X1,Y1,Z1, "
+                            "sphere:RADIUS, distance[:STEPS[+SECANT]], got 'cone'"),
+    ("sphere_room", "box:1,2,3", "--parallax: expected 6 numbers X0,Y0,Z0,X1,Y1,Z1 after box:"),
+    ("sphere_room", "sphere:", "--parallax: expected 1 numbers RADIUS after sphere:"),
+    ("sphere_room", "distance:x", "--parallax: expected one of none"),
+    ("sphere_room", "sphere:-1", "--parallax: reflectors[0].parallax.radius: expected a number "
+                                 "greater than 0, got -1.0"),
+    ("sphere_room", "distance:99", "--parallax: reflectors[0].parallax.steps: expected a whole "
+                                   "number from 1 to 64, got 99"),
+    ("sphere_room", "box:2,2,2,3,3,3", "--parallax: reflectors[0].parallax: the reflector's "
+                                       "capture centre [0.5, 1.0, -0.8] is outside the box"),
+    ("chrome_sphere", "distance", "--parallax: scene 'chrome_sphere' has no cube-live "
+                                  "reflector (--method cube-live makes every curved"),
+    ("lab20", "distance", "--parallax: scene 'lab20' has no curved reflector"),
+])
+def test_a_bad_parallax_is_refused_naming_the_flag(scene, text, message):
+    # the API takes the text as it is; the command line parses it first
+    with pytest.raises(OptionError) as info:
+        apply_options(load_scene(scene), {"parallax": text})
+    assert str(info.value).startswith(message), str(info.value)
+    assert "\n" not in str(info.value)
+    try:
+        parsed = OPTION_NAMES["parallax"].parse("--parallax", text)
+    except OptionError as refused:
+        assert str(refused) == str(info.value)
+    else:
+        with pytest.raises(OptionError, match=f"^{re.escape(str(info.value))}$"):
+            apply_options(load_scene(scene), {"parallax": parsed})
 
 
 @pytest.mark.parametrize("name, value, field, expected", [
@@ -196,12 +259,15 @@ def test_every_option_has_a_flag_and_parses_its_text():
              "method": "stencil", "capture": "fbo", "env_size": "128", "max_bounces": "2",
              "cube_faces": str(SKY_CUBE), "set": "camera.near=0.5"}
     for name, option in OPTION_NAMES.items():
-        if name == "map_size":
+        if name in ("map_size", "parallax"):
             continue
         value = option.parse(option.flag, texts[name])
         assert apply_options(lab, {name: value}) != lab, name
     assert apply_options(load_scene("sphere"), {"map_size": OPTION_NAMES["map_size"].parse(
         "--map-size", "64")}).reflector("sphere").map_size == 64
+    live = apply_options(load_scene("sphere"), {"method": "cube-live", "parallax": OPTION_NAMES[
+        "parallax"].parse("--parallax", "sphere:4")})
+    assert live.reflector("sphere").parallax == SphereProxy(4.0)
 
 
 def test_set_key_walks_into_nested_tables_and_arrays():

@@ -18,7 +18,14 @@ from mirrorlab.plan import (
     screen_area,
 )
 from mirrorlab.scene.loader import load_scene, shipped_scene_names
-from mirrorlab.scene.model import Camera, Scene, Transform
+from mirrorlab.scene.model import (
+    BoxProxy,
+    Camera,
+    DistanceSearch,
+    Scene,
+    SphereProxy,
+    Transform,
+)
 from mirrorlab.views import camera_view
 
 SIZE = (64, 64)
@@ -170,6 +177,44 @@ def test_live_cube_map_follows_the_objects_not_the_viewer():
         "red_block", transform=replace(block.transform, position=(2.3, 0.1, 0.9)))
     (again,) = captures(run(moved, state))
     assert again.runs and "scene changed" in again.reason
+
+
+def test_a_live_cube_map_is_not_captured_again_for_a_change_in_how_it_is_read():
+    # A proxy's size and a search's steps change the lookup, not what the six faces show;
+    # a distance search needs the depths as well, so switching to one captures again.
+    room = load_scene("sphere_room")
+    state = TextureState()
+    assert ran_captures(run(room, state)) == [("sphere", 1)]
+    smaller = room.with_reflector("sphere", parallax=BoxProxy((-2.0, -1.0, -2.0),
+                                                              (2.0, 3.0, 2.0)))
+    (kept,) = captures(run(smaller, state))
+    assert not kept.runs and "nothing it shows changed" in kept.reason
+    searched = room.with_reflector("sphere", parallax=DistanceSearch())
+    assert ran_captures(run(searched, state)) == [("sphere", 1)]
+    finer = room.with_reflector("sphere", parallax=DistanceSearch(steps=16, secant=4))
+    assert ran_captures(run(finer, state)) == []
+    moved = finer.with_object("floor", transform=replace(
+        finer.object("floor").transform, position=(0.0, -1.9, 0.0)))
+    assert ran_captures(run(moved, state)) == [("sphere", 1)]
+
+
+def test_another_reflectors_proxy_is_part_of_what_a_capture_shows():
+    # Two live spheres, two bounces: the ball's capture shows the sphere with its own map
+    # and lookup, so a change of the sphere's box is a change the ball's capture shows;
+    # the sphere's captures show the ball, in which the sphere is plain, and are kept.
+    room = load_scene("sphere_room")
+    ball = replace(room.reflector("sphere"), name="ball", parallax=None,
+                   transform=Transform(position=(-0.7, 0.3, 0.6), scale=(0.35, 0.35, 0.35)))
+    scene = replace(room, reflectors=(*room.reflectors, ball), max_bounces=2)
+    state = TextureState()
+    assert sorted(ran_captures(run(scene, state))) == [("ball", 1), ("ball", 2),
+                                                        ("sphere", 1), ("sphere", 2)]
+    resized = scene.with_reflector("sphere", parallax=BoxProxy((-3.0, -2.0, -3.0),
+                                                               (3.0, 3.0, 3.0)))
+    assert ran_captures(run(resized, state)) == [("ball", 2)]
+    # another kind of correction draws the sphere with another shader: all of it again
+    other = scene.with_reflector("sphere", parallax=SphereProxy(3.0))
+    assert len(ran_captures(run(other, state))) == 4
 
 
 def test_a_static_map_is_never_captured_and_a_sphere_map_is_baked_per_view_rotation():
