@@ -31,7 +31,7 @@ def run_render(scene: Scene, size: tuple[int, int], out: Path, frames: list[int]
             from mirrorlab.raytrace import trace_scene
 
             for frame in frames:
-                image = trace_scene(scene.at_frame(frame), size).to_uint8()
+                image = trace_scene(scene.at_frame(frame), size, progress=True).to_uint8()
                 if out_dir is not None:
                     outputs.add_png(frame_name(out_dir, scene, frame), image)
             outputs.add_png(out, image)
