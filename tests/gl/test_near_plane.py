@@ -12,6 +12,7 @@ near plane. Tolerance: 99% of pixels within 10/255 of the tracer.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import replace
 
 import numpy as np
@@ -59,5 +60,5 @@ def test_the_frame_agrees_with_the_tracer_across_the_near_plane(scene_renderer, 
         frames.append(image.astype(int))
     # Continuity: from the near plane outwards, each step changes the frame a little.
     on_glass = [f for d, f in zip(DISTANCES, frames, strict=True) if d >= NEAR - 1e-7]
-    steps = [np.abs(b - a).mean() for a, b in zip(on_glass, on_glass[1:], strict=False)]
+    steps = [np.abs(b - a).mean() for a, b in itertools.pairwise(on_glass)]
     assert max(steps[:-2]) < 1.0, f"the frame jumps between nearby distances: {steps}"
