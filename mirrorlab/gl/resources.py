@@ -18,6 +18,7 @@ from typing import Protocol
 
 import numpy as np
 
+from mirrorlab.errors import GLLimitError
 from mirrorlab.gl.context import GLContextError, ResourceRegistry
 from mirrorlab.gl.opengl import GL
 from mirrorlab.paths import shader_source
@@ -158,11 +159,23 @@ class Program(_Resource):
         GL.glDeleteProgram(self.name)
 
 
+def check_texture_size(width: int, height: int, what: str, cube: bool = False) -> None:
+    """GLLimitError naming ``what`` when a ``width`` x ``height`` texture (a cube map's face,
+    with ``cube``) is larger than this GL allows."""
+    limit_name = "GL_MAX_CUBE_MAP_TEXTURE_SIZE" if cube else "GL_MAX_TEXTURE_SIZE"
+    limit = int(np.asarray(GL.glGetIntegerv(getattr(GL, limit_name))).reshape(-1)[0])
+    if width > limit or height > limit:
+        raise GLLimitError(f"{what} is {width}x{height}, larger than this OpenGL allows "
+                           f"({limit_name} {limit})")
+
+
 class Texture2D(_Resource):
     """A 2D RGB texture. Make one with :meth:`from_image` or :meth:`blank`."""
 
     def __init__(self, registry: ResourceRegistry, width: int, height: int,
-                 pixels: np.ndarray | None, mipmaps: bool, clamp: bool) -> None:
+                 pixels: np.ndarray | None, mipmaps: bool, clamp: bool,
+                 what: str = "a texture") -> None:
+        check_texture_size(width, height, what)
         self.name = int(GL.glGenTextures(1))
         self.width, self.height = int(width), int(height)
         self.mipmaps = mipmaps
@@ -186,13 +199,16 @@ class Texture2D(_Resource):
         super().__init__(registry)
 
     @classmethod
-    def from_image(cls, registry: ResourceRegistry, image: np.ndarray) -> Texture2D:
-        """A mipmapped, repeating texture from ``image`` ``(h, w, 3)`` uint8, row 0 at the top."""
+    def from_image(cls, registry: ResourceRegistry, image: np.ndarray,
+                   what: str = "a texture") -> Texture2D:
+        """A mipmapped, repeating texture from ``image`` ``(h, w, 3)`` uint8, row 0 at the
+        top; ``what`` names it in a GLLimitError."""
         image = np.asarray(image)
         if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
             raise ValueError(f"texture image must be (h, w, 3) uint8, got {image.shape} "
                              f"{image.dtype}")
-        return cls(registry, image.shape[1], image.shape[0], image, mipmaps=True, clamp=False)
+        return cls(registry, image.shape[1], image.shape[0], image, mipmaps=True, clamp=False,
+                   what=what)
 
     @classmethod
     def blank(cls, registry: ResourceRegistry, width: int, height: int) -> Texture2D:
@@ -437,9 +453,10 @@ class TextureCube(_Resource):
     """
 
     def __init__(self, registry: ResourceRegistry, size: int, faces: np.ndarray | None,
-                 mipmaps: bool) -> None:
+                 mipmaps: bool, what: str = "a cube map's face") -> None:
         if size < 1:
             raise ValueError(f"cube-map size must be positive, got {size}")
+        check_texture_size(size, size, what, cube=True)
         if faces is not None:
             faces = np.asarray(faces)
             if faces.shape != (6, size, size, 3) or faces.dtype != np.uint8:
@@ -468,12 +485,13 @@ class TextureCube(_Resource):
 
     @classmethod
     def from_faces(cls, registry: ResourceRegistry, faces: np.ndarray,
-                   mipmaps: bool = True) -> TextureCube:
-        """A (by default mipmapped) cube map from ``faces`` ``(6, n, n, 3)`` uint8."""
+                   mipmaps: bool = True, what: str = "a cube map's face") -> TextureCube:
+        """A (by default mipmapped) cube map from ``faces`` ``(6, n, n, 3)`` uint8; ``what``
+        names a face in a GLLimitError."""
         faces = np.asarray(faces)
         if faces.ndim != 4:
             raise ValueError(f"cube faces must be (6, n, n, 3) uint8, got {faces.shape}")
-        return cls(registry, faces.shape[1], faces, mipmaps=mipmaps)
+        return cls(registry, faces.shape[1], faces, mipmaps=mipmaps, what=what)
 
     @classmethod
     def blank(cls, registry: ResourceRegistry, size: int, mipmaps: bool = False) -> TextureCube:

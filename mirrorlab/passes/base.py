@@ -50,7 +50,8 @@ class SharedResources:
     def texture(self, path: Path) -> Texture2D:
         """A mipmapped, repeating texture of the picture file ``path``."""
         if path not in self._textures:
-            self._textures[path] = Texture2D.from_image(self.registry, load_picture(path))
+            self._textures[path] = Texture2D.from_image(self.registry, load_picture(path),
+                                                        what=f"picture {path}")
         return self._textures[path]
 
     def program(self, vertex: str, fragment: str, **defines: str | int) -> Program:

@@ -201,8 +201,11 @@ class SphereMapped(CurvedPass):
             return 0
         if old is not None:
             old.release()
+        what = (f"picture {reflector.source}" if reflector.source is not None
+                else f"reflector {reflector.name}'s sphere map")
         self.textures[step.slot] = Texture2D(self.shared.registry, image.shape[1],
-                                             image.shape[0], image, mipmaps=True, clamp=True)
+                                             image.shape[0], image, mipmaps=True, clamp=True,
+                                             what=what)
         return 0
 
     def map_for(self, draw: ReflectorDraw) -> Texture2D:
@@ -218,12 +221,15 @@ class CubeMapped(CurvedPass):
         super().__init__(shared, reflector, background)
         if reflector.source is not None:
             faces = load_cube_faces(reflector.source)
+            what = f"cube face {reflector.source}/px.png"
         elif background.kind == "cube_faces":
             assert background.path is not None
             faces = load_cube_faces(background.path)
+            what = f"cube face {background.path}/px.png"
         else:
             faces = baked_cube(background, reflector.map_size)
-        self.cube = TextureCube.from_faces(shared.registry, faces)
+            what = f"reflector {reflector.name}'s cube map face"
+        self.cube = TextureCube.from_faces(shared.registry, faces, what=what)
 
     def release(self) -> None:
         self.cube.release()

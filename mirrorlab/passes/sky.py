@@ -54,7 +54,10 @@ class SkyPass:
 
     def __init__(self, shared: SharedResources, background: Background) -> None:
         self.background = background
-        self.cube = TextureCube.from_faces(shared.registry, background_faces(background))
+        what = (f"cube face {background.path}/px.png" if background.kind == "cube_faces"
+                else "the background's cube map face")
+        self.cube = TextureCube.from_faces(shared.registry, background_faces(background),
+                                           what=what)
         self.program = shared.program("envmap_sky.vert", "envmap_sky.frag")
         self.triangle = MeshBuffer(shared.registry, _SCREEN_TRIANGLE,
                                    np.arange(3, dtype=np.uint32))

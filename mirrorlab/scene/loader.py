@@ -56,6 +56,10 @@ MAX_LIGHTS = 4
 MAX_BOUNCES = 6
 MAX_MAP_SIZE = 4096
 MAX_FRAMES = 100_000
+MAX_MAGNITUDE = 1e6
+"""Largest magnitude of any number in a scene: GL computes in 32-bit floats, which keep
+about 7 digits, so beyond a million units a scene has no precision left (and beyond 3.4e38
+no value at all)."""
 
 _TOP_KEYS = ("name", "description", "max_bounces", "ambient", "camera", "background",
              "lights", "objects", "reflectors", "animation")
@@ -318,10 +322,15 @@ class _Reader:
             raise self.fail(key, f"expected a number, got {_kind(value)}")
         try:
             number = float(value)
-        except OverflowError:
-            raise self.fail(key, f"number {value} is too large") from None
-        if not math.isfinite(number):
-            raise self.fail(key, f"expected a finite number, got {value}")
+        except OverflowError:  # a whole number beyond float64
+            number = math.copysign(1e309, value)
+        else:
+            if not math.isfinite(number):
+                raise self.fail(key, f"expected a finite number, got {value}")
+        if not abs(number) <= MAX_MAGNITUDE:
+            raise self.fail(key, f"{value:g} is too large: it overflows OpenGL's 32-bit "
+                            f"floats or loses all precision in them; expected a number from "
+                            f"{-MAX_MAGNITUDE:g} to {MAX_MAGNITUDE:g}")
         if low is not None and (number < low or (low_open and number == low)):
             bound = f"greater than {low:g}" if low_open else f"at least {low:g}"
             raise self.fail(key, f"expected a number {bound}, got {value}")
