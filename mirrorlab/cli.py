@@ -244,7 +244,7 @@ def run_techniques(args: argparse.Namespace) -> int:
     return 0
 
 
-_VECTOR_FLAGS = (*tuple(o.flag for o in OPTIONS if "," in o.metavar), "--fovy")
+_VECTOR_FLAGS = (*tuple(o.flag for o in OPTIONS if "," in o.metavar), "--fovy", "--size")
 
 
 def join_negative_vectors(argv: Sequence[str]) -> list[str]:
@@ -263,6 +263,15 @@ def join_negative_vectors(argv: Sequence[str]) -> list[str]:
             out.append(token)
             i += 1
     return out
+
+
+def _close_progress_bars() -> None:
+    """Close the tqdm bars an interrupt left open, so the next line starts a line."""
+    tqdm_module = sys.modules.get("tqdm")
+    if tqdm_module is None:
+        return
+    for bar in list(getattr(tqdm_module.tqdm, "_instances", ())):
+        bar.close()
 
 
 BAD_INPUT = (UsageError, OptionError, OutputError, SceneError, WriteError, ValueError,
@@ -288,6 +297,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             warnings.simplefilter("error", RuntimeWarning)
             return runners[args.command](args)
     except KeyboardInterrupt:
+        _close_progress_bars()
         print(f"{command}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     except RuntimeWarning as exc:

@@ -15,6 +15,7 @@ independent check of every rasterised technique. :func:`trace_scene` traces any 
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -434,18 +435,29 @@ def trace_scene(scene: Scene, size: Sequence[int], supersample: int = 1,
     from tqdm import tqdm
 
     starts = range(0, height, band)
-    for top in tqdm(starts, desc="ray tracing", unit="band", disable=not progress,
-                    leave=False):
-        bottom = min(top + band, height)
-        traced = rays.render(view, proj, (k * width, k * height), bounces=scene.max_bounces,
-                             rows=(k * top, k * bottom))
-        assert traced.reflector is not None
-        rows = bottom - top
-        surface = traced.reflector.reshape(rows, k, width, k)[:, k // 2, :, k // 2]
-        reflector[top:bottom] = np.where(surface >= first_reflector, surface - first_reflector,
-                                         -1)
-        colors = traced.image.reshape(rows, k, width, k, 3).mean(axis=(1, 3))
-        image[top:bottom] = colors
-        pixels[top:bottom] = _to_uint8(colors)
-        mask[top:bottom] = traced.reflective_mask.reshape(rows, k, width, k).all(axis=(1, 3))
+    with tqdm(total=len(starts), desc="ray tracing", unit="band", disable=not progress,
+              leave=False, file=sys.stderr, mininterval=0.5) as bar:
+        for top in starts:
+            _trace_band(rays, view, proj, scene.max_bounces, (width, height), k, top,
+                        min(top + band, height), first_reflector,
+                        (image, pixels, mask, reflector))
+            bar.update()
     return RayImage(image, mask, reflector, pixels)
+
+
+def _trace_band(rays: RayScene, view: np.ndarray, proj: np.ndarray, bounces: int,
+                size: tuple[int, int], k: int, top: int, bottom: int, first_reflector: int,
+                into: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]) -> None:
+    """Trace image rows ``top`` to ``bottom`` (k x k rays a pixel) into the result arrays."""
+    image, pixels, mask, reflector = into
+    width, height = size
+    traced = rays.render(view, proj, (k * width, k * height), bounces=bounces,
+                         rows=(k * top, k * bottom))
+    assert traced.reflector is not None
+    rows = bottom - top
+    surface = traced.reflector.reshape(rows, k, width, k)[:, k // 2, :, k // 2]
+    reflector[top:bottom] = np.where(surface >= first_reflector, surface - first_reflector, -1)
+    colors = traced.image.reshape(rows, k, width, k, 3).mean(axis=(1, 3))
+    image[top:bottom] = colors
+    pixels[top:bottom] = _to_uint8(colors)
+    mask[top:bottom] = traced.reflective_mask.reshape(rows, k, width, k).all(axis=(1, 3))

@@ -243,14 +243,14 @@ class DemoApp:
 
 
 def run(scene: Scene, size: tuple[int, int], max_frames: int = 0,
-        screenshot: Path | None = None) -> int:
+        screenshot: Path | None = None, debug: bool = False) -> int:
     """Open the window on ``scene`` and run until Esc, the window closes, or ``max_frames``
     frames; with ``screenshot``, the last frame drawn is written there as a PNG."""
     import glfw
 
     from mirrorlab.files import write_png_atomic
 
-    context = WindowContext(size[0], size[1], f"mirrorlab demo - {scene.name}")
+    context = WindowContext(size[0], size[1], f"mirrorlab demo - {scene.name}", debug=debug)
     try:
         app = DemoApp(context, scene)
         print(f"mirrorlab demo of {scene.name} on {context.info()['renderer']}.\n{HELP}",

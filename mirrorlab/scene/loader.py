@@ -326,7 +326,8 @@ class _Reader:
             number = math.copysign(1e309, value)
         else:
             if not math.isfinite(number):
-                raise self.fail(key, f"expected a finite number, got {value}")
+                why = " (a number beyond 1.8e308 overflows to inf)" if math.isinf(number) else ""
+                raise self.fail(key, f"expected a finite number, got {value}{why}")
         if not abs(number) <= MAX_MAGNITUDE:
             raise self.fail(key, f"{value:g} is too large: it overflows OpenGL's 32-bit "
                             f"floats or loses all precision in them; expected a number from "
