@@ -97,6 +97,12 @@ class Renderer:
         return self._context.info()["renderer"]
 
     @property
+    def gl_objects(self) -> int:
+        """How many GL objects (programs, textures, buffers, framebuffers) are live in
+        this renderer's context now; 0 when it is closed."""
+        return 0 if self._context is None else len(self._context.resources)
+
+    @property
     def scene_renderer(self) -> SceneRenderer:
         """The GL-side renderer (for checks and benchmarks)."""
         self.open()

@@ -21,6 +21,8 @@ if TYPE_CHECKING:
     from mirrorlab.scene.model import Reflector, Scene
     from mirrorlab.views import View
 
+SCRATCH_KEPT = 4
+"""Scratch framebuffers kept, by size (most recently used)."""
 NO_CLIP = (0.0, 0.0, 0.0, 1.0)
 """A plane every point is in front of: what the shaders get when nothing is clipped."""
 
@@ -61,10 +63,17 @@ class SharedResources:
         return self._programs[key]
 
     def scratch(self, size: tuple[int, int]) -> Framebuffer:
-        """A colour + depth/stencil framebuffer of ``size`` to draw a capture into."""
-        if size not in self._scratch:
-            self._scratch[size] = Framebuffer(self.registry, *size)
-        return self._scratch[size]
+        """A colour + depth/stencil framebuffer of ``size`` to draw a capture into. The
+        last :data:`SCRATCH_KEPT` sizes used are kept (a window being resized would
+        otherwise leave one behind for every size it passed through)."""
+        framebuffer = self._scratch.pop(size, None)
+        if framebuffer is None:
+            framebuffer = Framebuffer(self.registry, *size)
+        self._scratch[size] = framebuffer  # now the most recently used
+        while len(self._scratch) > SCRATCH_KEPT:
+            oldest = next(iter(self._scratch))
+            self._scratch.pop(oldest).release()
+        return framebuffer
 
     def release(self) -> None:
         for _, mesh in self._meshes.values():
