@@ -105,7 +105,15 @@ def build_parser() -> argparse.ArgumentParser:
                        help="lab (the mirror techniques), sphere (the environment maps), all "
                        "(default), or a scene file: every technique its reflectors can use")
 
-    demo = commands.add_parser("demo", help="open a window on a scene (needs a display)")
+    from mirrorlab.app.controls import control_lines
+
+    demo = commands.add_parser(
+        "demo", help="open a window on a scene (needs a display)",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Open a window on a scene and change it live. It needs a display (on "
+        "a machine without one: xvfb-run -a mirrorlab demo); 'mirrorlab render' needs none.",
+        epilog="controls in the window (H shows them there too):\n  "
+        + "\n  ".join(control_lines(16)))
     _add_scene_arguments(demo)
     demo.add_argument("--size", default="800x800", help="window WIDTHxHEIGHT (default "
                       "%(default)s)")
@@ -114,6 +122,9 @@ def build_parser() -> argparse.ArgumentParser:
                       "closes)")
     demo.add_argument("--screenshot", metavar="PATH",
                       help="write the last frame as a PNG when the demo ends")
+    demo.add_argument("--shot-dir", metavar="DIR", default=".",
+                      help="where S saves screenshots, as demo-SCENE-NNN.png (default: the "
+                      "current folder)")
     demo.add_argument("--debug", action="store_true", help=DEBUG_HELP)
 
     commands.add_parser("techniques", help="list the reflection techniques")
@@ -226,6 +237,9 @@ def run_demo(args: argparse.Namespace) -> int:
     size = parse_size("--size", args.size)
     max_frames = parse_count("--max-frames", args.max_frames, 0, 10**9)
     screenshot = check_output("--screenshot", args.screenshot) if args.screenshot else None
+    shot_dir = Path(args.shot_dir)
+    if not shot_dir.is_dir():
+        raise UsageError(f"--shot-dir: {args.shot_dir!r} is not a folder")
     scene = scene_from_args(args)
 
     from mirrorlab.gl.context import use_platform
@@ -233,7 +247,8 @@ def run_demo(args: argparse.Namespace) -> int:
     use_platform("glx")  # before anything imports OpenGL in this process
     from mirrorlab.app.demo import run
 
-    return run(scene, size, max_frames=max_frames, screenshot=screenshot, debug=args.debug)
+    return run(scene, size, max_frames=max_frames, screenshot=screenshot, debug=args.debug,
+               shot_dir=shot_dir)
 
 
 def run_techniques(args: argparse.Namespace) -> int:

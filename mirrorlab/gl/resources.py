@@ -170,7 +170,8 @@ def check_texture_size(width: int, height: int, what: str, cube: bool = False) -
 
 
 class Texture2D(_Resource):
-    """A 2D RGB texture. Make one with :meth:`from_image` or :meth:`blank`."""
+    """A 2D RGB texture (RGBA when made from ``(h, w, 4)`` pixels). Make one with
+    :meth:`from_image` or :meth:`blank`."""
 
     def __init__(self, registry: ResourceRegistry, width: int, height: int,
                  pixels: np.ndarray | None, mipmaps: bool, clamp: bool,
@@ -179,11 +180,13 @@ class Texture2D(_Resource):
         self.name = int(GL.glGenTextures(1))
         self.width, self.height = int(width), int(height)
         self.mipmaps = mipmaps
+        alpha = pixels is not None and pixels.shape[-1] == 4
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
         GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
         data = None if pixels is None else np.ascontiguousarray(pixels[::-1])
-        GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB8, self.width, self.height, 0,
-                        GL.GL_RGB, GL.GL_UNSIGNED_BYTE, data)
+        GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGBA8 if alpha else GL.GL_RGB8, self.width,
+                        self.height, 0, GL.GL_RGBA if alpha else GL.GL_RGB,
+                        GL.GL_UNSIGNED_BYTE, data)
         wrap = GL.GL_CLAMP_TO_EDGE if clamp else GL.GL_REPEAT
         GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_S, wrap)
         GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, wrap)
@@ -201,12 +204,12 @@ class Texture2D(_Resource):
     @classmethod
     def from_image(cls, registry: ResourceRegistry, image: np.ndarray,
                    what: str = "a texture") -> Texture2D:
-        """A mipmapped, repeating texture from ``image`` ``(h, w, 3)`` uint8, row 0 at the
-        top; ``what`` names it in a GLLimitError."""
+        """A mipmapped, repeating texture from ``image`` ``(h, w, 3)`` (or ``(h, w, 4)``, with
+        alpha) uint8, row 0 at the top; ``what`` names it in a GLLimitError."""
         image = np.asarray(image)
-        if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
-            raise ValueError(f"texture image must be (h, w, 3) uint8, got {image.shape} "
-                             f"{image.dtype}")
+        if image.ndim != 3 or image.shape[2] not in (3, 4) or image.dtype != np.uint8:
+            raise ValueError(f"texture image must be (h, w, 3) or (h, w, 4) uint8, got "
+                             f"{image.shape} {image.dtype}")
         return cls(registry, image.shape[1], image.shape[0], image, mipmaps=True, clamp=False,
                    what=what)
 
