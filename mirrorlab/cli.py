@@ -286,7 +286,10 @@ def _close_progress_bars() -> None:
     if tqdm_module is None:
         return
     for bar in list(getattr(tqdm_module.tqdm, "_instances", ())):
-        bar.close()
+        try:
+            bar.close()
+        except Exception:  # a bar interrupted while it was being made
+            pass
 
 
 BAD_INPUT = (UsageError, OptionError, OutputError, SceneError, WriteError, ValueError,
@@ -313,7 +316,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             return runners[args.command](args)
     except KeyboardInterrupt:
         _close_progress_bars()
-        print(f"{command}: interrupted", file=sys.stderr)
+        # An interrupt inside a progress bar's own drawing can leave its line open: go
+        # back to the line's start (and, on a terminal, clear it) before the message.
+        clear = "\r\033[K" if sys.stderr.isatty() else "\r"
+        print(f"{clear}{command}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     except RuntimeWarning as exc:
         print(f"{command}: error: a value is out of range for the computation ({exc})",

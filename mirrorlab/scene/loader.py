@@ -323,13 +323,16 @@ class _Reader:
         try:
             number = float(value)
         except OverflowError:  # a whole number beyond float64
-            number = math.copysign(1e309, value)
+            number = math.inf if value > 0 else -math.inf
         else:
             if not math.isfinite(number):
                 why = " (a number beyond 1.8e308 overflows to inf)" if math.isinf(number) else ""
                 raise self.fail(key, f"expected a finite number, got {value}{why}")
         if not abs(number) <= MAX_MAGNITUDE:
-            raise self.fail(key, f"{value:g} is too large: it overflows OpenGL's 32-bit "
+            shown = f"{number:g}" if math.isfinite(number) else (
+                f"a {len(str(abs(value)))}-digit number" if isinstance(value, int)
+                else str(value))
+            raise self.fail(key, f"{shown} is too large: it overflows OpenGL's 32-bit "
                             f"floats or loses all precision in them; expected a number from "
                             f"{-MAX_MAGNITUDE:g} to {MAX_MAGNITUDE:g}")
         if low is not None and (number < low or (low_open and number == low)):
