@@ -238,7 +238,9 @@ class _Context:
         self.release()
 
 
-_egl_display_users = 0  # eglTerminate ends every context on the shared display: count users
+# The EGL display is initialised once and kept for the life of the process: every
+# eglTerminate + eglInitialize cycle cost Mesa about 13 KB that it never gave back (1,000
+# one-shot renders grew the process by 17 MB; see README, Reliability).
 
 
 class HeadlessContext(_Context):
@@ -277,17 +279,13 @@ class HeadlessContext(_Context):
         if not EGL.eglChooseConfig(
             self.display, attributes, ctypes.pointer(config), 1, ctypes.pointer(count)
         ) or count.value < 1:
-            self._terminate_if_unused()
             raise GLContextError("EGL has no config for desktop OpenGL (is Mesa installed?)")
         EGL.eglBindAPI(EGL.EGL_OPENGL_API)
         flags = (EGL.EGLint * 3)(EGL.EGL_CONTEXT_OPENGL_DEBUG, EGL.EGL_TRUE, EGL.EGL_NONE)
         self.context = EGL.eglCreateContext(self.display, config, EGL.EGL_NO_CONTEXT,
                                             flags if debug else None)
         if not self.context:
-            self._terminate_if_unused()
             raise GLContextError("eglCreateContext failed for desktop OpenGL")
-        global _egl_display_users
-        _egl_display_users += 1
         super().__init__()
         self.make_current()
         if debug:
@@ -300,17 +298,13 @@ class HeadlessContext(_Context):
             raise GLContextError("eglMakeCurrent failed (surfaceless contexts need Mesa)")
 
     def _destroy(self) -> None:
+        from OpenGL import contextdata
+
         egl = self._egl
+        contextdata.cleanupContext()  # PyOpenGL's own per-context records (this one is current)
         egl.eglMakeCurrent(self.display, egl.EGL_NO_SURFACE, egl.EGL_NO_SURFACE,
                            egl.EGL_NO_CONTEXT)
         egl.eglDestroyContext(self.display, self.context)
-        global _egl_display_users
-        _egl_display_users -= 1
-        self._terminate_if_unused()
-
-    def _terminate_if_unused(self) -> None:
-        if _egl_display_users == 0:
-            self._egl.eglTerminate(self.display)
 
 
 

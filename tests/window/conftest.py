@@ -18,8 +18,12 @@ def pytest_collection_modifyitems(config, items):
         item.add_marker(skip)
 
 
-@pytest.fixture
+@pytest.fixture(scope="session")
 def xdisplay():
+    """One connection to the X server for the whole session. Xvfb resets itself when its
+    last client leaves, and a connection made during that reset is refused: with this
+    one held open (and ./dev starting Xvfb with -noreset) the server never resets
+    between tests."""
     from Xlib import display
 
     d = display.Display()
