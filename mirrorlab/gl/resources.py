@@ -223,12 +223,17 @@ class Texture2D(_Resource):
         GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
 
-    def copy_from_framebuffer(self, width: int, height: int) -> None:
+    def copy_from_framebuffer(self, width: int, height: int,
+                              source: tuple[int, int]) -> None:
         """Copy the bound read framebuffer's lower-left ``width`` x ``height`` into level 0.
 
         This is the lab's ``glCopyTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, 0, 0, w, h, 0)``;
-        the texture takes the copied size.
+        the texture takes the copied size. ``source`` is the size of the framebuffer
+        read: a copy reaching outside it (whose texels GL leaves undefined) is refused.
         """
+        if width > source[0] or height > source[1]:
+            raise ValueError(f"a {width}x{height} copy reaches outside the {source[0]}x"
+                             f"{source[1]} framebuffer it reads")
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
         GL.glCopyTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB, 0, 0, int(width), int(height), 0)
         self.width, self.height = int(width), int(height)
@@ -506,12 +511,16 @@ class TextureCube(_Resource):
         GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
         GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
 
-    def copy_face_from_framebuffer(self, face: int) -> None:
+    def copy_face_from_framebuffer(self, face: int, source: tuple[int, int]) -> None:
         """Copy the bound read framebuffer's lower-left ``size`` x ``size`` square into level 0
         of ``face`` (0..5): ``glCopyTexImage2D(GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, ...)``.
-        Window row 0 (the bottom) becomes the face's ``t = 0``."""
+        Window row 0 (the bottom) becomes the face's ``t = 0``. ``source`` is the size of
+        the framebuffer read, which must hold the square."""
         if not 0 <= face < 6:
             raise ValueError(f"cube face must be 0..5, got {face}")
+        if self.size > min(source):
+            raise ValueError(f"a {self.size}x{self.size} face reaches outside the "
+                             f"{source[0]}x{source[1]} framebuffer it reads")
         GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
         GL.glCopyTexImage2D(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL.GL_RGB, 0, 0,
                             self.size, self.size, 0)

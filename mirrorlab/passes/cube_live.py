@@ -41,7 +41,7 @@ class LiveCubeMapped(CurvedPass):
         for face, plan in enumerate(step.views):
             draws += renderer.draw_view(plan, target)
             target.bind()
-            cube.copy_face_from_framebuffer(face)
+            cube.copy_face_from_framebuffer(face, target.size)
         cube.generate_mipmaps()
         return draws
 
