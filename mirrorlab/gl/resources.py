@@ -502,14 +502,31 @@ class TextureCube(_Resource):
         return cls(registry, faces.shape[1], faces, mipmaps=mipmaps, what=what)
 
     @classmethod
-    def blank(cls, registry: ResourceRegistry, size: int, mipmaps: bool = False) -> TextureCube:
-        """Six empty ``size`` x ``size`` faces for a live capture. With ``mipmaps``, call
-        :meth:`generate_mipmaps` after each capture."""
-        return cls(registry, size, None, mipmaps=mipmaps)
+    def blank(cls, registry: ResourceRegistry, size: int, mipmaps: bool = False,
+              what: str = "a cube map's face") -> TextureCube:
+        """Six empty ``size`` x ``size`` faces for a live capture (or an :meth:`upload`).
+        With ``mipmaps``, call :meth:`generate_mipmaps` after each capture."""
+        return cls(registry, size, None, mipmaps=mipmaps, what=what)
 
     def bind(self, unit: int = 0) -> None:
         GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
         GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+
+    def upload(self, faces: np.ndarray) -> None:
+        """Fill level 0 of every face from ``faces`` ``(6, size, size, 3)`` uint8 (rows as
+        :meth:`from_faces` takes them) and rebuild the mipmaps, if any."""
+        faces = np.asarray(faces)
+        if faces.shape != (6, self.size, self.size, 3) or faces.dtype != np.uint8:
+            raise ValueError(f"cube faces must be (6, {self.size}, {self.size}, 3) uint8, got "
+                             f"{faces.shape} {faces.dtype}")
+        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
+        for face in range(6):
+            GL.glTexSubImage2D(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, 0, 0, self.size,
+                               self.size, GL.GL_RGB, GL.GL_UNSIGNED_BYTE,
+                               np.ascontiguousarray(faces[face, ::-1]))
+        if self.mipmaps:
+            GL.glGenerateMipmap(GL.GL_TEXTURE_CUBE_MAP)
 
     def copy_face_from_framebuffer(self, face: int, source: tuple[int, int]) -> None:
         """Copy the bound read framebuffer's lower-left ``size`` x ``size`` square into level 0

@@ -11,8 +11,8 @@ import numpy as np
 
 from mirrorlab.gl.context import ResourceRegistry
 from mirrorlab.gl.opengl import GL
-from mirrorlab.gl.resources import Framebuffer, MeshBuffer, Program, Texture2D
-from mirrorlab.scene.backgrounds import load_picture
+from mirrorlab.gl.resources import Framebuffer, MeshBuffer, Program, Texture2D, TextureCube
+from mirrorlab.scene.backgrounds import cube_face_size, load_cube_faces, load_picture
 from mirrorlab.scene.mesh import MeshData, load_mesh
 
 if TYPE_CHECKING:
@@ -85,6 +85,20 @@ class SharedResources:
         self._textures.clear()
         self._programs.clear()
         self._scratch.clear()
+
+
+def cube_from_folder(registry: ResourceRegistry, folder: Path) -> TextureCube:
+    """A mipmapped cube map of the six pictures in ``folder``. Its storage is made from
+    the first face's header before any picture is decoded: a size the GL cannot
+    allocate fails at once, not after reading six large pictures."""
+    cube = TextureCube.blank(registry, cube_face_size(folder), mipmaps=True,
+                             what=f"cube face {folder}/px.png")
+    try:
+        cube.upload(load_cube_faces(folder))
+    except BaseException:
+        cube.release()
+        raise
+    return cube
 
 
 def set_view_uniforms(program: Program, view: View) -> None:

@@ -20,9 +20,9 @@ from mirrorlab.gl.resources import (
     Texture2D,
     TextureCube,
 )
-from mirrorlab.passes.base import NO_CLIP, SharedResources, ViewDrawer
+from mirrorlab.passes.base import NO_CLIP, SharedResources, ViewDrawer, cube_from_folder
 from mirrorlab.plan import PlannedPass, ReflectorDraw
-from mirrorlab.scene.backgrounds import environment_of, load_cube_faces, load_picture
+from mirrorlab.scene.backgrounds import environment_of, load_picture
 from mirrorlab.scene.model import Background, CurvedReflector
 from mirrorlab.views import View, eye_position, is_orthographic
 
@@ -219,17 +219,14 @@ class CubeMapped(CurvedPass):
     def __init__(self, shared: SharedResources, reflector: CurvedReflector,
                  background: Background) -> None:
         super().__init__(shared, reflector, background)
-        if reflector.source is not None:
-            faces = load_cube_faces(reflector.source)
-            what = f"cube face {reflector.source}/px.png"
-        elif background.kind == "cube_faces":
-            assert background.path is not None
-            faces = load_cube_faces(background.path)
-            what = f"cube face {background.path}/px.png"
+        folder = reflector.source if reflector.source is not None else (
+            background.path if background.kind == "cube_faces" else None)
+        if folder is not None:
+            self.cube = cube_from_folder(shared.registry, folder)
         else:
-            faces = baked_cube(background, reflector.map_size)
-            what = f"reflector {reflector.name}'s cube map face"
-        self.cube = TextureCube.from_faces(shared.registry, faces, what=what)
+            self.cube = TextureCube.from_faces(shared.registry,
+                                               baked_cube(background, reflector.map_size),
+                                               what=f"reflector {reflector.name}'s cube map")
 
     def release(self) -> None:
         self.cube.release()

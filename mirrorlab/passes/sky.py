@@ -7,8 +7,8 @@ import numpy as np
 from mirrorlab.envmap import bake_cube_faces
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import MeshBuffer, TextureCube
-from mirrorlab.passes.base import SharedResources
-from mirrorlab.scene.backgrounds import environment_of, load_cube_faces
+from mirrorlab.passes.base import SharedResources, cube_from_folder
+from mirrorlab.scene.backgrounds import environment_of
 from mirrorlab.scene.model import Background
 from mirrorlab.views import View, is_orthographic
 
@@ -21,11 +21,8 @@ _SCREEN_TRIANGLE = np.array(
 
 
 def background_faces(background: Background, size: int = SKY_SIZE) -> np.ndarray:
-    """Six cube faces ``(6, n, n, 3)`` uint8 of an environment background: its own
-    pictures, or baked from it at ``size``."""
-    if background.kind == "cube_faces":
-        assert background.path is not None
-        return load_cube_faces(background.path)
+    """Six cube faces ``(6, n, n, 3)`` uint8 baked at ``size`` from an environment
+    background (one of pictures is read as it is: see :func:`cube_from_folder`)."""
     return bake_cube_faces(environment_of(background), size)
 
 
@@ -54,10 +51,12 @@ class SkyPass:
 
     def __init__(self, shared: SharedResources, background: Background) -> None:
         self.background = background
-        what = (f"cube face {background.path}/px.png" if background.kind == "cube_faces"
-                else "the background's cube map face")
-        self.cube = TextureCube.from_faces(shared.registry, background_faces(background),
-                                           what=what)
+        if background.kind == "cube_faces":
+            assert background.path is not None
+            self.cube = cube_from_folder(shared.registry, background.path)
+        else:
+            self.cube = TextureCube.from_faces(shared.registry, background_faces(background),
+                                               what="the background's cube map face")
         self.program = shared.program("envmap_sky.vert", "envmap_sky.frag")
         self.triangle = MeshBuffer(shared.registry, _SCREEN_TRIANGLE,
                                    np.arange(3, dtype=np.uint32))

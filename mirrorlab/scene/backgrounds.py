@@ -184,6 +184,21 @@ def load_cube_faces(folder: str | Path) -> np.ndarray:
     return _load_cube_faces(folder.resolve(), stamps)
 
 
+def cube_face_size(folder: str | Path) -> int:
+    """The side of the cube faces in ``folder``, from ``px.png``'s header alone (nothing is
+    decoded), so that a texture too large for the GL is found before six pictures are
+    read; :func:`load_cube_faces` checks the faces fully. ValueError naming the file."""
+    from PIL import Image
+
+    path = Path(folder) / f"{CUBE_FACE_FILES[0]}.png"
+    try:
+        with Image.open(path) as image:
+            return int(image.size[0])
+    except (OSError, ValueError, SyntaxError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
+        raise ValueError(f"picture {path} cannot be read as an image ({reason})") from None
+
+
 @lru_cache(maxsize=8)
 def _load_cube_faces(folder: Path, stamps: tuple) -> np.ndarray:
     """:func:`load_cube_faces`, remembered per folder and the files' modification times."""

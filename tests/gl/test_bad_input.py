@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import shutil
 import struct
 import zlib
 from pathlib import Path
@@ -144,17 +145,23 @@ def test_bad_window_sizes(capsys, outputs, size):
 @pytest.fixture(scope="module")
 def huge_faces(tmp_path_factory):
     """Six 8192 x 8192 cube faces (1-bit PNGs, small files): more than llvmpipe can
-    allocate for one cube map."""
+    allocate for one cube map. The GL storage is made from the first face's header
+    before any face is decoded, so the refusal comes at once."""
     folder = tmp_path_factory.mktemp("huge_faces")
-    face = Image.new("1", (8192, 8192), 1)
-    for stem in CUBE_FACE_FILES:
-        face.save(folder / f"{stem}.png")
+    Image.new("1", (8192, 8192), 1).save(folder / "px.png")
+    for stem in CUBE_FACE_FILES[1:]:
+        shutil.copy(folder / "px.png", folder / f"{stem}.png")
     return folder
 
 
 def test_cube_faces_beyond_what_the_gl_can_allocate(capsys, outputs, huge_faces):
     refused(capsys, render_args(outputs, "--cube-faces", str(huge_faces)),
             "OpenGL ran out of memory in pass 'background'", "smaller")
+    outputs.assert_untouched()
+    # The same folder as a static cube map's source: the same refusal, in its pass.
+    refused(capsys, render_args(outputs, "chrome_sphere", "--method", "cube", "--set",
+                                f'reflectors[0].source="{huge_faces}"'),
+            "OpenGL ran out of memory in pass", "smaller")
     outputs.assert_untouched()
 
 
