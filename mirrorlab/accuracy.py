@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mirrorlab.files import write_bytes_atomic
+from mirrorlab.files import Outputs, write_bytes_atomic
 from mirrorlab.options import apply_options
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import (
@@ -548,13 +548,22 @@ def plot_summary(summary: Sequence[SummaryRow], path: Path, title: str) -> bool:
     """Error against time, one marker per technique and size (and per step count of a
     distance search), one panel per scene, saved as PNG at ``path``. Returns False (and
     writes nothing) when matplotlib is not installed."""
+    data = plot_png(summary, title)
+    if data is None:
+        return False
+    write_bytes_atomic(path, data)
+    return True
+
+
+def plot_png(summary: Sequence[SummaryRow], title: str) -> bytes | None:
+    """:func:`plot_summary`'s picture as PNG bytes; None without matplotlib."""
     try:
         import matplotlib
 
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
-        return False
+        return None
     markers = "osD^v<>Px*hX"
     scenes = list(dict.fromkeys(r.scene for r in summary))
     columns = min(2, len(scenes))
@@ -600,8 +609,7 @@ def plot_summary(summary: Sequence[SummaryRow], path: Path, title: str) -> bool:
         figure.savefig(buffer, format="png")
         data = buffer.getvalue()
     plt.close(figure)
-    write_bytes_atomic(path, data)
-    return True
+    return data
 
 
 def run_command(settings: SweepSettings, scenes: str | Scene, out_dir: Path,
@@ -625,7 +633,6 @@ def run_command(settings: SweepSettings, scenes: str | Scene, out_dir: Path,
         rows = run_panels(panels, settings)
         title = (f"accuracy vs time, {settings.frame}x{settings.frame} frames, llvmpipe; "
                  f"medians of {settings.frames} frames")
-        write_bytes_atomic(out_dir / "accuracy.csv", rows_to_csv(rows).encode())
     summary = summarise(rows)
     markdown = [title, ""]
     for scene in dict.fromkeys(r.scene for r in summary):
@@ -633,11 +640,18 @@ def run_command(settings: SweepSettings, scenes: str | Scene, out_dir: Path,
         heading = SCENE_TITLES.get(scene, scene)
         say(f"\n{heading}:\n{format_text(table)}")
         markdown += [f"### {heading}", "", format_markdown(table), ""]
-    write_bytes_atomic(out_dir / "accuracy.md", "\n".join(markdown).encode())
-    written = ["accuracy.md"] if from_csv is not None else ["accuracy.csv", "accuracy.md"]
-    if plot_summary(summary, out_dir / "accuracy.png", title):
-        written.append("accuracy.png")
-    else:
+    plot = plot_png(summary, title)
+    written = []
+    with Outputs() as outputs:  # all three files, or none
+        if from_csv is None:
+            outputs.add(out_dir / "accuracy.csv", rows_to_csv(rows).encode())
+            written.append("accuracy.csv")
+        outputs.add(out_dir / "accuracy.md", "\n".join(markdown).encode())
+        written.append("accuracy.md")
+        if plot is not None:
+            outputs.add(out_dir / "accuracy.png", plot)
+            written.append("accuracy.png")
+    if plot is None:
         say("matplotlib is not installed, so no plot (pip install 'mirrorlab[plot]')")
     say(f"wrote {', '.join(str(out_dir / name) for name in written)}")
     return 0

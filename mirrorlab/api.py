@@ -40,11 +40,14 @@ class Renderer:
             image = renderer.render("lab20")
 
     ``size`` (width, height) is the default frame size in pixels. Everything is freed on
-    leaving the ``with`` block (or by :meth:`close`).
+    leaving the ``with`` block (or by :meth:`close`). ``debug`` makes a debug context
+    whose KHR_debug messages are checked after every pass (a GL error is raised, naming
+    the pass, either way).
     """
 
-    def __init__(self, size: Sequence[int] | str = (512, 512)) -> None:
+    def __init__(self, size: Sequence[int] | str = (512, 512), debug: bool = False) -> None:
         self.size = check_size(size)
+        self.debug = debug
         self._context: HeadlessContext | None = None
         self._renderer: SceneRenderer | None = None
         self._target: Framebuffer | None = None
@@ -62,10 +65,11 @@ class Renderer:
         if self._context is not None:
             return
         from mirrorlab.gl.context import HeadlessContext
-        from mirrorlab.renderer import SceneRenderer
 
-        self._context = HeadlessContext()
+        self._context = HeadlessContext(debug=self.debug)
         try:
+            from mirrorlab.renderer import SceneRenderer
+
             self._renderer = SceneRenderer(self._context.resources)
         except BaseException:
             self.close()
@@ -93,6 +97,12 @@ class Renderer:
         return self._context.info()["renderer"]
 
     @property
+    def gl_objects(self) -> int:
+        """How many GL objects (programs, textures, buffers, framebuffers) are live in
+        this renderer's context now; 0 when it is closed."""
+        return 0 if self._context is None else len(self._context.resources)
+
+    @property
     def scene_renderer(self) -> SceneRenderer:
         """The GL-side renderer (for checks and benchmarks)."""
         self.open()
@@ -117,17 +127,17 @@ class Renderer:
         :mod:`mirrorlab.options`). ``use_plan`` False runs every pass. Returns the frame
         as ``(height, width, 3)`` uint8 RGB, row 0 at the top; :attr:`last_stats` says
         what ran."""
-        from mirrorlab.gl.context import check_gl_errors
+        from mirrorlab.gl.context import gl_pass
 
         posed = resolve_scene(scene, **options).at_frame(frame)
         self.open()
         assert self._context is not None and self._renderer is not None
         self._context.make_current()
-        target = self._target_of(check_size(size) if size is not None else self.size)
+        with gl_pass("the frame's target"):
+            target = self._target_of(check_size(size) if size is not None else self.size)
         self.last_stats = self._renderer.render(posed, target, use_plan, tiny_pixels)
-        image = target.read()
-        check_gl_errors(f"rendering scene {posed.name!r}")
-        return image
+        with gl_pass("reading the frame back"):
+            return target.read()
 
     def frames(self, scene: SceneLike, frames: Sequence[int] | None = None,
                size: Sequence[int] | str | None = None, use_plan: bool = True,

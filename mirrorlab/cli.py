@@ -10,10 +10,12 @@ from __future__ import annotations
 import argparse
 import re
 import sys
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
-from mirrorlab.files import OutputError, check_output
+from mirrorlab.errors import GLContextError, GLPassError, WriteError
+from mirrorlab.files import OutputError, check_folder, check_output
 from mirrorlab.options import (
     OPTIONS,
     OptionError,
@@ -28,6 +30,11 @@ from mirrorlab.scene.model import Scene
 
 class UsageError(Exception):
     """Bad input from the command line; the message is shown as is."""
+
+
+DEBUG_HELP = ("a debug OpenGL context whose KHR_debug messages are checked after every "
+              "pass: a GL error stops the command, naming the pass")
+EXIT_BAD_INPUT, EXIT_MACHINE, EXIT_INTERRUPTED = 2, 1, 130
 
 
 def _add_scene_arguments(parser: argparse.ArgumentParser) -> None:
@@ -68,6 +75,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--raytrace", action="store_true",
                         help="draw the ray-traced ground truth instead (no OpenGL; slow; "
                         "--method raytrace says the same)")
+    render.add_argument("--debug", action="store_true", help=DEBUG_HELP)
 
     plan = commands.add_parser("plan", help="print the passes each frame would run, and why")
     _add_scene_arguments(plan)
@@ -97,7 +105,15 @@ def build_parser() -> argparse.ArgumentParser:
                        help="lab (the mirror techniques), sphere (the environment maps), all "
                        "(default), or a scene file: every technique its reflectors can use")
 
-    demo = commands.add_parser("demo", help="open a window on a scene (needs a display)")
+    from mirrorlab.app.controls import control_lines
+
+    demo = commands.add_parser(
+        "demo", help="open a window on a scene (needs a display)",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        description="Open a window on a scene and change it live. It needs a display (on "
+        "a machine without one: xvfb-run -a mirrorlab demo); 'mirrorlab render' needs none.",
+        epilog="controls in the window (H shows them there too):\n  "
+        + "\n  ".join(control_lines(16)))
     _add_scene_arguments(demo)
     demo.add_argument("--size", default="800x800", help="window WIDTHxHEIGHT (default "
                       "%(default)s)")
@@ -106,6 +122,10 @@ def build_parser() -> argparse.ArgumentParser:
                       "closes)")
     demo.add_argument("--screenshot", metavar="PATH",
                       help="write the last frame as a PNG when the demo ends")
+    demo.add_argument("--shot-dir", metavar="DIR", default=".",
+                      help="where S saves screenshots, as demo-SCENE-NNN.png (default: the "
+                      "current folder)")
+    demo.add_argument("--debug", action="store_true", help=DEBUG_HELP)
 
     commands.add_parser("techniques", help="list the reflection techniques")
     return parser
@@ -136,17 +156,33 @@ def run_render(args: argparse.Namespace) -> int:
     size = parse_size("--size", args.size)
     out = check_output("--out", args.out) if args.out else None
     save_env = check_output("--save-env", args.save_env) if args.save_env else None
-    out_dir = Path(args.out_dir) if args.out_dir else None
-    if out_dir is not None and out_dir.exists() and not out_dir.is_dir():
-        raise UsageError(f"--out-dir: {args.out_dir!r} is a file, expected a folder")
+    out_dir = check_folder("--out-dir", args.out_dir) if args.out_dir else None
     if args.option_method == "raytrace":  # the ray tracer, as the API's method="raytrace"
         args.option_method, args.raytrace = None, True
     scene = scene_from_args(args)
     if out is None:
-        out = check_output("--out", Path("out") / f"{scene.name}.png")
+        out = check_output("--out", Path("out") / f"{scene.name}.png", make_folder=True)
     frames = frame_list(args, scene)
+    outputs = [("--out", out)] + ([("--save-env", save_env)] if save_env else [])
+    if out_dir is not None:
+        from mirrorlab.commands.render import frame_name
+
+        outputs += [("--out-dir", frame_name(out_dir, scene, f)) for f in frames]
+    check_distinct(outputs)
     return render(scene, size, out, frames, out_dir, args.stats, not args.no_plan, save_env,
-                  args.raytrace)
+                  args.raytrace, debug=args.debug)
+
+
+def check_distinct(outputs: list[tuple[str, Path]]) -> None:
+    """UsageError when two of a command's outputs are one file: one would silently
+    replace the other (``--out a.png --save-env a.png``)."""
+    seen: dict[Path, str] = {}
+    for option, path in outputs:
+        key = path.resolve()
+        if key in seen:
+            raise UsageError(f"{option}: {path} is also the file of {seen[key]}; give each "
+                             f"output its own file")
+        seen[key] = option
 
 
 def frame_list(args: argparse.Namespace, scene: Scene) -> list[int]:
@@ -185,9 +221,7 @@ def run_bench(args: argparse.Namespace) -> int:
                                  for p in args.sizes.split(","))
     if args.frames:
         changes["frames"] = parse_count("--frames", args.frames, 1, 10000)
-    out_dir = Path(args.out_dir)
-    if out_dir.exists() and not out_dir.is_dir():
-        raise UsageError(f"--out-dir: {args.out_dir!r} is a file, expected a directory")
+    out_dir = check_folder("--out-dir", args.out_dir)
     settings = SweepSettings.quick() if args.quick else SweepSettings()
     from dataclasses import replace
 
@@ -203,6 +237,9 @@ def run_demo(args: argparse.Namespace) -> int:
     size = parse_size("--size", args.size)
     max_frames = parse_count("--max-frames", args.max_frames, 0, 10**9)
     screenshot = check_output("--screenshot", args.screenshot) if args.screenshot else None
+    shot_dir = Path(args.shot_dir)
+    if not shot_dir.is_dir():
+        raise UsageError(f"--shot-dir: {args.shot_dir!r} is not a folder")
     scene = scene_from_args(args)
 
     from mirrorlab.gl.context import use_platform
@@ -210,7 +247,8 @@ def run_demo(args: argparse.Namespace) -> int:
     use_platform("glx")  # before anything imports OpenGL in this process
     from mirrorlab.app.demo import run
 
-    return run(scene, size, max_frames=max_frames, screenshot=screenshot)
+    return run(scene, size, max_frames=max_frames, screenshot=screenshot, debug=args.debug,
+               shot_dir=shot_dir)
 
 
 def run_techniques(args: argparse.Namespace) -> int:
@@ -221,7 +259,7 @@ def run_techniques(args: argparse.Namespace) -> int:
     return 0
 
 
-_VECTOR_FLAGS = (*tuple(o.flag for o in OPTIONS if "," in o.metavar), "--fovy")
+_VECTOR_FLAGS = (*tuple(o.flag for o in OPTIONS if "," in o.metavar), "--fovy", "--size")
 
 
 def join_negative_vectors(argv: Sequence[str]) -> list[str]:
@@ -242,29 +280,61 @@ def join_negative_vectors(argv: Sequence[str]) -> list[str]:
     return out
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(join_negative_vectors(sys.argv[1:] if argv is None else argv))
-    runners = {"render": run_render, "plan": run_plan, "bench": run_bench, "demo": run_demo,
-               "techniques": run_techniques}
-    try:
-        return runners[args.command](args)
-    except (UsageError, OptionError, OutputError, SceneError, ValueError,
-            FileNotFoundError) as exc:
-        print(f"mirrorlab {args.command}: error: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        where = exc.filename or "output"
-        print(f"mirrorlab {args.command}: error: cannot write {where}: {exc.strerror or exc}",
-              file=sys.stderr)
-        return 1
-    except Exception as exc:
-        from mirrorlab.gl.context import GLContextError
+def _close_progress_bars() -> None:
+    """Close the tqdm bars an interrupt left open, so the next line starts a line."""
+    tqdm_module = sys.modules.get("tqdm")
+    if tqdm_module is None:
+        return
+    for bar in list(getattr(tqdm_module.tqdm, "_instances", ())):
+        try:
+            bar.close()
+        except Exception:  # a bar interrupted while it was being made
+            pass
 
-        if isinstance(exc, GLContextError):
-            print(f"mirrorlab {args.command}: error: {exc}", file=sys.stderr)
-            return 1
-        raise
+
+BAD_INPUT = (UsageError, OptionError, OutputError, SceneError, WriteError, ValueError,
+             FileNotFoundError)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run one command; returns its exit status: 0 done, 2 bad input (including a write
+    the system refuses and a size the GL cannot allocate), 1 a problem with the machine
+    (no display, no OpenGL, an OpenGL too old or failing), 130 interrupted (Ctrl-C).
+    Every failure is one line on stderr, never a traceback or a numpy warning."""
+    command = "mirrorlab"
+    try:
+        parser = build_parser()
+        args = parser.parse_args(join_negative_vectors(sys.argv[1:] if argv is None
+                                                       else argv))
+        command = f"mirrorlab {args.command}"
+        runners = {"render": run_render, "plan": run_plan, "bench": run_bench,
+                   "demo": run_demo, "techniques": run_techniques}
+        with warnings.catch_warnings():
+            # A numeric warning means a value out of range slipped past the checks: stop
+            # with one line rather than print numpy's warning and go on.
+            warnings.simplefilter("error", RuntimeWarning)
+            return runners[args.command](args)
+    except KeyboardInterrupt:
+        _close_progress_bars()
+        # An interrupt inside a progress bar's own drawing can leave its line open: go
+        # back to the line's start (and, on a terminal, clear it) before the message.
+        clear = "\r\033[K" if sys.stderr.isatty() else "\r"
+        print(f"{clear}{command}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except RuntimeWarning as exc:
+        print(f"{command}: error: a value is out of range for the computation ({exc})",
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except BAD_INPUT as exc:
+        print(f"{command}: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except OSError as exc:  # reading a file the checks let through
+        where = exc.filename or "a file"
+        print(f"{command}: error: cannot read {where}: {exc.strerror or exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except (GLContextError, GLPassError) as exc:
+        print(f"{command}: error: {exc}", file=sys.stderr)
+        return EXIT_MACHINE
 
 
 if __name__ == "__main__":

@@ -157,16 +157,37 @@ def _apply_technique(document: dict, value: Any, flag: str) -> None:
     planar = value in PLANAR_TECHNIQUES
     for reflector in _reflectors_of_kind(document, planar, flag, f"{value} is a technique "
                                          f"for a {_KIND_NAMES[planar]}, and "):
-        # A source is kept only where it means the same: a picture for the sphere maps,
-        # a folder of faces for a static cube map.
-        if not planar and "source" in reflector and _source_kind(
-                value) != _source_kind(reflector.get("technique")):
-            del reflector["source"]
-        reflector["technique"] = value
-        if planar and value != "ortho":
-            reflector.pop("ortho", None)
-        if value != "cube-live":
-            reflector.pop("parallax", None)  # a correction of live cube-map lookups only
+        _set_technique(reflector, value)
+
+
+def _set_technique(reflector: dict, value: str) -> None:
+    """Give one reflector's table the technique ``value`` (of its kind)."""
+    planar = value in PLANAR_TECHNIQUES
+    # A source is kept only where it means the same: a picture for the sphere maps, a
+    # folder of faces for a static cube map.
+    if not planar and "source" in reflector and _source_kind(
+            value) != _source_kind(reflector.get("technique")):
+        del reflector["source"]
+    reflector["technique"] = value
+    if planar and value != "ortho":
+        reflector.pop("ortho", None)
+    if value != "cube-live":
+        reflector.pop("parallax", None)  # a correction of live cube-map lookups only
+
+
+def with_technique(scene: Scene, name: str, value: str) -> Scene:
+    """``scene`` with its reflector ``name`` drawn by technique ``value`` (one of its
+    kind's), as ``--method`` would set it: a ``source`` that means something else for
+    the new technique is dropped. OptionError for a technique of the other kind."""
+    document = scene_to_document(scene)
+    for reflector in document.get("reflectors", []):
+        if reflector.get("name") == name:
+            planar = reflector.get("technique") in PLANAR_TECHNIQUES
+            allowed = PLANAR_TECHNIQUES if planar else CURVED_TECHNIQUES
+            parse_choice(f"technique of {name}", value, allowed)
+            _set_technique(reflector, value)
+            return from_document(document, scene.source)
+    raise OptionError("technique", f"scene {scene.name!r} has no reflector {name!r}")
 
 
 _KIND_NAMES = {True: "planar mirror", False: "curved reflector"}

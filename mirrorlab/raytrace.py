@@ -15,6 +15,7 @@ independent check of every rasterised technique. :func:`trace_scene` traces any 
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -57,7 +58,8 @@ class RaySurface:
 
 @dataclass(frozen=True)
 class RayImage:
-    """``image`` ``(h, w, 3)`` float64 in [0, 1], row 0 at the top; ``reflective_mask``
+    """``image`` ``(h, w, 3)`` float (float32 from :func:`trace_scene`) in [0, 1], row 0
+    at the top; ``reflective_mask``
     ``(h, w)`` bool, True where the pixel's primary ray met the front of a reflective
     surface (the region every reflection technique is judged on); ``reflector`` ``(h, w)``
     int, the index in the scene's reflectors of the pixel's first hit (-1: none), when
@@ -66,10 +68,21 @@ class RayImage:
     image: np.ndarray
     reflective_mask: np.ndarray
     reflector: np.ndarray | None = None
+    pixels: np.ndarray | None = None
+    """The image as uint8, when it was made from the float64 colours as they were traced."""
 
     def to_uint8(self) -> np.ndarray:
         """The image as ``(h, w, 3)`` uint8, rounded as GL's unorm conversion rounds."""
-        return np.round(np.clip(self.image, 0.0, 1.0) * 255.0).astype(np.uint8)
+        if self.pixels is not None:
+            return self.pixels
+        out = np.empty(self.image.shape, dtype=np.uint8)
+        for top in range(0, len(out), 256):  # in bands: no full-size float temporaries
+            out[top:top + 256] = _to_uint8(self.image[top:top + 256])
+        return out
+
+
+def _to_uint8(colors: np.ndarray) -> np.ndarray:
+    return np.round(np.clip(colors, 0.0, 1.0) * 255.0).astype(np.uint8)
 
 
 def sample_bilinear(texture: np.ndarray, uv: np.ndarray) -> np.ndarray:
@@ -228,19 +241,26 @@ class RayScene:
         return chain
 
     def render(self, view: np.ndarray, projection: np.ndarray, size: Sequence[int],
-               bounces: int = 1) -> RayImage:
+               bounces: int = 1, rows: tuple[int, int] | None = None) -> RayImage:
         """Trace one ray through each pixel centre of a ``size`` (width, height) image seen
-        through ``projection @ view`` (both ``(4, 4)``, the rasteriser's matrices).
+        through ``projection @ view`` (both ``(4, 4)``, the rasteriser's matrices); only
+        the image rows ``rows`` = (first, end) when given (first even, so that each 2 x 2
+        pixel quad lies in the band), and the result has those rows only.
 
         Rays start on the near plane, so nothing nearer than it shows, as in GL.
         Textures are filtered like GL_LINEAR_MIPMAP_LINEAR, with the level chosen
         from the texture-coordinate differences between neighbouring pixels
         (as a GPU does across a 2 x 2 quad).
         """
-        width, height = (int(v) for v in size)
+        width, full_height = (int(v) for v in size)
+        first, end = rows if rows is not None else (0, full_height)
+        if first % 2 or not 0 <= first < end <= full_height:
+            raise ValueError(f"rows must be (even first, end) within 0..{full_height}, "
+                             f"got {rows}")
+        height = end - first
         columns = (np.arange(width) + 0.5) / width * 2.0 - 1.0
-        rows = 1.0 - (np.arange(height) + 0.5) / height * 2.0
-        ndc_x, ndc_y = np.meshgrid(columns, rows)
+        rows_ndc = 1.0 - (np.arange(first, end) + 0.5) / full_height * 2.0
+        ndc_x, ndc_y = np.meshgrid(columns, rows_ndc)
         inverse = np.linalg.inv(np.asarray(projection, dtype=np.float64)
                                 @ np.asarray(view, dtype=np.float64))
         flat = np.stack([ndc_x.ravel(), ndc_y.ravel()], axis=1)
@@ -378,9 +398,14 @@ def ray_scene(scene: Scene) -> RayScene:
     return RayScene(surfaces, lights, scene.ambient, background)
 
 
+TILE_RAYS = 1 << 17
+"""Rays traced at once: the tracer's working memory grows with this, not the image."""
+
+
 def trace_scene(scene: Scene, size: Sequence[int], supersample: int = 1,
                 camera_view: np.ndarray | None = None,
-                projection: np.ndarray | None = None) -> RayImage:
+                projection: np.ndarray | None = None, progress: bool = False,
+                tile_rays: int = TILE_RAYS) -> RayImage:
     """Ray-traced image and reflective mask of ``scene`` seen by its camera (or the given
     ``camera_view`` and ``projection``) at ``size`` (width, height), following
     ``scene.max_bounces`` reflections.
@@ -389,6 +414,10 @@ def trace_scene(scene: Scene, size: Sequence[int], supersample: int = 1,
     filter over the pixel, which is what a mipmapped texture lookup approximates, while
     one ray per pixel aliases wherever a reflection compresses what it shows); a pixel's
     mask is then True only when all its k x k rays meet a reflector's front.
+
+    The image is traced in bands of rows, about ``tile_rays`` rays each, so the memory
+    it takes is the result's (about 17 bytes a pixel) and one band's, at any size;
+    ``progress`` shows a tqdm bar of the bands on stderr.
     """
     width, height = (int(v) for v in size)
     k = int(supersample)
@@ -397,13 +426,38 @@ def trace_scene(scene: Scene, size: Sequence[int], supersample: int = 1,
     view = scene.camera.view() if camera_view is None else camera_view
     proj = scene.camera.projection(width / height) if projection is None else projection
     rays = ray_scene(scene)
-    traced = rays.render(view, proj, (k * width, k * height), bounces=scene.max_bounces)
     first_reflector = len(rays.surfaces) - len(scene.reflectors)
+    band = max(2, tile_rays // (k * k * width) // 2 * 2)  # image rows a band, even
+    image = np.empty((height, width, 3), dtype=np.float32)
+    pixels = np.empty((height, width, 3), dtype=np.uint8)
+    mask = np.empty((height, width), dtype=bool)
+    reflector = np.empty((height, width), dtype=np.int16)
+    from tqdm import tqdm
+
+    starts = range(0, height, band)
+    with tqdm(total=len(starts), desc="ray tracing", unit="band", disable=not progress,
+              leave=False, file=sys.stderr, mininterval=0.5) as bar:
+        for top in starts:
+            _trace_band(rays, view, proj, scene.max_bounces, (width, height), k, top,
+                        min(top + band, height), first_reflector,
+                        (image, pixels, mask, reflector))
+            bar.update()
+    return RayImage(image, mask, reflector, pixels)
+
+
+def _trace_band(rays: RayScene, view: np.ndarray, proj: np.ndarray, bounces: int,
+                size: tuple[int, int], k: int, top: int, bottom: int, first_reflector: int,
+                into: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]) -> None:
+    """Trace image rows ``top`` to ``bottom`` (k x k rays a pixel) into the result arrays."""
+    image, pixels, mask, reflector = into
+    width, height = size
+    traced = rays.render(view, proj, (k * width, k * height), bounces=bounces,
+                         rows=(k * top, k * bottom))
     assert traced.reflector is not None
-    surface = traced.reflector.reshape(height, k, width, k)[:, k // 2, :, k // 2]
-    reflector = np.where(surface >= first_reflector, surface - first_reflector, -1)
-    if k == 1:
-        return RayImage(traced.image, traced.reflective_mask, reflector)
-    image = traced.image.reshape(height, k, width, k, 3).mean(axis=(1, 3))
-    mask = traced.reflective_mask.reshape(height, k, width, k).all(axis=(1, 3))
-    return RayImage(image, mask, reflector)
+    rows = bottom - top
+    surface = traced.reflector.reshape(rows, k, width, k)[:, k // 2, :, k // 2]
+    reflector[top:bottom] = np.where(surface >= first_reflector, surface - first_reflector, -1)
+    colors = traced.image.reshape(rows, k, width, k, 3).mean(axis=(1, 3))
+    image[top:bottom] = colors
+    pixels[top:bottom] = _to_uint8(colors)
+    mask[top:bottom] = traced.reflective_mask.reshape(rows, k, width, k).all(axis=(1, 3))

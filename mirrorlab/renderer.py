@@ -14,7 +14,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field, replace
 
-from mirrorlab.gl.context import ResourceRegistry
+from mirrorlab.gl.context import ResourceRegistry, gl_pass, gl_version, require_gl_version
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import RenderTarget
 from mirrorlab.passes.base import (
@@ -35,7 +35,7 @@ from mirrorlab.scene.model import (
     Scene,
     Transform,
 )
-from mirrorlab.techniques import technique
+from mirrorlab.techniques import RENDERER_GL_VERSION, technique
 from mirrorlab.views import View
 
 
@@ -81,6 +81,7 @@ class SceneRenderer:
     """Runs frame plans: captures and bakes first, then the camera's view."""
 
     def __init__(self, registry: ResourceRegistry) -> None:
+        self._gl_version = gl_version()
         self.registry = registry
         self.shared = SharedResources(registry)
         self.drawer = SceneDrawer(self.shared)
@@ -125,13 +126,20 @@ class SceneRenderer:
         return self._sky
 
     def _use_scene(self, scene: Scene) -> None:
+        for reflector in scene.reflectors:
+            entry = technique(reflector.technique)
+            if self._gl_version < entry.gl_version:
+                require_gl_version(entry.gl_version, f"technique {entry.name!r}")
+        if self._gl_version < RENDERER_GL_VERSION:
+            require_gl_version(RENDERER_GL_VERSION, "mirrorlab's renderer (GLSL 3.30)")
         self.scene = scene
         names = {r.name: r for r in scene.reflectors}
         for name in list(self._passes):
             if name not in names or self._passes[name][0] != _pass_key(names[name],
                                                                        scene.background):
                 self._drop(name)
-        self._sky_for(scene.background)
+        with gl_pass("background"):
+            self._sky_for(scene.background)
 
     # ------------------------------------------------------------- frames
 
@@ -153,14 +161,23 @@ class SceneRenderer:
         width, height = target.size
         plan = self._plan(scene, (int(width), int(height)), use_plan, tiny_pixels, view)
         draws = 0
-        for step in plan.passes:
-            if not step.runs or step.name == "camera":
-                continue
-            reflector = scene.reflector(step.reflector)  # type: ignore[arg-type]
-            draws += self._pass(reflector).update(step, reflector, self, target)
-            self.state.record(step)
-        draws += self.draw_view(plan.top, target)
-        restore_state(found)
+        try:
+            for step in plan.passes:
+                if not step.runs or step.name == "camera":
+                    continue
+                reflector = scene.reflector(step.reflector)  # type: ignore[arg-type]
+                with gl_pass(f"{step.name}:{step.reflector}"):
+                    draws += self._pass(reflector).update(step, reflector, self, target)
+                self.state.record(step)
+            with gl_pass("camera"):
+                draws += self.draw_view(plan.top, target)
+        except BaseException:
+            # What a failed pass left half made cannot be trusted by the next frame.
+            self.state.clear()
+            self._last_plan = None
+            raise
+        finally:
+            restore_state(found)
         self.last_frame = FrameStats(plan, draws, (time.perf_counter() - start) * 1e3)
         return self.last_frame
 

@@ -34,13 +34,16 @@ TextureKind = Literal["static", "baked", "fixed", "viewer", "inline"]
 @dataclass(frozen=True)
 class Technique:
     """``name``; ``kind`` of reflector (``planar`` or ``curved``); ``texture`` (see
-    :data:`TextureKind`); ``pass_class`` as ``module:Class``; ``summary`` for help texts."""
+    :data:`TextureKind`); ``pass_class`` as ``module:Class``; ``summary`` for help texts;
+    ``gl_version`` the OpenGL (major, minor) its pass needs (every pass's shaders are GLSL
+    3.30; ``sphere-texgen`` also needs the compatibility profile's texgen)."""
 
     name: str
     kind: Literal["planar", "curved"]
     texture: TextureKind
     pass_class: str
     summary: str
+    gl_version: tuple[int, int] = (3, 3)
 
     @property
     def captures_scene(self) -> bool:
@@ -52,6 +55,9 @@ class Technique:
         module, name = self.pass_class.split(":")
         return getattr(importlib.import_module(module), name)
 
+
+RENDERER_GL_VERSION = (3, 3)
+"""What the renderer's own shaders (the lit scene, the sky) need: GLSL 3.30."""
 
 TECHNIQUES: dict[str, Technique] = {t.name: t for t in (
     Technique("ortho", "planar", "fixed", "mirrorlab.passes.ortho:OrthoMirror",

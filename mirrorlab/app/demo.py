@@ -1,48 +1,43 @@
 """The desktop demo: any scene in a glfw window, under the keyboard and the mouse.
 
-Keys:
-  Left/Right        turn the robot's base (a scene with a robot)
-  Up/Down           the robot's lower arm; with Shift (or PageUp/PageDown) the upper arm;
-                    in a scene without a robot, move the first curved reflector up and down
-  1-9               the technique of the first reflector (its kind's techniques in order)
-  M                 the next technique of the first reflector
-  A/D, W/S          orbit the camera; dragging with the left mouse button orbits too
-  +/-, mouse wheel  zoom
-  R                 reset the scene and the camera
-  H                 print this help
-  Esc               quit
-
-The title shows the technique, the frame rate and how many captures have run: the
-planner captures only when something the capture shows has changed.
+The controls are listed in :mod:`mirrorlab.app.controls` (and in the window: H). The
+title shows the scene, the reflector the number keys act on and its technique, the
+frame's time, the passes it ran and a frame counter. A frame is drawn when something
+changed (a key, the mouse, a resize, an animated scene), so an idle demo costs nothing.
 """
 
 from __future__ import annotations
 
 import math
+import sys
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
-from mirrorlab.gl.context import WindowContext, check_gl_errors
+from mirrorlab.app.controls import CONTROLS
+from mirrorlab.app.picking import framebuffer_pixel, pick_reflector
+from mirrorlab.gl.context import WindowContext, gl_pass
+from mirrorlab.options import with_technique
 from mirrorlab.scene.model import (
     CURVED_TECHNIQUES,
     PLANAR_TECHNIQUES,
     Camera,
     CurvedReflector,
+    PlanarReflector,
     Scene,
-    Transform,
 )
 
 JOINT_STEP_DEG = 5.0
-ORBIT_STEP_DEG = 5.0
 ZOOM_FACTOR = 1.1
+DRAG_DEG_PER_PIXEL = 0.4
 REFLECTOR_STEP = 0.25
 REFLECTOR_RANGE = 3.0
 """How far (world units) Up/Down may move a curved reflector from where the file puts it."""
-HELP = __doc__.split("\n\n")[1]
+IDLE_WAIT_S = 0.5
+"""How long an idle demo sleeps in glfw.wait_events_timeout before looking again."""
 
 
 @dataclass
@@ -81,79 +76,139 @@ class Orbit:
         return (x, y, z)
 
 
-class DemoApp:
-    """One scene in the window: the scene as the file gives it, the changes the keys make,
-    the orbit camera, and the renderer."""
+@dataclass
+class Changes:
+    """What the keys and the mouse changed, applied to the scene each frame: joint
+    offsets (degrees; on top of an animation), the lift of the first curved reflector,
+    techniques by reflector, and the orbit camera."""
 
-    def __init__(self, context: WindowContext, scene: Scene) -> None:
+    orbit: Orbit
+    joints: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    lift: float = 0.0
+    techniques: dict[str, str] = field(default_factory=dict)
+
+
+def _first_curved(scene: Scene) -> CurvedReflector | None:
+    return next((r for r in scene.reflectors if isinstance(r, CurvedReflector)), None)
+
+
+class DemoApp:
+    """One scene in the window: the scene as the file gives it, the changes the keys and
+    the mouse make, the renderer, and what is drawn over the frame."""
+
+    def __init__(self, context: WindowContext, scene: Scene, shot_dir: Path = Path(".")) -> None:
         import glfw
 
-        from mirrorlab.gl.resources import DefaultFramebuffer
+        from mirrorlab.app.overlay import Overlay
         from mirrorlab.renderer import SceneRenderer
 
         self.context = context
         self.initial = scene
-        self.scene = scene
-        self.orbit = Orbit.from_eye(scene.camera.eye, scene.camera.target)
-        self.target = DefaultFramebuffer(context.framebuffer_size)
+        self.changes = Changes(Orbit.from_eye(scene.camera.eye, scene.camera.target))
+        self.configured = scene  # the file's scene with the chosen techniques
+        self.shot_dir = shot_dir
         self.renderer = SceneRenderer(context.resources)
-        self._drag_from: tuple[float, float] | None = None
+        self.overlay = Overlay(context.resources)
         self.frames = 0
-        self.captures = 0
+        self.dirty = True
+        self.show_help = False
+        self.show_inset = False
+        self.save_next = False
+        self.print_plan = False
+        self.last_ms = 0.0
+        self.last_ran: list[str] = []
+        self.message = ""
+        self._drag_from: tuple[float, float] | None = None
+        self._cursor: tuple[float, float] | None = None
+        self._size = context.framebuffer_size()
         window = context.window
         glfw.set_key_callback(window, self.on_key)
         glfw.set_scroll_callback(window, self.on_scroll)
         glfw.set_mouse_button_callback(window, self.on_mouse_button)
         glfw.set_cursor_pos_callback(window, self.on_cursor)
+        glfw.set_cursor_enter_callback(window, self.on_cursor_enter)
+        glfw.set_framebuffer_size_callback(window, lambda *_: self.touch())
+        glfw.set_window_refresh_callback(window, lambda *_: self.touch())
 
-    # ------------------------------------------------------------- changes
+    def touch(self) -> None:
+        self.dirty = True
 
-    def camera(self) -> Camera:
-        """The scene's camera (lens, clip planes) moved to the orbit's eye and target."""
-        return replace(self.scene.camera, eye=self.orbit.eye(), target=self.orbit.target)
+    @property
+    def animated(self) -> bool:
+        return self.initial.animation is not None
+
+    # ------------------------------------------------------------- the scene
+
+    def camera(self, scene: Scene) -> Camera:
+        orbit = self.changes.orbit
+        return replace(scene.camera, eye=orbit.eye(), target=orbit.target)
+
+    def scene_now(self) -> Scene:
+        """The scene to draw this frame: animated, the techniques chosen, the joints and
+        the reflector moved, seen from the orbit camera."""
+        scene = self.configured.at_frame(self.frames % self.configured.frame_count)
+        robot = scene.robot
+        if robot is not None and any(self.changes.joints):
+            scene = scene.with_angles([a + d for a, d in zip(robot.angles, self.changes.joints,
+                                                             strict=True)])
+        curved = _first_curved(scene)
+        if curved is not None and self.changes.lift:
+            x, y, z = curved.transform.position
+            moved = replace(curved.transform, position=(x, y + self.changes.lift, z))
+            scene = scene.with_reflector(curved.name, transform=moved)
+        return replace(scene, camera=self.camera(scene))
 
     def turn_joint(self, index: int, delta: float) -> None:
-        robot = self.scene.robot
-        if robot is None:
-            return
-        angles = list(robot.angles)
-        angles[index] += delta
-        self.scene = self.scene.with_angles(angles)
+        if self.configured.robot is not None:
+            self.changes.joints[index] += delta
 
     def move_reflector(self, dy: float) -> None:
-        """Move the first curved reflector up (``dy`` > 0) or down, within
-        :data:`REFLECTOR_RANGE` of where the scene file puts it."""
-        curved = [r for r in self.scene.reflectors if isinstance(r, CurvedReflector)]
-        if not curved:
+        if _first_curved(self.configured) is not None:
+            lift = self.changes.lift + dy
+            self.changes.lift = min(REFLECTOR_RANGE, max(-REFLECTOR_RANGE, lift))
+
+    def target_index(self) -> int | None:
+        """The reflector under the mouse, else the first; None for a scene without one."""
+        if not self.configured.reflectors:
+            return None
+        import glfw
+
+        window = self.context.window
+        pixel = framebuffer_pixel(self.cursor(), glfw.get_window_size(window), self._size)
+        picked = None
+        if pixel is not None and min(self._size) > 0:
+            picked = pick_reflector(self.scene_now(), self._size, pixel)
+        return 0 if picked is None else picked
+
+    def techniques_of(self, index: int) -> tuple[str, ...]:
+        reflector = self.configured.reflectors[index]
+        return PLANAR_TECHNIQUES if isinstance(reflector, PlanarReflector) else CURVED_TECHNIQUES
+
+    def use_technique(self, index: int, name: str) -> None:
+        reflector = self.configured.reflectors[index]
+        self.configured = with_technique(self.configured, reflector.name, name)
+        self.changes.techniques[reflector.name] = name
+
+    def pick_technique(self, number: int) -> None:
+        index = self.target_index()
+        if index is None:
             return
-        reflector = curved[0]
-        home = self.initial.reflector(reflector.name).transform.position[1]
-        x, y, z = reflector.transform.position
-        new_y = min(home + REFLECTOR_RANGE, max(home - REFLECTOR_RANGE, y + dy))
-        transform: Transform = replace(reflector.transform, position=(x, new_y, z))
-        self.scene = self.scene.with_reflector(reflector.name, transform=transform)
-
-    def techniques(self) -> tuple[str, ...]:
-        """The techniques the first reflector can take."""
-        if not self.scene.reflectors:
-            return ()
-        first = self.scene.reflectors[0]
-        return PLANAR_TECHNIQUES if first.kind == "planar" else CURVED_TECHNIQUES
-
-    def use_technique(self, name: str) -> None:
-        if self.scene.reflectors and name in self.techniques():
-            first = self.scene.reflectors[0]
-            self.scene = self.scene.with_reflector(first.name, technique=name)
+        names = self.techniques_of(index)
+        if number < len(names):
+            self.use_technique(index, names[number])
 
     def next_technique(self) -> None:
-        names = self.techniques()
-        if names:
-            current = self.scene.reflectors[0].technique
-            self.use_technique(names[(names.index(current) + 1) % len(names)])
+        index = self.target_index()
+        if index is None:
+            return
+        names = self.techniques_of(index)
+        current = self.configured.reflectors[index].technique
+        self.use_technique(index, names[(names.index(current) + 1) % len(names)])
 
     def reset(self) -> None:
-        self.scene = self.initial
-        self.orbit = Orbit.from_eye(self.initial.camera.eye, self.initial.camera.target)
+        self.configured = self.initial
+        self.changes = Changes(Orbit.from_eye(self.initial.camera.eye,
+                                              self.initial.camera.target))
 
     # ------------------------------------------------------------- input
 
@@ -163,10 +218,6 @@ class DemoApp:
         if action not in (glfw.PRESS, glfw.REPEAT):
             return
         shift = bool(mods & glfw.MOD_SHIFT)
-        orbit_keys = {
-            glfw.KEY_A: (-ORBIT_STEP_DEG, 0.0), glfw.KEY_D: (ORBIT_STEP_DEG, 0.0),
-            glfw.KEY_W: (0.0, ORBIT_STEP_DEG), glfw.KEY_S: (0.0, -ORBIT_STEP_DEG),
-        }
         joint_keys = {
             glfw.KEY_LEFT: (0, -JOINT_STEP_DEG), glfw.KEY_RIGHT: (0, JOINT_STEP_DEG),
             glfw.KEY_UP: (2 if shift else 1, JOINT_STEP_DEG),
@@ -174,107 +225,263 @@ class DemoApp:
             glfw.KEY_PAGE_UP: (2, JOINT_STEP_DEG), glfw.KEY_PAGE_DOWN: (2, -JOINT_STEP_DEG),
         }
         number_keys = {glfw.KEY_1 + i: i for i in range(9)}
+        number_keys.update({glfw.KEY_KP_1 + i: i for i in range(9)})
+        once = action == glfw.PRESS
         if key == glfw.KEY_ESCAPE:
             glfw.set_window_should_close(window, True)
-        elif key in orbit_keys:
-            self.orbit.turn(*orbit_keys[key])
         elif key in (glfw.KEY_EQUAL, glfw.KEY_KP_ADD):
-            self.orbit.zoom(1.0 / ZOOM_FACTOR)
+            self.changes.orbit.zoom(1.0 / ZOOM_FACTOR)
         elif key in (glfw.KEY_MINUS, glfw.KEY_KP_SUBTRACT):
-            self.orbit.zoom(ZOOM_FACTOR)
-        elif key in (glfw.KEY_UP, glfw.KEY_DOWN) and self.scene.robot is None:
+            self.changes.orbit.zoom(ZOOM_FACTOR)
+        elif key in (glfw.KEY_UP, glfw.KEY_DOWN) and self.configured.robot is None:
             self.move_reflector(REFLECTOR_STEP if key == glfw.KEY_UP else -REFLECTOR_STEP)
         elif key in joint_keys:
             self.turn_joint(*joint_keys[key])
-        elif key in number_keys and action == glfw.PRESS:
-            names = self.techniques()
-            if number_keys[key] < len(names):
-                self.use_technique(names[number_keys[key]])
-        elif key == glfw.KEY_M and action == glfw.PRESS:
+        elif key in number_keys and once:
+            self.pick_technique(number_keys[key])
+        elif key == glfw.KEY_M and once:
             self.next_technique()
-        elif key == glfw.KEY_R:
+        elif key == glfw.KEY_E and once:
+            self.show_inset = not self.show_inset
+        elif key == glfw.KEY_P and once:
+            self.print_plan = True
+        elif key == glfw.KEY_S and once:
+            self.save_next = True
+        elif key == glfw.KEY_R and once:
             self.reset()
-        elif key == glfw.KEY_H and action == glfw.PRESS:
-            print(HELP, flush=True)
+        elif key == glfw.KEY_H and once:
+            self.show_help = not self.show_help
+        else:
+            return
+        self.touch()
 
     def on_scroll(self, window, dx: float, dy: float) -> None:
-        self.orbit.zoom(ZOOM_FACTOR ** (-dy))
+        self.changes.orbit.zoom(ZOOM_FACTOR ** (-dy))
+        self.touch()
+
+    def cursor(self) -> tuple[float, float]:
+        """Where the pointer is, in window coordinates, as the events have told so far."""
+        import glfw
+
+        if self._cursor is None:
+            self._cursor = glfw.get_cursor_pos(self.context.window)
+        return self._cursor
 
     def on_mouse_button(self, window, button: int, action: int, mods: int) -> None:
         import glfw
 
         if button == glfw.MOUSE_BUTTON_LEFT:
-            self._drag_from = glfw.get_cursor_pos(window) if action == glfw.PRESS else None
+            # From the last motion event, not a query: a query answers where the pointer
+            # is now, which may be ahead of the events still queued.
+            self._drag_from = self.cursor() if action == glfw.PRESS else None
+
+    def on_cursor_enter(self, window, entered: int) -> None:
+        if not entered:
+            self._cursor = (-1.0, -1.0)  # outside: the number keys act on the first reflector
 
     def on_cursor(self, window, x: float, y: float) -> None:
+        self._cursor = (x, y)
         if self._drag_from is not None:
             x0, y0 = self._drag_from
-            self.orbit.turn((x - x0) * 0.4, (y - y0) * 0.4)
+            self.changes.orbit.turn((x - x0) * DRAG_DEG_PER_PIXEL,
+                                    (y - y0) * DRAG_DEG_PER_PIXEL)
             self._drag_from = (x, y)
+            self.touch()
 
     # ------------------------------------------------------------- frames
 
-    def draw(self) -> None:
-        """Render one frame into the window's back buffer."""
-        width, height = self.target.size
-        if width == 0 or height == 0:  # minimised
-            return
-        scene = replace(self.scene, camera=self.camera())
-        stats = self.renderer.render(scene, self.target)
-        self.frames += 1
-        self.captures += sum(1 for p in stats.plan.ran if p.name == "capture")
+    def draw(self) -> np.ndarray | None:
+        """Render one frame (and what goes over it) into the back buffer; returns the
+        frame as ``(h, w, 3)`` uint8 when a screenshot was asked for."""
+        from mirrorlab.gl.opengl import GL
+        from mirrorlab.gl.resources import DefaultFramebuffer
 
-    def title(self, fps: float) -> str:
-        parts = [f"mirrorlab demo - {self.scene.name}"]
-        robot = self.scene.robot
+        self._size = size = self.context.framebuffer_size()
+        if size[0] == 0 or size[1] == 0:  # minimised
+            return None
+        target = DefaultFramebuffer(lambda: size)  # one size for the whole frame
+        began = time.perf_counter()
+        scene = self.scene_now()
+        stats = self.renderer.render(scene, target)
+        with gl_pass("demo overlay"):
+            self.draw_overlay(scene, stats, size)
+            GL.glFinish()  # the frame's time includes the rasterising, not only the calls
+        self.last_ms = (time.perf_counter() - began) * 1e3
+        self.last_ran = stats.ran
+        self.frames += 1
+        if self.print_plan:
+            self.print_plan = False
+            self.report_plan(scene, stats, size)
+        image = None
+        if self.save_next:
+            self.save_next = False
+            with gl_pass("reading the frame back"):
+                image = target.read()
+        return image
+
+    def read_frame(self) -> np.ndarray:
+        """The back buffer as ``(h, w, 3)`` uint8 (the frame just drawn, before the swap)."""
+        from mirrorlab.gl.resources import DefaultFramebuffer
+
+        size = self._size
+        return DefaultFramebuffer(lambda: size).read()
+
+    def scale(self) -> float:
+        """Framebuffer pixels per window unit (2 on a high-DPI screen)."""
+        import glfw
+
+        width, _ = glfw.get_window_size(self.context.window)
+        return self._size[0] / width if width > 0 else 1.0
+
+    def draw_overlay(self, scene: Scene, stats, size: tuple[int, int]) -> None:
+        scale = self.scale()
+        margin = round(8 * scale)
+        if self.show_inset:
+            self.draw_inset(scene, stats, size, scale, margin)
+        if self.show_help:
+            lines: list = [f"mirrorlab demo: {scene.name} (the title shows the technique, "
+                           f"frame time and passes)", "", *CONTROLS]
+            index = self.target_index()
+            if index is not None:
+                names = "  ".join(f"{i + 1} {n}" for i, n in enumerate(self.techniques_of(index)))
+                lines += ["", f"techniques of {scene.reflectors[index].name}: {names}"]
+            self.overlay.text("help", lines, (margin, margin), size, scale)
+
+    def draw_inset(self, scene: Scene, stats, size: tuple[int, int], scale: float,
+                   margin: int) -> None:
+        """The target reflector's texture as the camera's view used it, in the bottom
+        left corner: a planar capture, a sphere or latitude-longitude map, or a cube
+        map's six faces."""
+        from mirrorlab.gl.resources import TextureCube
+
+        index = self.target_index()
+        label = "no reflector in this scene"
+        texture = None
+        if index is not None:
+            reflector = scene.reflectors[index]
+            draw = next((d for d in stats.plan.top.draws if d.reflector.name == reflector.name),
+                        None)
+            label = f"{reflector.name} ({reflector.technique})"
+            if draw is None or draw.mode not in ("texture", "map"):
+                why = "drawn straight into the frame" if reflector.technique == "stencil" else (
+                    draw.reason if draw is not None else "not drawn")
+                label += f": no texture ({why})"
+            else:
+                held = self.renderer.pass_for(reflector.name)
+                texture = (held.captures.texture(draw.slot) if hasattr(held, "captures")
+                           else held.map_for(draw))  # type: ignore[attr-defined]
+        width, height = size
+        if isinstance(texture, TextureCube):
+            face = min((width - 2 * margin) / 6 - 2, height / 4)
+            top = height - margin - face
+            self.overlay.cube_faces(texture, (margin, top), face, size)
+            label += f": cube map, {texture.size} a face; +X -X +Y -Y +Z -Z"
+        elif texture is not None:
+            box = min(width, height) * 0.4
+            aspect = texture.width / texture.height
+            inset = (box, box / aspect) if aspect >= 1.0 else (box * aspect, box)
+            top = height - margin - inset[1]
+            self.overlay.texture(texture, (margin, top), inset, size)
+            label += f": {texture.width}x{texture.height}"
+            face = inset[1]
+        else:
+            face = 0.0
+        self.overlay.text("label", [label], (margin, height - margin - face - 24 * scale),
+                          size, scale)
+
+    def report_plan(self, scene: Scene, stats, size: tuple[int, int]) -> None:
+        print(f"plan of frame {self.frames} ({scene.name}, {size[0]}x{size[1]}):")
+        for line in stats.plan.describe():
+            print(f"  {line}")
+        print(f"live GL objects: {len(self.context.resources)}", flush=True)
+
+    def save(self, image: np.ndarray) -> None:
+        from mirrorlab.errors import WriteError
+        from mirrorlab.files import write_png_atomic
+
+        number = 1
+        while (path := self.shot_dir / f"demo-{self.initial.name}-{number:03d}.png").exists():
+            number += 1
+        try:
+            write_png_atomic(path, image)
+        except WriteError as exc:
+            self.message = str(exc)
+            print(f"mirrorlab demo: {exc}", file=sys.stderr, flush=True)
+        else:
+            self.message = f"saved {path}"
+            print(f"saved {path}", flush=True)
+
+    def status(self, scene: Scene) -> str:
+        parts = []
+        robot = scene.robot
         if robot is not None:
             base, lower, upper = robot.angles
             parts.append(f"base {base:.0f} lower {lower:.0f} upper {upper:.0f} deg")
-        curved = [r for r in self.scene.reflectors if isinstance(r, CurvedReflector)]
-        if robot is None and curved:
-            parts.append(f"height {curved[0].transform.position[1]:.2f}")
-        if self.scene.reflectors:
-            parts.append(self.scene.reflectors[0].technique)
-        parts.append(f"{fps:.0f} fps, {self.captures} captures - H for help")
+        curved = _first_curved(scene)
+        if robot is None and curved is not None:
+            parts.append(f"height {curved.transform.position[1]:.2f}")
+        index = self.target_index()
+        if index is not None:
+            reflector = scene.reflectors[index]
+            parts.append(f"{reflector.name}: {reflector.technique}")
+        x, y, z = scene.camera.eye
+        parts.append(f"eye {x:.2f},{y:.2f},{z:.2f}")
+        parts.append(f"{self.last_ms:.1f} ms")
+        parts.append(" + ".join(self.last_ran))
         return " - ".join(parts)
 
+    def title(self, scene: Scene) -> str:
+        message = f" - {self.message}" if self.message else ""
+        return (f"mirrorlab demo - {scene.name} - {self.status(scene)} - frame {self.frames}"
+                f"{message} - H: help")
+
     def release(self) -> None:
+        self.overlay.release()
         self.renderer.release()
 
 
 def run(scene: Scene, size: tuple[int, int], max_frames: int = 0,
-        screenshot: Path | None = None) -> int:
+        screenshot: Path | None = None, debug: bool = False,
+        shot_dir: Path = Path(".")) -> int:
     """Open the window on ``scene`` and run until Esc, the window closes, or ``max_frames``
-    frames; with ``screenshot``, the last frame drawn is written there as a PNG."""
+    frames; with ``screenshot``, the last frame drawn is written there as a PNG. S saves
+    screenshots into ``shot_dir``."""
     import glfw
 
     from mirrorlab.files import write_png_atomic
 
-    context = WindowContext(size[0], size[1], f"mirrorlab demo - {scene.name}")
+    context = WindowContext(size[0], size[1], f"mirrorlab demo - {scene.name}", debug=debug)
+    app = None
     try:
-        app = DemoApp(context, scene)
-        print(f"mirrorlab demo of {scene.name} on {context.info()['renderer']}.\n{HELP}",
-              flush=True)
+        app = DemoApp(context, scene, shot_dir)
+        print(f"mirrorlab demo of {scene.name} on {context.info()['renderer']}: press H in "
+              f"the window for the controls (also: mirrorlab demo --help).", flush=True)
         last_image = None
-        started, frames_at_title = time.perf_counter(), 0
+        continuous = app.animated or max_frames > 0
         while not context.should_close():
-            glfw.poll_events()
-            app.draw()
+            if continuous or app.dirty:
+                glfw.poll_events()
+            else:
+                glfw.wait_events_timeout(IDLE_WAIT_S)
+            if not (continuous or app.dirty) or context.should_close():
+                continue
+            app.dirty = False
+            image = app.draw()
             if screenshot is not None:
-                last_image = app.target.read()
-            check_gl_errors("a demo frame")
+                with gl_pass("reading the frame back"):
+                    last_image = app.read_frame() if image is None else image
             context.swap_buffers()
-            now = time.perf_counter()
-            if now - started >= 0.5:
-                glfw.set_window_title(context.window,
-                                      app.title((app.frames - frames_at_title) / (now - started)))
-                started, frames_at_title = now, app.frames
+            if image is not None:
+                app.save(image)
+            glfw.set_window_title(context.window, app.title(app.scene_now()))
             if max_frames and app.frames >= max_frames:
                 break
-        app.release()
         if screenshot is not None and last_image is not None:
             write_png_atomic(screenshot, last_image)
             print(f"wrote {screenshot}", flush=True)
         return 0
     finally:
+        if app is not None:
+            context.make_current()
+            app.release()
         context.release()

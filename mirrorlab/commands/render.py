@@ -20,18 +20,19 @@ def frame_name(out_dir: Path, scene: Scene, frame: int) -> Path:
 def run_render(scene: Scene, size: tuple[int, int], out: Path, frames: list[int],
                out_dir: Path | None = None, stats: bool = False, use_plan: bool = True,
                save_env: Path | None = None, raytrace: bool = False,
-               say: Callable[[str], None] = print) -> int:
+               say: Callable[[str], None] = print, debug: bool = False) -> int:
     """Render ``frames`` of ``scene``; the last goes to ``out``, every one to ``out_dir``
     too; all files are written together at the end, or none. With ``stats``, each frame
     is also drawn with every pass (--no-plan) by a second renderer, in turn with the
-    planned one, so both are timed under the same conditions."""
+    planned one, so both are timed under the same conditions. ``debug`` checks the GL's
+    debug messages after every pass."""
     start = time.perf_counter()
     with Outputs() as outputs:
         if raytrace:
             from mirrorlab.raytrace import trace_scene
 
             for frame in frames:
-                image = trace_scene(scene.at_frame(frame), size).to_uint8()
+                image = trace_scene(scene.at_frame(frame), size, progress=True).to_uint8()
                 if out_dir is not None:
                     outputs.add_png(frame_name(out_dir, scene, frame), image)
             outputs.add_png(out, image)
@@ -42,7 +43,7 @@ def run_render(scene: Scene, size: tuple[int, int], out: Path, frames: list[int]
             return 0
         from mirrorlab.api import Renderer
 
-        with Renderer(size) as renderer, Renderer(size) as unplanned:
+        with Renderer(size, debug=debug) as renderer, Renderer(size, debug=debug) as unplanned:
             records = []
             comparison: list[tuple[int, float]] = []
             image = None

@@ -15,14 +15,40 @@ from __future__ import annotations
 
 import ctypes
 import os
+import re
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Literal, Self
+
+from mirrorlab.errors import (
+    DEBIAN_GL_PACKAGES,
+    GLContextError,
+    GLVersionError,
+    pass_error,
+)
 
 Platform = Literal["egl", "glx"]
 
+LIBRARIES = {
+    # (file, Debian package) that PyOpenGL loads for each platform
+    "egl": (("libEGL.so.1", "libegl1"), ("libGL.so.1", "libgl1")),
+    "glx": (("libGL.so.1", "libgl1"), ("libGLX.so.0", "libglx0")),
+}
+DRIVER_PACKAGES = {"egl": DEBIAN_GL_PACKAGES, "glx": "libglx-mesa0 libgl1-mesa-dri"}
 
-class GLContextError(RuntimeError):
-    """A context could not be created or made current; the message says what to install or do."""
+
+def check_libraries(platform: Platform) -> None:
+    """GLContextError naming the Debian packages when a library PyOpenGL needs for
+    ``platform`` cannot be loaded (checked before PyOpenGL tries, which would fail
+    later with an AttributeError deep inside it)."""
+    for filename, package in LIBRARIES[platform]:
+        try:
+            ctypes.CDLL(filename)
+        except OSError as exc:
+            raise GLContextError(
+                f"cannot load the OpenGL library {filename} ({exc}); install the Debian "
+                f"packages {package} {DRIVER_PACKAGES[platform]}") from None
 
 
 def _opengl_imported() -> bool:
@@ -89,17 +115,90 @@ class ResourceRegistry:
 
 
 def check_gl_errors(where: str) -> None:
-    """Raise GLContextError if the GL error queue holds anything, naming ``where``."""
+    """Raise :class:`~mirrorlab.errors.GLPassError` naming ``where`` if the GL error queue
+    holds anything, or the debug callback (see :func:`enable_debug_output`) caught an
+    error; :class:`~mirrorlab.errors.GLOutOfMemoryError` for GL_OUT_OF_MEMORY."""
     from OpenGL import GL
 
     errors = []
     for _ in range(16):
-        code = GL.glGetError()
+        code = int(GL.glGetError())
         if code == GL.GL_NO_ERROR:
             break
-        errors.append(hex(int(code)))
-    if errors:
-        raise GLContextError(f"OpenGL error(s) {', '.join(errors)} after {where}")
+        errors.append(code)
+    messages = [m for m in _debug_errors]
+    _debug_errors.clear()
+    if errors or messages:
+        code = errors[0] if errors else messages[0][0]
+        detail = "; ".join(text for _, text in messages) or "found by glGetError"
+        raise pass_error(where, code, detail)
+
+
+@contextmanager
+def gl_pass(name: str) -> Iterator[None]:
+    """Run a pass's GL calls: a GL error raised by PyOpenGL inside, or left in the error
+    queue or the debug log after, becomes a :class:`~mirrorlab.errors.GLPassError` that
+    names the pass ``name`` (``capture:mirror``, ``camera``)."""
+    from OpenGL.error import GLError
+
+    try:
+        yield
+    except GLError as exc:
+        operation = getattr(exc.baseOperation, "__name__", str(exc.baseOperation))
+        messages = "; ".join(text for _, text in _debug_errors)
+        _debug_errors.clear()
+        detail = f"{operation} failed" + (f": {messages}" if messages else "")
+        raise pass_error(name, int(exc.err), detail) from None
+    check_gl_errors(name)
+
+
+_debug_errors: list[tuple[int, str]] = []
+"""(GL error code, driver message) of errors the debug callback saw since the last check."""
+_debug_callbacks: list = []  # kept alive: GL holds only the C pointer
+_DEBUG_CODES = {"out of memory": 0x0505, "invalid enum": 0x0500, "invalid value": 0x0501,
+                "invalid operation": 0x0502, "invalid framebuffer": 0x0506}
+
+
+def enable_debug_output() -> None:
+    """Route the current context's KHR_debug messages to mirrorlab: errors (and undefined
+    behaviour) are kept and raised, naming the pass, by the next :func:`check_gl_errors`
+    or :func:`gl_pass`; the messages are delivered synchronously, inside the call."""
+    from OpenGL import GL
+
+    def callback(source, kind, ident, severity, length, message, user):
+        if kind in (GL.GL_DEBUG_TYPE_ERROR, GL.GL_DEBUG_TYPE_UNDEFINED_BEHAVIOR):
+            text = ctypes.string_at(message, length).decode(errors="replace").strip()
+            lowered = text.lower()
+            code = next((c for key, c in _DEBUG_CODES.items() if key in lowered), 0x0502)
+            _debug_errors.append((code, text))
+
+    proc = GL.GLDEBUGPROC(callback)
+    _debug_callbacks.append(proc)
+    GL.glEnable(GL.GL_DEBUG_OUTPUT)
+    GL.glEnable(GL.GL_DEBUG_OUTPUT_SYNCHRONOUS)
+    GL.glDebugMessageCallback(proc, None)
+
+
+def gl_version() -> tuple[int, int]:
+    """(major, minor) of the current context's OpenGL."""
+    from OpenGL import GL
+
+    text = GL.glGetString(GL.GL_VERSION).decode(errors="replace")
+    match = re.match(r"\s*(\d+)\.(\d+)", text)
+    return (int(match.group(1)), int(match.group(2))) if match else (0, 0)
+
+
+def require_gl_version(needed: tuple[int, int], what: str) -> None:
+    """GLVersionError naming ``what`` and the version it needs when the current context's
+    OpenGL is older than ``needed``."""
+    have = gl_version()
+    if have < needed:
+        from OpenGL import GL
+
+        text = GL.glGetString(GL.GL_VERSION).decode(errors="replace")
+        renderer = GL.glGetString(GL.GL_RENDERER).decode(errors="replace")
+        raise GLVersionError(f"{what} needs OpenGL {needed[0]}.{needed[1]}; this context "
+                             f"has OpenGL {text} ({renderer})")
 
 
 class _Context:
@@ -139,7 +238,9 @@ class _Context:
         self.release()
 
 
-_egl_display_users = 0  # eglTerminate ends every context on the shared display: count users
+# The EGL display is initialised once and kept for the life of the process: every
+# eglTerminate + eglInitialize cycle cost Mesa about 13 KB that it never gave back (1,000
+# one-shot renders grew the process by 17 MB; see README, Reliability).
 
 
 class HeadlessContext(_Context):
@@ -150,14 +251,15 @@ class HeadlessContext(_Context):
     call :meth:`release`.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, debug: bool = False) -> None:
         use_platform("egl")
+        check_libraries("egl")
         try:
             from OpenGL import EGL
         except Exception as exc:  # pragma: no cover - depends on the machine
             raise GLContextError(
                 f"cannot load EGL ({exc}); install the Debian packages "
-                f"libegl-mesa0 libgl1-mesa-dri"
+                f"libegl1 {DEBIAN_GL_PACKAGES}"
             ) from exc
         self._egl = EGL
         self.display = EGL.eglGetDisplay(EGL.EGL_DEFAULT_DISPLAY)
@@ -166,8 +268,8 @@ class HeadlessContext(_Context):
             self.display, ctypes.pointer(major), ctypes.pointer(minor)
         ):
             raise GLContextError(
-                "eglInitialize failed: no EGL display; install the Debian packages "
-                "libegl-mesa0 libgl1-mesa-dri"
+                f"eglInitialize failed: no EGL display; install the Debian packages "
+                f"{DEBIAN_GL_PACKAGES}"
             )
         config = EGL.EGLConfig()
         count = EGL.EGLint()
@@ -177,17 +279,17 @@ class HeadlessContext(_Context):
         if not EGL.eglChooseConfig(
             self.display, attributes, ctypes.pointer(config), 1, ctypes.pointer(count)
         ) or count.value < 1:
-            self._terminate_if_unused()
             raise GLContextError("EGL has no config for desktop OpenGL (is Mesa installed?)")
         EGL.eglBindAPI(EGL.EGL_OPENGL_API)
-        self.context = EGL.eglCreateContext(self.display, config, EGL.EGL_NO_CONTEXT, None)
+        flags = (EGL.EGLint * 3)(EGL.EGL_CONTEXT_OPENGL_DEBUG, EGL.EGL_TRUE, EGL.EGL_NONE)
+        self.context = EGL.eglCreateContext(self.display, config, EGL.EGL_NO_CONTEXT,
+                                            flags if debug else None)
         if not self.context:
-            self._terminate_if_unused()
             raise GLContextError("eglCreateContext failed for desktop OpenGL")
-        global _egl_display_users
-        _egl_display_users += 1
         super().__init__()
         self.make_current()
+        if debug:
+            enable_debug_output()
 
     def make_current(self) -> None:
         egl = self._egl
@@ -196,17 +298,13 @@ class HeadlessContext(_Context):
             raise GLContextError("eglMakeCurrent failed (surfaceless contexts need Mesa)")
 
     def _destroy(self) -> None:
+        from OpenGL import contextdata
+
         egl = self._egl
+        contextdata.cleanupContext()  # PyOpenGL's own per-context records (this one is current)
         egl.eglMakeCurrent(self.display, egl.EGL_NO_SURFACE, egl.EGL_NO_SURFACE,
                            egl.EGL_NO_CONTEXT)
         egl.eglDestroyContext(self.display, self.context)
-        global _egl_display_users
-        _egl_display_users -= 1
-        self._terminate_if_unused()
-
-    def _terminate_if_unused(self) -> None:
-        if _egl_display_users == 0:
-            self._egl.eglTerminate(self.display)
 
 
 
@@ -217,29 +315,37 @@ class WindowContext(_Context):
     :meth:`release` (or use as a context manager) to close the window.
     """
 
-    def __init__(self, width: int, height: int, title: str, visible: bool = True) -> None:
+    def __init__(self, width: int, height: int, title: str, visible: bool = True,
+                 debug: bool = False) -> None:
         use_platform("glx")
+        if not os.environ.get("DISPLAY"):
+            raise GLContextError(
+                "no display for a window (DISPLAY is not set); run it on a desktop or "
+                "under 'xvfb-run -a', or use 'mirrorlab render', which needs no display")
+        check_libraries("glx")
         import glfw
 
         self._glfw = glfw
-        if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
-            raise GLContextError(
-                "no display for a window (DISPLAY is not set); run under a desktop, or "
-                "'xvfb-run -a mirrorlab demo', or use 'mirrorlab render' for headless output"
-            )
         glfw.ERROR_REPORTING = "ignore"
         if not glfw.init():
-            raise GLContextError(f"glfw could not initialise on display {os.environ['DISPLAY']}")
+            raise GLContextError(
+                f"cannot open the display {os.environ['DISPLAY']!r} for a window (is the X "
+                f"server running?); or use 'mirrorlab render', which needs no display")
         glfw.window_hint(glfw.VISIBLE, glfw.TRUE if visible else glfw.FALSE)
         glfw.window_hint(glfw.DEPTH_BITS, 24)
         glfw.window_hint(glfw.STENCIL_BITS, 8)
+        glfw.window_hint(glfw.OPENGL_DEBUG_CONTEXT, glfw.TRUE if debug else glfw.FALSE)
         self.window = glfw.create_window(width, height, title, None, None)
         if not self.window:
             glfw.terminate()
-            raise GLContextError("glfw could not create an OpenGL window on this display")
+            raise GLContextError(
+                f"cannot create an OpenGL window on display {os.environ['DISPLAY']!r}; "
+                f"install the Debian packages libgl1 {DRIVER_PACKAGES['glx']}")
         super().__init__()
         self.make_current()
         glfw.swap_interval(1)
+        if debug:
+            enable_debug_output()
 
     def make_current(self) -> None:
         self._glfw.make_context_current(self.window)

@@ -19,6 +19,7 @@ from typing import Protocol
 
 import numpy as np
 
+from mirrorlab.errors import GLLimitError
 from mirrorlab.gl.context import GLContextError, ResourceRegistry
 from mirrorlab.gl.opengl import GL
 from mirrorlab.paths import shader_source
@@ -159,19 +160,34 @@ class Program(_Resource):
         GL.glDeleteProgram(self.name)
 
 
+def check_texture_size(width: int, height: int, what: str, cube: bool = False) -> None:
+    """GLLimitError naming ``what`` when a ``width`` x ``height`` texture (a cube map's face,
+    with ``cube``) is larger than this GL allows."""
+    limit_name = "GL_MAX_CUBE_MAP_TEXTURE_SIZE" if cube else "GL_MAX_TEXTURE_SIZE"
+    limit = int(np.asarray(GL.glGetIntegerv(getattr(GL, limit_name))).reshape(-1)[0])
+    if width > limit or height > limit:
+        raise GLLimitError(f"{what} is {width}x{height}, larger than this OpenGL allows "
+                           f"({limit_name} {limit})")
+
+
 class Texture2D(_Resource):
-    """A 2D RGB texture. Make one with :meth:`from_image` or :meth:`blank`."""
+    """A 2D RGB texture (RGBA when made from ``(h, w, 4)`` pixels). Make one with
+    :meth:`from_image` or :meth:`blank`."""
 
     def __init__(self, registry: ResourceRegistry, width: int, height: int,
-                 pixels: np.ndarray | None, mipmaps: bool, clamp: bool) -> None:
+                 pixels: np.ndarray | None, mipmaps: bool, clamp: bool,
+                 what: str = "a texture") -> None:
+        check_texture_size(width, height, what)
         self.name = int(GL.glGenTextures(1))
         self.width, self.height = int(width), int(height)
         self.mipmaps = mipmaps
+        alpha = pixels is not None and pixels.shape[-1] == 4
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
         GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
         data = None if pixels is None else np.ascontiguousarray(pixels[::-1])
-        GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB8, self.width, self.height, 0,
-                        GL.GL_RGB, GL.GL_UNSIGNED_BYTE, data)
+        GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGBA8 if alpha else GL.GL_RGB8, self.width,
+                        self.height, 0, GL.GL_RGBA if alpha else GL.GL_RGB,
+                        GL.GL_UNSIGNED_BYTE, data)
         wrap = GL.GL_CLAMP_TO_EDGE if clamp else GL.GL_REPEAT
         GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_S, wrap)
         GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, wrap)
@@ -187,13 +203,16 @@ class Texture2D(_Resource):
         super().__init__(registry)
 
     @classmethod
-    def from_image(cls, registry: ResourceRegistry, image: np.ndarray) -> Texture2D:
-        """A mipmapped, repeating texture from ``image`` ``(h, w, 3)`` uint8, row 0 at the top."""
+    def from_image(cls, registry: ResourceRegistry, image: np.ndarray,
+                   what: str = "a texture") -> Texture2D:
+        """A mipmapped, repeating texture from ``image`` ``(h, w, 3)`` (or ``(h, w, 4)``, with
+        alpha) uint8, row 0 at the top; ``what`` names it in a GLLimitError."""
         image = np.asarray(image)
-        if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
-            raise ValueError(f"texture image must be (h, w, 3) uint8, got {image.shape} "
-                             f"{image.dtype}")
-        return cls(registry, image.shape[1], image.shape[0], image, mipmaps=True, clamp=False)
+        if image.ndim != 3 or image.shape[2] not in (3, 4) or image.dtype != np.uint8:
+            raise ValueError(f"texture image must be (h, w, 3) or (h, w, 4) uint8, got "
+                             f"{image.shape} {image.dtype}")
+        return cls(registry, image.shape[1], image.shape[0], image, mipmaps=True, clamp=False,
+                   what=what)
 
     @classmethod
     def blank(cls, registry: ResourceRegistry, width: int, height: int) -> Texture2D:
@@ -205,12 +224,17 @@ class Texture2D(_Resource):
         GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
 
-    def copy_from_framebuffer(self, width: int, height: int) -> None:
+    def copy_from_framebuffer(self, width: int, height: int,
+                              source: tuple[int, int]) -> None:
         """Copy the bound read framebuffer's lower-left ``width`` x ``height`` into level 0.
 
         This is the lab's ``glCopyTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, 0, 0, w, h, 0)``;
-        the texture takes the copied size.
+        the texture takes the copied size. ``source`` is the size of the framebuffer
+        read: a copy reaching outside it (whose texels GL leaves undefined) is refused.
         """
+        if width > source[0] or height > source[1]:
+            raise ValueError(f"a {width}x{height} copy reaches outside the {source[0]}x"
+                             f"{source[1]} framebuffer it reads")
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
         GL.glCopyTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB, 0, 0, int(width), int(height), 0)
         self.width, self.height = int(width), int(height)
@@ -438,9 +462,10 @@ class TextureCube(_Resource):
     """
 
     def __init__(self, registry: ResourceRegistry, size: int, faces: np.ndarray | None,
-                 mipmaps: bool) -> None:
+                 mipmaps: bool, what: str = "a cube map's face") -> None:
         if size < 1:
             raise ValueError(f"cube-map size must be positive, got {size}")
+        check_texture_size(size, size, what, cube=True)
         if faces is not None:
             faces = np.asarray(faces)
             if faces.shape != (6, size, size, 3) or faces.dtype != np.uint8:
@@ -469,29 +494,51 @@ class TextureCube(_Resource):
 
     @classmethod
     def from_faces(cls, registry: ResourceRegistry, faces: np.ndarray,
-                   mipmaps: bool = True) -> TextureCube:
-        """A (by default mipmapped) cube map from ``faces`` ``(6, n, n, 3)`` uint8."""
+                   mipmaps: bool = True, what: str = "a cube map's face") -> TextureCube:
+        """A (by default mipmapped) cube map from ``faces`` ``(6, n, n, 3)`` uint8; ``what``
+        names a face in a GLLimitError."""
         faces = np.asarray(faces)
         if faces.ndim != 4:
             raise ValueError(f"cube faces must be (6, n, n, 3) uint8, got {faces.shape}")
-        return cls(registry, faces.shape[1], faces, mipmaps=mipmaps)
+        return cls(registry, faces.shape[1], faces, mipmaps=mipmaps, what=what)
 
     @classmethod
-    def blank(cls, registry: ResourceRegistry, size: int, mipmaps: bool = False) -> TextureCube:
-        """Six empty ``size`` x ``size`` faces for a live capture. With ``mipmaps``, call
-        :meth:`generate_mipmaps` after each capture."""
-        return cls(registry, size, None, mipmaps=mipmaps)
+    def blank(cls, registry: ResourceRegistry, size: int, mipmaps: bool = False,
+              what: str = "a cube map's face") -> TextureCube:
+        """Six empty ``size`` x ``size`` faces for a live capture (or an :meth:`upload`).
+        With ``mipmaps``, call :meth:`generate_mipmaps` after each capture."""
+        return cls(registry, size, None, mipmaps=mipmaps, what=what)
 
     def bind(self, unit: int = 0) -> None:
         GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
         GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
 
-    def copy_face_from_framebuffer(self, face: int) -> None:
+    def upload(self, faces: np.ndarray) -> None:
+        """Fill level 0 of every face from ``faces`` ``(6, size, size, 3)`` uint8 (rows as
+        :meth:`from_faces` takes them) and rebuild the mipmaps, if any."""
+        faces = np.asarray(faces)
+        if faces.shape != (6, self.size, self.size, 3) or faces.dtype != np.uint8:
+            raise ValueError(f"cube faces must be (6, {self.size}, {self.size}, 3) uint8, got "
+                             f"{faces.shape} {faces.dtype}")
+        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
+        for face in range(6):
+            GL.glTexSubImage2D(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, 0, 0, self.size,
+                               self.size, GL.GL_RGB, GL.GL_UNSIGNED_BYTE,
+                               np.ascontiguousarray(faces[face, ::-1]))
+        if self.mipmaps:
+            GL.glGenerateMipmap(GL.GL_TEXTURE_CUBE_MAP)
+
+    def copy_face_from_framebuffer(self, face: int, source: tuple[int, int]) -> None:
         """Copy the bound read framebuffer's lower-left ``size`` x ``size`` square into level 0
         of ``face`` (0..5): ``glCopyTexImage2D(GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, ...)``.
-        Window row 0 (the bottom) becomes the face's ``t = 0``."""
+        Window row 0 (the bottom) becomes the face's ``t = 0``. ``source`` is the size of
+        the framebuffer read, which must hold the square."""
         if not 0 <= face < 6:
             raise ValueError(f"cube face must be 0..5, got {face}")
+        if self.size > min(source):
+            raise ValueError(f"a {self.size}x{self.size} face reaches outside the "
+                             f"{source[0]}x{source[1]} framebuffer it reads")
         GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
         GL.glCopyTexImage2D(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL.GL_RGB, 0, 0,
                             self.size, self.size, 0)

@@ -11,8 +11,8 @@ import numpy as np
 
 from mirrorlab.gl.context import ResourceRegistry
 from mirrorlab.gl.opengl import GL
-from mirrorlab.gl.resources import Framebuffer, MeshBuffer, Program, Texture2D
-from mirrorlab.scene.backgrounds import load_picture
+from mirrorlab.gl.resources import Framebuffer, MeshBuffer, Program, Texture2D, TextureCube
+from mirrorlab.scene.backgrounds import cube_face_size, load_cube_faces, load_picture
 from mirrorlab.scene.mesh import MeshData, load_mesh
 
 if TYPE_CHECKING:
@@ -21,6 +21,8 @@ if TYPE_CHECKING:
     from mirrorlab.scene.model import Reflector, Scene
     from mirrorlab.views import View
 
+SCRATCH_KEPT = 4
+"""Scratch framebuffers kept, by size (most recently used)."""
 NO_CLIP = (0.0, 0.0, 0.0, 1.0)
 """A plane every point is in front of: what the shaders get when nothing is clipped."""
 
@@ -50,7 +52,8 @@ class SharedResources:
     def texture(self, path: Path) -> Texture2D:
         """A mipmapped, repeating texture of the picture file ``path``."""
         if path not in self._textures:
-            self._textures[path] = Texture2D.from_image(self.registry, load_picture(path))
+            self._textures[path] = Texture2D.from_image(self.registry, load_picture(path),
+                                                        what=f"picture {path}")
         return self._textures[path]
 
     def program(self, vertex: str, fragment: str, **defines: str | int) -> Program:
@@ -60,10 +63,17 @@ class SharedResources:
         return self._programs[key]
 
     def scratch(self, size: tuple[int, int]) -> Framebuffer:
-        """A colour + depth/stencil framebuffer of ``size`` to draw a capture into."""
-        if size not in self._scratch:
-            self._scratch[size] = Framebuffer(self.registry, *size)
-        return self._scratch[size]
+        """A colour + depth/stencil framebuffer of ``size`` to draw a capture into. The
+        last :data:`SCRATCH_KEPT` sizes used are kept (a window being resized would
+        otherwise leave one behind for every size it passed through)."""
+        framebuffer = self._scratch.pop(size, None)
+        if framebuffer is None:
+            framebuffer = Framebuffer(self.registry, *size)
+        self._scratch[size] = framebuffer  # now the most recently used
+        while len(self._scratch) > SCRATCH_KEPT:
+            oldest = next(iter(self._scratch))
+            self._scratch.pop(oldest).release()
+        return framebuffer
 
     def release(self) -> None:
         for _, mesh in self._meshes.values():
@@ -75,6 +85,20 @@ class SharedResources:
         self._textures.clear()
         self._programs.clear()
         self._scratch.clear()
+
+
+def cube_from_folder(registry: ResourceRegistry, folder: Path) -> TextureCube:
+    """A mipmapped cube map of the six pictures in ``folder``. Its storage is made from
+    the first face's header before any picture is decoded: a size the GL cannot
+    allocate fails at once, not after reading six large pictures."""
+    cube = TextureCube.blank(registry, cube_face_size(folder), mipmaps=True,
+                             what=f"cube face {folder}/px.png")
+    try:
+        cube.upload(load_cube_faces(folder))
+    except BaseException:
+        cube.release()
+        raise
+    return cube
 
 
 def set_view_uniforms(program: Program, view: View) -> None:

@@ -13,7 +13,7 @@ from __future__ import annotations
 from mirrorlab.gl.resources import DepthTextureCube, Program, RenderTarget, TextureCube
 from mirrorlab.passes.base import SharedResources, ViewDrawer
 from mirrorlab.passes.envmap import CurvedPass
-from mirrorlab.passes.sky import background_faces
+from mirrorlab.passes.sky import background_cube
 from mirrorlab.plan import PlannedPass, ReflectorDraw
 from mirrorlab.scene.model import (
     Background,
@@ -46,8 +46,7 @@ class LiveCubeMapped(CurvedPass):
         self.background: TextureCube | None = None
         if isinstance(reflector.parallax, DistanceSearch):
             assert background is not None
-            self.background = TextureCube.from_faces(shared.registry,
-                                                     background_faces(background))
+            self.background = background_cube(shared, background)
 
     def make_program(self, shared: SharedResources, reflector: CurvedReflector) -> Program:
         kind = None if reflector.parallax is None else reflector.parallax.kind
@@ -91,7 +90,7 @@ class LiveCubeMapped(CurvedPass):
         for face, plan in enumerate(step.views):
             draws += renderer.draw_view(plan, target)
             target.bind()
-            cube.copy_face_from_framebuffer(face)
+            cube.copy_face_from_framebuffer(face, target.size)
             if depth is not None:
                 depth.copy_face_from_framebuffer(face)
         cube.generate_mipmaps()

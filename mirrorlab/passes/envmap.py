@@ -20,9 +20,9 @@ from mirrorlab.gl.resources import (
     Texture2D,
     TextureCube,
 )
-from mirrorlab.passes.base import NO_CLIP, SharedResources, ViewDrawer
+from mirrorlab.passes.base import NO_CLIP, SharedResources, ViewDrawer, cube_from_folder
 from mirrorlab.plan import PlannedPass, ReflectorDraw
-from mirrorlab.scene.backgrounds import environment_of, load_cube_faces, load_picture
+from mirrorlab.scene.backgrounds import environment_of, load_picture
 from mirrorlab.scene.model import Background, CurvedReflector
 from mirrorlab.views import View, eye_position, is_orthographic
 
@@ -215,8 +215,11 @@ class SphereMapped(CurvedPass):
             return 0
         if old is not None:
             old.release()
+        what = (f"picture {reflector.source}" if reflector.source is not None
+                else f"reflector {reflector.name}'s sphere map")
         self.textures[step.slot] = Texture2D(self.shared.registry, image.shape[1],
-                                             image.shape[0], image, mipmaps=True, clamp=True)
+                                             image.shape[0], image, mipmaps=True, clamp=True,
+                                             what=what)
         return 0
 
     def map_for(self, draw: ReflectorDraw) -> Texture2D:
@@ -230,14 +233,14 @@ class CubeMapped(CurvedPass):
     def __init__(self, shared: SharedResources, reflector: CurvedReflector,
                  background: Background) -> None:
         super().__init__(shared, reflector, background)
-        if reflector.source is not None:
-            faces = load_cube_faces(reflector.source)
-        elif background.kind == "cube_faces":
-            assert background.path is not None
-            faces = load_cube_faces(background.path)
+        folder = reflector.source if reflector.source is not None else (
+            background.path if background.kind == "cube_faces" else None)
+        if folder is not None:
+            self.cube = cube_from_folder(shared.registry, folder)
         else:
-            faces = baked_cube(background, reflector.map_size)
-        self.cube = TextureCube.from_faces(shared.registry, faces)
+            self.cube = TextureCube.from_faces(shared.registry,
+                                               baked_cube(background, reflector.map_size),
+                                               what=f"reflector {reflector.name}'s cube map")
 
     def release(self) -> None:
         self.cube.release()

@@ -130,11 +130,14 @@ class CaptureTextures:
         size = plan.view.size
         texture = self.texture(slot)
         if self.mode == "copy":
+            # The frame's own target when it has the capture's size (as the lab does),
+            # else a framebuffer of exactly that size: the copy never reads outside what
+            # was drawn, whatever size the window has.
             target: RenderTarget = (frame_target if tuple(frame_target.size) == size
                                     else self.shared.scratch(size))
             draws = renderer.draw_view(plan, target)
             target.bind()
-            texture.copy_from_framebuffer(*size)
+            texture.copy_from_framebuffer(*size, source=tuple(target.size))
             return draws
         framebuffer = self._framebuffers.get(slot)
         if framebuffer is None or framebuffer.size != size:

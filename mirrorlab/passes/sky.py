@@ -9,7 +9,7 @@ import numpy as np
 from mirrorlab.envmap import bake_cube_faces
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import MeshBuffer, TextureCube
-from mirrorlab.passes.base import SharedResources
+from mirrorlab.passes.base import SharedResources, cube_from_folder
 from mirrorlab.scene.backgrounds import environment_of, load_cube_faces
 from mirrorlab.scene.model import Background
 from mirrorlab.views import View, is_orthographic
@@ -32,6 +32,17 @@ def background_faces(background: Background, size: int = SKY_SIZE) -> np.ndarray
         assert background.path is not None
         return load_cube_faces(background.path)
     return bake_cube_faces(environment_of(background), size)
+
+
+def background_cube(shared: SharedResources, background: Background) -> TextureCube:
+    """The background as a cube map: a folder of pictures read face by face (its GL
+    storage made from the first picture's header, so a size the GL cannot hold is refused
+    before any picture is decoded), anything else baked (:func:`background_faces`)."""
+    if background.kind == "cube_faces":
+        assert background.path is not None
+        return cube_from_folder(shared.registry, background.path)
+    return TextureCube.from_faces(shared.registry, background_faces(background),
+                                  what="the background's cube map face")
 
 
 def ray_directions(view: View) -> np.ndarray:
@@ -59,7 +70,7 @@ class SkyPass:
 
     def __init__(self, shared: SharedResources, background: Background) -> None:
         self.background = background
-        self.cube = TextureCube.from_faces(shared.registry, background_faces(background))
+        self.cube = background_cube(shared, background)
         self.program = shared.program("envmap_sky.vert", "envmap_sky.frag")
         self.triangle = MeshBuffer(shared.registry, _SCREEN_TRIANGLE,
                                    np.arange(3, dtype=np.uint32))

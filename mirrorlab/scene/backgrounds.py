@@ -130,17 +130,43 @@ def cube_faces_environment(faces: np.ndarray) -> EnvFunction:
     return environment
 
 
+MAX_PICTURE_PIXELS = 16384 * 16384
+"""Largest picture read, in pixels (a 16384 x 16384 picture is 768 MB as RGB); a larger
+one is refused from its header, before anything is decoded."""
+
+
 def load_picture(path: str | Path) -> np.ndarray:
     """A picture file as ``(h, w, 3)`` uint8, row 0 at the top; ValueError naming the file
-    when it cannot be read as an image."""
+    when it cannot be read (missing, unreadable, empty, corrupt, not an image) or holds
+    more than :data:`MAX_PICTURE_PIXELS` pixels."""
+    import warnings
+
     from PIL import Image
 
     path = Path(path)
+    if path.is_file() and path.stat().st_size == 0:
+        raise ValueError(f"picture {path} is empty (0 bytes)")
     try:
-        with Image.open(path) as image:
-            return np.asarray(image.convert("RGB"))
-    except (OSError, ValueError) as exc:
+        with warnings.catch_warnings():
+            # Pillow's decompression-bomb guard: the size is checked here instead.
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            Image.MAX_IMAGE_PIXELS = None
+            with Image.open(path) as image:
+                width, height = image.size
+                if width * height > MAX_PICTURE_PIXELS:
+                    raise ValueError(f"picture {path} is {width}x{height}, too large: "
+                                     f"expected at most {MAX_PICTURE_PIXELS:,} pixels "
+                                     f"(16384x16384)")
+                if width < 1 or height < 1:
+                    raise ValueError(f"picture {path} is {width}x{height}: it has no pixels")
+                return np.asarray(image.convert("RGB"))
+    except ValueError as exc:
+        if str(exc).startswith(f"picture {path}"):
+            raise
         raise ValueError(f"picture {path} cannot be read as an image ({exc})") from None
+    except (OSError, SyntaxError, EOFError, MemoryError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
+        raise ValueError(f"picture {path} cannot be read as an image ({reason})") from None
 
 
 def load_cube_faces(folder: str | Path) -> np.ndarray:
@@ -156,6 +182,21 @@ def load_cube_faces(folder: str | Path) -> np.ndarray:
     stamps = tuple((folder / f"{stem}.png").stat().st_mtime_ns
                    if (folder / f"{stem}.png").is_file() else None for stem in CUBE_FACE_FILES)
     return _load_cube_faces(folder.resolve(), stamps)
+
+
+def cube_face_size(folder: str | Path) -> int:
+    """The side of the cube faces in ``folder``, from ``px.png``'s header alone (nothing is
+    decoded), so that a texture too large for the GL is found before six pictures are
+    read; :func:`load_cube_faces` checks the faces fully. ValueError naming the file."""
+    from PIL import Image
+
+    path = Path(folder) / f"{CUBE_FACE_FILES[0]}.png"
+    try:
+        with Image.open(path) as image:
+            return int(image.size[0])
+    except (OSError, ValueError, SyntaxError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
+        raise ValueError(f"picture {path} cannot be read as an image ({reason})") from None
 
 
 @lru_cache(maxsize=8)

@@ -64,6 +64,10 @@ MAX_MAP_SIZE = 4096
 MAX_FRAMES = 100_000
 MAX_SEARCH_STEPS = 64
 """Most linear-search steps (and secant steps) a distance-search lookup may take."""
+MAX_MAGNITUDE = 1e6
+"""Largest magnitude of any number in a scene: GL computes in 32-bit floats, which keep
+about 7 digits, so beyond a million units a scene has no precision left (and beyond 3.4e38
+no value at all)."""
 
 _TOP_KEYS = ("name", "description", "max_bounces", "ambient", "camera", "background",
              "lights", "objects", "reflectors", "animation")
@@ -341,10 +345,19 @@ class _Reader:
             raise self.fail(key, f"expected a number, got {_kind(value)}")
         try:
             number = float(value)
-        except OverflowError:
-            raise self.fail(key, f"number {value} is too large") from None
-        if not math.isfinite(number):
-            raise self.fail(key, f"expected a finite number, got {value}")
+        except OverflowError:  # a whole number beyond float64
+            number = math.inf if value > 0 else -math.inf
+        else:
+            if not math.isfinite(number):
+                why = " (a number beyond 1.8e308 overflows to inf)" if math.isinf(number) else ""
+                raise self.fail(key, f"expected a finite number, got {value}{why}")
+        if not abs(number) <= MAX_MAGNITUDE:
+            shown = f"{number:g}" if math.isfinite(number) else (
+                f"a {len(str(abs(value)))}-digit number" if isinstance(value, int)
+                else str(value))
+            raise self.fail(key, f"{shown} is too large: it overflows OpenGL's 32-bit "
+                            f"floats or loses all precision in them; expected a number from "
+                            f"{-MAX_MAGNITUDE:g} to {MAX_MAGNITUDE:g}")
         if low is not None and (number < low or (low_open and number == low)):
             bound = f"greater than {low:g}" if low_open else f"at least {low:g}"
             raise self.fail(key, f"expected a number {bound}, got {value}")

@@ -8,6 +8,11 @@ from pathlib import Path
 
 import numpy as np
 
+MAX_MESH_BYTES = 256 * 2**20
+"""Largest mesh file read."""
+MAX_COORDINATE = 1e6
+"""Largest vertex coordinate magnitude (as :data:`mirrorlab.scene.loader.MAX_MAGNITUDE`)."""
+
 
 @dataclass(frozen=True)
 class MeshData:
@@ -63,6 +68,12 @@ def load_mesh(path: str | Path) -> MeshData:
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"mesh file {path} does not exist")
+    size = path.stat().st_size
+    if size == 0:
+        raise ValueError(f"mesh file {path} is empty (0 bytes)")
+    if size > MAX_MESH_BYTES:
+        raise ValueError(f"mesh file {path} is {size / 2**20:,.0f} MB, too large: expected "
+                         f"at most {MAX_MESH_BYTES // 2**20} MB")
     try:
         with warnings.catch_warnings():
             # trimesh's texture merge warns (an all-NaN median) on some files it then
@@ -75,6 +86,14 @@ def load_mesh(path: str | Path) -> MeshData:
     indices = np.asarray(mesh.faces, dtype=np.int64)
     if indices.size == 0:
         raise ValueError(f"mesh file {path}: expected triangles, found none")
+    if not np.all(np.isfinite(positions)):
+        row = int(np.flatnonzero(~np.isfinite(positions).all(axis=1))[0])
+        raise ValueError(f"mesh file {path}: vertex {row + 1} is not finite "
+                         f"({positions[row].tolist()})")
+    if np.abs(positions).max() > MAX_COORDINATE:
+        row = int(np.flatnonzero((np.abs(positions) > MAX_COORDINATE).any(axis=1))[0])
+        raise ValueError(f"mesh file {path}: vertex {row + 1} ({positions[row].tolist()}) "
+                         f"lies beyond {MAX_COORDINATE:g}, too far for OpenGL's 32-bit floats")
     uv = getattr(mesh.visual, "uv", None)
     uvs = np.zeros((len(positions), 2)) if uv is None else np.asarray(uv, dtype=np.float64)
     return MeshData(

@@ -38,6 +38,10 @@ DEFAULT_BACKING: Vec3 = (0.33, 0.3, 0.27)
 """Unlit colour of a planar mirror's back face."""
 
 
+NEAR_MARGIN = 1e-4
+"""How far (a share of ``near``) a camera's clipping near plane lies before ``near``."""
+
+
 @dataclass(frozen=True)
 class Camera:
     """A perspective viewer. ``fovy`` is the vertical field of view in degrees; ``near``
@@ -55,8 +59,14 @@ class Camera:
         return math3d.look_at(self.eye, self.target, self.up)
 
     def projection(self, aspect: float) -> np.ndarray:
-        """``(4, 4)`` perspective for a width / height ``aspect``."""
-        return math3d.perspective(self.fovy, aspect, self.near, self.far)
+        """``(4, 4)`` perspective for a width / height ``aspect``.
+
+        Its near plane lies :data:`NEAR_MARGIN` of ``near`` closer to the eye than
+        ``near``: a surface exactly at the near distance (a viewer placed exactly
+        ``near`` from a mirror) is then in front of the plane by far more than float
+        rounding, so it is drawn, and traced, the same way every time."""
+        return math3d.perspective(self.fovy, aspect, self.near * (1.0 - NEAR_MARGIN),
+                                  self.far)
 
 
 @dataclass(frozen=True)

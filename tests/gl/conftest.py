@@ -11,7 +11,10 @@ from mirrorlab.gl.opengl import GL
 
 @pytest.fixture(scope="session")
 def gl_context():
-    with HeadlessContext() as context:
+    """A debug context: its KHR_debug messages are checked after every pass the renderer
+    runs (and PyOpenGL checks glGetError after every call), so a GL error fails the test
+    where it happens, naming the pass."""
+    with HeadlessContext(debug=True) as context:
         yield context
 
 

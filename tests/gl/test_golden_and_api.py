@@ -142,6 +142,7 @@ def run_cli(*args, cwd):
 
 
 def test_cli_render_writes_frame_and_environment(tmp_path):
+    (tmp_path / "o").mkdir()
     result = run_cli("render", "--out", "o/frame.png", "--size", "80x60", "--save-env",
                      "o/env.png", "--angles", "0,10,-20", "--camera", "10,4,8",
                      "--target", "-3.5,1,-2", cwd=tmp_path)

@@ -766,8 +766,11 @@ def test_other_structural_mistakes_are_named(tmp_path):
     cases.append((document, "camera.up", "is too short to orient the camera"))
     document = base_document()
     document["lights"] = [{"direction": [1e300, 1e300, 0]}]
-    cases.append((document, "lights[0].direction",
-                  "expected a direction whose length is a finite number"))
+    cases.append((document, "lights[0].direction[0]", "1e+300 is too large: it overflows "
+                  "OpenGL's 32-bit floats"))
+    document = base_document()
+    document["camera"]["eye"] = [1e150, 5, 9]  # fine in float64, infinite in GL's float32
+    cases.append((document, "camera.eye[0]", "expected a number from -1e+06 to 1e+06"))
     for document, key, words in cases:
         assert_refused(tmp_path, document, key, words)
 

@@ -13,6 +13,7 @@ from mirrorlab.scene.animation import interpolate
 from mirrorlab.scene.graph import Node, SceneGraph
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import (
+    NEAR_MARGIN,
     Camera,
     PlanarReflector,
     RobotObject,
@@ -203,7 +204,11 @@ def test_transform_scales_then_turns_x_y_z_then_moves():
 def test_camera_matrices_and_their_refusals():
     camera = Camera(eye=(0, 0, 5), target=(0, 0, 0), fovy=90, near=1, far=10)
     assert np.allclose(camera.view(), math3d.look_at((0, 0, 5), (0, 0, 0), (0, 1, 0)))
-    assert np.allclose(camera.projection(2.0), math3d.perspective(90, 2.0, 1, 10))
+    # The clipping near plane lies NEAR_MARGIN of near before near (see test_near_plane).
+    assert np.allclose(camera.projection(2.0),
+                       math3d.perspective(90, 2.0, 1 - NEAR_MARGIN, 10), rtol=0, atol=1e-15)
+    assert not np.allclose(camera.projection(2.0), math3d.perspective(90, 2.0, 1, 10),
+                           rtol=0, atol=1e-6)
     with pytest.raises(ValueError):
         Camera(eye=(1, 1, 1), target=(1, 1, 1)).view()
 

@@ -12,15 +12,7 @@ import pytest
 
 import mirrorlab
 from tests.imagecheck import assert_images_close, save_failure
-from tests.window.test_demo import (  # noqa: F401  (xdisplay is a fixture)
-    GIVE_UP_S,
-    find_window,
-    press,
-    screenshot,
-    title,
-    wait_for,
-    xdisplay,
-)
+from tests.window.xwindow import GIVE_UP_S, find_window, press, screenshot, title, wait_for
 
 WIDTH, HEIGHT = 256, 256
 
@@ -36,7 +28,7 @@ def cone_demo():
         proc.wait()
 
 
-def test_cone_demo_moves_the_cone_and_its_reflection_changes(xdisplay, cone_demo):  # noqa: F811
+def test_cone_demo_moves_the_cone_and_its_reflection_changes(xdisplay, cone_demo):
     window = find_window(xdisplay, "mirrorlab demo - spheremap_cone")
     headless = mirrorlab.render("cone", size=(WIDTH, HEIGHT))
 
