@@ -243,15 +243,18 @@ def curved_reflectors(draw, name: str) -> dict[str, Any]:
         entry["source"] = str(draw(st.sampled_from(PICTURES)))
     elif technique == "cube-live" and draw(st.booleans()):
         entry["parallax"] = draw(parallax_tables())
+        if entry["parallax"]["proxy"] == "box":  # numbers beyond 1e6 are refused: keep
+            entry["capture_center"] = [0.0, 0.0, 0.0]  # the centre inside the box
+            entry["position"] = draw(vec(st.floats(-5e5, 5e5)))
     return entry
 
 
 @st.composite
 def parallax_tables(draw) -> dict[str, Any]:
     proxy = draw(st.sampled_from(PARALLAX_PROXIES))
-    if proxy == "box":  # wide enough to hold any capture centre drawn here
-        return {"proxy": "box", "min": draw(vec(st.floats(-1e35, -1e30))),
-                "max": draw(vec(st.floats(1e30, 1e35)))}
+    if proxy == "box":  # holds every capture centre within 5e5 of the origin
+        return {"proxy": "box", "min": draw(vec(st.floats(-1e6, -5e5))),
+                "max": draw(vec(st.floats(5e5, 1e6)))}
     if proxy == "sphere":
         return {"proxy": "sphere", "radius": draw(st.floats(1e-6, 1e6))}
     table: dict[str, Any] = {"proxy": "distance"}
