@@ -1,0 +1,1 @@
+"""The sphere-map lab's judge (placeholder until written)."""
