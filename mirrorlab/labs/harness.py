@@ -248,6 +248,8 @@ def drive_spheremap(namespace: dict[str, Any], run: Run, session: Any) -> None:
     finish_frame(run, session)
     fixed = [e for e in session.events if e["kind"] == "draw_cone_fixed_function"]
     run.state["texgen_draws"] = [{k: v for k, v in e.items() if k != "kind"} for e in fixed]
+    run.state["frame_events"] = [
+        {"kind": e["kind"], "steps": e["steps"]} for e in session.events][:100]
     run.state["launch_texture"] = int(session.backdrop_texture)
     texture = namespace.get("launch")
     run.state["student_launch"] = int(texture) if isinstance(texture, int | np.integer) else -1

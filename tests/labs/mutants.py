@@ -87,7 +87,65 @@ LEGACY = (
     Mutant("lab20", "legacy_gl_clamp", (("GL_CLAMP_TO_EDGE", "GL_CLAMP"),), {}),
 )
 
-MUTANTS = (*LAB20,)
+SPHEREMAP = (
+    Mutant("spheremap", "reflect_sign",
+           (("return u - 2.0 * dot(n, u) * n;", "return 2.0 * dot(n, u) * n - u;"),),
+           {"reflection": "wrong way", "side_by_side": "tasks 1 and 2"}),
+    Mutant("spheremap", "reflect_no_two",
+           (("return u - 2.0 * dot(n, u) * n;", "return u - dot(n, u) * n;"),),
+           {"reflection": "factor 2", "side_by_side": "tasks 1 and 2"}),
+    Mutant("spheremap", "st_no_plus_one",
+           (("(r.z + 1.0) * (r.z + 1.0)", "r.z * r.z"),),
+           {"sphere_coordinates": "r.z + 1", "side_by_side": "tasks 1 and 2"}),
+    Mutant("spheremap", "st_swapped",
+           (("vec2(r.x / m + 0.5, r.y / m + 0.5)", "vec2(r.y / m + 0.5, r.x / m + 0.5)"),),
+           {"sphere_coordinates": "swapped", "side_by_side": "tasks 1 and 2"}),
+    Mutant("spheremap", "texgen_object_linear",
+           (("glTexGeni(GL_T, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)",
+             "glTexGeni(GL_T, GL_TEXTURE_GEN_MODE, GL_OBJECT_LINEAR)"),),
+           {"texgen_setup": "GL_OBJECT_LINEAR", "side_by_side": "tasks 3 and 4"}),
+    Mutant("spheremap", "texgen_left_on",
+           (("    glDisable(GL_TEXTURE_GEN_S)\n    glDisable(GL_TEXTURE_GEN_T)\n", ""),),
+           {"texgen_draw": "left on"}),
+    Mutant("spheremap", "texgen_only_s", (("    glEnable(GL_TEXTURE_GEN_T)\n", ""),),
+           {"texgen_draw": "for t is off", "side_by_side": "tasks 3 and 4"}),
+)
+
+CUBEMAP = (
+    Mutant("cubemap", "face_signed_max", (("    vec3 a = abs(r);", "    vec3 a = r;"),),
+           {"face_selection": "largest signed", "live_frame": "tasks 1 to 4"}),
+    Mutant("cubemap", "st_swapped",
+           (("return vec2((sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0);",
+             "return vec2((tc / ma + 1.0) / 2.0, (sc / ma + 1.0) / 2.0);"),),
+           {"face_coordinates": "swapped", "live_frame": "tasks 1 to 4"}),
+    Mutant("cubemap", "st_not_divided",
+           (("return vec2((sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0);",
+             "return vec2((sc + 1.0) / 2.0, (tc + 1.0) / 2.0);"),),
+           {"face_coordinates": "divided by |major axis|", "live_frame": "tasks 1 to 4"}),
+    Mutant("cubemap", "up_wrong",
+           (("((1, 0, 0), (0, -1, 0))", "((1, 0, 0), (0, 1, 0))"),
+            ("((-1, 0, 0), (0, -1, 0))", "((-1, 0, 0), (0, 1, 0))"),
+            ("((0, 0, 1), (0, -1, 0))", "((0, 0, 1), (0, 1, 0))"),
+            ("((0, 0, -1), (0, -1, 0))", "((0, 0, -1), (0, 1, 0))")),
+           {"capture_cameras": "up must be", "capture_copy": "task 3",
+            "live_frame": "tasks 1 to 4"}),
+    Mutant("cubemap", "fov_60", (("gluPerspective(90, 1, 0.05, 50)",
+                                  "gluPerspective(60, 1, 0.05, 50)"),),
+           {"capture_cameras": "field of view 60", "capture_copy": "task 3",
+            "live_frame": "tasks 1 to 4"}),
+    Mutant("cubemap", "faces_swapped_y",
+           (("((0, 1, 0), (0, 0, 1)),      # POSITIVE_Y", "((0, -1, 0), (0, 0, -1)),   # Y-"),
+            ("((0, -1, 0), (0, 0, -1)),    # NEGATIVE_Y", "((0, 1, 0), (0, 0, 1)),     # Y+")),
+           {"capture_cameras": "wrong order", "capture_copy": "task 3",
+            "live_frame": "tasks 1 to 4"}),
+    Mutant("cubemap", "capture_after_camera",
+           (("    capture_cube()\n    glClear", "    glClear"),
+            ("    lab.draw_scene()\n    lab.draw_sphere", "    lab.draw_scene()\n    capture_cube()\n"
+             "    lab.draw_sphere")),
+           {"live_frame": "wrong order"}),
+)
+
+MUTANTS = (*LAB20, *SPHEREMAP, *CUBEMAP)
 
 
 def write_mutants(folder: Path, mutants=MUTANTS) -> dict[str, Mutant]:
