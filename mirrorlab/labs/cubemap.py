@@ -232,15 +232,19 @@ def judge(spec: LabSpec, student: Evidence, reference: Evidence) -> list[TaskRes
     return results_with_errors(spec, student, verdicts, GLSL_FUNCTIONS)
 
 
-def faces_strip(faces: np.ndarray | None, height: int) -> np.ndarray | None:
-    """Six faces side by side, scaled to fit a picture ``height`` tall and as wide as it."""
+def faces_grid(faces: np.ndarray | None, height: int) -> np.ndarray | None:
+    """The six faces in GL order as a 3 x 2 grid (+X -X +Y over -Y +Z -Z), in a square
+    picture ``height`` on a side."""
     if not isinstance(faces, np.ndarray) or faces.ndim != 4 or faces.shape[0] != 6:
         return None
-    strip = np.concatenate(list(faces), axis=1)
-    rows = np.linspace(0, strip.shape[0] - 1, height // 3).astype(int)
-    cols = np.linspace(0, strip.shape[1] - 1, height).astype(int)
+    side = height // 3
+    index = np.linspace(0, faces.shape[1] - 1, side).astype(int)
     out = np.full((height, height, 3), 255, dtype=np.uint8)
-    out[:height // 3] = strip[rows][:, cols]
+    top = (height - 2 * side) // 2
+    for face in range(6):
+        row, col = divmod(face, 3)
+        out[top + row * side:top + (row + 1) * side, col * side:(col + 1) * side] = \
+            faces[face][index][:, index]
     return out
 
 
@@ -248,7 +252,7 @@ def check_picture(student: Evidence, reference: Evidence) -> np.ndarray:
     ref = reference.image("frame")
     shape = ref.shape[:2] if ref is not None else (256, 256)
     return picture([(student.image("frame"), ref),
-                    (faces_strip(student.arrays.get("cube_faces"), shape[0]),
-                     faces_strip(reference.arrays.get("cube_faces"), shape[0]))], shape)
+                    (faces_grid(student.arrays.get("cube_faces"), shape[0]),
+                     faces_grid(reference.arrays.get("cube_faces"), shape[0]))], shape)
 
 

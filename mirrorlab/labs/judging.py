@@ -133,12 +133,25 @@ def blank(shape: tuple[int, int]) -> np.ndarray:
     return image
 
 
+HEADER = 16
+"""Pixels above the picture's cells for their titles."""
+
+
 def picture(rows: list[tuple[np.ndarray | None, np.ndarray | None]],
             size: tuple[int, int]) -> np.ndarray:
-    """Rows of student | reference | difference, each ``size`` (h, w), separated by 4 px."""
+    """Rows of student | reference | difference, each cell ``size`` (h, w), separated by
+    4 px, under a line of titles."""
+    from PIL import Image, ImageDraw
+
     h, w = size
     gap = 4
-    out = np.full((len(rows) * (h + gap) - gap, 3 * w + 2 * gap, 3), 255, dtype=np.uint8)
+    out = np.full((HEADER + len(rows) * (h + gap) - gap, 3 * w + 2 * gap, 3), 255,
+                  dtype=np.uint8)
+    titles = Image.fromarray(out[:HEADER])
+    draw = ImageDraw.Draw(titles)
+    for j, title in enumerate(("student", "reference", "difference x4")):
+        draw.text((j * (w + gap) + 4, 2), title, fill=(40, 40, 40))
+    out[:HEADER] = np.asarray(titles)
     for i, (student, reference) in enumerate(rows):
         ok_s = student is not None and student.shape == (h, w, 3)
         ok_r = reference is not None and reference.shape == (h, w, 3)
@@ -146,7 +159,7 @@ def picture(rows: list[tuple[np.ndarray | None, np.ndarray | None]],
                  difference_picture(student, reference) if ok_s and ok_r  # type: ignore[arg-type]
                  else blank((h, w))]
         for j, cell in enumerate(cells):
-            y, x = i * (h + gap), j * (w + gap)
+            y, x = HEADER + i * (h + gap), j * (w + gap)
             out[y:y + h, x:x + w] = cell
     return out
 
