@@ -112,8 +112,9 @@ def build_parser() -> argparse.ArgumentParser:
     lab = commands.add_parser("lab", help="check, run and grade the lab exercises")
     lab_commands = lab.add_subparsers(dest="lab_command", required=True, metavar="ACTION")
     limits = argparse.ArgumentParser(add_help=False)
-    limits.add_argument("--timeout", metavar="SECONDS", default="30",
-                        help="time limit of one submission (default %(default)s)")
+    limits.add_argument("--timeout", metavar="SECONDS", default="20",
+                        help="CPU-time limit of one submission (default %(default)s); it may "
+                        "take three times as long on the clock, plus 30 s")
     limits.add_argument("--memory", metavar="MB", default="1536",
                         help="memory limit of one submission (default %(default)s)")
     check = lab_commands.add_parser("check", parents=[limits],
@@ -272,7 +273,8 @@ def run_lab(args: argparse.Namespace) -> int:
         return run_window(args.lab_name, args.file, size, max_frames, screenshot)
     from mirrorlab.labs.sandbox import Limits
 
-    limits = Limits(seconds=float(parse_count("--timeout", args.timeout, 1, 3600)),
+    cpu = parse_count("--timeout", args.timeout, 1, 3600)
+    limits = Limits(cpu_seconds=cpu, seconds=3.0 * cpu + 30,
                     memory_mb=parse_count("--memory", args.memory, 256, 1 << 20))
     if action == "check":
         from mirrorlab.labs.checker import run_check

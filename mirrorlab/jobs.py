@@ -62,7 +62,7 @@ class Executor:
         for key, args in jobs.items():
             try:
                 yield Outcome(key, function(*args))
-            except Exception as exc:  # noqa: BLE001 - reported as that job's error
+            except Exception as exc:
                 yield Outcome(key, error=_describe(exc))
 
 
@@ -90,7 +90,7 @@ class PoolExecutor(Executor):
                     except concurrent.futures.process.BrokenProcessPool:
                         broken = True
                         continue
-                    except Exception as exc:  # noqa: BLE001
+                    except Exception as exc:
                         del pending[key]
                         yield Outcome(key, error=_describe(exc))
                         continue
@@ -149,7 +149,7 @@ class DaskExecutor(Executor):
             key = futures[future]
             try:
                 yield Outcome(key, future.result())
-            except Exception as exc:  # noqa: BLE001 - KilledWorker too: retries ran out
+            except Exception as exc:
                 yield Outcome(key, error=_describe(exc))
             finally:
                 future.release()

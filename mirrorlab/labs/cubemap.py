@@ -9,8 +9,7 @@ import numpy as np
 
 from mirrorlab.envmap import cube_map
 from mirrorlab.labs import LabSpec
-from mirrorlab.labs.judging import Evidence, TaskResult, picture, results_with_errors, \
-    share_within
+from mirrorlab.labs.judging import Evidence, TaskResult, picture, results_with_errors, share_within
 from mirrorlab.labs.kit import CubeMapLab
 from mirrorlab.views import CUBE_FACE_NAMES, CUBE_FACES
 
@@ -106,7 +105,7 @@ def judge_cameras(student: Evidence) -> tuple[bool, str]:
     if count != 6:
         return False, f"capture_cube() draws the scene {count} times; a cube map needs six"
     hints: list[str] = []
-    for i, projection in enumerate(projections):
+    for projection in projections:
         if not np.allclose(projection[3], (0, 0, -1, 0), atol=1e-6):
             hints.append("the face cameras need a perspective projection: gluPerspective(90, 1, "
                          "near, far)")
@@ -206,6 +205,9 @@ def judge_frame(student: Evidence, reference: Evidence,
                        "framebuffer, so it runs before the frame is cleared and drawn")
     if sphere is not None and capture is not None and capture > sphere:
         return False, "the sphere is drawn before this frame's capture: capture first"
+    stopped = student.stopped_by()
+    if stopped and stopped != "display":
+        return False, f"not judged: the frame stopped at {stopped}()"
     frame, ref = student.image("frame"), reference.image("frame")
     if frame is None or ref is None or frame.shape != ref.shape:
         return False, "display() drew no frame"

@@ -95,7 +95,7 @@ def load_student(path: Path, run: Run) -> dict[str, Any] | None:
     namespace: dict[str, Any] = {"__name__": "student_lab", "__file__": str(path)}
     try:
         exec(code, namespace)
-    except BaseException as exc:  # noqa: BLE001 - anything the student's file raises
+    except BaseException as exc:
         run.exception("<file>", exc)
         return None
     return namespace
@@ -115,6 +115,7 @@ def wrap_functions(namespace: dict[str, Any], run: Run, session: Any,
                       f"the starter")
 
             def missing(*args: Any, _name: str = name, **kwargs: Any) -> None:
+                run.calls.append(f"raise {_name}")
                 raise StudentFailure(_name)
 
             namespace[name] = missing
@@ -128,8 +129,9 @@ def wrap_functions(namespace: dict[str, Any], run: Run, session: Any,
                 return _original(*args, **kwargs)
             except StudentFailure:
                 raise
-            except BaseException as exc:  # noqa: BLE001 - the student's error, whatever it is
+            except BaseException as exc:
                 run.exception(_name, exc)
+                run.calls.append(f"raise {_name}")
                 raise StudentFailure(_name) from None
             finally:
                 session.steps.pop()
@@ -161,7 +163,7 @@ def drive_lab20(namespace: dict[str, Any], run: Run, session: Any) -> None:
         try:
             tex_ids = namespace["tex_ids"]
             return int(tex_ids[namespace["ENVIRONMENT"]]), int(tex_ids[namespace["METAL"]])
-        except Exception:  # noqa: BLE001 - whatever the student made of tex_ids
+        except Exception:
             return None
 
     def after_load_textures() -> None:
@@ -177,7 +179,7 @@ def drive_lab20(namespace: dict[str, Any], run: Run, session: Any) -> None:
         texture = None
         try:
             texture = robot["base"].texture if robot is not None else None
-        except Exception:  # noqa: BLE001
+        except Exception:
             texture = None
         names = {None: "none", 0: "none"}
         if got is not None:

@@ -77,6 +77,13 @@ class Evidence:
         marks = [i for i, c in enumerate(calls) if c.startswith("frame ")]
         return calls[marks[-1] + 1:] if marks else []
 
+    def stopped_by(self) -> str:
+        """The function whose error stopped the last frame, or ''."""
+        for call in self.last_frame_calls():
+            if call.startswith("raise "):
+                return call.split(" ", 1)[1]
+        return ""
+
     def frame_events(self) -> list[dict[str, Any]]:
         events = self.state.get("frame_events")
         return [e for e in events if isinstance(e, dict)] if isinstance(events, list) else []

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from mirrorlab import math3d
-from mirrorlab.paths import REPO_DIR, shader_source
+from mirrorlab.paths import REPO_DIR
 from mirrorlab.scene.graph import SceneGraph
 from mirrorlab.scene.robot import build_robot
 

@@ -9,8 +9,7 @@ import numpy as np
 
 from mirrorlab import math3d
 from mirrorlab.labs import LabSpec
-from mirrorlab.labs.judging import Evidence, TaskResult, picture, results_with_errors, \
-    share_within
+from mirrorlab.labs.judging import Evidence, TaskResult, picture, results_with_errors, share_within
 from mirrorlab.labs.kit import Lab20
 from mirrorlab.scene.backgrounds import image_sampler
 
@@ -297,6 +296,10 @@ def judge_mirror(student: Evidence, reference: Evidence) -> dict[str, tuple[bool
     frame = student.image("frame")
     ref_frame = reference.image("frame")
     calls = student.last_frame_calls()
+    stopped = student.stopped_by()
+    if stopped and stopped != "render_mirror":
+        hint = f"not judged: the frame stopped at {stopped}()"
+        return {"mirror_texture": (False, hint), "mirror_quad": (False, hint)}
     if "start render_mirror" not in calls:
         hint = "render_mirror() was not called in the last frame (see task 8)"
         return {"mirror_texture": (False, hint), "mirror_quad": (False, hint)}
@@ -343,6 +346,9 @@ def judge_passes(student: Evidence) -> tuple[bool, str]:
     calls = student.last_frame_calls()
     if not calls:
         return False, "display() did not draw a frame"
+    stopped = student.stopped_by()
+    if stopped and stopped != "display":
+        return False, f"not judged: the frame stopped at {stopped}()"
     events = student.frame_events()
     camera = next((i for i, e in enumerate(events) if e.get("kind") == "draw_scene"
                    and e.get("steps") == ["display"]), None)

@@ -22,7 +22,7 @@ th.sorted-up::after { content: " \\25B2"; } th.sorted-down::after { content: " \
 td.pass { background: #e3f6e3; } td.fail { background: #fbe4e4; }
 td.task { max-width: 14em; }
 td.task .hint { color: #555; font-size: 11px; }
-img.thumb { width: 300px; display: block; }
+img.thumb { width: 270px; display: block; }
 caption { text-align: left; padding-bottom: 0.6em; color: #444; }
 """
 
@@ -73,27 +73,27 @@ def report_html(spec: LabSpec, grades: list, engine: str, seconds: float) -> str
     from mirrorlab.labs.grading import safe_name
 
     tasks = spec.tasks
-    head = ['<th data-key="student">student</th>', '<th data-key="score">score</th>']
+    head = ['<th data-key="student">student</th>', '<th data-key="score">score</th>',
+            '<th data-key="picture">student | reference | difference</th>']
     head += [f'<th data-key="{t.id}" title="{escape(t.title)}">{t.number}. {escape(t.id)}</th>'
              for t in tasks]
-    head += ['<th data-key="seconds">seconds</th>', '<th data-key="picture">student | '
-             'reference | difference</th>']
+    head += ['<th data-key="seconds">seconds</th>']
     rows = []
     for grade in sorted(grades, key=lambda g: g.student):
         verdicts = {task_id: (passed, hint) for task_id, passed, hint in grade.tasks}
+        picture = f"pictures/{safe_name(grade.student)}.png"
         cells = [f'<td class="student">{escape(grade.student)}</td>',
-                 f'<td class="score" data-sort="{grade.score}">{grade.score}/{len(tasks)}</td>']
+                 f'<td class="score" data-sort="{grade.score}">{grade.score}/{len(tasks)}</td>',
+                 f'<td class="picture" data-sort="{grade.score}"><a href="{escape(picture)}">'
+                 f'<img class="thumb" src="{escape(picture)}" alt="{escape(grade.student)}">'
+                 f'</a></td>']
         for task in tasks:
             passed, hint = verdicts.get(task.id, (False, "not checked"))
             word = "pass" if passed else "FAIL"
             note = f'<div class="hint">{escape(hint)}</div>' if hint else ""
             cells.append(f'<td class="task {"pass" if passed else "fail"}" '
                          f'data-sort="{int(passed)}">{word}{note}</td>')
-        picture = f"pictures/{safe_name(grade.student)}.png"
         cells.append(f'<td class="seconds">{grade.seconds:.2f}</td>')
-        cells.append(f'<td class="picture" data-sort="{grade.score}"><a href="{escape(picture)}">'
-                     f'<img class="thumb" src="{escape(picture)}" alt="{escape(grade.student)}">'
-                     f'</a></td>')
         rows.append(f'<tr data-student="{escape(grade.student)}">{"".join(cells)}</tr>')
     full = sum(g.score == len(tasks) for g in grades)
     caption = (f"{len(grades)} submissions, {full} passing every task; graded in "

@@ -15,8 +15,11 @@ How, in order of preference (:func:`sandbox_mode` says which applies):
 - Without bubblewrap and without root there is no way to keep the code from writing where
   the user may, and :func:`run_sandboxed` refuses (:class:`SandboxError`).
 
-Limits (:class:`Limits`): wall-clock seconds (the whole process tree is killed then),
-address space (RLIMIT_AS), processes (RLIMIT_NPROC), file size and open files, CPU time.
+Limits (:class:`Limits`): CPU seconds (RLIMIT_CPU: an endless loop ends there, however
+busy the machine), wall-clock seconds (for code that waits forever; the whole process tree
+is killed then), address space (RLIMIT_AS), threads and processes (RLIMIT_NPROC), file
+size and open files. Run as root, a run that starts more than :data:`MAX_PROCESSES`
+processes (a fork bomb) is stopped at once.
 """
 
 from __future__ import annotations
@@ -40,6 +43,9 @@ from mirrorlab.paths import REPO_DIR
 UID_BASE = 200_000
 """Sandboxed processes run as UID_BASE + (the grading process's id mod 100000)."""
 
+MAX_PROCESSES = 8
+"""Processes a run may have at once (a lab's harness needs one; threads are not counted)."""
+
 MAX_RUN_JSON = 4 << 20
 MAX_OBSERVATIONS = 64 << 20
 
@@ -50,10 +56,12 @@ class SandboxError(RuntimeError):
 
 @dataclass(frozen=True)
 class Limits:
-    """What one submission may use: ``seconds`` of wall-clock time, ``memory_mb`` of address
-    space, ``processes`` (threads count too), ``file_mb`` per file written."""
+    """What one submission may use: ``cpu_seconds`` of CPU time, ``seconds`` of wall-clock
+    time, ``memory_mb`` of address space, ``processes`` (RLIMIT_NPROC: threads count too),
+    ``file_mb`` per file written."""
 
-    seconds: float = 30.0
+    cpu_seconds: int = 20
+    seconds: float = 120.0
     memory_mb: int = 1536
     processes: int = 64
     file_mb: int = 64
@@ -142,8 +150,8 @@ def _environment(box: Path) -> dict[str, str]:
 def _limit(limits: Limits, drop_to: int | None):
     def apply() -> None:
         memory = limits.memory_mb << 20
-        cpu = int(limits.seconds * 2) + 5
-        for kind, value in ((resource.RLIMIT_AS, memory), (resource.RLIMIT_CPU, cpu),
+        resource.setrlimit(resource.RLIMIT_CPU, (limits.cpu_seconds, limits.cpu_seconds + 1))
+        for kind, value in ((resource.RLIMIT_AS, memory),
                             (resource.RLIMIT_NPROC, limits.processes),
                             (resource.RLIMIT_FSIZE, limits.file_mb << 20),
                             (resource.RLIMIT_NOFILE, 256), (resource.RLIMIT_CORE, 0)):
@@ -156,22 +164,39 @@ def _limit(limits: Limits, drop_to: int | None):
     return apply
 
 
-def _kill_uid(uid: int) -> None:
-    """SIGKILL every process still running as ``uid`` (a sandbox's own user id)."""
+def uid_processes(uid: int) -> list[int]:
+    """The ids of the processes running as ``uid`` now."""
+    found = []
     for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
-        try:
-            if entry.stat().st_uid == uid:
-                os.kill(int(entry.name), signal.SIGKILL)
-        except (OSError, ProcessLookupError):
-            continue
+        if entry.name.isdigit():
+            try:
+                if entry.stat().st_uid == uid:
+                    found.append(int(entry.name))
+            except OSError:
+                continue
+    return found
 
 
-def run_sandboxed(argv: list[str], box: Path, limits: Limits) -> tuple[int | None, float, bool]:
+def _kill_uid(uid: int) -> None:
+    """SIGKILL every process still running as ``uid`` (a sandbox's own user id) until none
+    is left (they may still be forking while the first ones die)."""
+    for _ in range(500):
+        pids = uid_processes(uid)
+        if not pids:
+            return
+        for pid in pids:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                continue
+        time.sleep(0.01)
+
+
+def run_sandboxed(argv: list[str], box: Path, limits: Limits) -> tuple[int | None, float, str]:
     """Run ``argv`` in the sandbox with ``box`` (a folder) as its only writable place and
-    working folder. Returns (exit code or None on timeout, seconds, timed out). Output
-    goes to ``box/stdout.txt`` and ``box/stderr.txt``."""
+    working folder. Returns (exit code, or None when stopped; seconds; why it was stopped:
+    ``""``, ``"wall"`` or ``"processes"``). Output goes to ``box/stdout.txt`` and
+    ``box/stderr.txt``."""
     mode = sandbox_mode()
     if mode == "none":
         raise SandboxError(
@@ -209,18 +234,28 @@ def run_sandboxed(argv: list[str], box: Path, limits: Limits) -> tuple[int | Non
         process = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=out, stderr=err,
                                    cwd=box, env=env, preexec_fn=preexec,
                                    start_new_session=True)
-        timed_out = False
+        stopped = ""
+        code: int | None = None
         try:
-            code: int | None = process.wait(timeout=limits.seconds)
-        except subprocess.TimeoutExpired:
-            timed_out = True
-            code = None
-            os.killpg(process.pid, signal.SIGKILL)
-            process.wait()
+            while True:
+                try:
+                    code = process.wait(timeout=0.05)
+                    break
+                except subprocess.TimeoutExpired:
+                    pass
+                if root and len(uid_processes(uid)) > MAX_PROCESSES:
+                    stopped = "processes"
+                elif time.perf_counter() - started > limits.seconds:
+                    stopped = "wall"
+                if stopped:
+                    os.killpg(process.pid, signal.SIGKILL)
+                    process.wait()
+                    code = None
+                    break
         finally:
             if root:
                 _kill_uid(uid)
-    return code, time.perf_counter() - started, timed_out
+    return code, time.perf_counter() - started, stopped
 
 
 def _tail(path: Path, limit: int = 4000) -> str:
@@ -247,11 +282,18 @@ def run_harness(lab: str, file: Path, box: Path, limits: Limits,
                              sandbox_mode())
     argv = [sys.executable, "-I", "-m", "mirrorlab.labs.harness", lab, str(student),
             str(out), "--size", f"{size[0]}x{size[1]}"]
-    code, seconds, timed_out = run_sandboxed(argv, box, limits)
+    code, seconds, stopped = run_sandboxed(argv, box, limits)
     mode = sandbox_mode()
-    if timed_out:
-        return SandboxResult("timeout", f"stopped after the time limit of {limits.seconds:g} s "
-                             f"(an endless loop?)", seconds, None, out, mode)
+    if stopped == "wall":
+        return SandboxResult("timeout", f"stopped after {limits.seconds:g} s of waiting (the "
+                             f"wall-clock limit)", seconds, None, out, mode)
+    if stopped == "processes":
+        return SandboxResult("processes", f"stopped when it started more than {MAX_PROCESSES} "
+                             f"processes (a fork bomb?)", seconds, None, out, mode)
+    if code in (-signal.SIGXCPU, 128 + signal.SIGXCPU):
+        return SandboxResult("timeout", f"stopped at the CPU-time limit of "
+                             f"{limits.cpu_seconds} s (an endless loop?)", seconds, code, out,
+                             mode)
     stderr = _tail(box / "stderr.txt")
     run_json = out / "run.json"
     if code == 0 and run_json.is_file():
@@ -260,9 +302,14 @@ def run_harness(lab: str, file: Path, box: Path, limits: Limits,
     if "MemoryError" in stderr or "Cannot allocate memory" in stderr:
         return SandboxResult("memory", f"stopped at the memory limit of {limits.memory_mb} MB",
                              seconds, code, out, mode)
-    if code is not None and code < 0:
-        name = signal.Signals(-code).name if -code in signal.Signals._value2member_map_ else ""
-        detail = f"the program died ({name or f'signal {-code}'})"
+    died = -code if code is not None and code < 0 else (code - 128 if code and code > 128
+                                                          else 0)
+    if died:
+        try:
+            name = signal.Signals(died).name
+        except ValueError:
+            name = f"signal {died}"
+        detail = f"the program died ({name})"
     else:
         detail = f"the program stopped with exit status {code}"
     if last:

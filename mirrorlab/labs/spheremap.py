@@ -9,8 +9,7 @@ import numpy as np
 
 from mirrorlab.envmap import sphere_map
 from mirrorlab.labs import LabSpec
-from mirrorlab.labs.judging import Evidence, TaskResult, picture, results_with_errors, \
-    share_within
+from mirrorlab.labs.judging import Evidence, TaskResult, picture, results_with_errors, share_within
 
 GL_SPHERE_MAP = 0x2402
 MODE_NAMES = {0x2400: "GL_EYE_LINEAR", 0x2401: "GL_OBJECT_LINEAR", 0x2402: "GL_SPHERE_MAP",
@@ -145,6 +144,9 @@ def judge_texgen_draw(student: Evidence) -> tuple[bool, str]:
 
 def judge_frame(student: Evidence, reference: Evidence,
                 verdicts: dict[str, tuple[bool, str]]) -> tuple[bool, str]:
+    stopped = student.stopped_by()
+    if stopped and stopped != "display":
+        return False, f"not judged: the frame stopped at {stopped}()"
     frame, ref = student.image("frame"), reference.image("frame")
     if frame is None or ref is None or frame.shape != ref.shape:
         return False, "display() drew no frame"

@@ -46,7 +46,8 @@ def quad(texcoords) -> str:
 
 
 LAB20 = (
-    Mutant("lab20", "wrong_extents", (("glOrtho(-6, 2, -3, 5, 0, 15)", "glOrtho(-4, 4, -4, 4, 0, 15)"),),
+    Mutant("lab20", "wrong_extents",
+           (("glOrtho(-6, 2, -3, 5, 0, 15)", "glOrtho(-4, 4, -4, 4, 0, 15)"),),
            {"capture_camera": "wrong extents", "capture_scene": "fix its projection"}),
     Mutant("lab20", "camera_wrong_side",
            (("gluLookAt(-7, 0, 0, 0, 0, 0, 0, 1, 0)", "gluLookAt(7, 0, 0, 0, 0, 0, 0, 1, 0)"),),
@@ -58,14 +59,17 @@ LAB20 = (
     Mutant("lab20", "texcoords_rotated", ((QUAD, quad(((0, 1), (1, 1), (1, 0), (0, 0)))),),
            {"mirror_quad": "rotated"}),
     Mutant("lab20", "mirror_in_capture",
-           (("    lab.draw_scene(robot)\n    # TODO 3", "    lab.draw_scene(robot)\n    render_mirror()\n    # TODO 3"),),
+           (("    lab.draw_scene(robot)\n    # TODO 3",
+             "    lab.draw_scene(robot)\n    render_mirror()\n    # TODO 3"),),
            {"capture_scene": "drawn into its own capture"}),
     Mutant("lab20", "environment_not_bound",
-           (("    glActiveTexture(GL_TEXTURE1)\n    glBindTexture(GL_TEXTURE_2D, tex_ids[ENVIRONMENT])\n    glCopyTexImage2D",
+           (("    glActiveTexture(GL_TEXTURE1)\n"
+             "    glBindTexture(GL_TEXTURE_2D, tex_ids[ENVIRONMENT])\n    glCopyTexImage2D",
              "    glCopyTexImage2D"),),
            {"capture_copy": "overwrote METAL", "capture_scene": "went into METAL"}),
     Mutant("lab20", "environment_mipmaps",
-           (("GL_TEXTURE_MIN_FILTER, GL_LINEAR)", "GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR)"),),
+           (("GL_TEXTURE_MIN_FILTER, GL_LINEAR)",
+             "GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR)"),),
            {"environment_texture": "mipmaps", "mirror_texture": "black",
             "mirror_quad": "task 6"}),
     Mutant("lab20", "environment_repeat",
@@ -140,8 +144,8 @@ CUBEMAP = (
             "live_frame": "tasks 1 to 4"}),
     Mutant("cubemap", "capture_after_camera",
            (("    capture_cube()\n    glClear", "    glClear"),
-            ("    lab.draw_scene()\n    lab.draw_sphere", "    lab.draw_scene()\n    capture_cube()\n"
-             "    lab.draw_sphere")),
+            ("    lab.draw_scene()\n    lab.draw_sphere",
+             "    lab.draw_scene()\n    capture_cube()\n    lab.draw_sphere")),
            {"live_frame": "wrong order"}),
 )
 
