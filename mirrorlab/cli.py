@@ -143,9 +143,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="submissions graded at once (default %(default)s)")
     grade.add_argument("--scheduler", metavar="ADDRESS",
                        help="a running Dask scheduler (tcp://host:8786) to grade on")
-    grade.add_argument("--engine", choices=("dask", "pool"), default="dask",
-                       help="with --jobs > 1 and no --scheduler: a local Dask cluster "
-                       "(default) or a process pool")
+    grade.add_argument("--engine", choices=("pool", "dask"), default="pool",
+                       help="with --jobs > 1 and no --scheduler: a local process pool "
+                       "(default; measured faster here) or a local Dask cluster")
     grade.add_argument("--out-dir", metavar="DIR",
                        help="where grades.csv, report.html and the pictures go (default: "
                        "SUBMISSIONS_DIR-grades beside the submissions)")

@@ -156,10 +156,10 @@ class DaskExecutor(Executor):
 
 
 def open_executor(jobs: int = 1, scheduler: str | None = None,
-                  engine: str = "dask") -> Executor:
+                  engine: str = "pool") -> Executor:
     """The executor for ``jobs`` parallel jobs: a Dask client when ``scheduler`` is given;
-    otherwise in this process for one job, else a local Dask cluster (``engine`` "dask") or
-    a process pool ("pool")."""
+    otherwise in this process for one job, else a process pool (``engine`` "pool", the
+    default) or a local Dask cluster ("dask")."""
     if scheduler:
         return DaskExecutor(jobs, scheduler)
     if jobs <= 1:

@@ -43,7 +43,7 @@ def graded(classroom, tmp_path_factory, request):
     def grade(engine: str) -> tuple[Path, subprocess.CompletedProcess]:
         if engine not in done:
             out = tmp_path_factory.mktemp(f"grades-{engine}")
-            options = {"serial": ["--jobs", "1"], "pool": ["--jobs", "2", "--engine", "pool"],
+            options = {"serial": ["--jobs", "1"], "pool": ["--jobs", "2"],
                        "dask": ["--scheduler", request.getfixturevalue("dask_scheduler")]}
             result = mirrorlab_command("lab", "grade", "lab20", str(folder), "--out-dir",
                                        str(out), "--timeout", str(LIMITS.cpu_seconds),

@@ -29,7 +29,7 @@ def engines(dask_executor):
 
 def test_open_executor_picks_the_engine():
     assert type(open_executor(1)) is Executor
-    with open_executor(2, engine="pool") as pool:
+    with open_executor(2) as pool:
         assert pool.engine == "pool" and pool.workers == 2
     with pytest.raises(ValueError, match="--engine"):
         open_executor(2, engine="threads")
