@@ -75,7 +75,7 @@ def main() -> int:
         shutil.rmtree(folder, ignore_errors=True)
     rows = {}
     print(f"{args.students} lab 20 submissions, {args.rounds} rounds, medians:")
-    print(f"| engine | seconds | submissions per minute |\n|---|---:|---:|")
+    print("| engine | seconds | submissions per minute |\n|---|---:|---:|")
     for name, values in seconds.items():
         median = statistics.median(values)
         rows[name] = {"seconds": values, "per_minute": 60 * args.students / median}
