@@ -69,7 +69,7 @@ def main() -> int:
         for _ in range(args.rounds):
             started = time.perf_counter()
             with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                              dashboard_address=None):
+                              dashboard_address=":0"):
                 starts.append(time.perf_counter() - started)
     finally:
         shutil.rmtree(folder, ignore_errors=True)

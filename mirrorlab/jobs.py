@@ -121,8 +121,9 @@ class DaskExecutor(Executor):
         self.retries = retries
         self.cluster = None
         if address is None:
+            # ":0": any free port for the scheduler's HTTP routes (8787 may be taken)
             self.cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
-                                        processes=True, dashboard_address=None)
+                                        processes=True, dashboard_address=":0")
             self.client = Client(self.cluster)
         else:
             try:

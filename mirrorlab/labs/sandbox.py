@@ -123,20 +123,18 @@ def _hidden_ancestor(path: Path) -> Path | None:
 
 
 def _reachable_binds() -> list[str]:
-    """bwrap arguments that make the interpreter, the virtual environment and mirrorlab
-    readable by an unprivileged user, where a folder above them is closed to others."""
-    needed = {Path(sys.base_prefix).resolve(), Path(sys.prefix).resolve(), REPO_DIR.resolve(),
-              Path(sys.executable).resolve().parent}
-    covers: dict[Path, set[Path]] = {}
-    for path in needed:
-        hidden = _hidden_ancestor(path)
-        if hidden is not None:
-            covers.setdefault(hidden, set()).add(path)
+    """bwrap arguments (after the private /tmp) that show the interpreter, the virtual
+    environment and mirrorlab to the sandbox, read-only: where a folder above them is
+    closed to other users (such as /root), an empty folder replaces it first; each is
+    bound again in any case, since it may live under /tmp (a fresh clone there)."""
+    needed = sorted({Path(sys.base_prefix).resolve(), Path(sys.prefix).resolve(),
+                     REPO_DIR.resolve(), Path(sys.executable).resolve().parent})
+    hidden = sorted({h for h in map(_hidden_ancestor, needed) if h is not None})
     arguments: list[str] = []
-    for hidden, paths in sorted(covers.items()):
-        arguments += ["--perms", "0755", "--tmpfs", str(hidden)]
-        for path in sorted(paths):
-            arguments += ["--ro-bind", str(path), str(path)]
+    for folder in hidden:
+        arguments += ["--perms", "0755", "--tmpfs", str(folder)]
+    for path in needed:
+        arguments += ["--ro-bind", str(path), str(path)]
     return arguments
 
 

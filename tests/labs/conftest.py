@@ -17,8 +17,8 @@ import pytest
 
 from mirrorlab.labs.sandbox import Limits
 
-LIMITS = Limits(cpu_seconds=5, seconds=90.0)
-"""An endless loop ends after 5 s of CPU; honest runs use about one."""
+LIMITS = Limits(cpu_seconds=3, seconds=90.0)
+"""An endless loop ends after 3 s of CPU; honest runs use under one."""
 
 
 @pytest.fixture(scope="session", autouse=True)
