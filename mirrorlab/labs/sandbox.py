@@ -41,7 +41,8 @@ from typing import Any
 from mirrorlab.paths import REPO_DIR
 
 UID_BASE = 200_000
-"""Sandboxed processes run as UID_BASE + (the grading process's id mod 100000)."""
+"""Sandboxed processes run as UID_BASE + the id of the process that started them, so that
+two gradings running at once never share a user id (nor its process limit)."""
 
 MAX_PROCESSES = 8
 """Processes a run may have at once (a lab's harness needs one; threads are not counted)."""
@@ -107,7 +108,7 @@ def sandbox_mode() -> str:
 
 
 def sandbox_uid() -> int:
-    return UID_BASE + os.getpid() % 100_000
+    return UID_BASE + os.getpid()
 
 
 def _hidden_ancestor(path: Path) -> Path | None:
