@@ -112,7 +112,7 @@ class DaskExecutor(Executor):
     engine = "dask"
 
     def __init__(self, workers: int = 2, address: str | None = None,
-                 retries: int = RETRIES) -> None:
+                 retries: int = RETRIES, connect_timeout: str = "20s") -> None:
         try:
             from distributed import Client, LocalCluster
         except ImportError as exc:  # pragma: no cover - a dependency of mirrorlab
@@ -127,7 +127,7 @@ class DaskExecutor(Executor):
             self.client = Client(self.cluster)
         else:
             try:
-                self.client = Client(address, timeout="20s")
+                self.client = Client(address, timeout=connect_timeout)
             except OSError as exc:
                 raise ValueError(f"--scheduler: cannot reach a Dask scheduler at {address!r} "
                                  f"({exc})") from None

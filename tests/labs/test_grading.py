@@ -144,3 +144,57 @@ def test_report_opens_in_chromium_with_every_row_and_picture(graded, classroom, 
     assert np.any(np.all(np.abs(pixels - (0xe3, 0xf6, 0xe3)) <= 2, axis=1))
     assert np.any(np.all(np.abs(pixels - (0xfb, 0xe4, 0xe4)) <= 2, axis=1))
     assert np.mean(pixels.sum(axis=1) < 200) > 0.05, "no thumbnails on screen"
+
+
+def test_a_worker_killed_mid_submission_has_it_graded_elsewhere_once(tmp_path,
+                                                                     dask_scheduler):
+    """Kill the Dask worker that is running a (sleeping) submission: the scheduler runs it
+    again on another worker, and every student is graded exactly once."""
+    import signal
+    import threading
+    import time
+
+    from distributed import Client
+
+    from mirrorlab.labs import LABS
+    from mirrorlab.labs.grading import grade_folder
+    from mirrorlab.labs.sandbox import Limits, uid_processes
+
+    folder = tmp_path / "class"
+    folder.mkdir()
+    (folder / "ada.py").write_text(LABS["lab20"].solution.read_text())
+    (folder / "cy.py").write_text(LABS["lab20"].starter.read_text())
+    (folder / "slow.py").write_text("import time\ntime.sleep(3600)\n")
+    limits = Limits(cpu_seconds=3, seconds=8.0)
+    graded: list = []
+    grading = threading.Thread(target=lambda: graded.append(grade_folder(
+        LABS["lab20"], folder, 2, dask_scheduler, "dask", limits, progress=False)))
+    grading.start()
+    killed = None
+    with Client(dask_scheduler) as client:
+        # wait until a worker runs the slow submission alone and its sandbox is up
+        while grading.is_alive() and killed is None:
+            for address, keys in client.processing().items():
+                if [str(k).split("-")[0] for k in keys] != ["slow"]:
+                    continue
+                pid = client.run(os.getpid, workers=[address])[address]
+                if uid_processes(UID_BASE + pid):
+                    os.kill(pid, signal.SIGKILL)
+                    killed = pid
+                    break
+            time.sleep(0.05)
+    grading.join()
+    assert killed is not None, "the slow submission was never seen running"
+    grades, _ = graded[0]
+    assert sorted(g.student for g in grades) == ["ada", "cy", "slow"]
+    by_student = {g.student: g for g in grades}
+    assert by_student["ada"].score == len(LABS["lab20"].tasks)
+    assert all("wall-clock limit" in hint for _, _, hint in by_student["slow"].tasks)
+    # the dead worker's sandbox died with it (bubblewrap's --die-with-parent); its
+    # processes may take a moment to be reaped
+    for _ in range(600):
+        if not uid_processes(UID_BASE + killed):
+            break
+        time.sleep(0.05)
+    else:
+        raise AssertionError("the killed worker's sandboxed processes are still running")

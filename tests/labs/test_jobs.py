@@ -34,7 +34,7 @@ def test_open_executor_picks_the_engine():
     with pytest.raises(ValueError, match="--engine"):
         open_executor(2, engine="threads")
     with pytest.raises(ValueError, match="--scheduler: cannot reach"):
-        open_executor(2, scheduler="tcp://127.0.0.1:9")
+        DaskExecutor(address="tcp://127.0.0.1:9", connect_timeout="1s")
 
 
 def test_every_engine_gives_every_key_once(dask_executor):
