@@ -1,4 +1,4 @@
-"""Command line: ``mirrorlab render | plan | bench | demo | techniques``.
+"""Command line: ``mirrorlab render | plan | bench | demo | techniques | lab``.
 
 Argument parsing only: each command's work lives in its own module. Bad input ends
 with a one-line message naming the option or file and what was expected, exit status
@@ -128,6 +128,47 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--debug", action="store_true", help=DEBUG_HELP)
 
     commands.add_parser("techniques", help="list the reflection techniques")
+
+    lab = commands.add_parser("lab", help="check, run and grade the lab exercises")
+    lab_commands = lab.add_subparsers(dest="lab_command", required=True, metavar="ACTION")
+    limits = argparse.ArgumentParser(add_help=False)
+    limits.add_argument("--timeout", metavar="SECONDS", default="20",
+                        help="CPU-time limit of one submission (default %(default)s); it may "
+                        "take three times as long on the clock, plus 30 s")
+    limits.add_argument("--memory", metavar="MB", default="1536",
+                        help="memory limit of one submission (default %(default)s)")
+    check = lab_commands.add_parser("check", parents=[limits],
+                                    help="check one file: each task passed or failed, with "
+                                    "a hint; exit 0 only when all pass")
+    check.add_argument("lab_name", metavar="LAB", help="lab20, spheremap or cubemap (or the "
+                       "lab's folder name)")
+    check.add_argument("file", metavar="FILE", nargs="?",
+                       help="the student's file (default: the lab's starter.py)")
+    check.add_argument("--out", help="the picture student | reference | difference (default "
+                       "out/LAB_check.png)")
+    run = lab_commands.add_parser("run", help="run a lab file in the demo window")
+    run.add_argument("lab_name", metavar="LAB")
+    run.add_argument("file", metavar="FILE", nargs="?")
+    run.add_argument("--size", default="512x512", help="WIDTHxHEIGHT (default %(default)s)")
+    run.add_argument("--max-frames", metavar="N", default="0",
+                     help="close after this many frames (0: until Esc)")
+    run.add_argument("--screenshot", metavar="PATH", help="write the last frame as a PNG")
+    grade = lab_commands.add_parser("grade", parents=[limits],
+                                    help="grade a folder of submissions: grades.csv, "
+                                    "pictures and report.html")
+    grade.add_argument("lab_name", metavar="LAB")
+    grade.add_argument("submissions", metavar="SUBMISSIONS_DIR",
+                       help="one .py file or one folder per student")
+    grade.add_argument("--jobs", metavar="J", default="1",
+                       help="submissions graded at once (default %(default)s)")
+    grade.add_argument("--scheduler", metavar="ADDRESS",
+                       help="a running Dask scheduler (tcp://host:8786) to grade on")
+    grade.add_argument("--engine", choices=("pool", "dask"), default="pool",
+                       help="with --jobs > 1 and no --scheduler: a local process pool "
+                       "(default; measured faster here) or a local Dask cluster")
+    grade.add_argument("--out-dir", metavar="DIR",
+                       help="where grades.csv, report.html and the pictures go (default: "
+                       "SUBMISSIONS_DIR-grades beside the submissions)")
     return parser
 
 
@@ -259,6 +300,32 @@ def run_techniques(args: argparse.Namespace) -> int:
     return 0
 
 
+def run_lab(args: argparse.Namespace) -> int:
+    action = args.lab_command
+    if action == "run":
+        from mirrorlab.labs.checker import run_window
+
+        size = parse_size("--size", args.size)
+        max_frames = parse_count("--max-frames", args.max_frames, 0, 10**9)
+        screenshot = check_output("--screenshot", args.screenshot) if args.screenshot else None
+        return run_window(args.lab_name, args.file, size, max_frames, screenshot)
+    from mirrorlab.labs.sandbox import Limits
+
+    cpu = parse_count("--timeout", args.timeout, 1, 3600)
+    limits = Limits(cpu_seconds=cpu, seconds=3.0 * cpu + 30,
+                    memory_mb=parse_count("--memory", args.memory, 256, 1 << 20))
+    if action == "check":
+        from mirrorlab.labs.checker import run_check
+
+        out = check_output("--out", args.out) if args.out else None
+        return run_check(args.lab_name, args.file, out, limits)
+    from mirrorlab.labs.grading import run_grade
+
+    jobs = parse_count("--jobs", args.jobs, 1, 1024)
+    return run_grade(args.lab_name, Path(args.submissions), jobs, args.scheduler, args.engine,
+                     Path(args.out_dir) if args.out_dir else None, limits)
+
+
 _VECTOR_FLAGS = (*tuple(o.flag for o in OPTIONS if "," in o.metavar), "--fovy", "--size")
 
 
@@ -308,7 +375,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                                                        else argv))
         command = f"mirrorlab {args.command}"
         runners = {"render": run_render, "plan": run_plan, "bench": run_bench,
-                   "demo": run_demo, "techniques": run_techniques}
+                   "demo": run_demo, "techniques": run_techniques, "lab": run_lab}
         with warnings.catch_warnings():
             # A numeric warning means a value out of range slipped past the checks: stop
             # with one line rather than print numpy's warning and go on.

@@ -1,0 +1,28 @@
+#version 330 compatibility
+// The sphere-map lab's cone, per fragment: the student's reflect_eye and sphere_map_st
+// (inserted below) pick the texel of the sphere map.
+in vec3 eye_position;
+in vec3 eye_normal;
+
+uniform sampler2D sphere_map;
+uniform int mode;  // 0 colour; 1 the student's r; 2 u; 3 n; 4 the student's (s, t) of the kit's r
+
+out vec4 frag_color;
+
+// STUDENT CODE
+
+void main() {
+    vec3 u = normalize(eye_position);
+    vec3 n = normalize(eye_normal);
+    if (mode == 1) {
+        frag_color = vec4(reflect_eye(u, n), 1.0);
+    } else if (mode == 2) {
+        frag_color = vec4(u, 1.0);
+    } else if (mode == 3) {
+        frag_color = vec4(n, 1.0);
+    } else if (mode == 4) {
+        frag_color = vec4(sphere_map_st(u - 2.0 * dot(n, u) * n), 0.0, 1.0);
+    } else {
+        frag_color = vec4(texture(sphere_map, sphere_map_st(reflect_eye(u, n))).rgb, 1.0);
+    }
+}

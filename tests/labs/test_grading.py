@@ -1,0 +1,202 @@
+"""``mirrorlab lab grade`` on the generated class of 40 (solutions, the starter, every lab 20
+mutant twice, students whose files raise or do not parse, and the attacks): the expected
+grades.csv with ``--jobs 1``, ``--jobs 2`` (a process pool) and on a local Dask cluster
+through ``--scheduler``; the same files whichever ran it; every attack reported as that
+student's failure with nothing outside harmed; report.html in a real headless Chromium."""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mirrorlab.labs.sandbox import UID_BASE
+from mirrorlab.scene.backgrounds import load_picture
+from tests.labs.classroom import compare
+from tests.labs.conftest import LIMITS, mirrorlab_command, read_csv
+
+ENGINES = ("serial", "pool", "dask")
+
+
+@pytest.fixture(scope="session")
+def dask_scheduler():
+    """A local Dask cluster of two worker processes on loopback, for --scheduler."""
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                      dashboard_address=":0") as cluster:
+        yield cluster.scheduler_address
+
+
+@pytest.fixture(scope="session")
+def graded(classroom, tmp_path_factory, request):
+    """engine -> (output folder, the command's result), each graded once on demand."""
+    folder, _ = classroom
+    done: dict[str, tuple[Path, subprocess.CompletedProcess]] = {}
+
+    def grade(engine: str) -> tuple[Path, subprocess.CompletedProcess]:
+        if engine not in done:
+            out = tmp_path_factory.mktemp(f"grades-{engine}")
+            options = {"serial": ["--jobs", "1"], "pool": ["--jobs", "2"],
+                       "dask": ["--scheduler", request.getfixturevalue("dask_scheduler")]}
+            result = mirrorlab_command("lab", "grade", "lab20", str(folder), "--out-dir",
+                                       str(out), "--timeout", str(LIMITS.cpu_seconds),
+                                       *options[engine])
+            assert result.returncode == 0, result.stdout + result.stderr[-3000:]
+            done[engine] = (out, result)
+        return done[engine]
+
+    return grade
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_grades_csv_is_the_expected_one(engine, classroom, graded):
+    _, expected = classroom
+    assert len(expected) >= 40
+    out, result = graded(engine)
+    rows = read_csv(out / "grades.csv")
+    assert list(rows[0]) == ["student", "task", "passed", "hint", "seconds"]
+    assert compare(rows, expected) == []
+    assert [r["student"] for r in rows] == sorted(r["student"] for r in rows)
+    engine_words = {"serial": "serial (1 worker)", "pool": "pool (2 workers)",
+                    "dask": "dask (2 workers)"}
+    assert engine_words[engine] in result.stdout
+    # the progress bar counted every submission
+    assert re.search(r"grading lab20: 100%.*40/40", result.stderr)
+
+
+def test_every_engine_writes_the_same_files(graded):
+    outputs = {engine: graded(engine)[0] for engine in ENGINES}
+    tables = {engine: [{k: v for k, v in row.items() if k != "seconds"}
+                       for row in read_csv(out / "grades.csv")]
+              for engine, out in outputs.items()}
+    assert tables["serial"] == tables["pool"] == tables["dask"]
+    names = sorted(p.name for p in (outputs["serial"] / "pictures").iterdir())
+    assert len(names) == 40
+    for engine in ("pool", "dask"):
+        assert sorted(p.name for p in (outputs[engine] / "pictures").iterdir()) == names
+        for name in names:
+            assert np.array_equal(load_picture(outputs["serial"] / "pictures" / name),
+                                  load_picture(outputs[engine] / "pictures" / name)), name
+
+
+def test_attacks_harm_nothing_outside(graded, canaries):
+    graded("serial")
+    assert (canaries / "delete_me.txt").read_text() == "canary\n"
+    assert (canaries / "overwrite_me.txt").read_text() == "canary\n"
+    assert sorted(p.name for p in canaries.iterdir()) == ["delete_me.txt", "overwrite_me.txt"]
+    # no sandboxed process outlives its run (the fork bomb's included)
+    leftovers = [entry.name for entry in Path("/proc").iterdir() if entry.name.isdigit()
+                 and _uid(entry) >= UID_BASE]
+    assert leftovers == []
+
+
+def _uid(entry: Path) -> int:
+    try:
+        return entry.stat().st_uid
+    except OSError:
+        return -1
+
+
+def chromium(*args: str) -> subprocess.CompletedProcess:
+    """Headless Chromium with a fresh profile (flags that work here as root)."""
+    binary = shutil.which("chromium") or shutil.which("chromium-browser")
+    assert binary, "chromium is not installed: ./dev test installs the Debian package"
+    with tempfile.TemporaryDirectory(prefix="mirrorlab-chromium-") as profile:
+        return subprocess.run(
+            [binary, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+             "--no-first-run", "--disable-background-networking",
+             "--disable-component-update", "--disable-sync", f"--user-data-dir={profile}",
+             *args], capture_output=True, text=True, timeout=180)
+
+
+def test_report_opens_in_chromium_with_every_row_and_picture(graded, classroom, tmp_path):
+    out, _ = graded("serial")
+    _, expected = classroom
+    url = (out / "report.html").resolve().as_uri() + "#sort=-score"
+    dom = chromium("--dump-dom", url)
+    assert dom.returncode == 0, dom.stderr[-2000:]
+    html = dom.stdout
+    students = re.findall(r'<tr data-student="([^"]+)"', html)
+    assert sorted(students) == sorted(expected)
+    body = re.search(r"<body[^>]*>", html).group(0)
+    assert f'data-images-loaded="{len(expected)}"' in body
+    assert 'data-images-broken="0"' in body
+    # sorted by score, highest first, as the address asked
+    assert 'data-sorted-by="score descending"' in html
+    scores = [int(s) for s in re.findall(r'<td class="score" data-sort="(\d+)"', html)]
+    assert scores == sorted(scores, reverse=True) and scores[0] == 8
+    shot = tmp_path / "report.png"
+    done = chromium("--window-size=2560,1600", f"--screenshot={shot}", url)
+    assert done.returncode == 0 and shot.is_file(), done.stderr[-2000:]
+    if os.environ.get("MIRRORLAB_KEEP_SCREENSHOT"):
+        shutil.copy(shot, os.environ["MIRRORLAB_KEEP_SCREENSHOT"])
+    image = load_picture(shot)
+    assert image.shape[:2] == (1600, 2560)
+    # the table's pass and fail colours and the thumbnails' dark frames are on screen
+    pixels = image.reshape(-1, 3).astype(int)
+    assert np.any(np.all(np.abs(pixels - (0xe3, 0xf6, 0xe3)) <= 2, axis=1))
+    assert np.any(np.all(np.abs(pixels - (0xfb, 0xe4, 0xe4)) <= 2, axis=1))
+    assert np.mean(pixels.sum(axis=1) < 200) > 0.05, "no thumbnails on screen"
+
+
+def test_a_worker_killed_mid_submission_has_it_graded_elsewhere_once(tmp_path,
+                                                                     dask_scheduler):
+    """Kill the Dask worker that is running a (looping) submission while ``lab grade
+    --scheduler`` grades the class from its own process: the scheduler runs it again on
+    another worker, and every student is graded exactly once."""
+    import signal
+    import sys
+    import time
+
+    from distributed import Client
+
+    from mirrorlab.labs import LABS
+    from mirrorlab.labs.sandbox import uid_processes
+
+    folder = tmp_path / "class"
+    folder.mkdir()
+    (folder / "ada.py").write_text(LABS["lab20"].solution.read_text())
+    (folder / "cy.py").write_text(LABS["lab20"].starter.read_text())
+    (folder / "slow.py").write_text("while True:\n    pass\n")
+    out = tmp_path / "grades"
+    grading = subprocess.Popen(
+        [sys.executable, "-m", "mirrorlab.cli", "lab", "grade", "lab20", str(folder),
+         "--out-dir", str(out), "--scheduler", dask_scheduler, "--timeout", "3"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=dict(os.environ))
+    killed = None
+    with Client(dask_scheduler) as client:
+        # wait until a worker runs the slow submission alone and its sandbox is up
+        while grading.poll() is None and killed is None:
+            for address, keys in client.processing().items():
+                if [str(k).split("-")[0] for k in keys] != ["slow"]:
+                    continue
+                pid = client.run(os.getpid, workers=[address])[address]
+                if uid_processes(UID_BASE + pid):
+                    os.kill(pid, signal.SIGKILL)
+                    killed = pid
+                    break
+            time.sleep(0.05)
+    _, stderr = grading.communicate(timeout=600)
+    assert grading.returncode == 0, stderr[-3000:]
+    assert killed is not None, "the slow submission was never seen running"
+    rows = read_csv(out / "grades.csv")
+    tasks = len(LABS["lab20"].tasks)
+    assert sorted({r["student"] for r in rows}) == ["ada", "cy", "slow"]
+    assert len(rows) == 3 * tasks
+    assert all(r["passed"] == "yes" for r in rows if r["student"] == "ada")
+    assert all("CPU-time limit" in r["hint"] for r in rows if r["student"] == "slow")
+    # the dead worker's sandbox died with it (bubblewrap's --die-with-parent); its
+    # processes may take a moment to be reaped
+    for _ in range(600):
+        if not uid_processes(UID_BASE + killed):
+            break
+        time.sleep(0.05)
+    else:
+        raise AssertionError("the killed worker's sandboxed processes are still running")
