@@ -65,7 +65,9 @@ def test_user_fallback_limits_memory_and_cpu(user_mode, tmp_path):
 
 def test_the_checker_stays_small_while_a_submission_exhausts_its_memory(tmp_path):
     hog = tmp_path / "hog.py"
-    hog.write_text("hog = []\nwhile True:\n    hog.append(bytearray(256 << 20))\n")
+    # untouched zero pages (bytes, not bytearray): the memory limit, never the CPU limit,
+    # stops it, however loaded the machine (see classroom.py)
+    hog.write_text("hog = []\nwhile True:\n    hog.append(bytes(256 << 20))\n")
     # VmHWM: this process's own peak resident memory (ru_maxrss would also count what the
     # forked pytest process held before exec)
     script = ("import sys\nfrom mirrorlab.cli import main\n"
