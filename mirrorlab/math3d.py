@@ -54,6 +54,13 @@ def rotate(angle_deg: float, axis: Vec3) -> np.ndarray:
     return m
 
 
+def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.cross`` of two ``(3,)`` vectors, without its general-shape handling, which
+    cost more than the rest of :func:`look_at` (every frame computes a few views)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]])
+
+
 def look_at(eye: Vec3, target: Vec3, up: Vec3) -> np.ndarray:
     """World-to-eye matrix of a camera at ``eye`` looking at ``target``.
 
@@ -72,12 +79,12 @@ def look_at(eye: Vec3, target: Vec3, up: Vec3) -> np.ndarray:
     up_len = np.linalg.norm(up_v)
     if not 0.0 < up_len < np.inf:
         raise ValueError(f"up vector {tuple(up)} must be a non-zero finite vector")
-    side = np.cross(forward, up_v / up_len)
+    side = _cross3(forward, up_v / up_len)
     s_len = np.linalg.norm(side)
     if s_len < 1e-12:
         raise ValueError(f"up vector {tuple(up)} is parallel to the view direction")
     side /= s_len
-    true_up = np.cross(side, forward)
+    true_up = _cross3(side, forward)
     m = np.eye(4)
     m[0, :3], m[1, :3], m[2, :3] = side, true_up, -forward
     m[:3, 3] = -m[:3, :3] @ eye_v

@@ -136,13 +136,17 @@ _VALUES = ("GL_FRONT_FACE", "GL_CULL_FACE_MODE", "GL_DEPTH_FUNC", "GL_DEPTH_WRIT
            "GL_DRAW_FRAMEBUFFER_BINDING", "GL_READ_FRAMEBUFFER_BINDING")
 
 
+_SWITCH_ENUMS = tuple((name, getattr(GL, name)) for name in _SWITCHES)
+_VALUE_ENUMS = tuple((name, getattr(GL, name)) for name in _VALUES)
+
+
 def gl_state() -> dict[str, object]:
     """The GL state a frame changes: switches, winding, depth and stencil settings, masks,
     bindings, viewport and clear colour (to restore it, and for tests)."""
-    state: dict[str, object] = {name: bool(GL.glIsEnabled(getattr(GL, name)))
-                                for name in _SWITCHES}
-    for name in _VALUES:
-        state[name] = int(np.asarray(GL.glGetIntegerv(getattr(GL, name))).reshape(-1)[0])
+    state: dict[str, object] = {name: bool(GL.glIsEnabled(enum))
+                                for name, enum in _SWITCH_ENUMS}
+    for name, enum in _VALUE_ENUMS:
+        state[name] = int(GL.glGetIntegerv(enum))
     state["GL_COLOR_WRITEMASK"] = tuple(
         bool(v) for v in np.asarray(GL.glGetBooleanv(GL.GL_COLOR_WRITEMASK)).reshape(-1))
     state["GL_VIEWPORT"] = tuple(int(v) for v in np.asarray(
@@ -154,8 +158,8 @@ def gl_state() -> dict[str, object]:
 
 def restore_state(state: dict[str, object]) -> None:
     """Put back what :func:`gl_state` read: leave GL as a frame found it."""
-    for name in _SWITCHES:
-        (GL.glEnable if state[name] else GL.glDisable)(getattr(GL, name))
+    for name, enum in _SWITCH_ENUMS:
+        (GL.glEnable if state[name] else GL.glDisable)(enum)
     GL.glFrontFace(state["GL_FRONT_FACE"])
     GL.glCullFace(state["GL_CULL_FACE_MODE"])
     GL.glDepthFunc(state["GL_DEPTH_FUNC"])

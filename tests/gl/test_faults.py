@@ -178,11 +178,18 @@ def test_an_opengl_too_old_names_the_technique_and_the_version(tmp_path):
 # --------------------------------------------------------------------------- Ctrl-C
 
 
+def _default_sigint() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def interrupt_when(command: list[str], started: str) -> subprocess.CompletedProcess:
     """Run ``command``, send it SIGINT (Ctrl-C) once ``started`` shows on its stderr (its
     progress bar), and return what it did."""
+    # A command started in the background of a non-interactive shell inherits SIGINT
+    # ignored, and Python then never turns SIGINT into KeyboardInterrupt: the child gets
+    # the default action back, whatever started pytest (a render ran to its end so).
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                               cwd=REPO_DIR)
+                               cwd=REPO_DIR, preexec_fn=_default_sigint)
     seen = bytearray()
     ready = threading.Event()
 

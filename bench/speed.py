@@ -1,0 +1,419 @@
+"""Speed against pyrender: mirrorlab's frames and pyrender's, side by side in one run, on the
+same meshes at the same sizes, every frame read back to numpy.
+
+Run from the repository root (``./dev bench speed`` does the set-up)::
+
+    python bench/speed.py [--quick] [--sizes 256,512,1024,2048] [--subdivisions 0,2,4,6]
+                          [--frames 30] [--warmup 5] [--block 5] [--out-dir out/bench/speed]
+
+pyrender runs in its own virtual environment, ``.venv-pyrender`` (made here on first use:
+its PyOpenGL pin conflicts with mirrorlab's, and its last release needs numpy < 2), as a
+worker process (``bench/pyrender_worker.py``) that this script drives over a pipe; both
+use headless EGL on the same llvmpipe. The meshes are the lab scene's parts moved to world
+space (400 triangles: the robot and the mirror's frame) and the same parts subdivided
+``--subdivisions`` times (x4 triangles each: 6 gives about 1.6 million), written to
+``OUT/meshes`` as OBJ files that both renderers load. The variants:
+
+- ``mirrorlab two passes``: the lab's mirror, the orthographic capture copied into its
+  texture, then the camera pass; a part moves by 1 mm every frame, so every frame plans
+  and captures again, as an animation would;
+- ``mirrorlab capture reused``: the same scene standing still: the planner reuses the
+  capture, only the camera pass runs;
+- ``mirrorlab one pass``: the meshes with no mirror;
+- ``pyrender default``: lit, physically based, multisampled, colour and depth read back;
+- ``pyrender flat``: ``RenderFlags.FLAT``, no lighting: the least work pyrender does.
+
+The variants take turns in blocks of ``--block`` frames, the order rotating every round,
+so that a shared machine's load falls on all of them alike. The report (``speed.md``,
+``speed.csv``, ``speed.png``) gives the median of ``--frames`` frames after ``--warmup``
+per variant, the ratios to pyrender's frames, and how frame time grows with pixels and
+triangles (the exponent ``k`` of ``time ~ amount ** k`` between the smallest and largest
+amount: 1 is linear).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import math
+import statistics
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+PYRENDER_VENV = ROOT / ".venv-pyrender"
+PYRENDER_PACKAGES = ("pyrender==0.1.45", "numpy<2", "Pillow")
+MIRRORLAB_VARIANTS = ("mirrorlab two passes", "mirrorlab capture reused", "mirrorlab one pass")
+PYRENDER_VARIANTS = ("pyrender default", "pyrender flat")
+STEP = 0.001
+"""How far (scene units) the moving part of the two-pass variant goes and comes back."""
+
+
+def log(message: str) -> None:
+    print(f"[speed] {message}", file=sys.stderr, flush=True)
+
+
+# --------------------------------------------------------------------------- pyrender
+
+
+def pyrender_python() -> Path:
+    """The pyrender environment's interpreter, made (once) with pip when missing."""
+    python = PYRENDER_VENV / "bin" / "python"
+    stamp = PYRENDER_VENV / ".installed"
+    wanted = " ".join(PYRENDER_PACKAGES)
+    if not stamp.exists() or stamp.read_text() != wanted:
+        log(f"making pyrender's environment in {PYRENDER_VENV} ({', '.join(PYRENDER_PACKAGES)})")
+        subprocess.run([sys.executable, "-m", "venv", "--clear", str(PYRENDER_VENV)],
+                       check=True)
+        subprocess.run([str(python), "-m", "pip", "install", "-q",
+                        "--disable-pip-version-check", *PYRENDER_PACKAGES], check=True)
+        stamp.write_text(wanted)
+    return python
+
+
+class PyrenderWorker:
+    """pyrender in its own process and environment, driven one JSON line at a time."""
+
+    def __init__(self) -> None:
+        self.process = subprocess.Popen(
+            [str(pyrender_python()), str(ROOT / "bench" / "pyrender_worker.py")],
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+
+    def ask(self, **command) -> dict:
+        assert self.process.stdin is not None and self.process.stdout is not None
+        self.process.stdin.write(json.dumps(command) + "\n")
+        self.process.stdin.flush()
+        line = self.process.stdout.readline()
+        if not line:
+            raise RuntimeError(f"pyrender's worker ended (exit {self.process.wait()})")
+        return json.loads(line)
+
+    def close(self) -> None:
+        if self.process.poll() is None:
+            self.ask(cmd="quit")
+            self.process.wait(timeout=60)
+
+
+# --------------------------------------------------------------------------- meshes
+
+
+@dataclass(frozen=True)
+class MeshSet:
+    """World-space OBJ files with their colours, and the triangles a pass draws."""
+
+    level: int
+    files: tuple[tuple[Path, tuple[float, float, float]], ...]
+    triangles: int
+
+
+def write_mesh_sets(folder: Path, levels: tuple[int, ...]) -> list[MeshSet]:
+    """The lab scene's parts in world space, each subdivided ``level`` times, as OBJ files
+    (kept in ``folder`` for the next run)."""
+    import trimesh
+
+    import mirrorlab
+    from mirrorlab.scene.mesh import load_mesh
+    from mirrorlab.scene.robot import scene_parts
+
+    parts = scene_parts(mirrorlab.load_scene("lab20"))
+    sets = []
+    for level in levels:
+        target = folder / f"lab_x{4 ** level}"
+        target.mkdir(parents=True, exist_ok=True)
+        files, triangles = [], 0
+        for index, part in enumerate(parts):
+            path = target / f"{index:02d}_{part.name}.obj"
+            data = load_mesh(part.mesh)
+            triangles += len(data.indices) * 4 ** level
+            if not path.exists():
+                vertices = (part.model[:3, :3] @ data.positions.T.astype(np.float64)).T
+                vertices += part.model[:3, 3]
+                faces = data.indices.astype(np.int64)
+                for _ in range(level):
+                    vertices, faces = trimesh.remesh.subdivide(vertices, faces)
+                partial = path.with_suffix(".partial.obj")
+                trimesh.Trimesh(vertices=vertices, faces=faces, process=False).export(partial)
+                partial.replace(path)
+            files.append((path, tuple(float(c) for c in part.color)))
+        sets.append(MeshSet(level, tuple(files), triangles))
+    return sets
+
+
+# --------------------------------------------------------------------------- timing
+
+
+@dataclass
+class Variant:
+    name: str
+    frames: Callable[[int], list[float]]  # draws n frames, returns each one's ms
+    samples: list[float]
+
+
+def mirrorlab_variant(renderer, scenes: list, size: int) -> Callable[[int], list[float]]:
+    """Frames of ``scenes`` in turn (one scene: a still frame), each read back."""
+    turn = [0]
+
+    def frames(count: int) -> list[float]:
+        times = []
+        for _ in range(count):
+            scene = scenes[turn[0] % len(scenes)]
+            turn[0] += 1
+            start = time.perf_counter()
+            renderer.render(scene, size=(size, size))
+            times.append((time.perf_counter() - start) * 1e3)
+        return times
+    return frames
+
+
+def pyrender_variant(worker: PyrenderWorker, flags: str) -> Callable[[int], list[float]]:
+    """Frames drawn by pyrender with ``flags`` ("default" or "flat"), timed by the worker."""
+    return lambda count: worker.ask(cmd="frames", count=count, flags=flags)["ms"]
+
+
+def time_configuration(renderers, worker: PyrenderWorker, lab, meshes: MeshSet, size: int,
+                       frames: int, warmup: int, block: int) -> list[dict]:
+    """Median frame times of every variant for one mesh set at ``size`` x ``size``."""
+    from mirrorlab.scene.model import MeshObject, Transform
+
+    objects = tuple(MeshObject(name=path.stem, mesh=path, color=color)
+                    for path, color in meshes.files)
+    mirrored = replace(lab, objects=objects, animation=None)
+    moved = mirrored.with_object(objects[0].name, transform=Transform(position=(0, 0, STEP)))
+    plain = replace(mirrored, reflectors=())
+    camera = lab.camera
+    setup = worker.ask(cmd="setup", size=[size, size], meshes=[
+        {"path": str(path), "color": list(color)} for path, color in meshes.files],
+        camera={"view": camera.view().ravel().tolist(),
+                "yfov": float(np.radians(camera.fovy)), "znear": camera.near,
+                "zfar": camera.far},
+        light={"direction": list(lab.lights[0].direction), "intensity": 3.0})
+    two_pass, reused, one_pass = renderers
+    variants = [
+        Variant(MIRRORLAB_VARIANTS[0], mirrorlab_variant(two_pass, [mirrored, moved], size), []),
+        Variant(MIRRORLAB_VARIANTS[1], mirrorlab_variant(reused, [mirrored], size), []),
+        Variant(MIRRORLAB_VARIANTS[2], mirrorlab_variant(one_pass, [plain], size), []),
+        *(Variant(name, pyrender_variant(worker, name.split()[1]), [])
+          for name in PYRENDER_VARIANTS),
+    ]
+    for variant in variants:
+        variant.frames(warmup)
+    turn = 0
+    while min(len(v.samples) for v in variants) < frames:
+        order = variants[turn % len(variants):] + variants[:turn % len(variants)]
+        for variant in order:
+            variant.samples += variant.frames(block)
+        turn += 1
+    expected = ["capture:mirror", "camera"]
+    if two_pass.last_stats.ran != expected or reused.last_stats.ran != ["camera"]:
+        raise RuntimeError(f"the variants did not run the passes they stand for: "
+                           f"{two_pass.last_stats.ran}, {reused.last_stats.ran}")
+    medians = {v.name: statistics.median(v.samples) for v in variants}
+    log(f"{meshes.triangles} triangles, {size}x{size}: " + ", ".join(
+        f"{name} {ms:.2f} ms" for name, ms in medians.items()))
+    return [{"triangles": meshes.triangles, "size": size, "variant": v.name,
+             "median_ms": round(medians[v.name], 3),
+             "p10_ms": round(float(np.percentile(v.samples, 10)), 3),
+             "p90_ms": round(float(np.percentile(v.samples, 90)), 3),
+             "frames": len(v.samples), "gl": setup["gl"]} for v in variants]
+
+
+def run(mesh_sets: list[MeshSet], sizes: list[int], frames: int, warmup: int,
+        block: int) -> list[dict]:
+    import mirrorlab
+
+    lab = mirrorlab.load_scene("lab20")
+    worker = PyrenderWorker()
+    rows: list[dict] = []
+    try:
+        # a renderer (and context) a variant, as a program drawing that scene would keep
+        with mirrorlab.Renderer((64, 64)) as two_pass, mirrorlab.Renderer((64, 64)) as reused, \
+                mirrorlab.Renderer((64, 64)) as one_pass:
+            for meshes in mesh_sets:
+                for size in sizes:
+                    rows += time_configuration((two_pass, reused, one_pass), worker, lab,
+                                               meshes, size, frames, warmup, block)
+    finally:
+        worker.close()
+    return rows
+
+
+# --------------------------------------------------------------------------- report
+
+
+def growth_exponent(amounts: list[float], times: list[float]) -> float:
+    """``k`` in ``time ~ amount ** k`` between the first and last point."""
+    return math.log(times[-1] / times[0]) / math.log(amounts[-1] / amounts[0])
+
+
+def ratio_table(rows: list[dict]) -> str:
+    by_key = {(r["triangles"], r["size"], r["variant"]): r["median_ms"] for r in rows}
+    lines = ["| triangles | size | two passes ms | reused ms | one pass ms | pyrender "
+             "default ms | pyrender flat ms | two passes / flat | reused / flat | one pass / "
+             "flat | two passes / default | reused / default |",
+             "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    for triangles, size in dict.fromkeys((r["triangles"], r["size"]) for r in rows):
+        two, reused, one, default, flat = (by_key[(triangles, size, name)] for name in
+                                           (*MIRRORLAB_VARIANTS, *PYRENDER_VARIANTS))
+        lines.append(f"| {triangles:,} | {size} | {two:.2f} | {reused:.2f} | {one:.2f} | "
+                     f"{default:.2f} | {flat:.2f} | {two / flat:.2f}x | {reused / flat:.2f}x | "
+                     f"{one / flat:.2f}x | {two / default:.2f}x | {reused / default:.2f}x |")
+    return "\n".join(lines)
+
+
+def growth_table(rows: list[dict]) -> str:
+    """Exponents of frame time in pixels (per mesh set) and triangles (per size)."""
+    variants = list(dict.fromkeys(r["variant"] for r in rows))
+    by_key = {(r["triangles"], r["size"], r["variant"]): r["median_ms"] for r in rows}
+    triangle_counts = sorted({r["triangles"] for r in rows})
+    sizes = sorted({r["size"] for r in rows})
+    lines = ["| variant | " + " | ".join(
+        [f"k in pixels, {t:,} triangles" for t in triangle_counts]
+        + [f"k in triangles, {s}x{s}" for s in sizes]) + " |",
+        "|---|" + "---:|" * (len(triangle_counts) + len(sizes))]
+    pixels = [s * s for s in sizes]
+    for variant in variants:
+        cells = []
+        for triangles in triangle_counts:
+            times = [by_key[(triangles, s, variant)] for s in sizes]
+            cells.append(f"{growth_exponent(pixels, times):.2f}" if len(sizes) > 1 else "")
+        for size in sizes:
+            times = [by_key[(t, size, variant)] for t in triangle_counts]
+            cells.append(f"{growth_exponent(triangle_counts, times):.2f}"
+                         if len(triangle_counts) > 1 else "")
+        lines.append(f"| {variant} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def plot(rows: list[dict]) -> bytes | None:
+    """Frame time against pixels (at the fewest and most triangles) and against triangles
+    (at each size), log-log, as PNG bytes; None without matplotlib."""
+    try:
+        import matplotlib
+    except ImportError:
+        return None
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    variants = list(dict.fromkeys(r["variant"] for r in rows))
+    triangle_counts = sorted({r["triangles"] for r in rows})
+    sizes = sorted({r["size"] for r in rows})
+    by_key = {(r["triangles"], r["size"], r["variant"]): r["median_ms"] for r in rows}
+    figure, (by_pixels, by_triangles) = plt.subplots(1, 2, figsize=(12, 5))
+    colors = dict(zip(variants, plt.rcParams["axes.prop_cycle"].by_key()["color"],
+                      strict=False))
+    for triangles, style in ((triangle_counts[0], "-"), (triangle_counts[-1], "--")):
+        for variant in variants:
+            pixels = [s * s for s in sizes]
+            by_pixels.plot(pixels, [by_key[(triangles, s, variant)] for s in sizes], style,
+                           marker="o", color=colors[variant],
+                           label=f"{variant}, {triangles:,} tris")
+    for size, style in ((sizes[0], ":"), (512 if 512 in sizes else sizes[-1], "-")):
+        for variant in variants:
+            by_triangles.plot(triangle_counts,
+                              [by_key[(t, size, variant)] for t in triangle_counts], style,
+                              marker="o", color=colors[variant], label=f"{variant}, {size}²")
+    for axes, amounts, label in ((by_pixels, [s * s for s in sizes], "pixels"),
+                                 (by_triangles, triangle_counts, "triangles")):
+        axes.set_xscale("log")
+        axes.set_yscale("log")
+        axes.set_xlabel(label)
+        axes.set_ylabel("median frame time, ms (readback included)")
+        if len(amounts) > 1:
+            top = max(r["median_ms"] for r in rows)
+            guide = [top * a / amounts[-1] for a in amounts]
+            axes.plot(amounts, guide, color="grey", linewidth=0.8, label="linear (slope 1)")
+        axes.grid(True, which="both", alpha=0.3)
+        axes.legend(fontsize=6)
+    by_pixels.set_title("frame time against frame size")
+    by_triangles.set_title("frame time against triangles")
+    figure.tight_layout()
+    buffer = io.BytesIO()
+    figure.savefig(buffer, format="png", dpi=110)
+    plt.close(figure)
+    return buffer.getvalue()
+
+
+def report(rows: list[dict], out_dir: Path, settings: dict) -> str:
+    from mirrorlab.files import Outputs
+
+    text = "\n\n".join([
+        f"{settings['frames']} timed frames a variant after {settings['warmup']} warm-up, "
+        f"blocks of {settings['block']}; {rows[0]['gl']}",
+        ratio_table(rows),
+        "Growth of frame time (k in time ~ amount^k, first to last point; 1 is linear):",
+        growth_table(rows)]) + "\n"
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    picture = plot(rows)
+    with Outputs() as outputs:
+        outputs.add(out_dir / "speed.csv", buffer.getvalue().encode())
+        outputs.add(out_dir / "speed.md", text.encode())
+        if picture is not None:
+            outputs.add(out_dir / "speed.png", picture)
+    log(f"wrote {out_dir}/speed.csv, speed.md" + (", speed.png" if picture else
+                                                  " (no plot: matplotlib is not installed)"))
+    return text
+
+
+def rows_from_csv(path: Path) -> list[dict]:
+    with open(path, newline="") as stream:
+        rows = list(csv.DictReader(stream))
+    for row in rows:
+        for key in ("triangles", "size", "frames"):
+            row[key] = int(row[key])
+        for key in ("median_ms", "p10_ms", "p90_ms"):
+            row[key] = float(row[key])
+    return rows
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true",
+                        help="3 frames a variant at 32x32 and 64x64, the lab meshes and "
+                        "their first subdivision (what the tests run: it checks the "
+                        "benchmark works, not the figures)")
+    parser.add_argument("--sizes", default="256,512,1024,2048")
+    parser.add_argument("--subdivisions", default="0,2,4,6",
+                        help="mesh sets: the lab's parts subdivided this many times, x4 "
+                        "triangles each (default %(default)s: 402 to 1.6 million)")
+    parser.add_argument("--frames", type=int, default=30)
+    parser.add_argument("--warmup", type=int, default=5)
+    parser.add_argument("--block", type=int, default=5)
+    parser.add_argument("--out-dir", default="out/bench/speed")
+    parser.add_argument("--from-csv", metavar="PATH",
+                        help="time nothing: re-make the tables and plot from a speed.csv")
+    args = parser.parse_args(argv)
+    try:
+        sizes = [32, 64] if args.quick else [int(s) for s in args.sizes.split(",")]
+        levels = (0, 1) if args.quick else tuple(int(s) for s in args.subdivisions.split(","))
+    except ValueError:
+        parser.error("--sizes and --subdivisions take comma-separated whole numbers")
+    if any(not 16 <= s <= 4096 for s in sizes) or any(not 0 <= n <= 7 for n in levels):
+        parser.error("sizes must be 16 to 4096 and subdivisions 0 to 7")
+    settings = {"frames": 3 if args.quick else args.frames,
+                "warmup": 1 if args.quick else args.warmup,
+                "block": 3 if args.quick else args.block}
+    if min(settings.values()) < 1:
+        parser.error("--frames, --warmup and --block must be at least 1")
+    out_dir = Path(args.out_dir)
+    if args.from_csv:
+        rows = rows_from_csv(Path(args.from_csv))
+    else:
+        mesh_sets = write_mesh_sets(out_dir / "meshes", levels)
+        rows = run(mesh_sets, sizes, settings["frames"], settings["warmup"], settings["block"])
+    sys.stdout.write(report(rows, out_dir, settings))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
