@@ -1,8 +1,9 @@
 """Where a frame's time goes: Python's share of its CPU time, and each pass's time.
 
-Run from the repository root (``./dev bench profile`` does the set-up, with py-spy)::
+Run from the repository root as root or with perf allowed (``./dev bench profile`` does the
+set-up, with Debian's ``linux-perf``)::
 
-    python bench/frame_profile.py [--size 512] [--seconds 8] [--frames 100]
+    python bench/frame_profile.py [--size 512] [--seconds 6] [--frames 100]
                                   [--json PATH]
 
 Two frames of the lab scene are measured: ``two passes`` (the robot's elbow turns a
@@ -10,21 +11,24 @@ little every frame, so the planner plans again and the capture runs) and ``captu
 reused`` (the scene stands still: the camera pass only); each ends with the readback
 to numpy.
 
-**Python's share.** Each variant runs for ``--seconds`` in a process of its own under
-py-spy (``--native``: C frames too), which samples the main thread's stack 250 times a
-second while it is on the CPU. A sample whose stack reaches into Mesa (the GL driver:
-``swrast_dri``/``libgallium``, ``libGL*``, ``libEGL*``, ``libglapi``, ``libLLVM``) is the
-driver's; any other is Python's side: the interpreter running mirrorlab, PyOpenGL and
-numpy code, and the C code they call for themselves (ctypes, numpy, PyOpenGL-accelerate).
-The process also measures its CPU time (``time.process_time``: every thread, llvmpipe's
-rasteriser threads too) and its main thread's (``time.thread_time``) over the same frames,
-so
+**Python's share.** Each variant draws frames in a process of its own; after a warm-up,
+``perf record`` samples every thread of it ~1000 times a second of CPU time for
+``--seconds``: only while a thread runs on a CPU, so the samples are CPU time, spread over
+the main thread and llvmpipe's rasteriser threads as it was spent. Each sample is counted
+by the library it fell in:
 
-    Python's share = (Python samples / main-thread samples) x main-thread CPU / process CPU
+- the GL driver: any sample on a rasteriser thread; on the main thread Mesa's libraries
+  (``swrast_dri``/``libgallium``, ``libGL*``, ``libEGL``, ``libglapi``, ``libLLVM``) and
+  llvmpipe's compiled shaders (``[JIT]``);
+- Python: the interpreter (``libpython``) and the extension modules Python code calls for
+  itself (numpy, ctypes and libffi, PyOpenGL-accelerate, ...);
+- either: the C library and the kernel on the main thread (a ``memcpy`` may be numpy's or
+  Mesa's).
 
-is the part of all the CPU time a frame costs that Python spends.
+Python's share is Python's samples over all samples, given with "either" counted out and
+in (a lower and an upper bound).
 
-**Per-pass times.** In this process, without py-spy: every pass of the frame, and the
+**Per-pass times.** In this process, without perf: every pass of the frame, and the
 readback, end with ``glFinish``, so each one's wall time includes its rasterisation.
 The medians of ``--frames`` frames are printed. (The finishes cost a little: the sum is a
 little more than an unmeasured frame.)
@@ -47,9 +51,9 @@ from collections import Counter, defaultdict
 from pathlib import Path
 
 VARIANTS = ("two passes", "capture reused")
-DRIVER = re.compile(r"\((?:lib(?:gallium|GLX|EGL|GL|glapi|LLVM|GLdispatch|OpenGL|gbm|drm)"
-                    r"[^)]*|[^)]*_dri\.so[^)]*)\)")
-RATE = 250
+DRIVER = re.compile(r"swrast_dri|libgallium|libGL|libEGL|libOpenGL|libglapi|libLLVM|\[JIT\]")
+PYTHON = re.compile(r"libpython|^python|\.cpython-|libffi|openblas|_umath")
+RATE = 999
 
 
 def log(message: str) -> None:
@@ -68,74 +72,79 @@ def scenes(variant: str) -> list:
 
 
 def child(variant: str, size: int, seconds: float) -> None:
-    """Frames of ``variant`` for ``seconds`` after a warm-up; prints the CPU times."""
+    """Frames of ``variant`` for ``seconds`` after a warm-up (announced with a line
+    ``ready`` on stdout, when the sampler may start)."""
     import mirrorlab
 
     frames = scenes(variant)
     with mirrorlab.Renderer((size, size)) as renderer:
         for index in range(20):
             renderer.render(frames[index % len(frames)])
-        count = timed_frames(renderer, frames, seconds)
-    print(json.dumps(count))
+        print("ready", flush=True)
+        end = time.perf_counter() + seconds
+        count = 0
+        while time.perf_counter() < end:
+            renderer.render(frames[count % len(frames)])
+            count += 1
+    print(json.dumps({"frames": count}), flush=True)
 
 
-def timed_frames(renderer, frames: list, seconds: float) -> dict:
-    """The timed loop (py-spy's samples are counted only inside it, by its name)."""
-    end = time.perf_counter() + seconds
-    process, thread = time.process_time(), time.thread_time()
-    count = 0
-    while time.perf_counter() < end:
-        renderer.render(frames[count % len(frames)])
-        count += 1
-    return {"frames": count, "process_cpu_s": time.process_time() - process,
-            "main_cpu_s": time.thread_time() - thread}
-
-
-def py_spy() -> str:
-    found = shutil.which("py-spy") or str(Path(sys.executable).with_name("py-spy"))
-    if not Path(found).exists():
-        raise SystemExit("frame_profile.py: py-spy is not installed; pip install py-spy "
-                         "(or: ./dev bench profile)")
+def perf() -> str:
+    found = shutil.which("perf")
+    if found is None:
+        raise SystemExit("frame_profile.py: perf is not installed (Debian: apt-get install "
+                         "linux-perf; or ./dev bench profile)")
     return found
 
 
+def classify(thread: str, library: str) -> str:
+    """``driver``, ``python`` or ``either`` for a sample of ``thread`` in ``library``."""
+    if thread.startswith("llvmpipe") or DRIVER.search(library):
+        return "driver"
+    return "python" if PYTHON.search(library) else "either"
+
+
 def python_share(variant: str, size: int, seconds: float) -> dict:
-    """Run ``variant`` under py-spy and split its main thread's samples."""
+    """Sample ``variant``'s process with perf and split its CPU time."""
     with tempfile.TemporaryDirectory() as folder:
-        raw = Path(folder) / "samples.txt"
-        done = subprocess.run(
-            [py_spy(), "record", "--native", "--rate", str(RATE), "--format", "raw",
-             "--output", str(raw), "--", sys.executable, __file__, "--child", variant,
-             "--size", str(size), "--seconds", str(seconds)],
-            capture_output=True, text=True)
-        if done.returncode != 0 or not raw.exists():
-            raise SystemExit(f"frame_profile.py: py-spy failed: {done.stderr.strip()[-500:]}")
-        # py-spy writes its own lines around the child's
-        times = json.loads(next(line for line in reversed(done.stdout.splitlines())
-                                if line.startswith("{")))
-        samples = Counter()
-        python_leaves: Counter = Counter()
-        for line in raw.read_text().splitlines():
-            stack, _, count = line.rpartition(" ")
-            if "timed_frames" not in stack:
-                continue
-            frames = stack.split(";")
-            if any(DRIVER.search(frame) for frame in frames[1:]):
-                samples["driver"] += int(count)
-            else:
-                samples["python"] += int(count)
-                named = [f for f in frames if ".py:" in f]
-                if named:
-                    python_leaves[named[-1].split(" (")[0]] += int(count)
-    main = samples["python"] + samples["driver"]
-    share = samples["python"] / main * times["main_cpu_s"] / times["process_cpu_s"]
-    frames = times["frames"]
-    return {"variant": variant, "size": size, "frames": frames,
-            "process_cpu_ms_per_frame": round(times["process_cpu_s"] / frames * 1e3, 3),
-            "main_cpu_ms_per_frame": round(times["main_cpu_s"] / frames * 1e3, 3),
-            "main_thread_samples": main, "python_samples": samples["python"],
-            "python_share": round(share, 4),
-            "top_python_functions": python_leaves.most_common(8)}
+        data = Path(folder) / "perf.data"
+        process = subprocess.Popen([sys.executable, __file__, "--child", variant, "--size",
+                                    str(size), "--seconds", str(seconds + 3)],
+                                   stdout=subprocess.PIPE, text=True)
+        assert process.stdout is not None
+        try:
+            if process.stdout.readline().strip() != "ready":
+                raise SystemExit(f"frame_profile.py: the {variant} process did not start")
+            sampled = subprocess.run([perf(), "record", "-F", str(RATE), "-p",
+                                      str(process.pid), "-o", str(data), "--", "sleep",
+                                      str(seconds)], capture_output=True, text=True)
+            if sampled.returncode != 0 or not data.exists():
+                raise SystemExit(f"frame_profile.py: perf record failed: "
+                                 f"{sampled.stderr.strip()[-500:]}")
+            frames = json.loads(process.stdout.readline())["frames"]
+        finally:
+            process.wait()
+        table = subprocess.run([perf(), "report", "-i", str(data), "--stdio", "--sort",
+                                "comm,dso", "-F", "sample,comm,dso", "--percent-limit", "0"],
+                               capture_output=True, text=True, check=True).stdout
+    samples: Counter = Counter()
+    libraries: Counter = Counter()
+    for line in table.splitlines():
+        fields = line.split(None, 2)
+        if line.startswith("#") or len(fields) < 3 or not fields[0].isdigit():
+            continue
+        count, thread, library = int(fields[0]), fields[1], fields[2].strip()
+        kind = classify(thread, library)
+        samples[kind] += count
+        if not thread.startswith("llvmpipe"):
+            libraries[f"{library} ({kind})"] += count
+    total = sum(samples.values())
+    return {"variant": variant, "size": size, "frames_while_sampled": frames,
+            "samples": dict(samples),
+            "python_share_low": round(samples["python"] / total, 4),
+            "python_share_high": round((samples["python"] + samples["either"]) / total, 4),
+            "driver_share": round(samples["driver"] / total, 4),
+            "main_thread_libraries": libraries.most_common(8)}
 
 
 def pass_times(variant: str, size: int, frames: int) -> dict[str, float]:
@@ -189,7 +198,7 @@ def pass_times(variant: str, size: int, frames: int) -> dict[str, float]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--size", type=int, default=512)
-    parser.add_argument("--seconds", type=float, default=8.0)
+    parser.add_argument("--seconds", type=float, default=6.0)
     parser.add_argument("--frames", type=int, default=100)
     parser.add_argument("--json", metavar="PATH")
     parser.add_argument("--child", choices=VARIANTS, help=argparse.SUPPRESS)
@@ -201,16 +210,14 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--size 16 to 4096, --seconds above 0, --frames at least 1")
     report = {"shares": [], "passes": {}}
     for variant in VARIANTS:
-        log(f"{variant}: {args.seconds:g} s under py-spy")
+        log(f"{variant}: {args.seconds:g} s under perf")
         share = python_share(variant, args.size, args.seconds)
         report["shares"].append(share)
-        print(f"{variant}, {args.size}x{args.size}: Python's share {share['python_share']:.1%} "
-              f"of {share['process_cpu_ms_per_frame']:.2f} ms CPU a frame (main thread "
-              f"{share['main_cpu_ms_per_frame']:.2f} ms, {share['python_samples']} of "
-              f"{share['main_thread_samples']} of its samples on Python's side; "
-              f"{share['frames']} frames)")
-        print("  most sampled Python functions: " + ", ".join(
-            f"{name} {count}" for name, count in share["top_python_functions"]))
+        print(f"{variant}, {args.size}x{args.size}: Python's share {share['python_share_low']:.1%}"
+              f" to {share['python_share_high']:.1%} of the CPU time (the GL driver "
+              f"{share['driver_share']:.1%}; {sum(share['samples'].values())} samples)")
+        print("  main thread: " + ", ".join(f"{name} {count}" for name, count in
+                                            share["main_thread_libraries"]))
     for variant in VARIANTS:
         times = pass_times(variant, args.size, args.frames)
         report["passes"][variant] = times

@@ -9,6 +9,7 @@ view) and an optional world-space ``clip_plane``. Numpy only.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -82,11 +83,23 @@ class View:
         return _BIAS @ self.view_projection
 
 
+@functools.lru_cache(maxsize=64)
+def _camera_matrices(camera: Camera, aspect: float) -> tuple[np.ndarray, np.ndarray,
+                                                              np.ndarray]:
+    """``camera``'s view, projection and eye, worked out once (a still camera is the same
+    every frame); read-only, as every caller shares them."""
+    matrices = (camera.view(), camera.projection(aspect),
+                np.asarray(camera.eye, dtype=np.float64))
+    for matrix in matrices:
+        matrix.flags.writeable = False
+    return matrices
+
+
 def camera_view(camera: Camera, size: tuple[int, int], label: str = "camera") -> View:
     """The viewer's view of a ``size`` (width, height) target."""
-    return View(view=camera.view(), projection=camera.projection(size[0] / size[1]),
-                size=(int(size[0]), int(size[1])),
-                eye=np.asarray(camera.eye, dtype=np.float64), label=label)
+    view, projection, eye = _camera_matrices(camera, size[0] / size[1])
+    return View(view=view, projection=projection, size=(int(size[0]), int(size[1])),
+                eye=eye, label=label)
 
 
 def eye_position(view: np.ndarray) -> np.ndarray:
@@ -96,7 +109,10 @@ def eye_position(view: np.ndarray) -> np.ndarray:
 
 
 def is_orthographic(projection: np.ndarray) -> bool:
-    return bool(np.allclose(np.asarray(projection)[3], (0.0, 0.0, 0.0, 1.0)))
+    """Whether ``projection``'s last row is (0, 0, 0, 1), within ``np.allclose``'s
+    default tolerances (written out: allclose cost more than planning a view)."""
+    x, y, z, w = (float(v) for v in np.asarray(projection)[3])
+    return max(abs(x), abs(y), abs(z)) <= 1e-8 and abs(w - 1.0) <= 1e-8 + 1e-5
 
 
 def _mirror_of(view: View, plane: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:

@@ -4,6 +4,7 @@ the protocol a reflector's technique follows (:class:`ReflectorPass`)."""
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
 
@@ -18,7 +19,7 @@ from mirrorlab.scene.mesh import MeshData, load_mesh
 if TYPE_CHECKING:
     from mirrorlab.gl.resources import RenderTarget
     from mirrorlab.plan import PlannedPass, ReflectorDraw, ViewPlan
-    from mirrorlab.scene.model import Reflector, Scene
+    from mirrorlab.scene.model import Light, Reflector, Scene
     from mirrorlab.views import View
 
 SCRATCH_KEPT = 4
@@ -213,15 +214,24 @@ class ReflectorPass(Protocol):
         ...
 
 
-def light_uniforms(program: Program, scene: Scene) -> None:
-    """The scene's lights on the bound ``program`` (see lighting.glsl)."""
-    count = len(scene.lights)
+@functools.lru_cache(maxsize=32)
+def _light_arrays(lights: tuple[Light, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Unit directions and colour times intensity, ``(4, 3)`` float32 each (zero rows past
+    the last light), worked out once per set of lights."""
     directions = np.zeros((4, 3), dtype=np.float32)
     colors = np.zeros((4, 3), dtype=np.float32)
-    for i, light in enumerate(scene.lights):
+    for i, light in enumerate(lights):
         direction = np.asarray(light.direction, dtype=np.float64)
         directions[i] = direction / np.linalg.norm(direction)
         colors[i] = np.asarray(light.color, dtype=np.float64) * light.intensity
+    directions.flags.writeable = colors.flags.writeable = False
+    return directions, colors
+
+
+def light_uniforms(program: Program, scene: Scene) -> None:
+    """The scene's lights on the bound ``program`` (see lighting.glsl)."""
+    count = len(scene.lights)
+    directions, colors = _light_arrays(tuple(scene.lights))
     program.set_int("light_count", count)
     GL.glUniform3fv(program.location("light_directions"), 4, directions)
     GL.glUniform3fv(program.location("light_colors"), 4, colors)

@@ -25,13 +25,23 @@ class SceneDrawer:
         self.program.set_int("surface", 0)
         self._parts_of: Scene | None = None
         self._parts: list[tuple[Part, np.ndarray, np.ndarray]] = []
+        self._normals: dict[bytes, np.ndarray] = {}
 
     def _prepared(self, scene: Scene) -> list[tuple[Part, np.ndarray, np.ndarray]]:
-        """Each part with its float32 model and normal matrices, worked out once per scene."""
+        """Each part with its float32 model and normal matrices, worked out once per scene
+        (and a part's normal matrix once while its model stays: when the robot moves a
+        joint, the parts before it stay where they were)."""
         if scene is not self._parts_of:
-            self._parts = [(part, part.model.astype(np.float32),
-                            math3d.normal_matrix(part.model).astype(np.float32))
-                           for part in scene_parts(scene)]
+            normals = {}
+            self._parts = []
+            for part in scene_parts(scene):
+                key = part.model.tobytes()
+                normal = self._normals.get(key)
+                if normal is None:
+                    normal = math3d.normal_matrix(part.model).astype(np.float32)
+                normals[key] = normal
+                self._parts.append((part, part.model.astype(np.float32), normal))
+            self._normals = normals
             self._parts_of = scene
         return self._parts
 
