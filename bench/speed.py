@@ -71,10 +71,15 @@ def pyrender_python() -> Path:
     wanted = " ".join(PYRENDER_PACKAGES)
     if not stamp.exists() or stamp.read_text() != wanted:
         log(f"making pyrender's environment in {PYRENDER_VENV} ({', '.join(PYRENDER_PACKAGES)})")
-        subprocess.run([sys.executable, "-m", "venv", "--clear", str(PYRENDER_VENV)],
-                       check=True)
-        subprocess.run([str(python), "-m", "pip", "install", "-q",
-                        "--disable-pip-version-check", *PYRENDER_PACKAGES], check=True)
+        steps = {"python -m venv": [sys.executable, "-m", "venv", "--clear",
+                                    str(PYRENDER_VENV)],
+                 "pip install " + " ".join(PYRENDER_PACKAGES): [
+                     str(python), "-m", "pip", "install", "-q",
+                     "--disable-pip-version-check", *PYRENDER_PACKAGES]}
+        for name, command in steps.items():
+            if subprocess.run(command).returncode != 0:
+                raise SystemExit(f"speed.py: error: could not make pyrender's environment "
+                                 f"in {PYRENDER_VENV}: {name} failed")
         stamp.write_text(wanted)
     return python
 
