@@ -14,6 +14,17 @@ from mirrorlab.scene.robot import Part, scene_parts
 from mirrorlab.views import View
 
 
+def surface_matrix(normal: np.ndarray, color, textured: bool) -> np.ndarray:
+    """A part's ``part`` uniform (scene.vert, scene.frag), ``(4, 4)`` float32: the ``(3, 3)``
+    normal matrix in the upper left, the RGB colour (0-1) down the last column, and 1 below
+    it when the part wears its texture. One uniform call a part instead of three."""
+    matrix = np.zeros((4, 4), dtype=np.float32)
+    matrix[:3, :3] = normal
+    matrix[:3, 3] = color
+    matrix[3, 3] = 1.0 if textured else 0.0
+    return matrix
+
+
 class SceneDrawer:
     """Draws every part of a scene's objects (never its reflectors) with Lambert lighting,
     one ``glDrawElements`` call per part; and a reflector as a plain surface."""
@@ -28,9 +39,9 @@ class SceneDrawer:
         self._normals: dict[bytes, np.ndarray] = {}
 
     def _prepared(self, scene: Scene) -> list[tuple[Part, np.ndarray, np.ndarray]]:
-        """Each part with its float32 model and normal matrices, worked out once per scene
-        (and a part's normal matrix once while its model stays: when the robot moves a
-        joint, the parts before it stay where they were)."""
+        """Each part with its float32 model matrix and :func:`surface_matrix`, worked out
+        once per scene (and a part's normal matrix once while its model stays: when the
+        robot moves a joint, the parts before it stay where they were)."""
         if scene is not self._parts_of:
             normals = {}
             self._parts = []
@@ -38,9 +49,11 @@ class SceneDrawer:
                 key = part.model.tobytes()
                 normal = self._normals.get(key)
                 if normal is None:
-                    normal = math3d.normal_matrix(part.model).astype(np.float32)
+                    normal = math3d.normal_matrix(part.model)
                 normals[key] = normal
-                self._parts.append((part, part.model.astype(np.float32), normal))
+                self._parts.append((part, part.model.astype(np.float32),
+                                    surface_matrix(normal, part.color,
+                                                   part.texture is not None)))
             self._normals = normals
             self._parts_of = scene
         return self._parts
@@ -56,11 +69,9 @@ class SceneDrawer:
         """Draw the objects into the bound target; returns the number of draw calls."""
         program = self.begin(scene, view)
         parts = self._prepared(scene)
-        for part, model, normal in parts:
+        for part, model, surface in parts:
             program.set_mat4("model", model)
-            program.set_mat3("normal_matrix", normal)
-            program.set_vec3("color", part.color)
-            program.set_int("use_texture", part.texture is not None)
+            program.set_mat4("part", surface)
             if part.texture is not None:
                 self.shared.texture(part.texture).bind(0)
             self.shared.mesh(part.mesh).draw()
@@ -78,9 +89,8 @@ class SceneDrawer:
             model = np.eye(4)
             mesh = quad
         program.set_mat4("model", model)
-        program.set_mat3("normal_matrix", math3d.normal_matrix(model))
-        program.set_vec3("color", reflector.color)
-        program.set_int("use_texture", False)
+        program.set_mat4("part", surface_matrix(math3d.normal_matrix(model), reflector.color,
+                                                textured=False))
         GL.glEnable(GL.GL_CULL_FACE)
         mesh.draw()
         return 1

@@ -4,15 +4,14 @@
 in vec3 world_normal;
 in vec2 surface_uv;
 
-uniform vec3 color;
-uniform bool use_texture;
+uniform mat4 part;  // column 3: the part's colour, and 1 if it wears its texture
 uniform sampler2D surface;
 
 out vec4 frag_color;
 
 void main() {
-    vec3 albedo = color;
-    if (use_texture) {
+    vec3 albedo = part[3].rgb;
+    if (part[3].a > 0.5) {
         albedo *= texture(surface, surface_uv).rgb;
     }
     frag_color = vec4(lit(albedo, world_normal), 1.0);

@@ -10,14 +10,14 @@ layout(location = 2) in vec2 uv;
 
 uniform mat4 model;
 uniform mat4 view_projection;
-uniform mat3 normal_matrix;
+uniform mat4 part;  // upper-left 3x3: the normal matrix; column 3: colour, and 1 if textured
 
 out vec3 world_normal;
 out vec2 surface_uv;
 
 void main() {
     vec4 world_position = model * vec4(position, 1.0);
-    world_normal = normal_matrix * normal;
+    world_normal = mat3(part) * normal;
     surface_uv = uv;
     clip_world(world_position);
     gl_Position = view_projection * world_position;
