@@ -26,6 +26,8 @@ from dataclasses import dataclass
 from typing import Any
 
 RETRIES = 2
+CONNECT_TIMEOUT = "20s"
+"""How long a Dask client tries to reach a ``--scheduler`` before giving up."""
 
 
 @dataclass(frozen=True)
@@ -112,7 +114,7 @@ class DaskExecutor(Executor):
     engine = "dask"
 
     def __init__(self, workers: int = 2, address: str | None = None,
-                 retries: int = RETRIES, connect_timeout: str = "20s") -> None:
+                 retries: int = RETRIES, connect_timeout: str | None = None) -> None:
         try:
             from distributed import Client, LocalCluster
         except ImportError as exc:  # pragma: no cover - a dependency of mirrorlab
@@ -127,7 +129,7 @@ class DaskExecutor(Executor):
             self.client = Client(self.cluster)
         else:
             try:
-                self.client = Client(address, timeout=connect_timeout)
+                self.client = Client(address, timeout=connect_timeout or CONNECT_TIMEOUT)
             except OSError as exc:
                 raise ValueError(f"--scheduler: cannot reach a Dask scheduler at {address!r} "
                                  f"({exc})") from None

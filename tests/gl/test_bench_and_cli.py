@@ -347,7 +347,9 @@ def test_render_out_dir_writes_one_png_per_frame(tmp_path, capsys):
     assert main(["render", "robot_wave", "--frames", "8", "--size", "64x64", "--out",
                  str(out), "--out-dir", str(out_dir)]) == 0
     assert "wrote 8 frames" in capsys.readouterr().out
-    names = sorted(p.name for p in out_dir.iterdir())
+    # the frames, and the hidden record of how they were made (a rerun resumes by it)
+    names = sorted(p.name for p in out_dir.iterdir() if not p.name.startswith("."))
+    assert (out_dir / ".robot_wave.mirrorlab-batch.json").is_file()
     assert names == [f"robot_wave_{f:04d}.png" for f in range(8)]
     pictures = [png(out_dir / name) for name in names]
     assert np.array_equal(pictures[-1], png(out))
