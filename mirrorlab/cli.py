@@ -117,6 +117,16 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--from-csv", metavar="PATH",
                        help="measure nothing: re-make the tables and plot from a saved "
                        "accuracy.csv")
+    bench.add_argument("--jobs", metavar="J", default="1",
+                       help="ray trace the truths and score the frames in J processes; the "
+                       "timed frames stay in this process, run while the others are idle "
+                       "(default %(default)s)")
+    bench.add_argument("--scheduler", metavar="ADDRESS",
+                       help="trace and score on a running Dask scheduler's workers "
+                       "(tcp://host:8786)")
+    bench.add_argument("--engine", choices=("pool", "dask"), default="pool",
+                       help="with --jobs > 1 and no --scheduler: a local process pool "
+                       "(default) or a local Dask cluster")
     bench.add_argument("--scene", default="all",
                        help="lab (the mirror techniques), sphere (the environment maps), all "
                        "(default), or a scene file: every technique its reflectors can use")
@@ -303,6 +313,7 @@ def run_bench(args: argparse.Namespace) -> int:
                                  for p in args.sizes.split(","))
     if args.frames:
         changes["frames"] = parse_count("--frames", args.frames, 1, 10000)
+    jobs = parse_count("--jobs", args.jobs, 1, 1024)
     out_dir = check_folder("--out-dir", args.out_dir)
     settings = SweepSettings.quick() if args.quick else SweepSettings()
     from dataclasses import replace
@@ -312,7 +323,7 @@ def run_bench(args: argparse.Namespace) -> int:
     if args.scene not in ("lab", "sphere", "all"):
         scenes = load_scene(args.scene)
     return run_command(settings, scenes, out_dir, Path(args.from_csv) if args.from_csv
-                       else None)
+                       else None, jobs=jobs, scheduler=args.scheduler, engine=args.engine)
 
 
 def run_demo(args: argparse.Namespace) -> int:

@@ -7,7 +7,7 @@ them all before deciding which platform to load.
   :class:`GLLimitError` (larger than the GL allows) and :class:`GLOutOfMemoryError`;
 - the machine (exit 1): :class:`GLContextError` (no display, no GL libraries, an OpenGL
   too old), :class:`GLPassError` (any other GL error, naming the pass) and
-  :class:`BatchError` (frames of a batch failed on their workers).
+  :class:`BatchError` (jobs failed on their workers).
 """
 
 from __future__ import annotations
@@ -26,8 +26,9 @@ class GLVersionError(GLContextError):
 
 
 class BatchError(RuntimeError):
-    """Frames of a batch render failed where they ran; the message names the first and
-    how many (the frames that worked stay written)."""
+    """Jobs sent to workers failed where they ran (frames of a batch render, truths of the
+    accuracy sweep); the message names the first (and, for frames, how many: the frames
+    that worked stay written)."""
 
 
 class GLPassError(RuntimeError):
