@@ -17,7 +17,10 @@ Why the frames are identical whatever the number of jobs: a worker draws a scatt
 subset of the frames, in order, so its planner may reuse a capture (TextureState) made
 for an earlier frame of its own where a single renderer would have reused one from the
 frame just before. A capture is reused only when its key, everything the capture shows
-(the scene's content, the capture camera, the texture size), is equal, and the tests
+(the scene's content, the capture camera, the texture size), is equal (a reflected
+capture's camera matrices, and a sphere map's view rotation, are compared rounded to 12
+decimals: two views closer than that, far below float32's precision, count as one), and
+the tests
 render every frame from a fresh renderer, from runs starting part-way and from the whole
 sequence and compare them pixel for pixel (``tests/batch``).
 

@@ -55,8 +55,10 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
                       for panel in sphere_panels(quick))
     assert (lab_rows, sphere_rows) == (2 * (1 + 2 * 2 * 2 + 1), 3 * (1 + 7 * 2 + 3 * 2))
     total = lab_rows + sphere_rows
-    # one progress bar (tqdm, on stderr), and it reached its end
-    assert f"{total}/{total}" in out.err, out.err[-400:]
+    # one progress bar (tqdm, on stderr), and it reached its end: a step per row, and one
+    # more per viewpoint for scoring its frames (2 lab views, 3 sphere scenes)
+    steps = total + 2 + 3
+    assert f"{steps}/{steps}" in out.err, out.err[-400:]
     with open(tmp_path / "accuracy.csv") as stream:
         table = list(csv.DictReader(stream))
     assert len(table) == total
@@ -100,7 +102,8 @@ def test_accuracy_sweep_of_a_scene_file(tmp_path, capsys, monkeypatch):
                  "--out-dir", str(tmp_path)]) == 0
     out = capsys.readouterr()
     total = 1 + len(lab_techniques(SweepSettings.quick().sizes))
-    assert f"{total}/{total}" in out.err, out.err[-400:]
+    steps = total + 1  # and one step to score the viewpoint's frames
+    assert f"{steps}/{steps}" in out.err, out.err[-400:]
     with open(tmp_path / "accuracy.csv") as stream:
         table = list(csv.DictReader(stream))
     assert len(table) == total
