@@ -19,15 +19,16 @@ for an earlier frame of its own where a single renderer would have reused one fr
 frame just before. A capture is reused only when its key, everything the capture shows
 (the scene's content, the capture camera, the texture size), is equal (a reflected
 capture's camera matrices, and a sphere map's view rotation, are compared rounded to 12
-decimals: two views closer than that, far below float32's precision, count as one), and
-the tests
-render every frame from a fresh renderer, from runs starting part-way and from the whole
-sequence and compare them pixel for pixel (``tests/batch``).
+decimals: two views closer than that, far below float32's precision, count as one). The
+tests (``tests/batch``) compare, pixel for pixel, frames drawn in sequence with the same
+frames drawn from the middle on, every other one, backwards and by a fresh renderer.
 
 The renderer's lifetime: from the first frame of a batch in a thread to
 :func:`release_frame_renderer` (the command calls it for its own process at the end of a
-batch), or to the first frame of the next batch in that thread, which releases it
-first; a pool's worker processes end with the batch, taking their contexts with them.
+batch), or to the first frame of the next batch in that thread, which releases it first.
+A pool's worker processes and a local Dask cluster end with the batch's executor, taking
+their contexts with them; a worker of a running ``--scheduler`` keeps its renderer until
+its next batch or its end.
 """
 
 from __future__ import annotations
