@@ -168,16 +168,17 @@ def test_the_planner_reuses_captures_inside_a_worker():
 
 
 def test_a_killed_batch_resumes_to_the_same_files(tmp_path):
-    """Kill a real batch (and its workers) once some but not all frames are written; the
-    rerun renders only the missing ones and the folder ends as an uninterrupted batch's."""
+    """SIGKILL a real batch (its whole process group) once its first frame is on disk, with
+    23 frames of 30-40 ms each still to come; the rerun, on two processes, renders only
+    the missing ones, and the folder ends as an uninterrupted batch's."""
     out_dir = tmp_path / "frames"
     command = [sys.executable, "-m", "mirrorlab.cli", "render", "robot_wave", "--frames", "24",
                "--size", "512x512", "--out-dir", str(out_dir), "--jobs", "1"]
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                start_new_session=True)
     try:
-        while process.poll() is None and len(frames_in(out_dir)) < 2:
-            time.sleep(0.005)  # waiting for the condition: two frames on disk
+        while process.poll() is None and not frames_in(out_dir):
+            time.sleep(0.005)  # waiting for the condition: a frame on disk
         assert process.poll() is None, process.communicate()[1].decode()[-2000:]
         os.killpg(process.pid, signal.SIGKILL)
         process.wait()
@@ -188,7 +189,7 @@ def test_a_killed_batch_resumes_to_the_same_files(tmp_path):
     process.stdout.close()
     process.stderr.close()
     written = [p for p in frames_in(out_dir) if is_whole_frame(p, (512, 512))]
-    assert 2 <= len(written) < 24, f"{len(written)} frames were written before the kill"
+    assert 1 <= len(written) < 24, f"{len(written)} frames were written before the kill"
 
     resumed = mirrorlab_command(*command[3:-2], "--jobs", "2")
     assert resumed.returncode == 0, resumed.stderr[-2000:]
