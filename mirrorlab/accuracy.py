@@ -21,7 +21,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mirrorlab.errors import BatchError
 from mirrorlab.files import Outputs, write_bytes_atomic
+from mirrorlab.jobs import Executor, Outcome, open_executor
 from mirrorlab.options import apply_options
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import (
@@ -280,56 +282,125 @@ def file_panel(scene: Scene) -> Panel:
                  1 if curved else 0, proxies_for(scene) if curved else ())
 
 
-def run_panels(panels: Sequence[Panel], settings: SweepSettings,
-               progress: bool = True) -> list[SweepRow]:
-    """Measure every technique of every panel at every viewpoint, in one headless context:
-    one row per configuration and viewpoint, the ray tracer's own rows included (zero
-    error, its time)."""
-    from tqdm import tqdm
+@dataclass(frozen=True)
+class Truth:
+    """A viewpoint's ground truth: the traced ``image`` ``(h, w, 3)`` uint8, the ``mask``
+    ``(h, w)`` bool of the pixels scored (the reflective region shrunk by the panel's
+    inset), and the median milliseconds the ray tracer took."""
 
+    image: np.ndarray
+    mask: np.ndarray
+    milliseconds: float
+
+
+def trace_truth(scene: Scene, size: tuple[int, int], supersample: int, inset: int,
+                repeats: int) -> Truth:
+    """Trace ``scene`` ``repeats`` times (to time the ray tracer) at ``size`` with
+    ``supersample`` x ``supersample`` rays a pixel: a job of the sweep's first phase."""
     from mirrorlab.raytrace import trace_scene
 
+    times, truth = [], None
+    for _ in range(repeats):
+        start = time.perf_counter()
+        truth = trace_scene(scene, size, supersample)
+        times.append((time.perf_counter() - start) * 1e3)
+    assert truth is not None
+    return Truth(truth.to_uint8(), erode(truth.reflective_mask, inset), float(np.median(times)))
+
+
+def score_frames(truth: Truth, images: Sequence[np.ndarray]) -> list[ImageError]:
+    """Each of ``images`` ``(h, w, 3)`` uint8 against ``truth``: a job of the third phase."""
+    return [image_error(image, truth.image, truth.mask) for image in images]
+
+
+def run_panels(panels: Sequence[Panel], settings: SweepSettings, progress: bool = True,
+               executor: Executor | None = None) -> list[SweepRow]:
+    """Measure every technique of every panel at every viewpoint: one row per
+    configuration and viewpoint, the ray tracer's own rows included (zero error, its
+    time).
+
+    Three phases, so that parallel work never runs while frames are timed:
+
+    1. the ground truth of each viewpoint (:func:`trace_truth`), all sent to ``executor``
+       at once (the slowest, supersampled ones first) while this process waits;
+    2. every configuration's timed frames, one after another in this process, in one
+       headless context, with the executor idle; the last frame of each is kept
+       (512x512: 0.8 MB each, 270 MB for the full sweep);
+    3. each viewpoint's error measurements (:func:`score_frames`), sent to the executor.
+
+    Without an ``executor`` every phase runs here, in that order. The figures are the
+    same either way (the ray tracer and the scoring are deterministic); only the times
+    differ, and the ray tracer's own time is measured where its truth is traced (with
+    two jobs, beside another trace).
+    """
+    from tqdm import tqdm
+
+    executor = executor or Executor()
     size = (settings.frame, settings.frame)
-    jobs = [(panel, name, camera) for panel in panels
-            for name, camera in panel.viewpoints.items()]
-    total = sum(1 + len(scene_techniques(panel.scene, settings.sizes, panel.proxies,
-                                         settings.steps))
-                for panel, _, _ in jobs)
-    rows: list[SweepRow] = []
-    bar = tqdm(total=total, desc="accuracy", unit="config", disable=not progress,
+    views = [(panel, name, replace(panel.scene, camera=camera)) for panel in panels
+             for name, camera in panel.viewpoints.items()]
+    configurations = [scene_techniques(scene, settings.sizes, panel.proxies, settings.steps)
+                      for panel, _, scene in views]
+    total = 2 * len(views) + sum(len(c) for c in configurations)
+    bar = tqdm(total=total, desc="accuracy", unit="step", disable=not progress,
                file=sys.stderr, dynamic_ncols=True, mininterval=0.5)
-    with sweep_gl(size) as (renderer, framebuffer, timer), bar:
-        for panel, name, camera in jobs:
-            scene = replace(panel.scene, camera=camera)
-            repeats = max(1, settings.frames // 5) if panel.supersample == 1 else 1
-            truth_times, truth = [], None
-            for _ in range(repeats):
-                start = time.perf_counter()
-                truth = trace_scene(scene, size, panel.supersample)
-                truth_times.append((time.perf_counter() - start) * 1e3)
-            assert truth is not None
-            truth_image = truth.to_uint8()
-            mask = erode(truth.reflective_mask, panel.inset)
-            label = "raytrace" if panel.supersample == 1 else (
-                f"raytrace {panel.supersample}x{panel.supersample}")
-            rows.append(SweepRow(panel.name, label, 0, name, 0.0, 0.0, math.inf, 0.0,
-                                 float(np.median(truth_times)), math.nan))
-            bar.set_postfix_str(f"{label} {panel.name} {name}", refresh=False)
+    truths: dict[int, Truth] = {}
+    frames: dict[int, list[np.ndarray]] = {}
+    timings: dict[int, list[tuple[str, int, float, float]]] = {}
+    errors: dict[int, list[ImageError]] = {}
+    with bar:
+        bar.set_postfix_str("ray tracing the truths", refresh=False)
+        order = sorted(range(len(views)), key=lambda i: -views[i][0].supersample)
+        work = {f"truth-{i}": (views[i][2], size, views[i][0].supersample, views[i][0].inset,
+                               _truth_repeats(views[i][0], settings)) for i in order}
+        for outcome in executor.run(trace_truth, work):
+            truths[int(outcome.key.split("-")[1])] = _value(outcome, "ray tracing")
             bar.update()
-            for technique_label, options in scene_techniques(scene, settings.sizes,
-                                                             panel.proxies, settings.steps):
-                configured = apply_options(scene, options)
-                map_size = int(options.get("env_size", options.get("map_size", 0)))
-                if technique_label == "stencil":
-                    map_size = 0
-                error, wall, gpu = measure(renderer, configured, framebuffer, timer,
-                                           settings, truth_image, mask)
-                rows.append(SweepRow(panel.name, technique_label, map_size, name, error.mae,
-                                     error.p95, error.psnr, error.share_off, wall, gpu))
-                bar.set_postfix_str(f"{technique_label} {map_size or ''} {panel.name} {name}",
-                                    refresh=False)
-                bar.update()
+        with sweep_gl(size) as (renderer, framebuffer, timer):
+            for index, (panel, name, scene) in enumerate(views):
+                frames[index], timings[index] = [], []
+                for technique_label, options in configurations[index]:
+                    configured = apply_options(scene, options)
+                    map_size = int(options.get("env_size", options.get("map_size", 0)))
+                    if technique_label == "stencil":
+                        map_size = 0
+                    bar.set_postfix_str(f"{technique_label} {map_size or ''} {panel.name} "
+                                        f"{name}", refresh=False)
+                    image, wall, gpu = measure_frames(renderer, configured, framebuffer, timer,
+                                                      settings)
+                    frames[index].append(image)
+                    timings[index].append((technique_label, map_size, wall, gpu))
+                    bar.update()
+        bar.set_postfix_str("scoring the frames", refresh=False)
+        work = {f"score-{i}": (truths[i], frames[i]) for i in range(len(views))}
+        for outcome in executor.run(score_frames, work):
+            index = int(outcome.key.split("-")[1])
+            errors[index] = _value(outcome, "scoring")
+            frames[index] = []
+            bar.update()
+    rows: list[SweepRow] = []
+    for index, (panel, name, _) in enumerate(views):
+        label = "raytrace" if panel.supersample == 1 else (
+            f"raytrace {panel.supersample}x{panel.supersample}")
+        rows.append(SweepRow(panel.name, label, 0, name, 0.0, 0.0, math.inf, 0.0,
+                             truths[index].milliseconds, math.nan))
+        for (technique_label, map_size, wall, gpu), error in zip(timings[index],
+                                                                 errors[index], strict=True):
+            rows.append(SweepRow(panel.name, technique_label, map_size, name, error.mae,
+                                 error.p95, error.psnr, error.share_off, wall, gpu))
     return rows
+
+
+def _truth_repeats(panel: Panel, settings: SweepSettings) -> int:
+    """How often a truth is traced to time the ray tracer: a fifth of the timed frames
+    when it traces one ray a pixel, once when supersampled (seconds a frame)."""
+    return max(1, settings.frames // 5) if panel.supersample == 1 else 1
+
+
+def _value(outcome: Outcome, what: str):
+    if outcome.error is not None:
+        raise BatchError(f"{what} failed on a worker: {outcome.error}")
+    return outcome.value
 
 
 @contextmanager
@@ -376,13 +447,11 @@ def time_frames(render_frame: Callable[[], object], timer, settings: SweepSettin
     return float(np.median(walls)), float(np.median(gpus))
 
 
-def measure(renderer: SceneRenderer, scene: Scene, framebuffer, timer,
-            settings: SweepSettings, truth: np.ndarray, mask: np.ndarray,
-            ) -> tuple[ImageError, float, float]:
+def measure_frames(renderer: SceneRenderer, scene: Scene, framebuffer, timer,
+                   settings: SweepSettings) -> tuple[np.ndarray, float, float]:
     """Time frames of ``scene`` (see :func:`time_frames`), each capturing its reflectors
-    afresh as a moving scene would (maps baked from the background are kept), then score
-    the last frame against ``truth`` ``(h, w, 3)`` uint8 under ``mask`` ``(h, w)``.
-    Returns the error and the median wall and GL milliseconds."""
+    afresh as a moving scene would (maps baked from the background are kept). Returns
+    the last frame ``(h, w, 3)`` uint8 and the median wall and GL milliseconds."""
     from mirrorlab.gl.context import check_gl_errors
 
     def frame() -> None:
@@ -394,7 +463,7 @@ def measure(renderer: SceneRenderer, scene: Scene, framebuffer, timer,
     wall, gpu = time_frames(frame, timer, settings)
     image = framebuffer.read()
     check_gl_errors("a sweep frame")
-    return image_error(image, truth, mask), wall, gpu
+    return image, wall, gpu
 
 
 ENVMAP_MAX_SIZE = 1024
@@ -613,9 +682,12 @@ def plot_png(summary: Sequence[SummaryRow], title: str) -> bytes | None:
 
 
 def run_command(settings: SweepSettings, scenes: str | Scene, out_dir: Path,
-                from_csv: Path | None = None, say: Callable[[str], None] = print) -> int:
+                from_csv: Path | None = None, say: Callable[[str], None] = print,
+                jobs: int = 1, scheduler: str | None = None, engine: str = "pool") -> int:
     """``mirrorlab bench accuracy``: measure (or read ``from_csv``), print the tables, and
-    write accuracy.csv, accuracy.md and accuracy.png into ``out_dir``."""
+    write accuracy.csv, accuracy.md and accuracy.png into ``out_dir``. The truths and the
+    scoring run on ``jobs`` processes (or the Dask ``scheduler``'s workers; see
+    :func:`run_panels`), the timed frames in this process."""
     if from_csv is not None:
         try:
             rows = rows_from_csv(from_csv.read_text())
@@ -630,7 +702,13 @@ def run_command(settings: SweepSettings, scenes: str | Scene, out_dir: Path,
         else:
             panels = ([lab_panel(settings)] if scenes in ("lab", "all") else []) + (
                 sphere_panels(settings) if scenes in ("sphere", "all") else [])
-        rows = run_panels(panels, settings)
+        started = time.perf_counter()
+        with open_executor(jobs, scheduler, engine) as executor:
+            rows = run_panels(panels, settings, executor=executor)
+            workers = f"{executor.engine} ({executor.workers} worker"
+            workers += "s)" if executor.workers != 1 else ")"
+        say(f"measured {len(rows)} rows in {time.perf_counter() - started:.1f} s; truths "
+            f"and scoring on {workers}, timed frames in this process")
         title = (f"accuracy vs time, {settings.frame}x{settings.frame} frames, llvmpipe; "
                  f"medians of {settings.frames} frames")
     summary = summarise(rows)

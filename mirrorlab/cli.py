@@ -14,7 +14,7 @@ import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
-from mirrorlab.errors import GLContextError, GLPassError, WriteError
+from mirrorlab.errors import BatchError, GLContextError, GLPassError, WriteError
 from mirrorlab.files import OutputError, check_folder, check_output
 from mirrorlab.options import (
     OPTIONS,
@@ -64,8 +64,24 @@ def build_parser() -> argparse.ArgumentParser:
                         "(default 0)")
     render.add_argument("--frames", metavar="N", help="render frames 0 to N-1 (the last is "
                         "written to --out)")
-    render.add_argument("--out-dir", metavar="DIR", help="also write every frame as "
-                        "DIR/SCENE_NNNN.png")
+    render.add_argument("--out-dir", metavar="DIR", help="a batch: write every frame as "
+                        "DIR/SCENE_NNNN.png, each as soon as it is drawn; a rerun skips the "
+                        "frames already written whole")
+    render.add_argument("--jobs", metavar="J", default="1",
+                        help="with --out-dir: frames drawn by J processes at once, each "
+                        "keeping one OpenGL context (default %(default)s)")
+    render.add_argument("--scheduler", metavar="ADDRESS",
+                        help="with --out-dir: draw the frames on a running Dask scheduler's "
+                        "workers (tcp://host:8786)")
+    render.add_argument("--engine", choices=("pool", "dask"), default="pool",
+                        help="with --jobs > 1 and no --scheduler: a local process pool "
+                        "(default) or a local Dask cluster")
+    render.add_argument("--gif", metavar="PATH", help="with --out-dir: also write the "
+                        "frames as an animated GIF")
+    render.add_argument("--webp", metavar="PATH", help="with --out-dir: also write the "
+                        "frames as an animated WebP (lossless)")
+    render.add_argument("--fps", metavar="N", default="12",
+                        help="frames a second of --gif and --webp (default %(default)s)")
     render.add_argument("--stats", action="store_true", help="print the passes each frame "
                         "ran and skipped, and the time planning saved against --no-plan")
     render.add_argument("--no-plan", action="store_true",
@@ -101,6 +117,16 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--from-csv", metavar="PATH",
                        help="measure nothing: re-make the tables and plot from a saved "
                        "accuracy.csv")
+    bench.add_argument("--jobs", metavar="J", default="1",
+                       help="ray trace the truths and score the frames in J processes; the "
+                       "timed frames stay in this process, run while the others are idle "
+                       "(default %(default)s)")
+    bench.add_argument("--scheduler", metavar="ADDRESS",
+                       help="trace and score on a running Dask scheduler's workers "
+                       "(tcp://host:8786)")
+    bench.add_argument("--engine", choices=("pool", "dask"), default="pool",
+                       help="with --jobs > 1 and no --scheduler: a local process pool "
+                       "(default) or a local Dask cluster")
     bench.add_argument("--scene", default="all",
                        help="lab (the mirror techniques), sphere (the environment maps), all "
                        "(default), or a scene file: every technique its reflectors can use")
@@ -192,25 +218,50 @@ def scene_from_args(args: argparse.Namespace) -> Scene:
 
 
 def run_render(args: argparse.Namespace) -> int:
-    from mirrorlab.commands.render import run_render as render
-
     size = parse_size("--size", args.size)
+    jobs = parse_count("--jobs", args.jobs, 1, 1024)
+    fps = parse_count("--fps", args.fps, 1, 100)
     out = check_output("--out", args.out) if args.out else None
     save_env = check_output("--save-env", args.save_env) if args.save_env else None
     out_dir = check_folder("--out-dir", args.out_dir) if args.out_dir else None
+    animations = [(kind, check_output(f"--{kind}", path, f".{kind}"))
+                  for kind, path in (("gif", args.gif), ("webp", args.webp)) if path]
+    if out_dir is None:
+        batch_only = [("--jobs", jobs > 1), ("--scheduler", args.scheduler),
+                      *((f"--{kind}", True) for kind, _ in animations)]
+        for option, given in batch_only:
+            if given:
+                raise UsageError(f"{option}: works on a batch of frames; give --out-dir DIR "
+                                 f"too")
+    else:
+        for option, given in (("--stats", args.stats), ("--save-env", save_env)):
+            if given:
+                raise UsageError(f"{option}: measures frames in one renderer; give it "
+                                 f"without --out-dir")
     if args.option_method == "raytrace":  # the ray tracer, as the API's method="raytrace"
         args.option_method, args.raytrace = None, True
     scene = scene_from_args(args)
-    if out is None:
+    if out is None and out_dir is None:
         out = check_output("--out", Path("out") / f"{scene.name}.png", make_folder=True)
     frames = frame_list(args, scene)
-    outputs = [("--out", out)] + ([("--save-env", save_env)] if save_env else [])
+    outputs = ([("--out", out)] if out else []) + ([("--save-env", save_env)] if save_env
+                                                   else [])
+    outputs += [(f"--{kind}", path) for kind, path in animations]
     if out_dir is not None:
-        from mirrorlab.commands.render import frame_name
+        from mirrorlab.batch import frame_name
 
         outputs += [("--out-dir", frame_name(out_dir, scene, f)) for f in frames]
     check_distinct(outputs)
-    return render(scene, size, out, frames, out_dir, args.stats, not args.no_plan, save_env,
+    if out_dir is not None:
+        from mirrorlab.batch import FrameJob, run_batch
+
+        return run_batch(FrameJob(scene, size, not args.no_plan, args.raytrace, args.debug),
+                         frames, out_dir, jobs, args.scheduler, args.engine, out, animations,
+                         fps)
+    from mirrorlab.commands.render import run_render as render
+
+    assert out is not None
+    return render(scene, size, out, frames, args.stats, not args.no_plan, save_env,
                   args.raytrace, debug=args.debug)
 
 
@@ -262,6 +313,7 @@ def run_bench(args: argparse.Namespace) -> int:
                                  for p in args.sizes.split(","))
     if args.frames:
         changes["frames"] = parse_count("--frames", args.frames, 1, 10000)
+    jobs = parse_count("--jobs", args.jobs, 1, 1024)
     out_dir = check_folder("--out-dir", args.out_dir)
     settings = SweepSettings.quick() if args.quick else SweepSettings()
     from dataclasses import replace
@@ -271,7 +323,7 @@ def run_bench(args: argparse.Namespace) -> int:
     if args.scene not in ("lab", "sphere", "all"):
         scenes = load_scene(args.scene)
     return run_command(settings, scenes, out_dir, Path(args.from_csv) if args.from_csv
-                       else None)
+                       else None, jobs=jobs, scheduler=args.scheduler, engine=args.engine)
 
 
 def run_demo(args: argparse.Namespace) -> int:
@@ -399,7 +451,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         where = exc.filename or "a file"
         print(f"{command}: error: cannot read {where}: {exc.strerror or exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except (GLContextError, GLPassError) as exc:
+    except (GLContextError, GLPassError, BatchError) as exc:
         print(f"{command}: error: {exc}", file=sys.stderr)
         return EXIT_MACHINE
 

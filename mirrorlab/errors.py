@@ -6,7 +6,8 @@ them all before deciding which platform to load.
   option, an output path), :class:`WriteError` (the system refused a write),
   :class:`GLLimitError` (larger than the GL allows) and :class:`GLOutOfMemoryError`;
 - the machine (exit 1): :class:`GLContextError` (no display, no GL libraries, an OpenGL
-  too old) and :class:`GLPassError` (any other GL error, naming the pass).
+  too old), :class:`GLPassError` (any other GL error, naming the pass) and
+  :class:`BatchError` (jobs failed on their workers).
 """
 
 from __future__ import annotations
@@ -22,6 +23,12 @@ class GLContextError(RuntimeError):
 
 class GLVersionError(GLContextError):
     """The context's OpenGL is older than a technique needs."""
+
+
+class BatchError(RuntimeError):
+    """Jobs sent to workers failed where they ran (frames of a batch render, truths of the
+    accuracy sweep); the message names the first (and, for frames, how many: the frames
+    that worked stay written)."""
 
 
 class GLPassError(RuntimeError):

@@ -5,9 +5,10 @@ a key; results come back as each job finishes, each key exactly once.
 Engines (:func:`open_executor`):
 
 - ``serial``: in this process, one after another (``jobs`` = 1 and no scheduler).
-- ``pool``: a local :class:`concurrent.futures.ProcessPoolExecutor` of ``jobs`` processes.
-  When a worker process dies, the pool breaks; the jobs that had not finished are
-  submitted again to a new pool (up to ``retries`` times each).
+- ``pool``: a local :class:`concurrent.futures.ProcessPoolExecutor` of ``jobs`` processes,
+  kept from the first run to :meth:`Executor.close`. When a worker process dies, the pool
+  breaks; the jobs that had not finished are submitted again to a new pool (up to
+  ``retries`` times each).
 - ``dask``: a Dask distributed cluster: a :class:`distributed.LocalCluster` of ``jobs``
   worker processes (one thread each), or the running scheduler at ``scheduler``
   (``tcp://host:8786``). When a worker dies, the scheduler runs its jobs again on another
@@ -26,6 +27,8 @@ from dataclasses import dataclass
 from typing import Any
 
 RETRIES = 2
+CONNECT_TIMEOUT = "20s"
+"""How long a Dask client tries to reach a ``--scheduler`` before giving up."""
 
 
 @dataclass(frozen=True)
@@ -67,13 +70,24 @@ class Executor:
 
 
 class PoolExecutor(Executor):
-    """``jobs`` local worker processes; jobs of a broken pool are re-run on a new one."""
+    """``jobs`` local worker processes; jobs of a broken pool are re-run on a new one.
+
+    The pool is made at the first :meth:`run` and kept for the later ones until
+    :meth:`close`: its workers are forked once, from the process as it was then (the
+    accuracy sweep forks them before it opens its own OpenGL context, and finds them idle
+    while it times frames)."""
 
     engine = "pool"
 
     def __init__(self, workers: int, retries: int = RETRIES) -> None:
         self.workers = workers
         self.retries = retries
+        self._pool: concurrent.futures.ProcessPoolExecutor | None = None
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool = None
 
     def run(self, function: Callable[..., Any],
             jobs: Mapping[str, tuple]) -> Iterator[Outcome]:
@@ -81,8 +95,11 @@ class PoolExecutor(Executor):
         attempts = dict.fromkeys(jobs, 0)
         while pending:
             broken = False
-            with concurrent.futures.ProcessPoolExecutor(self.workers) as pool:
-                futures = {pool.submit(function, *args): key for key, args in pending.items()}
+            if self._pool is None:
+                self._pool = concurrent.futures.ProcessPoolExecutor(self.workers)
+            futures = {self._pool.submit(function, *args): key
+                       for key, args in pending.items()}
+            try:
                 for future in concurrent.futures.as_completed(futures):
                     key = futures[future]
                     try:
@@ -96,8 +113,12 @@ class PoolExecutor(Executor):
                         continue
                     del pending[key]
                     yield Outcome(key, value)
+            finally:
+                for future in futures:  # the caller stopped early: drop what has not begun
+                    future.cancel()
             if not broken:
                 break
+            self.close()
             for key in list(pending):
                 attempts[key] += 1
                 if attempts[key] > self.retries:
@@ -112,7 +133,7 @@ class DaskExecutor(Executor):
     engine = "dask"
 
     def __init__(self, workers: int = 2, address: str | None = None,
-                 retries: int = RETRIES, connect_timeout: str = "20s") -> None:
+                 retries: int = RETRIES, connect_timeout: str | None = None) -> None:
         try:
             from distributed import Client, LocalCluster
         except ImportError as exc:  # pragma: no cover - a dependency of mirrorlab
@@ -127,7 +148,7 @@ class DaskExecutor(Executor):
             self.client = Client(self.cluster)
         else:
             try:
-                self.client = Client(address, timeout=connect_timeout)
+                self.client = Client(address, timeout=connect_timeout or CONNECT_TIMEOUT)
             except OSError as exc:
                 raise ValueError(f"--scheduler: cannot reach a Dask scheduler at {address!r} "
                                  f"({exc})") from None

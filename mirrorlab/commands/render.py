@@ -1,5 +1,6 @@
-"""``mirrorlab render``: frames of a scene to PNG files, with what the planner ran and
-saved."""
+"""``mirrorlab render`` without ``--out-dir``: one picture (the last of the frames drawn),
+with what the planner ran and saved. With ``--out-dir`` the frames are a batch: see
+:mod:`mirrorlab.batch`."""
 
 from __future__ import annotations
 
@@ -13,16 +14,12 @@ from mirrorlab.files import Outputs
 from mirrorlab.scene.model import Scene
 
 
-def frame_name(out_dir: Path, scene: Scene, frame: int) -> Path:
-    return out_dir / f"{scene.name}_{frame:04d}.png"
-
-
 def run_render(scene: Scene, size: tuple[int, int], out: Path, frames: list[int],
-               out_dir: Path | None = None, stats: bool = False, use_plan: bool = True,
+               stats: bool = False, use_plan: bool = True,
                save_env: Path | None = None, raytrace: bool = False,
                say: Callable[[str], None] = print, debug: bool = False) -> int:
-    """Render ``frames`` of ``scene``; the last goes to ``out``, every one to ``out_dir``
-    too; all files are written together at the end, or none. With ``stats``, each frame
+    """Render ``frames`` of ``scene`` in order; the last goes to ``out`` (with ``save_env``,
+    its capture texture too), all files together at the end, or none. With ``stats``, each frame
     is also drawn with every pass (--no-plan) by a second renderer, in turn with the
     planned one, so both are timed under the same conditions. ``debug`` checks the GL's
     debug messages after every pass."""
@@ -33,8 +30,6 @@ def run_render(scene: Scene, size: tuple[int, int], out: Path, frames: list[int]
 
             for frame in frames:
                 image = trace_scene(scene.at_frame(frame), size, progress=True).to_uint8()
-                if out_dir is not None:
-                    outputs.add_png(frame_name(out_dir, scene, frame), image)
             outputs.add_png(out, image)
             if save_env is not None:
                 say(f"no capture texture when ray tracing; {save_env} not written")
@@ -60,8 +55,6 @@ def run_render(scene: Scene, size: tuple[int, int], out: Path, frames: list[int]
                 elapsed = (time.perf_counter() - began) * 1e3
                 assert renderer.last_stats is not None
                 records.append((frame, renderer.last_stats, elapsed))
-                if out_dir is not None:
-                    outputs.add_png(frame_name(out_dir, scene, frame), image)
                 if compare and not index % 2:
                     comparison.append(_unplanned(unplanned, scene, frame))
             assert image is not None
@@ -75,8 +68,6 @@ def run_render(scene: Scene, size: tuple[int, int], out: Path, frames: list[int]
     say(f"wrote {out} ({size[0]}x{size[1]}, {scene.name}, "
         f"{'frame' if len(frames) == 1 else 'frames'} {_span(frames)}, last frame's passes: "
         f"{' + '.join(last.ran)}, {total:.0f} ms with start-up, {gl_renderer})")
-    if out_dir is not None:
-        say(f"wrote {len(frames)} frames to {out_dir}")
     if save_env is not None:
         if environment is None:
             say(f"scene {scene.name} has no capture texture to save; {save_env} not written")

@@ -55,8 +55,10 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
                       for panel in sphere_panels(quick))
     assert (lab_rows, sphere_rows) == (2 * (1 + 2 * 2 * 2 + 1), 3 * (1 + 7 * 2 + 3 * 2))
     total = lab_rows + sphere_rows
-    # one progress bar (tqdm, on stderr), and it reached its end
-    assert f"{total}/{total}" in out.err, out.err[-400:]
+    # one progress bar (tqdm, on stderr), and it reached its end: a step per row, and one
+    # more per viewpoint for scoring its frames (2 lab views, 3 sphere scenes)
+    steps = total + 2 + 3
+    assert f"{steps}/{steps}" in out.err, out.err[-400:]
     with open(tmp_path / "accuracy.csv") as stream:
         table = list(csv.DictReader(stream))
     assert len(table) == total
@@ -100,7 +102,8 @@ def test_accuracy_sweep_of_a_scene_file(tmp_path, capsys, monkeypatch):
                  "--out-dir", str(tmp_path)]) == 0
     out = capsys.readouterr()
     total = 1 + len(lab_techniques(SweepSettings.quick().sizes))
-    assert f"{total}/{total}" in out.err, out.err[-400:]
+    steps = total + 1  # and one step to score the viewpoint's frames
+    assert f"{steps}/{steps}" in out.err, out.err[-400:]
     with open(tmp_path / "accuracy.csv") as stream:
         table = list(csv.DictReader(stream))
     assert len(table) == total
@@ -347,7 +350,9 @@ def test_render_out_dir_writes_one_png_per_frame(tmp_path, capsys):
     assert main(["render", "robot_wave", "--frames", "8", "--size", "64x64", "--out",
                  str(out), "--out-dir", str(out_dir)]) == 0
     assert "wrote 8 frames" in capsys.readouterr().out
-    names = sorted(p.name for p in out_dir.iterdir())
+    # the frames, and the hidden record of how they were made (a rerun resumes by it)
+    names = sorted(p.name for p in out_dir.iterdir() if not p.name.startswith("."))
+    assert (out_dir / ".robot_wave.mirrorlab-batch.json").is_file()
     assert names == [f"robot_wave_{f:04d}.png" for f in range(8)]
     pictures = [png(out_dir / name) for name in names]
     assert np.array_equal(pictures[-1], png(out))

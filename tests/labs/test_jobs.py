@@ -4,6 +4,8 @@ lost nor counted twice."""
 
 from __future__ import annotations
 
+import os
+
 import pytest
 
 from mirrorlab.jobs import DaskExecutor, Executor, PoolExecutor, open_executor
@@ -77,3 +79,15 @@ def test_each_job_runs_once_when_nothing_dies(tmp_path, dask_executor):
                        {f"k{i}": (str(folder), f"k{i}") for i in range(6)})
         assert sorted(got) == [f"k{i}" for i in range(6)]
         assert len(list(folder.iterdir())) == 6
+
+
+def test_a_pool_keeps_its_workers_from_the_first_run_to_close():
+    """The accuracy sweep forks its workers before it opens its OpenGL context and reuses
+    them after: every run of one pool is served by the processes of the first."""
+    with PoolExecutor(2) as pool:
+        first, again = ({o.value for o in pool.run(jobfunctions.process_id,
+                                                   {f"{run}{i}": (i,) for i in range(6)})}
+                        for run in "ab")
+        assert 1 <= len(first) <= 2 and os.getpid() not in first
+        assert again <= first  # a new pool would have new processes
+    assert pool._pool is None

@@ -1,0 +1,54 @@
+"""The accuracy sweep across the executor (``mirrorlab bench accuracy --jobs J``): truths
+traced and frames scored by worker processes give the same figures as one process; only
+the timing columns differ."""
+
+from __future__ import annotations
+
+import csv
+import subprocess
+import sys
+from pathlib import Path
+
+from mirrorlab.cli import main
+
+TIMES = ("wall_ms", "gpu_ms")
+
+
+def figures(folder: Path) -> list[dict[str, str]]:
+    with open(folder / "accuracy.csv") as stream:
+        return [{k: v for k, v in row.items() if k not in TIMES}
+                for row in csv.DictReader(stream)]
+
+
+def test_the_quick_sweep_on_two_processes_gives_the_figures_of_one(tmp_path, capsys):
+    one, two = tmp_path / "one", tmp_path / "two"
+    assert main(["bench", "accuracy", "--quick", "--jobs", "1", "--out-dir", str(one)]) == 0
+    assert "truths and scoring on serial (1 worker)" in capsys.readouterr().out
+    # a process of its own: a pool forks, and this test process holds EGL contexts
+    result = subprocess.run([sys.executable, "-m", "mirrorlab.cli", "bench", "accuracy",
+                             "--quick", "--jobs", "2", "--out-dir", str(two)],
+                            capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert "truths and scoring on pool (2 workers)" in result.stdout
+    serial, parallel = figures(one), figures(two)
+    assert len(serial) == 83
+    assert serial == parallel
+    # the figures are real measurements: the ray tracer's rows score zero, others do not
+    assert {r["mae"] for r in serial if r["technique"].startswith("raytrace")} == {"0.0"}
+    assert any(float(r["mae"]) > 1.0 for r in serial if r["technique"] == "ortho-copy")
+    with open(two / "accuracy.csv") as stream:
+        assert all(float(r["wall_ms"]) > 0 for r in csv.DictReader(stream))
+
+
+def test_bad_executor_options_of_the_sweep(capsys, tmp_path):
+    for extra, words in ((["--jobs", "0"], "--jobs: expected a whole number from 1"),
+                         (["--engine", "threads"], "--engine")):
+        code = None
+        try:
+            code = main(["bench", "accuracy", "--quick", "--out-dir", str(tmp_path / "x"),
+                         *extra])
+        except SystemExit as stop:  # argparse refuses a choice itself, with its usage
+            code = stop.code
+        assert code == 2
+        assert words in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()
