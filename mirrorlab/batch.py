@@ -199,7 +199,8 @@ def run_batch(job: FrameJob, frames: Sequence[int], out_dir: Path, jobs: int = 1
     for kind, path in animations:
         write_bytes_atomic(path, animation_bytes([names[f] for f in frames], kind, fps))
     if todo:
-        say(f"wrote {len(todo)} frames of {scene.name} ({job.size[0]}x{job.size[1]}) to "
+        say(f"wrote {len(todo)} frame{'' if len(todo) == 1 else 's'} of {scene.name} "
+            f"({job.size[0]}x{job.size[1]}) to "
             f"{out_dir} in {seconds:.1f} s on {engine_name}, "
             f"{len(todo) / seconds:.1f} frames a second, start-up included; skipped "
             f"{skipped} already written whole"
