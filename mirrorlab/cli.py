@@ -37,6 +37,21 @@ DEBUG_HELP = ("a debug OpenGL context whose KHR_debug messages are checked after
 EXIT_BAD_INPUT, EXIT_MACHINE, EXIT_INTERRUPTED = 2, 1, 130
 
 
+def _add_executor_arguments(parser: argparse.ArgumentParser, jobs: str,
+                            scheduler: str) -> None:
+    """``--jobs``, ``--scheduler`` and ``--engine``: where a command's independent jobs run
+    (:func:`mirrorlab.jobs.open_executor`). ``jobs`` says what J counts, ``scheduler``
+    what is done on the scheduler's workers."""
+    parser.add_argument("--jobs", metavar="J", default="1",
+                        help=f"{jobs} (default %(default)s)")
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        help=f"{scheduler} a running Dask scheduler's workers "
+                        f"(tcp://host:8786)")
+    parser.add_argument("--engine", choices=("pool", "dask"), default="pool",
+                        help="with --jobs > 1 and no --scheduler: a local process pool "
+                        "(default; measured faster here) or a local Dask cluster")
+
+
 def _add_scene_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("scene_file", nargs="?", metavar="SCENE",
                         help=f"a scene file (.toml) or a shipped scene: "
@@ -67,15 +82,9 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--out-dir", metavar="DIR", help="a batch: write every frame as "
                         "DIR/SCENE_NNNN.png, each as soon as it is drawn; a rerun skips the "
                         "frames already written whole")
-    render.add_argument("--jobs", metavar="J", default="1",
-                        help="with --out-dir: frames drawn by J processes at once, each "
-                        "keeping one OpenGL context (default %(default)s)")
-    render.add_argument("--scheduler", metavar="ADDRESS",
-                        help="with --out-dir: draw the frames on a running Dask scheduler's "
-                        "workers (tcp://host:8786)")
-    render.add_argument("--engine", choices=("pool", "dask"), default="pool",
-                        help="with --jobs > 1 and no --scheduler: a local process pool "
-                        "(default) or a local Dask cluster")
+    _add_executor_arguments(
+        render, jobs="with --out-dir: frames drawn by J processes at once, each keeping one "
+        "OpenGL context", scheduler="with --out-dir: draw the frames on")
     render.add_argument("--gif", metavar="PATH", help="with --out-dir: also write the "
                         "frames as an animated GIF")
     render.add_argument("--webp", metavar="PATH", help="with --out-dir: also write the "
@@ -117,16 +126,10 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--from-csv", metavar="PATH",
                        help="measure nothing: re-make the tables and plot from a saved "
                        "accuracy.csv")
-    bench.add_argument("--jobs", metavar="J", default="1",
-                       help="ray trace the truths and score the frames in J processes; the "
-                       "timed frames stay in this process, run while the others are idle "
-                       "(default %(default)s)")
-    bench.add_argument("--scheduler", metavar="ADDRESS",
-                       help="trace and score on a running Dask scheduler's workers "
-                       "(tcp://host:8786)")
-    bench.add_argument("--engine", choices=("pool", "dask"), default="pool",
-                       help="with --jobs > 1 and no --scheduler: a local process pool "
-                       "(default) or a local Dask cluster")
+    _add_executor_arguments(
+        bench, jobs="ray trace the truths and score the frames in J processes; the timed "
+        "frames stay in this process, run while the others are idle",
+        scheduler="trace and score on")
     bench.add_argument("--scene", default="all",
                        help="lab (the mirror techniques), sphere (the environment maps), all "
                        "(default), or a scene file: every technique its reflectors can use")
@@ -185,13 +188,8 @@ def build_parser() -> argparse.ArgumentParser:
     grade.add_argument("lab_name", metavar="LAB")
     grade.add_argument("submissions", metavar="SUBMISSIONS_DIR",
                        help="one .py file or one folder per student")
-    grade.add_argument("--jobs", metavar="J", default="1",
-                       help="submissions graded at once (default %(default)s)")
-    grade.add_argument("--scheduler", metavar="ADDRESS",
-                       help="a running Dask scheduler (tcp://host:8786) to grade on")
-    grade.add_argument("--engine", choices=("pool", "dask"), default="pool",
-                       help="with --jobs > 1 and no --scheduler: a local process pool "
-                       "(default; measured faster here) or a local Dask cluster")
+    _add_executor_arguments(grade, jobs="submissions graded at once",
+                            scheduler="grade on")
     grade.add_argument("--out-dir", metavar="DIR",
                        help="where grades.csv, report.html and the pictures go (default: "
                        "SUBMISSIONS_DIR-grades beside the submissions)")
