@@ -230,8 +230,8 @@ class Texture2D(_Resource):
 
         This is the lab's ``glCopyTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, 0, 0, w, h, 0)``;
         the texture takes the copied size. Once it has that size, later copies go into
-        the storage it has (``glCopyTexSubImage2D``): reallocating level 0 every frame
-        made the driver free and zero it again. ``source`` is the size of the framebuffer
+        the storage it has (``glCopyTexSubImage2D``) rather than defining level 0 anew
+        every frame, as ``glCopyTexImage2D`` does. ``source`` is the size of the framebuffer
         read: a copy reaching outside it (whose texels GL leaves undefined) is refused.
         """
         if width > source[0] or height > source[1]:
@@ -286,6 +286,9 @@ class _FramebufferObject(_Resource):
     name: int
     width: int
     height: int
+    _rows: np.ndarray | None = None
+    """Where :meth:`read` has GL write the rows, kept from frame to frame: a fresh 0.8 MB
+    array a frame (at 512 x 512) would be fresh pages for the kernel to zero."""
 
     @property
     def size(self) -> tuple[int, int]:
@@ -297,11 +300,9 @@ class _FramebufferObject(_Resource):
     def read(self) -> np.ndarray:
         """Colour as ``(height, width, 3)`` uint8, row 0 at the top (a new array)."""
         self.bind()
-        rows = getattr(self, "_rows", None)
-        if rows is None or rows.shape[:2] != (self.height, self.width):
-            # kept: a fresh 0.8 MB array a frame is fresh pages for the kernel to zero
-            rows = self._rows = np.empty((self.height, self.width, 3), dtype=np.uint8)
-        return read_pixels(self.width, self.height, rows)
+        if self._rows is None or self._rows.shape[:2] != (self.height, self.width):
+            self._rows = np.empty((self.height, self.width, 3), dtype=np.uint8)
+        return read_pixels(self.width, self.height, self._rows)
 
 
 class Framebuffer(_FramebufferObject):
