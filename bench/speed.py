@@ -390,7 +390,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sizes", default="256,512,1024,2048")
     parser.add_argument("--subdivisions", default="0,2,4,6",
                         help="mesh sets: the lab's parts subdivided this many times, x4 "
-                        "triangles each (default %(default)s: 402 to 1.6 million)")
+                        "triangles each (default %(default)s: 400 to 1.6 million)")
     parser.add_argument("--frames", type=int, default=30)
     parser.add_argument("--warmup", type=int, default=5)
     parser.add_argument("--block", type=int, default=5)
