@@ -423,6 +423,26 @@ class DefaultFramebuffer:
         return read_pixels(width, height)
 
 
+def upload_mesh(vertices: np.ndarray, indices: np.ndarray) -> tuple[int, int, int]:
+    """A new VAO over a new interleaved VBO of ``vertices`` ``(n, 8)`` float32 (location 0
+    position xyz, 1 normal xyz, 2 uv) and an index buffer of ``indices`` (flat uint32);
+    returns the names ``(vao, vbo, ebo)``, the VAO unbound. Whoever calls it deletes them."""
+    vao = int(GL.glGenVertexArrays(1))
+    vbo, ebo = (int(n) for n in GL.glGenBuffers(2))
+    GL.glBindVertexArray(vao)
+    GL.glBindBuffer(GL.GL_ARRAY_BUFFER, vbo)
+    GL.glBufferData(GL.GL_ARRAY_BUFFER, vertices.nbytes, vertices, GL.GL_STATIC_DRAW)
+    GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, ebo)
+    GL.glBufferData(GL.GL_ELEMENT_ARRAY_BUFFER, indices.nbytes, indices, GL.GL_STATIC_DRAW)
+    stride = vertices.shape[1] * vertices.itemsize
+    for location, (size, offset) in enumerate(((3, 0), (3, 12), (2, 24))):
+        GL.glEnableVertexAttribArray(location)
+        GL.glVertexAttribPointer(location, size, GL.GL_FLOAT, GL.GL_FALSE, stride,
+                                 GL.GLvoidp(offset))
+    GL.glBindVertexArray(0)
+    return vao, vbo, ebo
+
+
 class MeshBuffer(_Resource):
     """A mesh in GPU memory: one VAO over an interleaved VBO and an index buffer.
 
@@ -441,18 +461,7 @@ class MeshBuffer(_Resource):
             raise ValueError(f"mesh index {int(indices.max())} out of range for "
                              f"{len(vertices)} vertices")
         self.index_count = int(indices.size)
-        self.vao = int(GL.glGenVertexArrays(1))
-        self.vbo, self.ebo = (int(n) for n in GL.glGenBuffers(2))
-        GL.glBindVertexArray(self.vao)
-        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, self.vbo)
-        GL.glBufferData(GL.GL_ARRAY_BUFFER, vertices.nbytes, vertices, GL.GL_STATIC_DRAW)
-        GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, self.ebo)
-        GL.glBufferData(GL.GL_ELEMENT_ARRAY_BUFFER, indices.nbytes, indices, GL.GL_STATIC_DRAW)
-        for location, (size, offset) in enumerate(((3, 0), (3, 12), (2, 24))):
-            GL.glEnableVertexAttribArray(location)
-            GL.glVertexAttribPointer(location, size, GL.GL_FLOAT, GL.GL_FALSE, self.STRIDE,
-                                     GL.GLvoidp(offset))
-        GL.glBindVertexArray(0)
+        self.vao, self.vbo, self.ebo = upload_mesh(vertices, indices)
         super().__init__(registry)
 
     def draw(self) -> None:

@@ -156,25 +156,15 @@ class _Mesh:
     ``gl_Vertex`` aliases too."""
 
     def __init__(self, name: str) -> None:
+        from mirrorlab.gl.resources import upload_mesh
         from mirrorlab.scene.mesh import load_mesh
 
-        GL = _gl()
         data = load_mesh(REPO_DIR / "models" / f"{name}.obj")
-        vertices = data.interleaved()
+        vertices = np.ascontiguousarray(data.interleaved(), dtype=np.float32)
         indices = np.ascontiguousarray(data.indices.reshape(-1), dtype=np.uint32)
         self.count = int(indices.size)
-        self.vao = int(GL.glGenVertexArrays(1))
-        self.vbo, self.ebo = (int(n) for n in GL.glGenBuffers(2))
-        GL.glBindVertexArray(self.vao)
-        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, self.vbo)
-        GL.glBufferData(GL.GL_ARRAY_BUFFER, vertices.nbytes, vertices, GL.GL_STATIC_DRAW)
-        GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, self.ebo)
-        GL.glBufferData(GL.GL_ELEMENT_ARRAY_BUFFER, indices.nbytes, indices, GL.GL_STATIC_DRAW)
-        for location, (size, offset) in enumerate(((3, 0), (3, 12), (2, 24))):
-            GL.glEnableVertexAttribArray(location)
-            GL.glVertexAttribPointer(location, size, GL.GL_FLOAT, GL.GL_FALSE, 32,
-                                     GL.GLvoidp(offset))
-        GL.glBindVertexArray(0)
+        # the session's meshes live as long as its process: no registry, nothing to free
+        self.vao, self.vbo, self.ebo = upload_mesh(vertices, indices)
 
     def draw(self) -> None:
         GL = _gl()
