@@ -205,12 +205,12 @@ def judge_frame(student: Evidence, reference: Evidence,
                        "framebuffer, so it runs before the frame is cleared and drawn")
     if sphere is not None and capture is not None and capture > sphere:
         return False, "the sphere is drawn before this frame's capture: capture first"
-    stopped = student.stopped_by()
-    if stopped and stopped != "display":
-        return False, f"not judged: the frame stopped at {stopped}()"
-    frame, ref = student.image("frame"), reference.image("frame")
-    if frame is None or ref is None or frame.shape != ref.shape:
+    if hint := student.stopped_hint("display"):
+        return False, hint
+    frames = student.frames_with(reference)
+    if frames is None:
         return False, "display() drew no frame"
+    frame, ref = frames
     sphere_mask = reference.arrays.get("values_mask")
     in_sphere = share_within(frame, ref, 24, sphere_mask) if isinstance(
         sphere_mask, np.ndarray) and sphere_mask.shape == frame.shape[:2] else 0.0

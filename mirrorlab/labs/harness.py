@@ -152,6 +152,20 @@ def call(namespace: dict[str, Any], name: str) -> bool:
     return True
 
 
+def run_frames(namespace: dict[str, Any], run: Run, session: Any) -> None:
+    """The student's ``display()`` for up to FRAMES frames (until one raises), then the last
+    frame read back; its events (what was drawn, in which of the student's functions) are
+    kept in ``session.events`` and, the first 100, in the run's ``frame_events``."""
+    for frame in range(FRAMES):
+        session.events.clear()
+        run.calls.append(f"frame {frame}")
+        if not call(namespace, "display"):
+            break
+    finish_frame(run, session)
+    run.state["frame_events"] = [
+        {"kind": e["kind"], "steps": e["steps"]} for e in session.events][:100]
+
+
 # ---------------------------------------------------------------------------- the labs
 
 
@@ -210,12 +224,7 @@ def drive_lab20(namespace: dict[str, Any], run: Run, session: Any) -> None:
         "create_mirror": after_create_mirror, "render_mirror": after_render_mirror})
     call(namespace, "load_textures")
     call(namespace, "build_scene_graph")
-    for frame in range(FRAMES):
-        session.events.clear()
-        run.calls.append(f"frame {frame}")
-        if not call(namespace, "display"):
-            break
-    finish_frame(run, session)
+    run_frames(namespace, run, session)
     got = ids()
     if got is not None and GL.glIsTexture(got[1]):
         metal = kit.read_texture_2d(got[1])
@@ -227,8 +236,6 @@ def drive_lab20(namespace: dict[str, Any], run: Run, session: Any) -> None:
     if capture_draws:
         run.arrays["projection_capture"] = capture_draws[0]["projection"]
         run.arrays["modelview_capture"] = capture_draws[0]["modelview"]
-    run.state["frame_events"] = [
-        {"kind": e["kind"], "steps": e["steps"]} for e in session.events][:100]
 
 
 def drive_spheremap(namespace: dict[str, Any], run: Run, session: Any) -> None:
@@ -242,16 +249,9 @@ def drive_spheremap(namespace: dict[str, Any], run: Run, session: Any) -> None:
     wrap_functions(namespace, run, session, {"draw_cone_texgen": after_draw_cone_texgen})
     call(namespace, "load_textures")
     call(namespace, "setup_texgen")
-    for frame in range(FRAMES):
-        session.events.clear()
-        run.calls.append(f"frame {frame}")
-        if not call(namespace, "display"):
-            break
-    finish_frame(run, session)
+    run_frames(namespace, run, session)
     fixed = [e for e in session.events if e["kind"] == "draw_cone_fixed_function"]
     run.state["texgen_draws"] = [{k: v for k, v in e.items() if k != "kind"} for e in fixed]
-    run.state["frame_events"] = [
-        {"kind": e["kind"], "steps": e["steps"]} for e in session.events][:100]
     run.state["launch_texture"] = int(session.backdrop_texture)
     texture = namespace.get("launch")
     run.state["student_launch"] = int(texture) if isinstance(texture, int | np.integer) else -1
@@ -278,20 +278,13 @@ def drive_cubemap(namespace: dict[str, Any], run: Run, session: Any) -> None:
 
     wrap_functions(namespace, run, session, {"capture_cube": after_capture_cube})
     call(namespace, "create_cube_texture")
-    for frame in range(FRAMES):
-        session.events.clear()
-        run.calls.append(f"frame {frame}")
-        if not call(namespace, "display"):
-            break
-    finish_frame(run, session)
+    run_frames(namespace, run, session)
     draws = [e for e in session.events if e["kind"] == "draw_scene"
              and "capture_cube" in e["steps"]]
     if draws:
         run.arrays["capture_projections"] = np.stack([e["projection"] for e in draws][:12])
         run.arrays["capture_modelviews"] = np.stack([e["modelview"] for e in draws][:12])
         run.state["capture_viewports"] = [e["viewport"] for e in draws][:12]
-    run.state["frame_events"] = [
-        {"kind": e["kind"], "steps": e["steps"]} for e in session.events][:100]
     run.state["cube_texture"] = cube_id()
     glsl = namespace.get("CUBE_MAP_GLSL")
     check_values(run, session, lambda mode: session.draw_sphere(glsl, cube_id(), mode),

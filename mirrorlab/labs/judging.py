@@ -84,6 +84,20 @@ class Evidence:
                 return call.split(" ", 1)[1]
         return ""
 
+    def stopped_hint(self, judged: str) -> str:
+        """"not judged: ..." when an error in a function other than ``judged`` (the one
+        under judgement) stopped the last frame, else ''."""
+        stopped = self.stopped_by()
+        return f"not judged: the frame stopped at {stopped}()" if stopped and \
+            stopped != judged else ""
+
+    def frames_with(self, reference: Evidence) -> tuple[np.ndarray, np.ndarray] | None:
+        """This run's last frame and ``reference``'s, when both exist at one size."""
+        frame, ref = self.image("frame"), reference.image("frame")
+        if frame is None or ref is None or frame.shape != ref.shape:
+            return None
+        return frame, ref
+
     def frame_events(self) -> list[dict[str, Any]]:
         events = self.state.get("frame_events")
         return [e for e in events if isinstance(e, dict)] if isinstance(events, list) else []

@@ -296,9 +296,7 @@ def judge_mirror(student: Evidence, reference: Evidence) -> dict[str, tuple[bool
     frame = student.image("frame")
     ref_frame = reference.image("frame")
     calls = student.last_frame_calls()
-    stopped = student.stopped_by()
-    if stopped and stopped != "render_mirror":
-        hint = f"not judged: the frame stopped at {stopped}()"
+    if hint := student.stopped_hint("render_mirror"):
         return {"mirror_texture": (False, hint), "mirror_quad": (False, hint)}
     if "start render_mirror" not in calls:
         hint = "render_mirror() was not called in the last frame (see task 8)"
@@ -346,9 +344,8 @@ def judge_passes(student: Evidence) -> tuple[bool, str]:
     calls = student.last_frame_calls()
     if not calls:
         return False, "display() did not draw a frame"
-    stopped = student.stopped_by()
-    if stopped and stopped != "display":
-        return False, f"not judged: the frame stopped at {stopped}()"
+    if hint := student.stopped_hint("display"):
+        return False, hint
     events = student.frame_events()
     camera = next((i for i, e in enumerate(events) if e.get("kind") == "draw_scene"
                    and e.get("steps") == ["display"]), None)

@@ -25,18 +25,31 @@ def _best(values: np.ndarray, candidates: dict[str, np.ndarray], tolerance: floa
     return ""
 
 
-def judge_reflection(student: Evidence) -> tuple[bool, str]:
+def _cone_values(student: Evidence, key: str, function: str,
+                 width: int = 3) -> tuple[np.ndarray, np.ndarray, np.ndarray] | str:
+    """The values ``key`` the student's ``function`` gave on the cone's pixels
+    ``(pixels, width)`` (its first ``width`` components), with the view direction u and
+    normal n there ``(pixels, 3)``; or the hint when there are none, or when the values
+    are not all finite."""
     mask = student.arrays.get("values_mask")
     if not isinstance(mask, np.ndarray) or mask.dtype != bool or mask.ndim != 2 or \
             mask.sum() < 50:
-        return False, "the cone could not be drawn with SPHERE_MAP_GLSL"
+        return "the cone could not be drawn with SPHERE_MAP_GLSL"
     shape = (*mask.shape, 3)
-    r, u, n = (student.floats(f"values_{key}", shape) for key in ("r", "u", "n"))
-    if r is None or u is None or n is None:
-        return False, "the cone could not be drawn with SPHERE_MAP_GLSL"
-    r, u, n = r[mask], u[mask], n[mask]
-    if not np.all(np.isfinite(r)):
-        return False, "reflect_eye gives NaN or infinity on the cone"
+    values, u, n = (student.floats(f"values_{name}", shape) for name in (key, "u", "n"))
+    if values is None or u is None or n is None:
+        return "the cone could not be drawn with SPHERE_MAP_GLSL"
+    values, u, n = values[mask][:, :width], u[mask], n[mask]
+    if not np.all(np.isfinite(values)):
+        return f"{function} gives NaN or infinity on the cone"
+    return values, u, n
+
+
+def judge_reflection(student: Evidence) -> tuple[bool, str]:
+    cone = _cone_values(student, "r", "reflect_eye")
+    if isinstance(cone, str):
+        return False, cone
+    r, u, n = cone
     un = (u * n).sum(-1, keepdims=True)
     right = u - 2 * un * n
     found = _best(r, {
@@ -59,17 +72,10 @@ def judge_reflection(student: Evidence) -> tuple[bool, str]:
 
 
 def judge_coordinates(student: Evidence) -> tuple[bool, str]:
-    mask = student.arrays.get("values_mask")
-    if not isinstance(mask, np.ndarray) or mask.dtype != bool or mask.ndim != 2 or \
-            mask.sum() < 50:
-        return False, "the cone could not be drawn with SPHERE_MAP_GLSL"
-    shape = (*mask.shape, 3)
-    st, u, n = (student.floats(f"values_{key}", shape) for key in ("st", "u", "n"))
-    if st is None or u is None or n is None:
-        return False, "the cone could not be drawn with SPHERE_MAP_GLSL"
-    st, u, n = st[mask][:, :2], u[mask], n[mask]
-    if not np.all(np.isfinite(st)):
-        return False, "sphere_map_st gives NaN or infinity on the cone"
+    cone = _cone_values(student, "st", "sphere_map_st", width=2)
+    if isinstance(cone, str):
+        return False, cone
+    st, u, n = cone
     r = u - 2 * (u * n).sum(-1, keepdims=True) * n
     s, t = sphere_map(r)
     right = np.stack([s, t], -1)
@@ -144,12 +150,12 @@ def judge_texgen_draw(student: Evidence) -> tuple[bool, str]:
 
 def judge_frame(student: Evidence, reference: Evidence,
                 verdicts: dict[str, tuple[bool, str]]) -> tuple[bool, str]:
-    stopped = student.stopped_by()
-    if stopped and stopped != "display":
-        return False, f"not judged: the frame stopped at {stopped}()"
-    frame, ref = student.image("frame"), reference.image("frame")
-    if frame is None or ref is None or frame.shape != ref.shape:
+    if hint := student.stopped_hint("display"):
+        return False, hint
+    frames = student.frames_with(reference)
+    if frames is None:
         return False, "display() drew no frame"
+    frame, ref = frames
     half = ref.shape[1] // 2
     left_ok = share_within(frame[:, :half], ref[:, :half], 24) >= 0.97
     right_ok = share_within(frame[:, half:], ref[:, half:], 24) >= 0.97
