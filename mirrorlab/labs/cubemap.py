@@ -205,11 +205,9 @@ def judge_frame(student: Evidence, reference: Evidence,
                        "framebuffer, so it runs before the frame is cleared and drawn")
     if sphere is not None and capture is not None and capture > sphere:
         return False, "the sphere is drawn before this frame's capture: capture first"
-    if hint := student.stopped_hint("display"):
-        return False, hint
-    frames = student.frames_with(reference)
+    frames, why = student.displayed_frames(reference)
     if frames is None:
-        return False, "display() drew no frame"
+        return False, why
     frame, ref = frames
     sphere_mask = reference.arrays.get("values_mask")
     in_sphere = share_within(frame, ref, 24, sphere_mask) if isinstance(

@@ -91,12 +91,17 @@ class Evidence:
         return f"not judged: the frame stopped at {stopped}()" if stopped and \
             stopped != judged else ""
 
-    def frames_with(self, reference: Evidence) -> tuple[np.ndarray, np.ndarray] | None:
-        """This run's last frame and ``reference``'s, when both exist at one size."""
+    def displayed_frames(self, reference: Evidence
+                         ) -> tuple[tuple[np.ndarray, np.ndarray] | None, str]:
+        """This run's last frame and ``reference``'s (each (H, W, 3) uint8, one size) for
+        judging display(), with ''; or None with why they cannot be judged: an error outside
+        display() stopped the frame, or display() drew none."""
+        if hint := self.stopped_hint("display"):
+            return None, hint
         frame, ref = self.image("frame"), reference.image("frame")
         if frame is None or ref is None or frame.shape != ref.shape:
-            return None
-        return frame, ref
+            return None, "display() drew no frame"
+        return (frame, ref), ""
 
     def frame_events(self) -> list[dict[str, Any]]:
         events = self.state.get("frame_events")

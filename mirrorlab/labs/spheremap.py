@@ -150,11 +150,9 @@ def judge_texgen_draw(student: Evidence) -> tuple[bool, str]:
 
 def judge_frame(student: Evidence, reference: Evidence,
                 verdicts: dict[str, tuple[bool, str]]) -> tuple[bool, str]:
-    if hint := student.stopped_hint("display"):
-        return False, hint
-    frames = student.frames_with(reference)
+    frames, why = student.displayed_frames(reference)
     if frames is None:
-        return False, "display() drew no frame"
+        return False, why
     frame, ref = frames
     half = ref.shape[1] // 2
     left_ok = share_within(frame[:, :half], ref[:, :half], 24) >= 0.97
