@@ -11,7 +11,7 @@ the same driver, PyOpenGL configuration and CPU. Three variants are timed:
 ``mirrorlab``
     ``SceneRenderer.render(scene, framebuffer)`` with the capture forced (its texture
     marked stale before each frame: capture pass and camera pass) followed by
-    ``Framebuffer.read()`` into numpy: the real renderer on ``scenes/lab20.toml``.
+    ``Framebuffer.read()`` into numpy: the real renderer on the shipped ``lab20`` scene.
 ``minimal``
     The same two passes written directly against PyOpenGL in this file: its own
     framebuffer of the same size, one VBO + EBO + VAO per mesh (loaded with

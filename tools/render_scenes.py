@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 
 import mirrorlab
+from mirrorlab.data import scenes_dir
 from mirrorlab.files import write_png_atomic
-from mirrorlab.scene.loader import SCENES_DIR
 
 DOCS = Path(__file__).resolve().parent.parent / "docs" / "scenes"
 SIZE = (384, 384)
@@ -21,7 +21,7 @@ SIZE = (384, 384)
 
 def main() -> None:
     with mirrorlab.Renderer(SIZE) as renderer:
-        for path in sorted(SCENES_DIR.glob("*.toml")):
+        for path in sorted(scenes_dir().glob("*.toml")):
             scene = mirrorlab.load_scene(path)
             frames = sorted({0, scene.frame_count // 2, scene.frame_count - 1})
             image = np.hstack([renderer.render(scene, frame) for frame in frames])

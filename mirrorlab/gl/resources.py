@@ -22,7 +22,7 @@ import numpy as np
 from mirrorlab.errors import GLLimitError
 from mirrorlab.gl.context import GLContextError, ResourceRegistry
 from mirrorlab.gl.opengl import GL
-from mirrorlab.paths import shader_source
+from mirrorlab.shaders import shader_source
 
 
 class RenderTarget(Protocol):

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from mirrorlab import math3d
-from mirrorlab.paths import REPO_DIR
+from mirrorlab.data import model_file, texture_file
 from mirrorlab.scene.graph import SceneGraph
 from mirrorlab.scene.robot import build_robot
 
@@ -159,7 +159,7 @@ class _Mesh:
         from mirrorlab.gl.resources import upload_mesh
         from mirrorlab.scene.mesh import load_mesh
 
-        data = load_mesh(REPO_DIR / "models" / f"{name}.obj")
+        data = load_mesh(model_file(name))
         vertices = np.ascontiguousarray(data.interleaved(), dtype=np.float32)
         indices = np.ascontiguousarray(data.indices.reshape(-1), dtype=np.uint32)
         self.count = int(indices.size)
@@ -177,7 +177,7 @@ def picture(name: str) -> np.ndarray:
     """``textures/<name>.png`` as ``(h, w, 3)`` uint8, row 0 at the top."""
     from mirrorlab.scene.backgrounds import load_picture
 
-    return load_picture(REPO_DIR / "textures" / f"{name}.png")
+    return load_picture(texture_file(name))
 
 
 def upload_picture(texture_id: int, image: np.ndarray) -> None:

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from mirrorlab.paths import REPO_DIR
+from mirrorlab.data import scenes_dir
 from mirrorlab.scene.animation import CAMERA_FIELDS, OBJECT_FIELDS, REFLECTOR_FIELDS
 from mirrorlab.scene.model import (
     CAPTURE_MODES,
@@ -52,7 +52,6 @@ from mirrorlab.scene.model import (
     Transform,
 )
 
-SCENES_DIR = REPO_DIR / "scenes"
 """The shipped scene files."""
 DEFAULT_SCENE = "lab20"
 SCENE_ALIASES = {"lab": "lab20", "cone": "spheremap_cone", "sphere": "chrome_sphere"}
@@ -121,7 +120,7 @@ def scene_path(name_or_path: str | Path) -> Path:
             raise SceneError(text, "", "no such scene file")
         return candidate
     stem = SCENE_ALIASES.get(text, text)
-    shipped = SCENES_DIR / f"{stem}.toml"
+    shipped = scenes_dir() / f"{stem}.toml"
     if _is_file(shipped):
         return shipped
     raise SceneError(text, "", f"unknown scene; expected a .toml file or one of "
@@ -144,8 +143,8 @@ def _is_dir(path: Path) -> bool:
 
 
 def shipped_scene_names() -> list[str]:
-    """Names of the scene files in ``scenes/``, and the short names."""
-    names = sorted(p.stem for p in SCENES_DIR.glob("*.toml"))
+    """Names of the shipped scene files (package data), and the short names."""
+    names = sorted(p.stem for p in scenes_dir().glob("*.toml"))
     return names + sorted(SCENE_ALIASES)
 
 
@@ -997,6 +996,6 @@ def _kind(value: Any) -> str:
     return type(value).__name__
 
 
-__all__ = ["DEFAULT_SCENE", "SCENES_DIR", "SceneError", "check_quad", "dumps",
+__all__ = ["DEFAULT_SCENE", "SceneError", "check_quad", "dumps",
            "from_document", "load_scene", "loads", "scene_path", "scene_to_document",
            "shipped_scene_names"]

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from mirrorlab import math3d
-from mirrorlab.paths import REPO_DIR
+from mirrorlab.data import model_file, texture_file
 from mirrorlab.scene.graph import Node, SceneGraph
 from mirrorlab.scene.model import MeshObject, RobotObject, Scene, SceneObject
 
@@ -71,14 +71,6 @@ class Part:
     model: np.ndarray
     color: tuple[float, float, float]
     texture: Path | None
-
-
-def model_file(name: str) -> Path:
-    return REPO_DIR / "models" / f"{name}.obj"
-
-
-def texture_file(name: str) -> Path:
-    return REPO_DIR / "textures" / f"{name}.png"
 
 
 @lru_cache(maxsize=256)

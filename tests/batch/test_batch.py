@@ -28,7 +28,7 @@ from mirrorlab.batch import (
     render_frame,
 )
 from mirrorlab.cli import main
-from mirrorlab.paths import REPO_DIR
+from mirrorlab.data import scenes_dir
 from mirrorlab.scene.backgrounds import load_picture
 from mirrorlab.scene.loader import loads
 
@@ -126,7 +126,7 @@ camera = { eye = [3.0, 2.0, 6.0] }
 def animated(name: str, **options):
     if name == "robot_wave":
         return resolve_scene(name, **options)
-    source = REPO_DIR / "scenes" / f"{name}.toml"
+    source = scenes_dir() / f"{name}.toml"
     return resolve_scene(loads(source.read_text() + ANIMATIONS[name], source), **options)
 
 

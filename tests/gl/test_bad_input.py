@@ -17,10 +17,10 @@ import pytest
 from PIL import Image
 
 from mirrorlab.cli import main
-from mirrorlab.paths import REPO_DIR
+from mirrorlab.data import data_path
 from mirrorlab.scene.backgrounds import CUBE_FACE_FILES
 
-MODELS = REPO_DIR / "models"
+MODELS = data_path("models")
 
 
 class Outputs:

@@ -22,12 +22,12 @@ from mirrorlab.accuracy import (
     sphere_panels,
 )
 from mirrorlab.cli import main
-from mirrorlab.paths import REPO_DIR
+from mirrorlab.data import data_path, scenes_dir
 from mirrorlab.scene.backgrounds import CUBE_FACE_FILES
 from mirrorlab.scene.model import CURVED_TECHNIQUES, PLANAR_TECHNIQUES
 from tests.imagecheck import assert_images_close
 
-SKY_CUBE = REPO_DIR / "textures" / "sky_cube"
+SKY_CUBE = data_path("textures") / "sky_cube"
 
 
 def png(path) -> np.ndarray:
@@ -97,7 +97,7 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
 def test_accuracy_sweep_of_a_scene_file(tmp_path, capsys, monkeypatch):
     """``--scene FILE`` measures every technique the file's reflectors can take, from its
     own camera: two_mirrors has planar mirrors only."""
-    monkeypatch.chdir(REPO_DIR)
+    monkeypatch.chdir(scenes_dir().parent)
     assert main(["bench", "accuracy", "--quick", "--scene", "scenes/two_mirrors.toml",
                  "--out-dir", str(tmp_path)]) == 0
     out = capsys.readouterr()
@@ -186,7 +186,7 @@ def test_exact_methods_through_the_api_match_the_ray_tracer():
     (["--env-size", "9000"], "--env-size"),
     (["sphere", "--map-size", "2"], "--map-size"),
     (["sphere", "--method", "mirror"], "--method"),
-    (["sphere", "--cube-faces", str(REPO_DIR / "models")], "--cube-faces"),
+    (["sphere", "--cube-faces", str(data_path("models"))], "--cube-faces"),
     (["cone", "--set", "camera.fovy=0"], "--set"),
     (["robot_wave", "--frames", "30"], "--frames"),
 ])
@@ -253,7 +253,7 @@ def rolled_faces(folder):
 
 def test_a_cube_map_from_six_images_draws_what_the_baked_cube_draws(tmp_path, monkeypatch):
     """The shipped faces are the baked sky, so the two static cubes must agree exactly."""
-    monkeypatch.chdir(REPO_DIR)
+    monkeypatch.chdir(data_path())
     from_files, baked, rolled = (tmp_path / f"{n}.png" for n in ("files", "baked", "rolled"))
     common = ["--method", "cube", "--size", "96x96"]
     assert main(["render", "sphere", *common, "--cube-faces", "textures/sky_cube",

@@ -10,7 +10,7 @@ import sys
 
 from PIL import Image
 
-from mirrorlab.paths import REPO_DIR
+from tests import REPO_DIR
 
 VARIANTS = {"mirrorlab two passes", "mirrorlab capture reused", "mirrorlab one pass",
             "pyrender default", "pyrender flat"}

@@ -19,7 +19,8 @@ from pathlib import Path
 import pytest
 from PIL import Image
 
-from mirrorlab.paths import REPO_DIR
+from mirrorlab.data import data_path
+from tests import REPO_DIR
 
 GIVE_UP_S = 120.0
 """Only a limit for a hung process: every wait ends when its condition holds."""
@@ -119,12 +120,12 @@ def test_unreadable_picture_and_mesh_files(shared_folder):
     picture = shared_folder / "secret.png"
     Image.new("RGB", (4, 4)).save(picture)
     mesh = shared_folder / "secret.obj"
-    shutil.copy(REPO_DIR / "models" / "base.obj", mesh)
+    shutil.copy(data_path("models") / "base.obj", mesh)
     for path in (picture, mesh):
         path.chmod(0o000)
     out = shared_folder / "out.png"
     scene = shared_folder / "scene.toml"
-    scene.write_text(f'[[objects]]\nmesh = "{REPO_DIR / "models" / "base.obj"}"\n'
+    scene.write_text(f'[[objects]]\nmesh = "{data_path("models") / "base.obj"}"\n'
                      f'texture = "{picture}"\n')
     result = run(sandboxed("render", str(scene), "--size", "24x24", "--out", str(out),
                            uid=1000))

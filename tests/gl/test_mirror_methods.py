@@ -14,15 +14,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import mirrorlab
+from mirrorlab.data import data_path
 from mirrorlab.gl.context import check_gl_errors
 from mirrorlab.options import apply_options
-from mirrorlab.paths import REPO_DIR
 from mirrorlab.raytrace import trace_scene
 from mirrorlab.scene.model import Camera, MeshObject, PlanarReflector, Scene, Transform
 from mirrorlab.scene.robot import hand_center
@@ -32,7 +31,7 @@ from tests.imagecheck import assert_region_close, red_dominant, save_failure, sh
 
 SIZE = 160
 MIRROR_CENTER = np.array([-7.0, 1.0, -2.0])
-HAND_MESH = Path(REPO_DIR) / "models" / "hand.obj"
+HAND_MESH = data_path("models") / "hand.obj"
 
 
 def viewer_at(degrees: float, distance: float, fovy: float = 45.0, height: float = 0.0):

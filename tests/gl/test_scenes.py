@@ -10,15 +10,15 @@ import numpy as np
 import pytest
 
 import mirrorlab
+from mirrorlab.data import scenes_dir
 from mirrorlab.options import apply_options
 from mirrorlab.passes.base import gl_state
 from mirrorlab.raytrace import trace_scene
-from mirrorlab.scene.loader import SCENES_DIR
 from mirrorlab.scene.model import Scene
 from tests.gl.frames import draw
 from tests.imagecheck import save_failure
 
-SCENE_FILES = sorted(p.stem for p in SCENES_DIR.glob("*.toml"))
+SCENE_FILES = sorted(p.stem for p in scenes_dir().glob("*.toml"))
 SIZE = (128, 128)
 
 

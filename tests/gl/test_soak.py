@@ -10,7 +10,7 @@ import sys
 
 import pytest
 
-from mirrorlab.paths import REPO_DIR
+from tests import REPO_DIR
 
 
 @pytest.fixture(scope="module")

@@ -13,9 +13,9 @@ from hypothesis import strategies as st
 from PIL import Image
 
 from mirrorlab import math3d
+from mirrorlab.data import data_path
 from mirrorlab.envmap import bake_cube_faces, bake_sphere_map, sphere_map_inverse
 from mirrorlab.options import OptionError, apply_options
-from mirrorlab.paths import REPO_DIR
 from mirrorlab.scene.backgrounds import (
     CUBE_FACE_FILES,
     SUN_DIRECTION,
@@ -30,8 +30,8 @@ from mirrorlab.scene.backgrounds import (
 from mirrorlab.scene.loader import SceneError, load_scene
 from mirrorlab.scene.model import Background, CurvedReflector, MeshObject
 
-SKY_CUBE = REPO_DIR / "textures" / "sky_cube"
-LAUNCH = REPO_DIR / "textures" / "launch.png"
+SKY_CUBE = data_path("textures") / "sky_cube"
+LAUNCH = data_path("textures") / "launch.png"
 
 directions = st.tuples(*(st.floats(-1.0, 1.0, allow_nan=False),) * 3).filter(
     lambda v: np.linalg.norm(v) > 1e-3)

@@ -19,10 +19,9 @@ import tomlkit
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from mirrorlab.paths import REPO_DIR
+from mirrorlab.data import data_path, scenes_dir
 from mirrorlab.plan import plan_frame
 from mirrorlab.scene.loader import (
-    SCENES_DIR,
     SceneError,
     check_quad,
     dumps,
@@ -49,13 +48,14 @@ from mirrorlab.scene.model import (
     SphereProxy,
     Transform,
 )
+from tests import REPO_DIR
 
-MODELS = sorted((REPO_DIR / "models").glob("*.obj"))
-PICTURES = sorted((REPO_DIR / "textures").glob("*.png"))
-SKY_CUBE = REPO_DIR / "textures" / "sky_cube"
-SCENE_FILES = sorted(SCENES_DIR.glob("*.toml"))
+MODELS = sorted((data_path("models")).glob("*.obj"))
+PICTURES = sorted((data_path("textures")).glob("*.png"))
+SKY_CUBE = data_path("textures") / "sky_cube"
+SCENE_FILES = sorted(scenes_dir().glob("*.toml"))
 SHIPPED_DOCUMENTS = {path: tomllib.loads(path.read_text()) for path in SCENE_FILES}
-GENERATED = SCENES_DIR / "generated.toml"
+GENERATED = scenes_dir() / "generated.toml"
 """Source of generated scenes: not a file, only where relative paths start from."""
 LAB_CORNERS = [[-7.0, -3.0, -6.0], [-7.0, 5.0, -6.0], [-7.0, 5.0, 2.0], [-7.0, -3.0, 2.0]]
 
@@ -84,7 +84,7 @@ def test_shipped_names_and_aliases():
     assert names[:len(SCENE_FILES)] == [p.stem for p in SCENE_FILES]
     assert {"lab", "cone", "sphere"} <= set(names)
     assert load_scene("lab") == load_scene("lab20")
-    assert load_scene(str(SCENES_DIR / "lab20.toml")) == load_scene("lab20")
+    assert load_scene(str(scenes_dir() / "lab20.toml")) == load_scene("lab20")
 
 
 def test_the_lab_file_has_exactly_the_labs_numbers():
@@ -416,7 +416,7 @@ def test_each_parallax_correction_reads_and_round_trips():
 
 # --------------------------------------------------------------------------- bad input
 
-MESH = str(REPO_DIR / "models" / "hand.obj")
+MESH = str(data_path("models") / "hand.obj")
 
 
 def base_document() -> dict[str, Any]:
@@ -428,7 +428,7 @@ def base_document() -> dict[str, Any]:
         "reflectors": [{"name": "mirror", "technique": "reflected",
                         "corners": copy.deepcopy(LAB_CORNERS)},
                        {"name": "ball", "technique": "cube-live",
-                        "mesh": str(REPO_DIR / "models" / "env_sphere.obj")}],
+                        "mesh": str(data_path("models") / "env_sphere.obj")}],
     }
 
 

@@ -5,12 +5,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mirrorlab.paths import REPO_DIR
+from mirrorlab.data import data_path
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.mesh import load_mesh, vertex_normals
 from mirrorlab.scene.robot import model_file, scene_parts
 
-MODELS = sorted((REPO_DIR / "models").glob("*.obj"))
+MODELS = sorted((data_path("models")).glob("*.obj"))
 
 
 def test_every_model_file_is_tested_and_the_scenes_use_only_them():

@@ -8,6 +8,7 @@ from dataclasses import replace
 
 import pytest
 
+from mirrorlab.data import data_path
 from mirrorlab.options import (
     OPTION_NAMES,
     OPTIONS,
@@ -19,11 +20,10 @@ from mirrorlab.options import (
     parse_size,
     set_key,
 )
-from mirrorlab.paths import REPO_DIR
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import BoxProxy, DistanceSearch, SphereProxy
 
-SKY_CUBE = REPO_DIR / "textures" / "sky_cube"
+SKY_CUBE = data_path("textures") / "sky_cube"
 
 
 def changed_fields(before, after) -> set[str]:
