@@ -7,9 +7,15 @@ Importing this package loads neither OpenGL nor glfw; a Renderer does, when made
 
 from __future__ import annotations
 
+from importlib.metadata import PackageNotFoundError, version
+
 from mirrorlab.api import Renderer, render
 from mirrorlab.scene.loader import SceneError, load_scene
 from mirrorlab.scene.model import Camera, Scene
 
 __all__ = ["Camera", "Renderer", "Scene", "SceneError", "load_scene", "render"]
-__version__ = "0.2.0"
+try:
+    __version__ = version("mirrorlab")
+    """The installed version, as the package metadata (pyproject.toml) gives it."""
+except PackageNotFoundError:  # a source folder on sys.path, never installed
+    __version__ = "0+unknown"

@@ -65,10 +65,14 @@ def _add_scene_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from mirrorlab import __version__
+
     parser = argparse.ArgumentParser(
         prog="mirrorlab",
         description="Mirrors and environment maps, rendered headless or in a window and "
-        "measured against a ray tracer. A scene is a TOML file (see README: Scenes).")
+        "measured against a ray tracer. A scene is a TOML file (see the documentation's "
+        "'Writing a scene').")
+    parser.add_argument("--version", action="version", version=f"mirrorlab {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     render = commands.add_parser("render", help="render a scene headless to a PNG")
@@ -194,6 +198,17 @@ def build_parser() -> argparse.ArgumentParser:
                        help="where grades.csv, report.html and the pictures go (default: "
                        "SUBMISSIONS_DIR-grades beside the submissions)")
     return parser
+
+
+def check_executor(args: argparse.Namespace) -> None:
+    """Before any work: ``--scheduler`` and ``--engine dask`` need Dask, an optional
+    dependency; without it, one line saying what to install (exit 2)."""
+    from mirrorlab.jobs import require_dask
+
+    if getattr(args, "scheduler", None):
+        require_dask("--scheduler")
+    elif getattr(args, "engine", None) == "dask":
+        require_dask("--engine dask")
 
 
 def scene_from_args(args: argparse.Namespace) -> Scene:
@@ -424,6 +439,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(join_negative_vectors(sys.argv[1:] if argv is None
                                                        else argv))
         command = f"mirrorlab {args.command}"
+        check_executor(args)
         runners = {"render": run_render, "plan": run_plan, "bench": run_bench,
                    "demo": run_demo, "techniques": run_techniques, "lab": run_lab}
         with warnings.catch_warnings():

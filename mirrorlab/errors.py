@@ -4,6 +4,7 @@ them all before deciding which platform to load.
 
 - bad input (exit 2): ``ValueError`` and its kinds here and elsewhere (a scene file, an
   option, an output path), :class:`WriteError` (the system refused a write),
+  :class:`MissingExtraError` (an option needs an optional dependency not installed),
   :class:`GLLimitError` (larger than the GL allows) and :class:`GLOutOfMemoryError`;
 - the machine (exit 1): :class:`GLContextError` (no display, no GL libraries, an OpenGL
   too old), :class:`GLPassError` (any other GL error, naming the pass) and
@@ -49,6 +50,16 @@ class GLOutOfMemoryError(GLPassError, ValueError):
         super().__init__(pass_name, code, detail)
         self.args = (f"OpenGL ran out of memory in pass {pass_name!r} ({detail}); use "
                      f"smaller sizes (--size, --env-size, --map-size, smaller pictures)",)
+
+
+class MissingExtraError(ValueError):
+    """An option needs an optional dependency that is not installed: ``OPTION: needs
+    WHAT, which is not installed; install it with: pip install 'mirrorlab[EXTRA]'``."""
+
+    def __init__(self, option: str, what: str, extra: str) -> None:
+        self.option, self.what, self.extra = option, what, extra
+        super().__init__(f"{option}: needs {what}, which is not installed; install it "
+                         f"with: pip install 'mirrorlab[{extra}]'")
 
 
 class GLLimitError(ValueError):

@@ -12,7 +12,8 @@ Engines (:func:`open_executor`):
 - ``dask``: a Dask distributed cluster: a :class:`distributed.LocalCluster` of ``jobs``
   worker processes (one thread each), or the running scheduler at ``scheduler``
   (``tcp://host:8786``). When a worker dies, the scheduler runs its jobs again on another
-  worker. Workers need mirrorlab installed (and, for files, the same paths).
+  worker. Workers need mirrorlab installed (and, for files, the same paths). Dask is an
+  optional dependency (``pip install 'mirrorlab[dask]'``); see :func:`require_dask`.
 
 A job that raises gives its key and the error message instead of a result; the executor
 never drops a key and never yields one twice.
@@ -25,6 +26,8 @@ import uuid
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
+
+from mirrorlab.errors import MissingExtraError
 
 RETRIES = 2
 CONNECT_TIMEOUT = "20s"
@@ -126,6 +129,16 @@ class PoolExecutor(Executor):
                     yield Outcome(key, error=f"its worker process died {attempts[key]} times")
 
 
+def require_dask(option: str = "the dask engine") -> None:
+    """:class:`~mirrorlab.errors.MissingExtraError` naming ``option`` (``--scheduler``,
+    ``--engine dask``) and the extra to install when Dask distributed cannot be
+    imported."""
+    try:
+        import distributed  # noqa: F401
+    except ImportError:
+        raise MissingExtraError(option, "Dask (dask[distributed])", "dask") from None
+
+
 class DaskExecutor(Executor):
     """Jobs as tasks of a Dask distributed cluster: a local one of ``workers`` processes, or
     the scheduler at ``address``."""
@@ -134,11 +147,9 @@ class DaskExecutor(Executor):
 
     def __init__(self, workers: int = 2, address: str | None = None,
                  retries: int = RETRIES, connect_timeout: str | None = None) -> None:
-        try:
-            from distributed import Client, LocalCluster
-        except ImportError as exc:  # pragma: no cover - a dependency of mirrorlab
-            raise RuntimeError("Dask is not installed: pip install 'dask[distributed]'") \
-                from exc
+        require_dask("--scheduler" if address is not None else "--engine dask")
+        from distributed import Client, LocalCluster
+
         self.retries = retries
         self.cluster = None
         if address is None:

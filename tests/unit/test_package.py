@@ -1,0 +1,57 @@
+"""The package's metadata: one version, the licence and classifiers, ``py.typed``,
+``python -m mirrorlab``, and Dask as an optional extra (tests/batch/test_without_dask.py
+runs the command line without it)."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from importlib.metadata import metadata, version
+from importlib.resources import files
+from pathlib import Path
+
+import mirrorlab
+
+REPO = Path(__file__).resolve().parents[2]
+
+def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "mirrorlab", *args], capture_output=True,
+                          text=True, cwd=cwd, timeout=120)
+
+
+def test_one_version_from_the_metadata():
+    assert mirrorlab.__version__ == version("mirrorlab")
+    assert re.fullmatch(r"\d+\.\d+\.\d+", mirrorlab.__version__)
+    changelog = (REPO / "CHANGELOG.md").read_text()
+    assert f"## {mirrorlab.__version__}" in changelog, "the version has no changelog entry"
+
+
+def test_version_flag_and_python_dash_m(tmp_path):
+    done = run_cli("--version", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == f"mirrorlab {mirrorlab.__version__}"
+    listed = run_cli("techniques", cwd=tmp_path)
+    assert listed.returncode == 0, listed.stderr
+    assert listed.stdout.split()[0] == "ortho"
+
+
+def test_licence_classifiers_and_typed_marker():
+    meta = metadata("mirrorlab")
+    assert meta["License-Expression"] == "MIT"
+    assert "LICENSE" in (meta.get_all("License-File") or [])
+    assert "MIT License" in (REPO / "LICENSE").read_text()
+    classifiers = meta.get_all("Classifier") or []
+    assert "Typing :: Typed" in classifiers
+    assert any(c.startswith("Programming Language :: Python :: 3.1") for c in classifiers)
+    assert files("mirrorlab").joinpath("py.typed").is_file()
+
+
+def test_dask_is_an_extra_not_a_dependency():
+    meta = metadata("mirrorlab")
+    requires = meta.get_all("Requires-Dist") or []
+    plain = [r for r in requires if "extra ==" not in r]
+    assert not any(r.startswith(("dask", "distributed")) for r in plain), plain
+    assert any(r.startswith("dask[distributed]") and 'extra == "dask"' in r
+               for r in requires), requires
+    assert "dask" in (meta.get_all("Provides-Extra") or [])
