@@ -55,12 +55,13 @@ def lab_viewpoints() -> dict[str, Camera]:
     """
     center = np.array([-7.0, 1.0, -2.0])
 
-    def around(distance: float, degrees: float, height: float = 0.0) -> tuple[float, ...]:
+    def around(distance: float, degrees: float,
+               height: float = 0.0) -> tuple[float, float, float]:
         angle = math.radians(degrees)
-        offset = np.array([math.cos(angle), height, math.sin(angle)]) * distance
-        return tuple(float(v) for v in center + offset)
+        x, y, z = center + np.array([math.cos(angle), height, math.sin(angle)]) * distance
+        return float(x), float(y), float(z)
 
-    target = tuple(float(v) for v in center)
+    target = (float(center[0]), float(center[1]), float(center[2]))
     return {
         "head-on far": Camera(eye=around(60.0, 0.0), target=target, fovy=10.0),
         "head-on near": Camera(eye=around(14.0, 0.0), target=target),
@@ -372,8 +373,8 @@ def run_panels(panels: Sequence[Panel], settings: SweepSettings, progress: bool 
                     timings[index].append((technique_label, map_size, wall, gpu))
                     bar.update()
         bar.set_postfix_str("scoring the frames", refresh=False)
-        work = {f"score-{i}": (truths[i], frames[i]) for i in range(len(views))}
-        for outcome in executor.run(score_frames, work):
+        scoring = {f"score-{i}": (truths[i], frames[i]) for i in range(len(views))}
+        for outcome in executor.run(score_frames, scoring):
             index = int(outcome.key.split("-")[1])
             errors[index] = _value(outcome, "scoring")
             frames[index] = []

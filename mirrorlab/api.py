@@ -119,9 +119,9 @@ class Renderer:
             self._target = Framebuffer(self._context.resources, *size)
         return self._target
 
-    def render(self, scene: SceneLike, frame: int = 0, size: Sequence[int] | str | None = None,
-               use_plan: bool = True, tiny_pixels: float = TINY_PIXELS,
-               **options: Any) -> np.ndarray:
+    def render(self, scene: SceneLike, *, frame: int = 0,
+               size: Sequence[int] | str | None = None, use_plan: bool = True,
+               tiny_pixels: float = TINY_PIXELS, **options: Any) -> np.ndarray:
         """Draw ``scene`` (a Scene, a file or a shipped name) posed at animation ``frame``,
         with ``options`` applied (``camera=(x, y, z)``, ``method="stencil"``, ...: see
         :mod:`mirrorlab.options`). ``use_plan`` False runs every pass. Returns the frame
@@ -139,19 +139,21 @@ class Renderer:
         with gl_pass("reading the frame back"):
             return target.read()
 
-    def frames(self, scene: SceneLike, frames: Sequence[int] | None = None,
+    def frames(self, scene: SceneLike, *, frames: Sequence[int] | None = None,
                size: Sequence[int] | str | None = None, use_plan: bool = True,
                tiny_pixels: float = TINY_PIXELS,
                **options: Any) -> Iterator[tuple[int, np.ndarray, FrameStats]]:
         """``(frame, image, stats)`` for each frame of the animation (or ``frames``)."""
         loaded = resolve_scene(scene, **options)
         for frame in frames if frames is not None else range(loaded.frame_count):
-            image = self.render(loaded, frame, size, use_plan, tiny_pixels)
+            image = self.render(loaded, frame=frame, size=size, use_plan=use_plan,
+                                tiny_pixels=tiny_pixels)
             assert self.last_stats is not None
             yield frame, image, self.last_stats
 
-    def plan(self, scene: SceneLike, frame: int = 0, size: Sequence[int] | str | None = None,
-             use_plan: bool = True, **options: Any) -> FramePlan:
+    def plan(self, scene: SceneLike, *, frame: int = 0,
+             size: Sequence[int] | str | None = None, use_plan: bool = True,
+             **options: Any) -> FramePlan:
         """The plan the next :meth:`render` of this frame would run (nothing is drawn)."""
         from mirrorlab.plan import plan_frame
 
@@ -160,7 +162,7 @@ class Renderer:
         return plan_frame(posed, check_size(size) if size is not None else self.size, state,
                           use_plan)
 
-    def read_texture(self, reflector: str, slot: int = 0) -> np.ndarray:
+    def read_texture(self, reflector: str, *, slot: int = 0) -> np.ndarray:
         """A planar reflector's capture texture from the last frame, ``(h, w, 3)`` uint8."""
         renderer = self.scene_renderer
         capture = renderer.pass_for(reflector)
@@ -170,7 +172,7 @@ class Renderer:
         return textures.textures[slot].read()
 
 
-def raytrace(scene: SceneLike, frame: int = 0, size: Sequence[int] | str = (512, 512),
+def raytrace(scene: SceneLike, *, frame: int = 0, size: Sequence[int] | str = (512, 512),
              **options: Any) -> np.ndarray:
     """The ray-traced ground truth of ``scene`` (see :mod:`mirrorlab.raytrace`), as
     ``(height, width, 3)`` uint8. Needs no OpenGL."""
@@ -180,8 +182,9 @@ def raytrace(scene: SceneLike, frame: int = 0, size: Sequence[int] | str = (512,
     return trace_scene(posed, check_size(size)).to_uint8()
 
 
-def render(scene: SceneLike = "lab20", size: Sequence[int] | str = (512, 512), frame: int = 0,
-           use_plan: bool = True, **options: Any) -> np.ndarray:
+def render(scene: SceneLike = "lab20", *, frame: int = 0,
+           size: Sequence[int] | str = (512, 512), use_plan: bool = True,
+           **options: Any) -> np.ndarray:
     """Draw one frame headless and return it as ``(height, width, 3)`` uint8 RGB.
 
     ``scene`` is a Scene, a scene file or a shipped scene's name (``lab20``, ``lab``,
@@ -193,6 +196,6 @@ def render(scene: SceneLike = "lab20", size: Sequence[int] | str = (512, 512), f
     """
     if options.get("method") == "raytrace":
         options.pop("method")
-        return raytrace(scene, frame, size, **options)
+        return raytrace(scene, frame=frame, size=size, **options)
     with Renderer(size) as renderer:
-        return renderer.render(scene, frame, use_plan=use_plan, **options)
+        return renderer.render(scene, frame=frame, use_plan=use_plan, **options)

@@ -104,7 +104,8 @@ def render_frame(job: FrameJob, frame: int) -> bytes:
 
         image = trace_scene(job.scene.at_frame(frame), job.size).to_uint8()
     else:
-        image = _frame_renderer(job).render(job.scene, frame, job.size, job.use_plan)
+        image = _frame_renderer(job).render(job.scene, frame=frame, size=job.size,
+                                            use_plan=job.use_plan)
     return png_bytes(image)
 
 

@@ -59,9 +59,8 @@ def _add_scene_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scene", help="the same as SCENE (kept for older command lines)")
     group = parser.add_argument_group("scene changes (override the scene file)")
     for option in OPTIONS:
-        extra = {"action": "append"} if option.repeat else {}
         group.add_argument(option.flag, dest=f"option_{option.name}", metavar=option.metavar,
-                           help=option.help, **extra)
+                           help=option.help, action="append" if option.repeat else "store")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -190,7 +190,7 @@ class _Planner:
         if self.use_plan:
             hidden = hidden_reason(reflector, view)
             if hidden:
-                mode = "back" if hidden.startswith("seen from behind") else "hidden"
+                mode: DrawMode = "back" if hidden.startswith("seen from behind") else "hidden"
                 return ReflectorDraw(reflector, mode, hidden)
         if bounce <= 0:
             return ReflectorDraw(reflector, "plain", "no bounces left: a plain surface")
@@ -207,6 +207,7 @@ class _Planner:
         if entry.texture == "static":
             return ReflectorDraw(reflector, "map", "its static map")
         if entry.texture == "baked":
+            assert isinstance(reflector, CurvedReflector)  # baked maps are curved techniques
             slot = self.bake(reflector, view)
             return ReflectorDraw(reflector, "map", "its sphere map for this view", slot=slot)
         slot, source = self.capture(reflector, view, bounce)
@@ -231,8 +232,8 @@ class _Planner:
         self.assigned[(reflector, key)] = slot
         return slot, fresh
 
-    def bake(self, reflector: Reflector, view: View) -> int:
-        if isinstance(reflector, CurvedReflector) and reflector.source is not None:
+    def bake(self, reflector: CurvedReflector, view: View) -> int:
+        if reflector.source is not None:
             key: tuple = ("picture", str(reflector.source), reflector.map_size)
             reason = "the picture is the map, as it is"
         else:

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from mirrorlab import math3d
 from mirrorlab.scene.backgrounds import environment_of, load_picture
@@ -127,7 +128,7 @@ class RayScene:
     """
 
     def __init__(self, surfaces: Sequence[RaySurface],
-                 lights: Sequence[tuple[Sequence[float], Sequence[float]]],
+                 lights: Sequence[tuple[ArrayLike, ArrayLike]],
                  ambient: float, background: Sequence[float] | Environment) -> None:
         import trimesh
 
@@ -237,7 +238,9 @@ class RayScene:
     def _mipmaps(self, index: int) -> MipChain:
         chain = self._mip_chains.get(index)
         if chain is None:
-            chain = self._mip_chains[index] = MipChain(self.surfaces[index].texture)
+            texture = self.surfaces[index].texture
+            assert texture is not None  # asked for textured surfaces only
+            chain = self._mip_chains[index] = MipChain(texture)
         return chain
 
     def render(self, view: np.ndarray, projection: np.ndarray, size: Sequence[int],

@@ -86,16 +86,22 @@ class SceneRenderer:
         self.shared = SharedResources(registry)
         self.drawer = SceneDrawer(self.shared)
         self.state = TextureState()
-        self.scene: Scene | None = None
+        self._scene: Scene | None = None
         self._passes: dict[str, tuple[tuple, ReflectorPass]] = {}
         self._sky: SkyPass | None = None
         self.last_frame: FrameStats | None = None
         self._last_plan: tuple[tuple, FramePlan] | None = None
 
+    @property
+    def scene(self) -> Scene:
+        """The scene of the frame being drawn (or drawn last)."""
+        if self._scene is None:
+            raise RuntimeError("the renderer has drawn no scene yet")
+        return self._scene
+
     # ------------------------------------------------------------- passes
 
     def _pass(self, reflector: Reflector) -> ReflectorPass:
-        assert self.scene is not None
         key = _pass_key(reflector, self.scene.background)
         held = self._passes.get(reflector.name)
         if held is not None and held[0] == key:
@@ -132,7 +138,7 @@ class SceneRenderer:
                 require_gl_version(entry.gl_version, f"technique {entry.name!r}")
         if self._gl_version < RENDERER_GL_VERSION:
             require_gl_version(RENDERER_GL_VERSION, "mirrorlab's renderer (GLSL 3.30)")
-        self.scene = scene
+        self._scene = scene
         names = {r.name: r for r in scene.reflectors}
         for name in list(self._passes):
             if name not in names or self._passes[name][0] != _pass_key(names[name],
@@ -197,7 +203,6 @@ class SceneRenderer:
         (cleared first), else only where a stencil mirror marked that level. Returns the
         number of draw calls."""
         scene = self.scene
-        assert scene is not None
         view = plan.view
         if stencil_level == 0:
             target.bind()
@@ -239,5 +244,4 @@ class SceneRenderer:
 
     def pass_for(self, name: str) -> ReflectorPass:
         """The pass of the current scene's reflector ``name`` (for checks and the demo)."""
-        assert self.scene is not None
         return self._pass(self.scene.reflector(name))

@@ -140,7 +140,7 @@ def methods_picture(renderer) -> None:
     view = {"camera": eye, "target": (-7.0, 1.0, -2.0)}
     methods = [labelled(renderer.render("lab20", method=m, **view), m)
                for m in PLANAR_TECHNIQUES]
-    methods.append(labelled(mirrorlab.render("lab20", (SIZE, SIZE), method="raytrace",
+    methods.append(labelled(mirrorlab.render("lab20", size=(SIZE, SIZE), method="raytrace",
                                              **view), "raytrace"))
     Image.fromarray(grid(methods, 4)).save(DOCS / "methods.png")
 

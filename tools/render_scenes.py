@@ -24,7 +24,7 @@ def main() -> None:
         for path in sorted(scenes_dir().glob("*.toml")):
             scene = mirrorlab.load_scene(path)
             frames = sorted({0, scene.frame_count // 2, scene.frame_count - 1})
-            image = np.hstack([renderer.render(scene, frame) for frame in frames])
+            image = np.hstack([renderer.render(scene, frame=frame) for frame in frames])
             write_png_atomic(DOCS / f"{scene.name}.png", image)
             print(f"wrote {DOCS / scene.name}.png (frames {frames})")
 

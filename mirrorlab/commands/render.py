@@ -29,8 +29,8 @@ def run_render(scene: Scene, size: tuple[int, int], out: Path, frames: list[int]
             from mirrorlab.raytrace import trace_scene
 
             for frame in frames:
-                image = trace_scene(scene.at_frame(frame), size, progress=True).to_uint8()
-            outputs.add_png(out, image)
+                traced = trace_scene(scene.at_frame(frame), size, progress=True).to_uint8()
+            outputs.add_png(out, traced)
             if save_env is not None:
                 say(f"no capture texture when ray tracing; {save_env} not written")
             say(f"wrote {out} ({size[0]}x{size[1]}, {scene.name}, ray traced, "
@@ -45,13 +45,13 @@ def run_render(scene: Scene, size: tuple[int, int], out: Path, frames: list[int]
             compare = stats and use_plan
             if compare:  # one untimed frame each: start-up work (shaders, meshes) is paid
                 for warm in (renderer, unplanned):
-                    warm.render(scene, frames[0], use_plan=False)
+                    warm.render(scene, frame=frames[0], use_plan=False)
                     warm.scene_renderer.state.clear()  # and forgotten: frame 0 captures
             for index, frame in enumerate(frames):
                 if compare and index % 2:  # take turns at going first
                     comparison.append(_unplanned(unplanned, scene, frame))
                 began = time.perf_counter()
-                image = renderer.render(scene, frame, use_plan=use_plan)
+                image = renderer.render(scene, frame=frame, use_plan=use_plan)
                 elapsed = (time.perf_counter() - began) * 1e3
                 assert renderer.last_stats is not None
                 records.append((frame, renderer.last_stats, elapsed))
@@ -90,7 +90,7 @@ def _environment(renderer, scene: Scene) -> np.ndarray | None:
     plan = renderer.last_stats.plan
     for draw in plan.top.draws:
         if isinstance(draw.reflector, PlanarReflector) and draw.mode == "texture":
-            return renderer.read_texture(draw.reflector.name, draw.slot)
+            return renderer.read_texture(draw.reflector.name, slot=draw.slot)
     for reflector in scene.reflectors:
         if isinstance(reflector, PlanarReflector) and reflector.technique != "stencil":
             try:
@@ -103,14 +103,14 @@ def _environment(renderer, scene: Scene) -> np.ndarray | None:
 def _unplanned(renderer, scene: Scene, frame: int) -> tuple[int, float]:
     """Passes run and milliseconds of ``frame`` drawn with every pass (--no-plan)."""
     began = time.perf_counter()
-    renderer.render(scene, frame, use_plan=False)
+    renderer.render(scene, frame=frame, use_plan=False)
     return len(renderer.last_stats.plan.ran), (time.perf_counter() - began) * 1e3
 
 
 def _report(records, comparison, use_plan: bool, say: Callable[[str], None]) -> None:
     for frame, stats, elapsed in records:
-        skipped = f"; skipped {', '.join(stats.skipped)}" if stats.skipped else ""
-        say(f"frame {frame}: ran {', '.join(stats.ran)}{skipped} ({elapsed:.1f} ms)")
+        skips = f"; skipped {', '.join(stats.skipped)}" if stats.skipped else ""
+        say(f"frame {frame}: ran {', '.join(stats.ran)}{skips} ({elapsed:.1f} ms)")
     ran = [len(stats.plan.ran) for _, stats, _ in records]
     skipped = [len(stats.plan.skipped) for _, stats, _ in records]
     times = [elapsed for _, _, elapsed in records]

@@ -19,7 +19,7 @@ import re
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import Literal, Self
+from typing import Literal, Protocol, Self
 
 from mirrorlab.errors import (
     DEBIAN_GL_PACKAGES,
@@ -85,6 +85,12 @@ if not _opengl_imported() and "PYOPENGL_PLATFORM" not in os.environ:
     use_platform("egl")
 
 
+class Releasable(Protocol):
+    """A GL object with an explicit lifetime."""
+
+    def release(self) -> None: ...
+
+
 class ResourceRegistry:
     """The GL objects made in one context, so that they can all be released with it.
 
@@ -93,12 +99,12 @@ class ResourceRegistry:
     """
 
     def __init__(self) -> None:
-        self._live: list = []
+        self._live: list[Releasable] = []
 
-    def add(self, resource: object) -> None:
+    def add(self, resource: Releasable) -> None:
         self._live.append(resource)
 
-    def discard(self, resource: object) -> None:
+    def discard(self, resource: Releasable) -> None:
         if resource in self._live:
             self._live.remove(resource)
 
@@ -109,7 +115,7 @@ class ResourceRegistry:
         """Release every live resource; returns how many there were."""
         count = len(self._live)
         for resource in reversed(list(self._live)):
-            resource.release()  # type: ignore[attr-defined]
+            resource.release()
         self._live.clear()
         return count
 

@@ -79,7 +79,7 @@ class Program(_Resource):
     def __init__(self, registry: ResourceRegistry, vertex: str, fragment: str,
                  defines: dict[str, str | int] | None = None) -> None:
         header = "".join(f"#define {key} {value}\n" for key, value in (defines or {}).items())
-        shaders = []
+        shaders: list[int] = []
         for name, kind in ((vertex, GL.GL_VERTEX_SHADER), (fragment, GL.GL_FRAGMENT_SHADER)):
             version, _, body = expand_includes(name).partition("\n")
             shader = GL.glCreateShader(kind)

@@ -184,8 +184,11 @@ class ViewDrawer(Protocol):
     """What a pass may ask of the renderer: draw a planned view into a target, at a stencil
     level, and the scene being drawn."""
 
-    scene: Scene
     shared: SharedResources
+
+    @property
+    def scene(self) -> Scene:
+        ...
 
     def draw_view(self, plan: ViewPlan, target: RenderTarget, stencil_level: int = 0) -> int:
         ...

@@ -137,7 +137,7 @@ class CaptureTextures:
                                     else self.shared.scratch(size))
             draws = renderer.draw_view(plan, target)
             target.bind()
-            texture.copy_from_framebuffer(*size, source=tuple(target.size))
+            texture.copy_from_framebuffer(*size, source=(target.size[0], target.size[1]))
             return draws
         framebuffer = self._framebuffers.get(slot)
         if framebuffer is None or framebuffer.size != size:

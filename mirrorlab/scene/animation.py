@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
+
+from mirrorlab.scene.model import PlanarReflector
 
 if TYPE_CHECKING:
     from mirrorlab.scene.model import Keyframe, Scene
@@ -17,11 +19,14 @@ OBJECT_FIELDS = ("position", "rotation", "scale", "angles")
 REFLECTOR_FIELDS = ("position", "rotation", "scale")
 """Reflector fields a keyframe can set (curved reflectors only)."""
 
+Value = float | tuple[float, ...]
+"""An animated value: a number (``fovy``) or a vector (``eye``, ``position``...)."""
 
-def interpolate(keys: list[tuple[int, object]], frame: int):
+
+def interpolate(keys: list[tuple[int, Value]], frame: int) -> Value:
     """The value at ``frame`` from ``(frame, value)`` pairs sorted by frame: linear between
-    the two around it, held before the first and after the last. Values are floats or
-    tuples of floats."""
+    the two around it, held before the first and after the last. The values of one track
+    are all floats or all tuples of floats of one length."""
     if frame <= keys[0][0]:
         return keys[0][1]
     for (f0, v0), (f1, v1) in itertools.pairwise(keys):
@@ -29,14 +34,16 @@ def interpolate(keys: list[tuple[int, object]], frame: int):
             if f1 == f0:
                 return v1
             w = (frame - f0) / (f1 - f0)
-            if isinstance(v0, tuple):
+            if isinstance(v0, tuple) and isinstance(v1, tuple):
                 return tuple(a + (b - a) * w for a, b in zip(v0, v1, strict=True))
+            if isinstance(v0, tuple) or isinstance(v1, tuple):
+                raise TypeError(f"keyframes {f0} and {f1} mix a number and a vector")
             return v0 + (v1 - v0) * w
     return keys[-1][1]
 
 
 def _track(keyframes: tuple[Keyframe, ...], group: str, name: str | None,
-           field: str) -> list[tuple[int, object]]:
+           field: str) -> list[tuple[int, Value]]:
     keys = []
     for key in keyframes:
         values = getattr(key, group)
@@ -51,7 +58,7 @@ def pose(scene: Scene, frame: int) -> Scene:
     """``scene`` with every animated value set for ``frame`` (see :class:`Keyframe`)."""
     assert scene.animation is not None
     keyframes = scene.animation.keyframes
-    camera_changes = {}
+    camera_changes: dict[str, Any] = {}  # each field's type, as the loader checked
     for field in CAMERA_FIELDS:
         keys = _track(keyframes, "camera", None, field)
         if keys:
@@ -68,6 +75,8 @@ def pose(scene: Scene, frame: int) -> Scene:
 
 def _apply(scene: Scene, group: str, name: str, changes: dict) -> Scene:
     item = scene.object(name) if group == "objects" else scene.reflector(name)
+    if isinstance(item, PlanarReflector):  # the loader refuses these keyframes
+        raise ValueError(f"reflector {name!r}: a planar mirror cannot be animated")
     fields = {}
     transform = item.transform
     for field, value in changes.items():

@@ -890,7 +890,7 @@ class _Reader:
             if group == "reflectors" and not isinstance(item, CurvedReflector):
                 raise self.fail(where, "a planar mirror cannot be animated; only curved "
                                 "reflectors and objects move")
-            fields = OBJECT_FIELDS if group == "objects" else REFLECTOR_FIELDS
+            fields: tuple[str, ...] = OBJECT_FIELDS if group == "objects" else REFLECTOR_FIELDS
             if isinstance(item, MeshObject):
                 fields = tuple(f for f in fields if f != "angles")
             values = self.table(raw, where, fields)

@@ -143,17 +143,17 @@ def test_a_frame_does_not_depend_on_the_frames_drawn_before(name, options):
     size = (48, 48)
     count = min(scene.frame_count, 8)
     with Renderer(size) as renderer:
-        sequence = [renderer.render(scene, f) for f in range(count)]
+        sequence = [renderer.render(scene, frame=f) for f in range(count)]
     histories = [range(count // 2, count), range(1, count, 2), range(count - 1, -1, -1)]
     for frames in histories:
         with Renderer(size) as renderer:
             for frame in frames:
-                image = renderer.render(scene, frame)
+                image = renderer.render(scene, frame=frame)
                 assert np.array_equal(image, sequence[frame]), \
                     f"{name} {options} frame {frame} after frames {list(frames)}"
     with Renderer(size) as renderer:
         last = count - 1
-        assert np.array_equal(renderer.render(scene, last), sequence[last])
+        assert np.array_equal(renderer.render(scene, frame=last), sequence[last])
 
 
 def test_the_planner_reuses_captures_inside_a_worker():
@@ -162,7 +162,7 @@ def test_the_planner_reuses_captures_inside_a_worker():
     with Renderer((48, 48)) as renderer:
         skipped = []
         for frame in range(6):
-            renderer.render("robot_wave", frame)
+            renderer.render("robot_wave", frame=frame)
             skipped.append(bool(renderer.last_stats.skipped))
     assert skipped == [False, True, True, True, True, False]
 

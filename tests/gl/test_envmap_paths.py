@@ -416,7 +416,7 @@ def test_renderer_release_frees_every_gl_object_it_made(gl_context):
 
 
 def test_headless_one_shot_renders_each_scene(gl_context):
-    image = mirrorlab.render("cone", (64, 48), method="sphere-texgen", map_size=32)
+    image = mirrorlab.render("cone", size=(64, 48), method="sphere-texgen", map_size=32)
     assert image.shape == (48, 64, 3) and image.dtype == np.uint8
     gl_context.make_current()  # the one-shot made (and released) its own context
     with mirrorlab.Renderer(size=(64, 48)) as renderer:

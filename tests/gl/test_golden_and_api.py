@@ -70,7 +70,7 @@ def test_one_renderer_draws_many_scenes_as_one_shot_renders_do():
         gl_side = renderer.scene_renderer
         kept = []
         for name, frame, options in SEQUENCE:
-            kept.append(renderer.render(name, frame, **options))
+            kept.append(renderer.render(name, frame=frame, **options))
             assert renderer.scene_renderer is gl_side, "the renderer changed its GL side"
     for (name, frame, options), image in zip(SEQUENCE, kept, strict=True):
         fresh = mirrorlab.render(name, size=size, frame=frame, **options)

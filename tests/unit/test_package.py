@@ -55,3 +55,21 @@ def test_dask_is_an_extra_not_a_dependency():
     assert any(r.startswith("dask[distributed]") and 'extra == "dask"' in r
                for r in requires), requires
     assert "dask" in (meta.get_all("Provides-Extra") or [])
+
+
+def test_the_api_takes_everything_after_the_scene_by_keyword():
+    """One argument order everywhere: ``render(scene, *, frame=..., size=..., ...)``."""
+    import inspect
+
+    from mirrorlab import api
+
+    for function in (api.render, api.raytrace, api.Renderer.render, api.Renderer.frames,
+                     api.Renderer.plan):
+        parameters = list(inspect.signature(function).parameters.values())
+        if parameters[0].name == "self":
+            parameters = parameters[1:]
+        assert parameters[0].name == "scene", function
+        kinds = {p.name: p.kind for p in parameters[1:]}
+        assert all(kind in (inspect.Parameter.KEYWORD_ONLY, inspect.Parameter.VAR_KEYWORD)
+                   for kind in kinds.values()), (function.__qualname__, kinds)
+        assert {"size"} <= set(kinds), function
