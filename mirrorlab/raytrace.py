@@ -24,8 +24,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from mirrorlab import math3d
-from mirrorlab.scene.backgrounds import environment_of, load_picture
-from mirrorlab.scene.mesh import load_mesh
+from mirrorlab.scene.backgrounds import environment_of
+from mirrorlab.scene.mesh import load_mesh, texture_picture
 from mirrorlab.scene.model import CurvedReflector, PlanarReflector, Scene
 
 Environment = Callable[[np.ndarray], np.ndarray]
@@ -381,7 +381,7 @@ def ray_scene(scene: Scene) -> RayScene:
     from mirrorlab.scene.robot import scene_parts
 
     surfaces = [mesh_surface(part.mesh, part.model, color=part.color,
-                             texture=load_picture(part.texture) if part.texture else None)
+                             texture=texture_picture(part.texture) if part.texture else None)
                 for part in scene_parts(scene)]
     for reflector in scene.reflectors:
         if isinstance(reflector, PlanarReflector):

@@ -13,8 +13,8 @@ import numpy as np
 from mirrorlab.gl.context import ResourceRegistry
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Framebuffer, MeshBuffer, Program, Texture2D, TextureCube
-from mirrorlab.scene.backgrounds import cube_face_size, load_cube_faces, load_picture
-from mirrorlab.scene.mesh import MeshData, load_mesh
+from mirrorlab.scene.backgrounds import cube_face_size, load_cube_faces
+from mirrorlab.scene.mesh import MeshData, TextureSource, load_mesh, texture_picture
 
 if TYPE_CHECKING:
     from mirrorlab.gl.resources import RenderTarget
@@ -36,7 +36,7 @@ class SharedResources:
     def __init__(self, registry: ResourceRegistry) -> None:
         self.registry = registry
         self._meshes: dict[Path, tuple[MeshData, MeshBuffer]] = {}
-        self._textures: dict[Path, Texture2D] = {}
+        self._textures: dict[TextureSource, Texture2D] = {}
         self._programs: dict[tuple, Program] = {}
         self._scratch: dict[tuple[int, int], Framebuffer] = {}
 
@@ -50,12 +50,15 @@ class SharedResources:
                                                    data.indices))
         return self._meshes[path]
 
-    def texture(self, path: Path) -> Texture2D:
-        """A mipmapped, repeating texture of the picture file ``path``."""
-        if path not in self._textures:
-            self._textures[path] = Texture2D.from_image(self.registry, load_picture(path),
-                                                        what=f"picture {path}")
-        return self._textures[path]
+    def texture(self, source: TextureSource) -> Texture2D:
+        """A mipmapped, repeating texture of the picture file (or glTF mesh's texture)
+        ``source``."""
+        if source not in self._textures:
+            what = (f"picture {source}" if isinstance(source, Path)
+                    else f"base colour texture of {source.mesh}")
+            self._textures[source] = Texture2D.from_image(self.registry,
+                                                          texture_picture(source), what=what)
+        return self._textures[source]
 
     def program(self, vertex: str, fragment: str, **defines: str | int) -> Program:
         key = (vertex, fragment, tuple(sorted(defines.items())))

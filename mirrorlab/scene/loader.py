@@ -215,8 +215,9 @@ def scene_to_document(scene: Scene, base: Path | None = None) -> dict[str, Any]:
             entry: dict[str, Any] = {"name": item.name, "type": "robot",
                                      "angles": list(item.angles)}
         else:
-            entry = {"name": item.name, "type": "mesh", "mesh": rel(item.mesh),
-                     "color": list(item.color)}
+            entry = {"name": item.name, "type": "mesh", "mesh": rel(item.mesh)}
+            if item.color is not None:
+                entry["color"] = list(item.color)
             if item.texture is not None:
                 entry["texture"] = rel(item.texture)
         entry.update(_transform_document(item.transform))
@@ -575,7 +576,8 @@ class _Reader:
             objects.append(MeshObject(
                 name=self.text(table.get("name", mesh.stem), f"{key}.name"), mesh=mesh,
                 transform=self.transform(table, key),
-                color=self.color(table.get("color", [1, 1, 1]), f"{key}.color"),
+                color=(self.color(table["color"], f"{key}.color") if "color" in table
+                       else None),
                 texture=texture))
         self.unique([o.name for o in objects], "objects")
         return tuple(objects)

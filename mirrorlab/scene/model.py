@@ -120,12 +120,13 @@ class Background:
 @dataclass(frozen=True)
 class MeshObject:
     """A lit mesh from any file trimesh reads, ``color`` multiplied by ``texture`` (a
-    picture) when there is one."""
+    picture) when there is one. Left None, each comes from a glTF file's own material
+    (its base colour factor and base colour texture), else white and no texture."""
 
     name: str
     mesh: Path
     transform: Transform = Transform()
-    color: Vec3 = (1.0, 1.0, 1.0)
+    color: Vec3 | None = None
     texture: Path | None = None
 
 

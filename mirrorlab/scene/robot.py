@@ -16,6 +16,7 @@ import numpy as np
 from mirrorlab import math3d
 from mirrorlab.data import model_file, texture_file
 from mirrorlab.scene.graph import Node, SceneGraph
+from mirrorlab.scene.mesh import MeshTexture, TextureSource, mesh_material
 from mirrorlab.scene.model import MeshObject, RobotObject, Scene, SceneObject
 
 JOINT_NAMES = ("base", "lower_arm", "upper_arm")
@@ -63,21 +64,36 @@ def robot_graph(robot: RobotObject) -> SceneGraph:
 @dataclass(frozen=True, eq=False)
 class Part:
     """One drawable mesh in world space: ``model`` ``(4, 4)`` mesh frame to world,
-    ``color`` RGB albedo, ``texture`` a picture or None. ``name`` is the object's name,
-    with the robot's node after a dot (``robot.hand``)."""
+    ``color`` RGB albedo, ``texture`` where its picture comes from (a picture file, or a
+    glTF mesh's own texture; see :func:`mirrorlab.scene.mesh.texture_picture`) or None.
+    ``name`` is the object's name, with the robot's node after a dot (``robot.hand``)."""
 
     name: str
     mesh: Path
     model: np.ndarray
     color: tuple[float, float, float]
-    texture: Path | None
+    texture: TextureSource | None
+
+
+WHITE = (1.0, 1.0, 1.0)
+
+
+def mesh_look(item: MeshObject) -> tuple[tuple[float, float, float], TextureSource | None]:
+    """A mesh object's colour and texture: the scene's own where it gives them, else its
+    glTF file's base colour factor and base colour texture, else white and none."""
+    material = mesh_material(item.mesh)
+    color = item.color if item.color is not None else (material.base_color or WHITE)
+    texture: TextureSource | None = item.texture
+    if texture is None and material.base_color_texture is not None:
+        texture = MeshTexture(item.mesh)
+    return color, texture
 
 
 @lru_cache(maxsize=256)
 def object_parts(item: SceneObject) -> tuple[Part, ...]:
     """The drawable parts of one object (remembered: objects are values)."""
     if isinstance(item, MeshObject):
-        return (Part(item.name, item.mesh, item.transform.matrix(), item.color, item.texture),)
+        return (Part(item.name, item.mesh, item.transform.matrix(), *mesh_look(item)),)
     graph = robot_graph(item)
     return tuple(
         Part(f"{item.name}.{node.name}", model_file(node.mesh), node.world_matrix(),
