@@ -10,10 +10,12 @@ from __future__ import annotations
 from importlib.metadata import PackageNotFoundError, version
 
 from mirrorlab.api import Renderer, render
+from mirrorlab.frame import Frame, show
 from mirrorlab.scene.loader import SceneError, load_scene
 from mirrorlab.scene.model import Camera, Scene
 
-__all__ = ["Camera", "Renderer", "Scene", "SceneError", "load_scene", "render"]
+__all__ = ["Camera", "Frame", "Renderer", "Scene", "SceneError", "load_scene", "render",
+           "show"]
 try:
     __version__ = version("mirrorlab")
     """The installed version, as the package metadata (pyproject.toml) gives it."""

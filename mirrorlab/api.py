@@ -10,8 +10,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
+from mirrorlab.frame import Frame
 from mirrorlab.options import apply_options, check_size
 from mirrorlab.plan import TINY_PIXELS
 from mirrorlab.scene.loader import load_scene
@@ -121,12 +120,13 @@ class Renderer:
 
     def render(self, scene: SceneLike, *, frame: int = 0,
                size: Sequence[int] | str | None = None, use_plan: bool = True,
-               tiny_pixels: float = TINY_PIXELS, **options: Any) -> np.ndarray:
+               tiny_pixels: float = TINY_PIXELS, **options: Any) -> Frame:
         """Draw ``scene`` (a Scene, a file or a shipped name) posed at animation ``frame``,
-        with ``options`` applied (``camera=(x, y, z)``, ``method="stencil"``, ...: see
-        :mod:`mirrorlab.options`). ``use_plan`` False runs every pass. Returns the frame
-        as ``(height, width, 3)`` uint8 RGB, row 0 at the top; :attr:`last_stats` says
-        what ran."""
+        ``size`` (width, height) or this renderer's size, with ``options`` applied
+        (``camera=(x, y, z)``, ``method="stencil"``, ...: see :mod:`mirrorlab.options`).
+        ``use_plan`` False runs every pass. Returns the frame as a :class:`Frame`, an
+        ``(height, width, 3)`` uint8 RGB array, row 0 at the top, that Jupyter shows as a
+        picture; :attr:`last_stats` says what ran."""
         from mirrorlab.gl.context import gl_pass
 
         posed = resolve_scene(scene, **options).at_frame(frame)
@@ -137,12 +137,12 @@ class Renderer:
             target = self._target_of(check_size(size) if size is not None else self.size)
         self.last_stats = self._renderer.render(posed, target, use_plan, tiny_pixels)
         with gl_pass("reading the frame back"):
-            return target.read()
+            return Frame(target.read())
 
     def frames(self, scene: SceneLike, *, frames: Sequence[int] | None = None,
                size: Sequence[int] | str | None = None, use_plan: bool = True,
                tiny_pixels: float = TINY_PIXELS,
-               **options: Any) -> Iterator[tuple[int, np.ndarray, FrameStats]]:
+               **options: Any) -> Iterator[tuple[int, Frame, FrameStats]]:
         """``(frame, image, stats)`` for each frame of the animation (or ``frames``)."""
         loaded = resolve_scene(scene, **options)
         for frame in frames if frames is not None else range(loaded.frame_count):
@@ -162,30 +162,32 @@ class Renderer:
         return plan_frame(posed, check_size(size) if size is not None else self.size, state,
                           use_plan)
 
-    def read_texture(self, reflector: str, *, slot: int = 0) -> np.ndarray:
-        """A planar reflector's capture texture from the last frame, ``(h, w, 3)`` uint8."""
+    def read_texture(self, reflector: str, *, slot: int = 0) -> Frame:
+        """A planar reflector's capture texture from the last frame, ``(h, w, 3)`` uint8
+        (a :class:`Frame`)."""
         renderer = self.scene_renderer
         capture = renderer.pass_for(reflector)
         textures = getattr(capture, "captures", None)
         if textures is None or slot not in textures.textures:
             raise ValueError(f"reflector {reflector!r} holds no capture texture")
-        return textures.textures[slot].read()
+        return Frame(textures.textures[slot].read())
 
 
 def raytrace(scene: SceneLike, *, frame: int = 0, size: Sequence[int] | str = (512, 512),
-             **options: Any) -> np.ndarray:
-    """The ray-traced ground truth of ``scene`` (see :mod:`mirrorlab.raytrace`), as
-    ``(height, width, 3)`` uint8. Needs no OpenGL."""
+             **options: Any) -> Frame:
+    """The ray-traced ground truth of ``scene`` (see :mod:`mirrorlab.raytrace`), as an
+    ``(height, width, 3)`` uint8 :class:`Frame`. Needs no OpenGL."""
     from mirrorlab.raytrace import trace_scene
 
     posed = resolve_scene(scene, **options).at_frame(frame)
-    return trace_scene(posed, check_size(size)).to_uint8()
+    return Frame(trace_scene(posed, check_size(size)).to_uint8())
 
 
 def render(scene: SceneLike = "lab20", *, frame: int = 0,
            size: Sequence[int] | str = (512, 512), use_plan: bool = True,
-           **options: Any) -> np.ndarray:
-    """Draw one frame headless and return it as ``(height, width, 3)`` uint8 RGB.
+           **options: Any) -> Frame:
+    """Draw one frame headless and return it as ``(height, width, 3)`` uint8 RGB, row 0 at
+    the top: a :class:`~mirrorlab.frame.Frame`, which Jupyter shows as a picture.
 
     ``scene`` is a Scene, a scene file or a shipped scene's name (``lab20``, ``lab``,
     ``cone``, ``sphere``, ...); ``options`` change it (``camera``, ``target``,

@@ -26,6 +26,25 @@ def test_render_api_returns_an_rgb_frame_of_the_asked_size():
     assert image.std() > 10  # not a blank frame
 
 
+def test_frames_show_as_pictures_in_a_notebook():
+    """What the API returns is a Frame: IPython's display formatter (a notebook's) finds
+    the frame's own pixels as a PNG in it, for a one-shot render, a kept renderer's frame,
+    its capture texture and the ray tracer's truth."""
+    import io
+
+    from IPython.core.formatters import DisplayFormatter
+
+    with mirrorlab.Renderer(size=(48, 40)) as renderer:
+        images = [mirrorlab.render(size=(48, 40)), renderer.render("lab20"),
+                  renderer.read_texture("mirror"),
+                  mirrorlab.render(size=(24, 20), method="raytrace")]
+    for image in images:
+        assert isinstance(image, mirrorlab.Frame)
+        data, _ = DisplayFormatter().format(image)
+        shown = np.asarray(Image.open(io.BytesIO(data["image/png"])))
+        assert np.array_equal(shown, image)
+
+
 def test_render_api_refuses_bad_sizes_and_cameras():
     with pytest.raises(ValueError, match="size"):
         mirrorlab.render(size=(0, 10))
