@@ -7,6 +7,11 @@ GLX for a window, as long as OpenGL has not been imported yet. Every other
 module in mirrorlab that calls GL takes the ``GL`` namespace from
 :mod:`mirrorlab.gl.opengl`, which imports this module first.
 
+A program that imports OpenGL itself can do so after ``import mirrorlab.gl`` (which
+chooses EGL), or with ``PYOPENGL_PLATFORM=egl`` set; when OpenGL was imported first and
+PyOpenGL bound the process to another platform, making a headless context says so in
+one line, with what to do.
+
 The renderer never creates a context: a caller makes one of these, makes it
 current, and hands the renderer a framebuffer to draw into.
 """
@@ -55,34 +60,60 @@ def _opengl_imported() -> bool:
     return "OpenGL.platform" in sys.modules
 
 
+_chosen: list[str] = []
+"""The platform mirrorlab set before OpenGL was imported (empty: none yet)."""
+PURPOSE = {"egl": "headless rendering", "glx": "a window"}
+
+
+def loaded_platform() -> str | None:
+    """The platform PyOpenGL bound this process to (``'egl'``, ``'glx'``, ``'osmesa'``...),
+    or None while OpenGL is not imported."""
+    module = sys.modules.get("OpenGL.platform")
+    platform = getattr(module, "PLATFORM", None) if module is not None else None
+    if platform is None:
+        return None
+    return type(platform).__name__.lower().removesuffix("platform") or None
+
+
 def current_platform() -> str | None:
     """The PyOpenGL platform this process uses or will use (``'egl'``, ``'glx'``, ...)."""
-    return os.environ.get("PYOPENGL_PLATFORM")
+    return loaded_platform() or os.environ.get("PYOPENGL_PLATFORM")
 
 
 def use_platform(name: Platform) -> None:
-    """Choose PyOpenGL's platform for this process, before OpenGL is first imported.
+    """Choose PyOpenGL's platform for this process, before OpenGL is first imported; when
+    OpenGL is imported already, check that it is bound to ``name``.
 
-    Raises GLContextError when OpenGL is already loaded for another platform:
-    a process can hold headless (EGL) or windowed (GLX) contexts, not both.
+    Raises GLContextError, one line saying what to do, when OpenGL is bound to another
+    platform: a process holds headless (EGL) or windowed (GLX) contexts, not both.
     """
     if name not in ("egl", "glx"):
         raise ValueError(f"GL platform must be 'egl' or 'glx', got {name!r}")
     if _opengl_imported():
-        if current_platform() != name:
+        loaded = loaded_platform()
+        if loaded != name and not _chosen:
             raise GLContextError(
-                f"PyOpenGL is already loaded for platform {current_platform()!r} in this "
-                f"process; a {name!r} context needs its own process"
-            )
-        return
-    os.environ["PYOPENGL_PLATFORM"] = name
+                f"OpenGL was imported before mirrorlab chose its platform, and PyOpenGL "
+                f"bound this process to {loaded!r}; {PURPOSE[name]} needs {name!r}: import "
+                f"mirrorlab.gl before OpenGL, or set PYOPENGL_PLATFORM={name} before "
+                f"Python starts")
+        if loaded != name:
+            raise GLContextError(
+                f"this process already uses OpenGL through {loaded!r}; {PURPOSE[name]} "
+                f"needs {name!r}, in a process of its own")
+    else:
+        os.environ["PYOPENGL_PLATFORM"] = name
+        _chosen[:] = [name]
     if name == "egl":
-        # Mesa picks the EGL display platform from this; surfaceless needs no X or GPU.
+        # Mesa picks the EGL display platform from this when the display is opened (not
+        # when OpenGL is imported); surfaceless needs no X server or GPU.
         os.environ.setdefault("EGL_PLATFORM", "surfaceless")
 
 
 if not _opengl_imported() and "PYOPENGL_PLATFORM" not in os.environ:
     use_platform("egl")
+elif not _opengl_imported():
+    _chosen[:] = [os.environ["PYOPENGL_PLATFORM"]]  # the user's choice, before OpenGL
 
 
 class Releasable(Protocol):
