@@ -1,6 +1,7 @@
 """The demo's controls, in one place: the window's help overlay, ``mirrorlab demo --help``
-and the README list them from here. Plain text (no markup): it is read in a terminal and
-in the window. Imports nothing (the command line reads it before choosing a GL platform).
+and the docs (docs/demo.md) list them from here. Plain text (no markup): it is read in a
+terminal and in the window. Imports nothing (the command line reads it before choosing a
+GL platform).
 """
 
 from __future__ import annotations

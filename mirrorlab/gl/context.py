@@ -277,7 +277,7 @@ class _Context:
 
 # The EGL display is initialised once and kept for the life of the process: every
 # eglTerminate + eglInitialize cycle cost Mesa about 13 KB that it never gave back (1,000
-# one-shot renders grew the process by 17 MB; see README, Reliability).
+# one-shot renders grew the process by 17 MB; see docs/reliability.md).
 
 
 class HeadlessContext(_Context):

@@ -7,7 +7,7 @@ was expected. :func:`scene_to_document` and :func:`dumps` write a Scene back; re
 that again gives an equal Scene.
 
 File names in a scene (meshes, textures, cube-face folders) are relative to the scene
-file's folder. The format is described key by key in README.md ("Scenes").
+file's folder. The format is described key by key in docs/scenes.md.
 Numpy only.
 """
 
