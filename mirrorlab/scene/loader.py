@@ -14,6 +14,7 @@ Numpy only.
 from __future__ import annotations
 
 import difflib
+import functools
 import json
 import math
 import re
@@ -125,6 +126,14 @@ def scene_path(name_or_path: str | Path) -> Path:
         return shipped
     raise SceneError(text, "", f"unknown scene; expected a .toml file or one of "
                      f"{', '.join(shipped_scene_names())}")
+
+
+@functools.cache
+def mesh_formats() -> frozenset[str]:
+    """The file types trimesh reads meshes from (``obj``, ``glb``, ``ply``, ...), by name."""
+    import trimesh
+
+    return frozenset(trimesh.available_formats())
 
 
 def _is_file(path: Path) -> bool:
@@ -420,6 +429,18 @@ class _Reader:
             raise self.fail(key, f"{what} {path} does not exist")
         return path.resolve()
 
+    def mesh_file(self, value: Any, key: str) -> Path:
+        """A mesh file of a format trimesh reads (checked by its name, as trimesh picks
+        its reader: a picture named as a mesh is refused here, not when first drawn)."""
+        path = self.file(value, key, "mesh file")
+        formats = mesh_formats()
+        suffix = path.name.lower().split(".", 1)[1] if "." in path.name else ""
+        if suffix not in formats and path.suffix.lower().lstrip(".") not in formats:
+            raise self.fail(key, f"mesh file {path} is not of a format trimesh reads: "
+                            f"expected a name ending in "
+                            f"{', '.join('.' + f for f in sorted(formats))}")
+        return path
+
     def folder_of_faces(self, value: Any, key: str) -> Path:
         folder = self.folder / self.text(value, key)
         if not _is_dir(folder):
@@ -570,7 +591,7 @@ class _Reader:
             table = self.table(item, key, _MESH_KEYS)
             if "mesh" not in table:
                 raise self.fail(f"{key}.mesh", "missing: a mesh object needs a mesh file")
-            mesh = self.file(table["mesh"], f"{key}.mesh", "mesh file")
+            mesh = self.mesh_file(table["mesh"], f"{key}.mesh")
             texture = (self.file(table["texture"], f"{key}.texture", "texture picture")
                        if "texture" in table else None)
             objects.append(MeshObject(
@@ -688,7 +709,7 @@ class _Reader:
         table = self.table(item, key, _CURVED_KEYS)
         if "mesh" not in table:
             raise self.fail(f"{key}.mesh", "missing: a curved reflector needs a mesh file")
-        mesh = self.file(table["mesh"], f"{key}.mesh", "mesh file")
+        mesh = self.mesh_file(table["mesh"], f"{key}.mesh")
         source = None
         if "source" in table:
             if technique == "cube":

@@ -506,6 +506,19 @@ def test_wrong_types_are_named_with_what_was_expected(tmp_path):
                    "expected a number, got the boolean true")
 
 
+def test_a_file_of_no_mesh_format_is_refused_as_a_mesh(tmp_path):
+    """A picture (or a scene file) named as a mesh is refused when the scene is read, not
+    when it is first planned or drawn (the mutation fuzzer found a cone whose mesh was the
+    launch picture)."""
+    (tmp_path / "picture.png").write_bytes(b"not read")
+    for where, index in (("objects", 1), ("reflectors", 1)):
+        document = base_document()
+        document[where][index]["mesh"] = "picture.png"
+        assert_refused(tmp_path, document, f"{where}[{index}].mesh",
+                       f"mesh file {tmp_path / 'picture.png'} is not of a format trimesh "
+                       f"reads", ".glb", ".obj", ".stl")
+
+
 def test_a_missing_mesh_file_is_named(tmp_path):
     document = base_document()
     document["objects"][1]["mesh"] = "nothere.obj"
