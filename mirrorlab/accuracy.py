@@ -28,12 +28,12 @@ from mirrorlab.options import apply_options
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import (
     CAPTURE_MODES,
-    CURVED_TECHNIQUES,
     Camera,
     CurvedReflector,
     DistanceSearch,
     Scene,
 )
+from mirrorlab.techniques import techniques
 
 if TYPE_CHECKING:
     from mirrorlab.gl.resources import Framebuffer, TimerQuery
@@ -148,11 +148,12 @@ def lab_techniques(sizes: Sequence[int]) -> list[tuple[str, dict]]:
     """``(label, options)`` for each planar configuration: every capturing technique with
     each capture mode and texture size, and the stencil mirror."""
     rows = []
-    for method in ("ortho", "reflected"):
+    planar = techniques("planar")
+    for entry in (t for t in planar if not t.draws_inline):
         for capture in CAPTURE_MODES:
-            rows += [(f"{method}-{capture}", {"method": method, "capture": capture,
-                                               "env_size": size}) for size in sizes]
-    rows.append(("stencil", {"method": "stencil"}))
+            rows += [(f"{entry.name}-{capture}", {"method": entry.name, "capture": capture,
+                                                   "env_size": size}) for size in sizes]
+    rows += [(entry.name, {"method": entry.name}) for entry in planar if entry.draws_inline]
     return rows
 
 
@@ -171,18 +172,20 @@ def curved_techniques(sizes: Sequence[int], proxies: Sequence[tuple[str, str]] =
     at the :func:`search_map_size` (labelled ``cube-live distance STEPS``)."""
     sizes = [size for size in sizes if size <= ENVMAP_MAX_SIZE]
     rows = []
-    for method in CURVED_TECHNIQUES:
-        plain = {"parallax": "none"} if method == "cube-live" else {}
-        rows += [(method, {"method": method, "map_size": size, **plain}) for size in sizes]
-    corrections = [(f"cube-live {label}", text) for label, text in proxies]
-    corrections.append(("cube-live distance", "distance"))
-    for label, text in corrections:
-        rows += [(label, {"method": "cube-live", "map_size": size, "parallax": text})
+    for entry in techniques("curved"):
+        plain = {"parallax": "none"} if entry.parallax else {}
+        rows += [(entry.name, {"method": entry.name, "map_size": size, **plain})
                  for size in sizes]
     searched = search_map_size(sizes)
-    rows += [(f"cube-live distance {other}", {"method": "cube-live", "map_size": searched,
-                                              "parallax": f"distance:{other}"})
-             for other in steps if other != DEFAULT_STEPS]
+    for name in (entry.name for entry in techniques("curved") if entry.parallax):
+        corrections = [(f"{name} {label}", text) for label, text in proxies]
+        corrections.append((f"{name} distance", "distance"))
+        for label, text in corrections:
+            rows += [(label, {"method": name, "map_size": size, "parallax": text})
+                     for size in sizes]
+        rows += [(f"{name} distance {other}", {"method": name, "map_size": searched,
+                                               "parallax": f"distance:{other}"})
+                 for other in steps if other != DEFAULT_STEPS]
     return rows
 
 
@@ -362,8 +365,6 @@ def run_panels(panels: Sequence[Panel], settings: SweepSettings, progress: bool 
                 for technique_label, options in configurations[index]:
                     configured = apply_options(scene, options)
                     map_size = int(options.get("env_size", options.get("map_size", 0)))
-                    if technique_label == "stencil":
-                        map_size = 0
                     bar.set_postfix_str(f"{technique_label} {map_size or ''} {panel.name} "
                                         f"{name}", refresh=False)
                     image, wall, gpu = measure_frames(renderer, configured, framebuffer, timer,

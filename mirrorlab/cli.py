@@ -61,7 +61,7 @@ def _add_scene_arguments(parser: argparse.ArgumentParser) -> None:
     for option in OPTIONS:
         extra = {"action": "append"} if option.repeat else {}
         group.add_argument(option.flag, dest=f"option_{option.name}", metavar=option.metavar,
-                           help=option.help, **extra)
+                           help=option.help_text, **extra)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -97,9 +97,12 @@ def build_parser() -> argparse.ArgumentParser:
                         help="run every pass of every frame (for comparison)")
     render.add_argument("--save-env", metavar="PATH",
                         help="also write the first planar mirror's capture texture as a PNG")
-    render.add_argument("--raytrace", action="store_true",
-                        help="draw the ray-traced ground truth instead (no OpenGL; slow; "
-                        "--method raytrace says the same)")
+    from mirrorlab.techniques import techniques
+
+    for entry in techniques("frame"):  # --raytrace: the whole frame by another renderer
+        render.add_argument(f"--{entry.name}", dest="frame_techniques", action="append_const",
+                            const=entry.name, help=f"draw {entry.summary} (--method "
+                            f"{entry.name} says the same)")
     render.add_argument("--debug", action="store_true", help=DEBUG_HELP)
 
     plan = commands.add_parser("plan", help="print the passes each frame would run, and why")
@@ -236,8 +239,7 @@ def run_render(args: argparse.Namespace) -> int:
             if given:
                 raise UsageError(f"{option}: measures frames in one renderer; give it "
                                  f"without --out-dir")
-    if args.option_method == "raytrace":  # the ray tracer, as the API's method="raytrace"
-        args.option_method, args.raytrace = None, True
+    frame_technique = frame_technique_of(args)
     scene = scene_from_args(args)
     if out is None and out_dir is None:
         out = check_output("--out", Path("out") / f"{scene.name}.png", make_folder=True)
@@ -253,14 +255,30 @@ def run_render(args: argparse.Namespace) -> int:
     if out_dir is not None:
         from mirrorlab.batch import FrameJob, run_batch
 
-        return run_batch(FrameJob(scene, size, not args.no_plan, args.raytrace, args.debug),
+        return run_batch(FrameJob(scene, size, not args.no_plan, frame_technique, args.debug),
                          frames, out_dir, jobs, args.scheduler, args.engine, out, animations,
                          fps)
     from mirrorlab.commands.render import run_render as render
 
     assert out is not None
     return render(scene, size, out, frames, args.stats, not args.no_plan, save_env,
-                  args.raytrace, debug=args.debug)
+                  frame_technique, debug=args.debug)
+
+
+def frame_technique_of(args: argparse.Namespace) -> str | None:
+    """The technique drawing the whole frame (``--raytrace``, or ``--method`` naming one),
+    taken out of the scene options; None for OpenGL."""
+    from mirrorlab.techniques import frame_technique
+
+    named = list(dict.fromkeys(args.frame_techniques or []))
+    if frame_technique(args.option_method) is not None:
+        named.append(args.option_method)
+        args.option_method = None
+    named = list(dict.fromkeys(named))
+    if len(named) > 1:
+        raise UsageError(f"--{named[1]}: the frame is drawn by one of "
+                         f"{', '.join(named)}, not all")
+    return named[0] if named else None
 
 
 def check_distinct(outputs: list[tuple[str, Path]]) -> None:
@@ -343,10 +361,10 @@ def run_demo(args: argparse.Namespace) -> int:
 
 
 def run_techniques(args: argparse.Namespace) -> int:
-    from mirrorlab.techniques import TECHNIQUES
+    from mirrorlab.techniques import techniques
 
-    for name, entry in TECHNIQUES.items():
-        print(f"{name:<14} {entry.kind:<7} {entry.summary}")
+    for entry in techniques():
+        print(f"{entry.name:<14} {entry.kind:<7} {entry.summary}")
     return 0
 
 

@@ -461,3 +461,9 @@ def _trace_band(rays: RayScene, view: np.ndarray, proj: np.ndarray, bounces: int
     image[top:bottom] = colors
     pixels[top:bottom] = _to_uint8(colors)
     mask[top:bottom] = traced.reflective_mask.reshape(rows, k, width, k).all(axis=(1, 3))
+
+
+def trace_frame(scene: Scene, size: Sequence[int], progress: bool = False) -> np.ndarray:
+    """The ``raytrace`` technique (:mod:`mirrorlab.techniques`): ``scene``'s ground truth at
+    ``size`` as ``(h, w, 3)`` uint8."""
+    return trace_scene(scene, size, progress=progress).to_uint8()

@@ -16,25 +16,29 @@ from mirrorlab.scene.model import Scene
 
 def run_render(scene: Scene, size: tuple[int, int], out: Path, frames: list[int],
                stats: bool = False, use_plan: bool = True,
-               save_env: Path | None = None, raytrace: bool = False,
+               save_env: Path | None = None, frame_technique: str | None = None,
                say: Callable[[str], None] = print, debug: bool = False) -> int:
     """Render ``frames`` of ``scene`` in order; the last goes to ``out`` (with ``save_env``,
-    its capture texture too), all files together at the end, or none. With ``stats``, each frame
-    is also drawn with every pass (--no-plan) by a second renderer, in turn with the
-    planned one, so both are timed under the same conditions. ``debug`` checks the GL's
-    debug messages after every pass."""
+    its capture texture too), all files together at the end, or none. With ``stats``, each
+    frame is also drawn with every pass (--no-plan) by a second renderer, in turn with the
+    planned one, so both are timed under the same conditions, and the two frames are
+    compared pixel for pixel. ``frame_technique`` names a technique that draws the whole
+    frame instead of OpenGL (:mod:`mirrorlab.techniques`). ``debug`` checks the GL's debug
+    messages after every pass."""
     start = time.perf_counter()
     with Outputs() as outputs:
-        if raytrace:
-            from mirrorlab.raytrace import trace_scene
+        if frame_technique is not None:
+            from mirrorlab.techniques import technique
 
+            draw_frame = technique(frame_technique).frame_function()
             for frame in frames:
-                image = trace_scene(scene.at_frame(frame), size, progress=True).to_uint8()
+                image = draw_frame(scene.at_frame(frame), size, progress=True)
             outputs.add_png(out, image)
             if save_env is not None:
-                say(f"no capture texture when ray tracing; {save_env} not written")
-            say(f"wrote {out} ({size[0]}x{size[1]}, {scene.name}, ray traced, "
-                f"{(time.perf_counter() - start) * 1e3:.0f} ms)")
+                say(f"no capture texture when drawn by {frame_technique}; {save_env} not "
+                    f"written")
+            say(f"wrote {out} ({size[0]}x{size[1]}, {scene.name}, drawn by "
+                f"{frame_technique}, {(time.perf_counter() - start) * 1e3:.0f} ms)")
             return 0
         from mirrorlab.api import Renderer
 
@@ -91,8 +95,11 @@ def _environment(renderer, scene: Scene) -> np.ndarray | None:
     for draw in plan.top.draws:
         if isinstance(draw.reflector, PlanarReflector) and draw.mode == "texture":
             return renderer.read_texture(draw.reflector.name, draw.slot)
+    from mirrorlab.techniques import technique
+
     for reflector in scene.reflectors:
-        if isinstance(reflector, PlanarReflector) and reflector.technique != "stencil":
+        if isinstance(reflector, PlanarReflector) and not technique(
+                reflector.technique).draws_inline:
             try:
                 return renderer.read_texture(reflector.name)
             except ValueError:

@@ -23,11 +23,6 @@ from mirrorlab import math3d
 
 Vec3 = tuple[float, float, float]
 
-PLANAR_TECHNIQUES = ("ortho", "reflected", "stencil")
-"""Techniques for a planar mirror (see :mod:`mirrorlab.techniques`)."""
-CURVED_TECHNIQUES = ("sphere", "sphere-vertex", "sphere-texgen", "cube", "cube-live",
-                     "latlong", "normal")
-"""Techniques for a curved (environment-mapped) reflector."""
 CAPTURE_MODES = ("copy", "fbo")
 """How a planar capture reaches its texture: ``glCopyTexImage2D`` (the lab) or drawn
 straight into it through a framebuffer."""
@@ -65,8 +60,13 @@ class Camera:
         ``near``: a surface exactly at the near distance (a viewer placed exactly
         ``near`` from a mirror) is then in front of the plane by far more than float
         rounding, so it is drawn, and traced, the same way every time."""
-        return math3d.perspective(self.fovy, aspect, self.near * (1.0 - NEAR_MARGIN),
-                                  self.far)
+        return math3d.perspective(self.fovy, aspect, *self.depth_range)
+
+    @property
+    def depth_range(self) -> tuple[float, float]:
+        """The (near, far) clip distances of :meth:`projection`: near moved in by
+        :data:`NEAR_MARGIN`."""
+        return (self.near * (1.0 - NEAR_MARGIN), self.far)
 
 
 @dataclass(frozen=True)
@@ -162,7 +162,8 @@ class OrthoCapture:
 @dataclass(frozen=True)
 class PlanarReflector:
     """A flat four-cornered mirror. ``corners`` ``(4, 3)`` run counter-clockwise seen
-    from the reflecting side. ``technique`` is one of :data:`PLANAR_TECHNIQUES`;
+    from the reflecting side. ``technique`` names a planar technique of
+    :mod:`mirrorlab.techniques`;
     ``capture`` one of :data:`CAPTURE_MODES`; ``texture_size`` the capture's square side
     in pixels (None: the size of the view it is seen in, as in the lab). ``ortho`` is the
     capture camera of the ``ortho`` technique (None: one derived from the corners, see
@@ -278,7 +279,8 @@ Parallax = BoxProxy | SphereProxy | DistanceSearch
 
 @dataclass(frozen=True)
 class CurvedReflector:
-    """An environment-mapped mesh. ``technique`` is one of :data:`CURVED_TECHNIQUES`;
+    """An environment-mapped mesh. ``technique`` names a curved technique of
+    :mod:`mirrorlab.techniques`;
     ``map_size`` the map's side in texels; ``source`` a picture used as the sphere map
     as it is, or a folder of six cube faces for ``cube`` (None: baked from the
     background); ``capture_center`` the point, in the mesh's own frame, a live cube

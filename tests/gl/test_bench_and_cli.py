@@ -24,7 +24,7 @@ from mirrorlab.accuracy import (
 from mirrorlab.cli import main
 from mirrorlab.data import data_path, scenes_dir
 from mirrorlab.scene.backgrounds import CUBE_FACE_FILES
-from mirrorlab.scene.model import CURVED_TECHNIQUES, PLANAR_TECHNIQUES
+from mirrorlab.techniques import technique_names
 from tests.imagecheck import assert_images_close
 
 SKY_CUBE = data_path("textures") / "sky_cube"
@@ -73,7 +73,7 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     assert reflected < 0.2 * ortho and stencil < 0.2 * ortho
     sky = {r["technique"]: float(r["mae"]) for r in table
            if r["scene"] == "sphere-sky" and r["map_size"] == "128"}
-    assert set(sky) == {*CURVED_TECHNIQUES, "cube-live box", "cube-live sphere",
+    assert set(sky) == {*technique_names("curved"), "cube-live box", "cube-live sphere",
                         "cube-live distance"}
     assert sky["sphere"] < sky["normal"] and sky["cube"] < sky["normal"]
     room = {r["technique"]: float(r["share_off"]) for r in table
@@ -140,8 +140,8 @@ def test_bench_refuses_a_file_as_its_folder_and_unknown_benchmarks(tmp_path, cap
 
 
 @pytest.mark.parametrize("scene, method", [
-    *(("lab20", m) for m in PLANAR_TECHNIQUES),
-    *(("chrome_sphere", m) for m in CURVED_TECHNIQUES),
+    *(("lab20", m) for m in technique_names("planar")),
+    *(("chrome_sphere", m) for m in technique_names("curved")),
 ])
 def test_render_command_draws_each_technique(tmp_path, capsys, scene, method):
     out = tmp_path / f"{method}.png"
@@ -157,7 +157,7 @@ def test_render_command_draws_each_technique(tmp_path, capsys, scene, method):
 def test_render_command_draws_the_ray_traced_truth(tmp_path, capsys):
     out = tmp_path / "truth.png"
     assert main(["render", "--raytrace", "--size", "64x48", "--out", str(out)]) == 0
-    assert "ray traced" in capsys.readouterr().out
+    assert "drawn by raytrace" in capsys.readouterr().out
     truth = png(out)
     assert np.array_equal(truth, mirrorlab.render(size=(64, 48), method="raytrace"))
     # and the exact techniques agree with it

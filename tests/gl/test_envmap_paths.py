@@ -34,7 +34,8 @@ from mirrorlab.passes.sky import background_faces
 from mirrorlab.raytrace import trace_scene
 from mirrorlab.renderer import SceneRenderer
 from mirrorlab.scene.mesh import load_mesh
-from mirrorlab.scene.model import CURVED_TECHNIQUES, Camera, Scene
+from mirrorlab.scene.model import Camera, Scene
+from mirrorlab.techniques import technique_names
 from mirrorlab.testing import difference_image
 from tests.gl import envmap_frames
 from tests.gl.envmap_frames import assert_close_to_truth, region_error
@@ -42,7 +43,7 @@ from tests.gl.envmap_frames import render as render_frame
 from tests.gl.frames import draw
 from tests.imagecheck import save_failure
 
-ENVMAP_METHODS = CURVED_TECHNIQUES
+ENVMAP_METHODS = technique_names("curved")
 SIZE = 192
 SMALL = 96
 SUPERSAMPLE = 4

@@ -23,6 +23,7 @@ from mirrorlab import load_scene, math3d, parallax
 from mirrorlab.accuracy import erode
 from mirrorlab.gl.resources import FloatFramebuffer
 from mirrorlab.options import apply_options
+from mirrorlab.passes.cube_live import capture_depth_range
 from mirrorlab.passes.envmap import (
     OUTPUT_COLOR,
     OUTPUT_COORDINATES,
@@ -39,7 +40,7 @@ from mirrorlab.scene.model import (
     SphereProxy,
     Transform,
 )
-from mirrorlab.views import CUBE_FAR, CUBE_NEAR, View
+from mirrorlab.views import View
 from tests.gl.envmap_frames import assert_close_to_truth, region_error, render
 
 SIZE = 96
@@ -98,10 +99,11 @@ def reference(renderer, scene: Scene, outputs, pixels, name: str = "sphere"):
         return parallax.sphere_lookup(origin, direction, center, correction.radius), none
     assert isinstance(correction, DistanceSearch)
     live = renderer.pass_for(name)
-    slot = renderer.last_frame.plan.top.draws[0].slot
-    faces = np.stack([live.depth(slot).read_face(face) for face in range(6)])
+    drawn = renderer.last_frame.plan.top.draws[0]
+    faces = np.stack([live.depth(drawn.slot).read_face(face) for face in range(6)])
+    near, far = capture_depth_range(drawn.source)
     return parallax.distance_lookup(origin, direction, center,
-                                    parallax.depth_capture(faces, CUBE_NEAR, CUBE_FAR),
+                                    parallax.depth_capture(faces, near, far),
                                     correction.steps, correction.secant, correction.thickness)
 
 

@@ -13,7 +13,8 @@ import pytest
 from mirrorlab import accuracy
 from mirrorlab.options import apply_options
 from mirrorlab.scene.loader import load_scene
-from mirrorlab.scene.model import CURVED_TECHNIQUES, BoxProxy, DistanceSearch
+from mirrorlab.scene.model import BoxProxy, DistanceSearch
+from mirrorlab.techniques import technique_names
 
 
 def test_image_error_scores_only_the_masked_pixels():
@@ -158,7 +159,7 @@ def test_planar_configurations_cover_every_capture_mode_and_size_plus_stencil():
 def test_curved_configurations_stop_at_the_largest_map_the_sweep_bakes():
     configs = accuracy.curved_techniques((64, 2048))
     assert [label for label, _ in configs] == [
-        *CURVED_TECHNIQUES, "cube-live distance", "cube-live distance 2+0",
+        *technique_names("curved"), "cube-live distance", "cube-live distance 2+0",
         "cube-live distance 4+1", "cube-live distance 16+2", "cube-live distance 32+4"]
     assert all(o["map_size"] == 64 for _, o in configs)
     assert accuracy.ENVMAP_MAX_SIZE < 2048
@@ -205,7 +206,7 @@ def test_a_scene_gets_the_configurations_of_its_kinds_of_reflector():
                                                                      steps=())]
               for name in ("lab20", "chrome_sphere", "mirror_and_sphere", "no_mirror")}
     assert labels["lab20"] == [label for label, _ in accuracy.lab_techniques(sizes)]
-    assert labels["chrome_sphere"] == [*CURVED_TECHNIQUES, "cube-live distance"]
+    assert labels["chrome_sphere"] == [*technique_names("curved"), "cube-live distance"]
     assert labels["mirror_and_sphere"] == labels["lab20"] + labels["chrome_sphere"]
     assert labels["no_mirror"] == []
 
