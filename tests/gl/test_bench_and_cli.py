@@ -120,6 +120,28 @@ def test_accuracy_sweep_of_a_scene_file(tmp_path, capsys, monkeypatch):
     assert (tmp_path / "accuracy.md").exists() and (tmp_path / "accuracy.png").exists()
 
 
+def test_a_sweep_from_inside_the_sphere_reports_no_reflector_pixels(tmp_path, capsys):
+    """From inside the chrome sphere no pixel shows a reflector (it is seen from outside
+    only): every row says so, none reports zero error."""
+    scene = tmp_path / "inside.toml"
+    source = (scenes_dir() / "chrome_sphere.toml").read_text().replace(
+        "eye = [1.3, 2.0, 7.4]", "eye = [0.1, 0.05, 0.2]").replace(
+        "target = [0.0, 0.1, 0.0]", "target = [0.0, 0.1, 3.0]").replace(
+        "near = 0.2", "near = 0.05").replace('"../', f'"{scenes_dir().parent}/')
+    scene.write_text(source)
+    assert main(["bench", "accuracy", "--scene", str(scene), "--frame", "32", "--sizes",
+                 "16", "--frames", "1", "--out-dir", str(tmp_path / "out")]) == 0
+    out = capsys.readouterr().out
+    with open(tmp_path / "out" / "accuracy.csv") as stream:
+        table = list(csv.DictReader(stream))
+    assert len(table) > 5
+    assert all(r["mae"] == "" and r["pixels"] == "0" for r in table)
+    lines = [line for line in out.splitlines() if line.startswith(("raytrace", "cube",
+                                                                   "sphere", "latlong"))]
+    assert lines and all("no reflector pixels" in line for line in lines), out
+    assert not re.search(r"\b0\.00\b", out)
+
+
 def test_bench_refuses_a_file_as_its_folder_and_unknown_benchmarks(tmp_path, capsys):
     blocker = tmp_path / "taken"
     blocker.write_text("keep me")

@@ -40,11 +40,34 @@ def test_a_pixel_is_off_only_beyond_ten_levels():
     assert error.share_off == pytest.approx(0.5)
 
 
-def test_identical_images_and_empty_masks_score_zero():
+def test_identical_images_score_zero_and_an_empty_mask_scores_nothing():
     image = np.full((3, 3, 3), 7, dtype=np.uint8)
-    assert accuracy.image_error(image, image, np.ones((3, 3), bool)).psnr == math.inf
+    same = accuracy.image_error(image, image, np.ones((3, 3), bool))
+    assert same.psnr == math.inf and same.mae == 0.0 and same.pixels == 9
     empty = accuracy.image_error(image, image * 0, np.zeros((3, 3), bool))
-    assert (empty.mae, empty.share_off) == (0.0, 0.0)
+    assert empty.empty and empty.pixels == 0
+    assert all(math.isnan(v) for v in (empty.mae, empty.p95, empty.psnr, empty.share_off))
+
+
+def test_a_viewpoint_with_no_reflector_pixels_is_said_so_never_zero_error():
+    def row(technique, viewpoint, mae, pixels):
+        nan = math.nan
+        return accuracy.SweepRow("s", technique, 0, viewpoint, mae, mae, nan, mae, 5.0,
+                                 nan, pixels)
+
+    rows = [row("raytrace", "inside", math.nan, 0), row("cube", "inside", math.nan, 0),
+            row("cube", "outside", 2.0, 100), row("sphere", "inside", math.nan, 0)]
+    summary = {r.technique: r for r in accuracy.summarise(rows)}
+    assert summary["cube"].mae == 2.0 and summary["cube"].worst_viewpoint == "outside"
+    assert math.isnan(summary["sphere"].mae) and math.isnan(summary["raytrace"].mae)
+    table = accuracy.summary_table(list(summary.values()))
+    text = accuracy.format_text(table)
+    assert "no reflector pixels" in text
+    by_name = {line[0]: line for line in table[1:]}
+    assert by_name["sphere"][2] == accuracy.NO_REFLECTOR_PIXELS
+    assert "0.00" not in by_name["sphere"] and "0.00" not in by_name["raytrace"]
+    back = accuracy.rows_from_csv(accuracy.rows_to_csv(rows))
+    assert [r.pixels for r in back] == [0, 0, 100, 0] and math.isnan(back[1].mae)
 
 
 def rows():
