@@ -17,6 +17,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from mirrorlab.scene.loader import SceneError, from_document, scene_to_document
 from mirrorlab.scene.model import CAPTURE_MODES, Scene
 from mirrorlab.techniques import (
@@ -302,7 +304,63 @@ def _apply_cube_faces(document: dict, value: Any, flag: str) -> None:
 
 def _apply_set(document: dict, value: Any, flag: str) -> None:
     for key, item in value:
+        _mirror_form_for(document, key, flag)
         set_key(document, key, item, flag)
+
+
+_SHAPE_KEYS = ("center", "normal", "width", "height", "up")
+"""How a scene file may give a planar mirror instead of its corners."""
+
+
+def _mirror_form_for(document: dict, key: str, flag: str) -> None:
+    """Before ``key`` is set: a planar mirror is written in a document by its corners (a
+    file's center/normal/width/height/up become corners when it is read), so setting
+    one of those shape keys puts the mirror back in that form first, and setting its
+    corners drops them. OptionError when its corners are no rectangle."""
+    match = re.fullmatch(r"reflectors\[(\d+)\]\.([A-Za-z_][\w-]*)(?:\[\d+\])?", key)
+    reflectors = document.get("reflectors")
+    if not match or not isinstance(reflectors, list) or int(match.group(1)) >= len(reflectors):
+        return
+    table = reflectors[int(match.group(1))]
+    if not isinstance(table, dict):
+        return
+    field = match.group(2)
+    if field == "corners":
+        for name in _SHAPE_KEYS:
+            table.pop(name, None)
+        return
+    if field not in _SHAPE_KEYS or "corners" not in table:
+        return
+    try:
+        corners = np.asarray(table["corners"], dtype=np.float64).reshape(4, 3)
+    except (TypeError, ValueError):
+        return  # left to the scene's own check, which names what is wrong
+    shape = rectangle_of(corners)
+    if shape is None:
+        raise OptionError(flag, f"{key}: reflectors[{match.group(1)}] is given by corners "
+                          f"that are no rectangle; set reflectors[{match.group(1)}].corners "
+                          f"instead")
+    del table["corners"]
+    table.update(shape)
+
+
+def rectangle_of(corners: np.ndarray) -> dict[str, list[float] | float] | None:
+    """A rectangular mirror's corners ``(4, 3)`` (counter-clockwise from the front, the
+    first edge along its height, as a scene file's center/normal/width/height/up make
+    them) as those keys; None when they are no rectangle."""
+    height_edge, width_edge = corners[1] - corners[0], corners[3] - corners[0]
+    height, width = float(np.linalg.norm(height_edge)), float(np.linalg.norm(width_edge))
+    if not (height > 0 and width > 0):
+        return None
+    size = max(height, width)
+    closes = np.linalg.norm(corners[2] - (corners[1] + width_edge)) <= 1e-9 * size
+    square = abs(float(height_edge @ width_edge)) <= 1e-9 * height * width
+    if not (closes and square):
+        return None
+    up = height_edge / height
+    normal = np.cross(up, width_edge / width)  # the loader takes right = normal x up
+    return {"center": corners.mean(axis=0).tolist(), "normal": normal.tolist(),
+            "width": width, "height": height, "up": up.tolist()}
 
 
 def _parse_set(flag: str, text: str) -> tuple[tuple[str, Any], ...]:

@@ -15,7 +15,10 @@ CAMERA_FIELDS = ("eye", "target", "up", "fovy")
 OBJECT_FIELDS = ("position", "rotation", "scale", "angles")
 """Object fields a keyframe can set (``angles``: robots only)."""
 REFLECTOR_FIELDS = ("position", "rotation", "scale")
-"""Reflector fields a keyframe can set (curved reflectors only)."""
+"""Curved reflector fields a keyframe can set."""
+PLANAR_FIELDS = ("position", "rotation")
+"""Planar mirror fields a keyframe can set: where its centre is and how it is turned from
+where its scene file puts it (its corners follow; its size is its corners')."""
 
 
 def interpolate(keys: list[tuple[int, object]], frame: int):
@@ -67,7 +70,12 @@ def pose(scene: Scene, frame: int) -> Scene:
 
 
 def _apply(scene: Scene, group: str, name: str, changes: dict) -> Scene:
+    from mirrorlab.scene.model import PlanarReflector
+
     item = scene.object(name) if group == "objects" else scene.reflector(name)
+    if isinstance(item, PlanarReflector):
+        moved = item.moved(changes.get("position"), changes.get("rotation"))
+        return scene.with_reflector(name, corners=moved.corners, ortho=moved.ortho)
     fields = {}
     transform = item.transform
     for field, value in changes.items():

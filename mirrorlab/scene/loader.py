@@ -26,7 +26,12 @@ from typing import Any
 import numpy as np
 
 from mirrorlab.data import scenes_dir
-from mirrorlab.scene.animation import CAMERA_FIELDS, OBJECT_FIELDS, REFLECTOR_FIELDS
+from mirrorlab.scene.animation import (
+    CAMERA_FIELDS,
+    OBJECT_FIELDS,
+    PLANAR_FIELDS,
+    REFLECTOR_FIELDS,
+)
 from mirrorlab.scene.model import (
     CAPTURE_MODES,
     DEFAULT_BACKING,
@@ -889,12 +894,14 @@ class _Reader:
         for name, raw in table.items():
             item = items[name]
             where = f"{key}.{key_name(name)}"
-            if group == "reflectors" and not isinstance(item, CurvedReflector):
-                raise self.fail(where, "a planar mirror cannot be animated; only curved "
-                                "reflectors and objects move")
             fields = OBJECT_FIELDS if group == "objects" else REFLECTOR_FIELDS
             if isinstance(item, MeshObject):
                 fields = tuple(f for f in fields if f != "angles")
+            if isinstance(item, PlanarReflector):
+                if isinstance(raw, Mapping) and "scale" in raw:
+                    raise self.fail(f"{where}.scale", "a planar mirror's keyframes take "
+                                    "position and rotation; its size is its corners'")
+                fields = PLANAR_FIELDS
             values = self.table(raw, where, fields)
             posed: dict[str, Any] = {}
             for field, entry in values.items():

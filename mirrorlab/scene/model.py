@@ -208,6 +208,27 @@ class PlanarReflector:
         return self.ortho if self.ortho is not None else ortho_capture_for(self.corner_array,
                                                                           self.normal)
 
+    def moved(self, position: Vec3 | None = None,
+              rotation: Vec3 | None = None) -> PlanarReflector:
+        """The mirror turned by ``rotation`` (degrees about x, then y, then z, as a
+        :class:`Transform`'s) about its centre, then moved so that its centre is at
+        ``position`` (default: where it is); its corners, and an ``ortho`` capture camera
+        given with it, follow. A keyframe poses a planar mirror this way, from the place
+        its scene file gives it."""
+        center = self.center
+        turn = Transform(rotation=rotation or (0.0, 0.0, 0.0)).matrix()[:3, :3]
+        goal = center if position is None else np.asarray(position, dtype=np.float64)
+
+        def place(point) -> Vec3:
+            return _vec(goal + turn @ (np.asarray(point, dtype=np.float64) - center))
+
+        corners = tuple(place(c) for c in self.corner_array)
+        ortho = self.ortho
+        if ortho is not None:
+            ortho = replace(ortho, eye=place(ortho.eye), target=place(ortho.target),
+                            up=_vec(turn @ np.asarray(ortho.up, dtype=np.float64)))
+        return replace(self, corners=corners, ortho=ortho)  # type: ignore[arg-type]
+
     def texcoords(self) -> np.ndarray:
         """``(4, 2)`` texture coordinates of the corners in the ortho capture: where the
         capture camera's extents put each corner (the lab's (0,0), (0,1), (1,1), (1,0))."""
@@ -314,8 +335,9 @@ Reflector = PlanarReflector | CurvedReflector
 class Keyframe:
     """Values set at ``frame``: ``camera`` maps camera fields to values; ``objects`` and
     ``reflectors`` map a name to its fields (position, rotation, scale; angles for a
-    robot). A field moves linearly between the keyframes that set it and holds its
-    value before the first and after the last."""
+    robot; a planar mirror's position and rotation, see :meth:`PlanarReflector.moved`).
+    A field moves linearly between the keyframes that set it and holds its value before
+    the first and after the last."""
 
     frame: int
     camera: dict = field(default_factory=dict)

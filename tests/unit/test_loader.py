@@ -652,9 +652,9 @@ def test_a_keyframe_naming_an_unknown_object_is_refused(tmp_path):
     assert_refused(tmp_path, document, "animation.keyframes[1].objects.robott",
                    "unknown key; did you mean 'robot'?")
     document["animation"]["keyframes"][1] = {"frame": 9, "reflectors": {"mirror": {
-        "position": [0, 0, 0]}}}
-    assert_refused(tmp_path, document, "animation.keyframes[1].reflectors.mirror",
-                   "a planar mirror cannot be animated")
+        "scale": [2, 2, 2]}}}
+    assert_refused(tmp_path, document, "animation.keyframes[1].reflectors.mirror.scale",
+                   "a planar mirror's keyframes take position and rotation")
     document["animation"]["keyframes"][1] = {"frame": 9, "objects": {"block": {
         "angles": [0, 0, 0]}}}
     assert_refused(tmp_path, document, "animation.keyframes[1].objects.block.angles",
