@@ -40,7 +40,7 @@ import threading
 import time
 import uuid
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from mirrorlab.errors import BatchError
@@ -62,13 +62,15 @@ class FrameJob:
     frame_technique: str | None = None
     debug: bool = False
     token: str = ""
+    tiny_pixels: float = 0.0
+    """Above 0: the planner's lossy small-reflector rule (see :mod:`mirrorlab.plan`)."""
 
     def description(self) -> str:
         """Everything that decides the frames' pixels, as text (the folder's record)."""
         from mirrorlab.scene.loader import dumps
 
         return json.dumps({"scene": dumps(self.scene), "size": list(self.size),
-                           "use_plan": self.use_plan,
+                           "use_plan": self.use_plan, "tiny_pixels": self.tiny_pixels,
                            "frame_technique": self.frame_technique},
                           sort_keys=True)
 
@@ -107,7 +109,8 @@ def render_frame(job: FrameJob, frame: int) -> bytes:
         draw_frame = technique(job.frame_technique).frame_function()
         image = draw_frame(job.scene.at_frame(frame), job.size, progress=False)
     else:
-        image = _frame_renderer(job).render(job.scene, frame, job.size, job.use_plan)
+        image = _frame_renderer(job).render(job.scene, frame, job.size, job.use_plan,
+                                            job.tiny_pixels)
     return png_bytes(image)
 
 
@@ -182,8 +185,7 @@ def run_batch(job: FrameJob, frames: Sequence[int], out_dir: Path, jobs: int = 1
     frame fails (the frames that worked stay written)."""
 
     scene = job.scene
-    job = FrameJob(scene, job.size, job.use_plan, job.frame_technique, job.debug,
-                   uuid.uuid4().hex)
+    job = replace(job, token=uuid.uuid4().hex)
     names = {frame: frame_name(out_dir, scene, frame) for frame in frames}
     record = record_name(out_dir, scene)
     description = job.description()

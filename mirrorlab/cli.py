@@ -35,6 +35,13 @@ class UsageError(Exception):
 DEBUG_HELP = ("a debug OpenGL context whose KHR_debug messages are checked after every "
               "pass: a GL error stops the command, naming the pass")
 EXIT_BAD_INPUT, EXIT_MACHINE, EXIT_INTERRUPTED = 2, 1, 130
+TINY_HELP = ("LOSSY: draw a reflector that may cover fewer than N pixels plain, without "
+             "its capture (default 0: off, and the plan changes no pixel)")
+
+
+def tiny_pixels_of(args: argparse.Namespace) -> float:
+    return float(parse_count("--tiny-pixels", args.tiny_pixels, 0, 10**9)
+                 if args.tiny_pixels is not None else 0)
 
 
 def _add_executor_arguments(parser: argparse.ArgumentParser, jobs: str,
@@ -92,9 +99,11 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--fps", metavar="N", default="12",
                         help="frames a second of --gif and --webp (default %(default)s)")
     render.add_argument("--stats", action="store_true", help="print the passes each frame "
-                        "ran and skipped, and the time planning saved against --no-plan")
+                        "ran and skipped, the time planning saved against --no-plan, and "
+                        "how many pixels the two frames differ in")
     render.add_argument("--no-plan", action="store_true",
                         help="run every pass of every frame (for comparison)")
+    render.add_argument("--tiny-pixels", metavar="N", help=TINY_HELP)
     render.add_argument("--save-env", metavar="PATH",
                         help="also write the first planar mirror's capture texture as a PNG")
     from mirrorlab.techniques import techniques
@@ -113,6 +122,7 @@ def build_parser() -> argparse.ArgumentParser:
                       "earlier ones captured)")
     plan.add_argument("--json", action="store_true", help="print the plans as JSON")
     plan.add_argument("--no-plan", action="store_true", help="plan every pass to run")
+    plan.add_argument("--tiny-pixels", metavar="N", help=TINY_HELP)
 
     bench = commands.add_parser("bench", help="measure error against the ray tracer, and time")
     bench.add_argument("what", metavar="accuracy", help="the benchmark to run: accuracy")
@@ -255,14 +265,15 @@ def run_render(args: argparse.Namespace) -> int:
     if out_dir is not None:
         from mirrorlab.batch import FrameJob, run_batch
 
-        return run_batch(FrameJob(scene, size, not args.no_plan, frame_technique, args.debug),
+        return run_batch(FrameJob(scene, size, not args.no_plan, frame_technique, args.debug,
+                                  tiny_pixels=tiny_pixels_of(args)),
                          frames, out_dir, jobs, args.scheduler, args.engine, out, animations,
                          fps)
     from mirrorlab.commands.render import run_render as render
 
     assert out is not None
     return render(scene, size, out, frames, args.stats, not args.no_plan, save_env,
-                  frame_technique, debug=args.debug)
+                  frame_technique, debug=args.debug, tiny_pixels=tiny_pixels_of(args))
 
 
 def frame_technique_of(args: argparse.Namespace) -> str | None:
@@ -314,7 +325,8 @@ def run_plan(args: argparse.Namespace) -> int:
 
     size = parse_size("--size", args.size)
     frames = parse_count("--frames", args.frames, 1, 10_000)
-    return plan(scene_from_args(args), size, frames, args.json, not args.no_plan)
+    return plan(scene_from_args(args), size, frames, args.json, not args.no_plan,
+                tiny_pixels=tiny_pixels_of(args))
 
 
 def run_bench(args: argparse.Namespace) -> int:

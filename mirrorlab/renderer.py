@@ -156,8 +156,9 @@ class SceneRenderer:
                tiny_pixels: float = TINY_PIXELS, view: View | None = None) -> FrameStats:
         """Draw one frame of ``scene`` (as seen by its camera, or ``view``) into ``target``.
 
-        ``use_plan`` False runs every pass (see :func:`~mirrorlab.plan.plan_frame`);
-        ``tiny_pixels`` 0 keeps small reflectors reflecting.
+        ``use_plan`` False runs every pass (see :func:`~mirrorlab.plan.plan_frame`); the
+        frame is the same either way. ``tiny_pixels`` above 0 turns on the lossy rule that
+        draws a reflector covering fewer pixels than that plain (off by default).
         """
         start = time.perf_counter()
         found = gl_state()

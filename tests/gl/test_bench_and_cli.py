@@ -364,6 +364,27 @@ def test_render_stats_report_the_passes_of_each_frame(tmp_path, capsys):
     assert f"{2 * 8} passes run" in comparison[0]
     assert f"saved {8 - len(expected)} passes" in comparison[0]
     assert png(out).shape == (64, 64, 3)
+    # the plan is lossless: each frame is the --no-plan frame, and the report says so
+    assert len(re.findall(r"the same as --no-plan\)$", text, flags=re.M)) == 8
+    assert "frames are the same, pixel for pixel, in all 8 frames" in text
+
+
+def test_render_stats_say_how_many_pixels_the_lossy_rule_changes(tmp_path, capsys):
+    # the lab's mirror seen from 300 units: a few pixels, drawn plain under --tiny-pixels
+    out = tmp_path / "far.png"
+    args = ["render", "lab20", "--camera", "300,1,-2", "--target", "-7,1,-2", "--set",
+            "camera.far=1000", "--size", "64x64", "--frames", "2", "--stats", "--out",
+            str(out)]
+    assert main(args) == 0
+    assert "frames are the same, pixel for pixel, in all 2 frames" in capsys.readouterr().out
+    assert main([*args, "--tiny-pixels", "16"]) == 0
+    text = capsys.readouterr().out
+    changed = re.search(r"frames differ in 2 of 2 frames: (\d+) pixels in all", text)
+    assert changed and int(changed.group(1)) > 0, text
+    assert "pixels differ from --no-plan)" in text
+    assert main(["plan", "lab20", "--camera", "300,1,-2", "--target", "-7,1,-2", "--set",
+                 "camera.far=1000", "--size", "64x64", "--tiny-pixels", "16"]) == 0
+    assert "lossy" in capsys.readouterr().out
 
 
 def test_render_out_dir_writes_one_png_per_frame(tmp_path, capsys):
