@@ -119,3 +119,47 @@ def cube_depth_range(scene: Scene, reflector: CurvedReflector) -> tuple[float, f
     far = reach(scene, center)
     near = 0.5 * nearest(scene, center, reflector.name)
     return float(min(max(near, far * 1e-6), far * 0.5)), far
+
+
+ENCLOSURE_RAYS = 64
+"""Directions (a Fibonacci sphere) :func:`encloses` looks along."""
+
+
+@lru_cache(maxsize=1)
+def _fibonacci_directions(count: int) -> np.ndarray:
+    index = np.arange(count) + 0.5
+    z = 1.0 - 2.0 * index / count
+    angle = np.pi * (1.0 + 5.0 ** 0.5) * index
+    rho = np.sqrt(1.0 - z * z)
+    directions = np.stack([rho * np.cos(angle), rho * np.sin(angle), z], axis=1)
+    directions.flags.writeable = False
+    return directions
+
+
+def encloses(scene: Scene, point: np.ndarray, leave_out: str = "") -> bool:
+    """Whether the boxes of the scene's object parts and reflectors (but ``leave_out``)
+    close ``point`` in: a ray from it in each of :data:`ENCLOSURE_RAYS` directions meets
+    one (a room's walls do; objects under an open sky do not). A live cube map's
+    distance search reads it: enclosed, a ray the search finds no surface for meets one
+    it cannot see; open, it may leave for the background."""
+    boxes = [(low, high) for name, low, high in scene_boxes(scene)
+             if not (name and name == leave_out)]
+    if not boxes:
+        return False
+    low = np.array([b[0] for b in boxes])  # (m, 3)
+    high = np.array([b[1] for b in boxes])
+    directions = _fibonacci_directions(ENCLOSURE_RAYS)  # (n, 3)
+    origin = np.asarray(point, dtype=np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inverse = 1.0 / directions[:, None, :]  # (n, 1, 3)
+        near = (low[None] - origin) * inverse
+        far = (high[None] - origin) * inverse
+    # a direction parallel to a slab is within it everywhere (from inside) or nowhere
+    parallel = np.broadcast_to(directions[:, None, :] == 0, near.shape)
+    inside = np.broadcast_to((origin >= low) & (origin <= high), near.shape)
+    first = np.where(parallel, np.where(inside, -np.inf, np.inf), np.minimum(near, far))
+    last = np.where(parallel, np.where(inside, np.inf, -np.inf), np.maximum(near, far))
+    entry = first.max(axis=2)  # (n, m)
+    leave = last.min(axis=2)
+    met = (leave >= np.maximum(entry, 0.0)).any(axis=1)
+    return bool(met.all())

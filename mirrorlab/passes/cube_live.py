@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from mirrorlab.bounds import encloses
 from mirrorlab.gl.resources import DepthTextureCube, Program, RenderTarget, TextureCube
 from mirrorlab.passes.base import SharedResources, ViewDrawer
 from mirrorlab.passes.envmap import CurvedPass
@@ -52,6 +53,9 @@ class LiveCubeMapped(CurvedPass):
         self.size = reflector.map_size
         self.cubes: dict[int, TextureCube] = {}
         self.depths: dict[int, DepthTextureCube] = {}
+        self.enclosed: dict[int, bool] = {}
+        """Whether the surroundings of a slot's capture close its centre in (a distance
+        search's fallback, see :func:`mirrorlab.bounds.encloses`)."""
         self.background: TextureCube | None = None
         if isinstance(reflector.parallax, DistanceSearch):
             assert background is not None
@@ -75,6 +79,7 @@ class LiveCubeMapped(CurvedPass):
             self.background.release()
         self.cubes.clear()
         self.depths.clear()
+        self.enclosed.clear()
         super().release()
 
     def cube(self, slot: int) -> TextureCube:
@@ -94,6 +99,9 @@ class LiveCubeMapped(CurvedPass):
         depths for a distance search."""
         cube = self.cube(step.slot)
         depth = self.depth(step.slot) if isinstance(reflector.parallax, DistanceSearch) else None
+        if depth is not None:
+            self.enclosed[step.slot] = encloses(renderer.scene, reflector.center(),
+                                                reflector.name)
         target = self.shared.scratch((self.size, self.size))
         draws = 0
         for face, plan in enumerate(step.views):
@@ -128,6 +136,7 @@ class LiveCubeMapped(CurvedPass):
             program.set_int("secant_steps", parallax.secant)
             program.set_vec2("capture_depth_range", capture_depth_range(draw.source))
             program.set_float("thickness", parallax.thickness)
+            program.set_int("enclosed", self.enclosed.get(draw.slot, False))
             self.depth(draw.slot).bind(DISTANCE_UNIT)
             assert self.background is not None
             self.background.bind(BACKGROUND_UNIT)
