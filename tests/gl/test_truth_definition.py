@@ -112,3 +112,36 @@ def test_a_mirror_seen_at_a_grazing_angle_takes_its_own_mip_level(scene_renderer
     if share < 0.99:
         save_failure(f"sliver_{method}_{degrees}", rendered=image, traced=truth.to_uint8())
     assert share >= 0.99
+
+
+def test_a_live_cube_map_sees_as_far_as_the_scene_reaches(scene_renderer):
+    """A large magenta ball whose near side lies 250 units from the chrome sphere, behind
+    the camera (whose far plane is 60: reflections see the whole scene, the far plane
+    bounds what is seen directly). The live cube map's faces reach the far side of the
+    scene's bounding sphere (once a fixed 200 units, and the ball was missing: 4 of the
+    78 pixels where the truth shows it in the reflection; now 57)."""
+    from mirrorlab.data import data_path
+
+    sky = mirrorlab.load_scene("chrome_sphere")
+    far_ball = MeshObject("far_ball", data_path("models") / "env_sphere.obj",
+                          Transform(position=(25.0, 55.0, 275.0), scale=(30.0, 30.0, 30.0)),
+                          color=(0.9, 0.1, 0.8))
+    distance = np.linalg.norm((25.0, 55.0, 275.0)) - 30.0
+    assert distance >= 250.0
+    scene = apply_options(replace(sky, objects=(*sky.objects, far_ball),
+                                  camera=replace(sky.camera, fovy=12.0)),
+                          {"method": "cube-live"})
+    size = (128, 128)
+    image = draw(scene_renderer, scene, size)[0]
+    truth = trace_scene(scene, size)
+
+    def magenta(picture: np.ndarray) -> np.ndarray:
+        p = picture.astype(int)
+        return (p[..., 0] > 2 * p[..., 1] + 30) & (p[..., 2] > 2 * p[..., 1] + 30)
+
+    expected = magenta(truth.to_uint8()) & truth.reflective_mask
+    assert expected.sum() > 50 and not (magenta(truth.to_uint8()) & ~truth.reflective_mask).any()
+    shown = magenta(image) & expected
+    if shown.sum() < 0.6 * expected.sum():
+        save_failure("far_ball", rendered=image, traced=truth.to_uint8())
+    assert shown.sum() >= 0.6 * expected.sum(), (int(shown.sum()), int(expected.sum()))
