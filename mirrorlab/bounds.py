@@ -41,8 +41,17 @@ def mesh_box(mesh: Path, model: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return world.min(axis=0), world.max(axis=0)
 
 
+@lru_cache(maxsize=256)
 def bounding_sphere(reflector: Reflector) -> tuple[np.ndarray, float]:
-    """World centre ``(3,)`` and radius of a sphere holding the reflector."""
+    """World centre ``(3,)`` (read-only) and radius of a sphere holding the reflector
+    (remembered: reflectors are values, and a frame asks for it in every view)."""
+    center, radius = _bounding_sphere(reflector)
+    center = np.array(center, dtype=np.float64)
+    center.flags.writeable = False
+    return center, radius
+
+
+def _bounding_sphere(reflector: Reflector) -> tuple[np.ndarray, float]:
     if isinstance(reflector, PlanarReflector):
         corners = reflector.corner_array
         center = corners.mean(axis=0)

@@ -359,10 +359,12 @@ def hidden_reason(reflector: Reflector, view: View) -> str | None:
             facing = float(-view.forward @ reflector.normal)
         if not facing > 0.0:
             return "seen from behind or edge-on: only its back shows"
-        if not reflector_footprint(reflector, view).empty:
-            return None
-        return _where_outside(reflector.corner_array, view) or (
-            "out of view (past a corner of the view)")
+        outside = _where_outside(reflector.corner_array, view)
+        if outside is not None:  # every corner beyond one plane: exactly out of view
+            return outside
+        if reflector_footprint(reflector, view).empty:
+            return "out of view (past a corner of the view)"
+        return None
     center, radius = bounding_sphere(reflector)
     if _sphere_in_view(center, radius, view) and not reflector_footprint(
             reflector, view).empty:
