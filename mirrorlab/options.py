@@ -166,7 +166,9 @@ def _apply_technique(document: dict, value: Any, flag: str) -> None:
     entry = _entry(value)
     if entry is None:
         if frame_technique(value) is not None:
-            return  # it draws the whole frame: the scene is left as it is
+            raise OptionError(flag, f"{value} draws the whole frame, not a reflector: give "
+                              f"it to mirrorlab.render(method={value!r}) or as "
+                              f"'mirrorlab render --{value}'")
         # A value from the Python API, not parsed: no kind of reflector to pick by it.
         # Given to every reflector, it is refused by the scene check with its key path
         # and the names (or here, when there is no reflector at all).

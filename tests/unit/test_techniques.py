@@ -130,6 +130,9 @@ def test_a_frame_technique_is_a_method_like_the_ray_tracer():
         assert image.shape == (6, 8, 3) and (image == 128).all()
     assert split_frame_technique({"method": "reflected"})[0] is None
     assert technique("raytrace").kind == "frame"
+    # a frame technique is no reflector's: where a scene is only changed, it is refused
+    with pytest.raises(OptionError, match="raytrace draws the whole frame"):
+        apply_options(load_scene("lab20"), {"method": "raytrace"})
 
 
 def test_every_list_comes_from_the_registry():
