@@ -54,8 +54,23 @@ def ortho_truth(scene: Scene) -> type[RayScene]:
     return OrthoTruth
 
 
+def every_draw(plan):
+    """Every reflector draw of a frame's plan, in every view (captures, stencil worlds)."""
+    pending = [plan.top] + [view for step in plan.passes for view in step.views]
+    while pending:
+        view = pending.pop()
+        for reflector_draw in view.draws:
+            yield reflector_draw
+            if reflector_draw.nested is not None:
+                pending.append(reflector_draw.nested)
+
+
 def share_on_reflectors(renderer, scene: Scene, label: str) -> float:
-    image = draw(renderer, scene, SIZE)[0]
+    image, stats = draw(renderer, scene, SIZE)
+    # a mirror seen from its front always has a capture camera (a mirrored view's
+    # oblique near plane once picked the wrong far corner and found none)
+    lost = [d.reason for d in every_draw(stats.plan) if "no capture camera" in d.reason]
+    assert not lost, (label, lost)
     truth = trace_scene(scene, SIZE, model=ortho_truth(scene))
     mask = truth.reflective_mask
     assert mask.sum() > 1000, label
