@@ -34,7 +34,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 import mirrorlab
 from mirrorlab.options import apply_options, parse_size
 from mirrorlab.scene.loader import SCENE_ALIASES, shipped_scene_names
-from mirrorlab.scene.model import CURVED_TECHNIQUES, PLANAR_TECHNIQUES, Scene
+from mirrorlab.scene.model import Scene
+from mirrorlab.techniques import technique_names
 
 
 @dataclass
@@ -76,7 +77,7 @@ def schedule() -> list[tuple[Scene, str | None]]:
             pairs.append((scene, None))
             continue
         kind = scene.reflectors[0].kind
-        for technique in PLANAR_TECHNIQUES if kind == "planar" else CURVED_TECHNIQUES:
+        for technique in technique_names(kind):
             configured = apply_options(scene, {"method": technique})
             pairs.append((configured, technique))
     return pairs

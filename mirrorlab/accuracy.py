@@ -28,12 +28,12 @@ from mirrorlab.options import apply_options
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import (
     CAPTURE_MODES,
-    CURVED_TECHNIQUES,
     Camera,
     CurvedReflector,
     DistanceSearch,
     Scene,
 )
+from mirrorlab.techniques import techniques
 
 if TYPE_CHECKING:
     from mirrorlab.gl.resources import Framebuffer, TimerQuery
@@ -73,29 +73,42 @@ def lab_viewpoints() -> dict[str, Camera]:
 
 @dataclass(frozen=True)
 class ImageError:
-    """Error of an image against the truth over a region, channels in 0..255 units:
-    mean absolute error, 95th percentile of the per-pixel worst channel, PSNR in dB
-    (inf when identical), and the share of pixels off by more than ``OFF_BY``."""
+    """Error of an image against the truth over a region of ``pixels`` pixels, channels
+    in 0..255 units: mean absolute error, 95th percentile of the per-pixel worst channel,
+    PSNR in dB (inf when identical), and the share of pixels off by more than
+    ``OFF_BY``. A region with no pixels has no error to tell: every figure is NaN
+    (reported as "no reflector pixels", never as zero error; see :attr:`empty`)."""
 
     mae: float
     p95: float
     psnr: float
     share_off: float
+    pixels: int = -1
+
+    @property
+    def empty(self) -> bool:
+        return self.pixels == 0
+
+
+NO_REFLECTOR_PIXELS = "no reflector pixels"
+"""What a table says where the truth saw no reflector (the camera inside a sphere, a
+mirror out of view): there is nothing to score."""
 
 
 def image_error(image: np.ndarray, truth: np.ndarray, mask: np.ndarray) -> ImageError:
     """Compare ``image`` and ``truth`` ``(h, w, 3)`` uint8 where ``mask`` ``(h, w)`` is True.
 
-    An empty mask scores zero error (nothing reflective was in view).
+    An empty mask (nothing reflective in view) has no error: NaN figures, 0 pixels.
     """
-    if not mask.any():
-        return ImageError(0.0, 0.0, math.inf, 0.0)
+    count = int(np.count_nonzero(mask))
+    if count == 0:
+        return ImageError(math.nan, math.nan, math.nan, math.nan, 0)
     diff = np.abs(image.astype(np.float64) - truth.astype(np.float64))[mask]
     worst = diff.max(axis=1)
     mse = float(np.mean(diff ** 2))
     psnr = math.inf if mse == 0.0 else 10.0 * math.log10(255.0 ** 2 / mse)
     return ImageError(float(diff.mean()), float(np.percentile(worst, 95)), psnr,
-                      float(np.mean(worst > OFF_BY)))
+                      float(np.mean(worst > OFF_BY)), count)
 
 
 @dataclass(frozen=True)
@@ -104,7 +117,8 @@ class SweepRow:
     "sphere-objects" and "sphere-room" for the environment maps),
     technique, map size (0: the technique has no texture) and viewpoint; times are
     medians in milliseconds (``gpu_ms`` from GL timer queries, NaN where there is no
-    GL work)."""
+    GL work); ``pixels`` the reflector pixels scored (0: none, and the error figures
+    NaN; -1: not recorded, in a CSV from before the column)."""
 
     scene: str
     technique: str
@@ -116,6 +130,7 @@ class SweepRow:
     share_off: float
     wall_ms: float
     gpu_ms: float
+    pixels: int = -1
 
 
 DEFAULT_STEPS = f"{DistanceSearch().steps}+{DistanceSearch().secant}"
@@ -149,11 +164,12 @@ def lab_techniques(sizes: Sequence[int]) -> list[tuple[str, dict]]:
     """``(label, options)`` for each planar configuration: every capturing technique with
     each capture mode and texture size, and the stencil mirror."""
     rows = []
-    for method in ("ortho", "reflected"):
+    planar = techniques("planar")
+    for entry in (t for t in planar if not t.draws_inline):
         for capture in CAPTURE_MODES:
-            rows += [(f"{method}-{capture}", {"method": method, "capture": capture,
-                                               "env_size": size}) for size in sizes]
-    rows.append(("stencil", {"method": "stencil"}))
+            rows += [(f"{entry.name}-{capture}", {"method": entry.name, "capture": capture,
+                                                   "env_size": size}) for size in sizes]
+    rows += [(entry.name, {"method": entry.name}) for entry in planar if entry.draws_inline]
     return rows
 
 
@@ -172,18 +188,20 @@ def curved_techniques(sizes: Sequence[int], proxies: Sequence[tuple[str, str]] =
     at the :func:`search_map_size` (labelled ``cube-live distance STEPS``)."""
     sizes = [size for size in sizes if size <= ENVMAP_MAX_SIZE]
     rows = []
-    for method in CURVED_TECHNIQUES:
-        plain = {"parallax": "none"} if method == "cube-live" else {}
-        rows += [(method, {"method": method, "map_size": size, **plain}) for size in sizes]
-    corrections = [(f"cube-live {label}", text) for label, text in proxies]
-    corrections.append(("cube-live distance", "distance"))
-    for label, text in corrections:
-        rows += [(label, {"method": "cube-live", "map_size": size, "parallax": text})
+    for entry in techniques("curved"):
+        plain = {"parallax": "none"} if entry.parallax else {}
+        rows += [(entry.name, {"method": entry.name, "map_size": size, **plain})
                  for size in sizes]
     searched = search_map_size(sizes)
-    rows += [(f"cube-live distance {other}", {"method": "cube-live", "map_size": searched,
-                                              "parallax": f"distance:{other}"})
-             for other in steps if other != DEFAULT_STEPS]
+    for name in (entry.name for entry in techniques("curved") if entry.parallax):
+        corrections = [(f"{name} {label}", text) for label, text in proxies]
+        corrections.append((f"{name} distance", "distance"))
+        for label, text in corrections:
+            rows += [(label, {"method": name, "map_size": size, "parallax": text})
+                     for size in sizes]
+        rows += [(f"{name} distance {other}", {"method": name, "map_size": searched,
+                                               "parallax": f"distance:{other}"})
+                 for other in steps if other != DEFAULT_STEPS]
     return rows
 
 
@@ -363,8 +381,6 @@ def run_panels(panels: Sequence[Panel], settings: SweepSettings, progress: bool 
                 for technique_label, options in configurations[index]:
                     configured = apply_options(scene, options)
                     map_size = int(options.get("env_size", options.get("map_size", 0)))
-                    if technique_label == "stencil":
-                        map_size = 0
                     bar.set_postfix_str(f"{technique_label} {map_size or ''} {panel.name} "
                                         f"{name}", refresh=False)
                     image, wall, gpu = measure_frames(renderer, configured, framebuffer, timer,
@@ -383,12 +399,16 @@ def run_panels(panels: Sequence[Panel], settings: SweepSettings, progress: bool 
     for index, (panel, name, _) in enumerate(views):
         label = "raytrace" if panel.supersample == 1 else (
             f"raytrace {panel.supersample}x{panel.supersample}")
-        rows.append(SweepRow(panel.name, label, 0, name, 0.0, 0.0, math.inf, 0.0,
-                             truths[index].milliseconds, math.nan))
+        scored = int(np.count_nonzero(truths[index].mask))
+        none = math.nan if scored == 0 else 0.0  # the truth itself: no error, if any pixels
+        rows.append(SweepRow(panel.name, label, 0, name, none, none,
+                             math.nan if scored == 0 else math.inf, none,
+                             truths[index].milliseconds, math.nan, scored))
         for (technique_label, map_size, wall, gpu), error in zip(timings[index],
                                                                  errors[index], strict=True):
             rows.append(SweepRow(panel.name, technique_label, map_size, name, error.mae,
-                                 error.p95, error.psnr, error.share_off, wall, gpu))
+                                 error.p95, error.psnr, error.share_off, wall, gpu,
+                                 error.pixels))
     return rows
 
 
@@ -503,16 +523,23 @@ def summarise(rows: Sequence[SweepRow]) -> list[SummaryRow]:
         groups.setdefault((row.scene, row.technique, row.map_size), []).append(row)
     summary = []
     for (scene, technique, map_size), group in groups.items():
-        worst = max(group, key=lambda r: r.mae)
+        # Viewpoints with no reflector pixels have no error: they are left out of the
+        # means (and when every one is empty, so is the summary: NaN, not zero).
+        scored = [r for r in group if not math.isnan(r.mae)]
+        worst = max(scored, key=lambda r: r.mae) if scored else None
         gpu = [r.gpu_ms for r in group if not math.isnan(r.gpu_ms)]
+
+        def mean(values: list[float]) -> float:
+            return float(np.mean(values)) if values else math.nan
+
         summary.append(SummaryRow(
             scene, technique, map_size,
-            float(np.mean([r.mae for r in group])),
-            float(np.mean([r.p95 for r in group])),
-            float(np.mean([r.share_off for r in group])),
+            mean([r.mae for r in scored]),
+            mean([r.p95 for r in scored]),
+            mean([r.share_off for r in scored]),
             float(np.median([r.wall_ms for r in group])),
             float(np.median(gpu)) if gpu else math.nan,
-            worst.viewpoint,
+            worst.viewpoint if worst is not None else NO_REFLECTOR_PIXELS,
         ))
     return summary
 
@@ -531,15 +558,17 @@ def rows_from_csv(text: str) -> list[SweepRow]:
     measuring again); ValueError naming the line that does not fit."""
     reader = csv.DictReader(io.StringIO(text))
     names = [f.name for f in fields(SweepRow)]
-    if reader.fieldnames != names:
+    if reader.fieldnames not in (names, names[:-1]):  # a CSV from before "pixels" too
         raise ValueError(f"expected the columns {','.join(names)}, got {reader.fieldnames}")
     rows = []
     for line, record in enumerate(reader, start=2):
         try:
+            number = {n: float(record[n]) if record[n] else math.nan for n in names[4:-1]}
             rows.append(SweepRow(
                 record["scene"], record["technique"], int(record["map_size"]),
-                record["viewpoint"],
-                *(float(record[n]) if record[n] else math.nan for n in names[4:])))
+                record["viewpoint"], number["mae"], number["p95"], number["psnr"],
+                number["share_off"], number["wall_ms"], number["gpu_ms"],
+                int(record.get("pixels") or -1)))
         except ValueError as exc:
             raise ValueError(f"line {line}: {exc}") from None
     return rows
@@ -556,9 +585,12 @@ def summary_table(summary: Sequence[SummaryRow]) -> list[list[str]]:
     table = [["technique", "map", "MAE /255", "p95 /255", "off >10", "wall ms", "GL ms",
               "worst view"]]
     for row in summary:
+        if math.isnan(row.mae):  # nothing to score: said so, never a zero error
+            errors = [NO_REFLECTOR_PIXELS, "-", "-"]
+        else:
+            errors = [f"{row.mae:.2f}", f"{row.p95:.1f}", f"{row.share_off:.1%}"]
         table.append([
-            row.technique, str(row.map_size) if row.map_size else "-",
-            f"{row.mae:.2f}", f"{row.p95:.1f}", f"{row.share_off:.1%}",
+            row.technique, str(row.map_size) if row.map_size else "-", *errors,
             f"{row.wall_ms:.2f}", "-" if math.isnan(row.gpu_ms) else f"{row.gpu_ms:.2f}",
             row.worst_viewpoint,
         ])
@@ -647,7 +679,8 @@ def plot_png(summary: Sequence[SummaryRow], title: str) -> bytes | None:
         # The ray tracer has no error by definition and is far slower: named in the
         # panel's title rather than drawn, so that the techniques keep the axes.
         traced = [r for r in summary if r.scene == scene and r.technique.startswith("raytrace")]
-        rows = [r for r in summary if r.scene == scene and r not in traced]
+        rows = [r for r in summary if r.scene == scene and r not in traced
+                and not math.isnan(r.mae)]
         palette = plt.get_cmap("tab20")
         for index, (name, points) in enumerate(_series(rows).items()):
             times = [row.wall_ms for row, _ in points]
@@ -672,7 +705,11 @@ def plot_png(summary: Sequence[SummaryRow], title: str) -> bytes | None:
             heading += f"\n(ground truth: {truth.technique}, {truth.wall_ms:.0f} ms a frame)"
         axes.set_title(heading, fontsize=10)
         axes.grid(True, which="both", alpha=0.3)
-        axes.legend(fontsize=7, ncol=2)
+        if rows:
+            axes.legend(fontsize=7, ncol=2)
+        else:
+            axes.text(0.5, 0.5, NO_REFLECTOR_PIXELS, transform=axes.transAxes,
+                      ha="center", va="center")
     figure.suptitle(title)
     figure.tight_layout()
     with io.BytesIO() as buffer:

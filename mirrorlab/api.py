@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from mirrorlab.frame import Frame
-from mirrorlab.options import apply_options, check_size
+from mirrorlab.options import apply_options, check_size, split_frame_technique
 from mirrorlab.plan import TINY_PIXELS
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import Scene
@@ -192,12 +192,15 @@ def render(scene: SceneLike = "lab20", *, frame: int = 0,
     ``scene`` is a Scene, a scene file or a shipped scene's name (``lab20``, ``lab``,
     ``cone``, ``sphere``, ...); ``options`` change it (``camera``, ``target``,
     ``angles``, ``method``, ``capture``, ``env_size``, ``map_size``, ``max_bounces``,
-    ``cube_faces``, ``set``: see :mod:`mirrorlab.options`). ``method="raytrace"`` draws
-    the ray-traced ground truth instead. Each call makes and frees its own context;
-    keep a :class:`Renderer` for many frames.
+    ``cube_faces``, ``set``: see :mod:`mirrorlab.options`). A ``method`` that draws the
+    whole frame (``"raytrace"``: the ray-traced ground truth; see
+    :mod:`mirrorlab.techniques`) draws it instead of OpenGL. Each call makes and frees its
+    own context; keep a :class:`Renderer` for many frames.
     """
-    if options.get("method") == "raytrace":
-        options.pop("method")
-        return raytrace(scene, frame=frame, size=size, **options)
+    frame_technique, options = split_frame_technique(options)
+    if frame_technique is not None:
+        posed = resolve_scene(scene, **options).at_frame(frame)
+        return Frame(frame_technique.frame_function()(posed, check_size(size),
+                                                      progress=False))
     with Renderer(size) as renderer:
         return renderer.render(scene, frame=frame, use_plan=use_plan, **options)

@@ -40,7 +40,7 @@ import threading
 import time
 import uuid
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from mirrorlab.errors import BatchError
@@ -52,23 +52,26 @@ from mirrorlab.scene.model import Scene
 @dataclass(frozen=True)
 class FrameJob:
     """What every frame of a batch is drawn with: the ``scene``, ``size`` (width, height),
-    whether the planner may skip passes (``use_plan``), ray tracing instead of OpenGL,
-    a debug context, and the batch's ``token`` (a worker's renderer belongs to one
-    batch)."""
+    whether the planner may skip passes (``use_plan``), the technique that draws the whole
+    frame instead of OpenGL (``frame_technique``, e.g. the ray tracer; None: OpenGL), a
+    debug context, and the batch's ``token`` (a worker's renderer belongs to one batch)."""
 
     scene: Scene
     size: tuple[int, int]
     use_plan: bool = True
-    raytrace: bool = False
+    frame_technique: str | None = None
     debug: bool = False
     token: str = ""
+    tiny_pixels: float = 0.0
+    """Above 0: the planner's lossy small-reflector rule (see :mod:`mirrorlab.plan`)."""
 
     def description(self) -> str:
         """Everything that decides the frames' pixels, as text (the folder's record)."""
         from mirrorlab.scene.loader import dumps
 
         return json.dumps({"scene": dumps(self.scene), "size": list(self.size),
-                           "use_plan": self.use_plan, "raytrace": self.raytrace},
+                           "use_plan": self.use_plan, "tiny_pixels": self.tiny_pixels,
+                           "frame_technique": self.frame_technique},
                           sort_keys=True)
 
 
@@ -98,14 +101,17 @@ def release_frame_renderer() -> None:
 
 def render_frame(job: FrameJob, frame: int) -> bytes:
     """One frame of ``job``'s scene as PNG file bytes: what a worker runs. OpenGL frames
-    are drawn by this thread's kept renderer; ray-traced ones need no context."""
-    if job.raytrace:
-        from mirrorlab.raytrace import trace_scene
+    are drawn by this thread's kept renderer; a frame technique's (the ray tracer's) need
+    no context."""
+    if job.frame_technique is not None:
+        from mirrorlab.techniques import technique
 
-        image = trace_scene(job.scene.at_frame(frame), job.size).to_uint8()
+        draw_frame = technique(job.frame_technique).frame_function()
+        image = draw_frame(job.scene.at_frame(frame), job.size, progress=False)
     else:
         image = _frame_renderer(job).render(job.scene, frame=frame, size=job.size,
-                                            use_plan=job.use_plan)
+                                            use_plan=job.use_plan,
+                                            tiny_pixels=job.tiny_pixels)
     return png_bytes(image)
 
 
@@ -180,8 +186,7 @@ def run_batch(job: FrameJob, frames: Sequence[int], out_dir: Path, jobs: int = 1
     frame fails (the frames that worked stay written)."""
 
     scene = job.scene
-    job = FrameJob(scene, job.size, job.use_plan, job.raytrace, job.debug,
-                   uuid.uuid4().hex)
+    job = replace(job, token=uuid.uuid4().hex)
     names = {frame: frame_name(out_dir, scene, frame) for frame in frames}
     record = record_name(out_dir, scene)
     description = job.description()

@@ -35,6 +35,13 @@ class UsageError(Exception):
 DEBUG_HELP = ("a debug OpenGL context whose KHR_debug messages are checked after every "
               "pass: a GL error stops the command, naming the pass")
 EXIT_BAD_INPUT, EXIT_MACHINE, EXIT_INTERRUPTED = 2, 1, 130
+TINY_HELP = ("LOSSY: draw a reflector that may cover fewer than N pixels plain, without "
+             "its capture (default 0: off, and the plan changes no pixel)")
+
+
+def tiny_pixels_of(args: argparse.Namespace) -> float:
+    return float(parse_count("--tiny-pixels", args.tiny_pixels, 0, 10**9)
+                 if args.tiny_pixels is not None else 0)
 
 
 def _add_executor_arguments(parser: argparse.ArgumentParser, jobs: str,
@@ -60,7 +67,7 @@ def _add_scene_arguments(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("scene changes (override the scene file)")
     for option in OPTIONS:
         group.add_argument(option.flag, dest=f"option_{option.name}", metavar=option.metavar,
-                           help=option.help, action="append" if option.repeat else "store")
+                           help=option.help_text, action="append" if option.repeat else "store")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -95,14 +102,19 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--fps", metavar="N", default="12",
                         help="frames a second of --gif and --webp (default %(default)s)")
     render.add_argument("--stats", action="store_true", help="print the passes each frame "
-                        "ran and skipped, and the time planning saved against --no-plan")
+                        "ran and skipped, the time planning saved against --no-plan, and "
+                        "how many pixels the two frames differ in")
     render.add_argument("--no-plan", action="store_true",
                         help="run every pass of every frame (for comparison)")
+    render.add_argument("--tiny-pixels", metavar="N", help=TINY_HELP)
     render.add_argument("--save-env", metavar="PATH",
                         help="also write the first planar mirror's capture texture as a PNG")
-    render.add_argument("--raytrace", action="store_true",
-                        help="draw the ray-traced ground truth instead (no OpenGL; slow; "
-                        "--method raytrace says the same)")
+    from mirrorlab.techniques import techniques
+
+    for entry in techniques("frame"):  # --raytrace: the whole frame by another renderer
+        render.add_argument(f"--{entry.name}", dest="frame_techniques", action="append_const",
+                            const=entry.name, help=f"draw {entry.summary} (--method "
+                            f"{entry.name} says the same)")
     render.add_argument("--debug", action="store_true", help=DEBUG_HELP)
 
     plan = commands.add_parser("plan", help="print the passes each frame would run, and why")
@@ -113,6 +125,7 @@ def build_parser() -> argparse.ArgumentParser:
                       "earlier ones captured)")
     plan.add_argument("--json", action="store_true", help="print the plans as JSON")
     plan.add_argument("--no-plan", action="store_true", help="plan every pass to run")
+    plan.add_argument("--tiny-pixels", metavar="N", help=TINY_HELP)
 
     bench = commands.add_parser("bench", help="measure error against the ray tracer, and time")
     bench.add_argument("what", metavar="accuracy", help="the benchmark to run: accuracy")
@@ -250,8 +263,7 @@ def run_render(args: argparse.Namespace) -> int:
             if given:
                 raise UsageError(f"{option}: measures frames in one renderer; give it "
                                  f"without --out-dir")
-    if args.option_method == "raytrace":  # the ray tracer, as the API's method="raytrace"
-        args.option_method, args.raytrace = None, True
+    frame_technique = frame_technique_of(args)
     scene = scene_from_args(args)
     if out is None and out_dir is None:
         out = check_output("--out", Path("out") / f"{scene.name}.png", make_folder=True)
@@ -267,14 +279,31 @@ def run_render(args: argparse.Namespace) -> int:
     if out_dir is not None:
         from mirrorlab.batch import FrameJob, run_batch
 
-        return run_batch(FrameJob(scene, size, not args.no_plan, args.raytrace, args.debug),
+        return run_batch(FrameJob(scene, size, not args.no_plan, frame_technique, args.debug,
+                                  tiny_pixels=tiny_pixels_of(args)),
                          frames, out_dir, jobs, args.scheduler, args.engine, out, animations,
                          fps)
     from mirrorlab.commands.render import run_render as render
 
     assert out is not None
     return render(scene, size, out, frames, args.stats, not args.no_plan, save_env,
-                  args.raytrace, debug=args.debug)
+                  frame_technique, debug=args.debug, tiny_pixels=tiny_pixels_of(args))
+
+
+def frame_technique_of(args: argparse.Namespace) -> str | None:
+    """The technique drawing the whole frame (``--raytrace``, or ``--method`` naming one),
+    taken out of the scene options; None for OpenGL."""
+    from mirrorlab.techniques import frame_technique
+
+    named = list(dict.fromkeys(args.frame_techniques or []))
+    if frame_technique(args.option_method) is not None:
+        named.append(args.option_method)
+        args.option_method = None
+    named = list(dict.fromkeys(named))
+    if len(named) > 1:
+        raise UsageError(f"--{named[1]}: the frame is drawn by one of "
+                         f"{', '.join(named)}, not all")
+    return named[0] if named else None
 
 
 def check_distinct(outputs: list[tuple[str, Path]]) -> None:
@@ -310,7 +339,8 @@ def run_plan(args: argparse.Namespace) -> int:
 
     size = parse_size("--size", args.size)
     frames = parse_count("--frames", args.frames, 1, 10_000)
-    return plan(scene_from_args(args), size, frames, args.json, not args.no_plan)
+    return plan(scene_from_args(args), size, frames, args.json, not args.no_plan,
+                tiny_pixels=tiny_pixels_of(args))
 
 
 def run_bench(args: argparse.Namespace) -> int:
@@ -357,10 +387,10 @@ def run_demo(args: argparse.Namespace) -> int:
 
 
 def run_techniques(args: argparse.Namespace) -> int:
-    from mirrorlab.techniques import TECHNIQUES
+    from mirrorlab.techniques import techniques
 
-    for name, entry in TECHNIQUES.items():
-        print(f"{name:<14} {entry.kind:<7} {entry.summary}")
+    for entry in techniques():
+        print(f"{entry.name:<14} {entry.kind:<7} {entry.summary}")
     return 0
 
 

@@ -126,6 +126,26 @@ def perspective(fovy_deg: float, aspect: float, near: float, far: float) -> np.n
     return m
 
 
+def with_depth_range(projection: np.ndarray, near: float, far: float) -> np.ndarray:
+    """``projection`` ``(4, 4)`` with its depth row set for clip distances ``near`` and
+    ``far``: the x, y and w rows are kept (a flip, an off-centre frustum), the z row is
+    a plain one's, so any oblique near plane is gone. ``projection`` must be a perspective
+    (w row (0, 0, -1, 0)) or an orthographic (w row (0, 0, 0, 1)) projection; ValueError
+    otherwise."""
+    matrix = np.array(projection, dtype=np.float64)
+    perspective = np.allclose(matrix[3], (0.0, 0.0, -1.0, 0.0), rtol=0.0, atol=1e-12)
+    if not (0.0 < near < far if perspective else near < far):
+        raise ValueError(f"depth range needs {'0 < ' if perspective else ''}near < far, got "
+                         f"near={near}, far={far}")
+    if perspective:
+        matrix[2] = (0.0, 0.0, (far + near) / (near - far), 2.0 * far * near / (near - far))
+    elif np.allclose(matrix[3], (0.0, 0.0, 0.0, 1.0), rtol=0.0, atol=1e-12):
+        matrix[2] = (0.0, 0.0, -2.0 / (far - near), -(far + near) / (far - near))
+    else:
+        raise ValueError(f"not a perspective or orthographic projection: w row {matrix[3]}")
+    return matrix
+
+
 def normal_matrix(model: np.ndarray) -> np.ndarray:
     """``(3, 3)`` inverse-transpose of the upper-left of ``model``, for transforming normals."""
     return np.linalg.inv(model[:3, :3]).T
@@ -193,9 +213,12 @@ def oblique_projection(projection: np.ndarray, plane_in_eye_space: np.ndarray) -
     if perspective and not clip_plane[3] < 0.0:
         raise ValueError(
             f"oblique near plane must have the eye strictly behind it (d < 0), got {clip_plane}")
-    # The corner of the view volume opposite the plane, in eye space.
-    corner = np.linalg.inv(matrix) @ np.array(
-        [np.sign(clip_plane[0]), np.sign(clip_plane[1]), 1.0, 1.0])
+    # The corner of the view volume opposite the plane: chosen by the signs of the plane
+    # in clip space, not in eye space, which differ where the projection flips x or y (a
+    # view of the world seen in a mirror) or is off-centre.
+    inverse = np.linalg.inv(matrix)
+    in_clip = inverse.T @ clip_plane
+    corner = inverse @ np.array([np.sign(in_clip[0]), np.sign(in_clip[1]), 1.0, 1.0])
     reach = float(clip_plane @ corner)
     if not reach > 0.0:
         raise ValueError(f"oblique near plane {clip_plane} leaves nothing of the view volume")

@@ -17,8 +17,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from mirrorlab.scene.loader import SceneError, from_document, scene_to_document
-from mirrorlab.scene.model import CAPTURE_MODES, CURVED_TECHNIQUES, PLANAR_TECHNIQUES, Scene
+from mirrorlab.scene.model import CAPTURE_MODES, Scene
+from mirrorlab.techniques import (
+    Technique,
+    frame_technique,
+    technique,
+    technique_names,
+    techniques,
+)
 
 MAX_SIZE = 8192
 """Largest render or window side accepted, in pixels."""
@@ -103,7 +112,9 @@ class Option:
 
     name: str
     metavar: str
-    help: str
+    help: str | Callable[[], str]
+    """For the command line's help: the text, or a function making it when the parser is
+    built (for lists that can grow, such as the techniques)."""
     parse: Callable[[str, str], Any]
     apply: Callable[[dict, Any, str], None]
     writes: str = ""
@@ -114,6 +125,10 @@ class Option:
     @property
     def flag(self) -> str:
         return "--" + self.name.replace("_", "-")
+
+    @property
+    def help_text(self) -> str:
+        return self.help() if callable(self.help) else self.help
 
 
 def _vec3(names: str) -> Callable[[str, str], tuple[float, ...]]:
@@ -134,27 +149,36 @@ def _apply_angles(document: dict, value: Any, flag: str) -> None:
         robot["angles"] = _plain(value)
 
 
-_PICTURE_SOURCE = ("sphere", "sphere-vertex", "sphere-texgen", "normal")
-"""Curved techniques whose ``source`` is a picture (``cube``'s is a folder of faces)."""
+def _entry(name: Any) -> Technique | None:
+    """The reflector technique called ``name`` (None for anything else)."""
+    try:
+        entry = technique(name) if isinstance(name, str) else None
+    except ValueError:
+        return None
+    return entry if entry is not None and entry.kind != "frame" else None
 
 
-def _source_kind(technique: Any) -> str | None:
-    return "picture" if technique in _PICTURE_SOURCE else (
-        "faces" if technique == "cube" else None)
+def _reflector_technique_names() -> tuple[str, ...]:
+    return technique_names("planar") + technique_names("curved")
 
 
 def _apply_technique(document: dict, value: Any, flag: str) -> None:
-    if value not in _TECHNIQUE_NAMES:
+    entry = _entry(value)
+    if entry is None:
+        if frame_technique(value) is not None:
+            raise OptionError(flag, f"{value} draws the whole frame, not a reflector: give "
+                              f"it to mirrorlab.render(method={value!r}) or as "
+                              f"'mirrorlab render --{value}'")
         # A value from the Python API, not parsed: no kind of reflector to pick by it.
         # Given to every reflector, it is refused by the scene check with its key path
         # and the names (or here, when there is no reflector at all).
         reflectors = document.get("reflectors", [])
         if not reflectors:
-            parse_choice(flag, value, _TECHNIQUE_NAMES)
+            parse_choice(flag, value, _reflector_technique_names())
         for reflector in reflectors:
             reflector["technique"] = value
         return
-    planar = value in PLANAR_TECHNIQUES
+    planar = entry.kind == "planar"
     for reflector in _reflectors_of_kind(document, planar, flag, f"{value} is a technique "
                                          f"for a {_KIND_NAMES[planar]}, and "):
         _set_technique(reflector, value)
@@ -162,16 +186,16 @@ def _apply_technique(document: dict, value: Any, flag: str) -> None:
 
 def _set_technique(reflector: dict, value: str) -> None:
     """Give one reflector's table the technique ``value`` (of its kind)."""
-    planar = value in PLANAR_TECHNIQUES
+    entry = technique(value)
+    old = _entry(reflector.get("technique"))
     # A source is kept only where it means the same: a picture for the sphere maps, a
     # folder of faces for a static cube map.
-    if not planar and "source" in reflector and _source_kind(
-            value) != _source_kind(reflector.get("technique")):
+    if "source" in reflector and (old is None or entry.source != old.source):
         del reflector["source"]
     reflector["technique"] = value
-    if planar and value != "ortho":
+    if not entry.own_camera:
         reflector.pop("ortho", None)
-    if value != "cube-live":
+    if not entry.parallax:
         reflector.pop("parallax", None)  # a correction of live cube-map lookups only
 
 
@@ -182,8 +206,7 @@ def with_technique(scene: Scene, name: str, value: str) -> Scene:
     document = scene_to_document(scene)
     for reflector in document.get("reflectors", []):
         if reflector.get("name") == name:
-            planar = reflector.get("technique") in PLANAR_TECHNIQUES
-            allowed = PLANAR_TECHNIQUES if planar else CURVED_TECHNIQUES
+            allowed = technique_names(technique(reflector["technique"]).kind)
             parse_choice(f"technique of {name}", value, allowed)
             _set_technique(reflector, value)
             return from_document(document, scene.source)
@@ -197,7 +220,7 @@ def _reflectors_of_kind(document: dict, planar: bool, flag: str,
                         why: str = "") -> list[dict]:
     """The document's planar (or curved) reflectors; OptionError when it has none."""
     targets = [r for r in document.get("reflectors", [])
-               if (r.get("technique") in PLANAR_TECHNIQUES) == planar]
+               if (getattr(_entry(r.get("technique")), "kind", None) == "planar") == planar]
     if not targets:
         what = "none" if why else f"no {_KIND_NAMES[planar]}"
         raise OptionError(flag, f"{why}scene {document.get('name')!r} has {what}")
@@ -243,15 +266,18 @@ def parse_parallax(flag: str, text: str) -> dict[str, Any] | str:
 
 
 def _apply_parallax(document: dict, value: Any, flag: str) -> None:
-    """Give every ``cube-live`` reflector the ``parallax`` ``value``: a ``parallax`` table as
-    in a scene file, or its ``--parallax`` text; ``"none"`` removes the correction."""
+    """Give every reflector whose technique takes a parallax correction (``cube-live``) the
+    ``parallax`` ``value``: a ``parallax`` table as in a scene file, or its
+    ``--parallax`` text; ``"none"`` removes the correction."""
     if isinstance(value, str):
         value = parse_parallax(flag, value)
     live = [r for r in _reflectors_of_kind(document, False, flag)
-            if r.get("technique") == "cube-live"]
+            if getattr(_entry(r.get("technique")), "parallax", False)]
     if not live:
-        raise OptionError(flag, f"scene {document.get('name')!r} has no cube-live reflector "
-                          "(--method cube-live makes every curved reflector one)")
+        names = [t.name for t in techniques("curved") if t.parallax]
+        raise OptionError(flag, f"scene {document.get('name')!r} has no {' or '.join(names)} "
+                          f"reflector (--method {names[0] if names else 'NAME'} makes every "
+                          f"curved reflector one)")
     for reflector in live:
         if value == "none":
             reflector.pop("parallax", None)
@@ -280,7 +306,63 @@ def _apply_cube_faces(document: dict, value: Any, flag: str) -> None:
 
 def _apply_set(document: dict, value: Any, flag: str) -> None:
     for key, item in value:
+        _mirror_form_for(document, key, flag)
         set_key(document, key, item, flag)
+
+
+_SHAPE_KEYS = ("center", "normal", "width", "height", "up")
+"""How a scene file may give a planar mirror instead of its corners."""
+
+
+def _mirror_form_for(document: dict, key: str, flag: str) -> None:
+    """Before ``key`` is set: a planar mirror is written in a document by its corners (a
+    file's center/normal/width/height/up become corners when it is read), so setting
+    one of those shape keys puts the mirror back in that form first, and setting its
+    corners drops them. OptionError when its corners are no rectangle."""
+    match = re.fullmatch(r"reflectors\[(\d+)\]\.([A-Za-z_][\w-]*)(?:\[\d+\])?", key)
+    reflectors = document.get("reflectors")
+    if not match or not isinstance(reflectors, list) or int(match.group(1)) >= len(reflectors):
+        return
+    table = reflectors[int(match.group(1))]
+    if not isinstance(table, dict):
+        return
+    field = match.group(2)
+    if field == "corners":
+        for name in _SHAPE_KEYS:
+            table.pop(name, None)
+        return
+    if field not in _SHAPE_KEYS or "corners" not in table:
+        return
+    try:
+        corners = np.asarray(table["corners"], dtype=np.float64).reshape(4, 3)
+    except (TypeError, ValueError):
+        return  # left to the scene's own check, which names what is wrong
+    shape = rectangle_of(corners)
+    if shape is None:
+        raise OptionError(flag, f"{key}: reflectors[{match.group(1)}] is given by corners "
+                          f"that are no rectangle; set reflectors[{match.group(1)}].corners "
+                          f"instead")
+    del table["corners"]
+    table.update(shape)
+
+
+def rectangle_of(corners: np.ndarray) -> dict[str, list[float] | float] | None:
+    """A rectangular mirror's corners ``(4, 3)`` (counter-clockwise from the front, the
+    first edge along its height, as a scene file's center/normal/width/height/up make
+    them) as those keys; None when they are no rectangle."""
+    height_edge, width_edge = corners[1] - corners[0], corners[3] - corners[0]
+    height, width = float(np.linalg.norm(height_edge)), float(np.linalg.norm(width_edge))
+    if not (height > 0 and width > 0):
+        return None
+    size = max(height, width)
+    closes = np.linalg.norm(corners[2] - (corners[1] + width_edge)) <= 1e-9 * size
+    square = abs(float(height_edge @ width_edge)) <= 1e-9 * height * width
+    if not (closes and square):
+        return None
+    up = height_edge / height
+    normal = np.cross(up, width_edge / width)  # the loader takes right = normal x up
+    return {"center": corners.mean(axis=0).tolist(), "normal": normal.tolist(),
+            "width": width, "height": height, "up": up.tolist()}
 
 
 def _parse_set(flag: str, text: str) -> tuple[tuple[str, Any], ...]:
@@ -294,7 +376,13 @@ def _parse_set(flag: str, text: str) -> tuple[tuple[str, Any], ...]:
     return ((key.strip(), value),)
 
 
-_TECHNIQUE_NAMES = PLANAR_TECHNIQUES + CURVED_TECHNIQUES
+def _method_help() -> str:
+    frames = technique_names("frame")
+    drawn = f"; or the whole frame drawn by {', '.join(frames)}" if frames else ""
+    return (f"technique for every reflector of its kind: planar "
+            f"{', '.join(technique_names('planar'))}; curved "
+            f"{', '.join(technique_names('curved'))}{drawn}")
+
 
 OPTIONS: tuple[Option, ...] = (
     Option("camera", "X,Y,Z", "viewer position (the scene's camera.eye)",
@@ -306,9 +394,8 @@ OPTIONS: tuple[Option, ...] = (
            r"camera\.fovy"),
     Option("angles", "BASE,LOWER,UPPER", "the robot's joint angles in degrees",
            _vec3("BASE,LOWER,UPPER"), _apply_angles, "objects"),
-    Option("method", "NAME", "technique for every reflector of its kind: planar "
-           f"{', '.join(PLANAR_TECHNIQUES)}; curved {', '.join(CURVED_TECHNIQUES)}",
-           lambda flag, text: parse_choice(flag, text, _TECHNIQUE_NAMES), _apply_technique,
+    Option("method", "NAME", _method_help,
+           lambda flag, text: parse_choice(flag, text, technique_names()), _apply_technique,
            "reflectors"),
     Option("parallax", "PROXY", "how cube-live lookups correct for nearby surroundings: "
            f"{', '.join(PARALLAX_FORMS)}", parse_parallax, _apply_parallax,
@@ -335,6 +422,16 @@ OPTIONS: tuple[Option, ...] = (
            repeat=True),
 )
 OPTION_NAMES = {option.name: option for option in OPTIONS}
+
+
+def split_frame_technique(values: Mapping[str, Any]) -> tuple[Technique | None, dict]:
+    """The frame technique ``values["method"]`` names (one that draws the whole frame, such
+    as the ray tracer), and the other options; ``(None, values)`` when it names none."""
+    entry = frame_technique(values.get("method"))
+    rest = dict(values)
+    if entry is not None:
+        rest.pop("method")
+    return entry, rest
 
 
 def apply_options(scene: Scene, values: Mapping[str, Any]) -> Scene:

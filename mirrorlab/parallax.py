@@ -39,6 +39,9 @@ background at infinity)."""
 PARALLEL = 1e-20
 """A direction component at most this large counts as zero: the ray runs parallel to
 that pair of box faces (the shader uses the same threshold)."""
+REFINE_STEPS = 4
+"""A distance search looks at a step in which the ray crosses the stored surface again in
+this many smaller steps (the shader's REFINE_STEPS)."""
 AT_CENTER = 1e-6
 """How close (world units) a surface point may come to the capture centre before the
 distance search gives up on it: there the plain lookup is exact anyway."""
@@ -148,12 +151,13 @@ def sphere_lookup(origin, direction, center, radius) -> np.ndarray:
 
 
 def distance_lookup(origin, direction, center, inverse_distance: InverseDistance,
-                    steps: int = 8, secant: int = 2,
-                    thickness: float = 0.1) -> tuple[np.ndarray, np.ndarray]:
+                    steps: int = 8, secant: int = 2, thickness: float = 0.1,
+                    enclosed: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """The lookup direction ``(..., 3)`` found by searching the ray for the surface the
     capture saw, from the capture's ``inverse_distance`` (see :data:`InverseDistance`), and
-    ``(...)`` True where the ray meets nothing the capture saw and leaves for the
-    background: look the (plain) direction up in the background, not in the capture.
+    ``(...)`` True where the lookup is to be made in the background rather than the
+    capture (the search found no surface, and the capture saw nothing along the plain
+    direction either).
 
     With ``x = origin - center`` and ``s = |x|``, the ray's points are visited as
     ``center + l(t) / (1 - t)`` with ``l(t) = (1 - t) x + t s direction`` for ``t`` in
@@ -169,8 +173,15 @@ def distance_lookup(origin, direction, center, inverse_distance: InverseDistance
     counts as a hit only when its secant point is short of infinity and the last point
     probed lies within ``thickness`` (relative to its distance from the centre) of the
     stored surface (with no secant steps, every crossing short of infinity is a hit);
-    else the search goes on. A hit is the secant point of its last bracket; a ray with
-    no hit leaves for the background.
+    else the search goes on. A step that ends behind the stored surface is looked at
+    again in :data:`REFINE_STEPS` smaller ones and each crossing found there judged in
+    turn: one step may hide the ray passing behind an object, coming out past its
+    silhouette and meeting the wall behind it, which the steps' own points never show. A hit is the
+    secant point of its last bracket. A ray with no hit passed behind what the capture
+    saw, or met what it could not see: where the surroundings close the centre in
+    (``enclosed``: a room, :func:`mirrorlab.bounds.encloses`) it falls back to the plain
+    lookup, the plain direction in the capture (in the background where the capture saw
+    nothing that way either), and otherwise leaves for the background.
 
     Falls back to the plain direction (in the capture) when the origin is at the centre
     (within :data:`AT_CENTER`, where the plain lookup is exact) or already behind the
@@ -217,25 +228,43 @@ def distance_lookup(origin, direction, center, inverse_distance: InverseDistance
     t_before = np.zeros(shape, dtype)
     for k in range(1, int(steps) + 1):
         t_after = np.full(shape, k / steps, dtype)
-        h_after, mismatch = probe(t_after)
-        crossing = ~done & (h_before > 0) & (h_after <= 0)
+        h_after, _ = probe(t_after)
+        crossing = ~done & (h_after <= 0)
         if crossing.any():
-            low, h_low = t_before.copy(), h_before.copy()
-            high, h_high = t_after.copy(), h_after.copy()
-            for _ in range(int(secant)):
-                t = np.where(crossing, _secant(low, h_low, high, h_high), high)
-                h, mismatch = probe(t)
-                behind = h <= 0
-                high, h_high = np.where(behind, t, high), np.where(behind, h, h_high)
-                low, h_low = np.where(behind, low, t), np.where(behind, h_low, h)
-            t = np.where(crossing, _secant(low, h_low, high, h_high), high)
-            judged = np.abs(mismatch) <= thickness if secant else True
-            accept = crossing & (t < 1) & judged
-            hit = np.where(accept, t, hit)
-            found |= accept
-            done |= accept
+            # a step that ends behind the stored surface, again in REFINE_STEPS smaller
+            # ones, each crossing there narrowed and judged in turn (a step may hide the
+            # ray passing behind an object, coming out past its silhouette and meeting
+            # the wall behind it)
+            sub_before, sh_before = t_before.copy(), h_before.copy()
+            mismatch = np.zeros(shape, dtype)
+            for j in range(1, REFINE_STEPS + 1):
+                if j == REFINE_STEPS:
+                    sub_after, sh_after = t_after, h_after
+                else:
+                    fraction = np.asarray(j / REFINE_STEPS, dtype)
+                    sub_after = t_before * (1 - fraction) + t_after * fraction
+                    sh_after, mismatch = probe(sub_after)
+                inner = crossing & ~done & (sh_before > 0) & (sh_after <= 0)
+                if inner.any():
+                    low, h_low = sub_before.copy(), sh_before.copy()
+                    high, h_high = sub_after.copy(), sh_after.copy()
+                    for _ in range(int(secant)):
+                        t = np.where(inner, _secant(low, h_low, high, h_high), high)
+                        h, mismatch = probe(t)
+                        behind = h <= 0
+                        high, h_high = np.where(behind, t, high), np.where(behind, h, h_high)
+                        low, h_low = np.where(behind, low, t), np.where(behind, h_low, h)
+                    t = np.where(inner, _secant(low, h_low, high, h_high), high)
+                    judged = np.abs(mismatch) <= thickness if secant else True
+                    accept = inner & (t < 1) & judged
+                    hit = np.where(accept, t, hit)
+                    found |= accept
+                    done |= accept
+                sub_before, sh_before = sub_after, sh_after
         t_before, h_before = t_after, h_after
-    background = usable & ~done
+    seen_plainly = np.asarray(inverse_distance(plain.reshape(-1, 3)),
+                              dtype=dtype).reshape(shape) > 0
+    background = usable & ~done & ~(seen_plainly & bool(enclosed))
     look = _towards(towards(hit), plain, found)
     return look, background
 

@@ -4,9 +4,15 @@
 textures hold now, and returns the frame's ordered passes, each with its reason:
 captures first (a capture's own sub-captures before it), then the camera pass. For every
 view it also says how each reflector is drawn there (:class:`ReflectorDraw`): not at
-all (out of view, facing away), as a plain surface (bounces used up, or too small on
-screen to be worth a capture), with its map, with a capture, or, for a stencil mirror,
-as the world seen through it.
+all (out of view, facing away), as a plain surface (bounces used up), with its map, with
+a capture, or, for a stencil mirror, as the world seen through it.
+
+The plan is lossless: a pass is skipped, and a reflector left undrawn, only where that
+cannot change a pixel. Whether a reflector can show in a view is decided from its
+footprint (:mod:`mirrorlab.footprint`: a planar mirror clipped against the view volume, a
+curved one's bounding sphere by its projected ellipse), which errs large. The one lossy
+rule, drawing a reflector that covers fewer than ``tiny_pixels`` pixels plain instead of
+capturing it, is off unless asked for.
 
 Reflections of reflections: a reflector seen in another's capture is drawn with a
 texture one bounce lower, made for that capture's camera; at bounce 0 it is plain. A
@@ -20,13 +26,12 @@ Pure numpy; the renderer (:mod:`mirrorlab.renderer`) runs what this decides.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from functools import lru_cache
-from pathlib import Path
 from typing import Literal
 
 import numpy as np
 
-from mirrorlab import math3d
+from mirrorlab import bounds, math3d
+from mirrorlab.footprint import Footprint, polygon_footprint, sphere_footprint
 from mirrorlab.scene.model import CurvedReflector, PlanarReflector, Reflector, Scene
 from mirrorlab.techniques import technique
 from mirrorlab.views import (
@@ -39,8 +44,11 @@ from mirrorlab.views import (
     stencil_view,
 )
 
-TINY_PIXELS = 16.0
-"""A reflector covering fewer pixels than this on screen is drawn plain (no capture)."""
+TINY_PIXELS = 0.0
+"""The default of the lossy small-reflector rule: off. Given a positive number, a
+reflector whose footprint may cover fewer pixels than that is drawn plain, with no
+capture, which changes those pixels (16 saves the captures of reflectors seen from very
+far away)."""
 
 DrawMode = Literal["hidden", "back", "plain", "map", "texture", "stencil"]
 """``hidden``: not drawn (out of view); ``back``: only a planar mirror's backing shows;
@@ -154,8 +162,9 @@ def plan_frame(scene: Scene, size: tuple[int, int], state: TextureState | None =
 
     With ``use_plan`` False every pass runs: every reflector is captured at every bounce
     for every view, nothing is reused and no reflector is drawn plain for being small
-    (for comparison: the frame must come out the same). ``tiny_pixels`` 0 turns the
-    small-reflector rule off.
+    (for comparison: the frame comes out the same, pixel for pixel, unless
+    ``tiny_pixels`` is positive). ``tiny_pixels`` above 0 turns on the lossy rule: a
+    reflector whose footprint may cover fewer pixels than that is drawn plain.
     """
     planner = _Planner(scene, state or TextureState(), use_plan,
                        tiny_pixels if use_plan else 0.0)
@@ -197,11 +206,14 @@ class _Planner:
         if self.tiny_pixels > 0 and entry.texture != "static":
             area = screen_area(reflector, view)
             if area < self.tiny_pixels:
-                return ReflectorDraw(reflector, "plain", f"covers about {area:.1f} pixels "
-                                     f"(under {self.tiny_pixels:g}): drawn plain, no capture")
-        if entry.texture == "inline":
+                return ReflectorDraw(reflector, "plain", f"covers at most {area:.1f} pixels "
+                                     f"(under {self.tiny_pixels:g}; lossy): drawn plain, no "
+                                     f"capture")
+        if entry.draws_inline:
             assert isinstance(reflector, PlanarReflector)
-            nested = self.plan_view(stencil_view(view, reflector), bounce - 1, reflector.name)
+            far = self.reach(view, reflector) if view.eye is not None else None
+            nested = self.plan_view(stencil_view(view, reflector, far), bounce - 1,
+                                    reflector.name)
             return ReflectorDraw(reflector, "stencil", "the mirrored world, drawn in place",
                                  nested=nested)
         if entry.texture == "static":
@@ -252,14 +264,26 @@ class _Planner:
     def _planned_keys(self) -> set[tuple[str, tuple]]:
         return {(p.reflector, p.key) for p in self.passes if p.reflector is not None}
 
+    def reach(self, view: View, reflector: PlanarReflector) -> float:
+        """How far the world seen in ``reflector`` from ``view`` extends: reflections see
+        the whole scene, whatever the camera's far plane (the truth's definition)."""
+        eye = view.eye
+        if eye is None:
+            return 0.0  # orthographic: no eye to measure from (not used)
+        mirrored = math3d.transform_points(math3d.reflection_matrix(reflector.plane), eye)[:3]
+        return bounds.reach(self.scene, mirrored)
+
     def capture(self, reflector: Reflector, view: View,
                 bounce: int) -> tuple[int, View | None]:
         entry = technique(reflector.technique)
-        if isinstance(reflector, PlanarReflector):
+        if entry.capture_camera in ("reflected", "ortho"):
+            assert isinstance(reflector, PlanarReflector)
             size = reflector.texture_size
             texture_size = (size, size) if size else view.size
-            if entry.texture == "viewer":
-                camera = reflected_capture_view(view, reflector, texture_size)
+            if entry.capture_camera == "reflected":
+                camera = reflected_capture_view(view, reflector, texture_size,
+                                                self.reach(view, reflector)
+                                                if view.eye is not None else None)
                 if camera is None:
                     return 0, None
                 cameras = [camera]
@@ -267,9 +291,13 @@ class _Planner:
             else:
                 cameras = [ortho_capture_view(reflector, texture_size)]
                 key = ("fixed", bounce, texture_size, self.content)
-        else:
-            cameras = cube_face_views(reflector)
+        elif entry.capture_camera == "cube":
+            assert isinstance(reflector, CurvedReflector)
+            cameras = cube_face_views(reflector, bounds.cube_depth_range(self.scene, reflector))
             key = ("fixed", bounce, (reflector.map_size,), self.own_content(reflector))
+        else:
+            raise ValueError(f"technique {entry.name!r} has a texture of kind "
+                             f"{entry.texture!r} but no capture camera")
         slot, held = self.slot_for(reflector.name, key)
         source = cameras[0]
         if held and (reflector.name, key) in self._planned_keys():
@@ -322,7 +350,9 @@ class _Planner:
 
 
 def hidden_reason(reflector: Reflector, view: View) -> str | None:
-    """Why ``reflector`` cannot show in ``view`` (conservatively), or None."""
+    """Why ``reflector`` cannot show in ``view``, or None when it may: a planar mirror
+    seen from behind or edge-on (only its backing can show), or a footprint
+    (:func:`reflector_footprint`) that covers no pixel."""
     if isinstance(reflector, PlanarReflector):
         if view.eye is not None:
             facing = float((view.eye - reflector.center) @ reflector.normal)
@@ -330,10 +360,22 @@ def hidden_reason(reflector: Reflector, view: View) -> str | None:
             facing = float(-view.forward @ reflector.normal)
         if not facing > 0.0:
             return "seen from behind or edge-on: only its back shows"
-        points = reflector.corner_array
-    else:
-        center, radius = bounding_sphere(reflector)
-        return None if _sphere_in_view(center, radius, view) else "out of view"
+        outside = _where_outside(reflector.corner_array, view)
+        if outside is not None:  # every corner beyond one plane: exactly out of view
+            return outside
+        if reflector_footprint(reflector, view).empty:
+            return "out of view (past a corner of the view)"
+        return None
+    center, radius = bounding_sphere(reflector)
+    if _sphere_in_view(center, radius, view) and not reflector_footprint(
+            reflector, view).empty:
+        return None
+    return "out of view"
+
+
+def _where_outside(points: np.ndarray, view: View) -> str | None:
+    """Which side of ``view`` all of ``points`` ``(n, 3)`` lie beyond, in words (None
+    when no single side has them all)."""
     if view.clip_plane is not None and np.all(
             math3d.transform_points(np.eye(4), points) @ view.clip_plane <= 0.0):
         return "behind the mirror it would be seen in"
@@ -363,45 +405,27 @@ def _sphere_in_view(center: np.ndarray, radius: float, view: View) -> bool:
     return True
 
 
-@lru_cache(maxsize=64)
-def _mesh_sphere(mesh: Path) -> tuple[np.ndarray, float]:
-    from mirrorlab.scene.mesh import load_mesh
-
-    positions = load_mesh(mesh).positions.astype(np.float64)
-    center = (positions.min(axis=0) + positions.max(axis=0)) / 2.0
-    return center, float(np.linalg.norm(positions - center, axis=1).max())
+def bounding_sphere(reflector: Reflector) -> tuple[np.ndarray, float]:
+    """World centre ``(3,)`` and radius of a sphere around the reflector
+    (:func:`mirrorlab.bounds.bounding_sphere`)."""
+    return bounds.bounding_sphere(reflector)
 
 
-def bounding_sphere(reflector: CurvedReflector) -> tuple[np.ndarray, float]:
-    """World centre ``(3,)`` and radius of a sphere around the reflector's mesh."""
-    center, radius = _mesh_sphere(reflector.mesh)
-    model = reflector.model_matrix()
-    world = math3d.transform_points(model, center)[:3]
-    stretch = float(np.linalg.svd(model[:3, :3], compute_uv=False).max())
-    return world, radius * stretch
+def reflector_footprint(reflector: Reflector, view: View) -> Footprint:
+    """Where ``reflector`` can show in ``view`` (:mod:`mirrorlab.footprint`): a planar
+    mirror's quad clipped against the view volume and the view's clip plane, a curved
+    reflector's bounding sphere by its projected ellipse. It errs large."""
+    if isinstance(reflector, PlanarReflector):
+        return polygon_footprint(reflector.corner_array, view.view_projection, view.size,
+                                 view.clip_plane)
+    center, radius = bounding_sphere(reflector)
+    return sphere_footprint(center, radius, view.view, view.projection, view.size)
 
 
 def screen_area(reflector: Reflector, view: View) -> float:
-    """About how many pixels ``reflector`` covers in ``view`` (inf when it reaches behind
-    the eye, where a projection says nothing)."""
-    width, height = view.size
-    if isinstance(reflector, PlanarReflector):
-        clip = math3d.transform_points(view.view_projection, reflector.corner_array)
-        if np.any(clip[:, 3] <= 1e-9):
-            return float("inf")
-        ndc = clip[:, :2] / clip[:, 3:4]
-        pixels = np.clip(ndc, -1.0, 1.0) * [width / 2.0, height / 2.0]
-        x, y = pixels[:, 0], pixels[:, 1]
-        return float(abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))) / 2.0)
-    center, radius = bounding_sphere(reflector)
-    if is_orthographic(view.projection):
-        scale = abs(view.projection[1, 1]) * height / 2.0
-        return float(np.pi * (radius * scale) ** 2)
-    depth = float(-(view.view @ np.append(center, 1.0))[2])
-    if depth <= radius:
-        return float("inf")
-    scale = abs(view.projection[1, 1]) * height / 2.0
-    return float(np.pi * (radius * scale / depth) ** 2)
+    """At most how many pixels ``reflector`` covers in ``view`` (its footprint's
+    :attr:`~mirrorlab.footprint.Footprint.pixels`)."""
+    return reflector_footprint(reflector, view).pixels
 
 
 def describe_steps(plan: FramePlan) -> list[str]:

@@ -8,6 +8,26 @@ Shading repeats the rasteriser's model in numpy:
 ``albedo * (ambient + sum of light * max(n . l, 0))`` with the vertex normal
 interpolated across the triangle and the texture sampled with its mipmaps.
 
+It draws the picture the rasteriser draws, by the same definition (docs/accuracy.md):
+
+- **Near and far planes.** Primary rays start on the camera's near plane; a primary
+  ray whose first surface lies beyond the far plane sees the background, as GL clips
+  it. Reflections see the whole scene, whatever the far plane (the rasteriser's
+  reflection views reach as far as the scene extends).
+- **Back faces.** Every surface but a planar mirror is seen from its front only: a ray
+  meeting a back face passes through it, as back-face culling lets the rasteriser's
+  view through. So the inside of a curved reflector shows the world beyond it, not
+  a reflection; a planar mirror's back shows its backing colour.
+- **Offsets.** A ray leaving a surface starts a few hundred float32 ULPs off it along
+  its normal, in the frame the intersector works in (Wachter and Binder, "A Fast and
+  Robust Method for Avoiding Self-Intersection", Ray Tracing Gems ch. 6): the offset
+  scales with the hit's magnitude, so the truth holds at any scale.
+- **Mip selection.** Each ray carries ray differentials (Igehy 1999): the rays through
+  the neighbouring pixel of its 2 x 2 quad in x and in y, transferred to every surface
+  it meets and reflected with it (a curved mirror's normal turning spreads them). The
+  texture's level of detail is chosen from them where the ray ends, as a GPU chooses
+  it from the differences across its quad, for every pixel and at every bounce.
+
 It shares no code with the GL passes: the scene (:class:`~mirrorlab.scene.model.Scene`,
 its meshes and the camera's matrices) is the only common ground, so it stays an
 independent check of every rasterised technique. :func:`trace_scene` traces any scene.
@@ -31,7 +51,16 @@ from mirrorlab.scene.model import CurvedReflector, PlanarReflector, Scene
 Environment = Callable[[np.ndarray], np.ndarray]
 """``env(directions (n, 3) unit, world) -> (n, 3)`` RGB in [0, 1] for rays that escape."""
 
-_EPSILON = 1e-4  # scene units; pushes secondary rays off the surface they leave
+_ULP_ORIGIN = 1.0 / 32.0
+_FLOAT_SCALE = 1.0 / 65536.0
+_INT_SCALE = 256.0
+"""Wachter and Binder's constants (Ray Tracing Gems ch. 6): below |p| = 1/32 a fixed
+offset of 1/65536 along the normal, above it 256 float32 ULPs of each coordinate."""
+_FRAME_SIZE = 100.0
+"""The intersector's float32 frame: the mesh's bounding box moved to the origin and
+scaled so its diagonal is 100 (as trimesh hands it to embree); offsets are made there."""
+_MAX_PASSES = 16
+"""Back faces a ray may pass through before it is taken to escape."""
 
 
 @dataclass
@@ -152,12 +181,36 @@ class RayScene:
         self._mip_chains: dict[int, MipChain] = {}
         self._face_normals = np.cross(self._triangles[:, 1] - self._triangles[:, 0],
                                       self._triangles[:, 2] - self._triangles[:, 0])
+        self._reflective = np.array([s.reflective for s in self.surfaces])
+        self._backed = np.array([s.backing is not None for s in self.surfaces])
+        self._texture_sizes = np.array(
+            [(0.0, 0.0) if s.texture is None or s.reflective
+             else (s.texture.shape[1], s.texture.shape[0]) for s in self.surfaces],
+            dtype=np.float64)
+        low, high = vertices.min(axis=0), vertices.max(axis=0)
+        self._frame_origin = low
+        self._frame_scale = _FRAME_SIZE / max(float(np.linalg.norm(high - low)), 1e-300)
 
     def _escape(self, directions: np.ndarray) -> np.ndarray:
         if callable(self.background):
             return np.asarray(self.background(directions), dtype=np.float64)
         return np.broadcast_to(np.asarray(self.background, dtype=np.float64),
                                directions.shape).copy()
+
+    def offset_points(self, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+        """``points`` ``(n, 3)`` moved off their surface along ``normals`` ``(n, 3)``
+        (unit, pointing where the next ray goes) by Wachter and Binder's integer-ULP
+        offset, made in the intersector's float32 frame: far enough that the next ray
+        cannot meet the surface it leaves again, at any scale or distance from the
+        origin, and no farther."""
+        q = ((points - self._frame_origin) * self._frame_scale).astype(np.float32)
+        n = np.asarray(normals, dtype=np.float32)
+        steps = (_INT_SCALE * n).astype(np.int32)
+        bits = q.view(np.int32)
+        moved = (bits + np.where(q < 0, -steps, steps)).view(np.float32)
+        near_zero = np.abs(q) < _ULP_ORIGIN
+        offset = np.where(near_zero, q + np.float32(_FLOAT_SCALE) * n, moved)
+        return offset.astype(np.float64) / self._frame_scale + self._frame_origin
 
     def trace(self, origins: np.ndarray, directions: np.ndarray,
               bounces: int = 1) -> tuple[np.ndarray, np.ndarray]:
@@ -169,47 +222,139 @@ class RayScene:
                              np.asarray(directions, dtype=np.float64), bounces)
         return self._shade(hits, np.zeros(len(hits.surface))), hits.on_mirror
 
-    def _resolve(self, origins: np.ndarray, directions: np.ndarray, bounces: int) -> _Hits:
-        """Follow each ray through up to ``bounces`` reflections to the surface it ends on."""
+    def _first_visible(self, origins: np.ndarray, directions: np.ndarray,
+                       spreads: np.ndarray | None, beyond: Callable[[np.ndarray], np.ndarray]
+                       | None) -> _Visible:
+        """Each ray's first surface seen from its front (or a planar mirror's backing),
+        passing through back faces; ``spreads`` ``(n, 4, 3)`` are its differentials,
+        carried to that surface; ``beyond`` marks hit points past the far plane (those
+        rays see nothing)."""
+        count = len(origins)
+        seen = _Visible.none(count, spreads)
+        pending = np.arange(count)
+        origins = origins.copy()
+        spreads = None if spreads is None else spreads.copy()
+        for _ in range(_MAX_PASSES):
+            if len(pending) == 0:
+                break
+            faces, rays, points = self._mesh.ray.intersects_id(
+                origins[pending], directions[pending], multiple_hits=False,
+                return_locations=True)
+            if len(rays) == 0:
+                break
+            faces, local = np.asarray(faces), np.asarray(rays)
+            rays = pending[local]
+            surface_ids = self._face_surface[faces]
+            face_normals = self._face_normals[faces]
+            incoming = directions[rays]
+            front = np.einsum("nd,nd->n", face_normals, incoming) < 0.0
+            backed = self._backed[surface_ids]
+            if spreads is not None:
+                spreads[rays] = _transfer(spreads[rays], points - origins[rays], incoming,
+                                          face_normals)
+            stops = front | backed
+            if beyond is not None:
+                clipped = stops & beyond(points)
+                stops &= ~clipped  # past the far plane: these rays see the background
+            done = rays[stops]
+            seen.face[done] = faces[stops]
+            seen.point[done] = points[stops]
+            seen.front[done] = front[stops]
+            through = ~front & ~backed
+            if beyond is not None:
+                through &= ~beyond(points)
+            # Culled back faces: go on from just past them.
+            unit_normals = face_normals[through] / np.linalg.norm(
+                face_normals[through], axis=1, keepdims=True)
+            origins[rays[through]] = self.offset_points(points[through], -unit_normals)
+            pending = rays[through]
+        if spreads is not None:
+            seen.spreads = spreads
+        return seen
+
+    def _resolve(self, origins: np.ndarray, directions: np.ndarray, bounces: int,
+                 spreads: np.ndarray | None = None,
+                 beyond: Callable[[np.ndarray], np.ndarray] | None = None) -> _Hits:
+        """Follow each ray through up to ``bounces`` reflections to the surface it ends on;
+        with ``spreads`` (its ray differentials ``(n, 4, 3)``) the texel footprint there
+        too. ``beyond`` (primary rays only) marks points past the far plane."""
         hits = _Hits.escaping(directions)
         if len(origins) == 0:
             return hits
-        faces, rays, points = self._mesh.ray.intersects_id(
-            origins, directions, multiple_hits=False, return_locations=True)
+        seen = self._first_visible(origins, directions, spreads, beyond)
+        rays = np.nonzero(seen.face >= 0)[0]
         if len(rays) == 0:
             return hits
-        faces, rays = np.asarray(faces), np.asarray(rays)
+        faces, points, front = seen.face[rays], seen.point[rays], seen.front[rays]
         barycentric = _barycentric(self._triangles[faces], points)
         corners = self._faces[faces]
-        normals = np.einsum("nk,nkd->nd", barycentric, self._normals[corners])
-        normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-300)
-        front = np.einsum("nd,nd->n", self._face_normals[faces], directions[rays]) < 0.0
+        raw_normals = np.einsum("nk,nkd->nd", barycentric, self._normals[corners])
+        lengths = np.maximum(np.linalg.norm(raw_normals, axis=1, keepdims=True), 1e-300)
+        normals = raw_normals / lengths
         surface_ids = self._face_surface[faces]
         hits.surface[rays] = surface_ids
         hits.first[rays] = surface_ids
         hits.uv[rays] = np.einsum("nk,nkd->nd", barycentric, self._uvs[corners])
         hits.normal[rays] = normals
-        mirrors = np.array([s.reflective for s in self.surfaces])[surface_ids]
-        backed = np.array([s.backing is not None for s in self.surfaces])[surface_ids]
-        hits.backing[rays[mirrors & backed & ~front]] = True
+        mirrors = self._reflective[surface_ids]
+        hits.backing[rays[~front]] = True  # a planar mirror's back: its backing colour
         hits.on_mirror[rays[mirrors & front]] = True
-        reflecting = mirrors & (front | ~backed)
+        reflecting = mirrors & front
+        derivatives = None
+        if seen.spreads is not None:
+            derivatives = _surface_derivatives(self._triangles[faces], seen.spreads[rays])
+            hits.texels[rays] = self._texel_footprint(surface_ids, corners, derivatives)
         if not reflecting.any():
             return hits
         if bounces <= 0:  # bounces used up: the mirror is a plain surface
             hits.plain[rays[reflecting]] = True
             return hits
-        rays, points, normals = rays[reflecting], points[reflecting], normals[reflecting]
-        incoming = directions[rays]
+        incoming = directions[rays[reflecting]]
+        normal = normals[reflecting]
         # A mirror reflects about its normal turned towards the incoming ray.
-        facing = np.where((np.einsum("nd,nd->n", normals, incoming) > 0)[:, None],
-                          -normals, normals)
-        reflected = incoming - 2.0 * np.einsum("nd,nd->n", incoming, facing)[:, None] * facing
+        towards = np.where(np.einsum("nd,nd->n", normal, incoming) > 0, -1.0, 1.0)[:, None]
+        facing = normal * towards
+        along = np.einsum("nd,nd->n", incoming, facing)[:, None]
+        reflected = incoming - 2.0 * along * facing
         reflected /= np.linalg.norm(reflected, axis=1, keepdims=True)
-        onward = self._resolve(points + _EPSILON * facing, reflected, bounces - 1)
-        for name in ("surface", "uv", "normal", "direction", "backing", "plain"):
-            getattr(hits, name)[rays] = getattr(onward, name)
+        onward_spreads = None
+        if seen.spreads is not None and derivatives is not None:
+            onward_spreads = _reflect_spreads(
+                seen.spreads[rays[reflecting]], incoming, facing, along,
+                derivatives[reflecting], self._normals[corners[reflecting]], towards,
+                lengths[reflecting])
+        face_normals = self._face_normals[faces[reflecting]]
+        leave = face_normals / np.linalg.norm(face_normals, axis=1, keepdims=True)
+        reflected, onward_spreads = self.onward(surface_ids[reflecting], leave, reflected,
+                                                onward_spreads)
+        starts = self.offset_points(points[reflecting], leave)  # front faces: leave outward
+        onward = self._resolve(starts, reflected, bounces - 1, onward_spreads)
+        chosen = rays[reflecting]
+        for name in ("surface", "uv", "normal", "direction", "backing", "plain", "texels"):
+            getattr(hits, name)[chosen] = getattr(onward, name)
         return hits
+
+    def onward(self, surface_ids: np.ndarray, outward: np.ndarray, reflected: np.ndarray,
+               spreads: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
+        """Where rays go on from the reflective surfaces ``surface_ids`` ``(n,)`` they met
+        (``outward`` ``(n, 3)``: the faces' unit normals): the mirror reflections
+        ``reflected`` ``(n, 3)`` with their differentials ``spreads``, as they are. A
+        model of another kind of reflector (a test's) changes them here."""
+        return reflected, spreads
+
+    def _texel_footprint(self, surface_ids: np.ndarray, corners: np.ndarray,
+                         derivatives: np.ndarray) -> np.ndarray:
+        """``(n,)``: how many texels of its texture the ray's pixel step covers at its hit
+        (GL's rho: the longer of the x and y steps), from the barycentric derivatives
+        ``(n, 2, 2)`` (``d(u, v)/d(x, y)`` of the hit's triangle coordinates)."""
+        texels = np.zeros(len(surface_ids))
+        uv = self._uvs[corners]  # (n, 3, 2)
+        edges = np.stack([uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]], axis=1)  # (n, 2, 2)
+        steps = np.einsum("nak,nab->nbk", edges, derivatives)  # uv change per x, per y
+        sizes = self._texture_sizes[surface_ids]  # (n, 2) width, height (0: untextured)
+        lengths = np.linalg.norm(steps * sizes[:, None, :], axis=2)  # (n, 2)
+        texels[:] = lengths.max(axis=1)
+        return texels
 
     def _shade(self, hits: _Hits, lod: np.ndarray) -> np.ndarray:
         """Colours ``(n, 3)`` of resolved hits; ``lod`` ``(n,)`` is log2 of the texel footprint."""
@@ -218,10 +363,11 @@ class RayScene:
         colors[escaped] = self._escape(hits.direction[escaped])
         for index, surface in enumerate(self.surfaces):
             mine = hits.surface == index
+            backing = mine & hits.backing
+            if backing.any() and surface.backing is not None:
+                colors[backing] = np.asarray(surface.backing, dtype=np.float64)
+            mine = mine & ~hits.backing
             if surface.reflective:
-                backing = mine & hits.backing
-                if backing.any():
-                    colors[backing] = np.asarray(surface.backing, dtype=np.float64)
                 mine = mine & hits.plain
             if not mine.any():
                 continue
@@ -250,10 +396,10 @@ class RayScene:
         the image rows ``rows`` = (first, end) when given (first even, so that each 2 x 2
         pixel quad lies in the band), and the result has those rows only.
 
-        Rays start on the near plane, so nothing nearer than it shows, as in GL.
-        Textures are filtered like GL_LINEAR_MIPMAP_LINEAR, with the level chosen
-        from the texture-coordinate differences between neighbouring pixels
-        (as a GPU does across a 2 x 2 quad).
+        Rays start on the near plane, so nothing nearer than it shows, and a first hit
+        past the far plane shows the background, as in GL. Textures are filtered like
+        GL_LINEAR_MIPMAP_LINEAR, the level chosen from each ray's differentials: the rays
+        through the other pixel of its 2 x 2 quad in x and in y, followed with it.
         """
         width, full_height = (int(v) for v in size)
         first, end = rows if rows is not None else (0, full_height)
@@ -261,52 +407,121 @@ class RayScene:
             raise ValueError(f"rows must be (even first, end) within 0..{full_height}, "
                              f"got {rows}")
         height = end - first
-        columns = (np.arange(width) + 0.5) / width * 2.0 - 1.0
-        rows_ndc = 1.0 - (np.arange(first, end) + 0.5) / full_height * 2.0
-        ndc_x, ndc_y = np.meshgrid(columns, rows_ndc)
-        inverse = np.linalg.inv(np.asarray(projection, dtype=np.float64)
-                                @ np.asarray(view, dtype=np.float64))
-        flat = np.stack([ndc_x.ravel(), ndc_y.ravel()], axis=1)
-        near = _unproject(inverse, flat, -1.0)
-        far = _unproject(inverse, flat, 1.0)
-        directions = far - near
-        directions /= np.linalg.norm(directions, axis=1, keepdims=True)
-        hits = self._resolve(near, directions, bounces)
-        lod = self._pixel_lod(hits, width, height)
-        colors = self._shade(hits, lod.ravel())
+        matrix = np.asarray(projection, dtype=np.float64) @ np.asarray(view, dtype=np.float64)
+        inverse = np.linalg.inv(matrix)
+
+        def rays(columns: np.ndarray, image_rows: np.ndarray):
+            ndc_x = (columns + 0.5) / width * 2.0 - 1.0
+            ndc_y = 1.0 - (image_rows + 0.5) / full_height * 2.0
+            grid_x, grid_y = np.meshgrid(ndc_x, ndc_y)
+            flat = np.stack([grid_x.ravel(), grid_y.ravel()], axis=1)
+            near = _unproject(inverse, flat, -1.0)
+            directions = _unproject(inverse, flat, 1.0) - near
+            return near, directions / np.linalg.norm(directions, axis=1, keepdims=True)
+
+        columns, image_rows = np.arange(width), np.arange(first, end)
+        near, directions = rays(columns, image_rows)
+        # The other pixel of each 2 x 2 quad (past the edge for an odd size, as a GPU's
+        # helper pixel is), for the differentials.
+        near_x, directions_x = rays(columns ^ 1, image_rows)
+        near_y, directions_y = rays(columns, image_rows ^ 1)
+        spreads = np.stack([near_x - near, directions_x - directions,
+                            near_y - near, directions_y - directions], axis=1)
+
+        def beyond(points: np.ndarray) -> np.ndarray:
+            clip = np.column_stack([points, np.ones(len(points))]) @ matrix.T
+            with np.errstate(divide="ignore", invalid="ignore"):
+                return clip[:, 2] > clip[:, 3]
+
+        hits = self._resolve(near, directions, bounces, spreads, beyond)
+        lod = np.log2(np.maximum(hits.texels, 1.0))
+        colors = self._shade(hits, lod)
         return RayImage(colors.reshape(height, width, 3), hits.on_mirror.reshape(height, width),
                         hits.first.reshape(height, width))
 
-    def _pixel_lod(self, hits: _Hits, width: int, height: int) -> np.ndarray:
-        """``(height, width)`` mip level per pixel from texel-space differences to the other
-        pixel of its 2 x 2 quad in x and in y (0 where the neighbour lies on another part)."""
-        lod = np.zeros((height, width))
-        surface = hits.surface.reshape(height, width)
-        uv = hits.uv.reshape(height, width, 2)
-        sizes = np.ones((height, width, 2))
-        for index, part in enumerate(self.surfaces):
-            if part.texture is not None:
-                sizes[surface == index] = (part.texture.shape[1], part.texture.shape[0])
-        texels = uv * sizes
-        partner_x = np.arange(width) ^ 1
-        partner_y = np.arange(height) ^ 1
-        partner_x[partner_x >= width] = width - 1
-        partner_y[partner_y >= height] = height - 1
-        dx = texels[:, partner_x] - texels
-        dy = texels[partner_y] - texels
-        dx[surface[:, partner_x] != surface] = 0.0
-        dy[surface[partner_y] != surface] = 0.0
-        rho = np.maximum(np.linalg.norm(dx, axis=2), np.linalg.norm(dy, axis=2))
-        lod[rho > 1.0] = np.log2(rho[rho > 1.0])
-        return lod
+
+def _transfer(spreads: np.ndarray, travelled: np.ndarray, directions: np.ndarray,
+              normals: np.ndarray) -> np.ndarray:
+    """Ray differentials ``(n, 4, 3)`` (d origin / dx, d direction / dx, the same for y)
+    carried along unit ``directions`` ``(n, 3)`` by ``travelled`` ``(n, 3)`` onto the
+    plane with normal ``normals`` ``(n, 3)`` (Igehy's transfer): the origins' change
+    becomes the change of the hit point on that plane."""
+    distance = np.linalg.norm(travelled, axis=1)[:, None]
+    out = spreads.copy()
+    denominator = np.einsum("nd,nd->n", directions, normals)[:, None]
+    safe = np.where(np.abs(denominator) > 1e-300, denominator, 1e-300)
+    for origin, direction in ((0, 1), (2, 3)):
+        moved = spreads[:, origin] + distance * spreads[:, direction]
+        along = np.einsum("nd,nd->n", moved, normals)[:, None] / safe
+        out[:, origin] = moved - along * directions
+    return out
+
+
+def _surface_derivatives(triangles: np.ndarray, spreads: np.ndarray) -> np.ndarray:
+    """``(n, 2, 2)``: the change of a hit's triangle coordinates (u along B - A, v along
+    C - A) per pixel step in x (column 0) and in y (column 1), from its transferred
+    differentials ``(n, 4, 3)``."""
+    a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
+    e1, e2 = b - a, c - a
+    g11 = np.einsum("nd,nd->n", e1, e1)
+    g12 = np.einsum("nd,nd->n", e1, e2)
+    g22 = np.einsum("nd,nd->n", e2, e2)
+    det = g11 * g22 - g12 * g12
+    det = np.where(np.abs(det) > 1e-300, det, 1e-300)
+    out = np.empty((len(triangles), 2, 2))
+    for column, origin in enumerate((0, 2)):
+        step = spreads[:, origin]
+        r1 = np.einsum("nd,nd->n", e1, step)
+        r2 = np.einsum("nd,nd->n", e2, step)
+        out[:, 0, column] = (g22 * r1 - g12 * r2) / det
+        out[:, 1, column] = (g11 * r2 - g12 * r1) / det
+    return out
+
+
+def _reflect_spreads(spreads: np.ndarray, incoming: np.ndarray, facing: np.ndarray,
+                     along: np.ndarray, derivatives: np.ndarray, corner_normals: np.ndarray,
+                     towards: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """The differentials ``(n, 4, 3)`` of the reflected rays: the hit point's change stays
+    the origin's, the direction's change is ``dD - 2 ((dD.n) n + (D.n) dn)``, ``dn`` the
+    change of the interpolated unit normal across the triangle (zero on a flat mirror:
+    the corners' normals agree)."""
+    out = spreads.copy()
+    edges = np.stack([corner_normals[:, 1] - corner_normals[:, 0],
+                      corner_normals[:, 2] - corner_normals[:, 0]], axis=1)  # (n, 2, 3)
+    for column, (origin, direction) in enumerate(((0, 1), (2, 3))):
+        raw = np.einsum("nk,nkd->nd", derivatives[:, :, column], edges)
+        raw_change = raw / lengths
+        change = (raw_change - np.einsum("nd,nd->n", raw_change, facing * towards)[:, None]
+                  * facing * towards) * towards
+        d_direction = spreads[:, direction]
+        out[:, direction] = d_direction - 2.0 * (
+            np.einsum("nd,nd->n", d_direction, facing)[:, None] * facing + along * change)
+        out[:, origin] = spreads[:, origin]
+    return out
+
+
+@dataclass
+class _Visible:
+    """Each ray's first visible surface: its ``face`` (-1: none), the hit ``point``, whether
+    it met the face's ``front``, and the ray differentials carried there."""
+
+    face: np.ndarray
+    point: np.ndarray
+    front: np.ndarray
+    spreads: np.ndarray | None
+
+    @classmethod
+    def none(cls, count: int, spreads: np.ndarray | None) -> _Visible:
+        return cls(np.full(count, -1), np.zeros((count, 3)), np.zeros(count, dtype=bool),
+                   None)
 
 
 @dataclass
 class _Hits:
     """Where each ray's path ends: ``surface`` index (-1 escaped), ``uv`` and ``normal`` there,
     the last ``direction`` travelled, whether it ended on a mirror's ``backing``, on a
-    mirror with no bounces left (``plain``), and whether the first hit was a mirror's
-    front (``on_mirror``)."""
+    mirror with no bounces left (``plain``), whether the first hit was a mirror's front
+    (``on_mirror``), and the texel footprint there (``texels``, from ray differentials)."""
 
     surface: np.ndarray
     uv: np.ndarray
@@ -316,13 +531,14 @@ class _Hits:
     plain: np.ndarray
     on_mirror: np.ndarray
     first: np.ndarray
+    texels: np.ndarray
 
     @classmethod
     def escaping(cls, directions: np.ndarray) -> _Hits:
         count = len(directions)
         return cls(np.full(count, -1), np.zeros((count, 2)), np.zeros((count, 3)),
                    directions.copy(), np.zeros(count, dtype=bool), np.zeros(count, dtype=bool),
-                   np.zeros(count, dtype=bool), np.full(count, -1))
+                   np.zeros(count, dtype=bool), np.full(count, -1), np.zeros(count))
 
 
 class MipChain:
@@ -374,10 +590,11 @@ def _barycentric(triangles: np.ndarray, points: np.ndarray) -> np.ndarray:
     return np.stack([1.0 - v - w, v, w], axis=1)
 
 
-def ray_scene(scene: Scene) -> RayScene:
+def ray_scene(scene: Scene, model: type[RayScene] | None = None) -> RayScene:
     """The tracer's model of ``scene``: every object's parts, each planar mirror as a
-    reflective quad with its backing, each curved reflector as a perfect mirror (both
-    faces reflect), the lights, and the background for rays that escape."""
+    reflective quad with its backing, each curved reflector as a perfect mirror seen
+    from outside (rays pass through its back faces), the lights, and the background for
+    rays that escape; a ``model`` (a :class:`RayScene` subclass) in place of RayScene."""
     from mirrorlab.scene.robot import scene_parts
 
     surfaces = [mesh_surface(part.mesh, part.model, color=part.color,
@@ -398,7 +615,7 @@ def ray_scene(scene: Scene) -> RayScene:
               for light in scene.lights]
     background = (scene.background.color if not scene.background.is_environment
                   else environment_of(scene.background))
-    return RayScene(surfaces, lights, scene.ambient, background)
+    return (model or RayScene)(surfaces, lights, scene.ambient, background)
 
 
 TILE_RAYS = 1 << 17
@@ -408,7 +625,7 @@ TILE_RAYS = 1 << 17
 def trace_scene(scene: Scene, size: Sequence[int], supersample: int = 1,
                 camera_view: np.ndarray | None = None,
                 projection: np.ndarray | None = None, progress: bool = False,
-                tile_rays: int = TILE_RAYS) -> RayImage:
+                tile_rays: int = TILE_RAYS, model: type[RayScene] | None = None) -> RayImage:
     """Ray-traced image and reflective mask of ``scene`` seen by its camera (or the given
     ``camera_view`` and ``projection``) at ``size`` (width, height), following
     ``scene.max_bounces`` reflections.
@@ -420,7 +637,8 @@ def trace_scene(scene: Scene, size: Sequence[int], supersample: int = 1,
 
     The image is traced in bands of rows, about ``tile_rays`` rays each, so the memory
     it takes is the result's (about 17 bytes a pixel) and one band's, at any size;
-    ``progress`` shows a tqdm bar of the bands on stderr.
+    ``progress`` shows a tqdm bar of the bands on stderr. ``model`` is the
+    :class:`RayScene` class traced with (see :func:`ray_scene`).
     """
     width, height = (int(v) for v in size)
     k = int(supersample)
@@ -428,7 +646,7 @@ def trace_scene(scene: Scene, size: Sequence[int], supersample: int = 1,
         raise ValueError(f"supersample must be a positive whole number, got {supersample!r}")
     view = scene.camera.view() if camera_view is None else camera_view
     proj = scene.camera.projection(width / height) if projection is None else projection
-    rays = ray_scene(scene)
+    rays = ray_scene(scene, model)
     first_reflector = len(rays.surfaces) - len(scene.reflectors)
     band = max(2, tile_rays // (k * k * width) // 2 * 2)  # image rows a band, even
     image = np.empty((height, width, 3), dtype=np.float32)
@@ -464,3 +682,9 @@ def _trace_band(rays: RayScene, view: np.ndarray, proj: np.ndarray, bounces: int
     image[top:bottom] = colors
     pixels[top:bottom] = _to_uint8(colors)
     mask[top:bottom] = traced.reflective_mask.reshape(rows, k, width, k).all(axis=(1, 3))
+
+
+def trace_frame(scene: Scene, size: Sequence[int], progress: bool = False) -> np.ndarray:
+    """The ``raytrace`` technique (:mod:`mirrorlab.techniques`): ``scene``'s ground truth at
+    ``size`` as ``(h, w, 3)`` uint8."""
+    return trace_scene(scene, size, progress=progress).to_uint8()

@@ -31,6 +31,7 @@ from mirrorlab.scene.model import (
     Background,
     CurvedReflector,
     DistanceSearch,
+    PlanarReflector,
     Reflector,
     Scene,
     Transform,
@@ -63,9 +64,12 @@ class FrameStats:
 
 
 def _pass_key(reflector: Reflector, background: Background) -> tuple:
-    """What a reflector's pass is made from: everything but where a curved one is (it may
-    move every frame) and the sizes of its parallax correction (read at each draw; the
-    kind chooses the shader), and the background for the maps baked from it."""
+    """What a reflector's pass is made from: everything but where it is (it may move every
+    frame; a planar pass places its quad at each draw) and the sizes of a curved one's
+    parallax correction (read at each draw; the kind chooses the shader), and the
+    background for the maps baked from it."""
+    if isinstance(reflector, PlanarReflector):
+        return (reflector.technique, reflector.capture, None)
     if isinstance(reflector, CurvedReflector):
         parallax = reflector.parallax
         still = replace(reflector, transform=Transform(), parallax=None)
@@ -158,8 +162,9 @@ class SceneRenderer:
                tiny_pixels: float = TINY_PIXELS, view: View | None = None) -> FrameStats:
         """Draw one frame of ``scene`` (as seen by its camera, or ``view``) into ``target``.
 
-        ``use_plan`` False runs every pass (see :func:`~mirrorlab.plan.plan_frame`);
-        ``tiny_pixels`` 0 keeps small reflectors reflecting.
+        ``use_plan`` False runs every pass (see :func:`~mirrorlab.plan.plan_frame`); the
+        frame is the same either way. ``tiny_pixels`` above 0 turns on the lossy rule that
+        draws a reflector covering fewer pixels than that plain (off by default).
         """
         start = time.perf_counter()
         found = gl_state()

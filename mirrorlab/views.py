@@ -34,7 +34,6 @@ CUBE_FACES = (
     ((0.0, 0.0, -1.0), (0.0, -1.0, 0.0)),
 )
 CUBE_FACE_NAMES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
-CUBE_NEAR, CUBE_FAR = 0.05, 200.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -46,7 +45,9 @@ class View:
     None for an orthographic view (which looks along ``-z`` of its eye space);
     ``mirrored`` True when ``projection @ view`` turns counter-clockwise triangles
     clockwise (the world seen in a mirror); ``clip_plane`` ``(4,)`` world-space plane
-    whose negative side is cut away, or None; ``label`` names the view in plans.
+    whose negative side is cut away, or None; ``label`` names the view in plans;
+    ``depth_range`` the (near, far) clip distances its projection was made with (an
+    oblique near plane then replaced near), None where unknown.
     """
 
     view: np.ndarray
@@ -56,10 +57,44 @@ class View:
     label: str
     mirrored: bool = False
     clip_plane: np.ndarray | None = None
+    depth_range: tuple[float, float] | None = None
 
     @cached_property
     def view_projection(self) -> np.ndarray:
         return self.projection @ self.view
+
+    @cached_property
+    def origin(self) -> np.ndarray:
+        """World point ``(3,)`` everything is drawn relative to (camera-relative
+        rendering, see :meth:`relative`): the eye, or an orthographic view's camera
+        position."""
+        if self.eye is not None:
+            return np.asarray(self.eye, dtype=np.float64)
+        return eye_position(self.view)
+
+    @cached_property
+    def relative_view_projection(self) -> np.ndarray:
+        """``(4, 4)`` float64: :attr:`view_projection` for points given relative to
+        :attr:`origin` (its translation is the eye's own, near zero), so that float32 on
+        the GL side never holds a large world position."""
+        return np.asarray(self.projection, dtype=np.float64) @ self.relative_view
+
+    @cached_property
+    def relative_view(self) -> np.ndarray:
+        """``(4, 4)``: the rigid :attr:`view` for points relative to :attr:`origin`."""
+        return np.asarray(self.view, dtype=np.float64) @ math3d.translate(self.origin)
+
+    def relative(self, model: np.ndarray) -> np.ndarray:
+        """``model`` ``(4, 4)`` (object to world) composed in float64 with the move to
+        :attr:`origin`: object to origin-relative world, ready for float32 upload."""
+        return math3d.translate(-self.origin) @ np.asarray(model, dtype=np.float64)
+
+    def relative_plane(self, plane: np.ndarray | None) -> np.ndarray | None:
+        """A world plane ``(4,)`` for points relative to :attr:`origin` (None stays None)."""
+        if plane is None:
+            return None
+        plane = np.asarray(plane, dtype=np.float64)
+        return np.append(plane[:3], plane[3] + plane[:3] @ self.origin)
 
     @cached_property
     def forward(self) -> np.ndarray:
@@ -99,7 +134,7 @@ def camera_view(camera: Camera, size: tuple[int, int], label: str = "camera") ->
     """The viewer's view of a ``size`` (width, height) target."""
     view, projection, eye = _camera_matrices(camera, size[0] / size[1])
     return View(view=view, projection=projection, size=(int(size[0]), int(size[1])),
-                eye=eye, label=label)
+                eye=eye, label=label, depth_range=camera.depth_range)
 
 
 def eye_position(view: np.ndarray) -> np.ndarray:
@@ -124,19 +159,31 @@ def _mirror_of(view: View, plane: np.ndarray) -> tuple[np.ndarray, np.ndarray | 
     return mirrored, eye
 
 
+def _reaching(projection: np.ndarray, view: View, far: float | None
+              ) -> tuple[np.ndarray, tuple[float, float] | None]:
+    """``projection`` (of a view derived from ``view``) with its far plane moved to ``far``
+    (a perspective one, when ``far`` is given; its near is ``view``'s), and the range."""
+    if far is None or view.depth_range is None or is_orthographic(projection):
+        return projection, view.depth_range
+    near = min(view.depth_range[0], 0.5 * far)
+    return math3d.with_depth_range(projection, near, far), (near, far)
+
+
 def reflected_capture_view(view: View, reflector: PlanarReflector,
-                           size: tuple[int, int] | None = None) -> View | None:
+                           size: tuple[int, int] | None = None,
+                           far: float | None = None) -> View | None:
     """The capture camera of a ``reflected`` mirror for ``view``: the view reflected in the
-    mirror's plane, its near plane moved onto the glass (Lengyel's oblique projection),
-    drawn at ``size`` (default: ``view``'s). Its :meth:`View.texture_matrix` maps a point
-    on the glass to where ``view`` sees it. None when the viewer is in or behind the
-    mirror's plane, where no such camera exists (nothing of the glass's front is seen).
+    mirror's plane, its far plane at ``far`` (default: ``view``'s) and its near plane moved
+    onto the glass (Lengyel's oblique projection), drawn at ``size`` (default:
+    ``view``'s). Its :meth:`View.texture_matrix` maps a point on the glass to where
+    ``view`` sees it. None when the viewer is in or behind the mirror's plane, where no
+    such camera exists (nothing of the glass's front is seen).
     """
     plane = reflector.plane
     rigid, eye = _mirror_of(view, plane)
     # Flip clip-space x back as well: the capture keeps view's winding, and x runs the
     # other way across the image, which the projective lookup undoes.
-    projection = _FLIP_X @ view.projection @ _FLIP_X
+    projection, depth_range = _reaching(_FLIP_X @ view.projection @ _FLIP_X, view, far)
     plane_in_eye = plane @ np.linalg.inv(rigid)
     try:
         projection = math3d.oblique_projection(projection, plane_in_eye)
@@ -145,16 +192,20 @@ def reflected_capture_view(view: View, reflector: PlanarReflector,
     if not np.all(np.isfinite(projection)):
         return None
     return View(view=rigid, projection=projection, size=size or view.size, eye=eye,
-                label=f"{reflector.name} seen from {view.label}", mirrored=view.mirrored)
+                label=f"{reflector.name} seen from {view.label}", mirrored=view.mirrored,
+                depth_range=depth_range)
 
 
-def stencil_view(view: View, reflector: PlanarReflector) -> View:
+def stencil_view(view: View, reflector: PlanarReflector, far: float | None = None) -> View:
     """The world seen in a stencil mirror from ``view``: drawn straight into ``view``'s
-    target through ``view_projection @ reflection``, clipped by the mirror's plane."""
+    target through ``view_projection @ reflection`` (its far plane at ``far``, default
+    ``view``'s), clipped by the mirror's plane."""
     rigid, eye = _mirror_of(view, reflector.plane)
-    return View(view=rigid, projection=view.projection @ _FLIP_X, size=view.size, eye=eye,
+    projection, depth_range = _reaching(view.projection @ _FLIP_X, view, far)
+    return View(view=rigid, projection=projection, size=view.size, eye=eye,
                 label=f"{reflector.name} (stencil) in {view.label}",
-                mirrored=not view.mirrored, clip_plane=reflector.plane)
+                mirrored=not view.mirrored, clip_plane=reflector.plane,
+                depth_range=depth_range)
 
 
 def ortho_capture_view(reflector: PlanarReflector, size: tuple[int, int]) -> View:
@@ -165,14 +216,19 @@ def ortho_capture_view(reflector: PlanarReflector, size: tuple[int, int]) -> Vie
                 label=f"{reflector.name} ortho capture")
 
 
-def cube_face_views(reflector: CurvedReflector) -> list[View]:
-    """The six 90-degree views of a live cube map from the reflector's capture centre."""
+def cube_face_views(reflector: CurvedReflector,
+                    depth_range: tuple[float, float]) -> list[View]:
+    """The six 90-degree views of a live cube map from the reflector's capture centre,
+    with clip distances ``depth_range`` (near, far; see
+    :func:`mirrorlab.bounds.cube_depth_range`)."""
     center = reflector.center()
-    projection = math3d.perspective(90.0, 1.0, CUBE_NEAR, CUBE_FAR)
+    near, far = depth_range
+    projection = math3d.perspective(90.0, 1.0, near, far)
     size = (reflector.map_size, reflector.map_size)
     views = []
     for name, (direction, up) in zip(CUBE_FACE_NAMES, CUBE_FACES, strict=True):
         view = math3d.look_at(center, center + np.asarray(direction), up)
         views.append(View(view=view, projection=projection, size=size, eye=center,
-                          label=f"{reflector.name} cube {name}"))
+                          label=f"{reflector.name} cube {name}",
+                          depth_range=(float(near), float(far))))
     return views

@@ -26,7 +26,7 @@ import mirrorlab
 from mirrorlab.accuracy import erode
 from mirrorlab.options import apply_options
 from mirrorlab.raytrace import trace_scene
-from mirrorlab.scene.model import CURVED_TECHNIQUES, PLANAR_TECHNIQUES
+from mirrorlab.techniques import technique_names
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
 SIZE = 256
@@ -139,7 +139,7 @@ def methods_picture(renderer) -> None:
     eye = (-7 + 16 * math.cos(angle), 1.0 + 4.8, -2 + 16 * math.sin(angle))
     view = {"camera": eye, "target": (-7.0, 1.0, -2.0)}
     methods = [labelled(renderer.render("lab20", method=m, **view), m)
-               for m in PLANAR_TECHNIQUES]
+               for m in technique_names("planar")]
     methods.append(labelled(mirrorlab.render("lab20", size=(SIZE, SIZE), method="raytrace",
                                              **view), "raytrace"))
     Image.fromarray(grid(methods, 4)).save(DOCS / "methods.png")
@@ -147,7 +147,7 @@ def methods_picture(renderer) -> None:
 
 def envmaps_picture(renderer) -> None:
     sphere = mirrorlab.load_scene("chrome_sphere")
-    maps = [labelled(renderer.render(sphere, method=m), m) for m in CURVED_TECHNIQUES]
+    maps = [labelled(renderer.render(sphere, method=m), m) for m in technique_names("curved")]
     truth = trace_scene(sphere, (SIZE, SIZE), supersample=4).to_uint8()
     Image.fromarray(grid([*maps, labelled(truth, "raytrace 4x4")], 4)).save(
         DOCS / "envmaps.png")

@@ -21,14 +21,8 @@ from mirrorlab.app.controls import CONTROLS
 from mirrorlab.app.picking import framebuffer_pixel, pick_reflector
 from mirrorlab.gl.context import WindowContext, gl_pass
 from mirrorlab.options import with_technique
-from mirrorlab.scene.model import (
-    CURVED_TECHNIQUES,
-    PLANAR_TECHNIQUES,
-    Camera,
-    CurvedReflector,
-    PlanarReflector,
-    Scene,
-)
+from mirrorlab.scene.model import Camera, CurvedReflector, Scene
+from mirrorlab.techniques import technique, technique_names
 
 JOINT_STEP_DEG = 5.0
 ZOOM_FACTOR = 1.1
@@ -182,7 +176,7 @@ class DemoApp:
 
     def techniques_of(self, index: int) -> tuple[str, ...]:
         reflector = self.configured.reflectors[index]
-        return PLANAR_TECHNIQUES if isinstance(reflector, PlanarReflector) else CURVED_TECHNIQUES
+        return technique_names(reflector.kind)
 
     def use_technique(self, index: int, name: str) -> None:
         reflector = self.configured.reflectors[index]
@@ -363,7 +357,8 @@ class DemoApp:
                         None)
             label = f"{reflector.name} ({reflector.technique})"
             if draw is None or draw.mode not in ("texture", "map"):
-                why = "drawn straight into the frame" if reflector.technique == "stencil" else (
+                inline = technique(reflector.technique).draws_inline
+                why = "drawn straight into the frame" if inline else (
                     draw.reason if draw is not None else "not drawn")
                 label += f": no texture ({why})"
             else:

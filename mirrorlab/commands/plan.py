@@ -36,8 +36,9 @@ def plan_document(plans: list[FramePlan]) -> list[dict]:
 
 
 def run_plan(scene: Scene, size: tuple[int, int], frames: int, as_json: bool,
-             use_plan: bool, say: Callable[[str], None] = print) -> int:
-    plans = plan_frames(scene, size, frames, use_plan)
+             use_plan: bool, say: Callable[[str], None] = print,
+             tiny_pixels: float = TINY_PIXELS) -> int:
+    plans = plan_frames(scene, size, frames, use_plan, tiny_pixels)
     if as_json:
         say(json.dumps({"scene": scene.name, "size": list(size),
                         "frames": plan_document(plans)}, indent=2))

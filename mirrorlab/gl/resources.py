@@ -464,6 +464,14 @@ class MeshBuffer(_Resource):
         self.vao, self.vbo, self.ebo = upload_mesh(vertices, indices)
         super().__init__(registry)
 
+    def update_vertices(self, vertices: np.ndarray) -> None:
+        """Replace the vertices with ``vertices`` ``(n, 8)`` of the same count (a mesh that
+        moves: one ``glBufferSubData``)."""
+        vertices = np.ascontiguousarray(vertices, dtype=np.float32)
+        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, self.vbo)
+        GL.glBufferSubData(GL.GL_ARRAY_BUFFER, 0, vertices.nbytes, vertices)
+        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, 0)
+
     def draw(self) -> None:
         """One ``glDrawElements`` call for the whole mesh."""
         GL.glBindVertexArray(self.vao)

@@ -106,9 +106,18 @@ def cube_from_folder(registry: ResourceRegistry, folder: Path) -> TextureCube:
 
 
 def set_view_uniforms(program: Program, view: View) -> None:
-    """``view_projection`` and ``clip_plane`` of ``view`` on the bound ``program``."""
-    program.set_mat4("view_projection", view.view_projection)
-    program.set_vec4("clip_plane", NO_CLIP if view.clip_plane is None else view.clip_plane)
+    """``view_projection`` and ``clip_plane`` of ``view`` on the bound ``program``, both for
+    positions relative to the view's origin (camera-relative rendering: the shader's
+    ``model`` matrices are :meth:`View.relative`, so float32 never holds a large world
+    position; see :attr:`View.origin`)."""
+    program.set_mat4("view_projection", view.relative_view_projection)
+    set_clip_plane(program, view)
+
+
+def set_clip_plane(program: Program, view: View) -> None:
+    """``clip_plane`` of ``view`` on the bound ``program``, for origin-relative positions."""
+    plane = view.relative_plane(view.clip_plane)
+    program.set_vec4("clip_plane", NO_CLIP if plane is None else plane)
 
 
 def apply_view_state(view: View, stencil_level: int) -> None:

@@ -10,6 +10,9 @@ in the distances the capture saw, for which each face's depth buffer is copied t
 
 from __future__ import annotations
 
+import numpy as np
+
+from mirrorlab.bounds import encloses
 from mirrorlab.gl.resources import DepthTextureCube, Program, RenderTarget, TextureCube
 from mirrorlab.passes.base import SharedResources, ViewDrawer
 from mirrorlab.passes.envmap import CurvedPass
@@ -22,7 +25,7 @@ from mirrorlab.scene.model import (
     DistanceSearch,
     SphereProxy,
 )
-from mirrorlab.views import CUBE_FAR, CUBE_NEAR
+from mirrorlab.views import View
 
 PARALLAX_CODES = {None: 0, "box": 1, "sphere": 2, "distance": 3}
 """The ``PARALLAX`` define of ``envmap_cube.frag`` for each kind of correction."""
@@ -30,6 +33,13 @@ DISTANCE_UNIT = 1
 BACKGROUND_UNIT = 2
 """Texture units of a distance search's depth cube and background cube (the capture's
 colour cube is on unit 0)."""
+
+
+def capture_depth_range(face: View) -> tuple[float, float]:
+    """The (near, far) clip distances of a live cube map's faces (one face's view), which
+    a distance search reads its depths with."""
+    assert face.depth_range is not None
+    return face.depth_range
 
 
 class LiveCubeMapped(CurvedPass):
@@ -43,6 +53,9 @@ class LiveCubeMapped(CurvedPass):
         self.size = reflector.map_size
         self.cubes: dict[int, TextureCube] = {}
         self.depths: dict[int, DepthTextureCube] = {}
+        self.enclosed: dict[int, bool] = {}
+        """Whether the surroundings of a slot's capture close its centre in (a distance
+        search's fallback, see :func:`mirrorlab.bounds.encloses`)."""
         self.background: TextureCube | None = None
         if isinstance(reflector.parallax, DistanceSearch):
             assert background is not None
@@ -50,10 +63,10 @@ class LiveCubeMapped(CurvedPass):
 
     def make_program(self, shared: SharedResources, reflector: CurvedReflector) -> Program:
         kind = None if reflector.parallax is None else reflector.parallax.kind
-        program = shared.program("envmap.vert", "envmap_cube.frag",
+        program = shared.program(self.entry.vertex_shader, self.entry.fragment_shader,
                                  PARALLAX=PARALLAX_CODES[kind])
         program.use()
-        program.set_int("cube_map_texture", 0)
+        program.set_int(self.entry.sampler, 0)
         if kind == "distance":
             program.set_int("distance_map", DISTANCE_UNIT)
             program.set_int("background_map", BACKGROUND_UNIT)
@@ -66,6 +79,7 @@ class LiveCubeMapped(CurvedPass):
             self.background.release()
         self.cubes.clear()
         self.depths.clear()
+        self.enclosed.clear()
         super().release()
 
     def cube(self, slot: int) -> TextureCube:
@@ -85,6 +99,9 @@ class LiveCubeMapped(CurvedPass):
         depths for a distance search."""
         cube = self.cube(step.slot)
         depth = self.depth(step.slot) if isinstance(reflector.parallax, DistanceSearch) else None
+        if depth is not None:
+            self.enclosed[step.slot] = encloses(renderer.scene, reflector.center(),
+                                                reflector.name)
         target = self.shared.scratch((self.size, self.size))
         draws = 0
         for face, plan in enumerate(step.views):
@@ -99,21 +116,27 @@ class LiveCubeMapped(CurvedPass):
     def map_for(self, draw: ReflectorDraw) -> TextureCube:
         return self.cube(draw.slot)
 
-    def lookup_uniforms(self, program: Program, reflector: CurvedReflector, slot: int) -> None:
+    def lookup_uniforms(self, program: Program, reflector: CurvedReflector, view: View,
+                        draw: ReflectorDraw | None) -> None:
+        origin = view.origin
+        if program.has_uniform("view_origin"):  # for the ray-origin output of checks
+            program.set_vec3("view_origin", origin)
         parallax = reflector.parallax
         if parallax is None:
             return
-        program.set_vec3("capture_center", reflector.center())
+        program.set_vec3("capture_center", reflector.center() - origin)
         if isinstance(parallax, BoxProxy):
-            program.set_vec3("proxy_min", parallax.min)
-            program.set_vec3("proxy_max", parallax.max)
+            program.set_vec3("proxy_min", np.asarray(parallax.min) - origin)
+            program.set_vec3("proxy_max", np.asarray(parallax.max) - origin)
         elif isinstance(parallax, SphereProxy):
             program.set_float("proxy_radius", parallax.radius)
         else:
+            assert draw is not None and draw.source is not None
             program.set_int("search_steps", parallax.steps)
             program.set_int("secant_steps", parallax.secant)
-            program.set_vec2("capture_depth_range", (CUBE_NEAR, CUBE_FAR))
+            program.set_vec2("capture_depth_range", capture_depth_range(draw.source))
             program.set_float("thickness", parallax.thickness)
-            self.depth(slot).bind(DISTANCE_UNIT)
+            program.set_int("enclosed", self.enclosed.get(draw.slot, False))
+            self.depth(draw.slot).bind(DISTANCE_UNIT)
             assert self.background is not None
             self.background.bind(BACKGROUND_UNIT)

@@ -20,10 +20,11 @@ from mirrorlab.gl.resources import (
     Texture2D,
     TextureCube,
 )
-from mirrorlab.passes.base import NO_CLIP, SharedResources, ViewDrawer, cube_from_folder
+from mirrorlab.passes.base import SharedResources, ViewDrawer, cube_from_folder, set_clip_plane
 from mirrorlab.plan import PlannedPass, ReflectorDraw
 from mirrorlab.scene.backgrounds import environment_of, load_picture
 from mirrorlab.scene.model import Background, CurvedReflector
+from mirrorlab.techniques import technique
 from mirrorlab.views import View, eye_position, is_orthographic
 
 OUTPUT_COLOR = 0
@@ -34,12 +35,6 @@ OUTPUT_RAY_DIRECTION = 3
 for sphere, latlong and normal maps, the unit direction for cube maps (after any parallax
 correction). The cube maps' shader also writes, for checks of the parallax corrections,
 the reflected ray each fragment looks along: its world origin and unit direction."""
-
-_FRAGMENT = {"sphere": "envmap_sphere.frag", "sphere-vertex": "envmap_sphere.frag",
-             "normal": "envmap_normal.frag", "cube": "envmap_cube.frag",
-             "cube-live": "envmap_cube.frag", "latlong": "envmap_latlong.frag"}
-_SAMPLER = {"envmap_sphere.frag": "sphere_map_texture", "envmap_cube.frag": "cube_map_texture",
-            "envmap_latlong.frag": "latlong_texture", "envmap_normal.frag": "normal_map_texture"}
 
 
 @lru_cache(maxsize=16)
@@ -54,32 +49,30 @@ def baked_latlong(background: Background, size: int) -> np.ndarray:
 
 
 class CurvedPass:
-    """A curved reflector drawn by a shader (or, for ``sphere-texgen``, fixed-function
-    texgen) that samples a map; plain when bounces run out. ``output_mode`` chooses colour
-    or lookup coordinates (for numerical checks)."""
+    """A curved reflector drawn by its technique's shader program (or, for a
+    fixed-function technique, by texgen wherever the view has an eye point) that samples
+    a map; plain when bounces run out. What it sets besides the view and the map follows
+    the technique's registry entry (:mod:`mirrorlab.techniques`). ``output_mode`` chooses
+    colour or lookup coordinates (for numerical checks)."""
 
     def __init__(self, shared: SharedResources, reflector: CurvedReflector,
                  background: Background | None = None) -> None:
         self.shared = shared
-        self.technique = reflector.technique
+        self.entry = technique(reflector.technique)
         self.output_mode = OUTPUT_COLOR
         self.mesh = shared.mesh(reflector.mesh)
         self.fixed_mesh: FixedFunctionMesh | None = None
-        self.program: Program | None = None
-        if self.technique == "sphere-texgen":
+        if self.entry.fixed_function:
             self.fixed_mesh = FixedFunctionMesh(shared.registry, self.mesh)
-            # Texgen takes the view ray from the eye to each vertex; an orthographic view
-            # has no eye point, so there the same per-vertex formula runs in the shader.
-            self.ortho_program = shared.program("envmap.vert", "envmap_sphere.frag")
-        else:
-            self.program = self.make_program(shared, reflector)
+        # A fixed-function technique's texgen takes the view ray from the eye to each
+        # vertex; an orthographic view has no eye point, so there its shader runs instead.
+        self.program = self.make_program(shared, reflector)
 
     def make_program(self, shared: SharedResources, reflector: CurvedReflector) -> Program:
         """The technique's shader program, its map on texture unit 0."""
-        fragment = _FRAGMENT[self.technique]
-        program = shared.program("envmap.vert", fragment)
+        program = shared.program(self.entry.vertex_shader, self.entry.fragment_shader)
         program.use()
-        program.set_int(_SAMPLER[fragment], 0)
+        program.set_int(self.entry.sampler, 0)
         return program
 
     def release(self) -> None:
@@ -88,7 +81,7 @@ class CurvedPass:
 
     def update(self, step: PlannedPass, reflector: CurvedReflector, renderer: ViewDrawer,
                frame_target: RenderTarget) -> int:
-        raise ValueError(f"{self.technique} has no texture to update")
+        raise ValueError(f"{self.entry.name} has no texture to update")
 
     def map_for(self, draw: ReflectorDraw) -> Texture2D | TextureCube:  # pragma: no cover
         raise NotImplementedError
@@ -100,47 +93,49 @@ class CurvedPass:
         if draw.mode == "plain":
             return renderer.drawer.draw_plain(  # type: ignore[attr-defined]
                 renderer.scene, reflector, view)
-        return self.draw_mapped(reflector, view, self.map_for(draw), draw.slot)
+        return self.draw_mapped(reflector, view, self.map_for(draw), draw)
 
-    def lookup_uniforms(self, program: Program, reflector: CurvedReflector, slot: int) -> None:
-        """Set what the lookup needs besides the map and the view (bound ``program``)."""
+    def lookup_uniforms(self, program: Program, reflector: CurvedReflector, view: View,
+                        draw: ReflectorDraw | None) -> None:
+        """Set what the lookup needs besides the map and the view (bound ``program``;
+        world positions relative to ``view.origin``)."""
 
     def draw_mapped(self, reflector: CurvedReflector, view: View,
-                    texture: Texture2D | TextureCube, slot: int = 0) -> int:
-        """Draw the reflector sampling ``texture`` (the map of ``slot``) into the bound
-        target; returns 1."""
+                    texture: Texture2D | TextureCube, draw: ReflectorDraw | None = None) -> int:
+        """Draw the reflector sampling ``texture`` (the map ``draw`` names) into the bound
+        target; returns 1. Positions reach the shader relative to the view's origin
+        (camera-relative rendering), the matrices composed in float64."""
         model = reflector.model_matrix()
         GL.glEnable(GL.GL_DEPTH_TEST)
         GL.glEnable(GL.GL_CULL_FACE)
-        program = self.program
-        if self.technique == "sphere-texgen":
+        entry = self.entry
+        if entry.fixed_function:
             if self.output_mode != OUTPUT_COLOR:
-                raise ValueError("sphere-texgen is fixed-function: it can only output colour")
+                raise ValueError(f"{entry.name} is fixed-function: it can only output colour")
             if not is_orthographic(view.projection):
                 self._draw_texgen(view, model, texture)
                 return 1
-            program = self.ortho_program
-        assert program is not None
+        program = self.program
         program.use()
-        if program.has_uniform("per_vertex"):  # the sphere-map program, shared by three
-            program.set_int("sphere_map_texture", 0)
-            program.set_int("per_vertex", self.technique != "sphere")
-        program.set_mat4("model", model)
-        program.set_mat4("view", view.view)
+        program.set_int(entry.sampler, 0)  # a program may be shared: set what is ours
+        for name, value in entry.constants:
+            program.set_int(name, value)
+        program.set_mat4("model", view.relative(model))
+        program.set_mat4("view", view.relative_view)
         program.set_mat4("projection", view.projection)
         program.set_mat3("normal_matrix", math3d.normal_matrix(model))
         program.set_int("output_mode", self.output_mode)
-        program.set_vec4("clip_plane", NO_CLIP if view.clip_plane is None else view.clip_plane)
+        set_clip_plane(program, view)
         if program.has_uniform("orthographic"):  # "normal" ignores where the eye is
             program.set_int("orthographic", is_orthographic(view.projection))
-        if self.technique in ("cube", "cube-live", "latlong"):
-            program.set_vec3("eye_world", eye_position(view.view))
+        if entry.view_ray:
+            program.set_vec3("eye_world", eye_position(view.view) - view.origin)
             program.set_vec3("view_direction", view.forward)
-        if self.technique == "normal":
+        if entry.map_size_uniform:
             program.set_vec2("map_size", (texture.width, texture.height))  # type: ignore
         if isinstance(texture, TextureCube):
             GL.glEnable(GL.GL_TEXTURE_CUBE_MAP_SEAMLESS)
-        self.lookup_uniforms(program, reflector, slot)
+        self.lookup_uniforms(program, reflector, view, draw)
         texture.bind(0)
         self.mesh.draw()
         return 1
@@ -148,16 +143,20 @@ class CurvedPass:
     def _draw_texgen(self, view: View, model: np.ndarray, texture) -> None:
         """The textbook's way: no shader, GL_SPHERE_MAP texgen for s and t, the sphere map
         replacing the fragment colour. GL_NORMALIZE makes the eye-space normals unit, as
-        the numpy reference assumes. A clip plane is given in world space while the
-        modelview is the view alone, as glClipPlane takes it in eye space."""
+        the numpy reference assumes. The modelview is composed here in float64 (the
+        fixed-function path's camera-relative rendering), and a clip plane is given in
+        eye space, worked out here, with an identity modelview (glClipPlane takes it
+        through the modelview's inverse)."""
         assert self.fixed_mesh is not None
         GL.glUseProgram(0)
         GL.glMatrixMode(GL.GL_PROJECTION)
         GL.glLoadMatrixd(np.ascontiguousarray(view.projection.T, dtype=np.float64))
         GL.glMatrixMode(GL.GL_MODELVIEW)
-        GL.glLoadMatrixd(np.ascontiguousarray(view.view.T, dtype=np.float64))
+        GL.glLoadIdentity()
         if view.clip_plane is not None:
-            GL.glClipPlane(GL.GL_CLIP_PLANE0, np.asarray(view.clip_plane, dtype=np.float64))
+            in_eye = np.asarray(view.clip_plane, dtype=np.float64) @ np.linalg.inv(
+                np.asarray(view.view, dtype=np.float64))
+            GL.glClipPlane(GL.GL_CLIP_PLANE0, in_eye)
         GL.glLoadMatrixd(np.ascontiguousarray((view.view @ model).T, dtype=np.float64))
         GL.glDisable(GL.GL_LIGHTING)
         GL.glEnable(GL.GL_NORMALIZE)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from mirrorlab import math3d
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import MeshBuffer, RenderTarget, Texture2D, TextureFramebuffer
 from mirrorlab.passes.base import SharedResources, ViewDrawer, set_view_uniforms
@@ -14,22 +15,33 @@ from mirrorlab.views import View
 
 
 def mirror_vertices(reflector: PlanarReflector) -> tuple[np.ndarray, np.ndarray]:
-    """The quad as ``(4, 8)`` interleaved vertices (its ortho-capture texture coordinates
-    at the corners) and ``(2, 3)`` triangle indices."""
+    """The quad as ``(4, 8)`` interleaved vertices, positions relative to the mirror's
+    centre (placed by :func:`mirror_model`; float32 then keeps their precision anywhere),
+    its ortho-capture texture coordinates at the corners, and ``(2, 3)`` triangle
+    indices."""
     normals = np.broadcast_to(reflector.normal, (4, 3))
-    vertices = np.hstack([reflector.corner_array, normals, reflector.texcoords()])
+    vertices = np.hstack([reflector.corner_array - reflector.center, normals,
+                          reflector.texcoords()])
     return vertices.astype(np.float32), np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32)
+
+
+def mirror_model(reflector: PlanarReflector) -> np.ndarray:
+    """``(4, 4)``: the quad of :func:`mirror_vertices` to world (a move to the centre)."""
+    return math3d.translate(reflector.center)
 
 
 class PlanarPass:
     """The parts of a planar technique that do not depend on the technique: drawing the
-    mirror plain, its back alone, or its front with a texture."""
+    mirror plain, its back alone, or its front with a texture. The mirror may move
+    between frames (its pass is kept): each draw places the quad where the reflector it
+    is given is, updating the quad's four vertices when its shape or place changed."""
 
     def __init__(self, shared: SharedResources, reflector: PlanarReflector,
                  background: Background | None = None) -> None:
         self.shared = shared
         self.reflector = reflector
         self.quad = MeshBuffer(shared.registry, *mirror_vertices(reflector))
+        self._quad_of = reflector
         self.mirror_program = shared.program("mirror.vert", "mirror.frag")
         self.flat_program = shared.program("flat.vert", "flat.frag")
         self.mirror_program.use()
@@ -38,11 +50,19 @@ class PlanarPass:
     def release(self) -> None:
         self.quad.release()
 
+    def place(self, reflector: PlanarReflector) -> None:
+        """Make the quad ``reflector``'s (its corners and texture coordinates)."""
+        self.reflector = reflector
+        if (reflector.corners, reflector.ortho) != (self._quad_of.corners, self._quad_of.ortho):
+            self.quad.update_vertices(mirror_vertices(reflector)[0])
+            self._quad_of = reflector
+
     def flat_quad(self, view: View, color, far_depth: bool) -> None:
         """The quad in one flat colour (``far_depth``: at the far plane's depth)."""
         program = self.flat_program
         program.use()
         set_view_uniforms(program, view)
+        program.set_mat4("model", view.relative(mirror_model(self.reflector)))
         program.set_vec3("color", color)
         program.set_int("far_depth", far_depth)
         self.quad.draw()
@@ -58,15 +78,18 @@ class PlanarPass:
     def draw_textured(self, view: View, texture: Texture2D,
                       texture_matrix: np.ndarray | None) -> int:
         """Front textured (by the quad's own coordinates, or projectively through
-        ``texture_matrix`` ``(4, 4)``), back in its backing colour; returns 1."""
+        ``texture_matrix`` ``(4, 4)``, world to texture), back in its backing colour;
+        returns 1."""
         program = self.mirror_program
         GL.glDisable(GL.GL_CULL_FACE)
         program.use()
         set_view_uniforms(program, view)
+        program.set_mat4("model", view.relative(mirror_model(self.reflector)))
         program.set_vec3("backing_color", self.reflector.backing)
         program.set_int("projective", texture_matrix is not None)
         if texture_matrix is not None:
-            program.set_mat4("texture_matrix", texture_matrix)
+            # for origin-relative positions, composed in float64
+            program.set_mat4("texture_matrix", texture_matrix @ math3d.translate(view.origin))
         texture.bind(0)
         self.quad.draw()
         GL.glEnable(GL.GL_CULL_FACE)
@@ -75,12 +98,14 @@ class PlanarPass:
     def draw(self, draw: ReflectorDraw, view: View, renderer: ViewDrawer,
              target: RenderTarget, stencil_level: int) -> int:
         """The modes every planar technique shares: ``plain`` and ``back``."""
+        assert isinstance(draw.reflector, PlanarReflector)
+        self.place(draw.reflector)
         if draw.mode == "back":
             return self.draw_backing(view)
         if draw.mode == "plain":
             drawer = renderer.drawer  # type: ignore[attr-defined]
-            return drawer.draw_plain(renderer.scene, draw.reflector, view,
-                                     self.quad) + self.draw_backing(view)
+            return drawer.draw_plain(renderer.scene, draw.reflector, view, self.quad,
+                                     mirror_model(self.reflector)) + self.draw_backing(view)
         return self.draw_own(draw, view, renderer, target, stencil_level)
 
     def draw_own(self, draw: ReflectorDraw, view: View, renderer: ViewDrawer,

@@ -35,13 +35,15 @@ class SceneDrawer:
         self.program.use()
         self.program.set_int("surface", 0)
         self._parts_of: Scene | None = None
-        self._parts: list[tuple[Part, np.ndarray, np.ndarray]] = []
+        self._parts: list[tuple[Part, np.ndarray]] = []
+        self._models = np.zeros((0, 4, 4))
         self._normals: dict[bytes, np.ndarray] = {}
 
-    def _prepared(self, scene: Scene) -> list[tuple[Part, np.ndarray, np.ndarray]]:
-        """Each part with its float32 model matrix and :func:`surface_matrix`, worked out
-        once per scene (and a part's normal matrix once while its model stays: when the
-        robot moves a joint, the parts before it stay where they were)."""
+    def _prepared(self, scene: Scene) -> tuple[list[tuple[Part, np.ndarray]], np.ndarray]:
+        """Each part with its :func:`surface_matrix`, and every part's float64 model matrix
+        ``(n, 4, 4)``, worked out once per scene (and a part's normal matrix once while
+        its model stays: when the robot moves a joint, the parts before it stay where
+        they were)."""
         if scene is not self._parts_of:
             normals = {}
             self._parts = []
@@ -51,12 +53,13 @@ class SceneDrawer:
                 if normal is None:
                     normal = math3d.normal_matrix(part.model)
                 normals[key] = normal
-                self._parts.append((part, part.model.astype(np.float32),
-                                    surface_matrix(normal, part.color,
-                                                   part.texture is not None)))
+                self._parts.append((part, surface_matrix(normal, part.color,
+                                                         part.texture is not None)))
+            self._models = np.array([part.model for part, _ in self._parts],
+                                    dtype=np.float64).reshape(-1, 4, 4)
             self._normals = normals
             self._parts_of = scene
-        return self._parts
+        return self._parts, self._models
 
     def begin(self, scene: Scene, view: View) -> Program:
         program = self.program
@@ -68,8 +71,12 @@ class SceneDrawer:
     def draw(self, scene: Scene, view: View) -> int:
         """Draw the objects into the bound target; returns the number of draw calls."""
         program = self.begin(scene, view)
-        parts = self._prepared(scene)
-        for part, model, surface in parts:
+        parts, models = self._prepared(scene)
+        # Camera-relative: each model moved to the view's origin in float64, then float32.
+        relative = models.copy()
+        relative[:, :3, 3] -= view.origin
+        relative = relative.astype(np.float32)
+        for (part, surface), model in zip(parts, relative, strict=True):
             program.set_mat4("model", model)
             program.set_mat4("part", surface)
             if part.texture is not None:
@@ -78,17 +85,18 @@ class SceneDrawer:
         return len(parts)
 
     def draw_plain(self, scene: Scene, reflector: CurvedReflector | PlanarReflector,
-                   view: View, quad=None) -> int:
+                   view: View, quad=None, quad_model: np.ndarray | None = None) -> int:
         """The reflector as a lit surface in its plain colour: a curved one's mesh, or a
-        planar one's front (``quad``, its mesh buffer). Returns the draw count (1)."""
+        planar one's front (``quad``, its mesh buffer, placed by ``quad_model``). Returns
+        the draw count (1)."""
         program = self.begin(scene, view)
         if isinstance(reflector, CurvedReflector):
             model = reflector.model_matrix()
             mesh = self.shared.mesh(reflector.mesh)
         else:
-            model = np.eye(4)
+            model = np.eye(4) if quad_model is None else quad_model
             mesh = quad
-        program.set_mat4("model", model)
+        program.set_mat4("model", view.relative(model))
         program.set_mat4("part", surface_matrix(math3d.normal_matrix(model), reflector.color,
                                                 textured=False))
         GL.glEnable(GL.GL_CULL_FACE)

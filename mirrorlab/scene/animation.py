@@ -17,7 +17,10 @@ CAMERA_FIELDS = ("eye", "target", "up", "fovy")
 OBJECT_FIELDS = ("position", "rotation", "scale", "angles")
 """Object fields a keyframe can set (``angles``: robots only)."""
 REFLECTOR_FIELDS = ("position", "rotation", "scale")
-"""Reflector fields a keyframe can set (curved reflectors only)."""
+"""Curved reflector fields a keyframe can set."""
+PLANAR_FIELDS = ("position", "rotation")
+"""Planar mirror fields a keyframe can set: where its centre is and how it is turned from
+where its scene file puts it (its corners follow; its size is its corners')."""
 
 Value = float | tuple[float, ...]
 """An animated value: a number (``fovy``) or a vector (``eye``, ``position``...)."""
@@ -74,9 +77,11 @@ def pose(scene: Scene, frame: int) -> Scene:
 
 
 def _apply(scene: Scene, group: str, name: str, changes: dict) -> Scene:
+
     item = scene.object(name) if group == "objects" else scene.reflector(name)
-    if isinstance(item, PlanarReflector):  # the loader refuses these keyframes
-        raise ValueError(f"reflector {name!r}: a planar mirror cannot be animated")
+    if isinstance(item, PlanarReflector):
+        moved = item.moved(changes.get("position"), changes.get("rotation"))
+        return scene.with_reflector(name, corners=moved.corners, ortho=moved.ortho)
     fields = {}
     transform = item.transform
     for field, value in changes.items():

@@ -27,14 +27,17 @@ from typing import Any
 import numpy as np
 
 from mirrorlab.data import scenes_dir
-from mirrorlab.scene.animation import CAMERA_FIELDS, OBJECT_FIELDS, REFLECTOR_FIELDS
+from mirrorlab.scene.animation import (
+    CAMERA_FIELDS,
+    OBJECT_FIELDS,
+    PLANAR_FIELDS,
+    REFLECTOR_FIELDS,
+)
 from mirrorlab.scene.model import (
     CAPTURE_MODES,
-    CURVED_TECHNIQUES,
     DEFAULT_BACKING,
     DEFAULT_PLAIN_COLOR,
     PARALLAX_PROXIES,
-    PLANAR_TECHNIQUES,
     Animation,
     Background,
     BoxProxy,
@@ -52,6 +55,7 @@ from mirrorlab.scene.model import (
     SphereProxy,
     Transform,
 )
+from mirrorlab.techniques import names_where, technique, technique_names
 
 """The shipped scene files."""
 DEFAULT_SCENE = "lab20"
@@ -618,19 +622,19 @@ class _Reader:
             key = f"reflectors[{i}]"
             if not isinstance(item, Mapping):
                 raise self.fail(key, f"expected a table, got {_kind(item)}")
+            names = technique_names("planar") + technique_names("curved")
             if "technique" not in item:
-                raise self.fail(f"{key}.technique", "missing; expected one of "
-                                f"{', '.join(PLANAR_TECHNIQUES + CURVED_TECHNIQUES)}")
-            technique = self.choice(item["technique"], f"{key}.technique",
-                                    PLANAR_TECHNIQUES + CURVED_TECHNIQUES)
-            if technique in PLANAR_TECHNIQUES:
-                reflectors.append(self.planar(item, key, technique))
+                raise self.fail(f"{key}.technique", f"missing; expected one of "
+                                f"{', '.join(names)}")
+            name = self.choice(item["technique"], f"{key}.technique", names)
+            if technique(name).kind == "planar":
+                reflectors.append(self.planar(item, key, name))
             else:
-                reflectors.append(self.curved(item, key, technique))
+                reflectors.append(self.curved(item, key, name))
         self.unique([r.name for r in reflectors], "reflectors")
         return tuple(reflectors)
 
-    def planar(self, item: Mapping[str, Any], key: str, technique: str) -> PlanarReflector:
+    def planar(self, item: Mapping[str, Any], key: str, name: str) -> PlanarReflector:
         table = self.table(item, key, _PLANAR_KEYS)
         shape_keys = ("center", "normal", "width", "height", "up")
         given = [k for k in shape_keys if k in table]
@@ -650,11 +654,12 @@ class _Reader:
             texture_size = self.integer(table["texture_size"], f"{key}.texture_size", 1,
                                         MAX_MAP_SIZE)
         ortho = self.ortho(table["ortho"], f"{key}.ortho") if "ortho" in table else None
-        if ortho is not None and technique != "ortho":
-            raise self.fail(f"{key}.ortho", f"applies to technique 'ortho', not {technique!r}")
+        if ortho is not None and not technique(name).own_camera:
+            owners = _techniques_with(lambda t: t.own_camera)
+            raise self.fail(f"{key}.ortho", f"applies to {owners}, not {name!r}")
         return PlanarReflector(
             name=self.text(table.get("name", "mirror"), f"{key}.name"), corners=corners,
-            technique=technique,
+            technique=name,
             capture=self.choice(table.get("capture", "copy"), f"{key}.capture", CAPTURE_MODES),
             texture_size=texture_size, ortho=ortho,
             color=self.color(table.get("color", list(DEFAULT_PLAIN_COLOR)), f"{key}.color"),
@@ -705,24 +710,26 @@ class _Reader:
         return OrthoCapture(eye=eye, target=target, up=up,
                             extents=(left, right, bottom, top, near, far))
 
-    def curved(self, item: Mapping[str, Any], key: str, technique: str) -> CurvedReflector:
+    def curved(self, item: Mapping[str, Any], key: str, name: str) -> CurvedReflector:
         table = self.table(item, key, _CURVED_KEYS)
         if "mesh" not in table:
             raise self.fail(f"{key}.mesh", "missing: a curved reflector needs a mesh file")
         mesh = self.mesh_file(table["mesh"], f"{key}.mesh")
+        entry = technique(name)
         source = None
         if "source" in table:
-            if technique == "cube":
+            if entry.source == "faces":
                 source = self.folder_of_faces(table["source"], f"{key}.source")
-            elif technique in ("sphere", "sphere-vertex", "sphere-texgen", "normal"):
+            elif entry.source == "picture":
                 source = self.file(table["source"], f"{key}.source", "sphere-map picture")
             else:
-                raise self.fail(f"{key}.source", f"technique {technique!r} takes no source "
-                                "(cube-live captures the scene; latlong is baked from the "
+                raise self.fail(f"{key}.source", f"technique {name!r} takes no source (only "
+                                f"{_techniques_with(lambda t: t.source is not None)} do: a "
+                                "live map captures the scene, the others are baked from the "
                                 "background)")
         reflector = CurvedReflector(
             name=self.text(table.get("name", mesh.stem), f"{key}.name"), mesh=mesh,
-            transform=self.transform(table, key), technique=technique,
+            transform=self.transform(table, key), technique=name,
             map_size=self.integer(table.get("map_size", 256), f"{key}.map_size", 4,
                                   MAX_MAP_SIZE),
             source=source,
@@ -731,9 +738,9 @@ class _Reader:
             color=self.color(table.get("color", list(DEFAULT_PLAIN_COLOR)), f"{key}.color"))
         if "parallax" not in table:
             return reflector
-        if technique != "cube-live":
-            raise self.fail(f"{key}.parallax", f"applies to technique 'cube-live', not "
-                            f"{technique!r}")
+        if not entry.parallax:
+            raise self.fail(f"{key}.parallax", f"applies to "
+                            f"{_techniques_with(lambda t: t.parallax)}, not {name!r}")
         parallax = self.parallax(table["parallax"], f"{key}.parallax")
         if isinstance(parallax, BoxProxy):
             center = reflector.center()
@@ -910,12 +917,15 @@ class _Reader:
         for name, raw in table.items():
             item = items[name]
             where = f"{key}.{key_name(name)}"
-            if group == "reflectors" and not isinstance(item, CurvedReflector):
-                raise self.fail(where, "a planar mirror cannot be animated; only curved "
-                                "reflectors and objects move")
-            fields: tuple[str, ...] = OBJECT_FIELDS if group == "objects" else REFLECTOR_FIELDS
+            fields: tuple[str, ...] = (OBJECT_FIELDS if group == "objects"
+                                       else REFLECTOR_FIELDS)
             if isinstance(item, MeshObject):
                 fields = tuple(f for f in fields if f != "angles")
+            if isinstance(item, PlanarReflector):
+                if isinstance(raw, Mapping) and "scale" in raw:
+                    raise self.fail(f"{where}.scale", "a planar mirror's keyframes take "
+                                    "position and rotation; its size is its corners'")
+                fields = PLANAR_FIELDS
             values = self.table(raw, where, fields)
             posed: dict[str, Any] = {}
             for field, entry in values.items():
@@ -993,6 +1003,13 @@ def _segments_cross(a, b, c, d, normal) -> bool:
         return float(np.cross(q - p, r - p) @ normal)
 
     return side(a, b, c) * side(a, b, d) < 0 and side(c, d, a) * side(c, d, b) < 0
+
+
+def _techniques_with(test) -> str:
+    """``technique 'a'`` or ``techniques 'a', 'b'``: the techniques ``test`` is true of."""
+    names = names_where(test)
+    listed = ", ".join(repr(n) for n in names)
+    return f"technique {listed}" if len(names) == 1 else f"techniques {listed}"
 
 
 _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")

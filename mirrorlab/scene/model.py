@@ -15,7 +15,7 @@ import math
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
-from typing import Literal
+from typing import ClassVar, Literal
 
 import numpy as np
 
@@ -23,11 +23,6 @@ from mirrorlab import math3d
 
 Vec3 = tuple[float, float, float]
 
-PLANAR_TECHNIQUES = ("ortho", "reflected", "stencil")
-"""Techniques for a planar mirror (see :mod:`mirrorlab.techniques`)."""
-CURVED_TECHNIQUES = ("sphere", "sphere-vertex", "sphere-texgen", "cube", "cube-live",
-                     "latlong", "normal")
-"""Techniques for a curved (environment-mapped) reflector."""
 CAPTURE_MODES = ("copy", "fbo")
 """How a planar capture reaches its texture: ``glCopyTexImage2D`` (the lab) or drawn
 straight into it through a framebuffer."""
@@ -65,8 +60,13 @@ class Camera:
         ``near``: a surface exactly at the near distance (a viewer placed exactly
         ``near`` from a mirror) is then in front of the plane by far more than float
         rounding, so it is drawn, and traced, the same way every time."""
-        return math3d.perspective(self.fovy, aspect, self.near * (1.0 - NEAR_MARGIN),
-                                  self.far)
+        return math3d.perspective(self.fovy, aspect, *self.depth_range)
+
+    @property
+    def depth_range(self) -> tuple[float, float]:
+        """The (near, far) clip distances of :meth:`projection`: near moved in by
+        :data:`NEAR_MARGIN`."""
+        return (self.near * (1.0 - NEAR_MARGIN), self.far)
 
 
 @dataclass(frozen=True)
@@ -163,7 +163,8 @@ class OrthoCapture:
 @dataclass(frozen=True)
 class PlanarReflector:
     """A flat four-cornered mirror. ``corners`` ``(4, 3)`` run counter-clockwise seen
-    from the reflecting side. ``technique`` is one of :data:`PLANAR_TECHNIQUES`;
+    from the reflecting side. ``technique`` names a planar technique of
+    :mod:`mirrorlab.techniques`;
     ``capture`` one of :data:`CAPTURE_MODES`; ``texture_size`` the capture's square side
     in pixels (None: the size of the view it is seen in, as in the lab). ``ortho`` is the
     capture camera of the ``ortho`` technique (None: one derived from the corners, see
@@ -179,7 +180,7 @@ class PlanarReflector:
     color: Vec3 = DEFAULT_PLAIN_COLOR
     backing: Vec3 = DEFAULT_BACKING
 
-    kind = "planar"
+    kind: ClassVar[Literal["planar"]] = "planar"
 
     @cached_property
     def corner_array(self) -> np.ndarray:
@@ -207,6 +208,27 @@ class PlanarReflector:
         """The ``ortho`` technique's capture camera: :attr:`ortho` or the derived one."""
         return self.ortho if self.ortho is not None else ortho_capture_for(self.corner_array,
                                                                           self.normal)
+
+    def moved(self, position: Vec3 | None = None,
+              rotation: Vec3 | None = None) -> PlanarReflector:
+        """The mirror turned by ``rotation`` (degrees about x, then y, then z, as a
+        :class:`Transform`'s) about its centre, then moved so that its centre is at
+        ``position`` (default: where it is); its corners, and an ``ortho`` capture camera
+        given with it, follow. A keyframe poses a planar mirror this way, from the place
+        its scene file gives it."""
+        center = self.center
+        turn = Transform(rotation=rotation or (0.0, 0.0, 0.0)).matrix()[:3, :3]
+        goal = center if position is None else np.asarray(position, dtype=np.float64)
+
+        def place(point) -> Vec3:
+            return _vec(goal + turn @ (np.asarray(point, dtype=np.float64) - center))
+
+        corners = tuple(place(c) for c in self.corner_array)
+        ortho = self.ortho
+        if ortho is not None:
+            ortho = replace(ortho, eye=place(ortho.eye), target=place(ortho.target),
+                            up=_vec(turn @ np.asarray(ortho.up, dtype=np.float64)))
+        return replace(self, corners=corners, ortho=ortho)  # type: ignore[arg-type]
 
     def texcoords(self) -> np.ndarray:
         """``(4, 2)`` texture coordinates of the corners in the ortho capture: where the
@@ -279,7 +301,8 @@ Parallax = BoxProxy | SphereProxy | DistanceSearch
 
 @dataclass(frozen=True)
 class CurvedReflector:
-    """An environment-mapped mesh. ``technique`` is one of :data:`CURVED_TECHNIQUES`;
+    """An environment-mapped mesh. ``technique`` names a curved technique of
+    :mod:`mirrorlab.techniques`;
     ``map_size`` the map's side in texels; ``source`` a picture used as the sphere map
     as it is, or a folder of six cube faces for ``cube`` (None: baked from the
     background); ``capture_center`` the point, in the mesh's own frame, a live cube
@@ -296,7 +319,7 @@ class CurvedReflector:
     color: Vec3 = DEFAULT_PLAIN_COLOR
     parallax: Parallax | None = None
 
-    kind = "curved"
+    kind: ClassVar[Literal["curved"]] = "curved"
 
     def model_matrix(self) -> np.ndarray:
         return self.transform.matrix()
@@ -313,8 +336,9 @@ Reflector = PlanarReflector | CurvedReflector
 class Keyframe:
     """Values set at ``frame``: ``camera`` maps camera fields to values; ``objects`` and
     ``reflectors`` map a name to its fields (position, rotation, scale; angles for a
-    robot). A field moves linearly between the keyframes that set it and holds its
-    value before the first and after the last."""
+    robot; a planar mirror's position and rotation, see :meth:`PlanarReflector.moved`).
+    A field moves linearly between the keyframes that set it and holds its value before
+    the first and after the last."""
 
     frame: int
     camera: dict = field(default_factory=dict)

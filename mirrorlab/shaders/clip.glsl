@@ -2,7 +2,9 @@
 // Every vertex shader writes gl_ClipDistance[0]: Mesa 22.3's llvmpipe clips by it even
 // while GL_CLIP_DISTANCE0 is disabled, so "no plane" is (0, 0, 0, 1), which every point
 // is in front of.
-uniform vec4 clip_plane;  // world space; what lies on its negative side is cut away
+// World space, for positions relative to the view's origin as every vertex shader gets
+// them (camera-relative rendering); what lies on its negative side is cut away.
+uniform vec4 clip_plane;
 
 void clip_world(vec4 world_position) {
     gl_ClipDistance[0] = dot(clip_plane, world_position);

@@ -2,7 +2,9 @@
 // The environment-mapped object: world- and eye-space position and normal for the
 // per-fragment methods, and the per-vertex sphere-map coordinates (what GL_SPHERE_MAP
 // texgen computes) for the per-vertex method. The view matrix must be rigid, so that
-// its upper 3x3 also carries normals from world to eye space.
+// its upper 3x3 also carries normals from world to eye space. "World" positions are
+// relative to the view's origin (camera-relative rendering): model and view are
+// composed with that move in float64 on the CPU.
 #include "common.glsl"
 #include "clip.glsl"
 layout(location = 0) in vec3 position;

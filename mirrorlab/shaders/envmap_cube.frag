@@ -18,6 +18,7 @@ uniform samplerCube background_map;  // a distance search's rays that meet nothi
 // for one in the background map; 2: the reflected ray's origin (world); 3: its unit
 // direction (before any parallax correction)
 uniform int output_mode;
+uniform vec3 view_origin;  // world_position is relative to it (camera-relative rendering)
 
 out vec4 frag_color;
 
@@ -39,7 +40,7 @@ void main() {
     if (output_mode == 1) {
         frag_color = vec4(look, background ? 0.0 : 1.0);
     } else if (output_mode == 2) {
-        frag_color = vec4(world_position, 1.0);
+        frag_color = vec4(world_position + view_origin, 1.0);
     } else if (output_mode == 3) {
         frag_color = vec4(r, 1.0);
     } else {

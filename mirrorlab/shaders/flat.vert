@@ -1,12 +1,13 @@
 #version 330
-// World-space geometry in one flat colour (mirror backings and stencil masks).
+// Geometry in one flat colour (mirror backings and stencil masks), placed by model.
 #include "clip.glsl"
 layout(location = 0) in vec3 position;
 
+uniform mat4 model;
 uniform mat4 view_projection;
 
 void main() {
-    vec4 world_position = vec4(position, 1.0);
+    vec4 world_position = model * vec4(position, 1.0);
     clip_world(world_position);
     gl_Position = view_projection * world_position;
 }

@@ -8,6 +8,7 @@
 const float PARALLEL = 1e-20;   // a ray component this small never reaches its faces
 const float AT_CENTER = 1e-6;   // world units: a surface point at the capture centre
 const float NO_EXIT = 3.0e38;
+const int REFINE_STEPS = 4;    // a distance search's smaller steps within a crossing step
 
 uniform vec3 capture_center;    // world
 
@@ -54,14 +55,16 @@ vec3 sphere_lookup(vec3 origin, vec3 r) {
 // ray that passes behind an object (without meeting it) crosses its stored surface too.
 // Such a crossing is told from a hit by the depth mismatch left after the secant steps
 // (more than thickness, relative): the search goes on past it. Without secant steps
-// every crossing is a hit. A ray that meets nothing
-// leaves for the background, which is looked up in background_map, not in the capture
-// (where an object may hide it from the centre).
+// every crossing is a hit. Where the search accepts no crossing it falls back to the
+// plain lookup where the surroundings close the centre in (enclosed), and to the
+// background (looked up in background_map, not in the capture, where an object may
+// hide it from the centre) where they do not.
 uniform samplerCube distance_map;
 uniform vec2 capture_depth_range;  // near, far
 uniform int search_steps;          // linear steps, at least 1
 uniform int secant_steps;          // regula-falsi steps at each crossing
 uniform float thickness;           // largest relative depth mismatch of a hit
+uniform bool enclosed;             // the surroundings close the capture centre in
 
 // 1 / distance to the captured surface along the unit direction w (0: the background).
 float inverse_distance(vec3 w) {
@@ -112,33 +115,58 @@ vec3 distance_lookup(vec3 origin, vec3 r, out bool background) {
     for (int k = 1; k <= search_steps; ++k) {
         float t_after = float(k) / float(search_steps);
         float h_after = in_front(offset, size, r, t_after, mismatch);
-        if (h_before > 0.0 && h_after <= 0.0) {
-            float low = t_before;
-            float h_low = h_before;
-            float high = t_after;
-            float h_high = h_after;
-            for (int i = 0; i < secant_steps; ++i) {
-                float t = secant(low, h_low, high, h_high);
-                float h = in_front(offset, size, r, t, mismatch);
-                if (h <= 0.0) {
-                    high = t;
-                    h_high = h;
-                } else {
-                    low = t;
-                    h_low = h;
+        if (h_after <= 0.0) {
+            // A step that ends behind the stored surface may hide more than one
+            // crossing: the ray passing behind an object, coming out past its silhouette
+            // and meeting the wall behind it, all within one step. Such a step is
+            // looked at again in REFINE_STEPS smaller ones, and each crossing found there
+            // (in front, then behind) is narrowed and judged in turn, the first accepted
+            // taken.
+            float sub_before = t_before;
+            float sh_before = h_before;
+            for (int j = 1; j <= REFINE_STEPS; ++j) {
+                float sub_after = j == REFINE_STEPS ? t_after
+                    : mix(t_before, t_after, float(j) / float(REFINE_STEPS));
+                float sh_after = j == REFINE_STEPS ? h_after
+                    : in_front(offset, size, r, sub_after, mismatch);
+                if (sh_before > 0.0 && sh_after <= 0.0) {
+                    float low = sub_before;
+                    float h_low = sh_before;
+                    float high = sub_after;
+                    float h_high = sh_after;
+                    for (int i = 0; i < secant_steps; ++i) {
+                        float t = secant(low, h_low, high, h_high);
+                        float h = in_front(offset, size, r, t, mismatch);
+                        if (h <= 0.0) {
+                            high = t;
+                            h_high = h;
+                        } else {
+                            low = t;
+                            h_low = h;
+                        }
+                    }
+                    // A hit short of infinity (t = 1 exactly where the ray meets nothing
+                    // but the background there). Without secant steps there is no
+                    // refined point to judge: every such crossing is a hit (the
+                    // height-field assumption).
+                    float t = secant(low, h_low, high, h_high);
+                    if (t < 1.0 && (secant_steps == 0 || abs(mismatch) <= thickness)) {
+                        return safe_normalize((1.0 - t) * offset + (t * size) * r, r);
+                    }
                 }
-            }
-            // A hit short of infinity (t = 1 exactly where the ray meets nothing but the
-            // background there). Without secant steps there is no refined point to judge:
-            // every such crossing is a hit (the height-field assumption).
-            float t = secant(low, h_low, high, h_high);
-            if (t < 1.0 && (secant_steps == 0 || abs(mismatch) <= thickness)) {
-                return safe_normalize((1.0 - t) * offset + (t * size) * r, r);
+                sub_before = sub_after;
+                sh_before = sh_after;
             }
         }
         t_before = t_after;
         h_before = h_after;
     }
-    background = true;
+    // No crossing the search could accept: the ray passed behind what the capture saw
+    // (or met what it could not see). Closed in (a room), it meets a surface hidden from
+    // the centre: the plain lookup, in the capture, shows the surroundings that way
+    // (the background map where the capture saw nothing either). Under an open sky it
+    // most likely leaves for the background, which the plain lookup would show behind
+    // a ghost of whatever stands along r seen from the centre.
+    background = !enclosed || inverse_distance(r) == 0.0;
     return r;
 }

@@ -1,5 +1,7 @@
 #version 330
-// Scene parts: world-space normal and texture coordinate to the fragment stage.
+// Scene parts: world-space normal and texture coordinate to the fragment stage. model
+// places a part relative to the view's origin (camera-relative rendering: composed in
+// float64 on the CPU), and view_projection takes such positions.
 // view_projection may show the world seen in a mirror; the normal and the clip distance
 // stay in the unreflected world, so shading matches the real part and the clip plane
 // cuts away what lies behind the mirror.

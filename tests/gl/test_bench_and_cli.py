@@ -24,7 +24,7 @@ from mirrorlab.accuracy import (
 from mirrorlab.cli import main
 from mirrorlab.data import data_path, scenes_dir
 from mirrorlab.scene.backgrounds import CUBE_FACE_FILES
-from mirrorlab.scene.model import CURVED_TECHNIQUES, PLANAR_TECHNIQUES
+from mirrorlab.techniques import technique_names
 from tests.imagecheck import assert_images_close
 
 SKY_CUBE = data_path("textures") / "sky_cube"
@@ -73,7 +73,7 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     assert reflected < 0.2 * ortho and stencil < 0.2 * ortho
     sky = {r["technique"]: float(r["mae"]) for r in table
            if r["scene"] == "sphere-sky" and r["map_size"] == "128"}
-    assert set(sky) == {*CURVED_TECHNIQUES, "cube-live box", "cube-live sphere",
+    assert set(sky) == {*technique_names("curved"), "cube-live box", "cube-live sphere",
                         "cube-live distance"}
     assert sky["sphere"] < sky["normal"] and sky["cube"] < sky["normal"]
     room = {r["technique"]: float(r["share_off"]) for r in table
@@ -120,6 +120,28 @@ def test_accuracy_sweep_of_a_scene_file(tmp_path, capsys, monkeypatch):
     assert (tmp_path / "accuracy.md").exists() and (tmp_path / "accuracy.png").exists()
 
 
+def test_a_sweep_from_inside_the_sphere_reports_no_reflector_pixels(tmp_path, capsys):
+    """From inside the chrome sphere no pixel shows a reflector (it is seen from outside
+    only): every row says so, none reports zero error."""
+    scene = tmp_path / "inside.toml"
+    source = (scenes_dir() / "chrome_sphere.toml").read_text().replace(
+        "eye = [1.3, 2.0, 7.4]", "eye = [0.1, 0.05, 0.2]").replace(
+        "target = [0.0, 0.1, 0.0]", "target = [0.0, 0.1, 3.0]").replace(
+        "near = 0.2", "near = 0.05").replace('"../', f'"{scenes_dir().parent}/')
+    scene.write_text(source)
+    assert main(["bench", "accuracy", "--scene", str(scene), "--frame", "32", "--sizes",
+                 "16", "--frames", "1", "--out-dir", str(tmp_path / "out")]) == 0
+    out = capsys.readouterr().out
+    with open(tmp_path / "out" / "accuracy.csv") as stream:
+        table = list(csv.DictReader(stream))
+    assert len(table) > 5
+    assert all(r["mae"] == "" and r["pixels"] == "0" for r in table)
+    lines = [line for line in out.splitlines() if line.startswith(("raytrace", "cube",
+                                                                   "sphere", "latlong"))]
+    assert lines and all("no reflector pixels" in line for line in lines), out
+    assert not re.search(r"\b0\.00\b", out)
+
+
 def test_bench_refuses_a_file_as_its_folder_and_unknown_benchmarks(tmp_path, capsys):
     blocker = tmp_path / "taken"
     blocker.write_text("keep me")
@@ -140,8 +162,8 @@ def test_bench_refuses_a_file_as_its_folder_and_unknown_benchmarks(tmp_path, cap
 
 
 @pytest.mark.parametrize("scene, method", [
-    *(("lab20", m) for m in PLANAR_TECHNIQUES),
-    *(("chrome_sphere", m) for m in CURVED_TECHNIQUES),
+    *(("lab20", m) for m in technique_names("planar")),
+    *(("chrome_sphere", m) for m in technique_names("curved")),
 ])
 def test_render_command_draws_each_technique(tmp_path, capsys, scene, method):
     out = tmp_path / f"{method}.png"
@@ -157,7 +179,7 @@ def test_render_command_draws_each_technique(tmp_path, capsys, scene, method):
 def test_render_command_draws_the_ray_traced_truth(tmp_path, capsys):
     out = tmp_path / "truth.png"
     assert main(["render", "--raytrace", "--size", "64x48", "--out", str(out)]) == 0
-    assert "ray traced" in capsys.readouterr().out
+    assert "drawn by raytrace" in capsys.readouterr().out
     truth = png(out)
     assert np.array_equal(truth, mirrorlab.render(size=(64, 48), method="raytrace"))
     # and the exact techniques agree with it
@@ -342,6 +364,27 @@ def test_render_stats_report_the_passes_of_each_frame(tmp_path, capsys):
     assert f"{2 * 8} passes run" in comparison[0]
     assert f"saved {8 - len(expected)} passes" in comparison[0]
     assert png(out).shape == (64, 64, 3)
+    # the plan is lossless: each frame is the --no-plan frame, and the report says so
+    assert len(re.findall(r"the same as --no-plan\)$", text, flags=re.M)) == 8
+    assert "frames are the same, pixel for pixel, in all 8 frames" in text
+
+
+def test_render_stats_say_how_many_pixels_the_lossy_rule_changes(tmp_path, capsys):
+    # the lab's mirror seen from 300 units: a few pixels, drawn plain under --tiny-pixels
+    out = tmp_path / "far.png"
+    args = ["render", "lab20", "--camera", "300,1,-2", "--target", "-7,1,-2", "--set",
+            "camera.far=1000", "--size", "64x64", "--frames", "2", "--stats", "--out",
+            str(out)]
+    assert main(args) == 0
+    assert "frames are the same, pixel for pixel, in all 2 frames" in capsys.readouterr().out
+    assert main([*args, "--tiny-pixels", "16"]) == 0
+    text = capsys.readouterr().out
+    changed = re.search(r"frames differ in 2 of 2 frames: (\d+) pixels in all", text)
+    assert changed and int(changed.group(1)) > 0, text
+    assert "pixels differ from --no-plan)" in text
+    assert main(["plan", "lab20", "--camera", "300,1,-2", "--target", "-7,1,-2", "--set",
+                 "camera.far=1000", "--size", "64x64", "--tiny-pixels", "16"]) == 0
+    assert "lossy" in capsys.readouterr().out
 
 
 def test_render_out_dir_writes_one_png_per_frame(tmp_path, capsys):

@@ -178,17 +178,18 @@ def test_planned_frames_equal_unplanned_frames_pixel_for_pixel(scene_renderer, n
 # them; the cube-live sphere shows its surroundings from its centre (parallax), and the
 # mirror shows that sphere; the sphere in the room corrects for parallax with a box.
 TRUTH_TOLERANCE = {
-    ("lab20", "mirror"): 0.74,              # ortho: 76.3% measured
-    ("robot_wave", "mirror"): 0.74,         # ortho, frame 0 is the lab's pose: 76.3%
-    ("two_mirrors", "west"): 0.99,          # reflected, two bounces: 99.9%
+    ("lab20", "mirror"): 0.74,              # ortho: 76.2% measured
+    ("robot_wave", "mirror"): 0.74,         # ortho, frame 0 is the lab's pose: 76.2%
+    ("two_mirrors", "west"): 0.99,          # reflected, two bounces: 100.0%
     ("two_mirrors", "east"): 0.99,
     ("mirror_behind_camera", "mirror"): 0.99,
     ("chrome_sphere", "sphere"): 0.58,      # sphere map among objects: 60.7%
-    ("spheremap_cone", "cone"): 0.58,       # texgen, per vertex, the picture as is: 60.4%
+    ("spheremap_cone", "cone"): 0.58,       # texgen, per vertex, the picture as is: 60.6%
     ("mirror_and_sphere", "mirror"): 0.95,  # reflected, showing the cube-live sphere: 96.6%
     ("mirror_and_sphere", "sphere"): 0.55,  # cube-live, parallax: 57.4%
-    # cube-live with the room as its box proxy: 96.4% (the rest is its silhouette, traced
-    # here with one ray a pixel; test_parallax.py compares it inside the silhouette)
+    # cube-live with the room as its box proxy: 95.5% (the rest is its silhouette, traced
+    # here with one ray a pixel, its level of detail from ray differentials that the
+    # sphere's turning normal spreads; test_parallax.py compares it inside the silhouette)
     ("sphere_room", "sphere"): 0.95,
 }
 

@@ -13,7 +13,8 @@ import pytest
 from mirrorlab import accuracy
 from mirrorlab.options import apply_options
 from mirrorlab.scene.loader import load_scene
-from mirrorlab.scene.model import CURVED_TECHNIQUES, BoxProxy, DistanceSearch
+from mirrorlab.scene.model import BoxProxy, DistanceSearch
+from mirrorlab.techniques import technique_names
 
 
 def test_image_error_scores_only_the_masked_pixels():
@@ -39,11 +40,34 @@ def test_a_pixel_is_off_only_beyond_ten_levels():
     assert error.share_off == pytest.approx(0.5)
 
 
-def test_identical_images_and_empty_masks_score_zero():
+def test_identical_images_score_zero_and_an_empty_mask_scores_nothing():
     image = np.full((3, 3, 3), 7, dtype=np.uint8)
-    assert accuracy.image_error(image, image, np.ones((3, 3), bool)).psnr == math.inf
+    same = accuracy.image_error(image, image, np.ones((3, 3), bool))
+    assert same.psnr == math.inf and same.mae == 0.0 and same.pixels == 9
     empty = accuracy.image_error(image, image * 0, np.zeros((3, 3), bool))
-    assert (empty.mae, empty.share_off) == (0.0, 0.0)
+    assert empty.empty and empty.pixels == 0
+    assert all(math.isnan(v) for v in (empty.mae, empty.p95, empty.psnr, empty.share_off))
+
+
+def test_a_viewpoint_with_no_reflector_pixels_is_said_so_never_zero_error():
+    def row(technique, viewpoint, mae, pixels):
+        nan = math.nan
+        return accuracy.SweepRow("s", technique, 0, viewpoint, mae, mae, nan, mae, 5.0,
+                                 nan, pixels)
+
+    rows = [row("raytrace", "inside", math.nan, 0), row("cube", "inside", math.nan, 0),
+            row("cube", "outside", 2.0, 100), row("sphere", "inside", math.nan, 0)]
+    summary = {r.technique: r for r in accuracy.summarise(rows)}
+    assert summary["cube"].mae == 2.0 and summary["cube"].worst_viewpoint == "outside"
+    assert math.isnan(summary["sphere"].mae) and math.isnan(summary["raytrace"].mae)
+    table = accuracy.summary_table(list(summary.values()))
+    text = accuracy.format_text(table)
+    assert "no reflector pixels" in text
+    by_name = {line[0]: line for line in table[1:]}
+    assert by_name["sphere"][2] == accuracy.NO_REFLECTOR_PIXELS
+    assert "0.00" not in by_name["sphere"] and "0.00" not in by_name["raytrace"]
+    back = accuracy.rows_from_csv(accuracy.rows_to_csv(rows))
+    assert [r.pixels for r in back] == [0, 0, 100, 0] and math.isnan(back[1].mae)
 
 
 def rows():
@@ -158,7 +182,7 @@ def test_planar_configurations_cover_every_capture_mode_and_size_plus_stencil():
 def test_curved_configurations_stop_at_the_largest_map_the_sweep_bakes():
     configs = accuracy.curved_techniques((64, 2048))
     assert [label for label, _ in configs] == [
-        *CURVED_TECHNIQUES, "cube-live distance", "cube-live distance 2+0",
+        *technique_names("curved"), "cube-live distance", "cube-live distance 2+0",
         "cube-live distance 4+1", "cube-live distance 16+2", "cube-live distance 32+4"]
     assert all(o["map_size"] == 64 for _, o in configs)
     assert accuracy.ENVMAP_MAX_SIZE < 2048
@@ -205,7 +229,7 @@ def test_a_scene_gets_the_configurations_of_its_kinds_of_reflector():
                                                                      steps=())]
               for name in ("lab20", "chrome_sphere", "mirror_and_sphere", "no_mirror")}
     assert labels["lab20"] == [label for label, _ in accuracy.lab_techniques(sizes)]
-    assert labels["chrome_sphere"] == [*CURVED_TECHNIQUES, "cube-live distance"]
+    assert labels["chrome_sphere"] == [*technique_names("curved"), "cube-live distance"]
     assert labels["mirror_and_sphere"] == labels["lab20"] + labels["chrome_sphere"]
     assert labels["no_mirror"] == []
 

@@ -41,8 +41,8 @@ def test_math_scene_and_plan_layers_import_no_opengl_and_no_gl_layer():
 
 def test_listing_the_techniques_loads_no_pass_module():
     loaded = modules_loaded_by(
-        "from mirrorlab.techniques import TECHNIQUES\n"
-        "names = [t.name for t in TECHNIQUES.values()]")
+        "from mirrorlab.techniques import techniques\n"
+        "names = [t.name for t in techniques()]")
     assert not {m for m in loaded if m.startswith("mirrorlab.passes")}
     assert not gl_of(loaded)
 

@@ -33,9 +33,7 @@ from mirrorlab.scene.loader import (
 )
 from mirrorlab.scene.model import (
     CAPTURE_MODES,
-    CURVED_TECHNIQUES,
     PARALLAX_PROXIES,
-    PLANAR_TECHNIQUES,
     BoxProxy,
     Camera,
     CurvedReflector,
@@ -48,6 +46,7 @@ from mirrorlab.scene.model import (
     SphereProxy,
     Transform,
 )
+from mirrorlab.techniques import technique_names
 from tests import REPO_DIR
 
 MODELS = sorted((data_path("models")).glob("*.obj"))
@@ -203,7 +202,7 @@ def cameras(draw) -> dict[str, Any]:
 
 @st.composite
 def planar_reflectors(draw, name: str) -> dict[str, Any]:
-    technique = draw(st.sampled_from(PLANAR_TECHNIQUES))
+    technique = draw(st.sampled_from(technique_names("planar")))
     entry: dict[str, Any] = {"name": name, "technique": technique,
                              "center": draw(vec(moderate)), "normal": draw(directions),
                              "width": draw(st.floats(1e-2, 1e3)),
@@ -232,7 +231,7 @@ def planar_reflectors(draw, name: str) -> dict[str, Any]:
 
 @st.composite
 def curved_reflectors(draw, name: str) -> dict[str, Any]:
-    technique = draw(st.sampled_from(CURVED_TECHNIQUES))
+    technique = draw(st.sampled_from(technique_names("curved")))
     entry = {"name": name, "technique": technique, "mesh": str(draw(st.sampled_from(MODELS))),
              **draw(transforms()), "map_size": draw(st.integers(4, 4096)),
              "capture_center": draw(vec(moderate)), "color": draw(vec(unit))}
@@ -298,7 +297,7 @@ def backgrounds(draw, camera: dict[str, Any]) -> dict[str, Any]:
 @st.composite
 def animations(draw, camera: dict, items: list[dict], reflectors: list[dict]) -> dict:
     frames = draw(st.lists(st.integers(0, 40), min_size=1, max_size=4, unique=True))
-    curved = [r for r in reflectors if r["technique"] in CURVED_TECHNIQUES]
+    curved = [r for r in reflectors if r["technique"] in technique_names("curved")]
     keyframes = []
     for frame in frames:
         key: dict[str, Any] = {"frame": frame}
@@ -666,9 +665,9 @@ def test_a_keyframe_naming_an_unknown_object_is_refused(tmp_path):
     assert_refused(tmp_path, document, "animation.keyframes[1].objects.robott",
                    "unknown key; did you mean 'robot'?")
     document["animation"]["keyframes"][1] = {"frame": 9, "reflectors": {"mirror": {
-        "position": [0, 0, 0]}}}
-    assert_refused(tmp_path, document, "animation.keyframes[1].reflectors.mirror",
-                   "a planar mirror cannot be animated")
+        "scale": [2, 2, 2]}}}
+    assert_refused(tmp_path, document, "animation.keyframes[1].reflectors.mirror.scale",
+                   "a planar mirror's keyframes take position and rotation")
     document["animation"]["keyframes"][1] = {"frame": 9, "objects": {"block": {
         "angles": [0, 0, 0]}}}
     assert_refused(tmp_path, document, "animation.keyframes[1].objects.block.angles",
@@ -833,7 +832,8 @@ KNOWN_KEYS = sorted({
     "corners", "center", "normal", "width", "height", "capture", "texture_size", "ortho",
     "backing", "map_size", "source", "capture_center", "extents", "frames", "keyframes",
     "frame", "robot", "mirror", "sphere"})
-WORDS = sorted({*PLANAR_TECHNIQUES, *CURVED_TECHNIQUES, *CAPTURE_MODES, "procedural", "robot",
+WORDS = sorted({*technique_names("planar"), *technique_names("curved"), *CAPTURE_MODES,
+                "procedural", "robot",
                 "mesh", "../models/hand.obj", "../textures/launch.png", "../textures/sky_cube",
                 "../textures", "..", "", " ", "/", "\0", "x" * 300, "mirror", "sphere"})
 numbers = st.one_of(

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mirrorlab import math3d
@@ -120,3 +120,35 @@ def test_oblique_projection_refuses_a_plane_through_the_eye():
     projection = math3d.perspective(45.0, 1.0, 0.1, 100.0)
     with pytest.raises(ValueError, match="eye"):
         math3d.oblique_projection(projection, np.array([1.0, 0.0, 0.0, 0.0]))
+
+
+FLIP_X = np.diag([-1.0, 1.0, 1.0, 1.0])
+
+
+@settings(max_examples=200, deadline=None)
+@given(normal=st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, -0.05)),
+       distance=st.floats(0.2, 20.0), flip=st.booleans(), shift=st.floats(-0.5, 0.5),
+       seed=st.integers(0, 2**31 - 1))
+def test_the_oblique_projection_keeps_everything_of_the_view_beyond_its_plane(
+        normal, distance, flip, shift, seed):
+    """Lengyel's far plane goes through the view volume's corner opposite the new near
+    plane, so nothing of the old volume beyond the plane is cut. The corner is picked in
+    clip space: with x flipped (the world seen in a mirror) or an off-centre frustum the
+    eye-space signs pick the wrong one, and the far plane cuts through the view."""
+    projection = math3d.perspective(50.0, 1.3, 0.1, 40.0)
+    projection[0, 2] = shift  # off-centre
+    if flip:
+        projection = FLIP_X @ projection
+    n = np.asarray(normal)
+    n /= np.linalg.norm(n)
+    plane = np.append(n, -distance)  # the eye (origin) behind it: d < 0
+    oblique = math3d.oblique_projection(projection, plane)
+    rng = np.random.default_rng(seed)
+    ndc = rng.uniform(-1.0, 1.0, size=(400, 3))
+    inverse = np.linalg.inv(projection)
+    points = np.column_stack([ndc, np.ones(len(ndc))]) @ inverse.T
+    points = points / points[:, 3:]
+    beyond = points @ plane > 1e-9
+    clip = points[beyond] @ oblique.T
+    assert np.all(clip[:, 2] <= clip[:, 3] * (1 + 1e-9) + 1e-9)
+    assert np.all(clip[:, 2] >= -clip[:, 3] * (1 + 1e-9) - 1e-9)

@@ -301,3 +301,65 @@ def test_parse_count_refuses_what_is_not_a_whole_number_in_range(text):
     with pytest.raises(OptionError, match=r"^--frames: expected a whole number from 1 to "
                        r"100000"):
         parse_count("--frames", text, 1, 100_000)
+
+
+CENTERED_MIRROR = """
+name = "centred"
+[[objects]]
+type = "robot"
+[[reflectors]]
+name = "mirror"
+technique = "reflected"
+center = [-7.0, 1.0, -2.0]
+normal = [1.0, 0.0, 0.0]
+width = 8.0
+height = 6.0
+up = [0.0, 1.0, 0.0]
+"""
+
+
+def test_set_changes_a_mirror_given_by_centre_normal_and_size(tmp_path, capsys):
+    """A file that gives its mirror by center, normal, width and height takes --set on
+    any of them (the scene is written back with corners, which once made the file's own
+    form look like "corners and width both")."""
+    import numpy as np
+
+    from mirrorlab.cli import main
+    from mirrorlab.scene.loader import load_scene
+
+    path = tmp_path / "centred.toml"
+    path.write_text(CENTERED_MIRROR)
+    scene = load_scene(path)
+    wider = apply_options(scene, {"set": "reflectors[0].width=12"}).reflector("mirror")
+    corners = wider.corner_array
+    assert np.allclose(np.ptp(corners, axis=0), (0.0, 6.0, 12.0))
+    assert np.allclose(wider.center, (-7.0, 1.0, -2.0))
+    assert np.allclose(wider.normal, (1.0, 0.0, 0.0))
+    moved = apply_options(scene, {"set": ("reflectors[0].center=[-6, 2, 0]",
+                                          "reflectors[0].height=2")}).reflector("mirror")
+    assert np.allclose(moved.center, (-6.0, 2.0, 0.0))
+    assert np.allclose(np.ptp(moved.corner_array, axis=0), (0.0, 2.0, 8.0))
+    turned = apply_options(scene, {"set": "reflectors[0].normal=[1, 0, 1]"}).reflector("mirror")
+    assert np.allclose(turned.normal, np.array([1.0, 0.0, 1.0]) / np.sqrt(2))
+    # corners then replace the whole form
+    given = apply_options(scene, {"set": ("reflectors[0].width=12",
+                                          "reflectors[0].corners=[[0,0,0],[0,1,0],[0,1,1],"
+                                          "[0,0,1]]")}).reflector("mirror")
+    assert np.allclose(given.corner_array[2], (0.0, 1.0, 1.0))
+    assert main(["plan", str(path), "--set", "reflectors[0].width=12", "--frames",
+                 "1"]) == 0
+    capsys.readouterr()
+    # the shipped lab's mirror is given by corners: a rectangle, so it takes width too
+    lab = apply_options(load_scene("lab20"), {"set": "reflectors[0].width=4"})
+    assert np.allclose(np.ptp(lab.reflector("mirror").corner_array, axis=0), (0.0, 8.0, 4.0))
+
+
+def test_set_refuses_a_size_for_a_mirror_whose_corners_are_no_rectangle(tmp_path):
+    from mirrorlab.scene.loader import loads
+
+    scene = loads(CENTERED_MIRROR.replace(
+        'center = [-7.0, 1.0, -2.0]\nnormal = [1.0, 0.0, 0.0]\nwidth = 8.0\nheight = 6.0\n'
+        'up = [0.0, 1.0, 0.0]',
+        'corners = [[-7, -3, -6], [-7, 5, -5], [-7, 5, 2], [-7, -3, 2]]'))
+    with pytest.raises(OptionError, match=r"--set: reflectors\[0\].width: .*no rectangle"):
+        apply_options(scene, {"set": "reflectors[0].width=12"})

@@ -244,6 +244,54 @@ def test_distance_search_passes_behind_an_object_it_does_not_meet():
     assert not background and np.allclose(look, unit([3.0, 0.5, 0.0]), atol=1e-6)
 
 
+def post_and_wall(directions):
+    """Seen from the origin: a post at x = 2 (|z| < 0.2) in front of a wall at x = 8."""
+    d = np.asarray(directions, dtype=np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = 2.0 * d[:, 2] / d[:, 0]
+    ahead = d[:, 0] > 0
+    return np.where(ahead & (np.abs(z) < 0.2), d[:, 0] / 2.0, np.where(ahead, d[:, 0] / 8.0,
+                                                                       0.0))
+
+
+@pytest.mark.parametrize("steps", [4, 6, 8, 10, 12])
+def test_distance_search_finds_the_wall_behind_a_post_it_passed_behind(steps, monkeypatch):
+    # The ray from (0, 0, -1) along (1, 0, 0.3) misses the post, passes behind it (as the
+    # centre sees it) from x = 2.5 to 5, comes out and meets the wall at (8, 0, 1.4), all
+    # within one linear step: only the smaller steps see it come out.
+    origin, direction = np.array([0.0, 0.0, -1.0]), unit([1.0, 0.0, 0.3])
+    wall = unit([8.0, 0.0, 1.4])
+    look, background = parallax.distance_lookup(origin, direction, np.zeros(3),
+                                                post_and_wall, steps, 2, 0.1, enclosed=True)
+    assert not background
+    assert np.degrees(np.arccos(np.clip(look @ wall, -1, 1))) < 1e-3
+    missed = 0
+    monkeypatch.setattr(parallax, "REFINE_STEPS", 1)
+    for count in (4, 6, 10, 12):
+        look, _ = parallax.distance_lookup(origin, direction, np.zeros(3), post_and_wall,
+                                           count, 2, 0.1, enclosed=True)
+        missed += np.degrees(np.arccos(np.clip(look @ wall, -1, 1))) > 1.0
+    assert missed == 4  # without them every one of these falls back
+
+
+def test_with_no_surface_found_a_closed_room_falls_back_to_the_plain_lookup():
+    # Over the ledge, along +x: the wall the ray meets at x = 6 is hidden from the centre
+    # by the ledge, so no crossing is accepted. Closed in, the plain lookup (in the
+    # capture); open, the background.
+    def ledge_and_wall(directions):
+        d = np.asarray(directions, dtype=np.float64)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            y = 3.0 * d[:, 1] / d[:, 0]
+        ahead = d[:, 0] > 0
+        return np.where(ahead & (y < 1.0), d[:, 0] / 3.0, np.where(ahead, d[:, 0] / 6.0, 0.0))
+
+    over = np.array([0.0, 1.5, 0.0])
+    for enclosed in (True, False):
+        look, background = parallax.distance_lookup(over, [1.0, 0.0, 0.0], np.zeros(3),
+                                                    ledge_and_wall, 8, 2, enclosed=enclosed)
+        assert np.allclose(look, [1.0, 0.0, 0.0]) and background == (not enclosed)
+
+
 @few
 @given(extreme_batches, extreme_batches, st.integers(1, 9), st.integers(0, 4),
        st.floats(1e-3, 1.0), st.integers(0, 2**32 - 1))

@@ -232,21 +232,24 @@ def test_a_static_map_is_never_captured_and_a_sphere_map_is_baked_per_view_rotat
 # --------------------------------------------------------------------------- tiny
 
 
-def test_a_reflector_of_a_few_pixels_is_drawn_plain_unless_the_rule_is_off():
+def test_the_lossy_small_reflector_rule_is_off_unless_asked_for():
     far = Camera(eye=(300.0, 1.0, -2.0), target=LAB_CENTER, far=1000.0)
     scene = with_camera(load_scene("lab20"), far)
+    assert TINY_PIXELS == 0  # by default the plan is lossless
     area = screen_area(scene.reflector("mirror"), camera_view(far, SIZE))
-    assert 0.0 < area < TINY_PIXELS
-    plan = run(scene, TextureState())
-    assert captures(plan) == []
-    draw = draw_of(plan.top, "mirror")
+    assert 0.0 < area < 16
+    default = run(scene, TextureState())
+    assert ran_captures(default) == [("mirror", 1)]
+    assert draw_of(default.top, "mirror").mode == "texture"
+    lossy = run(scene, TextureState(), tiny_pixels=16)
+    assert captures(lossy) == []
+    draw = draw_of(lossy.top, "mirror")
     assert draw.mode == "plain"
     assert f"{area:.1f} pixels" in draw.reason and "under 16" in draw.reason
-    kept = run(scene, TextureState(), tiny_pixels=0)
-    assert ran_captures(kept) == [("mirror", 1)]
-    assert draw_of(kept.top, "mirror").mode == "texture"
+    assert "lossy" in draw.reason
     # Seen large enough, the rule changes nothing.
-    assert draw_of(run(load_scene("lab20"), TextureState()).top, "mirror").mode == "texture"
+    assert draw_of(run(load_scene("lab20"), TextureState(), tiny_pixels=16).top,
+                   "mirror").mode == "texture"
 
 
 # --------------------------------------------------------------------------- bounces
