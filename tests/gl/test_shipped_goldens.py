@@ -1,0 +1,35 @@
+"""Every shipped scene's frames are what they were, pixel for pixel: each sequence of
+:mod:`tests.gl.golden_frames` (every scene file as a still, turning and moving sequence,
+every frame of the animated one, and every technique on the scenes made for them) is
+drawn by a fresh renderer and compared with its golden PNG exactly (tolerance 0). On a
+failure the actual, expected and difference (x4) images are written to tests/_failures/
+and the message names the frames and the pixels that differ."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from mirrorlab.testing import difference_image
+from tests.gl.golden_frames import SIZE, draw_sequence, sequences
+from tests.imagecheck import save_failure
+
+SEQUENCES = list(sequences())
+
+
+@pytest.mark.parametrize("sequence", SEQUENCES, ids=[s.name for s in SEQUENCES])
+def test_shipped_scene_frames_equal_their_golden_frames(scene_renderer, sequence):
+    expected = np.asarray(Image.open(sequence.path).convert("RGB"))
+    actual = draw_sequence(scene_renderer, sequence)
+    assert actual.shape == expected.shape, (actual.shape, expected.shape)
+    if np.array_equal(actual, expected):
+        return
+    width = SIZE[0]
+    differing = (actual != expected).any(axis=-1)
+    per_frame = [int(differing[:, i * width:(i + 1) * width].sum())
+                 for i in range(len(sequence.frames))]
+    folder = save_failure(f"golden_{sequence.name}", actual=actual, expected=expected,
+                          diff=difference_image(actual, expected))
+    raise AssertionError(f"{sequence.name}: pixels differing in each frame {per_frame} "
+                         f"(of {SIZE[0] * SIZE[1]}); images in {folder}")
