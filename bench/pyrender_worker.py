@@ -3,13 +3,18 @@
 
 It reads one JSON command a line on standard input and answers each with one JSON line:
 
-``{"cmd": "setup", "size": [w, h], "meshes": [{"path", "color"}], "camera": {"view",
-"yfov", "znear", "zfar"}, "light": {"direction", "intensity"}}``
-    builds the scene (meshes already in world space) and an offscreen renderer; answers
-    ``{"ok": true, "triangles": n, "gl": renderer string}``.
-``{"cmd": "frames", "count": n, "flags": "default" | "flat"}``
-    renders ``n`` frames, each read back to numpy (colour and depth, as pyrender does);
-    answers ``{"ms": [...], "mean": mean colour of the last frame}``.
+``{"cmd": "setup", "size": [w, h], "meshes": [{"path", "color", "pose"?}], "camera":
+{"view", "yfov", "znear", "zfar"}, "light": {"direction", "intensity"}, "name"?}``
+    builds the scene ``name`` (default ``""``; scenes of other names are kept while the
+    size stays) and, when the size changed, an offscreen renderer; answers ``{"ok":
+    true, "triangles": n, "nodes": n, "gl": renderer string}``. A mesh is placed by its
+    ``pose`` (16 numbers, row-major; default: already in world space); meshes of one file
+    and colour share one ``pyrender.Mesh``, a node each, as a program placing many copies
+    would make them.
+``{"cmd": "frames", "count": n, "flags": "default" | "flat", "scene"?}``
+    renders ``n`` frames of the scene named ``scene`` (default ``""``), each read back to
+    numpy (colour and depth, as pyrender does); answers ``{"ms": [...], "mean": mean
+    colour of the last frame}``.
 ``{"cmd": "save", "path": p}``
     writes the last colour frame as a PNG.
 ``{"cmd": "quit"}``
@@ -47,42 +52,62 @@ def light_pose(direction: list[float]) -> np.ndarray:
     return pose
 
 
+def build_scene(command: dict) -> tuple[pyrender.Scene, int, int]:
+    """The scene a ``setup`` command describes, its triangles and its mesh nodes."""
+    width, height = command["size"]
+    scene = pyrender.Scene(bg_color=[0.16, 0.18, 0.22, 1.0], ambient_light=[0.3, 0.3, 0.3])
+    triangles = nodes = 0
+    shared: dict[tuple, tuple[pyrender.Mesh, int]] = {}
+    for item in command["meshes"]:
+        key = (item["path"], tuple(item["color"]))
+        if key not in shared:
+            mesh = trimesh.load(item["path"], process=False, force="mesh")
+            material = pyrender.MetallicRoughnessMaterial(
+                baseColorFactor=[*item["color"], 1.0], metallicFactor=0.0,
+                roughnessFactor=1.0)
+            shared[key] = (pyrender.Mesh.from_trimesh(mesh, material=material, smooth=True),
+                           len(mesh.faces))
+        mesh, faces = shared[key]
+        pose = np.asarray(item["pose"], dtype=np.float64).reshape(4, 4) if "pose" in item \
+            else np.eye(4)
+        scene.add(mesh, pose=pose)
+        triangles += faces
+        nodes += 1
+    camera = command["camera"]
+    pose = np.linalg.inv(np.asarray(camera["view"], dtype=np.float64).reshape(4, 4))
+    scene.add(pyrender.PerspectiveCamera(yfov=camera["yfov"], aspectRatio=width / height,
+                                         znear=camera["znear"], zfar=camera["zfar"]),
+              pose=pose)
+    light = command["light"]
+    scene.add(pyrender.DirectionalLight(intensity=light["intensity"]),
+              pose=light_pose(light["direction"]))
+    return scene, triangles, nodes
+
+
 def main() -> int:
-    renderer = scene = None
+    renderer = None
+    size = None
+    scenes: dict[str, pyrender.Scene] = {}
     last = None
     for line in sys.stdin:
         command = json.loads(line)
         if command["cmd"] == "setup":
-            width, height = command["size"]
-            scene = pyrender.Scene(bg_color=[0.16, 0.18, 0.22, 1.0],
-                                   ambient_light=[0.3, 0.3, 0.3])
-            triangles = 0
-            for item in command["meshes"]:
-                mesh = trimesh.load(item["path"], process=False, force="mesh")
-                material = pyrender.MetallicRoughnessMaterial(
-                    baseColorFactor=[*item["color"], 1.0], metallicFactor=0.0,
-                    roughnessFactor=1.0)
-                scene.add(pyrender.Mesh.from_trimesh(mesh, material=material, smooth=True))
-                triangles += len(mesh.faces)
-            camera = command["camera"]
-            pose = np.linalg.inv(np.asarray(camera["view"], dtype=np.float64).reshape(4, 4))
-            scene.add(pyrender.PerspectiveCamera(yfov=camera["yfov"],
-                                                 aspectRatio=width / height,
-                                                 znear=camera["znear"], zfar=camera["zfar"]),
-                      pose=pose)
-            light = command["light"]
-            scene.add(pyrender.DirectionalLight(intensity=light["intensity"]),
-                      pose=light_pose(light["direction"]))
-            if renderer is not None:
-                renderer.delete()
-            renderer = pyrender.OffscreenRenderer(width, height)
+            if renderer is None or size != tuple(command["size"]):
+                if renderer is not None:
+                    renderer.delete()
+                scenes.clear()  # their GL objects went with the old renderer's context
+                size = tuple(command["size"])
+                renderer = pyrender.OffscreenRenderer(*size)
+            scene, triangles, nodes = build_scene(command)
+            scenes[command.get("name", "")] = scene
             from OpenGL import GL
 
-            answer = {"ok": True, "triangles": triangles,
+            answer = {"ok": True, "triangles": triangles, "nodes": nodes,
                       "gl": GL.glGetString(GL.GL_RENDERER).decode()}
         elif command["cmd"] == "frames":
             flags = (pyrender.RenderFlags.FLAT if command["flags"] == "flat"
                      else pyrender.RenderFlags.NONE)
+            scene = scenes[command.get("scene", "")]
             times = []
             for _ in range(command["count"]):
                 start = time.perf_counter()

@@ -17,6 +17,8 @@ space (400 triangles: the robot and the mirror's frame) and the same parts subdi
 - ``mirrorlab two passes``: the lab's mirror, the orthographic capture copied into its
   texture, then the camera pass; a part moves by 1 mm every frame, so every frame plans
   and captures again, as an animation would;
+- ``mirrorlab reflected two passes``: the same with the mirror made ``reflected`` (the
+  viewer's mirror image captures it), captured again every frame;
 - ``mirrorlab capture reused``: the same scene standing still: the planner reuses the
   capture, only the camera pass runs;
 - ``mirrorlab one pass``: the meshes with no mirror;
@@ -34,6 +36,7 @@ amount: 1 is linear).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import io
 import json
@@ -51,7 +54,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 PYRENDER_VENV = ROOT / ".venv-pyrender"
 PYRENDER_PACKAGES = ("pyrender==0.1.45", "numpy<2", "Pillow")
-MIRRORLAB_VARIANTS = ("mirrorlab two passes", "mirrorlab capture reused", "mirrorlab one pass")
+MIRRORLAB_VARIANTS = ("mirrorlab two passes", "mirrorlab reflected two passes",
+                      "mirrorlab capture reused", "mirrorlab one pass")
 PYRENDER_VARIANTS = ("pyrender default", "pyrender flat")
 STEP = 0.001
 """How far (scene units) the moving part of the two-pass variant goes and comes back."""
@@ -200,11 +204,15 @@ def time_configuration(renderers, worker: PyrenderWorker, lab, meshes: MeshSet, 
                 "yfov": float(np.radians(camera.fovy)), "znear": camera.near,
                 "zfar": camera.far},
         light={"direction": list(lab.lights[0].direction), "intensity": 3.0})
-    two_pass, reused, one_pass = renderers
+    two_pass, reflected_pass, reused, one_pass = renderers
+    reflected = [replace(scene, reflectors=tuple(replace(r, technique="reflected")
+                                                 for r in scene.reflectors))
+                 for scene in (mirrored, moved)]
     variants = [
         Variant(MIRRORLAB_VARIANTS[0], mirrorlab_variant(two_pass, [mirrored, moved], size), []),
-        Variant(MIRRORLAB_VARIANTS[1], mirrorlab_variant(reused, [mirrored], size), []),
-        Variant(MIRRORLAB_VARIANTS[2], mirrorlab_variant(one_pass, [plain], size), []),
+        Variant(MIRRORLAB_VARIANTS[1], mirrorlab_variant(reflected_pass, reflected, size), []),
+        Variant(MIRRORLAB_VARIANTS[2], mirrorlab_variant(reused, [mirrored], size), []),
+        Variant(MIRRORLAB_VARIANTS[3], mirrorlab_variant(one_pass, [plain], size), []),
         *(Variant(name, pyrender_variant(worker, name.split()[1]), [])
           for name in PYRENDER_VARIANTS),
     ]
@@ -217,9 +225,11 @@ def time_configuration(renderers, worker: PyrenderWorker, lab, meshes: MeshSet, 
             variant.samples += variant.frames(block)
         turn += 1
     expected = ["capture:mirror", "camera"]
-    if two_pass.last_stats.ran != expected or reused.last_stats.ran != ["camera"]:
+    if (two_pass.last_stats.ran != expected or reflected_pass.last_stats.ran != expected
+            or reused.last_stats.ran != ["camera"]):
         raise RuntimeError(f"the variants did not run the passes they stand for: "
-                           f"{two_pass.last_stats.ran}, {reused.last_stats.ran}")
+                           f"{two_pass.last_stats.ran}, {reflected_pass.last_stats.ran}, "
+                           f"{reused.last_stats.ran}")
     medians = {v.name: statistics.median(v.samples) for v in variants}
     log(f"{meshes.triangles} triangles, {size}x{size}: " + ", ".join(
         f"{name} {ms:.2f} ms" for name, ms in medians.items()))
@@ -230,24 +240,133 @@ def time_configuration(renderers, worker: PyrenderWorker, lab, meshes: MeshSet, 
              "frames": len(v.samples), "gl": setup["gl"]} for v in variants]
 
 
-def run(mesh_sets: list[MeshSet], sizes: list[int], frames: int, warmup: int,
-        block: int) -> list[dict]:
+def run(worker: PyrenderWorker, mesh_sets: list[MeshSet], sizes: list[int], frames: int,
+        warmup: int, block: int) -> list[dict]:
     import mirrorlab
 
     lab = mirrorlab.load_scene("lab20")
-    worker = PyrenderWorker()
     rows: list[dict] = []
-    try:
-        # a renderer (and context) a variant, as a program drawing that scene would keep
-        with mirrorlab.Renderer((64, 64)) as two_pass, mirrorlab.Renderer((64, 64)) as reused, \
-                mirrorlab.Renderer((64, 64)) as one_pass:
-            for meshes in mesh_sets:
-                for size in sizes:
-                    rows += time_configuration((two_pass, reused, one_pass), worker, lab,
-                                               meshes, size, frames, warmup, block)
-    finally:
-        worker.close()
+    # a renderer (and context) a variant, as a program drawing that scene would keep
+    with contextlib.ExitStack() as stack:
+        renderers = [stack.enter_context(mirrorlab.Renderer((64, 64)))
+                     for _ in MIRRORLAB_VARIANTS]
+        for meshes in mesh_sets:
+            for size in sizes:
+                rows += time_configuration(renderers, worker, lab, meshes, size, frames,
+                                           warmup, block)
     return rows
+
+
+# --------------------------------------------------------------------------- scale
+
+
+SCALE_FAMILIES = ("mirrors unseen", "mirrors seen", "objects unseen", "objects seen",
+                  "tiny objects seen")
+"""The scale scenes (``bench/scale.py``), each at several counts."""
+
+
+def pyrender_meshes(scene, lab: MeshSet) -> list[dict]:
+    """pyrender's meshes for a scale scene: the lab's parts in world space (``lab``, the
+    mesh set of level 0) and each added box placed by its transform."""
+    meshes = [{"path": str(path), "color": list(color)} for path, color in lab.files]
+    for item in scene.objects:
+        if item.name.startswith("box_"):
+            meshes.append({"path": str(item.mesh), "color": list(item.color),
+                           "pose": item.transform.matrix().ravel().tolist()})
+    return meshes
+
+
+def scale_rows(worker: PyrenderWorker, lab: MeshSet, size: int, object_counts: list[int],
+               mirror_counts: list[int], modes: tuple[str, ...], frames: int, warmup: int,
+               block: int) -> list[dict]:
+    """Median frame times of the scale scenes: mirrorlab in each of ``modes``, and
+    pyrender's flat frame of every scene without mirrors (it has none), interleaved."""
+    import scale
+
+    scenes = scale.scale_scenes(object_counts, mirror_counts)
+    with contextlib.ExitStack() as stack:
+        variants = scale.mirrorlab_variants(stack, scenes, size, modes)
+        camera = scenes["base"].camera
+        for name, scene in scenes.items():
+            if "mirrors" in name:
+                continue
+            setup = worker.ask(cmd="setup", name=name, size=[size, size],
+                               meshes=pyrender_meshes(scene, lab),
+                               camera={"view": camera.view().ravel().tolist(),
+                                       "yfov": float(np.radians(camera.fovy)),
+                                       "znear": camera.near, "zfar": camera.far},
+                               light={"direction": list(scene.lights[0].direction),
+                                      "intensity": 3.0})
+            log(f"pyrender {name}: {setup['nodes']} nodes, {setup['triangles']} triangles")
+            variants.append(scale.Variant(
+                f"pyrender flat, {name}",
+                lambda count, name=name: worker.ask(cmd="frames", count=count, flags="flat",
+                                                    scene=name)["ms"]))
+        scale.interleave(variants, frames, warmup, block)
+    return [{"variant": v.name, "size": size,
+             "median_ms": round(statistics.median(v.samples), 3),
+             "p10_ms": round(float(np.percentile(v.samples, 10)), 3),
+             "p90_ms": round(float(np.percentile(v.samples, 90)), 3),
+             "frames": len(v.samples)} for v in variants]
+
+
+def _scale_parts(variant: str) -> tuple[str, int, str]:
+    """``("mirrorlab still", 100, "objects unseen")`` from a scale variant's name."""
+    kind, scene = variant.split(", ", 1)
+    if scene == "base":
+        return kind, 0, "base"
+    count, family = scene.split(" ", 1)
+    return kind, int(count), family
+
+
+def scale_table(rows: list[dict]) -> str:
+    """Every scale scene: each renderer's median and its ratio to that renderer's base
+    frame, and mirrorlab's still frame against pyrender's flat one."""
+    by = {_scale_parts(r["variant"]): r["median_ms"] for r in rows}
+    kinds = list(dict.fromkeys(_scale_parts(r["variant"])[0] for r in rows))
+    scenes = list(dict.fromkeys(_scale_parts(r["variant"])[1:] for r in rows))
+    header = "| scene | " + " | ".join(f"{kind} ms | {kind} / its base" for kind in kinds)
+    compare = [k for k in kinds if k.startswith("mirrorlab")]
+    has_pyrender = "pyrender flat" in kinds
+    if has_pyrender:
+        header += " | " + " | ".join(f"{kind} / pyrender flat" for kind in compare)
+    lines = [header + " |", "|---|" + "---:|" * (2 * len(kinds) + (len(compare)
+                                                                    if has_pyrender else 0))]
+    for count, family in scenes:
+        cells = []
+        for kind in kinds:
+            ms, base = by.get((kind, count, family)), by.get((kind, 0, "base"))
+            cells += ["" if ms is None else f"{ms:.2f}",
+                      "" if ms is None or not base else f"{ms / base:.2f}x"]
+        if has_pyrender:
+            flat = by.get(("pyrender flat", count, family))
+            for kind in compare:
+                ms = by.get((kind, count, family))
+                cells.append("" if ms is None or flat is None else f"{ms / flat:.2f}x")
+        name = "base" if family == "base" else f"{count:,} {family}"
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def scale_growth_table(rows: list[dict]) -> str:
+    """For each family and renderer: the exponent k of time ~ count^k between the fewest
+    and most items, and what each item adds to the base frame (µs, at the most items)."""
+    by = {_scale_parts(r["variant"]): r["median_ms"] for r in rows}
+    kinds = list(dict.fromkeys(_scale_parts(r["variant"])[0] for r in rows))
+    lines = ["| scene | renderer | counts | k in count | µs an item added to the base frame |",
+             "|---|---|---|---:|---:|"]
+    for family in SCALE_FAMILIES:
+        for kind in kinds:
+            counts = sorted(c for (k, c, f) in by if k == kind and f == family)
+            base = by.get((kind, 0, "base"))
+            if len(counts) < 2 or base is None:
+                continue
+            first, last = by[(kind, counts[0], family)], by[(kind, counts[-1], family)]
+            k = growth_exponent([counts[0], counts[-1]], [first, last])
+            added = (last - base) * 1e3 / counts[-1]
+            lines.append(f"| {family} | {kind} | {counts[0]:,} to {counts[-1]:,} | {k:.2f} | "
+                         f"{added:.2f} |")
+    return "\n".join(lines)
 
 
 # --------------------------------------------------------------------------- report
@@ -260,16 +379,19 @@ def growth_exponent(amounts: list[float], times: list[float]) -> float:
 
 def ratio_table(rows: list[dict]) -> str:
     by_key = {(r["triangles"], r["size"], r["variant"]): r["median_ms"] for r in rows}
-    lines = ["| triangles | size | two passes ms | reused ms | one pass ms | pyrender "
-             "default ms | pyrender flat ms | two passes / flat | reused / flat | one pass / "
-             "flat | two passes / default | reused / default |",
-             "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
+    lines = ["| triangles | size | two passes (ortho) ms | two passes (reflected) ms | reused ms "
+             "| one pass ms | pyrender default ms | pyrender flat ms | ortho two passes / flat "
+             "| reflected two passes / flat | reused / flat | one pass / flat | ortho two "
+             "passes / default | reused / default |",
+             "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
     for triangles, size in dict.fromkeys((r["triangles"], r["size"]) for r in rows):
-        two, reused, one, default, flat = (by_key[(triangles, size, name)] for name in
-                                           (*MIRRORLAB_VARIANTS, *PYRENDER_VARIANTS))
-        lines.append(f"| {triangles:,} | {size} | {two:.2f} | {reused:.2f} | {one:.2f} | "
-                     f"{default:.2f} | {flat:.2f} | {two / flat:.2f}x | {reused / flat:.2f}x | "
-                     f"{one / flat:.2f}x | {two / default:.2f}x | {reused / default:.2f}x |")
+        two, reflected, reused, one, default, flat = (
+            by_key[(triangles, size, name)] for name in (*MIRRORLAB_VARIANTS,
+                                                          *PYRENDER_VARIANTS))
+        lines.append(f"| {triangles:,} | {size} | {two:.2f} | {reflected:.2f} | {reused:.2f} | "
+                     f"{one:.2f} | {default:.2f} | {flat:.2f} | {two / flat:.2f}x | "
+                     f"{reflected / flat:.2f}x | {reused / flat:.2f}x | {one / flat:.2f}x | "
+                     f"{two / default:.2f}x | {reused / default:.2f}x |")
     return "\n".join(lines)
 
 
@@ -346,57 +468,97 @@ def plot(rows: list[dict]) -> bytes | None:
     return buffer.getvalue()
 
 
-def report(rows: list[dict], out_dir: Path, settings: dict) -> str:
+def report(rows: list[dict], scale: list[dict], out_dir: Path, settings: dict) -> str:
     from mirrorlab.files import Outputs
 
-    text = "\n\n".join([
-        f"{settings['frames']} timed frames a variant after {settings['warmup']} warm-up, "
-        f"blocks of {settings['block']}; {rows[0]['gl']}",
-        ratio_table(rows),
-        "Growth of frame time (k in time ~ amount^k, first to last point; 1 is linear):",
-        growth_table(rows)]) + "\n"
-    buffer = io.StringIO()
-    writer = csv.DictWriter(buffer, fieldnames=list(rows[0]), lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(rows)
-    picture = plot(rows)
+    parts = []
+    if rows:
+        parts += [
+            f"{settings['frames']} timed frames a variant after {settings['warmup']} warm-up, "
+            f"blocks of {settings['block']}; {rows[0]['gl']}",
+            ratio_table(rows),
+            "Growth of frame time (k in time ~ amount^k, first to last point; 1 is linear):",
+            growth_table(rows)]
+    if scale:
+        parts += [
+            f"Scenes at scale, {scale[0]['size']}x{scale[0]['size']}: the lab scene with a "
+            f"reflected mirror, and objects or mirrors added (bench/scale.py); "
+            f"{settings['frames']} timed frames a variant, interleaved",
+            scale_table(scale),
+            "Growth with the number of items (k in time ~ count^k, fewest to most):",
+            scale_growth_table(scale)]
+    text = "\n\n".join(parts) + "\n"
+    picture = plot(rows) if rows else None
     with Outputs() as outputs:
-        outputs.add(out_dir / "speed.csv", buffer.getvalue().encode())
+        for name, table_rows in (("speed.csv", rows), ("scale.csv", scale)):
+            if not table_rows:
+                continue
+            buffer = io.StringIO()
+            writer = csv.DictWriter(buffer, fieldnames=list(table_rows[0]),
+                                    lineterminator="\n")
+            writer.writeheader()
+            writer.writerows(table_rows)
+            outputs.add(out_dir / name, buffer.getvalue().encode())
         outputs.add(out_dir / "speed.md", text.encode())
         if picture is not None:
             outputs.add(out_dir / "speed.png", picture)
-    log(f"wrote {out_dir}/speed.csv, speed.md" + (", speed.png" if picture else
-                                                  " (no plot: matplotlib is not installed)"))
+    log(f"wrote {out_dir}/speed.md and its tables" + (", speed.png" if picture else ""))
     return text
 
 
 def rows_from_csv(path: Path) -> list[dict]:
+    if not path.exists():
+        return []
     with open(path, newline="") as stream:
         rows = list(csv.DictReader(stream))
     for row in rows:
         for key in ("triangles", "size", "frames"):
-            row[key] = int(row[key])
+            if key in row:
+                row[key] = int(row[key])
         for key in ("median_ms", "p10_ms", "p90_ms"):
             row[key] = float(row[key])
     return rows
+
+
+def counts(parser: argparse.ArgumentParser, option: str, text: str) -> list[int]:
+    try:
+        values = [int(c) for c in text.split(",") if c]
+    except ValueError:
+        values = []
+    if not values or any(v < 1 for v in values):
+        parser.error(f"{option} takes comma-separated positive whole numbers, got {text!r}")
+    return values
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true",
                         help="3 frames a variant at 32x32 and 64x64, the lab meshes and "
-                        "their first subdivision (what the tests run: it checks the "
-                        "benchmark works, not the figures)")
+                        "their first subdivision, and scale scenes of 3 and 12 items at 64x64 "
+                        "(what the tests run: it checks the benchmark works, not the figures)")
+    parser.add_argument("--parts", default="sweep,scale",
+                        help="sweep (sizes and triangles), scale (many objects and mirrors), "
+                        "or both (default %(default)s)")
     parser.add_argument("--sizes", default="256,512,1024,2048")
     parser.add_argument("--subdivisions", default="0,2,4,6",
                         help="mesh sets: the lab's parts subdivided this many times, x4 "
                         "triangles each (default %(default)s: 400 to 1.6 million)")
+    parser.add_argument("--scale-size", type=int, default=256,
+                        help="frame side of the scale scenes (default %(default)s)")
+    parser.add_argument("--scale-objects", default="10,100,1000",
+                        help="object counts of the scale scenes (default %(default)s)")
+    parser.add_argument("--scale-mirrors", default="10,100,400",
+                        help="mirror counts of the scale scenes (default %(default)s)")
+    parser.add_argument("--scale-modes", default="still,moving",
+                        help="still (the same scene every frame), moving (the camera moves a "
+                        "hair every frame), or both (default %(default)s)")
     parser.add_argument("--frames", type=int, default=30)
     parser.add_argument("--warmup", type=int, default=5)
     parser.add_argument("--block", type=int, default=5)
     parser.add_argument("--out-dir", default="out/bench/speed")
     parser.add_argument("--from-csv", metavar="PATH",
-                        help="time nothing: re-make the tables and plot from a speed.csv")
+                        help="time nothing: re-make the tables and plot from a speed.csv (and "
+                        "the scale.csv beside it)")
     args = parser.parse_args(argv)
     try:
         sizes = [32, 64] if args.quick else [int(s) for s in args.sizes.split(",")]
@@ -405,6 +567,19 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--sizes and --subdivisions take comma-separated whole numbers")
     if any(not 16 <= s <= 4096 for s in sizes) or any(not 0 <= n <= 7 for n in levels):
         parser.error("sizes must be 16 to 4096 and subdivisions 0 to 7")
+    parts = set(args.parts.split(","))
+    if not parts or not parts <= {"sweep", "scale"}:
+        parser.error(f"--parts takes sweep, scale or both, got {args.parts!r}")
+    modes = tuple(m for m in args.scale_modes.split(",") if m)
+    if not modes or not set(modes) <= {"still", "moving"}:
+        parser.error(f"--scale-modes takes still, moving or both, got {args.scale_modes!r}")
+    object_counts = [3, 12] if args.quick else counts(parser, "--scale-objects",
+                                                       args.scale_objects)
+    mirror_counts = [3, 12] if args.quick else counts(parser, "--scale-mirrors",
+                                                       args.scale_mirrors)
+    scale_size = 64 if args.quick else args.scale_size
+    if not 16 <= scale_size <= 4096:
+        parser.error("--scale-size must be 16 to 4096")
     settings = {"frames": 3 if args.quick else args.frames,
                 "warmup": 1 if args.quick else args.warmup,
                 "block": 3 if args.quick else args.block}
@@ -413,10 +588,20 @@ def main(argv: list[str] | None = None) -> int:
     out_dir = Path(args.out_dir)
     if args.from_csv:
         rows = rows_from_csv(Path(args.from_csv))
+        scale_results = rows_from_csv(Path(args.from_csv).with_name("scale.csv"))
     else:
         mesh_sets = write_mesh_sets(out_dir / "meshes", levels)
-        rows = run(mesh_sets, sizes, settings["frames"], settings["warmup"], settings["block"])
-    sys.stdout.write(report(rows, out_dir, settings))
+        worker = PyrenderWorker()
+        try:
+            rows = run(worker, mesh_sets, sizes, settings["frames"], settings["warmup"],
+                       settings["block"]) if "sweep" in parts else []
+            scale_results = scale_rows(worker, mesh_sets[0], scale_size, object_counts,
+                                       mirror_counts, modes, settings["frames"],
+                                       settings["warmup"], settings["block"]
+                                       ) if "scale" in parts else []
+        finally:
+            worker.close()
+    sys.stdout.write(report(rows, scale_results, out_dir, settings))
     return 0
 
 

@@ -1,0 +1,295 @@
+"""Cost at scale: what a frame costs when a scene holds many objects or many mirrors,
+seen and unseen, against the same frame without them, side by side in one run.
+
+Run from the repository root::
+
+    python bench/scale.py [--size 256] [--frames 30] [--warmup 3] [--block 5]
+                          [--objects 10,100,1000] [--mirrors 10,100,400] [--json PATH]
+
+(``bench/speed.py`` runs the same scenes with pyrender beside them; this script times
+mirrorlab alone.) The base scene is the lab's, with its mirror made ``reflected``: the
+robot, the mirror's frame and one mirror captured for the viewer. Added to it:
+
+- ``N mirrors unseen``: N small ``reflected`` mirrors on a grid behind the camera, facing
+  the scene (so the viewer is on their reflecting side): the frame is the base frame;
+- ``N mirrors seen``: N small ``reflected`` mirrors on a grid across the view, facing the
+  camera; each is captured in the first frame, then reused;
+- ``N objects unseen``: N small boxes on a grid behind the camera: the frame is the base
+  frame;
+- ``N objects seen``: N small boxes on a grid across the view;
+- ``N tiny objects seen``: the same grid of boxes a fiftieth of a unit across, most
+  covering no pixel.
+
+Frames are ``still`` (the same scene every frame, as a program showing a scene that
+stands still draws them) or ``moving`` (the camera moves a hair every frame, so every
+frame is planned and its reflected captures run again). Every frame is drawn with
+:class:`mirrorlab.Renderer` (one a variant, as a program drawing that scene would keep
+it) and read back to numpy.
+The variants take turns in blocks of ``--block`` frames, the order rotating every round;
+each one's median is divided by the base frame's median measured in the same run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+BOX_SIZE = 0.3
+TINY_BOX_SIZE = 0.02
+MIRROR_SIZE = 0.5
+MOVE = 1e-4
+"""How far (scene units) the camera moves each frame in the ``moving`` mode."""
+
+
+def log(message: str) -> None:
+    print(f"[scale] {message}", file=sys.stderr, flush=True)
+
+
+# --------------------------------------------------------------------------- scenes
+
+
+def base_scene():
+    """The lab scene with a ``reflected`` mirror: robot, mirror frame, one mirror."""
+    import mirrorlab
+    from mirrorlab.options import apply_options
+
+    return apply_options(mirrorlab.load_scene("lab20"), {"method": "reflected"})
+
+
+def _camera_frame(scene) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float]:
+    """The camera's eye, unit forward, right and up ``(3,)`` and distance to its target."""
+    camera = scene.camera
+    eye = np.asarray(camera.eye, dtype=np.float64)
+    target = np.asarray(camera.target, dtype=np.float64)
+    forward = target - eye
+    distance = float(np.linalg.norm(forward))
+    forward /= distance
+    right = np.cross(forward, np.asarray(camera.up, dtype=np.float64))
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    return eye, forward, right, up, distance
+
+
+def grid(count: int, center: np.ndarray, right: np.ndarray, up: np.ndarray,
+         half_width: float, half_height: float) -> np.ndarray:
+    """``(count, 3)`` points on a near-square grid across a rectangle."""
+    columns = int(np.ceil(np.sqrt(count * half_width / half_height)))
+    rows = int(np.ceil(count / columns))
+    points = []
+    for index in range(count):
+        row, column = divmod(index, columns)
+        u = (column + 0.5) / columns * 2.0 - 1.0
+        v = (row + 0.5) / rows * 2.0 - 1.0
+        points.append(center + u * half_width * right + v * half_height * up)
+    return np.array(points)
+
+
+def _points(scene, count: int, seen: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Grid points in view (on the plane through the camera's target, across 80% of the
+    view) or behind the camera (6 units back), and the unit direction they face."""
+    eye, forward, right, up, distance = _camera_frame(scene)
+    if seen:
+        half_height = 0.8 * distance * np.tan(np.radians(scene.camera.fovy / 2.0))
+        return grid(count, eye + distance * forward, right, up, half_height,
+                    half_height), -forward
+    return grid(count, eye - 6.0 * forward, right, up, 10.0, 5.0), forward
+
+
+def with_mirrors(scene, count: int, seen: bool):
+    """``scene`` with ``count`` small ``reflected`` mirrors (see the module's docstring)."""
+    from mirrorlab.scene.model import PlanarReflector
+
+    points, normal = _points(scene, count, seen)
+    _, _, right, up, _ = _camera_frame(scene)
+    if not seen:
+        right = -right  # corners counter-clockwise seen from the reflecting side
+    half = MIRROR_SIZE / 2.0
+    mirrors = tuple(PlanarReflector(
+        name=f"extra_mirror_{index}", technique="reflected",
+        corners=tuple(tuple(float(v) for v in point + a * half * right + b * half * up)
+                      for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1))))  # type: ignore
+        for index, point in enumerate(points))
+    for made in mirrors[:1]:
+        assert made.normal @ normal > 0.99, "a mirror faces the wrong way"
+    return replace(scene, reflectors=scene.reflectors + mirrors)
+
+
+def box_mesh() -> Path:
+    from mirrorlab.data import data_path
+
+    return data_path("models") / "hand.obj"
+
+
+def with_boxes(scene, count: int, seen: bool, size: float):
+    """``scene`` with ``count`` boxes of side about ``size``."""
+    from mirrorlab.scene.model import MeshObject, Transform
+
+    points, _ = _points(scene, count, seen)
+    colors = ((0.8, 0.3, 0.2), (0.2, 0.7, 0.3), (0.25, 0.35, 0.85))
+    boxes = tuple(MeshObject(name=f"box_{index}", mesh=box_mesh(),
+                             color=colors[index % len(colors)],
+                             transform=Transform(position=tuple(float(v) for v in point),
+                                                 scale=(size, size, size)))
+                  for index, point in enumerate(points))
+    return replace(scene, objects=scene.objects + boxes)
+
+
+def scale_scenes(object_counts: list[int], mirror_counts: list[int]) -> dict[str, object]:
+    """Every variant's scene by name, the base first."""
+    base = base_scene()
+    scenes: dict[str, object] = {"base": base}
+    for count in mirror_counts:
+        scenes[f"{count} mirrors unseen"] = with_mirrors(base, count, seen=False)
+    for count in mirror_counts:
+        scenes[f"{count} mirrors seen"] = with_mirrors(base, count, seen=True)
+    for count in object_counts:
+        scenes[f"{count} objects unseen"] = with_boxes(base, count, False, BOX_SIZE)
+    for count in object_counts:
+        scenes[f"{count} objects seen"] = with_boxes(base, count, True, BOX_SIZE)
+    for count in object_counts:
+        scenes[f"{count} tiny objects seen"] = with_boxes(base, count, True, TINY_BOX_SIZE)
+    return scenes
+
+
+def moved_camera(scene, step: int):
+    """``scene`` with its camera moved ``step * MOVE`` along x."""
+    camera = scene.camera
+    eye = (camera.eye[0] + step * MOVE, camera.eye[1], camera.eye[2])
+    return replace(scene, camera=replace(camera, eye=eye))
+
+
+# --------------------------------------------------------------------------- timing
+
+
+@dataclass
+class Variant:
+    name: str
+    frames: Callable[[int], list[float]]
+    samples: list[float] = field(default_factory=list)
+
+
+def mirrorlab_frames(renderer, scene, size: int, moving: bool) -> Callable[[int], list[float]]:
+    turn = [0]
+
+    def frames(count: int) -> list[float]:
+        times = []
+        for _ in range(count):
+            frame = moved_camera(scene, turn[0] % 2) if moving else scene
+            turn[0] += 1
+            start = time.perf_counter()
+            renderer.render(frame, size=(size, size))
+            times.append((time.perf_counter() - start) * 1e3)
+        return times
+    return frames
+
+
+def interleave(variants: list[Variant], frames: int, warmup: int, block: int) -> None:
+    """Warm every variant up, then run blocks in rotating order until each has ``frames``."""
+    for variant in variants:
+        variant.frames(warmup)
+    turn = 0
+    while min(len(v.samples) for v in variants) < frames:
+        shift = turn % len(variants)
+        for variant in variants[shift:] + variants[:shift]:
+            variant.samples += variant.frames(block)
+        turn += 1
+
+
+def medians(variants: list[Variant]) -> dict[str, float]:
+    return {v.name: statistics.median(v.samples) for v in variants}
+
+
+MOVING_SEEN_MIRRORS = 100
+"""With the camera moving, every seen mirror is captured again every frame: seen-mirror
+scenes of more than this many are left out of the moving frames (400 take seconds a
+frame)."""
+
+
+def mirrorlab_variants(stack, scenes: dict[str, object], size: int,
+                       modes: tuple[str, ...] = ("still",)) -> list[Variant]:
+    """A :class:`Variant` of every scene in every mode (``still``, ``moving``), each with a
+    renderer of its own (entered on ``stack``); an unseen scene's first frame is checked to
+    be the base frame, pixel for pixel."""
+    import mirrorlab
+
+    base_image = None
+    variants = []
+    for mode in modes:
+        for name, scene in scenes.items():
+            count = int(name.split()[0]) if name[0].isdigit() else 0
+            if mode == "moving" and "mirrors seen" in name and count > MOVING_SEEN_MIRRORS:
+                continue
+            renderer = stack.enter_context(mirrorlab.Renderer((size, size)))
+            started = time.perf_counter()
+            image = renderer.render(scene)
+            log(f"{name}: first frame {(time.perf_counter() - started) * 1e3:.0f} ms, "
+                f"passes {len(renderer.last_stats.ran)}")
+            if name == "base":
+                base_image = image
+            elif name.endswith("unseen") and not np.array_equal(image, base_image):
+                raise RuntimeError(f"{name}: the frame differs from the base frame")
+            variants.append(Variant(f"mirrorlab {mode}, {name}",
+                                    mirrorlab_frames(renderer, scene, size,
+                                                     mode == "moving")))
+    return variants
+
+
+def run(object_counts: list[int], mirror_counts: list[int], size: int, frames: int,
+        warmup: int, block: int, modes: tuple[str, ...]) -> dict[str, float]:
+    """Median ms of every variant."""
+    import contextlib
+
+    scenes = scale_scenes(object_counts, mirror_counts)
+    with contextlib.ExitStack() as stack:
+        variants = mirrorlab_variants(stack, scenes, size, modes)
+        interleave(variants, frames, warmup, block)
+        return medians(variants)
+
+
+def table(result: dict[str, float]) -> str:
+    """Each variant's median and its ratio to the base frame of its own kind (mirrorlab
+    still, mirrorlab moving, pyrender flat, ...: the words before the comma)."""
+    lines = ["| variant | median ms | against its base frame |", "|---|---:|---:|"]
+    for name, ms in result.items():
+        base = result.get(f"{name.split(',')[0]}, base")
+        ratio = f"{ms / base:.2f}x" if base else ""
+        lines.append(f"| {name} | {ms:.2f} | {ratio} |")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--size", type=int, default=256)
+    parser.add_argument("--frames", type=int, default=30)
+    parser.add_argument("--warmup", type=int, default=3)
+    parser.add_argument("--block", type=int, default=5)
+    parser.add_argument("--objects", default="10,100,1000")
+    parser.add_argument("--mirrors", default="10,100,400")
+    parser.add_argument("--modes", default="still,moving",
+                        help="still: the same scene every frame; moving: the camera moves a "
+                        "hair every frame (every frame planned, its reflected captures run "
+                        "again); default %(default)s")
+    parser.add_argument("--json", type=Path)
+    args = parser.parse_args(argv)
+    objects = [int(c) for c in args.objects.split(",") if c]
+    mirrors = [int(c) for c in args.mirrors.split(",") if c]
+    modes = tuple(m for m in args.modes.split(",") if m)
+    if not set(modes) <= {"still", "moving"}:
+        parser.error("--modes takes still and moving")
+    result = run(objects, mirrors, args.size, args.frames, args.warmup, args.block, modes)
+    print(table(result))
+    if args.json:
+        args.json.write_text(json.dumps(result, indent=2) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
