@@ -6,13 +6,18 @@ mesh file is read once (:func:`mirrorlab.scene.mesh.load_mesh`) and its bounds k
 
 from __future__ import annotations
 
-from functools import lru_cache
+from dataclasses import dataclass
+from functools import cached_property, lru_cache
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from mirrorlab import math3d
 from mirrorlab.scene.model import CurvedReflector, PlanarReflector, Reflector, Scene
+
+if TYPE_CHECKING:
+    from mirrorlab.scene.robot import Part
 
 REACH_MARGIN = 1e-3
 """A far plane set from a bounding sphere lies this share of the distance beyond it."""
@@ -71,31 +76,168 @@ def reflector_box(reflector: Reflector) -> tuple[np.ndarray, np.ndarray]:
     return mesh_box(reflector.mesh, reflector.model_matrix())
 
 
-@lru_cache(maxsize=32)
-def _boxes(objects: tuple, reflectors: tuple) -> tuple[tuple[str, np.ndarray, np.ndarray], ...]:
-    from mirrorlab.scene.robot import scene_parts
+@dataclass(frozen=True, eq=False)
+class ObjectBounds:
+    """One object's drawable parts (:func:`mirrorlab.scene.robot.object_parts`) with each
+    part's world box: ``low`` and ``high`` ``(k, 3)``."""
 
-    scene = Scene(name="bounds", objects=objects, reflectors=reflectors)
-    boxes = [("", *mesh_box(part.mesh, part.model)) for part in scene_parts(scene)]
-    boxes += [(r.name, *reflector_box(r)) for r in reflectors]
-    return tuple(boxes)
+    parts: tuple[Part, ...]
+    low: np.ndarray
+    high: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class SceneIndex:
+    """The bounds of everything in a scene, kept in arrays, so that a view can be tested
+    against all of them in one vectorised step (:mod:`mirrorlab.culling`).
+
+    ``parts`` every drawable part of the objects, in drawing order, with ``models``
+    ``(n, 4, 4)`` float64 and world boxes ``part_low``, ``part_high`` ``(n, 3)``;
+    ``reflectors`` the scene's, with ``names`` (name to position), boxes
+    ``reflector_low``, ``reflector_high`` ``(m, 3)``; the planar ones at positions
+    ``planar`` ``(p,)`` with ``corners`` ``(p, 4, 3)``, unit ``normals`` and ``centers``
+    ``(p, 3)``; the curved ones at ``curved`` ``(c,)`` with bounding spheres
+    ``sphere_centers`` ``(c, 3)`` and ``sphere_radii`` ``(c,)``. Read-only.
+    """
+
+    objects: tuple
+    reflectors: tuple
+    parts: tuple[Part, ...]
+    models: np.ndarray
+    part_low: np.ndarray
+    part_high: np.ndarray
+    names: dict[str, int]
+    reflector_low: np.ndarray
+    reflector_high: np.ndarray
+    planar: np.ndarray
+    corners: np.ndarray
+    normals: np.ndarray
+    centers: np.ndarray
+    curved: np.ndarray
+    sphere_centers: np.ndarray
+    sphere_radii: np.ndarray
+
+    @property
+    def box_names(self) -> tuple[str, ...]:
+        """The owner of every box of :meth:`boxes`: "" for a part, else a reflector's name."""
+        return ("",) * len(self.parts) + tuple(r.name for r in self.reflectors)
+
+    def boxes(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every part's box, then every reflector's: low and high ``(n + m, 3)``."""
+        return self._boxes
+
+    @cached_property
+    def _boxes(self) -> tuple[np.ndarray, np.ndarray]:
+        return (_frozen(np.concatenate([self.part_low, self.reflector_low])),
+                _frozen(np.concatenate([self.part_high, self.reflector_high])))
+
+    @cached_property
+    def sphere(self) -> tuple[np.ndarray, float]:
+        """World centre ``(3,)`` and radius of a sphere holding every box (the origin and
+        0 when there is none)."""
+        low, high = self.boxes()
+        if not len(low):
+            return np.zeros(3), 0.0
+        top = high.max(axis=0)
+        center = (low.min(axis=0) + top) / 2.0
+        return _frozen(center), float(np.linalg.norm(top - center))
+
+
+def _frozen(array: np.ndarray) -> np.ndarray:
+    array.flags.writeable = False
+    return array
+
+
+class _IndexCache:
+    """Scene indexes by the identity of a scene's ``objects`` and ``reflectors`` tuples
+    (a frame whose scene differs only in its camera finds its index at once), and each
+    object's bounds by the object's identity (a frame in which one object moved works out
+    only that one's)."""
+
+    KEPT = 4
+
+    def __init__(self) -> None:
+        self.indexes: list[SceneIndex] = []
+        self.objects: dict[int, tuple[object, ObjectBounds]] = {}
+
+    def index(self, scene: Scene) -> SceneIndex:
+        for index in self.indexes:
+            if index.objects is scene.objects and index.reflectors is scene.reflectors:
+                return index
+        index = self.build(scene.objects, scene.reflectors)
+        self.indexes = [index, *self.indexes[:self.KEPT - 1]]
+        return index
+
+    def object_bounds(self, item) -> ObjectBounds:
+        held = self.objects.get(id(item))
+        if held is not None and held[0] is item:
+            return held[1]
+        from mirrorlab.scene.robot import object_parts
+
+        parts = object_parts(item)
+        boxes = [mesh_box(part.mesh, part.model) for part in parts]
+        made = ObjectBounds(parts, _frozen(np.array([b[0] for b in boxes]).reshape(-1, 3)),
+                            _frozen(np.array([b[1] for b in boxes]).reshape(-1, 3)))
+        self.objects[id(item)] = (item, made)
+        return made
+
+    def build(self, objects: tuple, reflectors: tuple) -> SceneIndex:
+        bounds = [self.object_bounds(item) for item in objects]
+        if len(self.objects) > 2 * len(objects) + 256:  # forget objects no scene has now
+            keep = {id(item) for index in self.indexes for item in index.objects}
+            keep |= {id(item) for item in objects}
+            self.objects = {key: held for key, held in self.objects.items() if key in keep}
+        parts = tuple(part for b in bounds for part in b.parts)
+        models = np.array([part.model for part in parts], dtype=np.float64).reshape(-1, 4, 4)
+        part_low = np.concatenate([b.low for b in bounds]) if bounds else np.zeros((0, 3))
+        part_high = np.concatenate([b.high for b in bounds]) if bounds else np.zeros((0, 3))
+        reflector_boxes = [reflector_box(r) for r in reflectors]
+        planar = [i for i, r in enumerate(reflectors) if isinstance(r, PlanarReflector)]
+        curved = [i for i, r in enumerate(reflectors) if not isinstance(r, PlanarReflector)]
+        spheres = [bounding_sphere(reflectors[i]) for i in curved]
+        return SceneIndex(
+            objects=objects, reflectors=reflectors, parts=parts, models=_frozen(models),
+            part_low=_frozen(part_low), part_high=_frozen(part_high),
+            names={r.name: i for i, r in enumerate(reflectors)},
+            reflector_low=_frozen(np.array([b[0] for b in reflector_boxes]).reshape(-1, 3)),
+            reflector_high=_frozen(np.array([b[1] for b in reflector_boxes]).reshape(-1, 3)),
+            planar=_frozen(np.array(planar, dtype=np.intp)),
+            corners=_frozen(np.array([reflectors[i].corner_array for i in planar],
+                                     dtype=np.float64).reshape(-1, 4, 3)),
+            normals=_frozen(np.array([reflectors[i].normal for i in planar],
+                                     dtype=np.float64).reshape(-1, 3)),
+            centers=_frozen(np.array([reflectors[i].center for i in planar],
+                                     dtype=np.float64).reshape(-1, 3)),
+            curved=_frozen(np.array(curved, dtype=np.intp)),
+            sphere_centers=_frozen(np.array([c for c, _ in spheres],
+                                            dtype=np.float64).reshape(-1, 3)),
+            sphere_radii=_frozen(np.array([r for _, r in spheres], dtype=np.float64)))
+
+
+_CACHE = _IndexCache()
+
+
+def scene_index(scene: Scene) -> SceneIndex:
+    """The :class:`SceneIndex` of ``scene`` (made once for its objects and reflectors)."""
+    return _CACHE.index(scene)
+
+
+def reflector_index(reflectors: tuple[Reflector, ...]) -> SceneIndex:
+    """A :class:`SceneIndex` of ``reflectors`` alone (not kept)."""
+    return _CACHE.build((), reflectors)
 
 
 def scene_boxes(scene: Scene) -> tuple[tuple[str, np.ndarray, np.ndarray], ...]:
     """``(reflector name or "", min (3,), max (3,))`` of every object part and reflector."""
-    return _boxes(scene.objects, scene.reflectors)
+    index = scene_index(scene)
+    low, high = index.boxes()
+    return tuple(zip(index.box_names, low, high, strict=True))
 
 
 def scene_sphere(scene: Scene) -> tuple[np.ndarray, float]:
     """World centre ``(3,)`` and radius of a sphere holding every object and reflector of
     ``scene`` (the origin and 0 for an empty scene)."""
-    boxes = scene_boxes(scene)
-    if not boxes:
-        return np.zeros(3), 0.0
-    low = np.min([b[1] for b in boxes], axis=0)
-    high = np.max([b[2] for b in boxes], axis=0)
-    center = (low + high) / 2.0
-    return center, float(np.linalg.norm(high - center))
+    return scene_index(scene).sphere
 
 
 def reach(scene: Scene, eye: np.ndarray) -> float:
@@ -110,13 +252,20 @@ def nearest(scene: Scene, point: np.ndarray, leave_out: str) -> float:
     """The distance from ``point`` ``(3,)`` to the nearest box of the scene's object parts
     and reflectors but ``leave_out`` (inf when there is none)."""
     point = np.asarray(point, dtype=np.float64)
-    best = np.inf
-    for name, low, high in scene_boxes(scene):
-        if name == leave_out and name:
-            continue
-        gap = np.maximum(np.maximum(low - point, point - high), 0.0)
-        best = min(best, float(np.linalg.norm(gap)))
-    return best
+    index = scene_index(scene)
+    low, high = index.boxes()
+    if leave_out and leave_out in index.names:
+        keep = np.ones(len(low), dtype=bool)
+        keep[len(index.parts) + index.names[leave_out]] = False
+        low, high = low[keep], high[keep]
+    if not len(low):
+        return float(np.inf)
+    gaps = np.maximum(np.maximum(low - point, point - high), 0.0)
+    # The nearest few by a vectorised norm, then each of those exactly as one box's own
+    # distance is worked out (the near plane it sets must not move by a rounding).
+    rough = np.sqrt(np.einsum("ij,ij->i", gaps, gaps))
+    close = np.flatnonzero(rough <= rough.min() * (1.0 + 1e-9) + 1e-300)
+    return min(float(np.linalg.norm(gaps[i])) for i in close)
 
 
 def cube_depth_range(scene: Scene, reflector: CurvedReflector) -> tuple[float, float]:
@@ -151,12 +300,14 @@ def encloses(scene: Scene, point: np.ndarray, leave_out: str = "") -> bool:
     one (a room's walls do; objects under an open sky do not). A live cube map's
     distance search reads it: enclosed, a ray the search finds no surface for meets one
     it cannot see; open, it may leave for the background."""
-    boxes = [(low, high) for name, low, high in scene_boxes(scene)
-             if not (name and name == leave_out)]
-    if not boxes:
+    index = scene_index(scene)
+    low, high = index.boxes()
+    if leave_out and leave_out in index.names:
+        keep = np.ones(len(low), dtype=bool)
+        keep[len(index.parts) + index.names[leave_out]] = False
+        low, high = low[keep], high[keep]
+    if not len(low):
         return False
-    low = np.array([b[0] for b in boxes])  # (m, 3)
-    high = np.array([b[1] for b in boxes])
     directions = _fibonacci_directions(ENCLOSURE_RAYS)  # (n, 3)
     origin = np.asarray(point, dtype=np.float64)
     with np.errstate(divide="ignore", invalid="ignore"):

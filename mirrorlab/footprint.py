@@ -86,6 +86,17 @@ class Footprint:
             return None
         return x0, y0, x1 - x0 + 1, y1 - y0 + 1
 
+    def rectangle(self, margin: int = 0) -> tuple[int, int, int, int] | None:
+        """:attr:`bounds` grown by ``margin`` pixels each way, within the target."""
+        bounds = self.bounds
+        if bounds is None:
+            return None
+        width, height = self.size
+        x0, y0 = max(bounds[0] - margin, 0), max(bounds[1] - margin, 0)
+        x1 = min(bounds[0] + bounds[2] + margin, width)
+        y1 = min(bounds[1] + bounds[3] + margin, height)
+        return x0, y0, x1 - x0, y1 - y0
+
 
 def empty_footprint(size: tuple[int, int]) -> Footprint:
     return Footprint(np.zeros((0, 2)), 0.0, (int(size[0]), int(size[1])))
@@ -166,14 +177,16 @@ def screen_planes(size: tuple[int, int], margin: float = 0.0) -> np.ndarray:
 
 
 def polygon_footprint(points: np.ndarray, view_projection: np.ndarray, size: tuple[int, int],
-                      clip_plane: np.ndarray | None = None) -> Footprint:
+                      clip_plane: np.ndarray | None = None, depth: bool = True) -> Footprint:
     """The footprint of the convex polygon ``points`` ``(n, 3)`` (world) seen through
     ``view_projection`` ``(4, 4)`` on a ``size`` target, cut by the world plane
-    ``clip_plane`` ``(4,)`` (what lies on its negative side is not drawn) when given."""
+    ``clip_plane`` ``(4,)`` (what lies on its negative side is not drawn) when given.
+    ``depth`` False clips against the sides of the view volume only, not its near and far
+    planes (larger, never smaller)."""
     matrix = np.asarray(view_projection, dtype=np.float64)
     homogeneous = np.column_stack([np.asarray(points, dtype=np.float64), np.ones(len(points))])
     clip = homogeneous @ matrix.T
-    planes = view_volume_planes()
+    planes = view_volume_planes() if depth else view_volume_planes()[:4]
     if clip_plane is not None:
         # the world plane in clip coordinates: plane @ p_world = plane @ M^-1 @ p_clip
         try:

@@ -26,11 +26,13 @@ Pure numpy; the renderer (:mod:`mirrorlab.renderer`) runs what this decides.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
 
-from mirrorlab import bounds, math3d
+from mirrorlab import bounds, culling, math3d
+from mirrorlab.culling import OUTSIDE_REASONS
 from mirrorlab.footprint import Footprint, polygon_footprint, sphere_footprint
 from mirrorlab.scene.model import CurvedReflector, PlanarReflector, Reflector, Scene
 from mirrorlab.techniques import technique
@@ -91,8 +93,9 @@ class PlannedPass:
 class ReflectorDraw:
     """How ``reflector`` is drawn in one view: ``mode`` (see :data:`DrawMode`), the
     texture ``slot`` it samples, the capture ``source`` view (a reflected capture's
-    camera, for its projective lookup), the ``nested`` plan of a stencil mirror's
-    world, and the ``reason``."""
+    camera, for its projective lookup), for a stencil mirror the ``nested`` plan of the
+    world seen through it, and the ``reason``; ``footprint`` where it can show in the
+    view (:mod:`mirrorlab.footprint`; None where it was not needed)."""
 
     reflector: Reflector
     mode: DrawMode
@@ -100,15 +103,47 @@ class ReflectorDraw:
     slot: int = 0
     source: View | None = None
     nested: ViewPlan | None = None
+    footprint: Footprint | None = field(default=None, compare=False, repr=False)
 
 
-@dataclass(frozen=True)
+Rectangle = tuple[int, int, int, int]
+"""``(x, y, width, height)`` in GL window pixels (from the bottom left), for glScissor."""
+
+
+@dataclass(frozen=True, eq=False)
 class ViewPlan:
-    """A view and how each reflector (but the ``excluded`` one) is drawn in it."""
+    """A view and how each reflector (but the ``excluded`` one) is drawn in it.
+
+    ``shown``: the reflectors that are drawn there (in the scene's order); ``hidden``
+    the positions in the scene's reflectors of those that are not, each with a reason
+    code of ``HIDDEN_REASONS``, kept as arrays so that an unseen reflector costs a plan
+    nothing (:attr:`draws` spells them out on demand). ``scissor``: the part of the
+    view's target whose pixels matter (a reflected capture's glass, the glass of the
+    stencil mirror the view is seen through), None for all of it; what lies outside it
+    need not be rasterised.
+    """
 
     view: View
-    draws: tuple[ReflectorDraw, ...]
+    shown: tuple[ReflectorDraw, ...]
     excluded: str | None = None
+    reflectors: tuple[Reflector, ...] = ()
+    hidden: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.intp))
+    hidden_codes: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int8))
+    scissor: Rectangle | None = None
+
+    @cached_property
+    def draws(self) -> tuple[ReflectorDraw, ...]:
+        """Every reflector's draw but the excluded one's, in the scene's order, the
+        hidden ones as ``hidden`` draws with their reasons."""
+        if not len(self.hidden):
+            return self.shown
+        hidden = {int(i): ReflectorDraw(self.reflectors[i], "hidden",
+                                        HIDDEN_REASONS[int(code)])
+                  for i, code in zip(self.hidden, self.hidden_codes, strict=True)}
+        shown = iter(self.shown)
+        return tuple(hidden[i] if i in hidden else next(shown)
+                     for i, reflector in enumerate(self.reflectors)
+                     if reflector.name != self.excluded)
 
 
 @dataclass
@@ -117,12 +152,6 @@ class TextureState:
     bake in it. The planner reads it; the renderer records each capture it runs."""
 
     held: dict[tuple[str, int], tuple] = field(default_factory=dict)
-
-    def slot_holding(self, reflector: str, key: tuple) -> int | None:
-        for (name, slot), held in self.held.items():
-            if name == reflector and held == key:
-                return slot
-        return None
 
     def record(self, step: PlannedPass) -> None:
         assert step.reflector is not None
@@ -179,53 +208,80 @@ class _Planner:
                  tiny_pixels: float) -> None:
         self.scene = scene
         self.state = state
+        self.held: dict[str, list[tuple[int, tuple]]] = {}  # state.held by reflector
+        for (name, slot), key in state.held.items():
+            self.held.setdefault(name, []).append((slot, key))
         self.use_plan = use_plan
         self.tiny_pixels = tiny_pixels
         self.passes: list[PlannedPass] = []
+        self.planned: set[tuple[str, tuple]] = set()  # (reflector, key) of every pass so far
         self.content = scene.content_key()
+        self.index = bounds.scene_index(scene)
         self.assigned: dict[tuple[str, tuple], int] = {}  # this frame's (reflector, key) slots
         self.used: dict[str, set[int]] = {}
 
-    def plan_view(self, view: View, bounce: int, excluded: str | None) -> ViewPlan:
-        draws = []
-        for reflector in self.scene.reflectors:
-            if reflector.name == excluded:
-                continue
-            draws.append(self.draw(reflector, view, bounce))
-        return ViewPlan(view, tuple(draws), excluded)
-
-    def draw(self, reflector: Reflector, view: View, bounce: int) -> ReflectorDraw:
-        entry = technique(reflector.technique)
+    def plan_view(self, view: View, bounce: int, excluded: str | None,
+                  scissor: Rectangle | None = None) -> ViewPlan:
+        """How each reflector (but ``excluded``) is drawn in ``view``: which may show is
+        decided for all at once (:func:`visibility`); only those are planned one by
+        one."""
+        index = self.index
+        reflectors = index.reflectors
         if self.use_plan:
-            hidden = hidden_reason(reflector, view)
-            if hidden:
-                mode: DrawMode = "back" if hidden.startswith("seen from behind") else "hidden"
-                return ReflectorDraw(reflector, mode, hidden)
+            codes, footprints = visibility(index, view, excluded)
+        else:
+            codes, footprints = np.zeros(len(reflectors), dtype=np.int8), {}
+            if excluded is not None and excluded in index.names:
+                codes[index.names[excluded]] = EXCLUDED
+        shown = []
+        for i in np.flatnonzero(codes <= BACK):
+            reflector = reflectors[i]
+            footprint = footprints.get(int(i))
+            if codes[i] == BACK:
+                shown.append(ReflectorDraw(reflector, "back", BACK_REASON, footprint=footprint))
+            else:
+                shown.append(self.draw(reflector, view, bounce, footprint, scissor))
+        hidden = np.flatnonzero(codes > EXCLUDED)
+        return ViewPlan(view, tuple(shown), excluded, reflectors, hidden, codes[hidden],
+                        scissor)
+
+    def draw(self, reflector: Reflector, view: View, bounce: int,
+             footprint: Footprint | None = None,
+             scissor: Rectangle | None = None) -> ReflectorDraw:
+        """How ``reflector``, which may show in ``view`` (its ``footprint`` there when
+        known), is drawn there."""
+        entry = technique(reflector.technique)
         if bounce <= 0:
-            return ReflectorDraw(reflector, "plain", "no bounces left: a plain surface")
+            return ReflectorDraw(reflector, "plain", "no bounces left: a plain surface",
+                                 footprint=footprint)
         if self.tiny_pixels > 0 and entry.texture != "static":
-            area = screen_area(reflector, view)
+            area = (footprint or reflector_footprint(reflector, view)).pixels
             if area < self.tiny_pixels:
                 return ReflectorDraw(reflector, "plain", f"covers at most {area:.1f} pixels "
                                      f"(under {self.tiny_pixels:g}; lossy): drawn plain, no "
-                                     f"capture")
+                                     f"capture", footprint=footprint)
         if entry.draws_inline:
             assert isinstance(reflector, PlanarReflector)
             far = self.reach(view, reflector) if view.eye is not None else None
+            glass = (footprint or reflector_footprint(reflector, view)).bounds
+            inner = intersect(scissor, glass) if glass is not None else scissor
             nested = self.plan_view(stencil_view(view, reflector, far), bounce - 1,
-                                    reflector.name)
+                                    reflector.name, inner)
             return ReflectorDraw(reflector, "stencil", "the mirrored world, drawn in place",
-                                 nested=nested)
+                                 nested=nested, footprint=footprint)
         if entry.texture == "static":
-            return ReflectorDraw(reflector, "map", "its static map")
+            return ReflectorDraw(reflector, "map", "its static map", footprint=footprint)
         if entry.texture == "baked":
             assert isinstance(reflector, CurvedReflector)  # baked maps are curved techniques
             slot = self.bake(reflector, view)
-            return ReflectorDraw(reflector, "map", "its sphere map for this view", slot=slot)
-        slot, source = self.capture(reflector, view, bounce)
+            return ReflectorDraw(reflector, "map", "its sphere map for this view", slot=slot,
+                                 footprint=footprint)
+        slot, source = self.capture(reflector, view, bounce, footprint)
         if source is None:
-            return ReflectorDraw(reflector, "plain", "no capture camera from here")
-        return ReflectorDraw(reflector, "texture", "its capture", slot=slot, source=source)
+            return ReflectorDraw(reflector, "plain", "no capture camera from here",
+                                 footprint=footprint)
+        return ReflectorDraw(reflector, "texture", "its capture", slot=slot, source=source,
+                             footprint=footprint)
 
     # ------------------------------------------------------------- textures
 
@@ -234,7 +290,9 @@ class _Planner:
         if (reflector, key) in self.assigned:
             return self.assigned[(reflector, key)], True
         used = self.used.setdefault(reflector, set())
-        held = self.state.slot_holding(reflector, key) if self.use_plan else None
+        held = None
+        if self.use_plan:
+            held = next((slot for slot, k in self.held.get(reflector, ()) if k == key), None)
         if held is not None and held not in used:
             slot, fresh = held, True
         else:
@@ -253,16 +311,13 @@ class _Planner:
             key = ("bake", self.scene.background, reflector.map_size, rotation)
             reason = "the view turned (sphere maps live in eye space)"
         slot, held = self.slot_for(reflector.name, key)
-        if held and (reflector.name, key) in self._planned_keys():
+        if held and (reflector.name, key) in self.planned:
             return slot
         runs = not held
-        self.passes.append(PlannedPass(
+        self.add(PlannedPass(
             "bake", runs, reason if runs else "the map for this view is already made",
             reflector.name, reflector.technique, 0, view.label, slot, key))
         return slot
-
-    def _planned_keys(self) -> set[tuple[str, tuple]]:
-        return {(p.reflector, p.key) for p in self.passes if p.reflector is not None}
 
     def reach(self, view: View, reflector: PlanarReflector) -> float:
         """How far the world seen in ``reflector`` from ``view`` extends: reflections see
@@ -273,13 +328,15 @@ class _Planner:
         mirrored = math3d.transform_points(math3d.reflection_matrix(reflector.plane), eye)[:3]
         return bounds.reach(self.scene, mirrored)
 
-    def capture(self, reflector: Reflector, view: View,
-                bounce: int) -> tuple[int, View | None]:
+    def capture(self, reflector: Reflector, view: View, bounce: int,
+                footprint: Footprint | None = None) -> tuple[int, View | None]:
+        """Plan the capture ``reflector`` (seen in ``view`` with ``footprint``) needs at
+        ``bounce``; its slot and the capture's (first) camera, None when it has none."""
         entry = technique(reflector.technique)
+        scissors: list[Rectangle | None]
         if entry.capture_camera in ("reflected", "ortho"):
             assert isinstance(reflector, PlanarReflector)
-            size = reflector.texture_size
-            texture_size = (size, size) if size else view.size
+            texture_size = self.texture_size(reflector, view, footprint)
             if entry.capture_camera == "reflected":
                 camera = reflected_capture_view(view, reflector, texture_size,
                                                 self.reach(view, reflector)
@@ -287,33 +344,53 @@ class _Planner:
                 if camera is None:
                     return 0, None
                 cameras = [camera]
+                # only the glass is ever sampled: the rest of the capture need not be drawn
+                scissors = [glass_scissor(reflector, camera)]
                 key: tuple = ("viewer", bounce, camera.key, self.content)
             else:
                 cameras = [ortho_capture_view(reflector, texture_size)]
+                scissors = [None]
                 key = ("fixed", bounce, texture_size, self.content)
         elif entry.capture_camera == "cube":
             assert isinstance(reflector, CurvedReflector)
             cameras = cube_face_views(reflector, bounds.cube_depth_range(self.scene, reflector))
+            scissors = [None] * len(cameras)
             key = ("fixed", bounce, (reflector.map_size,), self.own_content(reflector))
         else:
             raise ValueError(f"technique {entry.name!r} has a texture of kind "
                              f"{entry.texture!r} but no capture camera")
         slot, held = self.slot_for(reflector.name, key)
         source = cameras[0]
-        if held and (reflector.name, key) in self._planned_keys():
+        if held and (reflector.name, key) in self.planned:
             return slot, source  # already captured earlier in this frame
         if held:
-            self.passes.append(PlannedPass(
+            self.add(PlannedPass(
                 "capture", False, "nothing it shows changed since it was captured",
                 reflector.name, reflector.technique, bounce, view.label, slot, key))
             return slot, source
-        plans = tuple(self.plan_view(camera, bounce - 1, reflector.name) for camera in cameras)
+        plans = tuple(self.plan_view(camera, bounce - 1, reflector.name, scissor)
+                      for camera, scissor in zip(cameras, scissors, strict=True))
         reason = ("every pass runs (--no-plan)" if not self.use_plan
                   else self.what_changed(reflector.name, key))
-        self.passes.append(PlannedPass("capture", True, reason, reflector.name,
-                                       reflector.technique, bounce, view.label, slot, key,
-                                       plans))
+        self.add(PlannedPass("capture", True, reason, reflector.name, reflector.technique,
+                             bounce, view.label, slot, key, plans))
         return slot, source
+
+    def texture_size(self, reflector: PlanarReflector, view: View,
+                     footprint: Footprint | None) -> tuple[int, int]:
+        """The (width, height) of ``reflector``'s capture texture seen in ``view``: its
+        ``texture_size`` square, the view's size when it gives none, or with
+        ``"footprint"`` the size of the pixel rectangle its glass covers in ``view``."""
+        size = reflector.texture_size
+        if size == "footprint":
+            rectangle = (footprint or reflector_footprint(reflector, view)).bounds
+            return (rectangle[2], rectangle[3]) if rectangle is not None else view.size
+        return (size, size) if isinstance(size, int) else view.size
+
+    def add(self, step: PlannedPass) -> None:
+        self.passes.append(step)
+        if step.reflector is not None:
+            self.planned.add((step.reflector, step.key))
 
     def own_content(self, reflector: CurvedReflector) -> tuple:
         """What a live cube map of ``reflector`` shows: the scene's content, but of the
@@ -330,8 +407,7 @@ class _Planner:
     def what_changed(self, reflector: str, key: tuple) -> str:
         """Why a capture must run: what differs from the nearest capture its textures hold
         (keys are (kind, bounce, camera or size, scene content))."""
-        held = [k for (name, _), k in self.state.held.items()
-                if name == reflector and k[:2] == key[:2]]
+        held = [k for _, k in self.held.get(reflector, ()) if k[:2] == key[:2]]
         if not held:
             return "its texture is still blank"
         previous = min(held, key=lambda k: (k[2] != key[2]) + (k[3] != key[3]))
@@ -349,60 +425,63 @@ class _Planner:
 # --------------------------------------------------------------------------- geometry
 
 
-def hidden_reason(reflector: Reflector, view: View) -> str | None:
-    """Why ``reflector`` cannot show in ``view``, or None when it may: a planar mirror
-    seen from behind or edge-on (only its backing can show), or a footprint
-    (:func:`reflector_footprint`) that covers no pixel."""
-    if isinstance(reflector, PlanarReflector):
-        if view.eye is not None:
-            facing = float((view.eye - reflector.center) @ reflector.normal)
+BACK_REASON = "seen from behind or edge-on: only its back shows"
+SHOWN, BACK, EXCLUDED = 0, 1, 2
+"""Codes of :func:`visibility`: may show (plan it), only its back shows (draw the
+backing), left out of this view (the reflector whose capture it is); the codes above
+these are the reasons it cannot show, :data:`HIDDEN_REASONS`."""
+CORNER = EXCLUDED + len(OUTSIDE_REASONS)
+CURVED_OUT = CORNER + 1
+HIDDEN_REASONS = ("", BACK_REASON, "", *OUTSIDE_REASONS[1:],
+                  "out of view (past a corner of the view)", "out of view")
+"""The reason for each code of :func:`visibility`."""
+
+
+def visibility(index: bounds.SceneIndex, view: View,
+               excluded: str | None = None) -> tuple[np.ndarray, dict[int, Footprint]]:
+    """Whether each reflector of ``index`` can show in ``view``: a code for each
+    (``(m,)`` int8: :data:`SHOWN`, :data:`BACK`, :data:`EXCLUDED` or a reason of
+    :data:`HIDDEN_REASONS`) and the footprint (:func:`reflector_footprint`) of each that
+    can, by position.
+
+    In one vectorised step for all: a planar mirror with every corner beyond one side of
+    the view, or a curved reflector whose bounding sphere lies beyond one, cannot show;
+    a planar mirror the viewer is behind (or edge-on to) shows only its back. Only what
+    is left, what reaches into the view, has its footprint worked out one by one (a
+    footprint that covers no pixel hides it too). It errs large: a reflector is hidden
+    only where drawing it could not change a pixel.
+    """
+    codes = np.zeros(len(index.reflectors), dtype=np.int8)
+    orthographic = is_orthographic(view.projection)
+    if len(index.planar):
+        outside = culling.quads_outside(index.corners, view.view_projection,
+                                        view.clip_plane, orthographic)
+        front = culling.facing(index.centers, index.normals, view.eye, view.forward)
+        codes[index.planar] = np.where(outside > 0, outside + EXCLUDED,
+                                       np.where(front, SHOWN, BACK))
+    if len(index.curved):
+        inside = culling.spheres_in_view(index.sphere_centers, index.sphere_radii,
+                                         view.view_projection, view.clip_plane)
+        codes[index.curved[~inside]] = CURVED_OUT
+    if excluded is not None and excluded in index.names:
+        codes[index.names[excluded]] = EXCLUDED
+    footprints: dict[int, Footprint] = {}
+    for i in np.flatnonzero(codes <= BACK):
+        reflector = index.reflectors[i]
+        footprint = reflector_footprint(reflector, view)
+        if footprint.empty:
+            codes[i] = CORNER if isinstance(reflector, PlanarReflector) else CURVED_OUT
         else:
-            facing = float(-view.forward @ reflector.normal)
-        if not facing > 0.0:
-            return "seen from behind or edge-on: only its back shows"
-        outside = _where_outside(reflector.corner_array, view)
-        if outside is not None:  # every corner beyond one plane: exactly out of view
-            return outside
-        if reflector_footprint(reflector, view).empty:
-            return "out of view (past a corner of the view)"
-        return None
-    center, radius = bounding_sphere(reflector)
-    if _sphere_in_view(center, radius, view) and not reflector_footprint(
-            reflector, view).empty:
-        return None
-    return "out of view"
+            footprints[int(i)] = footprint
+    return codes, footprints
 
 
-def _where_outside(points: np.ndarray, view: View) -> str | None:
-    """Which side of ``view`` all of ``points`` ``(n, 3)`` lie beyond, in words (None
-    when no single side has them all)."""
-    if view.clip_plane is not None and np.all(
-            math3d.transform_points(np.eye(4), points) @ view.clip_plane <= 0.0):
-        return "behind the mirror it would be seen in"
-    clip = math3d.transform_points(view.view_projection, points)
-    x, y, z, w = clip[:, 0], clip[:, 1], clip[:, 2], clip[:, 3]
-    if not is_orthographic(view.projection) and np.all(w <= 0.0):
-        return "out of view (behind the viewer)"
-    for outside, where in ((x < -w, "left of"), (x > w, "right of"), (y < -w, "below"),
-                           (y > w, "above"), (z < -w, "behind"), (z > w, "beyond")):
-        if np.all(outside):
-            what = "the viewer" if where == "behind" else "the view"
-            return f"out of view ({where} {what})"
-    return None
-
-
-def _sphere_in_view(center: np.ndarray, radius: float, view: View) -> bool:
-    if view.clip_plane is not None and float(np.append(center, 1.0) @ view.clip_plane) < -radius:
-        return False
-    matrix = view.view_projection
-    planes = (matrix[3] + matrix[0], matrix[3] - matrix[0], matrix[3] + matrix[1],
-              matrix[3] - matrix[1], matrix[3] + matrix[2], matrix[3] - matrix[2])
-    point = np.append(center, 1.0)
-    for plane in planes:
-        length = float(np.linalg.norm(plane[:3]))
-        if length > 0 and float(plane @ point) / length < -radius:
-            return False
-    return True
+def hidden_reason(reflector: Reflector, view: View) -> str | None:
+    """Why ``reflector`` cannot show in ``view`` (or, for a planar mirror seen from behind
+    or edge-on, why only its backing shows), or None when it may: :func:`visibility` for
+    this one reflector."""
+    codes, _ = visibility(bounds.reflector_index((reflector,)), view)
+    return HIDDEN_REASONS[int(codes[0])] or None
 
 
 def bounding_sphere(reflector: Reflector) -> tuple[np.ndarray, float]:
@@ -420,6 +499,35 @@ def reflector_footprint(reflector: Reflector, view: View) -> Footprint:
                                  view.clip_plane)
     center, radius = bounding_sphere(reflector)
     return sphere_footprint(center, radius, view.view, view.projection, view.size)
+
+
+GLASS_MARGIN = 2
+"""Pixels a reflected capture's scissor reaches beyond its glass's footprint: the
+lookup's bilinear taps reach one texel past the point sampled, and one more for the
+rounding of the projective coordinates."""
+
+
+def glass_scissor(reflector: PlanarReflector, capture: View) -> Rectangle | None:
+    """The part of a reflected capture ``capture`` that its mirror ever samples: the
+    glass's footprint in the capture, clipped to its sides only (the glass lies on the
+    capture's oblique near plane), grown by :data:`GLASS_MARGIN`. None (all of it) when
+    the glass has no footprint there."""
+    footprint = polygon_footprint(reflector.corner_array, capture.view_projection,
+                                  capture.size, depth=False)
+    return footprint.rectangle(GLASS_MARGIN)
+
+
+def intersect(first: Rectangle | None, second: Rectangle | None) -> Rectangle | None:
+    """The overlap of two pixel rectangles (None stands for everything); an empty overlap
+    is a rectangle of no width."""
+    if first is None:
+        return second
+    if second is None:
+        return first
+    x0, y0 = max(first[0], second[0]), max(first[1], second[1])
+    x1 = min(first[0] + first[2], second[0] + second[2])
+    y1 = min(first[1] + first[3], second[1] + second[3])
+    return x0, y0, max(x1 - x0, 0), max(y1 - y0, 0)
 
 
 def screen_area(reflector: Reflector, view: View) -> float:

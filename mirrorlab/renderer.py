@@ -14,6 +14,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field, replace
 
+from mirrorlab.bounds import scene_index
 from mirrorlab.gl.context import ResourceRegistry, gl_pass, gl_version, require_gl_version
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import RenderTarget
@@ -24,9 +25,9 @@ from mirrorlab.passes.base import (
     gl_state,
     restore_state,
 )
-from mirrorlab.passes.scene_draw import SceneDrawer
+from mirrorlab.passes.scene_draw import DrawPath, SceneDrawer
 from mirrorlab.passes.sky import SkyPass
-from mirrorlab.plan import TINY_PIXELS, FramePlan, TextureState, ViewPlan, plan_frame
+from mirrorlab.plan import TINY_PIXELS, FramePlan, Rectangle, TextureState, ViewPlan, plan_frame
 from mirrorlab.scene.model import (
     Background,
     CurvedReflector,
@@ -82,19 +83,23 @@ def _pass_key(reflector: Reflector, background: Background) -> tuple:
 
 
 class SceneRenderer:
-    """Runs frame plans: captures and bakes first, then the camera's view."""
+    """Runs frame plans: captures and bakes first, then the camera's view. ``draw_path``
+    chooses how objects are drawn (:mod:`mirrorlab.passes.scene_draw`): ``auto`` (one
+    multi-draw a pass where the context offers it, else a draw call a part),
+    ``packed`` or ``per-draw``; the frames are the same."""
 
-    def __init__(self, registry: ResourceRegistry) -> None:
+    def __init__(self, registry: ResourceRegistry, draw_path: DrawPath = "auto") -> None:
         self._gl_version = gl_version()
         self.registry = registry
         self.shared = SharedResources(registry)
-        self.drawer = SceneDrawer(self.shared)
+        self.drawer = SceneDrawer(self.shared, draw_path)
         self.state = TextureState()
         self._scene: Scene | None = None
         self._passes: dict[str, tuple[tuple, ReflectorPass]] = {}
         self._sky: SkyPass | None = None
         self.last_frame: FrameStats | None = None
         self._last_plan: tuple[tuple, FramePlan] | None = None
+        self._scissor: Rectangle | None = None  # the scissor rectangle set, None: off
 
     @property
     def scene(self) -> Scene:
@@ -136,6 +141,10 @@ class SceneRenderer:
         return self._sky
 
     def _use_scene(self, scene: Scene) -> None:
+        if (self._scene is not None and scene.reflectors is self._scene.reflectors
+                and scene.background == self._scene.background):
+            self._scene = scene  # the same reflectors: the same passes
+            return
         for reflector in scene.reflectors:
             entry = technique(reflector.technique)
             if self._gl_version < entry.gl_version:
@@ -168,15 +177,19 @@ class SceneRenderer:
         """
         start = time.perf_counter()
         found = gl_state()
+        self._scissor = None
+        GL.glDisable(GL.GL_SCISSOR_TEST)
         self._use_scene(scene)
         width, height = target.size
         plan = self._plan(scene, (int(width), int(height)), use_plan, tiny_pixels, view)
         draws = 0
+        index = scene_index(scene)
         try:
             for step in plan.passes:
                 if not step.runs or step.name == "camera":
                     continue
-                reflector = scene.reflector(step.reflector)  # type: ignore[arg-type]
+                assert step.reflector is not None
+                reflector = index.reflectors[index.names[step.reflector]]
                 with gl_pass(f"{step.name}:{step.reflector}"):
                     draws += self._pass(reflector).update(step, reflector, self, target)
                 self.state.record(step)
@@ -209,14 +222,27 @@ class SceneRenderer:
         number of draw calls."""
         scene = self.scene
         view = plan.view
+        outer = self._scissor
         if stencil_level == 0:
             target.bind()
             GL.glViewport(0, 0, *view.size)
             GL.glStencilMask(0xFF)
             GL.glClearColor(*scene.background.color, 1.0)
             GL.glClearStencil(0)
+            self._set_scissor(None)  # the whole target is cleared, whatever is drawn
             GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT
                        | GL.GL_STENCIL_BUFFER_BIT)
+        # Only the pixels that matter are rasterised (a capture's glass, a stencil
+        # mirror's): a scissor cannot change a pixel the plan says is ever seen.
+        self._set_scissor(plan.scissor)
+        try:
+            return self._draw_view(plan, target, stencil_level)
+        finally:
+            self._set_scissor(outer)
+
+    def _draw_view(self, plan: ViewPlan, target: RenderTarget, stencil_level: int) -> int:
+        scene = self.scene
+        view = plan.view
         apply_view_state(view, stencil_level)
         draws = 0
         sky = self._sky_for(scene.background)
@@ -225,9 +251,7 @@ class SceneRenderer:
             apply_view_state(view, stencil_level)
         draws += self.drawer.draw(scene, view)
         later = []
-        for draw in plan.draws:
-            if draw.mode == "hidden":
-                continue
+        for draw in plan.shown:
             if draw.mode == "stencil":
                 later.append(draw)
                 continue
@@ -236,6 +260,16 @@ class SceneRenderer:
             draws += self._pass(draw.reflector).draw(draw, view, self, target, stencil_level)
         return draws
 
+    def _set_scissor(self, rectangle: Rectangle | None) -> None:
+        if rectangle == self._scissor:
+            return
+        if rectangle is None:
+            GL.glDisable(GL.GL_SCISSOR_TEST)
+        else:
+            GL.glEnable(GL.GL_SCISSOR_TEST)
+            GL.glScissor(*rectangle)
+        self._scissor = rectangle
+
     def release(self) -> None:
         """Free every GL object the renderer made. Call with its context current."""
         for name in list(self._passes):
@@ -243,6 +277,7 @@ class SceneRenderer:
         if self._sky is not None:
             self._sky.release()
             self._sky = None
+        self.drawer.release()
         self.shared.release()
         self.state.clear()
         self._last_plan = None

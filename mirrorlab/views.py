@@ -15,7 +15,7 @@ from functools import cached_property
 
 import numpy as np
 
-from mirrorlab import math3d
+from mirrorlab import culling, math3d
 from mirrorlab.scene.model import Camera, CurvedReflector, PlanarReflector
 
 _FLIP_X = np.diag([-1.0, 1.0, 1.0, 1.0])
@@ -62,6 +62,12 @@ class View:
     @cached_property
     def view_projection(self) -> np.ndarray:
         return self.projection @ self.view
+
+    @cached_property
+    def cull_planes(self) -> np.ndarray:
+        """``(6, 4)`` or ``(7, 4)``: the view's clip volume (and clip plane) as planes of
+        homogeneous world points (:func:`mirrorlab.culling.view_planes`)."""
+        return culling.view_planes(self.view_projection, self.clip_plane)
 
     @cached_property
     def origin(self) -> np.ndarray:

@@ -225,6 +225,29 @@ def gl_version() -> tuple[int, int]:
     return (int(match.group(1)), int(match.group(2))) if match else (0, 0)
 
 
+def gl_extensions() -> frozenset[str]:
+    """The names of the current context's OpenGL extensions."""
+    from OpenGL import GL
+
+    count = int(GL.glGetIntegerv(GL.GL_NUM_EXTENSIONS))
+    return frozenset(GL.glGetStringi(GL.GL_EXTENSIONS, i).decode(errors="replace")
+                     for i in range(count))
+
+
+MULTI_DRAW_VERSION = (4, 3)
+"""OpenGL that has glMultiDrawElementsIndirect and shader storage buffers (with
+``GL_ARB_shader_draw_parameters``, or 4.6, for ``gl_DrawID``)."""
+
+
+def has_multi_draw() -> bool:
+    """Whether the current context can draw a pass as one multi-draw whose draws each read
+    their own data: OpenGL 4.6, or 4.3 with ``GL_ARB_shader_draw_parameters`` (macOS's
+    4.1 cannot)."""
+    version = gl_version()
+    return version >= (4, 6) or (version >= MULTI_DRAW_VERSION
+                                 and "GL_ARB_shader_draw_parameters" in gl_extensions())
+
+
 def require_gl_version(needed: tuple[int, int], what: str) -> None:
     """GLVersionError naming ``what`` and the version it needs when the current context's
     OpenGL is older than ``needed``."""

@@ -1,5 +1,5 @@
 """GL object wrappers with explicit lifetimes: Program, Texture2D, TextureCube,
-DepthTextureCube, Framebuffer, MeshBuffer.
+DepthTextureCube, Framebuffer, MeshBuffer, PackedMeshes, Buffer.
 
 Each wrapper registers with the context's
 :class:`~mirrorlab.gl.context.ResourceRegistry` and frees its GL name in
@@ -105,6 +105,7 @@ class Program(_Resource):
             raise GLContextError(f"program {vertex}+{fragment} did not link: {log}")
         self.label = f"{vertex}+{fragment}"
         self._locations: dict[str, int] = {}
+        self._values: dict[int, object] = {}  # what each uniform location holds
         super().__init__(registry)
 
     def use(self) -> None:
@@ -128,33 +129,63 @@ class Program(_Resource):
             return False
         return True
 
+    # Each setter skips the call when the uniform already holds the value: a program keeps
+    # its uniforms, and a still frame sets the same ones every frame.
+
+    def _unchanged(self, location: int, value: object) -> bool:
+        if self._values.get(location) == value:
+            return True
+        self._values[location] = value
+        return False
+
     def set_mat4(self, uniform: str, matrix: np.ndarray) -> None:
         """Set a ``(4, 4)`` row-major (numpy) matrix."""
-        GL.glUniformMatrix4fv(self.location(uniform), 1, GL.GL_TRUE,
-                              np.asarray(matrix, dtype=np.float32))
+        data = np.asarray(matrix, dtype=np.float32)
+        location = self.location(uniform)
+        if not self._unchanged(location, data.tobytes()):
+            GL.glUniformMatrix4fv(location, 1, GL.GL_TRUE, data)
 
     def set_mat3(self, uniform: str, matrix: np.ndarray) -> None:
         """Set a ``(3, 3)`` row-major (numpy) matrix."""
-        GL.glUniformMatrix3fv(self.location(uniform), 1, GL.GL_TRUE,
-                              np.asarray(matrix, dtype=np.float32))
+        data = np.asarray(matrix, dtype=np.float32)
+        location = self.location(uniform)
+        if not self._unchanged(location, data.tobytes()):
+            GL.glUniformMatrix3fv(location, 1, GL.GL_TRUE, data)
 
     def set_vec2(self, uniform: str, value) -> None:
         x, y = (float(v) for v in value)
-        GL.glUniform2f(self.location(uniform), x, y)
+        location = self.location(uniform)
+        if not self._unchanged(location, ("2f", x, y)):
+            GL.glUniform2f(location, x, y)
 
     def set_vec3(self, uniform: str, value) -> None:
         x, y, z = (float(v) for v in value)
-        GL.glUniform3f(self.location(uniform), x, y, z)
+        location = self.location(uniform)
+        if not self._unchanged(location, ("3f", x, y, z)):
+            GL.glUniform3f(location, x, y, z)
 
     def set_vec4(self, uniform: str, value) -> None:
         x, y, z, w = (float(v) for v in value)
-        GL.glUniform4f(self.location(uniform), x, y, z, w)
+        location = self.location(uniform)
+        if not self._unchanged(location, ("4f", x, y, z, w)):
+            GL.glUniform4f(location, x, y, z, w)
+
+    def set_vec3_array(self, uniform: str, values: np.ndarray) -> None:
+        """Set a ``vec3`` array uniform from ``values`` ``(n, 3)``."""
+        data = np.asarray(values, dtype=np.float32)
+        location = self.location(uniform)
+        if not self._unchanged(location, data.tobytes()):
+            GL.glUniform3fv(location, len(data), data)
 
     def set_float(self, uniform: str, value: float) -> None:
-        GL.glUniform1f(self.location(uniform), float(value))
+        location = self.location(uniform)
+        if not self._unchanged(location, ("1f", float(value))):
+            GL.glUniform1f(location, float(value))
 
     def set_int(self, uniform: str, value: int) -> None:
-        GL.glUniform1i(self.location(uniform), int(value))
+        location = self.location(uniform)
+        if not self._unchanged(location, ("1i", int(value))):
+            GL.glUniform1i(location, int(value))
 
     def _free(self) -> None:
         GL.glDeleteProgram(self.name)
@@ -480,6 +511,90 @@ class MeshBuffer(_Resource):
     def _free(self) -> None:
         GL.glDeleteVertexArrays(1, [self.vao])
         GL.glDeleteBuffers(2, [self.vbo, self.ebo])
+
+
+class Buffer(_Resource):
+    """A GL buffer object whose contents are replaced as a whole (per-draw data, indirect
+    draw commands): :meth:`upload` keeps the storage it has when the data fits."""
+
+    def __init__(self, registry: ResourceRegistry) -> None:
+        self.name = int(GL.glGenBuffers(1))
+        self.capacity = 0
+        self.size = 0
+        super().__init__(registry)
+
+    def upload(self, target: int, data: np.ndarray) -> None:
+        """Bind to ``target`` and fill with ``data`` (any contiguous array)."""
+        data = np.ascontiguousarray(data)
+        GL.glBindBuffer(target, self.name)
+        if data.nbytes > self.capacity:
+            GL.glBufferData(target, data.nbytes, data, GL.GL_DYNAMIC_DRAW)
+            self.capacity = data.nbytes
+        elif data.nbytes:
+            GL.glBufferSubData(target, 0, data.nbytes, data)
+        self.size = data.nbytes
+
+    def _free(self) -> None:
+        GL.glDeleteBuffers(1, [self.name])
+
+
+class PackedMeshes(_Resource):
+    """Many meshes in one VAO: their interleaved vertices (the :class:`MeshBuffer` layout)
+    in one vertex buffer and their indices in one index buffer, so that a pass binds one
+    vertex array and draws any of them by its range (``glDrawElementsBaseVertex``, or
+    all of a pass's in one ``glMultiDrawElementsIndirect``). A mesh is added once; adding
+    one re-makes the buffers (meshes are few and added on first use)."""
+
+    def __init__(self, registry: ResourceRegistry) -> None:
+        self._vertices: list[np.ndarray] = []
+        self._indices: list[np.ndarray] = []
+        self.vertex_count = 0
+        self.index_count = 0
+        self.vao = self.vbo = self.ebo = 0
+        super().__init__(registry)
+
+    def add(self, vertices: np.ndarray, indices: np.ndarray) -> tuple[int, int, int]:
+        """Add a mesh of ``vertices`` ``(n, 8)`` and flat ``indices``; returns its
+        ``(first index, index count, base vertex)``."""
+        vertices = np.ascontiguousarray(vertices, dtype=np.float32)
+        indices = np.ascontiguousarray(indices, dtype=np.uint32).reshape(-1)
+        if vertices.ndim != 2 or vertices.shape[1] != 8:
+            raise ValueError(f"mesh vertices must be (n, 8) float32, got {vertices.shape}")
+        placed = (self.index_count, int(indices.size), self.vertex_count)
+        self._vertices.append(vertices)
+        self._indices.append(indices)
+        self.vertex_count += len(vertices)
+        self.index_count += int(indices.size)
+        self._free()
+        self.vao, self.vbo, self.ebo = upload_mesh(np.concatenate(self._vertices),
+                                                   np.concatenate(self._indices))
+        return placed
+
+    def bind(self) -> None:
+        GL.glBindVertexArray(self.vao)
+
+    def draw(self, first_index: int, count: int, base_vertex: int) -> None:
+        """One mesh's triangles (bound first)."""
+        GL.glDrawElementsBaseVertex(GL.GL_TRIANGLES, int(count), GL.GL_UNSIGNED_INT,
+                                    GL.GLvoidp(4 * int(first_index)), int(base_vertex))
+
+    def multi_draw(self, first_command: int, count: int) -> None:
+        """``count`` draws from the bound ``GL_DRAW_INDIRECT_BUFFER``'s commands
+        (``(count, instances, first index, base vertex, base instance)`` uint32 each),
+        starting at command ``first_command`` (bound first)."""
+        GL.glMultiDrawElementsIndirect(GL.GL_TRIANGLES, GL.GL_UNSIGNED_INT,
+                                       GL.GLvoidp(INDIRECT_COMMAND_BYTES * first_command),
+                                       count, INDIRECT_COMMAND_BYTES)
+
+    def _free(self) -> None:
+        if self.vao:
+            GL.glDeleteVertexArrays(1, [self.vao])
+            GL.glDeleteBuffers(2, [self.vbo, self.ebo])
+        self.vao = self.vbo = self.ebo = 0
+
+
+INDIRECT_COMMAND_BYTES = 20
+"""Bytes of one ``DrawElementsIndirectCommand``: five uint32."""
 
 
 class TextureCube(_Resource):

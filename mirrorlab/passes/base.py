@@ -12,7 +12,14 @@ import numpy as np
 
 from mirrorlab.gl.context import ResourceRegistry
 from mirrorlab.gl.opengl import GL
-from mirrorlab.gl.resources import Framebuffer, MeshBuffer, Program, Texture2D, TextureCube
+from mirrorlab.gl.resources import (
+    Framebuffer,
+    MeshBuffer,
+    PackedMeshes,
+    Program,
+    Texture2D,
+    TextureCube,
+)
 from mirrorlab.scene.backgrounds import cube_face_size, load_cube_faces
 from mirrorlab.scene.mesh import MeshData, TextureSource, load_mesh, texture_picture
 
@@ -39,6 +46,24 @@ class SharedResources:
         self._textures: dict[TextureSource, Texture2D] = {}
         self._programs: dict[tuple, Program] = {}
         self._scratch: dict[tuple[int, int], Framebuffer] = {}
+        self._packed: PackedMeshes | None = None
+        self._ranges: dict[Path, tuple[int, int, int]] = {}
+
+    @property
+    def packed(self) -> PackedMeshes:
+        """Every mesh :meth:`mesh_range` was asked for, in one vertex array."""
+        if self._packed is None:
+            self._packed = PackedMeshes(self.registry)
+        return self._packed
+
+    def mesh_range(self, path: Path) -> tuple[int, int, int]:
+        """The mesh file ``path`` in :attr:`packed`: ``(first index, index count, base
+        vertex)``, added on first use."""
+        placed = self._ranges.get(path)
+        if placed is None:
+            data = load_mesh(path)
+            placed = self._ranges[path] = self.packed.add(data.interleaved(), data.indices)
+        return placed
 
     def mesh(self, path: Path) -> MeshBuffer:
         return self.mesh_data(path)[1]
@@ -85,6 +110,10 @@ class SharedResources:
         for resource in (*self._textures.values(), *self._programs.values(),
                          *self._scratch.values()):
             resource.release()
+        if self._packed is not None:
+            self._packed.release()
+            self._packed = None
+        self._ranges.clear()
         self._meshes.clear()
         self._textures.clear()
         self._programs.clear()
@@ -141,7 +170,7 @@ def apply_view_state(view: View, stencil_level: int) -> None:
 
 
 _SWITCHES = ("GL_DEPTH_TEST", "GL_CULL_FACE", "GL_STENCIL_TEST", "GL_CLIP_DISTANCE0",
-             "GL_TEXTURE_CUBE_MAP_SEAMLESS", "GL_BLEND")
+             "GL_TEXTURE_CUBE_MAP_SEAMLESS", "GL_BLEND", "GL_SCISSOR_TEST")
 _VALUES = ("GL_FRONT_FACE", "GL_CULL_FACE_MODE", "GL_DEPTH_FUNC", "GL_DEPTH_WRITEMASK",
            "GL_STENCIL_WRITEMASK", "GL_STENCIL_FUNC", "GL_STENCIL_REF", "GL_STENCIL_VALUE_MASK",
            "GL_STENCIL_FAIL", "GL_STENCIL_PASS_DEPTH_FAIL", "GL_STENCIL_PASS_DEPTH_PASS",
@@ -155,15 +184,16 @@ _VALUE_ENUMS = tuple((name, getattr(GL, name)) for name in _VALUES)
 
 def gl_state() -> dict[str, object]:
     """The GL state a frame changes: switches, winding, depth and stencil settings, masks,
-    bindings, viewport and clear colour (to restore it, and for tests)."""
+    bindings, viewport, scissor box and clear colour (to restore it, and for tests)."""
     state: dict[str, object] = {name: bool(GL.glIsEnabled(enum))
                                 for name, enum in _SWITCH_ENUMS}
     for name, enum in _VALUE_ENUMS:
         state[name] = int(GL.glGetIntegerv(enum))
     state["GL_COLOR_WRITEMASK"] = tuple(
         bool(v) for v in np.asarray(GL.glGetBooleanv(GL.GL_COLOR_WRITEMASK)).reshape(-1))
-    state["GL_VIEWPORT"] = tuple(int(v) for v in np.asarray(
-        GL.glGetIntegerv(GL.GL_VIEWPORT)).reshape(-1))
+    for box in ("GL_VIEWPORT", "GL_SCISSOR_BOX"):
+        state[box] = tuple(int(v) for v in np.asarray(
+            GL.glGetIntegerv(getattr(GL, box))).reshape(-1))
     state["GL_COLOR_CLEAR_VALUE"] = tuple(round(float(v), 6) for v in np.asarray(
         GL.glGetFloatv(GL.GL_COLOR_CLEAR_VALUE)).reshape(-1))
     return state
@@ -189,6 +219,7 @@ def restore_state(state: dict[str, object]) -> None:
     GL.glBindFramebuffer(GL.GL_DRAW_FRAMEBUFFER, state["GL_DRAW_FRAMEBUFFER_BINDING"])
     GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, state["GL_READ_FRAMEBUFFER_BINDING"])
     GL.glViewport(*state["GL_VIEWPORT"])  # type: ignore[misc]
+    GL.glScissor(*state["GL_SCISSOR_BOX"])  # type: ignore[misc]
     GL.glClearColor(*state["GL_COLOR_CLEAR_VALUE"])  # type: ignore[misc]
 
 
@@ -248,6 +279,6 @@ def light_uniforms(program: Program, scene: Scene) -> None:
     count = len(scene.lights)
     directions, colors = _light_arrays(tuple(scene.lights))
     program.set_int("light_count", count)
-    GL.glUniform3fv(program.location("light_directions"), 4, directions)
-    GL.glUniform3fv(program.location("light_colors"), 4, colors)
+    program.set_vec3_array("light_directions", directions)
+    program.set_vec3_array("light_colors", colors)
     program.set_float("ambient", scene.ambient)

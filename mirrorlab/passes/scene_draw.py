@@ -1,23 +1,56 @@
 """Drawing the scene's objects, and reflectors as plain lit surfaces: the lit shader every
-view uses."""
+view uses.
+
+Each view draws only the parts it can see: every part's world box lives in the scene's
+bounds arrays (:class:`mirrorlab.bounds.SceneIndex`) and all of them are tested against
+the view's clip volume in one vectorised step (:func:`mirrorlab.culling.boxes_in_view`).
+The meshes are packed into one vertex and one index buffer
+(:class:`~mirrorlab.gl.resources.PackedMeshes`). What is left is drawn one of two ways,
+chosen when the drawer is made, from what the context offers:
+
+- ``packed`` (OpenGL 4.6, or 4.3 with ``GL_ARB_shader_draw_parameters``): each part's
+  matrices in a shader storage buffer, its range of the packed meshes in an indirect
+  command, and the pass one ``glMultiDrawElementsIndirect`` for each run of parts that
+  share a texture (``scene_packed.vert`` reads part ``gl_DrawID``). A view's commands
+  and buffer are recorded once and replayed while the scene's objects and the view stay
+  as they were: a still frame re-sends nothing but the calls that draw.
+- ``per-draw`` (any OpenGL 3.3, macOS's 4.1 among them): one
+  ``glDrawElementsBaseVertex`` a part, its matrices as uniforms (``scene.vert``).
+
+Both draw the parts in the scene's order with the same float32 matrices, so the picture
+is the same, pixel for pixel.
+"""
 
 from __future__ import annotations
 
+from collections import OrderedDict
+from dataclasses import dataclass
+from typing import Literal
+
 import numpy as np
 
-from mirrorlab import math3d
+from mirrorlab import culling, math3d
+from mirrorlab.bounds import SceneIndex, scene_index
+from mirrorlab.gl.context import has_multi_draw
 from mirrorlab.gl.opengl import GL
-from mirrorlab.gl.resources import Program
+from mirrorlab.gl.resources import Buffer, Program
 from mirrorlab.passes.base import SharedResources, light_uniforms, set_view_uniforms
+from mirrorlab.scene.mesh import TextureSource
 from mirrorlab.scene.model import CurvedReflector, PlanarReflector, Scene
-from mirrorlab.scene.robot import Part, scene_parts
 from mirrorlab.views import View
+
+DrawPath = Literal["auto", "packed", "per-draw"]
+DRAW_PATHS: tuple[DrawPath, ...] = ("auto", "packed", "per-draw")
+"""How a drawer draws a view's parts: ``auto`` picks ``packed`` where the context offers
+it, else ``per-draw``."""
+RECORDED_VIEWS = 64
+"""Recorded views a packed drawer keeps (most recently used)."""
 
 
 def surface_matrix(normal: np.ndarray, color, textured: bool) -> np.ndarray:
-    """A part's ``part`` uniform (scene.vert, scene.frag), ``(4, 4)`` float32: the ``(3, 3)``
-    normal matrix in the upper left, the RGB colour (0-1) down the last column, and 1 below
-    it when the part wears its texture. One uniform call a part instead of three."""
+    """A part's ``part`` matrix (scene.vert, scene_packed.vert), ``(4, 4)`` float32: the
+    ``(3, 3)`` normal matrix in the upper left, the RGB colour (0-1) down the last column,
+    and 1 below it when the part wears its texture."""
     matrix = np.zeros((4, 4), dtype=np.float32)
     matrix[:3, :3] = normal
     matrix[:3, 3] = color
@@ -25,44 +58,134 @@ def surface_matrix(normal: np.ndarray, color, textured: bool) -> np.ndarray:
     return matrix
 
 
-class SceneDrawer:
-    """Draws every part of a scene's objects (never its reflectors) with Lambert lighting,
-    one ``glDrawElements`` call per part; and a reflector as a plain surface."""
+@dataclass(frozen=True, eq=False)
+class PartTable:
+    """What drawing a scene index's parts takes, worked out once per index: ``surfaces``
+    ``(n, 4, 4)`` float32 (:func:`surface_matrix` of each part), ``textures`` (each part's,
+    or None), ``ranges`` ``(n, 3)`` int (first index, index count, base vertex in the
+    packed meshes) and ``commands`` ``(n, 5)`` uint32 (each part's indirect command)."""
 
-    def __init__(self, shared: SharedResources) -> None:
+    surfaces: np.ndarray
+    textures: tuple[TextureSource | None, ...]
+    texture_ids: np.ndarray
+    """``(n,)``: each part's position in ``worn`` (-1: none)."""
+    worn: tuple[TextureSource, ...]
+    """The textures the parts wear, each once."""
+    ranges: np.ndarray
+    commands: np.ndarray
+
+
+@dataclass(eq=False)
+class RecordedView:
+    """One view's packed draw, recorded: the visible parts' matrices (``parts``) and
+    indirect commands (``commands``) in GL buffers, and the ``runs`` of parts that share a
+    texture, each (texture or None, first part, count)."""
+
+    parts: Buffer
+    commands: Buffer
+    runs: tuple[tuple[TextureSource | None, int, int], ...]
+    drawn: int
+
+
+def texture_runs(ids: np.ndarray) -> list[tuple[int, int, int]]:
+    """Runs of consecutive parts that can share one bound texture, from each part's
+    texture id ``(k,)`` (-1: wears none, so it joins any run): ``(id, first, count)``,
+    -1 only when no part of the run wears one."""
+    if not len(ids):
+        return []
+    worn = np.flatnonzero(ids >= 0)
+    if not len(worn):
+        return [(-1, 0, len(ids))]
+    # a part without a texture takes the last texture before it (or the first one)
+    last = np.maximum.accumulate(np.where(ids >= 0, np.arange(len(ids)), -1))
+    filled = np.where(last >= 0, ids[np.maximum(last, 0)], ids[worn[0]])
+    starts = np.flatnonzero(np.concatenate([[True], filled[1:] != filled[:-1]]))
+    ends = np.concatenate([starts[1:], [len(ids)]])
+    return [(int(filled[a]), int(a), int(b - a)) for a, b in zip(starts, ends, strict=True)]
+
+
+class SceneDrawer:
+    """Draws the parts of a scene's objects a view can see (never its reflectors) with
+    Lambert lighting, by ``draw_path`` (see the module's docstring); and a reflector as a
+    plain surface."""
+
+    def __init__(self, shared: SharedResources, draw_path: DrawPath = "auto") -> None:
+        if draw_path not in DRAW_PATHS:
+            raise ValueError(f"draw_path must be one of {', '.join(DRAW_PATHS)}, got "
+                             f"{draw_path!r}")
+        if draw_path == "auto":
+            draw_path = "packed" if has_multi_draw() else "per-draw"
+        elif draw_path == "packed" and not has_multi_draw():
+            raise ValueError("draw_path 'packed' needs OpenGL 4.6, or 4.3 with "
+                             "GL_ARB_shader_draw_parameters; this context has neither")
+        self.draw_path: DrawPath = draw_path
         self.shared = shared
         self.program: Program = shared.program("scene.vert", "scene.frag")
         self.program.use()
-        self.program.set_int("surface", 0)
-        self._parts_of: Scene | None = None
-        self._parts: list[tuple[Part, np.ndarray]] = []
-        self._models = np.zeros((0, 4, 4))
-        self._normals: dict[bytes, np.ndarray] = {}
+        self.program.set_int("texture_map", 0)
+        self.packed_program: Program | None = None
+        if draw_path == "packed":
+            self.packed_program = shared.program("scene_packed.vert", "scene.frag")
+            self.packed_program.use()
+            self.packed_program.set_int("texture_map", 0)
+        self._tables: OrderedDict[SceneIndex, PartTable] = OrderedDict()
+        self._recorded: OrderedDict[tuple, RecordedView] = OrderedDict()
+        self._spare: list[RecordedView] = []
+        self._each: OrderedDict[tuple, tuple[np.ndarray, np.ndarray]] = OrderedDict()
+        """The per-draw path's record of a view: the visible parts and their models."""
 
-    def _prepared(self, scene: Scene) -> tuple[list[tuple[Part, np.ndarray]], np.ndarray]:
-        """Each part with its :func:`surface_matrix`, and every part's float64 model matrix
-        ``(n, 4, 4)``, worked out once per scene (and a part's normal matrix once while
-        its model stays: when the robot moves a joint, the parts before it stay where
-        they were)."""
-        if scene is not self._parts_of:
-            normals = {}
-            self._parts = []
-            for part in scene_parts(scene):
-                key = part.model.tobytes()
-                normal = self._normals.get(key)
-                if normal is None:
-                    normal = math3d.normal_matrix(part.model)
-                normals[key] = normal
-                self._parts.append((part, surface_matrix(normal, part.color,
-                                                         part.texture is not None)))
-            self._models = np.array([part.model for part, _ in self._parts],
-                                    dtype=np.float64).reshape(-1, 4, 4)
-            self._normals = normals
-            self._parts_of = scene
-        return self._parts, self._models
+    # ------------------------------------------------------------- parts
 
-    def begin(self, scene: Scene, view: View) -> Program:
-        program = self.program
+    def _table(self, index: SceneIndex) -> PartTable:
+        """The :class:`PartTable` of ``index`` (kept for the last few indexes)."""
+        table = self._tables.get(index)
+        if table is not None:
+            self._tables.move_to_end(index)
+            return table
+        parts = index.parts
+        count = len(parts)
+        surfaces = np.zeros((count, 4, 4), dtype=np.float32)
+        if count:
+            surfaces[:, :3, :3] = np.linalg.inv(index.models[:, :3, :3]).transpose(0, 2, 1)
+            surfaces[:, :3, 3] = [part.color for part in parts]
+            surfaces[:, 3, 3] = [part.texture is not None for part in parts]
+        textures = tuple(part.texture for part in parts)
+        worn = tuple(dict.fromkeys(t for t in textures if t is not None))
+        unique = {t: i for i, t in enumerate(worn)}
+        ranges = np.array([self.shared.mesh_range(part.mesh) for part in parts],
+                          dtype=np.int64).reshape(-1, 3)
+        commands = np.zeros((count, 5), dtype=np.uint32)
+        commands[:, 0] = ranges[:, 1]  # index count
+        commands[:, 1] = 1  # one instance
+        commands[:, 2] = ranges[:, 0]  # first index
+        commands[:, 3] = ranges[:, 2]  # base vertex
+        table = PartTable(surfaces, textures,
+                          np.array([unique.get(t, -1) if t is not None else -1
+                                    for t in textures], dtype=np.int64),
+                          worn, ranges, commands)
+        self._tables[index] = table
+        while len(self._tables) > 4:
+            self._tables.popitem(last=False)
+        return table
+
+    @staticmethod
+    def visible(index: SceneIndex, view: View) -> np.ndarray:
+        """Positions ``(k,)`` of the parts of ``index`` that may show in ``view``."""
+        return np.flatnonzero(culling.boxes_in_view(index.part_low, index.part_high,
+                                                    view.cull_planes))
+
+    @staticmethod
+    def relative_models(index: SceneIndex, visible: np.ndarray, view: View) -> np.ndarray:
+        """``(k, 4, 4)`` float32: the visible parts' models relative to the view's origin,
+        composed in float64 (camera-relative rendering)."""
+        relative = index.models[visible]  # a copy (fancy indexing)
+        relative[:, :3, 3] -= view.origin
+        return relative.astype(np.float32)
+
+    # ------------------------------------------------------------- drawing
+
+    def begin(self, scene: Scene, view: View, program: Program | None = None) -> Program:
+        program = program or self.program
         program.use()
         set_view_uniforms(program, view)
         light_uniforms(program, scene)
@@ -70,19 +193,83 @@ class SceneDrawer:
 
     def draw(self, scene: Scene, view: View) -> int:
         """Draw the objects into the bound target; returns the number of draw calls."""
+        index = scene_index(scene)
+        if not index.parts:
+            return 0
+        table = self._table(index)
+        if self.draw_path == "packed":
+            return self._draw_packed(scene, view, index, table)
+        return self._draw_each(scene, view, index, table)
+
+    def _draw_each(self, scene: Scene, view: View, index: SceneIndex, table: PartTable) -> int:
+        key = _view_key(index, view)
+        held = self._each.get(key)
+        if held is not None:
+            self._each.move_to_end(key)
+            visible, models = held
+        else:
+            visible = self.visible(index, view)
+            models = self.relative_models(index, visible, view)
+            self._each[key] = (visible, models)
+            while len(self._each) > RECORDED_VIEWS:
+                self._each.popitem(last=False)
         program = self.begin(scene, view)
-        parts, models = self._prepared(scene)
-        # Camera-relative: each model moved to the view's origin in float64, then float32.
-        relative = models.copy()
-        relative[:, :3, 3] -= view.origin
-        relative = relative.astype(np.float32)
-        for (part, surface), model in zip(parts, relative, strict=True):
+        packed = self.shared.packed
+        packed.bind()
+        for i, model in zip(visible, models, strict=True):
             program.set_mat4("model", model)
-            program.set_mat4("part", surface)
-            if part.texture is not None:
-                self.shared.texture(part.texture).bind(0)
-            self.shared.mesh(part.mesh).draw()
-        return len(parts)
+            program.set_mat4("part", table.surfaces[i])
+            texture = table.textures[i]
+            if texture is not None:
+                self.shared.texture(texture).bind(0)
+            packed.draw(*table.ranges[i])
+        return len(visible)
+
+    def _draw_packed(self, scene: Scene, view: View, index: SceneIndex,
+                     table: PartTable) -> int:
+        recorded = self._record(index, view, table)
+        if not recorded.runs:
+            return 0
+        assert self.packed_program is not None
+        program = self.begin(scene, view, self.packed_program)
+        packed = self.shared.packed
+        packed.bind()
+        GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, recorded.commands.name)
+        GL.glBindBufferBase(GL.GL_SHADER_STORAGE_BUFFER, 0, recorded.parts.name)
+        for texture, first, count in recorded.runs:
+            if texture is not None:
+                self.shared.texture(texture).bind(0)
+            program.set_int("first_part", first)
+            packed.multi_draw(first, count)
+        GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
+        return len(recorded.runs)
+
+    def _record(self, index: SceneIndex, view: View, table: PartTable) -> RecordedView:
+        """``view``'s recorded draw of ``index`` (made when it has none)."""
+        key = _view_key(index, view)
+        recorded = self._recorded.get(key)
+        if recorded is not None:
+            self._recorded.move_to_end(key)
+            return recorded
+        visible = self.visible(index, view)
+        data = np.empty((len(visible), 2, 4, 4), dtype=np.float32)
+        data[:, 0] = self.relative_models(index, visible, view).transpose(0, 2, 1)
+        data[:, 1] = table.surfaces[visible].transpose(0, 2, 1)  # GLSL's are by column
+        runs = tuple((table.worn[tid] if tid >= 0 else None, first, count)
+                     for tid, first, count in texture_runs(table.texture_ids[visible]))
+        if self._spare:
+            recorded = self._spare.pop()
+        else:
+            registry = self.shared.registry
+            recorded = RecordedView(Buffer(registry), Buffer(registry), (), 0)
+        recorded.parts.upload(GL.GL_SHADER_STORAGE_BUFFER, data)
+        recorded.commands.upload(GL.GL_DRAW_INDIRECT_BUFFER, table.commands[visible])
+        GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
+        recorded.runs, recorded.drawn = runs, len(visible)
+        self._recorded[key] = recorded
+        while len(self._recorded) > RECORDED_VIEWS:
+            self._spare.append(self._recorded.popitem(last=False)[1])
+        return recorded
 
     def draw_plain(self, scene: Scene, reflector: CurvedReflector | PlanarReflector,
                    view: View, quad=None, quad_model: np.ndarray | None = None) -> int:
@@ -102,3 +289,21 @@ class SceneDrawer:
         GL.glEnable(GL.GL_CULL_FACE)
         mesh.draw()
         return 1
+
+    def release(self) -> None:
+        """Free the recorded views' buffers (the programs and meshes are shared)."""
+        for recorded in (*self._recorded.values(), *self._spare):
+            recorded.parts.release()
+            recorded.commands.release()
+        self._recorded.clear()
+        self._spare.clear()
+        self._tables.clear()
+        self._each.clear()
+
+
+def _view_key(index: SceneIndex, view: View) -> tuple:
+    """Equal for the same scene index seen through the same view (matrices, origin, clip
+    plane)."""
+    clip = None if view.clip_plane is None else np.asarray(view.clip_plane).tobytes()
+    return (index, np.asarray(view.view).tobytes(), np.asarray(view.projection).tobytes(),
+            view.origin.tobytes(), clip)

@@ -12,8 +12,11 @@ from PIL import Image
 
 from tests import REPO_DIR
 
-VARIANTS = {"mirrorlab two passes", "mirrorlab capture reused", "mirrorlab one pass",
-            "pyrender default", "pyrender flat"}
+VARIANTS = {"mirrorlab two passes", "mirrorlab reflected two passes",
+            "mirrorlab capture reused", "mirrorlab one pass", "pyrender default",
+            "pyrender flat"}
+SCALE_SCENES = {"base", *(f"{count} {family}" for count in (3, 12) for family in (
+    "mirrors unseen", "mirrors seen", "objects unseen", "objects seen", "tiny objects seen"))}
 
 
 def test_quick_speed_benchmark_times_every_variant_and_writes_its_report(tmp_path):
@@ -33,8 +36,19 @@ def test_quick_speed_benchmark_times_every_variant_and_writes_its_report(tmp_pat
         assert int(row["frames"]) >= 3
         assert 0 < float(row["p10_ms"]) <= float(row["median_ms"]) <= float(row["p90_ms"])
         assert "llvmpipe" in row["gl"]
+    with open(tmp_path / "scale.csv", newline="") as stream:
+        scale = list(csv.DictReader(stream))
+    ran = {(r["variant"].split(", ")[0], r["variant"].split(", ")[1]) for r in scale}
+    mirrorless = {s for s in SCALE_SCENES if "mirrors" not in s}
+    assert ran == ({("mirrorlab still", s) for s in SCALE_SCENES}
+                   | {("mirrorlab moving", s) for s in SCALE_SCENES}
+                   | {("pyrender flat", s) for s in mirrorless})
+    for row in scale:
+        assert int(row["frames"]) >= 3 and int(row["size"]) == 64
+        assert 0 < float(row["p10_ms"]) <= float(row["median_ms"]) <= float(row["p90_ms"])
     report = (tmp_path / "speed.md").read_text()
     assert "two passes / flat" in report and "k in pixels, 400 triangles" in report
+    assert "| 12 objects unseen |" in report and "k in count" in report
     assert report == done.stdout
     with Image.open(tmp_path / "speed.png") as plot:
         assert plot.size[0] > 600 and plot.size[1] > 300

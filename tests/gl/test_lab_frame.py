@@ -222,12 +222,25 @@ def test_viewer_behind_the_mirror_sees_its_backing_and_no_capture_runs(scene_ren
     assert is_backing.all(), f"{int((~is_backing).sum())} mirror pixels are not its backing"
 
 
-def test_frame_leaves_no_gl_error_and_counts_its_draw_calls(scene_renderer):
+def test_frame_leaves_no_gl_error_and_counts_its_draw_calls(scene_renderer, registry):
+    """One multi-draw a pass (the base's texture comes first, the untextured parts join
+    its run) and the mirror quad; drawn a call a part, the parts each view can see: the
+    mirror's frame lies behind the capture camera, and is culled there."""
+    from mirrorlab.renderer import SceneRenderer
+
     scene = lab()
     _, stats = draw(scene_renderer, scene, (SIZE, SIZE))
     check_gl_errors("a lab frame")
+    assert scene_renderer.drawer.draw_path == "packed"
+    assert stats.draw_calls == 3  # capture, camera, mirror quad
+    per_draw = SceneRenderer(registry, draw_path="per-draw")
+    try:
+        _, stats = draw(per_draw, scene, (SIZE, SIZE))
+    finally:
+        per_draw.release()
+    check_gl_errors("a lab frame drawn a call a part")
     parts = len(scene_parts(scene))
-    assert stats.draw_calls == parts * 2 + 1  # capture, camera, mirror quad
+    assert stats.draw_calls == (parts - 1) + parts + 1
 
 
 def test_non_square_frames_capture_at_the_frame_size(scene_renderer):

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from mirrorlab.renderer import SceneRenderer
 from mirrorlab.testing import difference_image
 from tests.gl.golden_frames import SIZE, draw_sequence, sequences
 from tests.imagecheck import save_failure
@@ -20,8 +21,29 @@ SEQUENCES = list(sequences())
 
 @pytest.mark.parametrize("sequence", SEQUENCES, ids=[s.name for s in SEQUENCES])
 def test_shipped_scene_frames_equal_their_golden_frames(scene_renderer, sequence):
+    """The context's own draw path (on llvmpipe's OpenGL 4.5: one multi-draw a pass)."""
+    assert_golden(draw_sequence(scene_renderer, sequence), sequence)
+
+
+@pytest.mark.parametrize("sequence", SEQUENCES, ids=[s.name for s in SEQUENCES])
+def test_the_per_draw_path_draws_the_same_frames(registry, sequence):
+    """The draw path a context without multi-draw gets (macOS's OpenGL 4.1), forced: a
+    draw call a part, the same frames."""
+    renderer = SceneRenderer(registry, draw_path="per-draw")
+    try:
+        assert renderer.drawer.draw_path == "per-draw"
+        assert_golden(draw_sequence(renderer, sequence), sequence, "per_draw_")
+    finally:
+        renderer.release()
+
+
+def test_a_context_with_multi_draw_gets_the_packed_path(scene_renderer):
+    """llvmpipe's OpenGL 4.5 has GL_ARB_shader_draw_parameters: the packed path is chosen."""
+    assert scene_renderer.drawer.draw_path == "packed"
+
+
+def assert_golden(actual: np.ndarray, sequence, prefix: str = "") -> None:
     expected = np.asarray(Image.open(sequence.path).convert("RGB"))
-    actual = draw_sequence(scene_renderer, sequence)
     assert actual.shape == expected.shape, (actual.shape, expected.shape)
     if np.array_equal(actual, expected):
         return
@@ -29,7 +51,7 @@ def test_shipped_scene_frames_equal_their_golden_frames(scene_renderer, sequence
     differing = (actual != expected).any(axis=-1)
     per_frame = [int(differing[:, i * width:(i + 1) * width].sum())
                  for i in range(len(sequence.frames))]
-    folder = save_failure(f"golden_{sequence.name}", actual=actual, expected=expected,
+    folder = save_failure(f"golden_{prefix}{sequence.name}", actual=actual, expected=expected,
                           diff=difference_image(actual, expected))
     raise AssertionError(f"{sequence.name}: pixels differing in each frame {per_frame} "
                          f"(of {SIZE[0] * SIZE[1]}); images in {folder}")

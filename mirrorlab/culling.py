@@ -1,0 +1,129 @@
+"""Which of a scene's things a view can see, decided for all of them at once: boxes,
+quads and spheres kept in arrays (:class:`mirrorlab.bounds.SceneIndex`) tested against a
+view's clip volume in one vectorised step each, so that nothing is done in Python for a
+thing the view cannot see. Numpy only.
+
+A view's clip volume is where ``-w <= x, y, z <= w`` in its clip coordinates (and, for
+the world seen in a stencil mirror, where its clip plane is not negative): six planes
+of homogeneous world points, the rows ``w + x``, ``w - x``, ... of its view-projection
+matrix (exact for any projective matrix, an oblique near plane and a mirrored view
+included). A thing is culled only when all of it lies beyond one of those planes, by
+more than a rounding's worth: then the rasteriser would clip every triangle of it
+away, so culling it cannot change a pixel.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+CULL_SLACK = 1e-9
+"""Relative margin (of the terms of a plane's equation) by which a thing must lie beyond
+a plane to be culled: float rounding never culls what the rasteriser would still draw."""
+
+OUTSIDE_REASONS = (
+    "",
+    "behind the mirror it would be seen in",
+    "out of view (behind the viewer)",
+    "out of view (left of the view)",
+    "out of view (right of the view)",
+    "out of view (below the view)",
+    "out of view (above the view)",
+    "out of view (behind the viewer)",
+    "out of view (beyond the view)",
+)
+"""The words for each code :func:`quads_outside` gives (0: not beyond any one side)."""
+
+
+def volume_planes(view_projection: np.ndarray) -> np.ndarray:
+    """``(6, 4)``: the clip volume of ``view_projection`` ``(4, 4)`` as planes of
+    homogeneous world points (inside where ``plane @ (x, y, z, 1) >= 0``), in the order
+    left, right, bottom, top, near, far."""
+    m = np.asarray(view_projection, dtype=np.float64)
+    return np.array([m[3] + m[0], m[3] - m[0], m[3] + m[1], m[3] - m[1], m[3] + m[2],
+                     m[3] - m[2]])
+
+
+def view_planes(view_projection: np.ndarray, clip_plane: np.ndarray | None) -> np.ndarray:
+    """``(6, 4)`` or ``(7, 4)``: :func:`volume_planes` and the world ``clip_plane`` when
+    given (what lies on its negative side is cut away)."""
+    planes = volume_planes(view_projection)
+    if clip_plane is None:
+        return planes
+    return np.vstack([planes, np.asarray(clip_plane, dtype=np.float64)])
+
+
+def boxes_in_view(low: np.ndarray, high: np.ndarray, planes: np.ndarray) -> np.ndarray:
+    """``(n,)`` bool: which of the world boxes ``low``, ``high`` ``(n, 3)`` may show
+    within ``planes`` ``(k, 4)`` (False only for a box wholly beyond one plane)."""
+    if not len(low):
+        return np.zeros(0, dtype=bool)
+    normals, offsets = planes[:, :3], planes[:, 3]
+    # for each box and plane, the box's corner farthest along the plane's normal
+    farthest = np.where(normals[None, :, :] > 0.0, high[:, None, :], low[:, None, :])
+    value = np.einsum("nkj,kj->nk", farthest, normals) + offsets
+    size = np.einsum("nkj,kj->nk", np.abs(farthest), np.abs(normals)) + np.abs(offsets)
+    return np.all(value >= -CULL_SLACK * size, axis=1)
+
+
+def quads_outside(corners: np.ndarray, view_projection: np.ndarray,
+                  clip_plane: np.ndarray | None, orthographic: bool) -> np.ndarray:
+    """``(p,)`` int8: for each quad of ``corners`` ``(p, 4, 3)`` (world), the code of the
+    side of the view all four corners lie beyond, in :data:`OUTSIDE_REASONS` (0 when no
+    one side has them all): the clip plane first, then behind a perspective eye, then
+    left, right, below, above, in front of the near and beyond the far plane. Beyond a
+    side means by more than :data:`CULL_SLACK` of the terms compared (a quad lying on
+    the near plane, as a mirror seen in a mirror in its own plane does, is not beyond
+    it); behind the eye, at or behind its plane."""
+    corners = np.asarray(corners, dtype=np.float64)
+    codes = np.zeros(len(corners), dtype=np.int8)
+    if not len(corners):
+        return codes
+    homogeneous = np.concatenate([corners, np.ones((*corners.shape[:-1], 1))], axis=-1)
+    if clip_plane is not None:
+        plane = np.asarray(clip_plane, dtype=np.float64)
+        side = homogeneous @ plane
+        size = np.abs(homogeneous) @ np.abs(plane)
+        codes[np.all(side < -CULL_SLACK * size, axis=1)] = 1
+    clip = homogeneous @ np.asarray(view_projection, dtype=np.float64).T  # (p, 4, 4)
+    x, y, z, w = clip[..., 0], clip[..., 1], clip[..., 2], clip[..., 3]
+    margin = CULL_SLACK * np.abs(w)
+    tests = [] if orthographic else [(w <= 0.0, 2)]
+    tests += [(x + w < -margin - CULL_SLACK * np.abs(x), 3),
+              (w - x < -margin - CULL_SLACK * np.abs(x), 4),
+              (y + w < -margin - CULL_SLACK * np.abs(y), 5),
+              (w - y < -margin - CULL_SLACK * np.abs(y), 6),
+              (z + w < -margin - CULL_SLACK * np.abs(z), 7),
+              (w - z < -margin - CULL_SLACK * np.abs(z), 8)]
+    for outside, code in tests:
+        codes[(codes == 0) & np.all(outside, axis=1)] = code
+    return codes
+
+
+def facing(centers: np.ndarray, normals: np.ndarray, eye: np.ndarray | None,
+           forward: np.ndarray) -> np.ndarray:
+    """``(p,)`` bool: whether a viewer at ``eye`` ``(3,)`` (None: orthographic, looking
+    along ``forward`` ``(3,)``) is on the reflecting side of each mirror (``centers``,
+    unit ``normals`` ``(p, 3)``), strictly: edge-on is not facing."""
+    if eye is not None:
+        towards = np.asarray(eye, dtype=np.float64) - centers
+    else:
+        towards = np.broadcast_to(-np.asarray(forward, dtype=np.float64), centers.shape)
+    return np.einsum("ij,ij->i", towards, normals) > 0.0
+
+
+def spheres_in_view(centers: np.ndarray, radii: np.ndarray, view_projection: np.ndarray,
+                    clip_plane: np.ndarray | None) -> np.ndarray:
+    """``(c,)`` bool: which of the world spheres ``centers`` ``(c, 3)``, ``radii`` ``(c,)``
+    reach into the view (False only for a sphere wholly beyond one plane)."""
+    if not len(centers):
+        return np.zeros(0, dtype=bool)
+    points = np.concatenate([centers, np.ones((len(centers), 1))], axis=1)
+    inside = np.ones(len(centers), dtype=bool)
+    if clip_plane is not None:
+        inside &= points @ np.asarray(clip_plane, dtype=np.float64) >= -radii
+    planes = volume_planes(view_projection)
+    lengths = np.linalg.norm(planes[:, :3], axis=1)
+    for plane, length in zip(planes, lengths, strict=True):
+        if length > 0:
+            inside &= (points @ plane) / length >= -radii
+    return inside
