@@ -45,8 +45,9 @@ import numpy as np
 BOX_SIZE = 0.3
 TINY_BOX_SIZE = 0.02
 MIRROR_SIZE = 0.5
-MOVE = 1e-4
-"""How far (scene units) the camera moves each frame in the ``moving`` mode."""
+MOVE = 1e-5
+"""How far (scene units) the camera moves each frame in the ``moving`` mode: a new place
+every frame, so nothing recorded for an earlier view is drawn again."""
 
 
 def log(message: str) -> None:
@@ -182,7 +183,7 @@ def mirrorlab_frames(renderer, scene, size: int, moving: bool) -> Callable[[int]
     def frames(count: int) -> list[float]:
         times = []
         for _ in range(count):
-            frame = moved_camera(scene, turn[0] % 2) if moving else scene
+            frame = moved_camera(scene, turn[0]) if moving else scene
             turn[0] += 1
             start = time.perf_counter()
             renderer.render(frame, size=(size, size))

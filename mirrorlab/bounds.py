@@ -87,25 +87,45 @@ class ObjectBounds:
 
 
 @dataclass(frozen=True, eq=False)
-class SceneIndex:
-    """The bounds of everything in a scene, kept in arrays, so that a view can be tested
-    against all of them in one vectorised step (:mod:`mirrorlab.culling`).
-
-    ``parts`` every drawable part of the objects, in drawing order, with ``models``
-    ``(n, 4, 4)`` float64 and world boxes ``part_low``, ``part_high`` ``(n, 3)``;
-    ``reflectors`` the scene's, with ``names`` (name to position), boxes
-    ``reflector_low``, ``reflector_high`` ``(m, 3)``; the planar ones at positions
-    ``planar`` ``(p,)`` with ``corners`` ``(p, 4, 3)``, unit ``normals`` and ``centers``
-    ``(p, 3)``; the curved ones at ``curved`` ``(c,)`` with bounding spheres
-    ``sphere_centers`` ``(c, 3)`` and ``sphere_radii`` ``(c,)``. Read-only.
-    """
+class ObjectArrays:
+    """The bounds of a scene's objects: ``parts`` (every drawable part, in drawing order)
+    with ``models`` ``(n, 4, 4)`` float64 and world boxes ``part_low``, ``part_high``
+    ``(n, 3)``. Read-only; made once for an ``objects`` tuple."""
 
     objects: tuple
-    reflectors: tuple
     parts: tuple[Part, ...]
     models: np.ndarray
     part_low: np.ndarray
     part_high: np.ndarray
+
+    @cached_property
+    def part_centers(self) -> np.ndarray:
+        """``(n, 3)``: the middle of each part's box."""
+        return _frozen((self.part_low + self.part_high) / 2.0)
+
+    @cached_property
+    def part_halves(self) -> np.ndarray:
+        """``(n, 3)``: half the size of each part's box."""
+        return _frozen((self.part_high - self.part_low) / 2.0)
+
+    @cached_property
+    def digest(self) -> int:
+        """A hash of the objects from each one's hash (kept by its identity): what a key
+        holding them hashes by, without hashing them all again."""
+        return hash(tuple(_CACHE.hash_of(item) for item in self.objects))
+
+
+@dataclass(frozen=True, eq=False)
+class ReflectorArrays:
+    """The bounds of a scene's ``reflectors``: ``names`` (name to position), boxes
+    ``reflector_low``, ``reflector_high`` ``(m, 3)``; the planar ones at positions
+    ``planar`` ``(p,)`` with ``corners`` ``(p, 4, 3)``, unit ``normals`` and ``centers``
+    ``(p, 3)``; the curved ones at ``curved`` ``(c,)`` with bounding spheres
+    ``sphere_centers`` ``(c, 3)`` and ``sphere_radii`` ``(c,)``. Read-only; made once for
+    a ``reflectors`` tuple (and hashed by identity: a key for what depends on them
+    alone)."""
+
+    reflectors: tuple
     names: dict[str, int]
     reflector_low: np.ndarray
     reflector_high: np.ndarray
@@ -117,10 +137,93 @@ class SceneIndex:
     sphere_centers: np.ndarray
     sphere_radii: np.ndarray
 
+    @cached_property
+    def digest(self) -> int:
+        """:attr:`ObjectArrays.digest` of the reflectors."""
+        return hash(tuple(_CACHE.hash_of(item) for item in self.reflectors))
+
+
+class SceneIndex:
+    """The bounds of everything in a scene, kept in arrays, so that a view can be tested
+    against all of them in one vectorised step (:mod:`mirrorlab.culling`): its objects'
+    (:class:`ObjectArrays`, as ``index.objects_part``) and its reflectors'
+    (:class:`ReflectorArrays`, ``index.reflectors_part``), whose fields it offers as its
+    own (``index.parts``, ``index.planar``, ...). Read-only."""
+
+    def __init__(self, objects_part: ObjectArrays, reflectors_part: ReflectorArrays) -> None:
+        self.objects_part = objects_part
+        self.reflectors_part = reflectors_part
+        self.objects = objects_part.objects
+        self.reflectors = reflectors_part.reflectors
+
+    @property
+    def parts(self) -> tuple[Part, ...]:
+        return self.objects_part.parts
+
+    @property
+    def models(self) -> np.ndarray:
+        return self.objects_part.models
+
+    @property
+    def part_low(self) -> np.ndarray:
+        return self.objects_part.part_low
+
+    @property
+    def part_high(self) -> np.ndarray:
+        return self.objects_part.part_high
+
+    @property
+    def part_centers(self) -> np.ndarray:
+        return self.objects_part.part_centers
+
+    @property
+    def part_halves(self) -> np.ndarray:
+        return self.objects_part.part_halves
+
+    @property
+    def names(self) -> dict[str, int]:
+        return self.reflectors_part.names
+
+    @property
+    def reflector_low(self) -> np.ndarray:
+        return self.reflectors_part.reflector_low
+
+    @property
+    def reflector_high(self) -> np.ndarray:
+        return self.reflectors_part.reflector_high
+
+    @property
+    def planar(self) -> np.ndarray:
+        return self.reflectors_part.planar
+
+    @property
+    def corners(self) -> np.ndarray:
+        return self.reflectors_part.corners
+
+    @property
+    def normals(self) -> np.ndarray:
+        return self.reflectors_part.normals
+
+    @property
+    def centers(self) -> np.ndarray:
+        return self.reflectors_part.centers
+
+    @property
+    def curved(self) -> np.ndarray:
+        return self.reflectors_part.curved
+
+    @property
+    def sphere_centers(self) -> np.ndarray:
+        return self.reflectors_part.sphere_centers
+
+    @property
+    def sphere_radii(self) -> np.ndarray:
+        return self.reflectors_part.sphere_radii
+
     @property
     def box_names(self) -> tuple[str, ...]:
         """The owner of every box of :meth:`boxes`: "" for a part, else a reflector's name."""
-        return ("",) * len(self.parts) + tuple(r.name for r in self.reflectors)
+        return ("",) * len(self.objects_part.parts) + tuple(r.name for r in self.reflectors)
 
     def boxes(self) -> tuple[np.ndarray, np.ndarray]:
         """Every part's box, then every reflector's: low and high ``(n + m, 3)``."""
@@ -128,8 +231,9 @@ class SceneIndex:
 
     @cached_property
     def _boxes(self) -> tuple[np.ndarray, np.ndarray]:
-        return (_frozen(np.concatenate([self.part_low, self.reflector_low])),
-                _frozen(np.concatenate([self.part_high, self.reflector_high])))
+        objects, reflectors = self.objects_part, self.reflectors_part
+        return (_frozen(np.concatenate([objects.part_low, reflectors.reflector_low])),
+                _frozen(np.concatenate([objects.part_high, reflectors.reflector_high])))
 
     @cached_property
     def sphere(self) -> tuple[np.ndarray, float]:
@@ -150,23 +254,39 @@ def _frozen(array: np.ndarray) -> np.ndarray:
 
 class _IndexCache:
     """Scene indexes by the identity of a scene's ``objects`` and ``reflectors`` tuples
-    (a frame whose scene differs only in its camera finds its index at once), and each
-    object's bounds by the object's identity (a frame in which one object moved works out
-    only that one's)."""
+    (a frame whose scene differs only in its camera finds its index at once; one whose
+    objects alone changed keeps its reflectors' arrays, and the other way round), and
+    each object's bounds by the object's identity (a frame in which one object moved
+    works out only that one's)."""
 
     KEPT = 4
 
     def __init__(self) -> None:
         self.indexes: list[SceneIndex] = []
         self.objects: dict[int, tuple[object, ObjectBounds]] = {}
+        self.hashes: dict[int, tuple[object, int]] = {}
 
     def index(self, scene: Scene) -> SceneIndex:
         for index in self.indexes:
             if index.objects is scene.objects and index.reflectors is scene.reflectors:
                 return index
-        index = self.build(scene.objects, scene.reflectors)
+        objects = next((i.objects_part for i in self.indexes if i.objects is scene.objects),
+                       None) or self.object_arrays(scene.objects)
+        reflectors = next((i.reflectors_part for i in self.indexes
+                           if i.reflectors is scene.reflectors),
+                          None) or self.reflector_arrays(scene.reflectors)
+        index = SceneIndex(objects, reflectors)
         self.indexes = [index, *self.indexes[:self.KEPT - 1]]
         return index
+
+    def hash_of(self, item) -> int:
+        """``hash(item)``, worked out once while the item lives in a kept scene."""
+        held = self.hashes.get(id(item))
+        if held is not None and held[0] is item:
+            return held[1]
+        value = hash(item)
+        self.hashes[id(item)] = (item, value)
+        return value
 
     def object_bounds(self, item) -> ObjectBounds:
         held = self.objects.get(id(item))
@@ -181,24 +301,34 @@ class _IndexCache:
         self.objects[id(item)] = (item, made)
         return made
 
-    def build(self, objects: tuple, reflectors: tuple) -> SceneIndex:
+    def _forget(self, objects: tuple, reflectors: tuple) -> None:
+        """Drop what no kept scene holds, once much more is held than a scene has."""
+        if len(self.objects) + len(self.hashes) <= 4 * (len(objects) + len(reflectors)) + 512:
+            return
+        keep = {id(item) for index in self.indexes
+                for item in (*index.objects, *index.reflectors)}
+        keep |= {id(item) for item in (*objects, *reflectors)}
+        self.objects = {key: held for key, held in self.objects.items() if key in keep}
+        self.hashes = {key: held for key, held in self.hashes.items() if key in keep}
+
+    def object_arrays(self, objects: tuple) -> ObjectArrays:
+        self._forget(objects, ())
         bounds = [self.object_bounds(item) for item in objects]
-        if len(self.objects) > 2 * len(objects) + 256:  # forget objects no scene has now
-            keep = {id(item) for index in self.indexes for item in index.objects}
-            keep |= {id(item) for item in objects}
-            self.objects = {key: held for key, held in self.objects.items() if key in keep}
         parts = tuple(part for b in bounds for part in b.parts)
         models = np.array([part.model for part in parts], dtype=np.float64).reshape(-1, 4, 4)
         part_low = np.concatenate([b.low for b in bounds]) if bounds else np.zeros((0, 3))
         part_high = np.concatenate([b.high for b in bounds]) if bounds else np.zeros((0, 3))
+        return ObjectArrays(objects, parts, _frozen(models), _frozen(part_low),
+                            _frozen(part_high))
+
+    def reflector_arrays(self, reflectors: tuple) -> ReflectorArrays:
+        self._forget((), reflectors)
         reflector_boxes = [reflector_box(r) for r in reflectors]
         planar = [i for i, r in enumerate(reflectors) if isinstance(r, PlanarReflector)]
         curved = [i for i, r in enumerate(reflectors) if not isinstance(r, PlanarReflector)]
         spheres = [bounding_sphere(reflectors[i]) for i in curved]
-        return SceneIndex(
-            objects=objects, reflectors=reflectors, parts=parts, models=_frozen(models),
-            part_low=_frozen(part_low), part_high=_frozen(part_high),
-            names={r.name: i for i, r in enumerate(reflectors)},
+        return ReflectorArrays(
+            reflectors=reflectors, names={r.name: i for i, r in enumerate(reflectors)},
             reflector_low=_frozen(np.array([b[0] for b in reflector_boxes]).reshape(-1, 3)),
             reflector_high=_frozen(np.array([b[1] for b in reflector_boxes]).reshape(-1, 3)),
             planar=_frozen(np.array(planar, dtype=np.intp)),
@@ -224,7 +354,7 @@ def scene_index(scene: Scene) -> SceneIndex:
 
 def reflector_index(reflectors: tuple[Reflector, ...]) -> SceneIndex:
     """A :class:`SceneIndex` of ``reflectors`` alone (not kept)."""
-    return _CACHE.build((), reflectors)
+    return SceneIndex(_CACHE.object_arrays(()), _CACHE.reflector_arrays(reflectors))
 
 
 def scene_boxes(scene: Scene) -> tuple[tuple[str, np.ndarray, np.ndarray], ...]:

@@ -52,16 +52,16 @@ def view_planes(view_projection: np.ndarray, clip_plane: np.ndarray | None) -> n
     return np.vstack([planes, np.asarray(clip_plane, dtype=np.float64)])
 
 
-def boxes_in_view(low: np.ndarray, high: np.ndarray, planes: np.ndarray) -> np.ndarray:
-    """``(n,)`` bool: which of the world boxes ``low``, ``high`` ``(n, 3)`` may show
-    within ``planes`` ``(k, 4)`` (False only for a box wholly beyond one plane)."""
-    if not len(low):
+def boxes_in_view(centers: np.ndarray, halves: np.ndarray, planes: np.ndarray) -> np.ndarray:
+    """``(n,)`` bool: which of the world boxes given by their ``centers`` and half-sizes
+    ``halves`` ``(n, 3)`` may show within ``planes`` ``(k, 4)`` (False only for a box
+    wholly beyond one plane: even its corner farthest along the plane's normal is)."""
+    if not len(centers):
         return np.zeros(0, dtype=bool)
     normals, offsets = planes[:, :3], planes[:, 3]
-    # for each box and plane, the box's corner farthest along the plane's normal
-    farthest = np.where(normals[None, :, :] > 0.0, high[:, None, :], low[:, None, :])
-    value = np.einsum("nkj,kj->nk", farthest, normals) + offsets
-    size = np.einsum("nkj,kj->nk", np.abs(farthest), np.abs(normals)) + np.abs(offsets)
+    reach = halves @ np.abs(normals).T  # (n, k): the farthest corner's lead on the centre
+    value = centers @ normals.T + reach + offsets
+    size = np.abs(centers) @ np.abs(normals).T + reach + np.abs(offsets)
     return np.all(value >= -CULL_SLACK * size, axis=1)
 
 
@@ -86,17 +86,15 @@ def quads_outside(corners: np.ndarray, view_projection: np.ndarray,
         codes[np.all(side < -CULL_SLACK * size, axis=1)] = 1
     clip = homogeneous @ np.asarray(view_projection, dtype=np.float64).T  # (p, 4, 4)
     x, y, z, w = clip[..., 0], clip[..., 1], clip[..., 2], clip[..., 3]
-    margin = CULL_SLACK * np.abs(w)
-    tests = [] if orthographic else [(w <= 0.0, 2)]
-    tests += [(x + w < -margin - CULL_SLACK * np.abs(x), 3),
-              (w - x < -margin - CULL_SLACK * np.abs(x), 4),
-              (y + w < -margin - CULL_SLACK * np.abs(y), 5),
-              (w - y < -margin - CULL_SLACK * np.abs(y), 6),
-              (z + w < -margin - CULL_SLACK * np.abs(z), 7),
-              (w - z < -margin - CULL_SLACK * np.abs(z), 8)]
-    for outside, code in tests:
-        codes[(codes == 0) & np.all(outside, axis=1)] = code
-    return codes
+    # each side's clip coordinate against w, all six at once: (6, p, 4)
+    leads = np.stack([x + w, w - x, y + w, w - y, z + w, w - z])
+    slack = CULL_SLACK * (np.abs(w) + np.abs(np.stack([x, x, y, y, z, z])))
+    beyond = np.all(leads < -slack, axis=2)  # (6, p)
+    if not orthographic:
+        beyond = np.concatenate([np.all(w <= 0.0, axis=1)[None], beyond])
+    first = np.argmax(beyond, axis=0)
+    side = np.where(beyond.any(axis=0), first + (2 if not orthographic else 3), 0)
+    return np.where(codes > 0, codes, side).astype(np.int8)
 
 
 def facing(centers: np.ndarray, normals: np.ndarray, eye: np.ndarray | None,

@@ -25,6 +25,7 @@ Pure numpy; the renderer (:mod:`mirrorlab.renderer`) runs what this decides.
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Literal
@@ -56,6 +57,35 @@ DrawMode = Literal["hidden", "back", "plain", "map", "texture", "stencil"]
 """``hidden``: not drawn (out of view); ``back``: only a planar mirror's backing shows;
 ``plain``: a lit surface; ``map``: with its map; ``texture``: with its capture;
 ``stencil``: the world seen through it, drawn in place."""
+
+
+@dataclass(frozen=True, eq=False)
+class ContentKey:
+    """What a capture shows but the viewer (:meth:`mirrorlab.scene.model.Scene.content_key`:
+    background, ambient, lights, objects, reflectors, bounces), as part of a texture's
+    key: equal when the parts are, hashed by a ``digest`` worked out once (a scene of a
+    thousand objects is not hashed again for every capture of every frame)."""
+
+    parts: tuple
+    digest: int
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, ContentKey) and (self is other or (
+            self.digest == other.digest and self.parts == other.parts))
+
+    def __hash__(self) -> int:
+        return self.digest
+
+    def __repr__(self) -> str:
+        return f"ContentKey(digest={self.digest})"
+
+
+def content_key(scene: Scene, index: bounds.SceneIndex) -> ContentKey:
+    """``scene``'s :class:`ContentKey` (``index`` is its scene index)."""
+    background, ambient, lights, objects, reflectors, bounces = scene.content_key()
+    return ContentKey((background, ambient, lights, objects, reflectors, bounces),
+                      hash((background, ambient, lights, bounces, index.objects_part.digest,
+                            index.reflectors_part.digest)))
 
 
 @dataclass(frozen=True)
@@ -215,8 +245,8 @@ class _Planner:
         self.tiny_pixels = tiny_pixels
         self.passes: list[PlannedPass] = []
         self.planned: set[tuple[str, tuple]] = set()  # (reflector, key) of every pass so far
-        self.content = scene.content_key()
         self.index = bounds.scene_index(scene)
+        self.content = content_key(scene, self.index)
         self.assigned: dict[tuple[str, tuple], int] = {}  # this frame's (reflector, key) slots
         self.used: dict[str, set[int]] = {}
 
@@ -392,17 +422,19 @@ class _Planner:
         if step.reflector is not None:
             self.planned.add((step.reflector, step.key))
 
-    def own_content(self, reflector: CurvedReflector) -> tuple:
+    def own_content(self, reflector: CurvedReflector) -> ContentKey:
         """What a live cube map of ``reflector`` shows: the scene's content, but of the
         reflector's own parallax correction only its kind (a distance search captures
         depths too). A proxy's size or a search's steps change how the map is read, not
         what it holds."""
         if reflector.parallax is None:
             return self.content
-        background, ambient, lights, objects, reflectors, bounces = self.content
+        background, ambient, lights, objects, reflectors, bounces = self.content.parts
         own = (replace(reflector, parallax=None), reflector.parallax.kind)
-        return (background, ambient, lights, objects,
-                tuple(own if r.name == reflector.name else r for r in reflectors), bounces)
+        mine = tuple(own if r.name == reflector.name else r for r in reflectors)
+        return ContentKey((background, ambient, lights, objects, mine, bounces),
+                          hash((background, ambient, lights, bounces,
+                                self.index.objects_part.digest, hash(mine))))
 
     def what_changed(self, reflector: str, key: tuple) -> str:
         """Why a capture must run: what differs from the nearest capture its textures hold
@@ -437,6 +469,12 @@ HIDDEN_REASONS = ("", BACK_REASON, "", *OUTSIDE_REASONS[1:],
 """The reason for each code of :func:`visibility`."""
 
 
+_VISIBILITY: OrderedDict[tuple, tuple[np.ndarray, dict[int, Footprint]]] = OrderedDict()
+VISIBILITY_KEPT = 256
+"""Views whose :func:`visibility` is remembered (a still view of still reflectors, or a
+capture that follows nothing that moved, is not worked out again)."""
+
+
 def visibility(index: bounds.SceneIndex, view: View,
                excluded: str | None = None) -> tuple[np.ndarray, dict[int, Footprint]]:
     """Whether each reflector of ``index`` can show in ``view``: a code for each
@@ -449,8 +487,28 @@ def visibility(index: bounds.SceneIndex, view: View,
     a planar mirror the viewer is behind (or edge-on to) shows only its back. Only what
     is left, what reaches into the view, has its footprint worked out one by one (a
     footprint that covers no pixel hides it too). It errs large: a reflector is hidden
-    only where drawing it could not change a pixel.
+    only where drawing it could not change a pixel. The answer is remembered for the
+    same reflectors seen through the same view (read-only).
     """
+    clip = None if view.clip_plane is None else np.asarray(view.clip_plane).tobytes()
+    key = (index.reflectors_part, np.asarray(view.view).tobytes(),
+           np.asarray(view.projection).tobytes(),
+           view.size, None if view.eye is None else np.asarray(view.eye).tobytes(), clip,
+           excluded)
+    known = _VISIBILITY.get(key)
+    if known is not None:
+        _VISIBILITY.move_to_end(key)
+        return known
+    found = _visibility(index, view, excluded)
+    found[0].flags.writeable = False
+    _VISIBILITY[key] = found
+    while len(_VISIBILITY) > VISIBILITY_KEPT:
+        _VISIBILITY.popitem(last=False)
+    return found
+
+
+def _visibility(index: bounds.SceneIndex, view: View,
+                excluded: str | None) -> tuple[np.ndarray, dict[int, Footprint]]:
     codes = np.zeros(len(index.reflectors), dtype=np.int8)
     orthographic = is_orthographic(view.projection)
     if len(index.planar):

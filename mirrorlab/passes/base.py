@@ -4,6 +4,7 @@ the protocol a reflector's technique follows (:class:`ReflectorPass`)."""
 
 from __future__ import annotations
 
+import ctypes
 import functools
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
@@ -11,7 +12,7 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 
 from mirrorlab.gl.context import ResourceRegistry
-from mirrorlab.gl.opengl import GL
+from mirrorlab.gl.opengl import GL, RAW
 from mirrorlab.gl.resources import (
     Framebuffer,
     MeshBuffer,
@@ -180,47 +181,57 @@ _VALUES = ("GL_FRONT_FACE", "GL_CULL_FACE_MODE", "GL_DEPTH_FUNC", "GL_DEPTH_WRIT
 
 _SWITCH_ENUMS = tuple((name, getattr(GL, name)) for name in _SWITCHES)
 _VALUE_ENUMS = tuple((name, getattr(GL, name)) for name in _VALUES)
+_BOX_ENUMS = tuple((name, getattr(GL, name)) for name in ("GL_VIEWPORT", "GL_SCISSOR_BOX"))
+
+
+_INTS = (ctypes.c_int * 4)()
+_BOOLS = (ctypes.c_ubyte * 4)()
+_FLOATS = (ctypes.c_float * 4)()
 
 
 def gl_state() -> dict[str, object]:
     """The GL state a frame changes: switches, winding, depth and stencil settings, masks,
-    bindings, viewport, scissor box and clear colour (to restore it, and for tests)."""
-    state: dict[str, object] = {name: bool(GL.glIsEnabled(enum))
+    bindings, viewport, scissor box and clear colour (to restore it, and for tests). Read
+    through the raw entry points (:data:`mirrorlab.gl.opengl.RAW`): a frame reads it
+    every time."""
+    state: dict[str, object] = {name: bool(RAW.glIsEnabled(enum))
                                 for name, enum in _SWITCH_ENUMS}
+    ints = _INTS
     for name, enum in _VALUE_ENUMS:
-        state[name] = int(GL.glGetIntegerv(enum))
-    state["GL_COLOR_WRITEMASK"] = tuple(
-        bool(v) for v in np.asarray(GL.glGetBooleanv(GL.GL_COLOR_WRITEMASK)).reshape(-1))
-    for box in ("GL_VIEWPORT", "GL_SCISSOR_BOX"):
-        state[box] = tuple(int(v) for v in np.asarray(
-            GL.glGetIntegerv(getattr(GL, box))).reshape(-1))
-    state["GL_COLOR_CLEAR_VALUE"] = tuple(round(float(v), 6) for v in np.asarray(
-        GL.glGetFloatv(GL.GL_COLOR_CLEAR_VALUE)).reshape(-1))
+        RAW.glGetIntegerv(enum, ints)
+        state[name] = int(ints[0])
+    RAW.glGetBooleanv(GL.GL_COLOR_WRITEMASK, _BOOLS)
+    state["GL_COLOR_WRITEMASK"] = tuple(bool(v) for v in _BOOLS)
+    for name, enum in _BOX_ENUMS:
+        RAW.glGetIntegerv(enum, ints)
+        state[name] = tuple(int(v) for v in ints)
+    RAW.glGetFloatv(GL.GL_COLOR_CLEAR_VALUE, _FLOATS)
+    state["GL_COLOR_CLEAR_VALUE"] = tuple(round(float(v), 6) for v in _FLOATS)
     return state
 
 
 def restore_state(state: dict[str, object]) -> None:
     """Put back what :func:`gl_state` read: leave GL as a frame found it."""
     for name, enum in _SWITCH_ENUMS:
-        (GL.glEnable if state[name] else GL.glDisable)(enum)
-    GL.glFrontFace(state["GL_FRONT_FACE"])
-    GL.glCullFace(state["GL_CULL_FACE_MODE"])
-    GL.glDepthFunc(state["GL_DEPTH_FUNC"])
-    GL.glDepthMask(bool(state["GL_DEPTH_WRITEMASK"]))
-    GL.glStencilMask(state["GL_STENCIL_WRITEMASK"])
-    GL.glStencilFunc(state["GL_STENCIL_FUNC"], state["GL_STENCIL_REF"],
-                     state["GL_STENCIL_VALUE_MASK"])
-    GL.glStencilOp(state["GL_STENCIL_FAIL"], state["GL_STENCIL_PASS_DEPTH_FAIL"],
-                   state["GL_STENCIL_PASS_DEPTH_PASS"])
-    GL.glColorMask(*state["GL_COLOR_WRITEMASK"])  # type: ignore[misc]
-    GL.glUseProgram(state["GL_CURRENT_PROGRAM"])
-    GL.glBindVertexArray(state["GL_VERTEX_ARRAY_BINDING"])
-    GL.glActiveTexture(state["GL_ACTIVE_TEXTURE"])
-    GL.glBindFramebuffer(GL.GL_DRAW_FRAMEBUFFER, state["GL_DRAW_FRAMEBUFFER_BINDING"])
-    GL.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, state["GL_READ_FRAMEBUFFER_BINDING"])
-    GL.glViewport(*state["GL_VIEWPORT"])  # type: ignore[misc]
-    GL.glScissor(*state["GL_SCISSOR_BOX"])  # type: ignore[misc]
-    GL.glClearColor(*state["GL_COLOR_CLEAR_VALUE"])  # type: ignore[misc]
+        (RAW.glEnable if state[name] else RAW.glDisable)(enum)
+    RAW.glFrontFace(state["GL_FRONT_FACE"])
+    RAW.glCullFace(state["GL_CULL_FACE_MODE"])
+    RAW.glDepthFunc(state["GL_DEPTH_FUNC"])
+    RAW.glDepthMask(bool(state["GL_DEPTH_WRITEMASK"]))
+    RAW.glStencilMask(state["GL_STENCIL_WRITEMASK"])
+    RAW.glStencilFunc(state["GL_STENCIL_FUNC"], state["GL_STENCIL_REF"],
+                      state["GL_STENCIL_VALUE_MASK"])
+    RAW.glStencilOp(state["GL_STENCIL_FAIL"], state["GL_STENCIL_PASS_DEPTH_FAIL"],
+                    state["GL_STENCIL_PASS_DEPTH_PASS"])
+    RAW.glColorMask(*state["GL_COLOR_WRITEMASK"])  # type: ignore[misc]
+    RAW.glUseProgram(state["GL_CURRENT_PROGRAM"])
+    RAW.glBindVertexArray(state["GL_VERTEX_ARRAY_BINDING"])
+    RAW.glActiveTexture(state["GL_ACTIVE_TEXTURE"])
+    RAW.glBindFramebuffer(GL.GL_DRAW_FRAMEBUFFER, state["GL_DRAW_FRAMEBUFFER_BINDING"])
+    RAW.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, state["GL_READ_FRAMEBUFFER_BINDING"])
+    RAW.glViewport(*state["GL_VIEWPORT"])  # type: ignore[misc]
+    RAW.glScissor(*state["GL_SCISSOR_BOX"])  # type: ignore[misc]
+    RAW.glClearColor(*state["GL_COLOR_CLEAR_VALUE"])  # type: ignore[misc]
 
 
 class ViewDrawer(Protocol):

@@ -30,7 +30,7 @@ from typing import Literal
 import numpy as np
 
 from mirrorlab import culling, math3d
-from mirrorlab.bounds import SceneIndex, scene_index
+from mirrorlab.bounds import ObjectArrays, SceneIndex, scene_index
 from mirrorlab.gl.context import has_multi_draw
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Buffer, Program
@@ -128,7 +128,7 @@ class SceneDrawer:
             self.packed_program = shared.program("scene_packed.vert", "scene.frag")
             self.packed_program.use()
             self.packed_program.set_int("texture_map", 0)
-        self._tables: OrderedDict[SceneIndex, PartTable] = OrderedDict()
+        self._tables: OrderedDict[ObjectArrays, PartTable] = OrderedDict()
         self._recorded: OrderedDict[tuple, RecordedView] = OrderedDict()
         self._spare: list[RecordedView] = []
         self._each: OrderedDict[tuple, tuple[np.ndarray, np.ndarray]] = OrderedDict()
@@ -137,10 +137,10 @@ class SceneDrawer:
     # ------------------------------------------------------------- parts
 
     def _table(self, index: SceneIndex) -> PartTable:
-        """The :class:`PartTable` of ``index`` (kept for the last few indexes)."""
-        table = self._tables.get(index)
+        """The :class:`PartTable` of ``index``'s objects (kept for the last few)."""
+        table = self._tables.get(index.objects_part)
         if table is not None:
-            self._tables.move_to_end(index)
+            self._tables.move_to_end(index.objects_part)
             return table
         parts = index.parts
         count = len(parts)
@@ -163,7 +163,7 @@ class SceneDrawer:
                           np.array([unique.get(t, -1) if t is not None else -1
                                     for t in textures], dtype=np.int64),
                           worn, ranges, commands)
-        self._tables[index] = table
+        self._tables[index.objects_part] = table
         while len(self._tables) > 4:
             self._tables.popitem(last=False)
         return table
@@ -171,7 +171,7 @@ class SceneDrawer:
     @staticmethod
     def visible(index: SceneIndex, view: View) -> np.ndarray:
         """Positions ``(k,)`` of the parts of ``index`` that may show in ``view``."""
-        return np.flatnonzero(culling.boxes_in_view(index.part_low, index.part_high,
+        return np.flatnonzero(culling.boxes_in_view(index.part_centers, index.part_halves,
                                                     view.cull_planes))
 
     @staticmethod
@@ -305,5 +305,5 @@ def _view_key(index: SceneIndex, view: View) -> tuple:
     """Equal for the same scene index seen through the same view (matrices, origin, clip
     plane)."""
     clip = None if view.clip_plane is None else np.asarray(view.clip_plane).tobytes()
-    return (index, np.asarray(view.view).tobytes(), np.asarray(view.projection).tobytes(),
-            view.origin.tobytes(), clip)
+    return (index.objects_part, np.asarray(view.view).tobytes(),
+            np.asarray(view.projection).tobytes(), view.origin.tobytes(), clip)
