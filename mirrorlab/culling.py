@@ -52,6 +52,35 @@ def view_planes(view_projection: np.ndarray, clip_plane: np.ndarray | None) -> n
     return np.vstack([planes, np.asarray(clip_plane, dtype=np.float64)])
 
 
+SCISSOR_MARGIN = 1.0
+"""Pixels a scissor's planes (:func:`scissor_planes`) lie outside its rectangle."""
+
+
+def scissor_bounds(size: tuple[int, int],
+                   rectangle: tuple[int, int, int, int]) -> tuple[float, float, float, float]:
+    """The normalised device x and y bounds ``(left, right, bottom, top)`` of the pixel
+    ``rectangle`` ``(x, y, width, height)`` of a ``size`` target, grown by
+    :data:`SCISSOR_MARGIN`."""
+    width, height = size
+    x, y, w, h = rectangle
+    return (2.0 * (x - SCISSOR_MARGIN) / width - 1.0,
+            2.0 * (x + w + SCISSOR_MARGIN) / width - 1.0,
+            2.0 * (y - SCISSOR_MARGIN) / height - 1.0,
+            2.0 * (y + h + SCISSOR_MARGIN) / height - 1.0)
+
+
+def scissor_planes(view_projection: np.ndarray, size: tuple[int, int],
+                   rectangle: tuple[int, int, int, int]) -> np.ndarray:
+    """``(4, 4)``: the part of the clip volume of ``view_projection`` that a scissor
+    ``rectangle`` of a ``size`` target lets through (its sides, :func:`scissor_bounds`),
+    as planes of homogeneous world points: what lies wholly beyond one cannot colour a
+    pixel the scissor keeps."""
+    m = np.asarray(view_projection, dtype=np.float64)
+    left, right, bottom, top = scissor_bounds(size, rectangle)
+    return np.array([m[0] - left * m[3], right * m[3] - m[0], m[1] - bottom * m[3],
+                     top * m[3] - m[1]])
+
+
 def boxes_in_view(centers: np.ndarray, halves: np.ndarray, planes: np.ndarray) -> np.ndarray:
     """``(n,)`` bool: which of the world boxes given by their ``centers`` and half-sizes
     ``halves`` ``(n, 3)`` may show within ``planes`` ``(k, 4)`` (False only for a box
@@ -65,15 +94,62 @@ def boxes_in_view(centers: np.ndarray, halves: np.ndarray, planes: np.ndarray) -
     return np.all(value >= -CULL_SLACK * size, axis=1)
 
 
+PIXEL_MARGIN = 0.05
+"""Pixels by which a thing's projected box is grown before asking whether it holds a
+pixel centre: more than the rasteriser's snapping of vertices to its sub-pixel grid
+(1/256 of a pixel on llvmpipe) and float rounding."""
+_CORNER_SIGNS = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0)
+                          for z in (-1.0, 1.0)])
+
+
+def boxes_cover_pixels(centers: np.ndarray, halves: np.ndarray, view_projection: np.ndarray,
+                       size: tuple[int, int],
+                       rectangle: tuple[int, int, int, int] | None = None) -> np.ndarray:
+    """``(n,)`` bool: which of the world boxes (``centers``, ``halves`` ``(n, 3)``) may
+    colour a pixel of a ``size`` target (within the pixel ``rectangle`` when given).
+
+    A triangle colours only the pixels whose centres it covers, and every triangle of a
+    thing lies within the projection of its box; so a box whose projected corners, all
+    in front of the eye, span no pixel centre (a thing smaller than a pixel, between
+    centres) colours none. A box reaching to or behind the eye's plane may colour any.
+    """
+    if not len(centers):
+        return np.zeros(0, dtype=bool)
+    corners = centers[:, None, :] + halves[:, None, :] * _CORNER_SIGNS  # (n, 8, 3)
+    rows = np.asarray(view_projection, dtype=np.float64)[[0, 1, 3]]  # x, y and w
+    clip = corners @ rows[:, :3].T + rows[:, 3]  # (n, 8, 3)
+    w = clip[..., 2]
+    ahead = np.all(w > 0.0, axis=1)
+    safe = np.where(w > 0.0, w, 1.0)
+    width, height = size
+    x = (clip[..., 0] / safe + 1.0) * (0.5 * width)
+    y = (clip[..., 1] / safe + 1.0) * (0.5 * height)
+    x0, y0, x1, y1 = 0, 0, width - 1, height - 1
+    if rectangle is not None:
+        x0, y0 = rectangle[0], rectangle[1]
+        x1, y1 = rectangle[0] + rectangle[2] - 1, rectangle[1] + rectangle[3] - 1
+    # pixel i's centre is i + 0.5: some centre lies in [low, high] when
+    # ceil(low - 0.5) <= floor(high - 0.5)
+    first_x = np.maximum(np.ceil(x.min(axis=1) - PIXEL_MARGIN - 0.5), x0)
+    last_x = np.minimum(np.floor(x.max(axis=1) + PIXEL_MARGIN - 0.5), x1)
+    first_y = np.maximum(np.ceil(y.min(axis=1) - PIXEL_MARGIN - 0.5), y0)
+    last_y = np.minimum(np.floor(y.max(axis=1) + PIXEL_MARGIN - 0.5), y1)
+    return ~ahead | ((first_x <= last_x) & (first_y <= last_y))
+
+
 def quads_outside(corners: np.ndarray, view_projection: np.ndarray,
-                  clip_plane: np.ndarray | None, orthographic: bool) -> np.ndarray:
+                  clip_plane: np.ndarray | None, orthographic: bool,
+                  sides: tuple[float, float, float, float] = (-1.0, 1.0, -1.0, 1.0)
+                  ) -> np.ndarray:
     """``(p,)`` int8: for each quad of ``corners`` ``(p, 4, 3)`` (world), the code of the
     side of the view all four corners lie beyond, in :data:`OUTSIDE_REASONS` (0 when no
     one side has them all): the clip plane first, then behind a perspective eye, then
     left, right, below, above, in front of the near and beyond the far plane. Beyond a
     side means by more than :data:`CULL_SLACK` of the terms compared (a quad lying on
     the near plane, as a mirror seen in a mirror in its own plane does, is not beyond
-    it); behind the eye, at or behind its plane."""
+    it); behind the eye, at or behind its plane. ``sides`` narrows the left, right,
+    bottom and top sides from -1, 1, -1, 1 of normalised device coordinates (to what a
+    scissor keeps, :func:`scissor_bounds`)."""
     corners = np.asarray(corners, dtype=np.float64)
     codes = np.zeros(len(corners), dtype=np.int8)
     if not len(corners):
@@ -87,7 +163,9 @@ def quads_outside(corners: np.ndarray, view_projection: np.ndarray,
     clip = homogeneous @ np.asarray(view_projection, dtype=np.float64).T  # (p, 4, 4)
     x, y, z, w = clip[..., 0], clip[..., 1], clip[..., 2], clip[..., 3]
     # each side's clip coordinate against w, all six at once: (6, p, 4)
-    leads = np.stack([x + w, w - x, y + w, w - y, z + w, w - z])
+    left, right, bottom, top = sides
+    leads = np.stack([x - left * w, right * w - x, y - bottom * w, top * w - y, z + w,
+                      w - z])
     slack = CULL_SLACK * (np.abs(w) + np.abs(np.stack([x, x, y, y, z, z])))
     beyond = np.all(leads < -slack, axis=2)  # (6, p)
     if not orthographic:

@@ -220,10 +220,11 @@ def plan_frame(scene: Scene, size: tuple[int, int], state: TextureState | None =
     (width, height) pixels, given what ``state`` says the textures hold.
 
     With ``use_plan`` False every pass runs: every reflector is captured at every bounce
-    for every view, nothing is reused and no reflector is drawn plain for being small
-    (for comparison: the frame comes out the same, pixel for pixel, unless
-    ``tiny_pixels`` is positive). ``tiny_pixels`` above 0 turns on the lossy rule: a
-    reflector whose footprint may cover fewer pixels than that is drawn plain.
+    for every view, nothing is reused, no reflector is drawn plain for being small and
+    nothing is scissored (the renderer culls no object either), for comparison: the
+    frame comes out the same, pixel for pixel, unless ``tiny_pixels`` is positive.
+    ``tiny_pixels`` above 0 turns on the lossy rule: a reflector whose footprint may
+    cover fewer pixels than that is drawn plain.
     """
     planner = _Planner(scene, state or TextureState(), use_plan,
                        tiny_pixels if use_plan else 0.0)
@@ -258,7 +259,7 @@ class _Planner:
         index = self.index
         reflectors = index.reflectors
         if self.use_plan:
-            codes, footprints = visibility(index, view, excluded)
+            codes, footprints = visibility(index, view, excluded, scissor)
         else:
             codes, footprints = np.zeros(len(reflectors), dtype=np.int8), {}
             if excluded is not None and excluded in index.names:
@@ -294,7 +295,9 @@ class _Planner:
             assert isinstance(reflector, PlanarReflector)
             far = self.reach(view, reflector) if view.eye is not None else None
             glass = (footprint or reflector_footprint(reflector, view)).bounds
-            inner = intersect(scissor, glass) if glass is not None else scissor
+            inner = scissor
+            if glass is not None and self.use_plan:
+                inner = intersect(scissor, glass)
             nested = self.plan_view(stencil_view(view, reflector, far), bounce - 1,
                                     reflector.name, inner)
             return ReflectorDraw(reflector, "stencil", "the mirrored world, drawn in place",
@@ -375,7 +378,7 @@ class _Planner:
                     return 0, None
                 cameras = [camera]
                 # only the glass is ever sampled: the rest of the capture need not be drawn
-                scissors = [glass_scissor(reflector, camera)]
+                scissors = [glass_scissor(reflector, camera) if self.use_plan else None]
                 key: tuple = ("viewer", bounce, camera.key, self.content)
             else:
                 cameras = [ortho_capture_view(reflector, texture_size)]
@@ -464,8 +467,10 @@ backing), left out of this view (the reflector whose capture it is); the codes a
 these are the reasons it cannot show, :data:`HIDDEN_REASONS`."""
 CORNER = EXCLUDED + len(OUTSIDE_REASONS)
 CURVED_OUT = CORNER + 1
+SCISSORED = CURVED_OUT + 1
 HIDDEN_REASONS = ("", BACK_REASON, "", *OUTSIDE_REASONS[1:],
-                  "out of view (past a corner of the view)", "out of view")
+                  "out of view (past a corner of the view)", "out of view",
+                  "outside the part of the view that is ever seen (its scissor)")
 """The reason for each code of :func:`visibility`."""
 
 
@@ -475,8 +480,8 @@ VISIBILITY_KEPT = 256
 capture that follows nothing that moved, is not worked out again)."""
 
 
-def visibility(index: bounds.SceneIndex, view: View,
-               excluded: str | None = None) -> tuple[np.ndarray, dict[int, Footprint]]:
+def visibility(index: bounds.SceneIndex, view: View, excluded: str | None = None,
+               scissor: Rectangle | None = None) -> tuple[np.ndarray, dict[int, Footprint]]:
     """Whether each reflector of ``index`` can show in ``view``: a code for each
     (``(m,)`` int8: :data:`SHOWN`, :data:`BACK`, :data:`EXCLUDED` or a reason of
     :data:`HIDDEN_REASONS`) and the footprint (:func:`reflector_footprint`) of each that
@@ -486,20 +491,22 @@ def visibility(index: bounds.SceneIndex, view: View,
     the view, or a curved reflector whose bounding sphere lies beyond one, cannot show;
     a planar mirror the viewer is behind (or edge-on to) shows only its back. Only what
     is left, what reaches into the view, has its footprint worked out one by one (a
-    footprint that covers no pixel hides it too). It errs large: a reflector is hidden
-    only where drawing it could not change a pixel. The answer is remembered for the
+    footprint that covers no pixel hides it too). With a ``scissor`` (the part of the
+    view's target that matters), the view's sides are the scissor's, and a footprint
+    outside it hides a reflector as well. It errs large: a reflector is hidden only where
+    drawing it could not change a pixel that matters. The answer is remembered for the
     same reflectors seen through the same view (read-only).
     """
     clip = None if view.clip_plane is None else np.asarray(view.clip_plane).tobytes()
     key = (index.reflectors_part, np.asarray(view.view).tobytes(),
            np.asarray(view.projection).tobytes(),
            view.size, None if view.eye is None else np.asarray(view.eye).tobytes(), clip,
-           excluded)
+           excluded, scissor)
     known = _VISIBILITY.get(key)
     if known is not None:
         _VISIBILITY.move_to_end(key)
         return known
-    found = _visibility(index, view, excluded)
+    found = _visibility(index, view, excluded, scissor)
     found[0].flags.writeable = False
     _VISIBILITY[key] = found
     while len(_VISIBILITY) > VISIBILITY_KEPT:
@@ -507,19 +514,25 @@ def visibility(index: bounds.SceneIndex, view: View,
     return found
 
 
-def _visibility(index: bounds.SceneIndex, view: View,
-                excluded: str | None) -> tuple[np.ndarray, dict[int, Footprint]]:
+def _visibility(index: bounds.SceneIndex, view: View, excluded: str | None,
+                scissor: Rectangle | None) -> tuple[np.ndarray, dict[int, Footprint]]:
     codes = np.zeros(len(index.reflectors), dtype=np.int8)
     orthographic = is_orthographic(view.projection)
+    sides = (-1.0, 1.0, -1.0, 1.0) if scissor is None else culling.scissor_bounds(
+        view.size, scissor)
     if len(index.planar):
         outside = culling.quads_outside(index.corners, view.view_projection,
-                                        view.clip_plane, orthographic)
+                                        view.clip_plane, orthographic, sides)
         front = culling.facing(index.centers, index.normals, view.eye, view.forward)
         codes[index.planar] = np.where(outside > 0, outside + EXCLUDED,
                                        np.where(front, SHOWN, BACK))
     if len(index.curved):
         inside = culling.spheres_in_view(index.sphere_centers, index.sphere_radii,
                                          view.view_projection, view.clip_plane)
+        if scissor is not None:
+            inside &= culling.boxes_in_view(
+                index.sphere_centers, np.repeat(index.sphere_radii[:, None], 3, axis=1),
+                culling.scissor_planes(view.view_projection, view.size, scissor))
         codes[index.curved[~inside]] = CURVED_OUT
     if excluded is not None and excluded in index.names:
         codes[index.names[excluded]] = EXCLUDED
@@ -529,6 +542,8 @@ def _visibility(index: bounds.SceneIndex, view: View,
         footprint = reflector_footprint(reflector, view)
         if footprint.empty:
             codes[i] = CORNER if isinstance(reflector, PlanarReflector) else CURVED_OUT
+        elif scissor is not None and not _overlaps(footprint.bounds, scissor):
+            codes[i] = SCISSORED
         else:
             footprints[int(i)] = footprint
     return codes, footprints
@@ -573,6 +588,13 @@ def glass_scissor(reflector: PlanarReflector, capture: View) -> Rectangle | None
     footprint = polygon_footprint(reflector.corner_array, capture.view_projection,
                                   capture.size, depth=False)
     return footprint.rectangle(GLASS_MARGIN)
+
+
+def _overlaps(first: Rectangle | None, second: Rectangle) -> bool:
+    if first is None:
+        return False
+    overlap = intersect(first, second)
+    return overlap is not None and overlap[2] > 0 and overlap[3] > 0
 
 
 def intersect(first: Rectangle | None, second: Rectangle | None) -> Rectangle | None:

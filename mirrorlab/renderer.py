@@ -100,6 +100,7 @@ class SceneRenderer:
         self.last_frame: FrameStats | None = None
         self._last_plan: tuple[tuple, FramePlan] | None = None
         self._scissor: Rectangle | None = None  # the scissor rectangle set, None: off
+        self._cull = True  # whether this frame's views cull objects (not with use_plan off)
 
     @property
     def scene(self) -> Scene:
@@ -171,8 +172,9 @@ class SceneRenderer:
                tiny_pixels: float = TINY_PIXELS, view: View | None = None) -> FrameStats:
         """Draw one frame of ``scene`` (as seen by its camera, or ``view``) into ``target``.
 
-        ``use_plan`` False runs every pass (see :func:`~mirrorlab.plan.plan_frame`); the
-        frame is the same either way. ``tiny_pixels`` above 0 turns on the lossy rule that
+        ``use_plan`` False runs every pass (see :func:`~mirrorlab.plan.plan_frame`),
+        scissors nothing and draws every object in every view, culling none; the frame is
+        the same either way. ``tiny_pixels`` above 0 turns on the lossy rule that
         draws a reflector covering fewer pixels than that plain (off by default).
         """
         start = time.perf_counter()
@@ -182,6 +184,7 @@ class SceneRenderer:
         self._use_scene(scene)
         width, height = target.size
         plan = self._plan(scene, (int(width), int(height)), use_plan, tiny_pixels, view)
+        self._cull = use_plan
         draws = 0
         index = scene_index(scene)
         try:
@@ -249,7 +252,7 @@ class SceneRenderer:
         if sky is not None:
             draws += sky.run(view)
             apply_view_state(view, stencil_level)
-        draws += self.drawer.draw(scene, view)
+        draws += self.drawer.draw(scene, view, plan.scissor, cull=self._cull)
         later = []
         for draw in plan.shown:
             if draw.mode == "stencil":

@@ -8,12 +8,14 @@ The meshes are packed into one vertex and one index buffer
 (:class:`~mirrorlab.gl.resources.PackedMeshes`). What is left is drawn one of two ways,
 chosen when the drawer is made, from what the context offers:
 
-- ``packed`` (OpenGL 4.6, or 4.3 with ``GL_ARB_shader_draw_parameters``): each part's
-  matrices in a shader storage buffer, its range of the packed meshes in an indirect
-  command, and the pass one ``glMultiDrawElementsIndirect`` for each run of parts that
-  share a texture (``scene_packed.vert`` reads part ``gl_DrawID``). A view's commands
-  and buffer are recorded once and replayed while the scene's objects and the view stay
-  as they were: a still frame re-sends nothing but the calls that draw.
+- ``packed`` (OpenGL 4.6, or 4.3 with ``GL_ARB_shader_draw_parameters``): each visible
+  part's matrices in a shader storage buffer, its range of the packed meshes in an
+  indirect command (consecutive parts of one mesh as the instances of one command), and
+  the pass one ``glMultiDrawElementsIndirect`` for each run of parts that share a
+  texture (``scene_packed.vert`` reads part ``gl_BaseInstance + gl_InstanceID``). A
+  view's commands and buffer are recorded once and replayed while the scene's objects
+  and the view stay as they were: a still frame re-sends nothing but the calls that
+  draw.
 - ``per-draw`` (any OpenGL 3.3, macOS's 4.1 among them): one
   ``glDrawElementsBaseVertex`` a part, its matrices as uniforms (``scene.vert``).
 
@@ -35,6 +37,7 @@ from mirrorlab.gl.context import has_multi_draw
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Buffer, Program
 from mirrorlab.passes.base import SharedResources, light_uniforms, set_view_uniforms
+from mirrorlab.plan import Rectangle
 from mirrorlab.scene.mesh import TextureSource
 from mirrorlab.scene.model import CurvedReflector, PlanarReflector, Scene
 from mirrorlab.views import View
@@ -72,7 +75,8 @@ class PartTable:
     worn: tuple[TextureSource, ...]
     """The textures the parts wear, each once."""
     ranges: np.ndarray
-    commands: np.ndarray
+    mesh_ids: np.ndarray
+    """``(n,)``: which mesh each part draws (equal ids, equal ranges)."""
 
 
 @dataclass(eq=False)
@@ -154,25 +158,33 @@ class SceneDrawer:
         unique = {t: i for i, t in enumerate(worn)}
         ranges = np.array([self.shared.mesh_range(part.mesh) for part in parts],
                           dtype=np.int64).reshape(-1, 3)
-        commands = np.zeros((count, 5), dtype=np.uint32)
-        commands[:, 0] = ranges[:, 1]  # index count
-        commands[:, 1] = 1  # one instance
-        commands[:, 2] = ranges[:, 0]  # first index
-        commands[:, 3] = ranges[:, 2]  # base vertex
+        meshes = {mesh: i for i, mesh in enumerate(dict.fromkeys(p.mesh for p in parts))}
         table = PartTable(surfaces, textures,
                           np.array([unique.get(t, -1) if t is not None else -1
                                     for t in textures], dtype=np.int64),
-                          worn, ranges, commands)
+                          worn, ranges,
+                          np.array([meshes[part.mesh] for part in parts], dtype=np.int64))
         self._tables[index.objects_part] = table
         while len(self._tables) > 4:
             self._tables.popitem(last=False)
         return table
 
     @staticmethod
-    def visible(index: SceneIndex, view: View) -> np.ndarray:
-        """Positions ``(k,)`` of the parts of ``index`` that may show in ``view``."""
-        return np.flatnonzero(culling.boxes_in_view(index.part_centers, index.part_halves,
-                                                    view.cull_planes))
+    def visible(index: SceneIndex, view: View,
+                scissor: Rectangle | None = None) -> np.ndarray:
+        """Positions ``(k,)`` of the parts of ``index`` that may show in ``view`` (within
+        ``scissor``, when given): boxes within its clip volume, then of those, the ones
+        that may colour a pixel (:func:`mirrorlab.culling.boxes_cover_pixels`)."""
+        planes = view.cull_planes
+        if scissor is not None:
+            planes = np.vstack([planes, culling.scissor_planes(view.view_projection,
+                                                               view.size, scissor)])
+        inside = np.flatnonzero(culling.boxes_in_view(index.part_centers, index.part_halves,
+                                                      planes))
+        covering = culling.boxes_cover_pixels(index.part_centers[inside],
+                                              index.part_halves[inside],
+                                              view.view_projection, view.size, scissor)
+        return inside[covering]
 
     @staticmethod
     def relative_models(index: SceneIndex, visible: np.ndarray, view: View) -> np.ndarray:
@@ -191,24 +203,29 @@ class SceneDrawer:
         light_uniforms(program, scene)
         return program
 
-    def draw(self, scene: Scene, view: View) -> int:
-        """Draw the objects into the bound target; returns the number of draw calls."""
+    def draw(self, scene: Scene, view: View, scissor: Rectangle | None = None,
+             cull: bool = True) -> int:
+        """Draw the objects into the bound target (what can show within ``scissor``, the
+        part of it that matters, when given; every part, with ``cull`` False); returns the
+        number of draw calls."""
         index = scene_index(scene)
         if not index.parts:
             return 0
         table = self._table(index)
         if self.draw_path == "packed":
-            return self._draw_packed(scene, view, index, table)
-        return self._draw_each(scene, view, index, table)
+            return self._draw_packed(scene, view, index, table, scissor, cull)
+        return self._draw_each(scene, view, index, table, scissor, cull)
 
-    def _draw_each(self, scene: Scene, view: View, index: SceneIndex, table: PartTable) -> int:
-        key = _view_key(index, view)
+    def _draw_each(self, scene: Scene, view: View, index: SceneIndex, table: PartTable,
+                   scissor: Rectangle | None, cull: bool) -> int:
+        key = (*_view_key(index, view, scissor), cull)
         held = self._each.get(key)
         if held is not None:
             self._each.move_to_end(key)
             visible, models = held
         else:
-            visible = self.visible(index, view)
+            visible = (self.visible(index, view, scissor) if cull
+                       else np.arange(len(index.parts)))
             models = self.relative_models(index, visible, view)
             self._each[key] = (visible, models)
             while len(self._each) > RECORDED_VIEWS:
@@ -225,13 +242,13 @@ class SceneDrawer:
             packed.draw(*table.ranges[i])
         return len(visible)
 
-    def _draw_packed(self, scene: Scene, view: View, index: SceneIndex,
-                     table: PartTable) -> int:
-        recorded = self._record(index, view, table)
+    def _draw_packed(self, scene: Scene, view: View, index: SceneIndex, table: PartTable,
+                     scissor: Rectangle | None, cull: bool) -> int:
+        recorded = self._record(index, view, table, scissor, cull)
         if not recorded.runs:
             return 0
         assert self.packed_program is not None
-        program = self.begin(scene, view, self.packed_program)
+        self.begin(scene, view, self.packed_program)
         packed = self.shared.packed
         packed.bind()
         GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, recorded.commands.name)
@@ -239,31 +256,31 @@ class SceneDrawer:
         for texture, first, count in recorded.runs:
             if texture is not None:
                 self.shared.texture(texture).bind(0)
-            program.set_int("first_part", first)
             packed.multi_draw(first, count)
         GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
         return len(recorded.runs)
 
-    def _record(self, index: SceneIndex, view: View, table: PartTable) -> RecordedView:
+    def _record(self, index: SceneIndex, view: View, table: PartTable,
+                scissor: Rectangle | None, cull: bool) -> RecordedView:
         """``view``'s recorded draw of ``index`` (made when it has none)."""
-        key = _view_key(index, view)
+        key = (*_view_key(index, view, scissor), cull)
         recorded = self._recorded.get(key)
         if recorded is not None:
             self._recorded.move_to_end(key)
             return recorded
-        visible = self.visible(index, view)
+        visible = (self.visible(index, view, scissor) if cull
+                   else np.arange(len(index.parts)))
         data = np.empty((len(visible), 2, 4, 4), dtype=np.float32)
         data[:, 0] = self.relative_models(index, visible, view).transpose(0, 2, 1)
         data[:, 1] = table.surfaces[visible].transpose(0, 2, 1)  # GLSL's are by column
-        runs = tuple((table.worn[tid] if tid >= 0 else None, first, count)
-                     for tid, first, count in texture_runs(table.texture_ids[visible]))
+        commands, runs = indirect_commands(table, visible)
         if self._spare:
             recorded = self._spare.pop()
         else:
             registry = self.shared.registry
             recorded = RecordedView(Buffer(registry), Buffer(registry), (), 0)
         recorded.parts.upload(GL.GL_SHADER_STORAGE_BUFFER, data)
-        recorded.commands.upload(GL.GL_DRAW_INDIRECT_BUFFER, table.commands[visible])
+        recorded.commands.upload(GL.GL_DRAW_INDIRECT_BUFFER, commands)
         GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
         recorded.runs, recorded.drawn = runs, len(visible)
         self._recorded[key] = recorded
@@ -301,9 +318,41 @@ class SceneDrawer:
         self._each.clear()
 
 
-def _view_key(index: SceneIndex, view: View) -> tuple:
+def _view_key(index: SceneIndex, view: View, scissor: Rectangle | None) -> tuple:
     """Equal for the same scene index seen through the same view (matrices, origin, clip
-    plane)."""
+    plane) and scissor."""
     clip = None if view.clip_plane is None else np.asarray(view.clip_plane).tobytes()
     return (index.objects_part, np.asarray(view.view).tobytes(),
-            np.asarray(view.projection).tobytes(), view.origin.tobytes(), clip)
+            np.asarray(view.projection).tobytes(), view.origin.tobytes(), clip, scissor,
+            view.size)
+
+
+def indirect_commands(table: PartTable, visible: np.ndarray
+                      ) -> tuple[np.ndarray, tuple[tuple[TextureSource | None, int, int], ...]]:
+    """The indirect commands ``(c, 5)`` uint32 that draw the ``visible`` parts of
+    ``table`` in order (part k of them being instance k of the whole: its data is entry k
+    of the parts buffer), and the runs of commands that share a texture, each (texture
+    or None, first command, count). Consecutive parts of one mesh within a run are one
+    command of as many instances: instances are drawn in order, one after the other,
+    so the picture is that of a draw each."""
+    runs = texture_runs(table.texture_ids[visible])
+    if not len(visible):
+        return np.zeros((0, 5), dtype=np.uint32), ()
+    meshes = table.mesh_ids[visible]
+    starts = np.zeros(len(visible), dtype=bool)
+    starts[0] = True
+    starts[1:] = meshes[1:] != meshes[:-1]
+    starts[[first for _, first, _ in runs]] = True
+    first_part = np.flatnonzero(starts)
+    instances = np.diff(np.append(first_part, len(visible)))
+    ranges = table.ranges[visible[first_part]]
+    commands = np.zeros((len(first_part), 5), dtype=np.uint32)
+    commands[:, 0] = ranges[:, 1]  # index count
+    commands[:, 1] = instances
+    commands[:, 2] = ranges[:, 0]  # first index
+    commands[:, 3] = ranges[:, 2]  # base vertex
+    commands[:, 4] = first_part  # base instance: where the parts' data starts
+    command_of = np.searchsorted(first_part, [first for _, first, _ in runs])
+    ends = np.append(command_of[1:], len(first_part))
+    return commands, tuple((table.worn[tid] if tid >= 0 else None, int(a), int(b - a))
+                           for (tid, _, _), a, b in zip(runs, command_of, ends, strict=True))

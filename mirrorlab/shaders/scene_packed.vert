@@ -1,8 +1,9 @@
 #version 430
-// Scene parts, every part of a pass in one glMultiDrawElementsIndirect: draw k of the
-// call reads part first_part + k of the parts buffer (gl_DrawID counts the call's draws),
-// the same model and part matrices scene.vert takes as uniforms, so the picture is the
-// same, pixel for pixel.
+// Scene parts, every part of a pass in one glMultiDrawElementsIndirect: each command
+// draws consecutive parts of one mesh as its instances, its base instance the first one's
+// place in the parts buffer, so part gl_BaseInstance + gl_InstanceID is drawn, with the
+// same model and part matrices scene.vert takes as uniforms: the same picture, pixel for
+// pixel.
 #extension GL_ARB_shader_draw_parameters : require
 #include "clip.glsl"
 layout(location = 0) in vec3 position;
@@ -18,14 +19,13 @@ layout(std430, binding = 0) readonly buffer Parts {
 };
 
 uniform mat4 view_projection;
-uniform int first_part;
 
 out vec3 world_normal;
 out vec2 surface_uv;
 flat out vec4 surface;
 
 void main() {
-    Part drawn = parts[first_part + gl_DrawIDARB];
+    Part drawn = parts[gl_BaseInstanceARB + gl_InstanceID];
     vec4 world_position = drawn.model * vec4(position, 1.0);
     world_normal = mat3(drawn.part) * normal;
     surface_uv = uv;

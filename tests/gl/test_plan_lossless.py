@@ -1,9 +1,11 @@
 """The plan is lossless: on generated scenes, a planned frame equals the frame drawn with
-every pass (``--no-plan``), pixel for pixel. The scenes hold reflectors of every
-technique, placed across the edges and corners of the view (reaching behind the eye,
-long and thin, tiny and huge), cameras rolled and tilted with lenses from 3 to 178
-degrees, one to three bounces, and a second frame in which a mirror moves and turns and
-the camera shifts, then the first frame again (whose captures the planner may reuse).
+every pass (``--no-plan``: no pass skipped, no object culled, nothing scissored), pixel
+for pixel. The scenes hold reflectors of every technique, placed across the edges and
+corners of the view (reaching behind the eye, long and thin, tiny and huge), small and
+sub-pixel objects, turned, near the edges too, cameras rolled and tilted with lenses
+from 3 to 178 degrees, one to three bounces, and a second frame in which a mirror moves
+and turns and the camera shifts, then the first frame again (whose captures the
+planner may reuse).
 
 The planner keeps its textures from one generated scene to the next, as a renderer
 does; the unplanned renderer draws every pass of every frame. Examples are generated
@@ -124,6 +126,12 @@ def scenes(draw):
                                                                          aspect))))
     objects = (robot, block("block", near_the_edge(draw, camera, aspect), 2.0,
                             (0.2, 0.8, 0.3)))
+    for i in range(draw(st.integers(0, 6))):  # small things near the edges, some specks
+        side = draw(st.sampled_from([0.003, 0.03, 0.3]))
+        turn = tuple(draw(st.floats(-180, 180)) for _ in range(3))
+        speck = block(f"speck{i}", near_the_edge(draw, camera, aspect), side,
+                      (0.9, 0.7, 0.2))
+        objects += (replace(speck, transform=replace(speck.transform, rotation=turn)),)
     background = draw(st.sampled_from([Background(), Background(kind="sky")]))
     return size, Scene(name="generated", camera=camera, background=background,
                        objects=objects, reflectors=tuple(made), max_bounces=bounces)
