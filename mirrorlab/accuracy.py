@@ -28,6 +28,7 @@ from mirrorlab.options import apply_options
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import (
     CAPTURE_MODES,
+    FOOTPRINT_TEXTURE,
     Camera,
     CurvedReflector,
     DistanceSearch,
@@ -162,13 +163,19 @@ class SweepSettings:
 
 def lab_techniques(sizes: Sequence[int]) -> list[tuple[str, dict]]:
     """``(label, options)`` for each planar configuration: every capturing technique with
-    each capture mode and texture size, and the stencil mirror."""
+    each capture mode and texture size (and, for one with a camera of its own, a texture
+    the size of the mirror's footprint on screen: labelled ``... footprint``, its map
+    size 0, as it differs from view to view), and the stencil mirror."""
     rows = []
     planar = techniques("planar")
     for entry in (t for t in planar if not t.draws_inline):
         for capture in CAPTURE_MODES:
             rows += [(f"{entry.name}-{capture}", {"method": entry.name, "capture": capture,
                                                    "env_size": size}) for size in sizes]
+            if entry.own_camera:
+                rows.append((f"{entry.name}-{capture} {FOOTPRINT_TEXTURE}",
+                             {"method": entry.name, "capture": capture,
+                              "env_size": FOOTPRINT_TEXTURE}))
     rows += [(entry.name, {"method": entry.name}) for entry in planar if entry.draws_inline]
     return rows
 
@@ -380,7 +387,8 @@ def run_panels(panels: Sequence[Panel], settings: SweepSettings, progress: bool 
                 frames[index], timings[index] = [], []
                 for technique_label, options in configurations[index]:
                     configured = apply_options(scene, options)
-                    map_size = int(options.get("env_size", options.get("map_size", 0)))
+                    size_option = options.get("env_size", options.get("map_size", 0))
+                    map_size = size_option if isinstance(size_option, int) else 0
                     bar.set_postfix_str(f"{technique_label} {map_size or ''} {panel.name} "
                                         f"{name}", refresh=False)
                     image, wall, gpu = measure_frames(renderer, configured, framebuffer, timer,

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from mirrorlab.scene.loader import SceneError, from_document, scene_to_document
-from mirrorlab.scene.model import CAPTURE_MODES, Scene
+from mirrorlab.scene.model import CAPTURE_MODES, FOOTPRINT_TEXTURE, Scene
 from mirrorlab.techniques import (
     Technique,
     frame_technique,
@@ -195,6 +195,8 @@ def _set_technique(reflector: dict, value: str) -> None:
     reflector["technique"] = value
     if not entry.own_camera:
         reflector.pop("ortho", None)
+        if reflector.get("texture_size") == FOOTPRINT_TEXTURE:
+            reflector.pop("texture_size")  # a size that follows a camera of its own
     if not entry.parallax:
         reflector.pop("parallax", None)  # a correction of live cube-map lookups only
 
@@ -404,8 +406,10 @@ OPTIONS: tuple[Option, ...] = (
            "(glCopyTexImage2D) or fbo (drawn into it)",
            lambda flag, text: parse_choice(flag, text, CAPTURE_MODES),
            _apply_to("planar", "capture"), "reflectors"),
-    Option("env_size", "N", "planar capture texture side in pixels (default: the view's)",
-           lambda flag, text: parse_count(flag, text, 1, 4096),
+    Option("env_size", "N", "planar capture texture side in pixels (default: the view's), "
+           f"or {FOOTPRINT_TEXTURE} (ortho: the size of the mirror's footprint on screen)",
+           lambda flag, text: (text if text == FOOTPRINT_TEXTURE
+                               else parse_count(flag, text, 1, 4096)),
            _apply_to("planar", "texture_size"), "reflectors"),
     Option("map_size", "N", "curved reflectors' map side in texels",
            lambda flag, text: parse_count(flag, text, 4, 4096),

@@ -35,7 +35,14 @@ import numpy as np
 from mirrorlab import bounds, culling, math3d
 from mirrorlab.culling import OUTSIDE_REASONS
 from mirrorlab.footprint import Footprint, polygon_footprint, sphere_footprint
-from mirrorlab.scene.model import CurvedReflector, PlanarReflector, Reflector, Scene
+from mirrorlab.scene.model import (
+    FOOTPRINT_STEP,
+    FOOTPRINT_TEXTURE,
+    CurvedReflector,
+    PlanarReflector,
+    Reflector,
+    Scene,
+)
 from mirrorlab.techniques import technique
 from mirrorlab.views import (
     View,
@@ -413,11 +420,15 @@ class _Planner:
                      footprint: Footprint | None) -> tuple[int, int]:
         """The (width, height) of ``reflector``'s capture texture seen in ``view``: its
         ``texture_size`` square, the view's size when it gives none, or with
-        ``"footprint"`` the size of the pixel rectangle its glass covers in ``view``."""
+        ``"footprint"`` the size of the pixel rectangle its glass covers in ``view``,
+        rounded up to a multiple of :data:`~mirrorlab.scene.model.FOOTPRINT_STEP`."""
         size = reflector.texture_size
-        if size == "footprint":
+        if size == FOOTPRINT_TEXTURE:
             rectangle = (footprint or reflector_footprint(reflector, view)).bounds
-            return (rectangle[2], rectangle[3]) if rectangle is not None else view.size
+            if rectangle is None:
+                return view.size
+            step = FOOTPRINT_STEP
+            return (-(-rectangle[2] // step) * step, -(-rectangle[3] // step) * step)
         return (size, size) if isinstance(size, int) else view.size
 
     def add(self, step: PlannedPass) -> None:

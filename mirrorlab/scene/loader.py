@@ -22,7 +22,7 @@ import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -37,6 +37,7 @@ from mirrorlab.scene.model import (
     CAPTURE_MODES,
     DEFAULT_BACKING,
     DEFAULT_PLAIN_COLOR,
+    FOOTPRINT_TEXTURE,
     PARALLAX_PROXIES,
     Animation,
     Background,
@@ -649,10 +650,10 @@ class _Reader:
                 raise self.fail(f"{key}.{missing[0]}", "missing: a planar mirror needs "
                                 "corners, or center, normal, width and height")
             corners = self.rectangle(table, key)
-        texture_size = None
+        texture_size: int | Literal["footprint"] | None = None
         if "texture_size" in table:
-            texture_size = self.integer(table["texture_size"], f"{key}.texture_size", 1,
-                                        MAX_MAP_SIZE)
+            texture_size = self.texture_size(table["texture_size"], f"{key}.texture_size",
+                                             name)
         ortho = self.ortho(table["ortho"], f"{key}.ortho") if "ortho" in table else None
         if ortho is not None and not technique(name).own_camera:
             owners = _techniques_with(lambda t: t.own_camera)
@@ -664,6 +665,20 @@ class _Reader:
             texture_size=texture_size, ortho=ortho,
             color=self.color(table.get("color", list(DEFAULT_PLAIN_COLOR)), f"{key}.color"),
             backing=self.color(table.get("backing", list(DEFAULT_BACKING)), f"{key}.backing"))
+
+    def texture_size(self, value: Any, key: str, name: str) -> int | Literal["footprint"]:
+        """A whole number of pixels, or ``"footprint"`` for a technique whose capture
+        camera is its own."""
+        if isinstance(value, str):
+            if value != FOOTPRINT_TEXTURE:
+                raise self.fail(key, f'expected a whole number or "{FOOTPRINT_TEXTURE}", got '
+                                f"{value!r}")
+            if not technique(name).own_camera:
+                owners = _techniques_with(lambda t: t.own_camera)
+                raise self.fail(key, f'"{FOOTPRINT_TEXTURE}" applies to {owners} (a capture '
+                                f"camera of its own), not {name!r}")
+            return "footprint"
+        return self.integer(value, key, 1, MAX_MAP_SIZE)
 
     def corners(self, value: Any, key: str):
         items = self.array(value, key)

@@ -160,13 +160,25 @@ class OrthoCapture:
         return math3d.ortho(*self.extents)
 
 
+FOOTPRINT_TEXTURE = "footprint"
+"""The ``texture_size`` that sizes a capture to the mirror's footprint in the view it is
+seen in (rounded up to :data:`FOOTPRINT_STEP` pixels), for a technique whose capture
+camera is its own (``ortho``): its capture does not follow the viewer, only its size
+does."""
+FOOTPRINT_STEP = 16
+"""A footprint-sized capture's sides are multiples of this many pixels: a viewer moving
+a little keeps the capture's size, and the capture."""
+
+
 @dataclass(frozen=True)
 class PlanarReflector:
     """A flat four-cornered mirror. ``corners`` ``(4, 3)`` run counter-clockwise seen
     from the reflecting side. ``technique`` names a planar technique of
     :mod:`mirrorlab.techniques`;
     ``capture`` one of :data:`CAPTURE_MODES`; ``texture_size`` the capture's square side
-    in pixels (None: the size of the view it is seen in, as in the lab). ``ortho`` is the
+    in pixels (None: the size of the view it is seen in, as in the lab; ``"footprint"``,
+    for a technique with a camera of its own: the size of the pixel rectangle its glass
+    covers in that view, see :data:`FOOTPRINT_TEXTURE`). ``ortho`` is the
     capture camera of the ``ortho`` technique (None: one derived from the corners, see
     :func:`ortho_capture_for`). ``color`` is its plain look when bounces run out;
     ``backing`` the unlit colour of its back."""
@@ -175,7 +187,7 @@ class PlanarReflector:
     corners: tuple[Vec3, Vec3, Vec3, Vec3]
     technique: str = "reflected"
     capture: str = "copy"
-    texture_size: int | None = None
+    texture_size: int | Literal["footprint"] | None = None
     ortho: OrthoCapture | None = None
     color: Vec3 = DEFAULT_PLAIN_COLOR
     backing: Vec3 = DEFAULT_BACKING

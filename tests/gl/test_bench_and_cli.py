@@ -43,7 +43,8 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     out = capsys.readouterr()
     assert "technique" in out.out and "reflected-fbo" in out.out and "cube-live" in out.out
     # What the quick sweep measures, from its settings: the lab mirror at 2 viewpoints x
-    # (ray tracer + ortho and reflected x 2 captures x 2 sizes + stencil); the sphere alone
+    # (ray tracer + ortho and reflected x 2 captures x 2 sizes + ortho x 2 captures with a
+    # footprint-sized texture + stencil); the sphere alone
     # in the sky, among its objects and in the room, 1 view each x (ray tracer + 7 maps x
     # 2 sizes + the live cube map with a box proxy, a sphere proxy and a distance search
     # x 2 sizes).
@@ -53,7 +54,7 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     lab_rows = 2 * (1 + len(lab_techniques(quick.sizes)))
     sphere_rows = sum(1 + len(curved_techniques(quick.sizes, panel.proxies, quick.steps))
                       for panel in sphere_panels(quick))
-    assert (lab_rows, sphere_rows) == (2 * (1 + 2 * 2 * 2 + 1), 3 * (1 + 7 * 2 + 3 * 2))
+    assert (lab_rows, sphere_rows) == (2 * (1 + 2 * 2 * 2 + 2 + 1), 3 * (1 + 7 * 2 + 3 * 2))
     total = lab_rows + sphere_rows
     # one progress bar (tqdm, on stderr), and it reached its end: a step per row, and one
     # more per viewpoint for scoring its frames (2 lab views, 3 sphere scenes)
@@ -71,6 +72,9 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     reflected = float(by_key[("lab", "reflected-copy", "128", "60 deg")]["mae"])
     stencil = float(by_key[("lab", "stencil", "0", "60 deg")]["mae"])
     assert reflected < 0.2 * ortho and stencil < 0.2 * ortho
+    # ortho's error is its geometry's, whatever its texture's size: the footprint's too
+    footprint = float(by_key[("lab", "ortho-copy footprint", "0", "60 deg")]["mae"])
+    assert abs(footprint - ortho) < 0.1 * ortho
     sky = {r["technique"]: float(r["mae"]) for r in table
            if r["scene"] == "sphere-sky" and r["map_size"] == "128"}
     assert set(sky) == {*technique_names("curved"), "cube-live box", "cube-live sphere",
@@ -111,7 +115,8 @@ def test_accuracy_sweep_of_a_scene_file(tmp_path, capsys, monkeypatch):
     assert {r["viewpoint"] for r in table} == {"camera"}
     techniques = {r["technique"] for r in table}
     assert techniques == {"raytrace", "stencil"} | {f"{m}-{c}" for m in ("ortho", "reflected")
-                                                     for c in ("copy", "fbo")}
+                                                     for c in ("copy", "fbo")} | {
+        f"ortho-{c} footprint" for c in ("copy", "fbo")}
     # The exact techniques, two bounces deep, at the frame's size: 99% of the mirrors'
     # pixels within 10/255 of the ray tracer.
     rows = {(r["technique"], r["map_size"]): r for r in table}

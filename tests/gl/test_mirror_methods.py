@@ -242,3 +242,23 @@ def test_a_larger_reflected_texture_is_closer_to_the_truth(scene_renderer):
         image, _, _ = render(scene_renderer, scene, "reflected", env_size=env_size)
         shares.append(share_within(image, truth.to_uint8(), truth.reflective_mask, 10))
     assert shares[0] < shares[1] < shares[2], shares
+
+
+@pytest.mark.parametrize("capture", ["copy", "fbo"])
+def test_an_ortho_capture_the_size_of_its_footprint_shows_what_the_window_sized_one_does(
+        scene_renderer, capture):
+    """``texture_size = "footprint"``: the capture texture takes the planned size (the
+    glass's pixel rectangle, in whole steps), and the mirror shows what it shows with the
+    window-sized texture (ortho's error is its geometry's), to within filtering: 97% of
+    its pixels within 24/255, the red hand among them."""
+    scene = lab(viewer_at(30, 16))
+    window, window_env, _ = render(scene_renderer, scene, "ortho", capture)
+    footprint, footprint_env, stats = render(scene_renderer, scene, "ortho", capture,
+                                             env_size="footprint")
+    (step,) = [p for p in stats.plan.ran if p.name == "capture"]
+    width, height = step.views[0].view.size
+    assert footprint_env.shape == (height, width, 3) and window_env.shape == (SIZE, SIZE, 3)
+    assert width < SIZE and height < SIZE
+    mask = trace(scene).reflective_mask
+    assert red_dominant(footprint[mask]).sum() > 20
+    assert_region_close(f"ortho_footprint_{capture}", footprint, window, mask, 24, 0.97)
