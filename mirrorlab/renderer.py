@@ -44,13 +44,15 @@ from mirrorlab.views import View
 @dataclass
 class FrameStats:
     """What the last frame did: its plan (passes run and skipped, with reasons), the
-    number of draw calls, and the wall time of the frame's GL calls in milliseconds
-    (without waiting for the GPU to finish)."""
+    number of draw calls (a multi-draw counts one), the wall time of the frame's GL calls
+    in milliseconds (without waiting for the GPU to finish), and ``parts_drawn``: the
+    object parts drawn, summed over every view of the frame (what culling left)."""
 
     plan: FramePlan
     draw_calls: int
     milliseconds: float = 0.0
     passes_run: list[str] = field(default_factory=list)
+    parts_drawn: int = 0
 
     @property
     def ran(self) -> list[str]:
@@ -185,6 +187,7 @@ class SceneRenderer:
         width, height = target.size
         plan = self._plan(scene, (int(width), int(height)), use_plan, tiny_pixels, view)
         self._cull = use_plan
+        self.drawer.parts_drawn = 0
         draws = 0
         index = scene_index(scene)
         try:
@@ -205,7 +208,8 @@ class SceneRenderer:
             raise
         finally:
             restore_state(found)
-        self.last_frame = FrameStats(plan, draws, (time.perf_counter() - start) * 1e3)
+        self.last_frame = FrameStats(plan, draws, (time.perf_counter() - start) * 1e3,
+                                     parts_drawn=self.drawer.parts_drawn)
         return self.last_frame
 
     def _plan(self, scene: Scene, size: tuple[int, int], use_plan: bool, tiny_pixels: float,

@@ -137,6 +137,8 @@ class SceneDrawer:
         self._spare: list[RecordedView] = []
         self._each: OrderedDict[tuple, tuple[np.ndarray, np.ndarray]] = OrderedDict()
         """The per-draw path's record of a view: the visible parts and their models."""
+        self.parts_drawn = 0
+        """Parts drawn since it was last set to 0 (the renderer does, each frame)."""
 
     # ------------------------------------------------------------- parts
 
@@ -240,11 +242,13 @@ class SceneDrawer:
             if texture is not None:
                 self.shared.texture(texture).bind(0)
             packed.draw(*table.ranges[i])
+        self.parts_drawn += len(visible)
         return len(visible)
 
     def _draw_packed(self, scene: Scene, view: View, index: SceneIndex, table: PartTable,
                      scissor: Rectangle | None, cull: bool) -> int:
         recorded = self._record(index, view, table, scissor, cull)
+        self.parts_drawn += recorded.drawn
         if not recorded.runs:
             return 0
         assert self.packed_program is not None

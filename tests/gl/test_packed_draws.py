@@ -1,0 +1,137 @@
+"""Cost that follows sight, on llvmpipe: objects and mirrors out of view cost a frame no
+draw and no recorded data; a pass is one multi-draw whose commands hold consecutive
+parts of one mesh as instances; a still frame replays what it recorded (nothing uploaded
+again), a moving one records anew; the draw path without multi-draw gives the same
+frames (its goldens: tests/gl/test_shipped_goldens.py)."""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import mirrorlab
+from mirrorlab.bounds import scene_index
+from mirrorlab.data import data_path
+from mirrorlab.gl.resources import Buffer
+from mirrorlab.options import apply_options
+from mirrorlab.passes.scene_draw import indirect_commands, texture_runs
+from mirrorlab.renderer import SceneRenderer
+from mirrorlab.scene.model import MeshObject, Transform
+from tests.gl.frames import draw
+from tests.scenekit import mirror
+
+SIZE = (96, 96)
+BOX = data_path("models") / "hand.obj"
+
+
+def lab_reflected():
+    return apply_options(mirrorlab.load_scene("lab20"), {"method": "reflected"})
+
+
+def behind_the_camera(scene, count: int, kind: str):
+    """``scene`` with ``count`` boxes or mirrors 6 units behind its camera, facing it."""
+    camera = scene.camera
+    eye, target = np.asarray(camera.eye), np.asarray(camera.target)
+    back = (eye - target) / np.linalg.norm(eye - target)
+    points = [eye + 6.0 * back + (i % 10 - 4.5, i // 10 - 2.0, 0.0) for i in range(count)]
+    if kind == "boxes":
+        boxes = tuple(MeshObject(name=f"box{i}", mesh=BOX, color=(0.8, 0.3, 0.2),
+                                 transform=Transform(position=tuple(map(float, p)),
+                                                     scale=(0.3, 0.3, 0.3)))
+                      for i, p in enumerate(points))
+        return replace(scene, objects=scene.objects + boxes)
+    mirrors = tuple(mirror(f"m{i}", p, -back, 0.5, 0.5, "reflected")
+                    for i, p in enumerate(points))
+    return replace(scene, reflectors=scene.reflectors + mirrors)
+
+
+@pytest.mark.parametrize("kind", ["boxes", "mirrors"])
+def test_things_behind_the_camera_cost_no_draw_and_leave_the_frame_as_it_was(
+        scene_renderer, kind):
+    base = lab_reflected()
+    crowded = behind_the_camera(base, 60, kind)
+    image, stats = draw(scene_renderer, base, SIZE)
+    crowded_image, crowded_stats = draw(scene_renderer, crowded, SIZE)
+    assert np.array_equal(image, crowded_image)
+    assert crowded_stats.ran == stats.ran == ["capture:mirror", "camera"]
+    assert crowded_stats.draw_calls == stats.draw_calls
+    assert crowded_stats.parts_drawn == stats.parts_drawn
+    # nothing of them is planned one by one: every extra mirror is hidden by the arrays
+    assert len(crowded_stats.plan.top.shown) == len(stats.plan.top.shown)
+
+
+def test_a_still_frame_replays_and_a_moving_one_records_anew(scene_renderer, monkeypatch):
+    uploads = []
+    original = Buffer.upload
+    monkeypatch.setattr(Buffer, "upload", lambda self, target, data: (
+        uploads.append(len(data)), original(self, target, data))[1])
+    scene = lab_reflected()
+    first, _ = draw(scene_renderer, scene, SIZE)
+    assert uploads, "the first frame records its views"
+    uploads.clear()
+    again, stats = draw(scene_renderer, scene, SIZE)
+    assert uploads == [] and stats.ran == ["camera"]  # replayed: nothing sent again
+    assert np.array_equal(first, again)
+    eye = scene.camera.eye
+    moved = replace(scene, camera=replace(scene.camera, eye=(eye[0] + 0.01, *eye[1:])))
+    _, stats = draw(scene_renderer, moved, SIZE)
+    assert uploads and stats.ran == ["capture:mirror", "camera"]
+
+
+def test_a_thousand_boxes_of_one_mesh_are_one_command(scene_renderer, registry):
+    scene = lab_reflected()
+    camera = scene.camera
+    eye, target = np.asarray(camera.eye), np.asarray(camera.target)
+    forward = (target - eye) / np.linalg.norm(target - eye)
+    side = np.cross(forward, (0.0, 1.0, 0.0))
+    side /= np.linalg.norm(side)
+    up = np.cross(side, forward)
+    spots = [target + 3.0 * forward + ((i % 40) / 4 - 5.0) * side + ((i // 40) / 4 - 3) * up
+             for i in range(1000)]
+    boxes = tuple(MeshObject(name=f"box{i}", mesh=BOX, color=(0.8, 0.3, 0.2),
+                             transform=Transform(position=tuple(map(float, p)),
+                                                 scale=(0.1, 0.1, 0.1)))
+                  for i, p in enumerate(spots))
+    crowded = replace(scene, objects=scene.objects + boxes, reflectors=())
+    image, stats = draw(scene_renderer, crowded, SIZE)
+    # one pass, one multi-draw; the boxes half a pixel across between pixel centres culled
+    assert stats.draw_calls == 1 and 100 < stats.parts_drawn < 1000
+    per_draw = SceneRenderer(registry, draw_path="per-draw")
+    try:
+        each, each_stats = draw(per_draw, crowded, SIZE)
+    finally:
+        per_draw.release()
+    assert np.array_equal(image, each)
+    assert each_stats.draw_calls == each_stats.parts_drawn == stats.parts_drawn
+
+
+@settings(max_examples=200, deadline=None)
+@given(ids=st.lists(st.integers(-1, 3), max_size=40))
+def test_texture_runs_cover_every_part_in_order_with_one_texture_each(ids):
+    ids = np.array(ids, dtype=np.int64)
+    runs = texture_runs(ids)
+    assert sum(count for _, _, count in runs) == len(ids)
+    position = 0
+    for texture, first, count in runs:
+        assert first == position and count > 0
+        worn = {int(i) for i in ids[first:first + count] if i >= 0}
+        assert worn == ({texture} if texture >= 0 else set())
+        position += count
+    assert all(a[0] != b[0] for a, b in itertools.pairwise(runs))
+
+
+def test_indirect_commands_draw_consecutive_parts_of_a_mesh_as_instances(scene_renderer):
+    scene = lab_reflected()
+    draw(scene_renderer, scene, SIZE)  # the drawer makes the scene's part table
+    table = scene_renderer.drawer._table(scene_index(scene))
+    visible = np.arange(len(table.textures))
+    commands, runs = indirect_commands(table, visible)
+    assert commands[:, 1].sum() == len(visible)  # every part an instance of one command
+    assert list(commands[:, 4]) == list(np.cumsum(commands[:, 1]) - commands[:, 1])
+    assert sum(count for _, _, count in runs) == len(commands)
+
