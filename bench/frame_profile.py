@@ -6,10 +6,12 @@ set-up, with Debian's ``linux-perf``)::
     python bench/frame_profile.py [--size 512] [--seconds 6] [--frames 100]
                                   [--json PATH]
 
-Two frames of the lab scene are measured: ``two passes`` (the robot's elbow turns a
-little every frame, so the planner plans again and the capture runs) and ``capture
-reused`` (the scene stands still: the camera pass only); each ends with the readback
-to numpy.
+Three frames of the lab scene are measured: ``two passes`` (the robot's elbow turns
+between two poses every frame, so the planner plans again and the capture runs),
+``two passes, a new pose every frame`` (the elbow turns a hundredth of a degree further
+every frame: nothing worked out for an earlier frame is used again, as in an animation)
+and ``capture reused`` (the scene stands still: the camera pass only, a still frame
+replayed); each ends with the readback to numpy.
 
 **Python's share.** Each variant draws frames in a process of its own; after a warm-up,
 ``perf record`` samples every thread of it ~1000 times a second of CPU time for
@@ -50,7 +52,7 @@ import time
 from collections import Counter, defaultdict
 from pathlib import Path
 
-VARIANTS = ("two passes", "capture reused")
+VARIANTS = ("two passes", "two passes, a new pose every frame", "capture reused")
 DRIVER = re.compile(r"swrast_dri|libgallium|libGL|libEGL|libOpenGL|libglapi|libLLVM|\[JIT\]")
 PYTHON = re.compile(r"libpython|^python|\.cpython-|libffi|openblas|_umath")
 RATE = 999
@@ -68,6 +70,10 @@ def scenes(variant: str) -> list:
     if variant == "capture reused":
         return [lab]
     base, shoulder, elbow = lab.robot.angles
+    if variant == "two passes, a new pose every frame":
+        # a hundredth of a degree a frame: nothing drawn before is drawn again
+        return [lab.with_angles((base, shoulder, elbow + 0.01 * step))
+                for step in range(20000)]
     return [lab.with_angles((base, shoulder, elbow + step)) for step in (0.0, 0.5)]
 
 
@@ -190,7 +196,7 @@ def pass_times(variant: str, size: int, frames: int) -> dict[str, float]:
                     (drawn - start) * 1e3 - sum(current.values()))
     finally:
         mirrorlab.renderer.gl_pass = original
-    assert stats.ran == (["capture:mirror", "camera"] if variant == "two passes"
+    assert stats.ran == (["capture:mirror", "camera"] if variant.startswith("two passes")
                          else ["camera"]), stats.ran
     return {name: round(statistics.median(values), 3) for name, values in timings.items()}
 

@@ -76,37 +76,73 @@ def reflector_box(reflector: Reflector) -> tuple[np.ndarray, np.ndarray]:
     return mesh_box(reflector.mesh, reflector.model_matrix())
 
 
+@lru_cache(maxsize=64)
+def _mesh_local_box(mesh: Path) -> tuple[np.ndarray, np.ndarray]:
+    """A mesh file's own centre and half-size ``(3,)`` of its vertices' box (read-only)."""
+    positions = _mesh_points(mesh)
+    low, high = positions.min(axis=0), positions.max(axis=0)
+    return _frozen((low + high) / 2.0), _frozen((high - low) / 2.0)
+
+
 @dataclass(frozen=True, eq=False)
 class ObjectBounds:
-    """One object's drawable parts (:func:`mirrorlab.scene.robot.object_parts`) with each
-    part's world box: ``low`` and ``high`` ``(k, 3)``."""
+    """One object's drawable parts (:func:`mirrorlab.scene.robot.object_parts`) and, worked
+    out when first asked for, each part's exact world box ``low``, ``high`` ``(k, 3)``."""
 
     parts: tuple[Part, ...]
-    low: np.ndarray
-    high: np.ndarray
+
+    @cached_property
+    def boxes(self) -> tuple[np.ndarray, np.ndarray]:
+        boxes = [mesh_box(part.mesh, part.model) for part in self.parts]
+        return (_frozen(np.array([b[0] for b in boxes]).reshape(-1, 3)),
+                _frozen(np.array([b[1] for b in boxes]).reshape(-1, 3)))
 
 
 @dataclass(frozen=True, eq=False)
 class ObjectArrays:
     """The bounds of a scene's objects: ``parts`` (every drawable part, in drawing order)
-    with ``models`` ``(n, 4, 4)`` float64 and world boxes ``part_low``, ``part_high``
-    ``(n, 3)``. Read-only; made once for an ``objects`` tuple."""
+    with ``models`` ``(n, 4, 4)`` float64; for culling, each part's mesh box carried into
+    the world, ``part_centers`` and ``part_halves`` ``(n, 3)`` (it holds the part, a little
+    larger than its own box when turned); and, worked out when first asked for (what a
+    view's reach is set by), each part's exact world box ``part_low``, ``part_high``.
+    Read-only; made once for an ``objects`` tuple."""
 
     objects: tuple
+    bounds: tuple[ObjectBounds, ...]
     parts: tuple[Part, ...]
     models: np.ndarray
-    part_low: np.ndarray
-    part_high: np.ndarray
 
     @cached_property
+    def part_low(self) -> np.ndarray:
+        return _frozen(np.concatenate([b.boxes[0] for b in self.bounds])
+                       if self.bounds else np.zeros((0, 3)))
+
+    @cached_property
+    def part_high(self) -> np.ndarray:
+        return _frozen(np.concatenate([b.boxes[1] for b in self.bounds])
+                       if self.bounds else np.zeros((0, 3)))
+
+    @cached_property
+    def _carried(self) -> tuple[np.ndarray, np.ndarray]:
+        if not self.parts:
+            return np.zeros((0, 3)), np.zeros((0, 3))
+        local = [_mesh_local_box(part.mesh) for part in self.parts]
+        centers = np.array([c for c, _ in local])
+        halves = np.array([h for _, h in local])
+        turn = self.models[:, :3, :3]
+        world = np.einsum("nij,nj->ni", turn, centers) + self.models[:, :3, 3]
+        reach = np.einsum("nij,nj->ni", np.abs(turn), halves)  # the turned box's box
+        return _frozen(world), _frozen(reach)
+
+    @property
     def part_centers(self) -> np.ndarray:
-        """``(n, 3)``: the middle of each part's box."""
-        return _frozen((self.part_low + self.part_high) / 2.0)
+        """``(n, 3)``: the middle of each part's culling box."""
+        return self._carried[0]
 
-    @cached_property
+    @property
     def part_halves(self) -> np.ndarray:
-        """``(n, 3)``: half the size of each part's box."""
-        return _frozen((self.part_high - self.part_low) / 2.0)
+        """``(n, 3)``: half the size of each part's culling box."""
+        return self._carried[1]
 
     @cached_property
     def digest(self) -> int:
@@ -294,10 +330,7 @@ class _IndexCache:
             return held[1]
         from mirrorlab.scene.robot import object_parts
 
-        parts = object_parts(item)
-        boxes = [mesh_box(part.mesh, part.model) for part in parts]
-        made = ObjectBounds(parts, _frozen(np.array([b[0] for b in boxes]).reshape(-1, 3)),
-                            _frozen(np.array([b[1] for b in boxes]).reshape(-1, 3)))
+        made = ObjectBounds(object_parts(item))
         self.objects[id(item)] = (item, made)
         return made
 
@@ -313,13 +346,10 @@ class _IndexCache:
 
     def object_arrays(self, objects: tuple) -> ObjectArrays:
         self._forget(objects, ())
-        bounds = [self.object_bounds(item) for item in objects]
+        bounds = tuple(self.object_bounds(item) for item in objects)
         parts = tuple(part for b in bounds for part in b.parts)
         models = np.array([part.model for part in parts], dtype=np.float64).reshape(-1, 4, 4)
-        part_low = np.concatenate([b.low for b in bounds]) if bounds else np.zeros((0, 3))
-        part_high = np.concatenate([b.high for b in bounds]) if bounds else np.zeros((0, 3))
-        return ObjectArrays(objects, parts, _frozen(models), _frozen(part_low),
-                            _frozen(part_high))
+        return ObjectArrays(objects, bounds, parts, _frozen(models))
 
     def reflector_arrays(self, reflectors: tuple) -> ReflectorArrays:
         self._forget((), reflectors)

@@ -12,11 +12,13 @@ being drawn has it any more.
 from __future__ import annotations
 
 import time
+from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
 
 from mirrorlab.bounds import scene_index
 from mirrorlab.gl.context import ResourceRegistry, gl_pass, gl_version, require_gl_version
 from mirrorlab.gl.opengl import GL
+from mirrorlab.gl.record import CallRecorder, replay
 from mirrorlab.gl.resources import RenderTarget
 from mirrorlab.passes.base import (
     ReflectorPass,
@@ -66,6 +68,18 @@ class FrameStats:
                 for p in self.plan.skipped]
 
 
+@dataclass(frozen=True, eq=False)
+class RecordedFrame:
+    """A still frame's GL calls (:class:`~mirrorlab.gl.record.CallRecorder`), with what
+    it was drawn from: ``key`` (the scene, target, size, options and what the textures
+    held) and ``found`` (the GL state it started from), and its ``stats``."""
+
+    key: tuple
+    found: dict[str, object]
+    calls: list
+    stats: FrameStats
+
+
 def _pass_key(reflector: Reflector, background: Background) -> tuple:
     """What a reflector's pass is made from: everything but where it is (it may move every
     frame; a planar pass places its quad at each draw) and the sizes of a curved one's
@@ -101,6 +115,7 @@ class SceneRenderer:
         self._sky: SkyPass | None = None
         self.last_frame: FrameStats | None = None
         self._last_plan: tuple[tuple, FramePlan] | None = None
+        self._recorded: RecordedFrame | None = None  # the still frame to replay
         self._scissor: Rectangle | None = None  # the scissor rectangle set, None: off
         self._cull = True  # whether this frame's views cull objects (not with use_plan off)
 
@@ -181,11 +196,43 @@ class SceneRenderer:
         """
         start = time.perf_counter()
         found = gl_state()
+        size = (int(target.size[0]), int(target.size[1]))
+        key = None if view is not None else (scene, target, size, use_plan, tiny_pixels,
+                                             tuple(self.state.held.items()))
+        recorded = self._recorded
+        if recorded is not None and key is not None and recorded.key == key and (
+                recorded.found == found):
+            # A still frame: the same calls as the frame recorded, drawn into the same
+            # target from the same state, made again without working them out.
+            try:
+                with gl_pass("camera (replayed)"):
+                    replay(recorded.calls)
+            except BaseException:
+                self._recorded = None
+                raise
+            self.last_frame = replace(recorded.stats,
+                                      milliseconds=(time.perf_counter() - start) * 1e3)
+            return self.last_frame
+        self._recorded = None
+        still = key is not None and self._last_plan is not None and self._last_plan[0] == (
+            scene, size, use_plan, tiny_pixels, key[5])
+        recorder = CallRecorder() if still else None
+        with recorder or nullcontext():
+            stats = self._render(scene, target, size, use_plan, tiny_pixels, view, found,
+                                 start)
+        if recorder is not None and [p.name for p in stats.plan.ran] == ["camera"]:
+            # nothing but the camera pass ran: the next frame like it replays this one
+            assert key is not None
+            self._recorded = RecordedFrame(key, found, recorder.calls, stats)
+        return stats
+
+    def _render(self, scene: Scene, target: RenderTarget, size: tuple[int, int],
+                use_plan: bool, tiny_pixels: float, view: View | None,
+                found: dict[str, object], start: float) -> FrameStats:
         self._scissor = None
         GL.glDisable(GL.GL_SCISSOR_TEST)
         self._use_scene(scene)
-        width, height = target.size
-        plan = self._plan(scene, (int(width), int(height)), use_plan, tiny_pixels, view)
+        plan = self._plan(scene, size, use_plan, tiny_pixels, view)
         self._cull = use_plan
         self.drawer.parts_drawn = 0
         draws = 0
@@ -279,6 +326,7 @@ class SceneRenderer:
 
     def release(self) -> None:
         """Free every GL object the renderer made. Call with its context current."""
+        self._recorded = None
         for name in list(self._passes):
             self._drop(name)
         if self._sky is not None:
@@ -290,5 +338,7 @@ class SceneRenderer:
         self._last_plan = None
 
     def pass_for(self, name: str) -> ReflectorPass:
-        """The pass of the current scene's reflector ``name`` (for checks and the demo)."""
+        """The pass of the current scene's reflector ``name`` (for checks and the demo).
+        What a caller may change in it, the next frame draws: it is not replayed."""
+        self._recorded = None
         return self._pass(self.scene.reflector(name))

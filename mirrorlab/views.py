@@ -16,7 +16,7 @@ from functools import cached_property
 import numpy as np
 
 from mirrorlab import culling, math3d
-from mirrorlab.scene.model import Camera, CurvedReflector, PlanarReflector
+from mirrorlab.scene.model import Camera, CurvedReflector, OrthoCapture, PlanarReflector
 
 _FLIP_X = np.diag([-1.0, 1.0, 1.0, 1.0])
 _BIAS = np.array([[0.5, 0, 0, 0.5], [0, 0.5, 0, 0.5], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]])
@@ -214,12 +214,20 @@ def stencil_view(view: View, reflector: PlanarReflector, far: float | None = Non
                 depth_range=depth_range)
 
 
+@functools.lru_cache(maxsize=64)
+def _ortho_matrices(capture: OrthoCapture) -> tuple[np.ndarray, np.ndarray]:
+    """An ortho capture camera's view and projection, worked out once (read-only)."""
+    matrices = (capture.view(), capture.projection())
+    for matrix in matrices:
+        matrix.flags.writeable = False
+    return matrices
+
+
 def ortho_capture_view(reflector: PlanarReflector, size: tuple[int, int]) -> View:
     """The ``ortho`` technique's capture camera (the lab's pass 1) on a ``size`` target."""
-    capture = reflector.ortho_capture
-    return View(view=capture.view(), projection=capture.projection(),
-                size=(int(size[0]), int(size[1])), eye=None,
-                label=f"{reflector.name} ortho capture")
+    view, projection = _ortho_matrices(reflector.ortho_capture)
+    return View(view=view, projection=projection, size=(int(size[0]), int(size[1])),
+                eye=None, label=f"{reflector.name} ortho capture")
 
 
 def cube_face_views(reflector: CurvedReflector,

@@ -5,14 +5,17 @@ relative to that file (``../models/base.obj``)."""
 
 from __future__ import annotations
 
+from functools import lru_cache
 from importlib.resources import files
 from pathlib import Path
 
 
+@lru_cache(maxsize=256)
 def data_path(*parts: str) -> Path:
     """The shipped file or folder ``mirrorlab/data/<parts...>`` as a path on disk, e.g.
     ``data_path("models", "base.obj")``. It need not exist (callers check); RuntimeError
-    when mirrorlab runs from a zip archive, which it does not support."""
+    when mirrorlab runs from a zip archive, which it does not support. (Remembered: a
+    scene graph asks for its meshes whenever it is posed.)"""
     root = files(__name__)
     if not isinstance(root, Path):
         raise RuntimeError(f"mirrorlab's data is not on the file system ({root}); install "

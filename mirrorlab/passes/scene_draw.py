@@ -46,6 +46,9 @@ DrawPath = Literal["auto", "packed", "per-draw"]
 DRAW_PATHS: tuple[DrawPath, ...] = ("auto", "packed", "per-draw")
 """How a drawer draws a view's parts: ``auto`` picks ``packed`` where the context offers
 it, else ``per-draw``."""
+FEW_PARTS = 32
+"""Up to this many parts in view, none is culled for covering no pixel centre: testing
+costs more than the draws it could save (culling never changes a pixel either way)."""
 RECORDED_VIEWS = 64
 """Recorded views a packed drawer keeps (most recently used)."""
 
@@ -89,6 +92,32 @@ class RecordedView:
     commands: Buffer
     runs: tuple[tuple[TextureSource | None, int, int], ...]
     drawn: int
+
+
+def _few_indirect_commands(table: PartTable, visible: np.ndarray
+                           ) -> tuple[np.ndarray, tuple[tuple[TextureSource | None, int, int],
+                                                        ...]]:
+    """:func:`indirect_commands` one part at a time."""
+    commands: list[list[int]] = []
+    runs: list[list] = []  # [texture id, first command, count]
+    last_mesh = -1
+    for position, part in enumerate(visible.tolist()):
+        texture, mesh = int(table.texture_ids[part]), int(table.mesh_ids[part])
+        if not runs or (texture >= 0 and runs[-1][0] >= 0 and texture != runs[-1][0]):
+            runs.append([texture, len(commands), 0])
+            last_mesh = -1
+        elif texture >= 0 and runs[-1][0] < 0:
+            runs[-1][0] = texture  # an untextured run takes the first texture it meets
+        if mesh == last_mesh:
+            commands[-1][1] += 1
+            continue
+        first, count, base = (int(v) for v in table.ranges[part])
+        commands.append([count, 1, first, base, position])
+        runs[-1][2] += 1
+        last_mesh = mesh
+    return (np.array(commands, dtype=np.uint32).reshape(-1, 5),
+            tuple((table.worn[tid] if tid >= 0 else None, first, count)
+                  for tid, first, count in runs))
 
 
 def texture_runs(ids: np.ndarray) -> list[tuple[int, int, int]]:
@@ -183,6 +212,8 @@ class SceneDrawer:
                                                                view.size, scissor)])
         inside = np.flatnonzero(culling.boxes_in_view(index.part_centers, index.part_halves,
                                                       planes))
+        if len(inside) <= FEW_PARTS:
+            return inside  # too few for the pixel test to pay for itself
         covering = culling.boxes_cover_pixels(index.part_centers[inside],
                                               index.part_halves[inside],
                                               view.view_projection, view.size, scissor)
@@ -338,10 +369,11 @@ def indirect_commands(table: PartTable, visible: np.ndarray
     of the parts buffer), and the runs of commands that share a texture, each (texture
     or None, first command, count). Consecutive parts of one mesh within a run are one
     command of as many instances: instances are drawn in order, one after the other,
-    so the picture is that of a draw each."""
+    so the picture is that of a draw each. (A few parts are put together one by one:
+    numpy's calls would cost more; the result is the same.)"""
+    if len(visible) <= FEW_PARTS:
+        return _few_indirect_commands(table, visible)
     runs = texture_runs(table.texture_ids[visible])
-    if not len(visible):
-        return np.zeros((0, 5), dtype=np.uint32), ()
     meshes = table.mesh_ids[visible]
     starts = np.zeros(len(visible), dtype=bool)
     starts[0] = True

@@ -135,3 +135,29 @@ def test_indirect_commands_draw_consecutive_parts_of_a_mesh_as_instances(scene_r
     assert list(commands[:, 4]) == list(np.cumsum(commands[:, 1]) - commands[:, 1])
     assert sum(count for _, _, count in runs) == len(commands)
 
+
+
+@settings(max_examples=200, deadline=None)
+@given(parts=st.lists(st.tuples(st.integers(-1, 2), st.integers(0, 3)), min_size=1,
+                      max_size=80), seed=st.integers(0, 99))
+def test_few_and_many_parts_make_the_same_commands(parts, seed):
+    """Commands made one part at a time (a few parts) and by arrays (many) agree."""
+    from mirrorlab.passes import scene_draw
+    from mirrorlab.passes.scene_draw import PartTable
+
+    rng = np.random.default_rng(seed)
+    count = len(parts)
+    ranges = np.array([(10 * m, 3 + m, 100 * m) for _, m in parts], dtype=np.int64)
+    table = PartTable(np.zeros((count, 4, 4), np.float32), tuple(
+        f"t{t}" if t >= 0 else None for t, _ in parts),
+        np.array([t for t, _ in parts], dtype=np.int64), ("t0", "t1", "t2"), ranges,
+        np.array([m for _, m in parts], dtype=np.int64))
+    visible = np.sort(rng.choice(count, size=int(rng.integers(1, count + 1)), replace=False))
+    few = scene_draw._few_indirect_commands(table, visible)
+    original = scene_draw.FEW_PARTS
+    scene_draw.FEW_PARTS = -1
+    try:
+        many = indirect_commands(table, visible)
+    finally:
+        scene_draw.FEW_PARTS = original
+    assert np.array_equal(few[0], many[0]) and few[1] == many[1]

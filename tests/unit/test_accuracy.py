@@ -165,10 +165,13 @@ def test_erode_shrinks_a_mask_by_whole_pixels():
 
 
 def test_planar_configurations_cover_every_capture_mode_and_size_plus_stencil():
+    """... and, for ortho (a capture camera of its own), a texture the size of the
+    mirror's footprint on screen, with each capture mode."""
     configs = accuracy.lab_techniques((64, 128))
     labels = [label for label, _ in configs]
-    assert labels == ["ortho-copy"] * 2 + ["ortho-fbo"] * 2 + ["reflected-copy"] * 2 + [
-        "reflected-fbo"] * 2 + ["stencil"]
+    assert labels == (["ortho-copy"] * 2 + ["ortho-copy footprint"] + ["ortho-fbo"] * 2
+                      + ["ortho-fbo footprint"] + ["reflected-copy"] * 2
+                      + ["reflected-fbo"] * 2 + ["stencil"])
     assert [o.get("env_size") for _, o in configs[:2]] == [64, 128]
     lab = load_scene("lab20")
     for label, options in configs:
