@@ -161,3 +161,42 @@ def test_few_and_many_parts_make_the_same_commands(parts, seed):
     finally:
         scene_draw.FEW_PARTS = original
     assert np.array_equal(few[0], many[0]) and few[1] == many[1]
+
+
+def test_a_still_frame_is_replayed_into_the_same_target_from_the_same_state(
+        scene_renderer, registry, monkeypatch):
+    from mirrorlab.gl.opengl import GL
+    from mirrorlab.gl.resources import Framebuffer
+    from mirrorlab.passes.base import gl_state
+
+    target = Framebuffer(registry, *SIZE)
+    worked = []
+    original = SceneRenderer._render
+    monkeypatch.setattr(SceneRenderer, "_render", lambda self, *a: (
+        worked.append(1), original(self, *a))[1])
+    scene = mirrorlab.load_scene("lab20")
+    images = []
+    for _ in range(5):
+        scene_renderer.render(scene, target)
+        images.append(target.read())
+    # frame 1 captures; frame 2 draws the camera pass alone (a new plan: the textures
+    # changed); frame 3 plans what frame 2 did and is recorded; 4 and 5 replay it
+    assert len(worked) == 3 and all(np.array_equal(images[0], i) for i in images[1:])
+    assert scene_renderer.last_frame.ran == ["camera"]
+    # a caller's GL state that differs is no still frame: worked out, and left as it was
+    GL.glEnable(GL.GL_BLEND)
+    scene_renderer.render(scene, target)
+    assert len(worked) == 4 and gl_state()["GL_BLEND"] is True
+    assert np.array_equal(target.read(), images[0])
+    GL.glDisable(GL.GL_BLEND)
+    # what a caller may change in a pass is drawn again, not replayed
+    scene_renderer.render(scene, target)
+    scene_renderer.render(scene, target)
+    count = len(worked)
+    scene_renderer.pass_for("mirror")
+    scene_renderer.render(scene, target)
+    assert len(worked) == count + 1
+    # another target of the same size is no replay either
+    other = Framebuffer(registry, *SIZE)
+    scene_renderer.render(scene, other)
+    assert len(worked) == count + 2 and np.array_equal(other.read(), images[0])
