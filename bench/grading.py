@@ -25,19 +25,20 @@ REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
 from mirrorlab.labs import LABS  # noqa: E402
-from mirrorlab.labs.checker import reference_evidence  # noqa: E402
-from mirrorlab.labs.grading import grade_folder  # noqa: E402
-from mirrorlab.labs.sandbox import Limits  # noqa: E402
-from tests.labs.mutants import LAB20, LEGACY  # noqa: E402
+from mirrorlab.labs.trusted.checker import reference_evidence  # noqa: E402
+from mirrorlab.labs.trusted.grading import grade_folder  # noqa: E402
+from mirrorlab.labs.trusted.sandbox import Limits  # noqa: E402
+from mirrorlab.labs.trusted.variants import default_variant  # noqa: E402
+from tests.labs.classroom import starter_text  # noqa: E402
+from tests.labs.mutants import EQUIVALENT, LAB20, solution  # noqa: E402
 
 ENGINES = {"--jobs 1": (1, "pool"), "--jobs 2 (pool)": (2, "pool"),
            "--jobs 2 --engine dask (2 workers)": (2, "dask")}
 
 
 def make_class(folder: Path, students: int) -> None:
-    spec = LABS["lab20"]
-    sources = [spec.solution.read_text(), spec.starter.read_text(),
-               *(m.source() for m in (*LAB20, *LEGACY))]
+    sources = [solution("lab20"), starter_text("lab20"),
+               *(m.source() for m in (*LAB20, *EQUIVALENT))]
     for i in range(students):
         (folder / f"student{i:03d}.py").write_text(sources[i % len(sources)])
 
@@ -52,7 +53,7 @@ def main() -> int:
     folder = Path(tempfile.mkdtemp(prefix="mirrorlab-bench-class-"))
     try:
         make_class(folder, args.students)
-        reference_evidence(spec, limits)
+        reference_evidence(spec, default_variant(spec.name), None, limits)
         seconds: dict[str, list[float]] = {name: [] for name in ENGINES}
         names = list(ENGINES)
         for round_ in range(args.rounds):

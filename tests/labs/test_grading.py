@@ -1,7 +1,8 @@
-"""``mirrorlab lab grade`` on the generated class of 40 (solutions, the starter, every lab 20
-mutant twice, students whose files raise or do not parse, and the attacks): the expected
-grades.csv with ``--jobs 1``, ``--jobs 2`` (a process pool) and on a local Dask cluster
-through ``--scheduler``; the same files whichever ran it; every attack reported as that
+"""``mirrorlab lab grade`` on the generated class of 42 (solutions, the handout's allowed
+forms, the starter, every lab 20 mutant, students whose files raise or do not parse, and
+the attacks on the machine): the expected grades.csv with ``--jobs 1``, ``--jobs 2`` (a
+process pool) and on a local Dask cluster through ``--scheduler``; the same files whichever
+ran it; the gradebook and each student's own feedback page; every attack reported as that
 student's failure with nothing outside harmed; report.html in a real headless Chromium."""
 
 from __future__ import annotations
@@ -16,10 +17,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mirrorlab.labs.sandbox import UID_BASE
+from mirrorlab.labs import LABS
+from mirrorlab.labs.trusted.sandbox import UID_BASE
 from mirrorlab.scene.backgrounds import load_picture
-from tests.labs.classroom import compare
+from tests.labs.classroom import compare, starter_text
 from tests.labs.conftest import LIMITS, mirrorlab_command, read_csv
+from tests.labs.mutants import solution
 
 ENGINES = ("serial", "pool", "dask")
 
@@ -68,7 +71,7 @@ def test_grades_csv_is_the_expected_one(engine, classroom, graded):
                     "dask": "dask (2 workers)"}
     assert engine_words[engine] in result.stdout
     # the progress bar counted every submission
-    assert re.search(r"grading lab20: 100%.*40/40", result.stderr)
+    assert re.search(rf"grading lab20: 100%.*{len(expected)}/{len(expected)}", result.stderr)
 
 
 def test_every_engine_writes_the_same_files(graded):
@@ -78,12 +81,32 @@ def test_every_engine_writes_the_same_files(graded):
               for engine, out in outputs.items()}
     assert tables["serial"] == tables["pool"] == tables["dask"]
     names = sorted(p.name for p in (outputs["serial"] / "pictures").iterdir())
-    assert len(names) == 40
+    assert len(names) == len(tables["serial"]) // len(LABS["lab20"].tasks)
     for engine in ("pool", "dask"):
         assert sorted(p.name for p in (outputs[engine] / "pictures").iterdir()) == names
         for name in names:
             assert np.array_equal(load_picture(outputs["serial"] / "pictures" / name),
                                   load_picture(outputs[engine] / "pictures" / name)), name
+
+
+def test_gradebook_and_feedback_pages(graded, classroom):
+    out, _ = graded("serial")
+    _, expected = classroom
+    rows = read_csv(out / "gradebook.csv")
+    assert list(rows[0]) == ["student", "score", "max_score", "percent", "variant", "feedback"]
+    assert [r["student"] for r in rows] == sorted(expected)
+    tasks = len(LABS["lab20"].tasks)
+    for row in rows:
+        passing = sum(passed for passed, _ in expected[row["student"]].values())
+        assert (int(row["score"]), int(row["max_score"])) == (passing, tasks), row
+        assert float(row["percent"]) == pytest.approx(100 * passing / tasks, abs=0.05)
+        page = (out / row["feedback"]).read_text()
+        # the student's own name, score and picture, and nobody else's
+        assert f"{row['student']}" in page and f"{passing} of {tasks} tasks passed" in page
+        assert "data:image/png;base64," in page
+        others = [s for s in expected if s != row["student"] and s not in row["student"]
+                  and row["student"] not in s]
+        assert not [s for s in others if s in page], row["student"]
 
 
 def test_attacks_harm_nothing_outside(graded, canaries):
@@ -133,7 +156,9 @@ def test_report_opens_in_chromium_with_every_row_and_picture(graded, classroom, 
     scores = [int(s) for s in re.findall(r'<td class="score" data-sort="(\d+)"', html)]
     assert scores == sorted(scores, reverse=True) and scores[0] == 8
     shot = tmp_path / "report.png"
-    done = chromium("--window-size=2560,1600", f"--screenshot={shot}", url)
+    # in name order the first rows hold both passes (ada) and failures (the attacks)
+    done = chromium("--window-size=2560,1600", f"--screenshot={shot}",
+                    (out / "report.html").resolve().as_uri())
     assert done.returncode == 0 and shot.is_file(), done.stderr[-2000:]
     if os.environ.get("MIRRORLAB_KEEP_SCREENSHOT"):
         shutil.copy(shot, os.environ["MIRRORLAB_KEEP_SCREENSHOT"])
@@ -143,7 +168,9 @@ def test_report_opens_in_chromium_with_every_row_and_picture(graded, classroom, 
     pixels = image.reshape(-1, 3).astype(int)
     assert np.any(np.all(np.abs(pixels - (0xe3, 0xf6, 0xe3)) <= 2, axis=1))
     assert np.any(np.all(np.abs(pixels - (0xfb, 0xe4, 0xe4)) <= 2, axis=1))
-    assert np.mean(pixels.sum(axis=1) < 200) > 0.05, "no thumbnails on screen"
+    # the thumbnails: the lab's dark background (0.16, 0.18, 0.22) in their frames
+    background = np.all(np.abs(pixels - (41, 46, 56)) <= 6, axis=1)
+    assert np.mean(background) > 0.01, "no thumbnails on screen"
 
 
 def test_a_worker_killed_mid_submission_has_it_graded_elsewhere_once(tmp_path,
@@ -157,13 +184,12 @@ def test_a_worker_killed_mid_submission_has_it_graded_elsewhere_once(tmp_path,
 
     from distributed import Client
 
-    from mirrorlab.labs import LABS
-    from mirrorlab.labs.sandbox import uid_processes
+    from mirrorlab.labs.trusted.sandbox import uid_processes
 
     folder = tmp_path / "class"
     folder.mkdir()
-    (folder / "ada.py").write_text(LABS["lab20"].solution.read_text())
-    (folder / "cy.py").write_text(LABS["lab20"].starter.read_text())
+    (folder / "ada.py").write_text(solution("lab20"))
+    (folder / "cy.py").write_text(starter_text("lab20"))
     (folder / "slow.py").write_text("while True:\n    pass\n")
     out = tmp_path / "grades"
     grading = subprocess.Popen(

@@ -10,8 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from mirrorlab.labs import LABS, sandbox
-from mirrorlab.labs.sandbox import Limits, new_box, run_sandboxed, uid_processes
+from mirrorlab.labs import LABS
+from mirrorlab.labs.trusted import sandbox
+from mirrorlab.labs.trusted.sandbox import Limits, new_box, run_sandboxed, uid_processes
 
 SYSTEM_PYTHON = "/usr/bin/python3"
 
