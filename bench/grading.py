@@ -1,6 +1,10 @@
-"""Submissions graded per minute by `mirrorlab lab grade`, on each engine, side by side.
+"""Submissions graded per minute by `mirrorlab lab grade`, on each engine, side by side;
+with --before REV, also the checker of an earlier revision beside this one: the seconds
+of one `mirrorlab lab check` and submissions a minute of `lab grade --jobs 2`, what
+running the student's file behind the pipe costs.
 
     python bench/grading.py [--students 40] [--rounds 2] [--json PATH]
+                            [--before REV] [--checks 8] [--skip-engines]
 
 Builds a class of lab 20 submissions (the reference solution, the untouched starter and
 every mutant of tests/labs/mutants.py, repeated up to --students), then grades it with
@@ -8,14 +12,22 @@ every mutant of tests/labs/mutants.py, repeated up to --students), then grades i
 and --jobs 2 on a local Dask cluster of two worker processes (its start-up counted, and
 also reported alone). The engines alternate, in rotating order, for --rounds rounds; the
 medians are reported. The reference run is made once, before the timings.
+
+--before REV exports REV of this repository (git archive) into a temporary folder and runs
+its command line with that folder first on PYTHONPATH (same interpreter, same venv, same
+machine), alternating with this checkout's, for --checks checks of the reference
+solution and --rounds gradings of the class at --jobs 2: both judge the same files, each
+against its own cached (or shipped) reference.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import shutil
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -43,16 +55,88 @@ def make_class(folder: Path, students: int) -> None:
         (folder / f"student{i:03d}.py").write_text(sources[i % len(sources)])
 
 
+def command(design: Path | None, *args: str, cache: Path) -> float:
+    """Seconds one ``mirrorlab ARGS`` takes, run from this checkout or from ``design`` (an
+    exported earlier revision)."""
+    env = {**os.environ, "MIRRORLAB_CACHE": str(cache)}
+    env.pop("MIRRORLAB_SOLUTIONS", None)
+    if design is not None:
+        env["PYTHONPATH"] = str(design)
+    started = time.perf_counter()
+    done = subprocess.run([sys.executable, "-m", "mirrorlab.cli", *args], cwd=design or REPO,
+                          env=env, capture_output=True, text=True)
+    seconds = time.perf_counter() - started
+    if done.returncode not in (0, 1):
+        raise SystemExit(f"{' '.join(args)} failed: {done.stderr.strip()[-500:]}")
+    return seconds
+
+
+def compare(before: str, folder: Path, checks: int, rounds: int, students: int) -> dict:
+    """This checkout's checker and REV's, side by side (see the module's text)."""
+    old = Path(tempfile.mkdtemp(prefix="mirrorlab-bench-before-"))
+    cache = Path(tempfile.mkdtemp(prefix="mirrorlab-bench-cache-"))
+    try:
+        archive = subprocess.run(["git", "-C", str(REPO), "archive", before],
+                                 capture_output=True, check=True)
+        subprocess.run(["tar", "-x", "-C", str(old)], input=archive.stdout, check=True)
+        solution_file = folder / "student000.py"
+        designs = {f"before ({before})": old, "after (this checkout)": None}
+        out = cache / "check.png"
+        for design in designs.values():  # warm: each design makes or finds its reference
+            command(design, "lab", "check", "lab20", str(solution_file), "--out", str(out),
+                    cache=cache)
+        timings: dict[str, dict[str, list[float]]] = {n: {"check": [], "grade": []}
+                                                      for n in designs}
+        names = list(designs)
+        for i in range(checks):
+            for name in names[i % 2:] + names[:i % 2]:
+                timings[name]["check"].append(command(
+                    designs[name], "lab", "check", "lab20", str(solution_file), "--out",
+                    str(out), cache=cache))
+        for i in range(rounds):
+            for name in names[i % 2:] + names[:i % 2]:
+                timings[name]["grade"].append(command(
+                    designs[name], "lab", "grade", "lab20", str(folder), "--jobs", "2",
+                    "--out-dir", str(cache / "grades"), cache=cache))
+    finally:
+        shutil.rmtree(old, ignore_errors=True)
+        shutil.rmtree(cache, ignore_errors=True)
+    print(f"\nthe pipe's cost: {checks} checks of the solution and {rounds} gradings of "
+          f"{students} submissions (--jobs 2) each, alternating; medians:")
+    print("| checker | one lab check (s) | lab grade --jobs 2 (s) | submissions per minute |")
+    print("|---|---:|---:|---:|")
+    rows = {}
+    for name, values in timings.items():
+        check, grade = statistics.median(values["check"]), statistics.median(values["grade"])
+        rows[name] = {**values, "per_minute": 60 * students / grade}
+        print(f"| {name} | {check:.2f} | {grade:.1f} | {60 * students / grade:.0f} |")
+    first, second = (statistics.median(timings[n]["check"]) for n in names)
+    print(f"one check: after / before = {second / first:.2f}")
+    return rows
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--students", type=int, default=40)
     parser.add_argument("--rounds", type=int, default=2)
     parser.add_argument("--json", help="write the figures here as JSON")
+    parser.add_argument("--before", metavar="REV",
+                        help="also measure the checker of git revision REV beside this one")
+    parser.add_argument("--checks", type=int, default=8,
+                        help="with --before: lab checks timed per checker")
+    parser.add_argument("--skip-engines", action="store_true",
+                        help="measure only what --before asks")
     args = parser.parse_args()
     spec, limits = LABS["lab20"], Limits()
     folder = Path(tempfile.mkdtemp(prefix="mirrorlab-bench-class-"))
+    figures: dict = {"students": args.students}
     try:
         make_class(folder, args.students)
+        if args.before:
+            figures["before_after"] = compare(args.before, folder, args.checks, args.rounds,
+                                              args.students)
+        if args.skip_engines:
+            return _write(args, figures)
         reference_evidence(spec, default_variant(spec.name), None, limits)
         seconds: dict[str, list[float]] = {name: [] for name in ENGINES}
         names = list(ENGINES)
@@ -82,9 +166,13 @@ def main() -> int:
         rows[name] = {"seconds": values, "per_minute": 60 * args.students / median}
         print(f"| {name} | {median:.1f} | {60 * args.students / median:.0f} |")
     print(f"Dask LocalCluster(2) start-up alone: {statistics.median(starts):.1f} s")
+    figures.update(engines=rows, dask_start=starts)
+    return _write(args, figures)
+
+
+def _write(args: argparse.Namespace, figures: dict) -> int:
     if args.json:
-        Path(args.json).write_text(json.dumps({"students": args.students, "engines": rows,
-                                               "dask_start": starts}, indent=2))
+        Path(args.json).write_text(json.dumps(figures, indent=2))
     return 0
 
 

@@ -7,6 +7,7 @@ student's failure with nothing outside harmed; report.html in a real headless Ch
 
 from __future__ import annotations
 
+import html
 import os
 import re
 import shutil
@@ -101,9 +102,10 @@ def test_gradebook_and_feedback_pages(graded, classroom):
         assert (int(row["score"]), int(row["max_score"])) == (passing, tasks), row
         assert float(row["percent"]) == pytest.approx(100 * passing / tasks, abs=0.05)
         page = (out / row["feedback"]).read_text()
+        assert "data:image/png;base64," in page
+        page = html.unescape(re.sub(r"data:image/png;base64,[A-Za-z0-9+/=]+", "", page))
         # the student's own name, score and picture, and nobody else's
         assert f"{row['student']}" in page and f"{passing} of {tasks} tasks passed" in page
-        assert "data:image/png;base64," in page
         others = [s for s in expected if s != row["student"] and s not in row["student"]
                   and row["student"] not in s]
         assert not [s for s in others if s in page], row["student"]

@@ -12,6 +12,7 @@ and the shipped reference data.
 from __future__ import annotations
 
 import json
+import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -20,6 +21,9 @@ import numpy as np
 
 MAX_JSON = 16 << 20
 MAX_ARRAYS = 64 << 20
+MAX_UNPACKED = 256 << 20
+"""Evidence files may come from a student's folder (a released reference): their sizes,
+packed and unpacked, are checked before they are read."""
 
 
 @dataclass
@@ -132,10 +136,14 @@ class Evidence:
             if not path.is_file() or path.stat().st_size > limit:
                 raise ValueError(f"no readable {path.name} in {folder}")
         try:
+            with zipfile.ZipFile(arrays_path) as archive:
+                unpacked = sum(member.file_size for member in archive.infolist())
+            if unpacked > MAX_UNPACKED:
+                raise ValueError(f"its arrays unpack to {unpacked >> 20} MiB")
             plain = json.loads(text_path.read_text())
             with np.load(arrays_path, allow_pickle=False) as data:
                 arrays = {key: data[key] for key in data.files}
-        except (OSError, ValueError, UnicodeDecodeError) as exc:
+        except (OSError, ValueError, UnicodeDecodeError, zipfile.BadZipFile) as exc:
             raise ValueError(f"unreadable evidence in {folder}: {exc}") from None
         if not isinstance(plain, dict) or not isinstance(plain.get("lab"), str):
             raise ValueError(f"unreadable evidence in {folder}")

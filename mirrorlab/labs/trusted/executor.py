@@ -54,7 +54,7 @@ class Stop(Exception):
 class RunLimits:
     """What the trusted side accepts from one run."""
 
-    calls: int = 100_000
+    calls: int = 50_000
     frame_calls: int = 20_000
     frame_vertices: int = 1024
     textures: int = 64
@@ -116,6 +116,10 @@ class Executor:
     def step(self, header: dict[str, Any], functions: tuple[str, ...]) -> None:
         """An ``enter`` or ``leave`` note from the runner: the lab function running now."""
         function = header.get("function")
+        self.calls += 1
+        if self.calls > self.limits.calls:
+            raise Stop(f"stopped after {self.limits.calls} calls and notes in one run (the "
+                       f"labs make a few hundred): a loop that never ends?")
         if function not in functions:
             return
         steps = self.tracker.steps
@@ -144,7 +148,7 @@ class Executor:
         if self.calls > self.limits.calls:
             raise Stop(f"stopped after {self.limits.calls} calls in one run (the labs make a "
                        f"few hundred): a loop that never ends?")
-        if self.frame_calls > self.limits.frame_calls:
+        if self.frame_calls > self.limits.frame_calls and self.tracker.frames:
             raise Stop(f"stopped: more than {self.limits.frame_calls} calls in one frame")
         if not isinstance(name, str):
             return self.error(CallError("TypeError", "a call without a name"), "?")
@@ -337,7 +341,8 @@ class Executor:
         values = args[0] if name.endswith("v") else args
         self.frame_vertices += 1
         if self.frame_vertices > self.limits.frame_vertices:
-            raise Stop(f"stopped: more than {self.limits.frame_vertices} vertices in one frame "
+            where = "in one frame" if self.tracker.frames else "before the first frame"
+            raise Stop(f"stopped: more than {self.limits.frame_vertices} vertices {where} "
                        f"(the labs draw a handful with glVertex)")
         if name.endswith("v"):
             getattr(GL, name)(self._array(name, values))

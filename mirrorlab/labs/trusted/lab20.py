@@ -150,14 +150,14 @@ def judge_camera(student: Evidence, geometry: dict[str, Any],
     for name, variant in context.differing_others().items():
         if capture_matches(projection, modelview, lab20_geometry(variant)):
             context.matched = name
-            return False, (f"this capture is for {_another(name)} mirror, not yours: your "
-                           f"mirror's corners are {_corners(geometry)}")
+            return False, (f"this capture is for {_another(name)}, not yours: your mirror's "
+                           f"corners are {_corners(geometry)}")
     return False, _camera_hint(projection, modelview, geometry)
 
 
 def _another(name: str) -> str:
-    return "the lab's own (default variant)" if name == "default" else \
-        "another student's variant's"
+    return "the lab's own mirror (the default variant)" if name == "default" else \
+        "another student's mirror (their variant's numbers)"
 
 
 def _camera_hint(projection: np.ndarray, modelview: np.ndarray,
@@ -443,6 +443,14 @@ def judge_quad(student: Evidence, geometry: dict[str, Any], context: Context
     points = [w[:3] / w[3] if abs(w[3]) > 1e-12 else w[:3] for w in world]
     texcoords = [np.asarray(v[1][0], dtype=np.float64) for v in vertices]
     g = geometry
+    corners = np.array(g["corners"], dtype=np.float64)
+    for name, variant in context.differing_others().items():
+        theirs = np.array(lab20_geometry(variant)["corners"], dtype=np.float64)
+        if all(np.min(np.linalg.norm(theirs - p, axis=1)) < 1e-3 for p in points) and \
+                not all(np.min(np.linalg.norm(corners - p, axis=1)) < 1e-3 for p in points):
+            context.matched = context.matched or name
+            return False, (f"this quad is {_another(name)}, not yours: your mirror's corners "
+                           f"are {_corners(g)}")
     xs = np.array([p[0] for p in points])
     if not np.allclose(xs, g["x"], atol=1e-3):
         if np.allclose(xs, xs[0], atol=1e-3):
@@ -450,14 +458,6 @@ def judge_quad(student: Evidence, geometry: dict[str, Any], context: Context
                            f"x = {g['x']:g}: its corners are {_corners(g)}")
         return False, (f"the quad at {at} is not flat in the mirror's plane x = {g['x']:g}: its "
                        f"corners are {_corners(g)}")
-    corners = np.array(g["corners"], dtype=np.float64)
-    for name, variant in context.differing_others().items():
-        theirs = np.array(lab20_geometry(variant)["corners"], dtype=np.float64)
-        if all(np.min(np.linalg.norm(theirs - p, axis=1)) < 1e-3 for p in points) and \
-                not all(np.min(np.linalg.norm(corners - p, axis=1)) < 1e-3 for p in points):
-            context.matched = context.matched or name
-            return False, (f"this quad is {_another(name)} mirror, not yours: your mirror's "
-                           f"corners are {_corners(g)}")
     for point in points:
         inside = g["y0"] - 1e-3 <= point[1] <= g["y1"] + 1e-3 and \
             g["z0"] - 1e-3 <= point[2] <= g["z1"] + 1e-3

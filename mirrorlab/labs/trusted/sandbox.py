@@ -206,7 +206,7 @@ def bwrap_arguments(box: Path) -> list[str]:
     for folder in numpy_folders():
         root.bind(folder, Path(SANDBOX_SITE, folder.name))
     root.bind(box, Path(SANDBOX_BOX), writable=True)
-    return ["bwrap", *root.arguments, "--chdir", SANDBOX_BOX]
+    return [shutil.which("bwrap") or "bwrap", *root.arguments, "--chdir", SANDBOX_BOX]
 
 
 def _environment(home: str) -> dict[str, str]:

@@ -287,8 +287,10 @@ def judge(spec: LabSpec, student: Evidence, reference: Evidence, context: Contex
         "texgen_draw": judge_texgen_draw(student, unit),
     }
     verdicts["side_by_side"] = judge_side_by_side(student, reference, verdicts, side)
+    observed = _observed(student)
     for name, other in context.differing_others().items():
-        if (other["shader_side"], other["unit"]) != (side, unit) and _fits(student, other):
+        if observed is not None and observed != (side, unit) and \
+                observed == (other["shader_side"], int(other["unit"])):
             context.matched = name
             verdicts["side_by_side"] = (False, (
                 f"this file is made for {'the lab' if name == 'default' else 'another'}'s "
@@ -310,20 +312,21 @@ def judge(spec: LabSpec, student: Evidence, reference: Evidence, context: Contex
     return results(spec, student, verdicts, GLSL_FUNCTIONS)
 
 
-def _fits(student: Evidence, other: Any) -> bool:
-    """Whether the student's draws follow ``other``'s variant: its texgen unit and side."""
+def _observed(student: Evidence) -> tuple[str, int] | None:
+    """The (shader's side, texgen unit) the student's calls follow, when they show both:
+    the viewport the shader's cone was drawn in and the one unit texgen was on for at the
+    texgen cone."""
     draw = _texgen_draw(student)
     shader = student.events("draw", who="draw_cone_shader", within="display")
     if draw is None or not shader:
-        return False
-    seen = draw.get("seen") or {}
-    units = _units(draw)
-    on = [u for u, e in units.items() if "GL_TEXTURE_GEN_S" in e]
+        return None
+    on = [u for u, e in _units(draw).items() if "GL_TEXTURE_GEN_S" in e]
+    if len(on) != 1:
+        return None
     frame = student.image("frame")
     width = frame.shape[1] if frame is not None else 256
     in_left = (shader[-1].get("viewport") or [0])[0] < width // 2
-    return bool(on == [int(other["unit"])] and not seen.get("gen_s")
-                and in_left == (other["shader_side"] == "left"))
+    return ("left" if in_left else "right", on[0])
 
 
 def check_picture(student: Evidence, reference: Evidence) -> np.ndarray:
