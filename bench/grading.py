@@ -13,11 +13,13 @@ and --jobs 2 on a local Dask cluster of two worker processes (its start-up count
 also reported alone). The engines alternate, in rotating order, for --rounds rounds; the
 medians are reported. The reference run is made once, before the timings.
 
---before REV exports REV of this repository (git archive) into a temporary folder and runs
-its command line with that folder first on PYTHONPATH (same interpreter, same venv, same
-machine), alternating with this checkout's, for --checks checks of the reference
-solution and --rounds gradings of the class at --jobs 2: both judge the same files, each
-against its own cached (or shipped) reference.
+--before REV exports REV of this repository (git archive) into a temporary folder, makes a
+venv beside it whose mirrorlab is that export and whose other packages are this venv's
+(a .pth file; same interpreter, same machine), and runs its command line alternating with
+this checkout's, for --checks checks of the reference solution and --rounds gradings of
+the class at --jobs 2: both judge the same files, each against its own cached (or
+shipped) reference. (The export and its venv sit one folder below the temporary folder:
+an earlier sandbox could not reach a venv deeper.)
 """
 
 from __future__ import annotations
@@ -55,32 +57,43 @@ def make_class(folder: Path, students: int) -> None:
         (folder / f"student{i:03d}.py").write_text(sources[i % len(sources)])
 
 
-def command(design: Path | None, *args: str, cache: Path) -> float:
-    """Seconds one ``mirrorlab ARGS`` takes, run from this checkout or from ``design`` (an
-    exported earlier revision)."""
+def command(python: str, *args: str, cache: Path) -> float:
+    """Seconds one ``mirrorlab ARGS`` takes, run by ``python`` (this venv's, or the venv of
+    an exported earlier revision)."""
     env = {**os.environ, "MIRRORLAB_CACHE": str(cache)}
     env.pop("MIRRORLAB_SOLUTIONS", None)
-    if design is not None:
-        env["PYTHONPATH"] = str(design)
     started = time.perf_counter()
-    done = subprocess.run([sys.executable, "-m", "mirrorlab.cli", *args], cwd=design or REPO,
-                          env=env, capture_output=True, text=True)
+    done = subprocess.run([python, "-m", "mirrorlab.cli", *args], cwd=cache, env=env,
+                          capture_output=True, text=True)
     seconds = time.perf_counter() - started
-    if done.returncode not in (0, 1):
+    if done.returncode not in (0, 1) or (done.returncode == 1 and args[1] == "grade"):
         raise SystemExit(f"{' '.join(args)} failed: {done.stderr.strip()[-500:]}")
+    if args[1] == "check" and "tasks passed" not in done.stdout:
+        raise SystemExit(f"{' '.join(args)} judged nothing: {done.stdout[-300:]} "
+                         f"{done.stderr.strip()[-500:]}")
     return seconds
 
 
 def compare(before: str, folder: Path, checks: int, rounds: int, students: int) -> dict:
     """This checkout's checker and REV's, side by side (see the module's text)."""
     old = Path(tempfile.mkdtemp(prefix="mirrorlab-bench-before-"))
+    venv = Path(tempfile.mkdtemp(prefix="mirrorlab-bench-venv-"))
     cache = Path(tempfile.mkdtemp(prefix="mirrorlab-bench-cache-"))
     try:
         archive = subprocess.run(["git", "-C", str(REPO), "archive", before],
                                  capture_output=True, check=True)
         subprocess.run(["tar", "-x", "-C", str(old)], input=archive.stdout, check=True)
+        for made in (old, venv, cache):  # an earlier sandbox's dropped user must enter them
+            made.chmod(0o755)
+        base = Path(getattr(sys, "_base_executable", sys.executable)).resolve()
+        subprocess.run([str(base), "-m", "venv", "--without-pip", str(venv)], check=True)
+        site = next(venv.glob("lib/python3*/site-packages"))
+        import numpy
+
+        (site / "before.pth").write_text(f"{old}\n{Path(numpy.__file__).parent.parent}\n")
         solution_file = folder / "student000.py"
-        designs = {f"before ({before})": old, "after (this checkout)": None}
+        designs = {f"before ({before})": str(venv / "bin" / "python"),
+                   "after (this checkout)": sys.executable}
         out = cache / "check.png"
         for design in designs.values():  # warm: each design makes or finds its reference
             command(design, "lab", "check", "lab20", str(solution_file), "--out", str(out),
@@ -99,8 +112,8 @@ def compare(before: str, folder: Path, checks: int, rounds: int, students: int) 
                     designs[name], "lab", "grade", "lab20", str(folder), "--jobs", "2",
                     "--out-dir", str(cache / "grades"), cache=cache))
     finally:
-        shutil.rmtree(old, ignore_errors=True)
-        shutil.rmtree(cache, ignore_errors=True)
+        for made in (old, venv, cache):
+            shutil.rmtree(made, ignore_errors=True)
     print(f"\nthe pipe's cost: {checks} checks of the solution and {rounds} gradings of "
           f"{students} submissions (--jobs 2) each, alternating; medians:")
     print("| checker | one lab check (s) | lab grade --jobs 2 (s) | submissions per minute |")

@@ -8,6 +8,8 @@ no lab session, and these say so in one line.
 
 from __future__ import annotations
 
+from typing import Any
+
 
 class LabSetupError(RuntimeError):
     """No lab session is open; one line."""
@@ -26,13 +28,13 @@ def _no_session() -> LabSetupError:
                          "FILE' or check it with 'mirrorlab lab check LAB FILE'")
 
 
-def lab20() -> None:
+def lab20() -> Any:
     raise _no_session()
 
 
-def spheremap() -> None:
+def spheremap() -> Any:
     raise _no_session()
 
 
-def cubemap() -> None:
+def cubemap() -> Any:
     raise _no_session()

@@ -228,3 +228,13 @@ def test_a_worker_killed_mid_submission_has_it_graded_elsewhere_once(tmp_path,
         time.sleep(0.05)
     else:
         raise AssertionError("the killed worker's sandboxed processes are still running")
+    # what the killed worker's processes left in the temporary folder, the next run of
+    # any worker on this machine removes (their process ids are gone)
+    from mirrorlab.labs.trusted.sandbox import new_box, sweep_stale
+
+    scratch = Path(tempfile.gettempdir())
+    sweep_stale(scratch)
+    left = [p.name for p in scratch.iterdir() if p.name.startswith(
+        ("mirrorlab-box-", "mirrorlab-check-")) and int(p.name.split("-")[2]) != os.getpid()]
+    assert left == [], left
+    new_box(scratch).rmdir()

@@ -53,7 +53,7 @@ def _module(name: str, constants: dict[str, int], functions: list[str],
         setattr(module, function, _offered(remote, op, function, kinds) if kinds is not None
                 else _unavailable(function))
         names.append(function)
-    module.__all__ = names
+    module.__dict__["__all__"] = names
     return module
 
 
@@ -63,16 +63,15 @@ def build_modules(remote: Remote, description: dict) -> dict[str, ModuleType]:
                  description["gl_offered"], remote, "gl")
     for type_name, ctype in CTYPES.items():
         setattr(gl, type_name, ctype)
-        gl.__all__.append(type_name)
+        gl.__dict__["__all__"].append(type_name)
     glu = _module("OpenGL.GLU", description["glu_constants"], description["glu_functions"],
                   description["glu_offered"], remote, "glu")
     error = ModuleType("OpenGL.error")
-    error.Error = Exception
-    error.GLError = GLError
-    error.NullFunctionError = NullFunctionError
-    gl.GLError = GLError
+    for name, value in (("Error", Exception), ("GLError", GLError),
+                        ("NullFunctionError", NullFunctionError)):
+        setattr(error, name, value)
+    gl.__dict__["GLError"] = GLError
     package = ModuleType("OpenGL")
     package.__path__ = []  # a package: "import OpenGL.GL" finds its submodules in sys.modules
-    package.GL, package.GLU, package.error = gl, glu, error
-    package.ERROR_CHECKING = True
+    package.__dict__.update(GL=gl, GLU=glu, error=error, ERROR_CHECKING=True)
     return {"OpenGL": package, "OpenGL.GL": gl, "OpenGL.GLU": glu, "OpenGL.error": error}

@@ -161,7 +161,7 @@ def build_kit(remote: Remote, description: dict) -> ModuleType:
 
     for name in LAB_CLASSES:
         setattr(module, name, opener(name))
-    module.LabSetupError = LabSetupError
-    module.StudentShaderError = StudentShaderError
-    module.ENV_UNIT = 1
+    for name, value in (("LabSetupError", LabSetupError),
+                        ("StudentShaderError", StudentShaderError), ("ENV_UNIT", 1)):
+        setattr(module, name, value)
     return module

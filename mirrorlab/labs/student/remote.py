@@ -10,6 +10,7 @@ from typing import Any
 
 from .wire import DTYPES, Channel
 
+numpy: Any
 try:  # the sandbox may offer numpy; nothing here needs it
     import numpy
 except ImportError:  # pragma: no cover - depends on the sandbox
@@ -151,7 +152,7 @@ class Remote:
         self.pixel_types = pixel_types
 
     def line(self) -> int:
-        frame = sys._getframe(2)
+        frame: Any = sys._getframe(2)
         while frame is not None:
             if frame.f_code.co_filename == self.path:
                 return frame.f_lineno
@@ -217,8 +218,8 @@ def decode(value: Any, payloads: list[tuple[str, list[int], bytes]]) -> Any:
             return data
         if numpy is not None:
             return numpy.frombuffer(data, dtype=dtype).reshape(shape).copy()
-        items = array.array({"u1": "B", "i1": "b", "u2": "H", "i2": "h", "u4": "I",
-                             "i4": "i", "f4": "f", "f8": "d"}[dtype], data).tolist()
+        items: list[Any] = array.array({"u1": "B", "i1": "b", "u2": "H", "i2": "h", "u4": "I",
+                                        "i4": "i", "f4": "f", "f8": "d"}[dtype], data).tolist()
         for size in reversed(shape[1:]):
             items = [items[i:i + size] for i in range(0, len(items), size)]
         return items

@@ -125,7 +125,8 @@ def main(argv: list[str]) -> int:
     kit = build_kit(remote, description)
     package, labs = ModuleType("mirrorlab"), ModuleType("mirrorlab.labs")
     package.__path__, labs.__path__ = [], []
-    package.labs, labs.kit = labs, kit
+    package.__dict__["labs"] = labs
+    labs.__dict__["kit"] = kit
     install({**modules, "mirrorlab": package, "mirrorlab.labs": labs,
              "mirrorlab.labs.kit": kit})
     run = Run(channel, path, list(description["functions"]))

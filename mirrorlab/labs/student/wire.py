@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import os
 import struct
+from collections.abc import Sequence
 
 LENGTH = struct.Struct(">I")
 DTYPES = {"u1": 1, "i1": 1, "u2": 2, "i2": 2, "u4": 4, "i4": 4, "f4": 4, "f8": 8}
@@ -24,7 +25,7 @@ class PipeClosed(EOFError):
     """The other end closed the pipe."""
 
 
-def encode(header: dict, arrays: list[tuple[str, list[int], bytes]] = ()) -> bytes:
+def encode(header: dict, arrays: Sequence[tuple[str, list[int], bytes]] = ()) -> bytes:
     """One message: ``header`` (JSON-able) and ``arrays`` as (dtype, shape, bytes)."""
     if arrays:
         header = {**header, "arrays": [[d, list(s), len(b)] for d, s, b in arrays]}
@@ -38,7 +39,7 @@ class Channel:
     def __init__(self, read_fd: int, write_fd: int) -> None:
         self.read_fd, self.write_fd = read_fd, write_fd
 
-    def send(self, header: dict, arrays: list[tuple[str, list[int], bytes]] = ()) -> None:
+    def send(self, header: dict, arrays: Sequence[tuple[str, list[int], bytes]] = ()) -> None:
         data = memoryview(encode(header, arrays))
         while data:
             written = os.write(self.write_fd, data)

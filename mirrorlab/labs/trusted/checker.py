@@ -136,13 +136,14 @@ def trim_reference(evidence: Evidence) -> Evidence:
 
 
 def make_reference(spec: LabSpec, variant: Variant, solution: str, limits: Limits,
-                   size: tuple[int, int]) -> Evidence:
+                   size: tuple[int, int], keep: bool = False) -> Evidence:
     """The evidence of ``solution`` (the teacher's, with ``variant``'s numbers) run like any
     submission; CheckError when it does not run cleanly."""
     from mirrorlab.labs.content import solution_for
 
     text = solution_for(solution, variant)
-    evidence = run_job(spec.name, text.encode(), "solution.py", variant, limits, size)
+    evidence = run_job(spec.name, text.encode(), "solution.py", variant, limits, size,
+                       keep=keep)
     if evidence.status != "ok":
         raise CheckError(f"the reference solution of {spec.name} did not run: "
                          f"{evidence.detail}")
@@ -156,7 +157,7 @@ def make_reference(spec: LabSpec, variant: Variant, solution: str, limits: Limit
 
 def reference_evidence(spec: LabSpec, variant: Variant, solutions: Path | None,
                        limits: Limits = DEFAULT_LIMITS, size: tuple[int, int] = CHECK_SIZE,
-                       released: Path | None = None) -> Evidence:
+                       released: Path | None = None, keep: bool = False) -> Evidence:
     """The reference evidence for ``variant``: made from the teacher's ``solutions`` when
     given (cached), else shipped in the package (the default variant) or in a released
     folder (``released``); CheckError when there is none."""
@@ -169,7 +170,7 @@ def reference_evidence(spec: LabSpec, variant: Variant, solutions: Path | None,
             return Evidence.load(folder)
         except ValueError:
             pass
-        evidence = make_reference(spec, variant, solution, limits, size)
+        evidence = make_reference(spec, variant, solution, limits, size, keep)
         folder.parent.mkdir(parents=True, exist_ok=True)
         staging = Path(f"{folder}.{os.getpid()}.tmp")
         shutil.rmtree(staging, ignore_errors=True)
@@ -198,13 +199,14 @@ def reference_evidence(spec: LabSpec, variant: Variant, solutions: Path | None,
 
 def check_submission(spec: LabSpec, source: bytes, reference: Evidence, context: Context,
                      student: str = "", file_name: str = "submission.py",
-                     limits: Limits = DEFAULT_LIMITS, size: tuple[int, int] = CHECK_SIZE
-                     ) -> CheckResult:
-    """Run ``source`` in the sandbox through the trusted checker and judge it against
-    ``reference`` for ``context.variant``."""
+                     limits: Limits = DEFAULT_LIMITS, size: tuple[int, int] = CHECK_SIZE,
+                     keep: bool = False) -> CheckResult:
+    """Run ``source`` in the sandbox through the trusted checker (with ``keep``, this
+    process's kept checker process) and judge it against ``reference`` for
+    ``context.variant``."""
     module = judges()[spec.name]
     started = time.perf_counter()
-    evidence = run_job(spec.name, source, file_name, context.variant, limits, size)
+    evidence = run_job(spec.name, source, file_name, context.variant, limits, size, keep)
     try:
         results = module.judge(spec, evidence, reference, context)
     except Exception as exc:  # a judge's own fault: every task fails, saying so

@@ -222,13 +222,14 @@ def judge_cameras(student: Evidence, center: tuple[float, float, float], face_si
     for i, draw in enumerate(draws):
         viewport = draw.get("viewport")
         if viewport != [0, 0, face_size, face_size]:
-            setting = (draw.get("state") or {}).get("viewport", {})
+            setting = (draw.get("state") or {}).get("viewport") or {}
             line = setting.get("line", 0)
             inside = " inside capture_cube()'s loop" if setting.get("function") == \
                 "capture_cube" else ""
             by = f" (glViewport at {student.at(line)}{inside})" if line else ""
+            size = viewport or [0, 0, 0, 0]
             return False, (f"the viewport when the {CUBE_FACE_NAMES[i]} face is drawn is "
-                           f"{viewport[2]} x {viewport[3]}{by}; draw each face in "
+                           f"{size[2]} x {size[3]}{by}; draw each face in "
                            f"glViewport(0, 0, FACE_SIZE, FACE_SIZE)")
     return True, ""
 
@@ -415,13 +416,12 @@ def judge(spec: LabSpec, student: Evidence, reference: Evidence, context: Contex
     if _mipmapped(student) and "sphere" in regions and student.image("frame") is not None:
         # mipmaps made after the six faces are allowed: the sphere is then compared as a
         # trilinear filter sees it, both pictures blurred alike there
-        sphere = regions["sphere"]
-        assert sphere is not None and frame is not None
-        ours = student.image("frame")
-        assert ours is not None
-        mine, theirs = ours.copy(), frame.copy()
+        region, ours, ref_frame = regions["sphere"], student.image("frame"), frame
+        assert region is not None and ours is not None and ref_frame is not None
+        sphere = region
+        mine, theirs = ours.copy(), ref_frame.copy()
         mine[sphere] = _blurred(ours)[sphere]
-        theirs[sphere] = _blurred(frame)[sphere]
+        theirs[sphere] = _blurred(ref_frame)[sphere]
         judged = Evidence(student.lab, student.status, arrays={"frame": mine},
                           state=student.state)
         reference = Evidence(reference.lab, arrays={"frame": theirs})

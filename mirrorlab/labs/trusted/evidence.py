@@ -82,7 +82,7 @@ class Evidence:
     def last_frame(self) -> list[dict[str, Any]]:
         return self.frames[-1]["events"] if self.frames else []
 
-    def events(self, kind: str, frame: int = -1, who: str | None = None,
+    def events(self, kind: str, frame: int | None = -1, who: str | None = None,
                within: str | None = None) -> list[dict[str, Any]]:
         """Events of ``kind`` in frame ``frame`` (-1: the last; None: the set-up), drawn by
         ``who``, while lab function ``within`` ran."""
@@ -117,14 +117,18 @@ class Evidence:
         return self.textures.get(str(name)) if name else None
 
     # ---------------------------------------------------------------- files
-    def save(self, folder: Path) -> None:
-        """``folder/evidence.json`` and ``folder/arrays.npz``."""
+    def save(self, folder: Path, compress: bool = True) -> None:
+        """``folder/evidence.json`` and ``folder/arrays.npz`` (zip-compressed, or not when
+        it is read back at once)."""
         folder.mkdir(parents=True, exist_ok=True)
         plain = {key: getattr(self, key) for key in (
             "lab", "status", "detail", "errors", "call_errors", "frames", "setup",
             "textures", "state", "variant", "source")}
         (folder / "evidence.json").write_text(json.dumps(plain, default=_plain))
-        np.savez_compressed(folder / "arrays.npz", **self.arrays)
+        if compress:
+            np.savez_compressed(folder / "arrays.npz", **self.arrays)  # type: ignore[arg-type]
+        else:
+            np.savez(folder / "arrays.npz", **self.arrays)  # type: ignore[arg-type]
 
     @classmethod
     def load(cls, folder: Path) -> Evidence:

@@ -87,6 +87,7 @@ class Executor:
 
     def __init__(self, session: LabBase, limits: RunLimits | None = None) -> None:
         self.session, self.limits = session, limits or RunLimits()
+        self.lab: Any = session  # the lab's own drawing calls, by the session's kind
         self.tracker = Tracker()
         self.calls = self.frame_calls = self.frame_vertices = 0
         self.gl_seconds = 0.0
@@ -846,16 +847,16 @@ class Executor:
                                              GL_TEXTURE_2D) or None
                 shown[node] = textures[node]
         used = [t for t in textures.values() if t]
-        bound = self.record_draw("draw_scene", lambda: self.session.draw_scene(textures),
+        bound = self.record_draw("draw_scene", lambda: self.lab.draw_scene(textures),
                                  self._taint_of(used), textures=shown)
         self._after_kit_draw(bound)
 
     def kit_draw_objects(self, args: list[Any]) -> None:
-        bound = self.record_draw("draw_scene", self.session.draw_scene, "")
+        bound = self.record_draw("draw_scene", self.lab.draw_scene, "")
         self._after_kit_draw(bound)
 
     def kit_backdrop(self, args: list[Any]) -> None:
-        bound = self.record_draw("draw_backdrop", self.session.draw_backdrop, "")
+        bound = self.record_draw("draw_backdrop", self.lab.draw_backdrop, "")
         self._after_kit_draw(bound)
 
     def _glsl(self, value: Any, variable: str) -> str:
@@ -873,7 +874,7 @@ class Executor:
             raise LabSetupError("lab.draw_cone_shader(glsl, texture)")
         glsl = self._glsl(args[0], "SPHERE_MAP_GLSL")
         texture = self._owned(args[1], "lab.draw_cone_shader", GL_TEXTURE_2D)
-        self.record_draw("draw_cone_shader", lambda: self.session.draw_cone_shader(
+        self.record_draw("draw_cone_shader", lambda: self.lab.draw_cone_shader(
             glsl, texture, 0, self.limits.programs), self._taint_of([texture]),
             texture=texture)
         tracker = self.tracker
@@ -897,7 +898,7 @@ class Executor:
         }
         GL.glActiveTexture(previous)
         texture = self.tracker.bound(GL_TEXTURE_2D, unit)
-        self.record_draw("draw_cone_fixed_function", session.draw_cone_fixed_function,
+        self.record_draw("draw_cone_fixed_function", self.lab.draw_cone_fixed_function,
                          self._taint_of([texture]), seen=seen)
         self.ok()
 
@@ -912,7 +913,7 @@ class Executor:
             extra["sampling"] = {str(k): v.plain() for k, v in record.params.items()}
             extra["mipmaps_fresh"] = record.mipmaps_fresh
             extra["mipmaps"] = record.mipmaps.plain() if record.mipmaps else None
-        self.record_draw("draw_sphere", lambda: self.session.draw_sphere(
+        self.record_draw("draw_sphere", lambda: self.lab.draw_sphere(
             glsl, texture, 0, self.limits.programs), self._taint_of([texture]), **extra)
         tracker = self.tracker
         tracker.bindings[(1, GL_TEXTURE_CUBE_MAP)] = tracker.setting(texture)

@@ -123,7 +123,7 @@ def grade_one(lab: str, student: str, source: bytes, limits: Limits,
     reference = reference_evidence(spec, mine, None, limits) if solution is None else \
         _reference_from_text(spec, mine, solution, limits)
     check = check_submission(spec, source, reference, context, student, "submission.py",
-                             limits)
+                             limits, keep=True)
     return Grade(student, [(r.task.id, r.passed, r.hint) for r in check.results],
                  check.status, round(check.seconds, 2), png_bytes(check.picture), mine.id,
                  context.matched)
@@ -138,7 +138,7 @@ def _reference_from_text(spec: LabSpec, variant: Variant, solution: str, limits:
 
     with tempfile.TemporaryDirectory(prefix="mirrorlab-solution-") as folder:
         (Path(folder) / f"{spec.folder}.py").write_text(solution)
-        return reference_evidence(spec, variant, Path(folder), limits)
+        return reference_evidence(spec, variant, Path(folder), limits, keep=True)
 
 
 def unrunnable(spec: LabSpec, submission: Submission, problem: str,

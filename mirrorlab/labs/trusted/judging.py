@@ -145,7 +145,7 @@ def triangles_mask(clip: list[np.ndarray], triangles: list[tuple[int, int, int]]
     width, height = size
     mask = np.zeros((height, width), dtype=bool)
     yy, xx = np.mgrid[0:height, 0:width] + 0.5
-    screen = []
+    screen: list[tuple[float, float] | None] = []
     for point in clip:
         if point[3] <= 1e-6:
             screen.append(None)
@@ -153,8 +153,9 @@ def triangles_mask(clip: list[np.ndarray], triangles: list[tuple[int, int, int]]
         ndc = point[:2] / point[3]
         screen.append(((ndc[0] + 1) / 2 * width, (1 - ndc[1]) / 2 * height))
     for a, b, c in triangles:
-        corners = [screen[i] for i in (a, b, c)]
-        if any(p is None for p in corners):
+        found = [screen[i] for i in (a, b, c)]
+        corners = [p for p in found if p is not None]
+        if len(corners) < 3:
             continue
         inside = np.ones_like(mask)
         area = ((corners[1][0] - corners[0][0]) * (corners[2][1] - corners[0][1])
@@ -283,7 +284,7 @@ def picture(rows: list[tuple[np.ndarray | None, np.ndarray | None]],
                  if ok_s and ok_r else blank((h, w))]
         for j, cell in enumerate(cells):
             y, x = HEADER + i * (h + gap), j * (w + gap)
-            out[y:y + h, x:x + w] = cell
+            out[y:y + h, x:x + w] = cell  # type: ignore[assignment]
     return out
 
 
@@ -335,7 +336,7 @@ def misplaced_calls(student: Evidence, within: str, wanted: dict[str, int]) -> s
     """A hint when, in the last frame's ``within``, a call that belongs on one matrix
     (``wanted``: call name -> matrix mode) was applied to another."""
     for event in student.events("matrix", within=within):
-        target, mode = wanted.get(event["op"]), event.get("mode")
+        target, mode = wanted.get(event["op"]), int(event.get("mode") or 0)
         if target is not None and target != mode:
             set_by = event.get("mode_line", 0)
             since = f", set at line {set_by}" if set_by else ""

@@ -12,6 +12,7 @@ on unit 1 (the sphere-map lab's texgen cone is textured from the variant's unit)
 from __future__ import annotations
 
 import re
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -122,11 +123,8 @@ class _Mesh:
 
     def __init__(self, name: str) -> None:
         from mirrorlab.gl.resources import upload_mesh
-        from mirrorlab.scene.mesh import load_mesh
 
-        data = load_mesh(model_file(name))
-        vertices = np.ascontiguousarray(data.interleaved(), dtype=np.float32)
-        indices = np.ascontiguousarray(data.indices.reshape(-1), dtype=np.uint32)
+        vertices, indices = mesh_arrays(name)
         self.count = int(indices.size)
         # the session's meshes live as long as its process: no registry, nothing to free
         self.vao, self.vbo, self.ebo = upload_mesh(vertices, indices)
@@ -138,6 +136,18 @@ class _Mesh:
         GL.glBindVertexArray(0)
 
 
+@lru_cache(maxsize=32)
+def mesh_arrays(name: str) -> tuple[np.ndarray, np.ndarray]:
+    """The shipped mesh ``name`` as interleaved float32 vertices and uint32 indices (read
+    once a process: a checker process kept for many runs reads each file once)."""
+    from mirrorlab.scene.mesh import load_mesh
+
+    data = load_mesh(model_file(name))
+    return (np.ascontiguousarray(data.interleaved(), dtype=np.float32),
+            np.ascontiguousarray(data.indices.reshape(-1), dtype=np.uint32))
+
+
+@lru_cache(maxsize=8)
 def picture(name: str) -> np.ndarray:
     """``textures/<name>.png`` as ``(h, w, 3)`` uint8, row 0 at the top."""
     from mirrorlab.scene.backgrounds import load_picture

@@ -13,6 +13,7 @@ import math
 import os
 import select
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -61,7 +62,7 @@ class TrustedChannel:
             except OSError:
                 pass
 
-    def send(self, header: dict, arrays: list[tuple[str, list[int], bytes]] = ()) -> None:
+    def send(self, header: dict, arrays: Sequence[tuple[str, list[int], bytes]] = ()) -> None:
         data = memoryview(encode(header, arrays))
         try:
             while data:

@@ -141,7 +141,7 @@ def judge_texgen_setup(student: Evidence, unit: int) -> tuple[bool, str]:
     seen, units = draw.get("seen") or {}, _units(draw)
     hints = []
     for coordinate in ("s", "t"):
-        mode = seen.get(f"mode_{coordinate}")
+        mode = int(seen.get(f"mode_{coordinate}") or 0)
         if mode == GL_SPHERE_MAP:
             continue
         name, upper = MODE_NAMES.get(mode, str(mode)), coordinate.upper()
