@@ -242,7 +242,7 @@ glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA, 16384, 16384, 0, GL_RGBA, GL_UNSIGNED_BY
         "forge_call_flood": (HEADER + """
 while True:
     glClearColor(0.1, 0.2, 0.3, 1.0)
-""", "stopped after 50000 calls"),
+""", "stopped after 20000 calls"),
         "forge_vertex_flood": (HEADER + """
 glBegin(GL_POINTS)
 while True:

@@ -126,6 +126,39 @@ LAB20 = (
            {"passes": "the capture's picture stays in the frame"}),
 )
 
+VIEWER_PASS = "    lab.set_viewer()\n    lab.draw_scene(robot)"
+
+LAB20_MORE = (
+    # graded by test_check.py, beside the other labs' mutants
+    Mutant("lab20", "frame_cleared_white",
+           (("    create_mirror()\n" + CLEAR,
+             "    create_mirror()\n    glClearColor(1, 1, 1, 1)\n" + CLEAR),),
+           {"passes": "the frame is cleared to (1, 1, 1)",
+            "capture_scene": "the capture is cleared to (1, 1, 1)"}),
+    Mutant("lab20", "viewport_quarter",
+           ((VIEWER_PASS, "    glViewport(0, 0, 128, 128)\n" + VIEWER_PASS),),
+           {"passes": "the scene is drawn in glViewport(0, 0, 128, 128)",
+            "capture_scene": "glViewport(0, 0, 128, 128)"}),
+    Mutant("lab20", "viewer_by_hand",
+           ((VIEWER_PASS, "    glMatrixMode(GL_PROJECTION)\n    glLoadIdentity()\n"
+                          "    gluPerspective(60, 1, 0.1, 100)\n    glMatrixMode(GL_MODELVIEW)\n"
+                          "    glLoadIdentity()\n    gluLookAt(12, 5, 9, -3.5, 1, -2, 0, 1, 0)\n"
+                          "    lab.draw_scene(robot)"),
+            ("from OpenGL.GLU import gluLookAt",
+             "from OpenGL.GLU import gluLookAt, gluPerspective")),
+           {"passes": "field of view of 60 degrees; the viewer's is 45"}),
+    Mutant("lab20", "texcoords_in_world_units",
+           ((QUAD, quad(((0, 0), (0, 8), (8, 8), (8, 0)))),),
+           {"mirror_quad": "should be (0, 1): s = (z + 6) / 8, t = (y + 3) / 8"}),
+    Mutant("lab20", "near_cuts_the_robot",
+           (("glOrtho(Z0, Z1, Y0, Y1, 0, 15)", "glOrtho(Z0, Z1, Y0, Y1, 5, 15)"),),
+           {"capture_camera": "near and far planes", "capture_scene": "fix its projection"}),
+    Mutant("lab20", "capture_upside_down",
+           (("gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)",
+             "gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, -1, 0)"),),
+           {"capture_camera": "up is (0, -1, 0)", "capture_scene": "fix its projection"}),
+)
+
 EQUIVALENT = (
     # the lab text's own calls: GL_CLAMP works in the compatibility profile
     Mutant("lab20", "legacy_gl_clamp", (("GL_CLAMP_TO_EDGE", "GL_CLAMP"),)),
@@ -165,6 +198,15 @@ SPHEREMAP = (
            {"texgen_draw": "left on"}),
     Mutant("spheremap", "texgen_only_s", (("    glEnable(GL_TEXTURE_GEN_T)\n", ""),),
            {"texgen_draw": "for t is off", "side_by_side": "tasks 3 and 4"}),
+    Mutant("spheremap", "cone_aspect_of_the_window",
+           (("    glViewport(0, 0, half, HEIGHT)\n    lab.set_viewer(half / HEIGHT)",
+             "    glViewport(0, 0, half, HEIGHT)\n    lab.set_viewer()"),),
+           {"side_by_side": "aspect 1.00; this view needs 0.50"}),
+    Mutant("spheremap", "texgen_reflection_map",
+           (("glTexGeni(GL_S, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)",
+             "glTexGeni(GL_S, GL_TEXTURE_GEN_MODE, GL_REFLECTION_MAP)"),),
+           {"texgen_setup": "texgen for s is GL_REFLECTION_MAP (line",
+            "side_by_side": "tasks 3 and 4"}),
     Mutant("spheremap", "texgen_unit_1",
            (("texgen on for it alone.\"\"\"\n    glActiveTexture(GL_TEXTURE0 + UNIT)",
              "texgen on for it alone.\"\"\"\n    glActiveTexture(GL_TEXTURE1)"),),

@@ -16,7 +16,14 @@ from mirrorlab.labs.trusted.grading import grade_folder
 from mirrorlab.scene.backgrounds import load_picture
 from tests.labs.classroom import STARTER
 from tests.labs.conftest import LIMITS, SOLUTIONS, mirrorlab_command
-from tests.labs.mutants import CUBE_EQUIVALENT, CUBEMAP, SPHEREMAP, problems, write_mutants
+from tests.labs.mutants import (
+    CUBE_EQUIVALENT,
+    CUBEMAP,
+    LAB20_MORE,
+    SPHEREMAP,
+    problems,
+    write_mutants,
+)
 
 
 def task_lines(output: str) -> dict[int, tuple[str, str]]:
@@ -68,7 +75,8 @@ def test_untouched_starter_fails_every_task_with_its_hint(lab, tmp_path):
 
 
 @pytest.mark.parametrize("lab, mutants", [("spheremap", SPHEREMAP),
-                                          ("cubemap", (*CUBEMAP, *CUBE_EQUIVALENT))])
+                                          ("cubemap", (*CUBEMAP, *CUBE_EQUIVALENT)),
+                                          ("lab20", LAB20_MORE)])
 def test_each_mutant_is_caught_with_the_right_hint(lab, mutants, tmp_path):
     assert len(mutants) >= 6
     written = write_mutants(tmp_path / "class", mutants)

@@ -38,6 +38,7 @@ class Channel:
 
     def __init__(self, read_fd: int, write_fd: int) -> None:
         self.read_fd, self.write_fd = read_fd, write_fd
+        self._buffer = bytearray()
 
     def send(self, header: dict, arrays: Sequence[tuple[str, list[int], bytes]] = ()) -> None:
         data = memoryview(encode(header, arrays))
@@ -46,14 +47,15 @@ class Channel:
             data = data[written:]
 
     def _read(self, count: int) -> bytes:
-        chunks, left = [], count
-        while left:
-            chunk = os.read(self.read_fd, min(left, 1 << 20))
+        buffer = self._buffer
+        while len(buffer) < count:
+            chunk = os.read(self.read_fd, max(count - len(buffer), 1 << 16))
             if not chunk:
                 raise PipeClosed("the checker closed the pipe")
-            chunks.append(chunk)
-            left -= len(chunk)
-        return b"".join(chunks)
+            buffer += chunk
+        data = bytes(buffer[:count])
+        del buffer[:count]
+        return data
 
     def receive(self) -> tuple[dict, list[tuple[str, list[int], bytes]]]:
         (length,) = LENGTH.unpack(self._read(LENGTH.size))

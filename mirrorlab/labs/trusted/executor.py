@@ -54,8 +54,8 @@ class Stop(Exception):
 class RunLimits:
     """What the trusted side accepts from one run."""
 
-    calls: int = 50_000
-    frame_calls: int = 20_000
+    calls: int = 20_000
+    frame_calls: int = 10_000
     frame_vertices: int = 1024
     textures: int = 64
     texture_bytes: int = 64 << 20
@@ -712,6 +712,9 @@ class Executor:
 
     def read_pixels(self, name: str, args: list[Any], arrays: Any) -> Any:
         x, y, width, height, fmt, kind = args
+        if width > self.session.width or height > self.session.height:
+            raise gl_error(C.GL_INVALID_VALUE, f"{name}: {width} x {height} pixels; the frame "
+                           f"is {self.session.width} x {self.session.height}")
         channels = {int(GL.GL_RGB): 3, int(GL.GL_RGBA): 4}.get(fmt, 1)
         dtype = np.uint8 if kind == GL.GL_UNSIGNED_BYTE else np.float32
         rows = np.zeros((height, width, channels), dtype=dtype)

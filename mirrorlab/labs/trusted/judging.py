@@ -292,7 +292,7 @@ def picture(rows: list[tuple[np.ndarray | None, np.ndarray | None]],
 def fmt(values: Any) -> str:
     """Numbers as a person writes them: ``-6, 2, -3``."""
     return ", ".join(f"{v:g}" for v in np.round(np.asarray(values, dtype=np.float64), 3)
-                     .reshape(-1))
+                     .reshape(-1) + 0.0)
 
 
 def wrong_clear_colour(clear: dict[str, Any], background: tuple[float, ...],
@@ -366,3 +366,37 @@ def stacked_ops(event: dict[str, Any], student: Evidence, mode: int, first: str)
         return (f"{first} at {student.at(ops[names.index(first)]['line'])} multiplied onto "
                 f"{what}: call glLoadIdentity() before it")
     return ""
+
+
+def viewer_camera(student: Evidence, draw: dict[str, Any], lab: Any,
+                  aspect: float | None = None, what: str = "the scene") -> tuple[bool, str]:
+    """A hint when ``draw`` (the camera pass's) was not drawn with the viewer's matrices
+    and over the whole frame (or the part ``aspect`` says)."""
+    state = draw.get("state") or {}
+    viewport = draw.get("viewport") or [0, 0, 0, 0]
+    frame = student.image("frame")
+    size = (frame.shape[1], frame.shape[0]) if frame is not None else (256, 256)
+    if aspect is None and viewport != [0, 0, size[0], size[1]]:
+        line = (state.get("viewport") or {}).get("line", 0)
+        by = f" (glViewport at {student.at(line)})" if line else ""
+        return False, (f"{what} is drawn in glViewport({fmt(viewport)}){by}; the frame is "
+                       f"{size[0]} x {size[1]}: glViewport(0, 0, WIDTH, HEIGHT)")
+    projection, modelview = matrix(draw.get("projection")), matrix(draw.get("modelview"))
+    want_p, want_v = lab.viewer_for(size, aspect)
+    if projection is None or modelview is None:
+        return False, "the camera pass's matrices could not be read"
+    if not np.allclose(projection @ modelview, want_p @ want_v, atol=1e-4):
+        call = "lab.set_viewer()" if aspect is None else "lab.set_viewer(aspect)"
+        if np.allclose(modelview, want_v, atol=1e-4) and projection[3, 2] != 0:
+            shown, wanted = (p[1, 1] / p[0, 0] for p in (projection, want_p))
+            fovy, want_fovy = (float(np.degrees(2 * np.arctan(1 / p[1, 1])))
+                               for p in (projection, want_p))
+            if abs(shown - wanted) > 1e-3:
+                return False, (f"{what} is drawn with a projection of aspect {shown:.2f}; "
+                               f"this view needs {wanted:.2f}: {call} with it")
+            if abs(fovy - want_fovy) > 0.05:
+                return False, (f"{what} is drawn with a field of view of {fovy:.0f} degrees; "
+                               f"the viewer's is {want_fovy:.0f}: {call}")
+        return False, (f"{what} is not drawn from the viewer: its projection and camera are "
+                       f"not {call}'s (set it just before drawing)")
+    return True, ""

@@ -27,6 +27,7 @@ from mirrorlab.labs.trusted.judging import (
     stacked_ops,
     stopped_hint,
     triangles_mask,
+    viewer_camera,
     where,
     wrong_clear_colour,
 )
@@ -479,10 +480,15 @@ def judge_quad(student: Evidence, geometry: dict[str, Any], context: Context
     for point, have, expected in zip(points, got, want, strict=True):
         if not np.allclose(have, expected, atol=1e-3):
             return False, (f"the texture coordinates ({fmt(have)}) at the corner "
-                           f"({fmt(point)}) should be ({fmt(expected)}): s = (z - "
-                           f"{g['z0']:g}) / {g['z1'] - g['z0']:g}, t = (y - {g['y0']:g}) / "
-                           f"{g['y1'] - g['y0']:g}")
+                           f"({fmt(point)}) should be ({fmt(expected)}): s = "
+                           f"{_from('z', g['z0'])} / {g['z1'] - g['z0']:g}, t = "
+                           f"{_from('y', g['y0'])} / {g['y1'] - g['y0']:g}")
     return True, ""
+
+
+def _from(axis: str, start: float) -> str:
+    """``(z + 6)`` for the distance of ``axis`` from ``start`` = -6."""
+    return f"({axis} + {-start:g})" if start < 0 else f"({axis} - {start:g})" if start else axis
 
 
 def _covers(mode: int, points: list[np.ndarray], g: dict[str, Any]) -> bool:
@@ -550,7 +556,10 @@ def judge_passes(student: Evidence) -> tuple[bool, str]:
     if mirrors and copies and mirrors[0] < copies[0]:
         return False, ("passes in the wrong order: render_mirror() runs before create_mirror() "
                        "has copied this frame's capture")
-    return True, ""
+    if clears and (wrong := wrong_clear_colour(events[clears[-1]], Lab20.BACKGROUND, student)):
+        return False, (f"the frame is cleared to {wrong}; the lab's background is "
+                       f"({fmt(Lab20.BACKGROUND)}), as the given code leaves it")
+    return viewer_camera(student, viewer, Lab20)
 
 
 def mirror_region(size: tuple[int, int], geometry: dict[str, Any], grow: int = 2) -> np.ndarray:

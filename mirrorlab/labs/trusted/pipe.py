@@ -2,8 +2,9 @@
 
 A message (:mod:`mirrorlab.labs.student.wire`) is parsed only as JSON and raw bytes; the
 header's length, each array's declared type, shape and size, and the bytes left in the
-run's budget are all checked before a byte of the payload is read, so a message that asks
-for 1 GiB is refused while it is still a promise. Every read has a deadline.
+run's budget are all checked before the payload is read (small reads read ahead at most
+64 KiB), so a message that asks for 1 GiB is refused while it is still a promise. Every
+read has a deadline.
 """
 
 from __future__ import annotations
@@ -54,6 +55,8 @@ class TrustedChannel:
 
     def __init__(self, read_fd: int, write_fd: int, budget: PipeBudget) -> None:
         self.read_fd, self.write_fd, self.budget = read_fd, write_fd, budget
+        self._buffer = bytearray()
+        """Bytes read ahead of the message being parsed (at most 64 KiB)."""
 
     def close(self) -> None:
         for fd in (self.read_fd, self.write_fd):
@@ -73,6 +76,21 @@ class TrustedChannel:
 
     def _read_into(self, buffer: bytearray | memoryview, deadline: float) -> None:
         view = memoryview(buffer)
+        if self._buffer:
+            taken = min(len(view), len(self._buffer))
+            view[:taken] = self._buffer[:taken]
+            del self._buffer[:taken]
+            view = view[taken:]
+        if len(view) <= 1 << 16:
+            # a small read (a length, a header, a small array): what comes after it is read
+            # ahead, in one call, and kept for the next
+            while view:
+                self._fill(deadline)
+                taken = min(len(view), len(self._buffer))
+                view[:taken] = self._buffer[:taken]
+                del self._buffer[:taken]
+                view = view[taken:]
+            return
         while view:
             left = deadline - time.monotonic()
             if left <= 0:
@@ -85,6 +103,20 @@ class TrustedChannel:
                 raise PipeClosed("the sandbox closed the pipe")
             view[:len(chunk)] = chunk
             view = view[len(chunk):]
+
+    def _fill(self, deadline: float) -> None:
+        """Read what the sandbox has sent (at most 64 KiB) into the read-ahead buffer."""
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise PipeTimeout("the sandbox sent nothing in time")
+            ready, _, _ = select.select([self.read_fd], [], [], left)
+            if ready:
+                break
+        chunk = os.read(self.read_fd, 1 << 16)
+        if not chunk:
+            raise PipeClosed("the sandbox closed the pipe")
+        self._buffer += chunk
 
     def receive(self, deadline: float) -> tuple[dict, list[np.ndarray]]:
         """The next message: its header (a dict with a string ``op``) and its arrays, read

@@ -67,6 +67,9 @@ FRAMES = 2
 DECLARED = {"lab20": (), "spheremap": ("SPHERE_MAP_GLSL",), "cubemap": ("CUBE_MAP_GLSL",)}
 """Module-level strings of the student's file the checker judges even when the frame
 never draws them (the GLSL of the labs' shaders)."""
+BOX_FILE = "student.py"
+"""The student's file in its box (whatever it was called: never the box's own
+stdout.txt or stderr.txt)."""
 BOOT = ("import sys; sys.path[:0] = [{packages!r}]; sys.path.append({site!r}); "
         "from labstudent.runner import main; sys.exit(main(sys.argv[1:]))")
 
@@ -149,12 +152,12 @@ class LabRun:
         """The sandbox, the pipe, the session sent, the runner ready; RunEnded states
         (status not ok) are kept in the evidence, SandboxError when it cannot start."""
         self.box = new_box()
-        student = self.box / self.file_name
+        student = self.box / BOX_FILE
         student.write_bytes(self.source)
         mode = sandbox_mode()
         if mode == "bwrap":
             python, packages, site = interpreter(), SANDBOX_PACKAGES, SANDBOX_SITE
-            path = f"{SANDBOX_BOX}/{self.file_name}"
+            path = f"{SANDBOX_BOX}/{BOX_FILE}"
         else:
             python, packages, site = user_interpreter(), str(self.box / "pkg"), ""
             shutil.copytree(STUDENT_PACKAGE, self.box / "pkg" / "labstudent",
@@ -379,8 +382,9 @@ class LabRun:
         self.evidence.state["backdrop_texture"] = session.backdrop_texture
         self.evidence.state["launch"] = next(
             (t.name for t in tracker.textures.values() if t.picture == "launch"), 0)
-        glsl = self.declared.get("SPHERE_MAP_GLSL") or \
-            self.executor.glsl.get("SPHERE_MAP_GLSL")
+        # the GLSL the cone was drawn with, else the file's SPHERE_MAP_GLSL
+        glsl = self.executor.glsl.get("SPHERE_MAP_GLSL") or \
+            self.declared.get("SPHERE_MAP_GLSL")
         if glsl is not None:
             self._values(lambda mode: session.draw_cone_shader(
                 glsl, session.backdrop_texture, mode, limit=64),
@@ -399,7 +403,7 @@ class LabRun:
             faces = read_cube_faces(cube)
             if faces is not None:
                 evidence.arrays["cube_faces"] = faces
-        glsl = self.declared.get("CUBE_MAP_GLSL") or self.executor.glsl.get("CUBE_MAP_GLSL")
+        glsl = self.executor.glsl.get("CUBE_MAP_GLSL") or self.declared.get("CUBE_MAP_GLSL")
         if glsl is not None:
             self._values(lambda mode: session.draw_sphere(glsl, cube, mode, limit=64),
                          {"face_st": 1, "r": 2}, "cube_face")

@@ -22,8 +22,10 @@ from mirrorlab.labs.trusted.judging import (
     results,
     same_picture,
     stopped_hint,
+    viewer_camera,
     where,
 )
+from mirrorlab.labs.trusted.kit import SphereMapLab
 
 GL_SPHERE_MAP = 0x2402
 MODE_NAMES = {0x2400: "GL_EYE_LINEAR", 0x2401: "GL_OBJECT_LINEAR", 0x2402: "GL_SPHERE_MAP",
@@ -257,6 +259,16 @@ def judge_side_by_side(student: Evidence, reference: Evidence, verdicts: Verdict
         if (side == "left") != in_left:
             hints.append(f"{what} is drawn in the {'left' if in_left else 'right'} half; your "
                          f"variant puts it on the {side}")
+    if hints:
+        return False, "; ".join(hints)
+    halves = {"left": half / ref.shape[0], "right": (width - half) / ref.shape[0]}
+    for who, side, ok, what in (("draw_cone_shader", shader_side, shader_ok, "the shader's cone"),
+                                ("draw_cone_fixed_function", texgen_side, texgen_ok,
+                                 "the texgen cone")):
+        if not ok:
+            good, hint = viewer_camera(student, drawn[who], SphereMapLab, halves[side], what)
+            if not good:
+                hints.append(hint)
     if hints:
         return False, "; ".join(hints)
     if not shader_ok:
