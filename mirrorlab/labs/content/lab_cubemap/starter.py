@@ -32,7 +32,7 @@ vec2 cube_face_st(vec3 r, int face) {
 # TODO 3: where each face's camera looks, and its up, in the order of the faces
 #         (GL_TEXTURE_CUBE_MAP_POSITIVE_X, NEGATIVE_X, POSITIVE_Y, ...):
 #         ((dx, dy, dz), (ux, uy, uz)) for each face
-FACE_VIEWS = []
+FACE_VIEWS: list = []
 
 
 def create_cube_texture():
