@@ -174,7 +174,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     commands.add_parser("techniques", help="list the reflection techniques")
 
-    lab = commands.add_parser("lab", help="check, run and grade the lab exercises")
+    lab = commands.add_parser("lab", help="start, check, run, release and grade the lab "
+                              "exercises")
     lab_commands = lab.add_subparsers(dest="lab_command", required=True, metavar="ACTION")
     limits = argparse.ArgumentParser(add_help=False)
     limits.add_argument("--timeout", metavar="SECONDS", default="20",
@@ -182,25 +183,36 @@ def build_parser() -> argparse.ArgumentParser:
                         "take three times as long on the clock, plus 30 s")
     limits.add_argument("--memory", metavar="MB", default="1536",
                         help="memory limit of one submission (default %(default)s)")
-    check = lab_commands.add_parser("check", parents=[limits],
+    solutions = argparse.ArgumentParser(add_help=False)
+    solutions.add_argument("--solutions", metavar="DIR",
+                           help="the teacher's solutions (the repository's labs/solutions; "
+                           "default $MIRRORLAB_SOLUTIONS): references are made from them")
+    start = lab_commands.add_parser("start", help="write a lab's handout (README.md) and "
+                                    "starter.py into a folder")
+    start.add_argument("lab_name", metavar="LAB", help="lab20, spheremap or cubemap (or the "
+                       "lab's folder name)")
+    start.add_argument("folder", metavar="DIR", help="a new or empty folder")
+    check = lab_commands.add_parser("check", parents=[limits, solutions],
                                     help="check one file: each task passed or failed, with "
                                     "a hint; exit 0 only when all pass")
     check.add_argument("lab_name", metavar="LAB", help="lab20, spheremap or cubemap (or the "
                        "lab's folder name)")
     check.add_argument("file", metavar="FILE", nargs="?",
-                       help="the student's file (default: the lab's starter.py)")
+                       help="the student's file (default: the lab's starter); a variant.json "
+                       "beside it (from lab release) names its variant")
     check.add_argument("--out", help="the picture student | reference | difference (default "
                        "out/LAB_check.png)")
-    run = lab_commands.add_parser("run", help="run a lab file in the demo window")
+    run = lab_commands.add_parser("run", help="run a lab file in a window (the file itself "
+                                  "runs in the sandbox)")
     run.add_argument("lab_name", metavar="LAB")
     run.add_argument("file", metavar="FILE", nargs="?")
     run.add_argument("--size", default="512x512", help="WIDTHxHEIGHT (default %(default)s)")
     run.add_argument("--max-frames", metavar="N", default="0",
                      help="close after this many frames (0: until Esc)")
     run.add_argument("--screenshot", metavar="PATH", help="write the last frame as a PNG")
-    grade = lab_commands.add_parser("grade", parents=[limits],
+    grade = lab_commands.add_parser("grade", parents=[limits, solutions],
                                     help="grade a folder of submissions: grades.csv, "
-                                    "pictures and report.html")
+                                    "gradebook.csv, feedback pages, pictures and report.html")
     grade.add_argument("lab_name", metavar="LAB")
     grade.add_argument("submissions", metavar="SUBMISSIONS_DIR",
                        help="one .py file or one folder per student")
@@ -209,6 +221,25 @@ def build_parser() -> argparse.ArgumentParser:
     grade.add_argument("--out-dir", metavar="DIR",
                        help="where grades.csv, report.html and the pictures go (default: "
                        "SUBMISSIONS_DIR-grades beside the submissions)")
+    grade.add_argument("--key", metavar="KEYFILE", help="the course key the class was "
+                       "released with: each student is judged against their own variant")
+    release = lab_commands.add_parser("release", parents=[limits, solutions],
+                                      help="one folder per student: a handout and starter "
+                                      "with the student's own numbers, and their reference")
+    release.add_argument("lab_name", metavar="LAB")
+    release.add_argument("out", metavar="OUT", help="where the students' folders go")
+    release.add_argument("--students", metavar="FILE", required=True,
+                         help="the class list: one name a line")
+    release.add_argument("--key", metavar="KEYFILE", required=True,
+                         help="the course key (made, mode 0600, if the file does not exist)")
+    release.add_argument("--jobs", metavar="J", default="1",
+                         help="references made by J processes at once (default %(default)s)")
+    solution = lab_commands.add_parser("solution", parents=[solutions],
+                                       help="print one student's variant of the reference "
+                                       "solution (teachers only)")
+    solution.add_argument("lab_name", metavar="LAB")
+    solution.add_argument("--student", metavar="NAME", required=True)
+    solution.add_argument("--key", metavar="KEYFILE", required=True)
     return parser
 
 
@@ -396,28 +427,43 @@ def run_techniques(args: argparse.Namespace) -> int:
 
 def run_lab(args: argparse.Namespace) -> int:
     action = args.lab_command
+    if action == "start":
+        from mirrorlab.labs.trusted.release import run_start
+
+        return run_start(args.lab_name, Path(args.folder))
+    if action == "solution":
+        from mirrorlab.labs.trusted.release import run_solution
+
+        return run_solution(args.lab_name, args.student, Path(args.key), args.solutions)
     if action == "run":
-        from mirrorlab.labs.checker import run_window
+        from mirrorlab.labs.trusted.window import run_window
 
         size = parse_size("--size", args.size)
         max_frames = parse_count("--max-frames", args.max_frames, 0, 10**9)
         screenshot = check_output("--screenshot", args.screenshot) if args.screenshot else None
         return run_window(args.lab_name, args.file, size, max_frames, screenshot)
-    from mirrorlab.labs.sandbox import Limits
+    from mirrorlab.labs.trusted.sandbox import Limits
 
     cpu = parse_count("--timeout", args.timeout, 1, 3600)
     limits = Limits(cpu_seconds=cpu, seconds=3.0 * cpu + 30,
                     memory_mb=parse_count("--memory", args.memory, 256, 1 << 20))
     if action == "check":
-        from mirrorlab.labs.checker import run_check
+        from mirrorlab.labs.trusted.checker import run_check
 
         out = check_output("--out", args.out) if args.out else None
-        return run_check(args.lab_name, args.file, out, limits)
-    from mirrorlab.labs.grading import run_grade
+        return run_check(args.lab_name, args.file, out, limits, args.solutions)
+    if action == "release":
+        from mirrorlab.labs.trusted.release import run_release
+
+        jobs = parse_count("--jobs", args.jobs, 1, 1024)
+        return run_release(args.lab_name, Path(args.out), Path(args.students), Path(args.key),
+                           args.solutions, jobs, limits)
+    from mirrorlab.labs.trusted.grading import run_grade
 
     jobs = parse_count("--jobs", args.jobs, 1, 1024)
     return run_grade(args.lab_name, Path(args.submissions), jobs, args.scheduler, args.engine,
-                     Path(args.out_dir) if args.out_dir else None, limits)
+                     Path(args.out_dir) if args.out_dir else None, limits,
+                     Path(args.key) if args.key else None, args.solutions)
 
 
 _VECTOR_FLAGS = (*tuple(o.flag for o in OPTIONS if "," in o.metavar), "--fovy", "--size")
@@ -497,6 +543,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (GLContextError, GLPassError, BatchError) as exc:
         print(f"{command}: error: {exc}", file=sys.stderr)
         return EXIT_MACHINE
+    except Exception as exc:
+        from mirrorlab.labs.trusted.checker import CheckError
+        from mirrorlab.labs.trusted.execute import CheckerError
+        from mirrorlab.labs.trusted.sandbox import SandboxError
+
+        if isinstance(exc, SandboxError | CheckError):
+            print(f"{command}: error: {exc}", file=sys.stderr)
+            return EXIT_BAD_INPUT
+        if isinstance(exc, CheckerError):
+            print(f"{command}: error: {exc}", file=sys.stderr)
+            return EXIT_MACHINE
+        raise
 
 
 if __name__ == "__main__":

@@ -1,19 +1,22 @@
-"""The labs: each lab's tasks and functions (here), the student-facing kit (:mod:`.kit`),
-the harness that runs a student's file (:mod:`.harness`, only ever inside the sandbox),
-the sandbox (:mod:`.sandbox`), the judges that turn what a run showed into task results
-(:mod:`.lab20`, :mod:`.spheremap`, :mod:`.cubemap`), the checker (:mod:`.checker`) and
-class grading (:mod:`.grading`, :mod:`.report`). The students' files live in the
-top-level ``labs/`` folder. Importing this package loads no OpenGL.
+"""The labs: each lab's tasks and the functions of the student's file they live in (here),
+and three packages whose split is the labs' trust boundary:
+
+- :mod:`mirrorlab.labs.student` runs in the sandbox with the student's file: stand-ins for
+  OpenGL, GLU and the lab's kit that send every call to the checker. It imports nothing
+  of the rest of mirrorlab, and is all of mirrorlab a sandbox can see.
+- :mod:`mirrorlab.labs.trusted` runs outside: the sandbox, the executor that validates and
+  runs each call in its own GL context, the judges, the checker, grading, release and the
+  reports.
+- :mod:`mirrorlab.labs.content` holds what students are given: each lab's handout,
+  starter and reference data (package data). The teachers' solutions are not in the
+  package; they are in the repository's ``labs/solutions/``.
+
+Importing this package loads no OpenGL.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
-
-from mirrorlab.paths import REPO_DIR
-
-LABS_DIR = REPO_DIR / "labs"
 
 
 @dataclass(frozen=True)
@@ -29,9 +32,10 @@ class Task:
 
 @dataclass(frozen=True)
 class LabSpec:
-    """A lab: ``name`` (what the command line takes), its folder under ``labs/``, the
-    functions the student's file defines (``setup`` run once, then ``frame`` every
-    frame), and its tasks in the handout's order."""
+    """A lab: ``name`` (what the command line takes), ``folder`` (its content's and its
+    solution's name, also accepted on the command line), the functions the student's file
+    defines (``setup`` run once, then ``frame`` every frame), and its tasks in the
+    handout's order."""
 
     name: str
     folder: str
@@ -40,18 +44,6 @@ class LabSpec:
     frame: str
     functions: tuple[str, ...]
     tasks: tuple[Task, ...]
-
-    @property
-    def directory(self) -> Path:
-        return LABS_DIR / self.folder
-
-    @property
-    def starter(self) -> Path:
-        return self.directory / "starter.py"
-
-    @property
-    def solution(self) -> Path:
-        return self.directory / "solution.py"
 
     def task(self, task_id: str) -> Task:
         return next(t for t in self.tasks if t.id == task_id)

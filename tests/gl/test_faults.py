@@ -52,12 +52,25 @@ def sandboxed(*args: str, read_only: Path | None = None, hide: tuple[Path, ...] 
         command += ["--ro-bind", "/dev/null", str(path)]
     if uid is not None:
         # Mesa keeps its shader cache under $HOME, which this user may not write to (and
-        # says so on stderr): give it a home of its own.
+        # says so on stderr): give it a home of its own. In bubblewrap's user namespace the
+        # user is the caller outside, who owns the folder: it needs no other user's access
+        # (0700), and it is removed after the test.
         home = Path(tempfile.mkdtemp(prefix="mirrorlab-home-"))
-        home.chmod(0o777)
+        home.chmod(0o700)
+        HOMES.append(home)
         command += ["--unshare-user", "--uid", str(uid), "--gid", str(uid),
                     "--setenv", "HOME", str(home), "--setenv", "XDG_CACHE_HOME", str(home)]
     return command + mirrorlab_command(*args)
+
+
+HOMES: list[Path] = []
+
+
+@pytest.fixture(autouse=True)
+def remove_homes():
+    yield
+    while HOMES:
+        shutil.rmtree(HOMES.pop(), ignore_errors=True)
 
 
 def one_line(result: subprocess.CompletedProcess, code: int, *words: str) -> str:

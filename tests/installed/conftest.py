@@ -24,7 +24,8 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[2]
 HIDDEN = ("PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV", "PYOPENGL_PLATFORM", "EGL_PLATFORM",
-          "MIRRORLAB_FAILURES", "PYTEST_ADDOPTS", "PYTEST_CURRENT_TEST")
+          "MIRRORLAB_FAILURES", "MIRRORLAB_SOLUTIONS", "MIRRORLAB_CACHE", "PYTEST_ADDOPTS",
+          "PYTEST_CURRENT_TEST")
 """Variables of this test process that a user's shell would not have."""
 
 

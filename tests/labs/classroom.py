@@ -1,22 +1,24 @@
-"""A generated class for lab 20: reference solutions (as files and folders, one in the lab
-text's legacy GL_CLAMP), the untouched starter, every mutant (twice: two students make the
-same mistake), students whose files raise, do not parse or lack a function, and the
-attacks. Each student comes with the verdicts the checker must give: task id -> (passed,
-a phrase its hint must contain)."""
+"""A generated class for lab 20: reference solutions (as files and folders), the forms the
+handout allows, the untouched starter, every mutant (two of them twice: two students make
+the same mistake), students whose files raise, do not parse or lack a function, and the
+attacks on the machine. Each student comes with the verdicts the checker must give: task
+id -> (passed, a phrase its hint must contain)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 from mirrorlab.labs import LABS
-from tests.labs.mutants import LAB20, LEGACY
+from mirrorlab.labs.content import starter
+from mirrorlab.labs.trusted.variants import default_variant
+from tests.labs.mutants import EQUIVALENT, LAB20, solution
 
 TASKS = [t.id for t in LABS["lab20"].tasks]
 
 STARTER = {
     "lab20": {"capture_camera": "did not run", "capture_scene": "draws nothing",
               "capture_copy": "never called", "environment_texture": "mipmaps",
-              "base_texture": "base not textured", "mirror_texture": "not called",
+              "base_texture": "base not textured", "mirror_texture": "task 7",
               "mirror_quad": "not called", "passes": "never calls create_mirror"},
     "spheremap": {"reflection": "differs from u - 2 (n.u) n",
                   "sphere_coordinates": "differs from Hoff",
@@ -26,6 +28,10 @@ STARTER = {
                 "capture_cameras": "never called", "capture_copy": "never called",
                 "live_frame": "never calls capture_cube"},
 }
+
+
+def starter_text(lab: str) -> str:
+    return starter(LABS[lab], default_variant(lab))
 
 
 def verdicts(fails: dict[str, str]) -> dict[str, tuple[bool, str]]:
@@ -42,26 +48,25 @@ def line_of(text: str, needle: str) -> int:
 
 
 def attacks(canary_dir: Path, port: int) -> dict[str, tuple[str, dict[str, tuple[bool, str]]]]:
-    """The attacks, by student: each file's text and its verdicts. Two files in
-    ``canary_dir`` are targets; the folder and files are writable by anyone, so only the
-    sandbox keeps them whole. ``port`` is a port this machine listens on (loopback): the
-    sandbox has no network, so it is refused there."""
+    """The attacks on the machine, by student: each file's text and its verdicts. Two files
+    in ``canary_dir`` are targets; the folder and files are writable by anyone, so only
+    the sandbox keeps them whole (it cannot even see them). ``port`` is a port this
+    machine listens on (loopback): the sandbox has no network, so it is refused there."""
     delete, overwrite = canary_dir / "delete_me.txt", canary_dir / "overwrite_me.txt"
     return {
         "attack_endless_loop": ("while True:\n    pass\n", every_task("CPU-time limit")),
         "attack_fork_bomb": ("import os\nwhile True:\n    try:\n        os.fork()\n"
                              "    except OSError:\n        pass\n", every_task("fork bomb")),
         # bytes(n), not bytearray(n): it maps zero pages without touching them, so the
-        # address-space limit is reached at no CPU cost. bytearray zeroes each block, and
-        # the kernel's page faults for that took over the 3 s CPU limit on a loaded
-        # machine: the verdict then depended on which limit came first.
+        # address-space limit is reached at no CPU cost (bytearray's page faults could
+        # reach the CPU limit first on a loaded machine).
         "attack_huge_allocation": ("hog = []\nwhile True:\n    hog.append(bytes(256 << 20))\n",
                                    every_task("MemoryError")),
         "attack_crash": ("import ctypes\nctypes.string_at(0)\n", every_task("SIGSEGV")),
         "attack_delete_outside": (f"import os\nos.remove({str(delete)!r})\n",
-                                  every_task("Read-only file system")),
+                                  every_task("No such file or directory")),
         "attack_overwrite_outside": (f"open({str(overwrite)!r}, 'w').write('overwritten')\n",
-                                     every_task("Read-only file system")),
+                                     every_task("No such file or directory")),
         "attack_network": (f"import socket\nsocket.create_connection(('127.0.0.1', {port}), 5)\n",
                            every_task("ConnectionRefusedError")),
     }
@@ -70,49 +75,49 @@ def attacks(canary_dir: Path, port: int) -> dict[str, tuple[str, dict[str, tuple
 def make_class(folder: Path, canary_dir: Path, port: int
                ) -> dict[str, dict[str, tuple[bool, str]]]:
     """Write the class into ``folder``; returns student -> expected verdicts."""
-    spec = LABS["lab20"]
-    solution, starter = spec.solution.read_text(), spec.starter.read_text()
+    text, start = solution("lab20"), starter_text("lab20")
     expected: dict[str, dict[str, tuple[bool, str]]] = {}
     files: dict[str, str] = {}
 
-    def add(student: str, text: str, verdict: dict[str, tuple[bool, str]],
+    def add(student: str, source: str, verdict: dict[str, tuple[bool, str]],
             as_folder: str = "") -> None:
         expected[student] = verdict
         if as_folder:
             (folder / student).mkdir(parents=True)
-            (folder / student / as_folder).write_text(text)
+            (folder / student / as_folder).write_text(source)
         else:
-            files[student] = text
+            files[student] = source
 
-    add("ada_solution", solution, verdicts({}))
-    add("ben_solution_folder", solution, verdicts({}), as_folder="starter.py")
-    add("cy_solution_only_file", solution, verdicts({}), as_folder="mirror.py")
-    for mutant in LEGACY:
-        add(f"dee_{mutant.name}", mutant.source(), verdicts(mutant.fails))
-    add("eli_untouched_starter", starter, verdicts(STARTER["lab20"]))
+    add("ada_solution", text, verdicts({}))
+    add("ben_solution_folder", text, verdicts({}), as_folder="starter.py")
+    for mutant in EQUIVALENT:
+        add(f"dee_{mutant.name}", mutant.source(), verdicts({}))
+    add("eli_untouched_starter", start, verdicts(STARTER["lab20"]))
     for i, mutant in enumerate(LAB20):
         add(f"m{i:02d}_{mutant.name}", mutant.source(), verdicts(mutant.fails))
-        add(f"n{i:02d}_{mutant.name}_again", mutant.source(), verdicts(mutant.fails),
+    for mutant in (LAB20[4], LAB20[13]):  # the same mistake, from two students
+        add(f"n_{mutant.name}_again", mutant.source(), verdicts(mutant.fails),
             as_folder="lab20.py")
-    typo = solution.replace("glOrtho(-6, 2, -3, 5, 0, 15)", "glOrth(-6, 2, -3, 5, 0, 15)")
+    typo = text.replace("glOrtho(Z0, Z1, Y0, Y1, 0, 15)", "glOrth(Z0, Z1, Y0, Y1, 0, 15)")
     line = line_of(typo, "glOrth(")
-    raised = f"line {line}: glOrth(-6, 2, -3, 5, 0, 15) -> NameError"
+    raised = f"line {line}: glOrth(Z0, Z1, Y0, Y1, 0, 15) -> NameError"
     add("err_name_error", typo, verdicts({
         "capture_camera": raised, "capture_scene": raised, "capture_copy": raised,
+        "base_texture": "stopped at create_mirror()",
         "mirror_texture": "stopped at create_mirror()", "mirror_quad": "stopped at create_mirror()",
         "passes": "stopped at create_mirror()"}))
-    missing = solution.replace("def render_mirror():", "def render_mirrors():")
+    missing = text.replace("def render_mirror():", "def render_mirrors():")
     add("err_missing_function", missing, verdicts({
         "mirror_texture": "render_mirror() is missing", "mirror_quad": "render_mirror() is missing",
         "passes": "stopped at render_mirror()"}))
-    broken = solution + "\n\ndef half_written(:\n    pass\n"
+    broken = text + "\n\ndef half_written(:\n    pass\n"
     add("err_syntax", broken, every_task(f"line {line_of(broken, 'def half_written(:')}"))
-    add("err_import", "import no_such_module_anywhere\n" + solution,
+    add("err_import", "import no_such_module_anywhere\n" + text,
         every_task("line 1: import no_such_module_anywhere -> ModuleNotFoundError"))
-    for student, (text, verdict) in attacks(canary_dir, port).items():
-        add(student, text, verdict)
-    for student, text in files.items():
-        (folder / f"{student}.py").write_text(text)
+    for student, (source, verdict) in attacks(canary_dir, port).items():
+        add(student, source, verdict)
+    for student, source in files.items():
+        (folder / f"{student}.py").write_text(source)
     return expected
 
 

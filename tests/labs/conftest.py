@@ -1,6 +1,9 @@
 """Lab tests: students' files run only in the sandbox, through the checker, the command
-line or grading; this process never loads OpenGL. The reference runs are cached in a
-folder of this session's own."""
+line or grading. References are made from the teachers' solutions (labs/solutions, as on
+a teacher's machine: $MIRRORLAB_SOLUTIONS) and cached in a folder of this session's own;
+the tests of the shipped references and of the wheel run without them. Every temporary
+folder the labs make goes into a folder of the session's own (TMPDIR), which must be left
+empty of them."""
 
 from __future__ import annotations
 
@@ -15,35 +18,59 @@ from pathlib import Path
 
 import pytest
 
-from mirrorlab.labs.sandbox import Limits
+from mirrorlab.labs.trusted.sandbox import Limits
+from tests import REPO_DIR
 
 LIMITS = Limits(cpu_seconds=3, seconds=90.0)
 """An endless loop ends after 3 s of CPU; honest runs use under one."""
+SOLUTIONS = REPO_DIR / "labs" / "solutions"
+LEFTOVER_PREFIXES = ("mirrorlab-box-", "mirrorlab-submission-", "mirrorlab-home-",
+                     "mirrorlab-check-", "mirrorlab-solution-", "mirrorlab-release-")
+
+
+def leftovers(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir() if p.name.startswith(LEFTOVER_PREFIXES))
 
 
 @pytest.fixture(scope="session", autouse=True)
-def lab_cache(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("lab-cache")
-    old = os.environ.get("MIRRORLAB_CACHE")
-    os.environ["MIRRORLAB_CACHE"] = str(folder)
-    yield folder
-    if old is None:
-        os.environ.pop("MIRRORLAB_CACHE", None)
-    else:
-        os.environ["MIRRORLAB_CACHE"] = old
+def lab_environment(tmp_path_factory):
+    cache = tmp_path_factory.mktemp("lab-cache")
+    scratch = Path(tempfile.mkdtemp(prefix="lab-tmp-"))
+    saved = {key: os.environ.get(key) for key in ("MIRRORLAB_CACHE", "MIRRORLAB_SOLUTIONS",
+                                                  "TMPDIR")}
+    saved_tempdir = tempfile.tempdir
+    os.environ.update(MIRRORLAB_CACHE=str(cache), MIRRORLAB_SOLUTIONS=str(SOLUTIONS),
+                      TMPDIR=str(scratch))
+    tempfile.tempdir = str(scratch)
+    yield scratch
+    tempfile.tempdir = saved_tempdir
+    for key, value in saved.items():
+        if value is None:
+            os.environ.pop(key, None)
+        else:
+            os.environ[key] = value
+    left = leftovers(scratch)
+    shutil.rmtree(scratch, ignore_errors=True)
+    assert left == [], f"the lab tests left these temporary folders: {left}"
 
 
-def mirrorlab_command(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
-    """``mirrorlab ARGS`` as a process of its own."""
+def mirrorlab_command(*args: str, cwd: Path | None = None,
+                      env: dict[str, str | None] | None = None) -> subprocess.CompletedProcess:
+    """``mirrorlab ARGS`` as a process of its own (``env``: changes, None removes)."""
+    environment = dict(os.environ)
+    for key, value in (env or {}).items():
+        if value is None:
+            environment.pop(key, None)
+        else:
+            environment[key] = value
     return subprocess.run([sys.executable, "-m", "mirrorlab.cli", *args], capture_output=True,
-                          text=True, cwd=cwd, env=dict(os.environ))
+                          text=True, cwd=cwd, env=environment)
 
 
 @pytest.fixture(scope="session")
 def canaries():
     """Two files outside every submission's folder, which anyone may write: only the
-    sandbox keeps them whole. In /var/tmp, which sandboxed runs see (their /tmp is their
-    own)."""
+    sandbox keeps them whole. In /var/tmp (outside the session's own TMPDIR)."""
     folder = Path(tempfile.mkdtemp(prefix="mirrorlab-canary-", dir="/var/tmp"))
     folder.chmod(0o777)
     for name in ("delete_me.txt", "overwrite_me.txt"):

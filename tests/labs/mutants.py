@@ -1,13 +1,24 @@
-"""Mutants of the reference solutions, one per common mistake: each is the solution with a
-few lines changed, the tasks it must fail and a phrase the hint of each must contain.
-``write_mutants`` writes them as files (the checker never sees where they came from)."""
+"""Mutants of the teachers' solutions (labs/solutions/), one per common mistake: each is the
+solution with a few lines changed, the tasks it must fail and a phrase the hint of each
+must contain (every other task must pass). The issue's hint problems are here by name
+(``wrong_corner``, ``copy_offset``, ``depth_not_cleared``, ...); the ``EQUIVALENT`` ones
+are forms the handouts allow, which must pass every task. ``write_mutants`` writes them as
+files (the checker never sees where they came from)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from mirrorlab.labs import LABS
+from tests import REPO_DIR
+
+SOLUTIONS = REPO_DIR / "labs" / "solutions"
+
+
+def solution(lab: str) -> str:
+    """The teacher's solution of ``lab`` (the lab's own numbers)."""
+    return (SOLUTIONS / f"{LABS[lab].folder}.py").read_text()
 
 
 @dataclass(frozen=True)
@@ -15,11 +26,11 @@ class Mutant:
     lab: str
     name: str
     edits: tuple[tuple[str, str], ...]
-    fails: dict[str, str]
+    fails: dict[str, str] = field(default_factory=dict)
     """task id -> a phrase its hint must contain; every other task must pass."""
 
     def source(self) -> str:
-        text = LABS[self.lab].solution.read_text()
+        text = solution(self.lab)
         for old, new in self.edits:
             if old not in text:
                 raise AssertionError(f"mutant {self.name}: {old!r} is not in the solution")
@@ -28,67 +39,141 @@ class Mutant:
 
 
 QUAD = """    glTexCoord2f(0, 0)
-    glVertex3f(-7, -3, -6)
+    glVertex3f(MIRROR_X, Y0, Z0)
     glTexCoord2f(0, 1)
-    glVertex3f(-7, 5, -6)
+    glVertex3f(MIRROR_X, Y1, Z0)
     glTexCoord2f(1, 1)
-    glVertex3f(-7, 5, 2)
+    glVertex3f(MIRROR_X, Y1, Z1)
     glTexCoord2f(1, 0)
-    glVertex3f(-7, -3, 2)
+    glVertex3f(MIRROR_X, Y0, Z1)
 """
-CORNERS = ((-7, -3, -6), (-7, 5, -6), (-7, 5, 2), (-7, -3, 2))
+CORNERS = ("MIRROR_X, Y0, Z0", "MIRROR_X, Y1, Z0", "MIRROR_X, Y1, Z1", "MIRROR_X, Y0, Z1")
 
 
-def quad(texcoords) -> str:
-    """The mirror quad's lines with ``texcoords`` at the four corners."""
-    return "".join(f"    glTexCoord2f{tuple(st)}\n    glVertex3f{corner}\n"
-                   for st, corner in zip(texcoords, CORNERS, strict=True))
+def quad(texcoords, corners=CORNERS, vertex: str = "glVertex3f({})",
+         texcoord: str = "glTexCoord2f{}") -> str:
+    """The mirror quad's lines with ``texcoords`` at ``corners``."""
+    return "".join(f"    {texcoord.format(tuple(st))}\n    {vertex.format(corner)}\n"
+                   for st, corner in zip(texcoords, corners, strict=True))
 
+
+RIGHT = ((0, 0), (0, 1), (1, 1), (1, 0))
+CLEAR = "    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT)\n"
 
 LAB20 = (
     Mutant("lab20", "wrong_extents",
-           (("glOrtho(-6, 2, -3, 5, 0, 15)", "glOrtho(-4, 4, -4, 4, 0, 15)"),),
+           (("glOrtho(Z0, Z1, Y0, Y1, 0, 15)", "glOrtho(-4, 4, -4, 4, 0, 15)"),),
            {"capture_camera": "wrong extents", "capture_scene": "fix its projection"}),
     Mutant("lab20", "camera_wrong_side",
-           (("gluLookAt(-7, 0, 0, 0, 0, 0, 0, 1, 0)", "gluLookAt(7, 0, 0, 0, 0, 0, 0, 1, 0)"),),
+           (("gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)",
+             "gluLookAt(-MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)"),),
            {"capture_camera": "camera on the wrong side", "capture_scene": "fix its projection"}),
+    Mutant("lab20", "no_projection_mode",
+           (("    glMatrixMode(GL_PROJECTION)\n    glLoadIdentity()\n    glOrtho",
+             "    glLoadIdentity()\n    glOrtho"),),
+           {"capture_camera": "applied to the modelview matrix",
+            "capture_scene": "fix its projection"}),
+    Mutant("lab20", "no_load_identity",
+           (("    glMatrixMode(GL_PROJECTION)\n    glLoadIdentity()\n",
+             "    glMatrixMode(GL_PROJECTION)\n"),),
+           {"capture_camera": "multiplied onto the viewer's matrix",
+            "capture_scene": "fix its projection"}),
     Mutant("lab20", "texcoords_flipped", ((QUAD, quad(((1, 0), (1, 1), (0, 1), (0, 0)))),),
            {"mirror_quad": "flipped left-right"}),
     Mutant("lab20", "texcoords_upside_down", ((QUAD, quad(((0, 1), (0, 0), (1, 0), (1, 1)))),),
            {"mirror_quad": "upside down"}),
     Mutant("lab20", "texcoords_rotated", ((QUAD, quad(((0, 1), (1, 1), (1, 0), (0, 0)))),),
-           {"mirror_quad": "rotated"}),
+           {"mirror_quad": "rotated by 90 degrees"}),
+    Mutant("lab20", "wrong_corner", (("glVertex3f(MIRROR_X, Y1, Z1)",
+                                      "glVertex3f(MIRROR_X, Y1, Z1 - 1)"),),
+           {"mirror_quad": "is not a corner of your mirror; the nearest corner is (-7, 5, 2)"}),
+    Mutant("lab20", "quad_moved", ((QUAD, QUAD.replace("MIRROR_X,", "-5,")),),
+           {"mirror_quad": "lies in the plane x = -5"}),
     Mutant("lab20", "mirror_in_capture",
            (("    lab.draw_scene(robot)\n    # TODO 3",
              "    lab.draw_scene(robot)\n    render_mirror()\n    # TODO 3"),),
-           {"capture_scene": "drawn into its own capture"}),
+           {"capture_scene": "drawn into its own capture", "passes": "wrong order"}),
     Mutant("lab20", "environment_not_bound",
            (("    glActiveTexture(GL_TEXTURE1)\n"
              "    glBindTexture(GL_TEXTURE_2D, tex_ids[ENVIRONMENT])\n    glCopyTexImage2D",
              "    glCopyTexImage2D"),),
-           {"capture_copy": "overwrote METAL", "capture_scene": "went into METAL"}),
+           {"capture_copy": "overwrote METAL", "capture_scene": "judged once task 3 passes"}),
+    Mutant("lab20", "half_copy",
+           (("0, 0, WIDTH, HEIGHT, 0)", "0, 0, WIDTH // 2, HEIGHT // 2, 0)"),),
+           {"capture_copy": "copy the whole framebuffer, WIDTH x HEIGHT (256 x 256)"}),
+    Mutant("lab20", "copy_offset", (("GL_RGB, 0, 0, WIDTH, HEIGHT, 0)",
+                                     "GL_RGB, 64, 64, WIDTH, HEIGHT, 0)"),),
+           {"capture_copy": "starts at (64, 64) of the framebuffer: copy from its corner (0, 0)"}),
     Mutant("lab20", "environment_mipmaps",
            (("GL_TEXTURE_MIN_FILTER, GL_LINEAR)",
              "GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR)"),),
-           {"environment_texture": "mipmaps", "mirror_texture": "black",
-            "mirror_quad": "task 6"}),
+           {"environment_texture": "mipmaps", "mirror_texture": "black"}),
     Mutant("lab20", "environment_repeat",
            (("GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE", "GL_TEXTURE_WRAP_S, GL_REPEAT"),),
            {"environment_texture": "repeat"}),
     Mutant("lab20", "base_not_textured", (('    robot["base"].texture = tex_ids[METAL]\n', ""),),
            {"base_texture": "base not textured", "capture_scene": "task 5"}),
     Mutant("lab20", "sampler_not_set", (("    glUniform1i(lab.texSampler, 1)\n", ""),),
-           {"mirror_texture": "sampler uniform is not set", "mirror_quad": "task 6"}),
+           {"mirror_texture": "sampler uniform is not set"}),
     Mutant("lab20", "passes_wrong_order",
            (("    create_mirror()\n", ""),
             ("    lab.draw_scene(robot)\n    # TODO 8: pass 2\n",
              "    lab.draw_scene(robot)\n    create_mirror()\n    # TODO 8: pass 2\n")),
-           {"passes": "wrong order", "mirror_texture": "task 8", "mirror_quad": "task 8"}),
+           {"passes": "wrong order", "mirror_quad": "task 8"}),
+    Mutant("lab20", "capture_after_clear",
+           ((CLEAR + "    # TODO 1", "    # TODO 1"),
+            ("    create_mirror()\n" + CLEAR, CLEAR + "    create_mirror()\n")),
+           {"passes": "the capture's picture stays in the frame"}),
 )
 
-LEGACY = (
+VIEWER_PASS = "    lab.set_viewer()\n    lab.draw_scene(robot)"
+
+LAB20_MORE = (
+    # graded by test_check.py, beside the other labs' mutants
+    Mutant("lab20", "frame_cleared_white",
+           (("    create_mirror()\n" + CLEAR,
+             "    create_mirror()\n    glClearColor(1, 1, 1, 1)\n" + CLEAR),),
+           {"passes": "the frame is cleared to (1, 1, 1)",
+            "capture_scene": "the capture is cleared to (1, 1, 1)"}),
+    Mutant("lab20", "viewport_quarter",
+           ((VIEWER_PASS, "    glViewport(0, 0, 128, 128)\n" + VIEWER_PASS),),
+           {"passes": "the scene is drawn in glViewport(0, 0, 128, 128)",
+            "capture_scene": "glViewport(0, 0, 128, 128)"}),
+    Mutant("lab20", "viewer_by_hand",
+           ((VIEWER_PASS, "    glMatrixMode(GL_PROJECTION)\n    glLoadIdentity()\n"
+                          "    gluPerspective(60, 1, 0.1, 100)\n    glMatrixMode(GL_MODELVIEW)\n"
+                          "    glLoadIdentity()\n    gluLookAt(12, 5, 9, -3.5, 1, -2, 0, 1, 0)\n"
+                          "    lab.draw_scene(robot)"),
+            ("from OpenGL.GLU import gluLookAt",
+             "from OpenGL.GLU import gluLookAt, gluPerspective")),
+           {"passes": "field of view of 60 degrees; the viewer's is 45"}),
+    Mutant("lab20", "texcoords_in_world_units",
+           ((QUAD, quad(((0, 0), (0, 8), (8, 8), (8, 0)))),),
+           {"mirror_quad": "should be (0, 1): s = (z + 6) / 8, t = (y + 3) / 8"}),
+    Mutant("lab20", "near_cuts_the_robot",
+           (("glOrtho(Z0, Z1, Y0, Y1, 0, 15)", "glOrtho(Z0, Z1, Y0, Y1, 5, 15)"),),
+           {"capture_camera": "near and far planes", "capture_scene": "fix its projection"}),
+    Mutant("lab20", "capture_upside_down",
+           (("gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)",
+             "gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, -1, 0)"),),
+           {"capture_camera": "up is (0, -1, 0)", "capture_scene": "fix its projection"}),
+)
+
+EQUIVALENT = (
     # the lab text's own calls: GL_CLAMP works in the compatibility profile
-    Mutant("lab20", "legacy_gl_clamp", (("GL_CLAMP_TO_EDGE", "GL_CLAMP"),), {}),
+    Mutant("lab20", "legacy_gl_clamp", (("GL_CLAMP_TO_EDGE", "GL_CLAMP"),)),
+    Mutant("lab20", "triangle_fan", (("glBegin(GL_QUADS)", "glBegin(GL_TRIANGLE_FAN)"),)),
+    Mutant("lab20", "two_triangles", (("glBegin(GL_QUADS)", "glBegin(GL_TRIANGLES)"),
+                                      (QUAD, quad((*RIGHT[:3], RIGHT[0], RIGHT[2], RIGHT[3]),
+                                                  (*CORNERS[:3], CORNERS[0], CORNERS[2],
+                                                   CORNERS[3])))),),
+    Mutant("lab20", "other_winding", ((QUAD, quad(RIGHT[::-1], CORNERS[::-1])),)),
+    Mutant("lab20", "vector_calls", ((QUAD, quad(RIGHT, vertex="glVertex3fv(({},))",
+                                                 texcoord="glTexCoord2fv({})")),)),
+    Mutant("lab20", "look_at_along_x", (("gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)",
+                                         "gluLookAt(MIRROR_X, 0, 0, 1, 0, 0, 0, 1, 0)"),)),
+    Mutant("lab20", "farther_far_plane", (("glOrtho(Z0, Z1, Y0, Y1, 0, 15)",
+                                           "glOrtho(Z0, Z1, Y0, Y1, 0, 25)"),)),
 )
 
 SPHEREMAP = (
@@ -113,40 +198,93 @@ SPHEREMAP = (
            {"texgen_draw": "left on"}),
     Mutant("spheremap", "texgen_only_s", (("    glEnable(GL_TEXTURE_GEN_T)\n", ""),),
            {"texgen_draw": "for t is off", "side_by_side": "tasks 3 and 4"}),
+    Mutant("spheremap", "cone_aspect_of_the_window",
+           (("    glViewport(0, 0, half, HEIGHT)\n    lab.set_viewer(half / HEIGHT)",
+             "    glViewport(0, 0, half, HEIGHT)\n    lab.set_viewer()"),),
+           {"side_by_side": "aspect 1.00; this view needs 0.50"}),
+    Mutant("spheremap", "texgen_reflection_map",
+           (("glTexGeni(GL_S, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)",
+             "glTexGeni(GL_S, GL_TEXTURE_GEN_MODE, GL_REFLECTION_MAP)"),),
+           {"texgen_setup": "texgen for s is GL_REFLECTION_MAP (line",
+            "side_by_side": "tasks 3 and 4"}),
+    Mutant("spheremap", "texgen_unit_1",
+           (("texgen on for it alone.\"\"\"\n    glActiveTexture(GL_TEXTURE0 + UNIT)",
+             "texgen on for it alone.\"\"\"\n    glActiveTexture(GL_TEXTURE1)"),),
+           {"texgen_draw": "texgen for s and t is switched on for unit 1",
+            "side_by_side": "tasks 3 and 4"}),
 )
+
+FACE_LOOP = ("                         FACE_SIZE, 0)\n        glActiveTexture(GL_TEXTURE0)\n")
 
 CUBEMAP = (
     Mutant("cubemap", "face_signed_max", (("    vec3 a = abs(r);", "    vec3 a = r;"),),
-           {"face_selection": "largest signed", "live_frame": "tasks 1 to 4"}),
+           {"face_selection": "largest signed"}),
     Mutant("cubemap", "st_swapped",
            (("return vec2((sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0);",
              "return vec2((tc / ma + 1.0) / 2.0, (sc / ma + 1.0) / 2.0);"),),
-           {"face_coordinates": "swapped", "live_frame": "tasks 1 to 4"}),
+           {"face_coordinates": "swapped"}),
     Mutant("cubemap", "st_not_divided",
            (("return vec2((sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0);",
              "return vec2((sc + 1.0) / 2.0, (tc + 1.0) / 2.0);"),),
-           {"face_coordinates": "divided by |major axis|", "live_frame": "tasks 1 to 4"}),
+           {"face_coordinates": "divided by |major axis|"}),
     Mutant("cubemap", "up_wrong",
            (("((1, 0, 0), (0, -1, 0))", "((1, 0, 0), (0, 1, 0))"),
             ("((-1, 0, 0), (0, -1, 0))", "((-1, 0, 0), (0, 1, 0))"),
             ("((0, 0, 1), (0, -1, 0))", "((0, 0, 1), (0, 1, 0))"),
             ("((0, 0, -1), (0, -1, 0))", "((0, 0, -1), (0, 1, 0))")),
-           {"capture_cameras": "up must be", "capture_copy": "task 3",
-            "live_frame": "tasks 1 to 4"}),
+           {"capture_cameras": "up must be", "capture_copy": "task 3"}),
     Mutant("cubemap", "fov_60", (("gluPerspective(90, 1, 0.05, 50)",
                                   "gluPerspective(60, 1, 0.05, 50)"),),
-           {"capture_cameras": "field of view 60", "capture_copy": "task 3",
-            "live_frame": "tasks 1 to 4"}),
+           {"capture_cameras": "field of view 60", "capture_copy": "task 3"}),
     Mutant("cubemap", "faces_swapped_y",
            (("((0, 1, 0), (0, 0, 1)),      # POSITIVE_Y", "((0, -1, 0), (0, 0, -1)),   # Y-"),
             ("((0, -1, 0), (0, 0, -1)),    # NEGATIVE_Y", "((0, 1, 0), (0, 0, 1)),     # Y+")),
-           {"capture_cameras": "wrong order", "capture_copy": "task 3",
-            "live_frame": "tasks 1 to 4"}),
+           {"capture_cameras": "wrong order", "capture_copy": "task 3"}),
     Mutant("cubemap", "capture_after_camera",
            (("    capture_cube()\n    glClear", "    glClear"),
             ("    lab.draw_scene()\n    lab.draw_sphere",
              "    lab.draw_scene()\n    capture_cube()\n    lab.draw_sphere")),
            {"live_frame": "wrong order"}),
+    Mutant("cubemap", "depth_not_cleared",
+           (("        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT)\n        glMatrixMode",
+             "        glClear(GL_COLOR_BUFFER_BIT)\n        glMatrixMode"),),
+           {"capture_copy": "the depth buffer is not cleared between faces"}),
+    Mutant("cubemap", "viewport_in_loop",
+           ((FACE_LOOP, FACE_LOOP + "        glViewport(0, 0, WIDTH, HEIGHT)\n"),),
+           {"capture_cameras": "the viewport when the -X face is drawn is 256 x 256",
+            "capture_copy": "task 3"}),
+    Mutant("cubemap", "cleared_black",
+           (("    cx, cy, cz = CENTER\n",
+             "    cx, cy, cz = CENTER\n    glClearColor(0, 0, 0, 1)\n"),),
+           {"capture_copy": "the faces are cleared to (0, 0, 0)",
+            "live_frame": "the frame is cleared to (0, 0, 0)"}),
+    Mutant("cubemap", "no_projection_mode",
+           (("    glMatrixMode(GL_PROJECTION)\n    glLoadIdentity()\n    gluPerspective",
+             "    glLoadIdentity()\n    gluPerspective"),),
+           {"capture_cameras": "was applied to the modelview matrix",
+            "capture_copy": "task 3"}),
+    Mutant("cubemap", "near_3", (("gluPerspective(90, 1, 0.05, 50)",
+                                  "gluPerspective(90, 1, 3, 50)"),),
+           {"capture_cameras": "the near plane 3", "capture_copy": "task 3"}),
+    Mutant("cubemap", "mipmaps_before_faces",
+           (("    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR)\n",
+             "    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, "
+             "GL_LINEAR_MIPMAP_LINEAR)\n    glGenerateMipmap(GL_TEXTURE_CUBE_MAP)\n"),),
+           {"live_frame": "mipmaps made before the faces were copied"}),
+)
+
+CUBE_EQUIVALENT = (
+    Mutant("cubemap", "mipmaps_after_faces",
+           (("    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR)\n",
+             "    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, "
+             "GL_LINEAR_MIPMAP_LINEAR)\n"),
+            ("    glViewport(0, 0, WIDTH, HEIGHT)\n\n\ndef display",
+             "    glActiveTexture(GL_TEXTURE1)\n    glBindTexture(GL_TEXTURE_CUBE_MAP, "
+             "cube_texture)\n    glGenerateMipmap(GL_TEXTURE_CUBE_MAP)\n"
+             "    glActiveTexture(GL_TEXTURE0)\n    glViewport(0, 0, WIDTH, HEIGHT)\n\n\n"
+             "def display")),),
+    Mutant("cubemap", "other_near_far", (("gluPerspective(90, 1, 0.05, 50)",
+                                          "gluPerspective(90, 1, 0.2, 100)"),)),
 )
 
 MUTANTS = (*LAB20, *SPHEREMAP, *CUBEMAP)

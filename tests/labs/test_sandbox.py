@@ -1,17 +1,28 @@
-"""The sandbox's limits without bubblewrap (the fallback where bwrap does not work: a user
-id of its own), and the checker's own memory while a submission exhausts its."""
+"""The sandbox from anywhere: a clone and its venv two folders deep under the temporary
+folder, an interpreter under a closed home (pyenv's, under /root, here); a sandbox that
+cannot start is one line and exit 2; no temporary folder is left after a run and none is
+world-writable while it exists. Then its limits without bubblewrap (the fallback where
+bwrap does not work: a user id of its own), and the checker's own memory while a
+submission exhausts its."""
 
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
+import threading
+import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
-from mirrorlab.labs import LABS, sandbox
-from mirrorlab.labs.sandbox import Limits, new_box, run_sandboxed, uid_processes
+from mirrorlab.labs import LABS
+from mirrorlab.labs.trusted import sandbox
+from mirrorlab.labs.trusted.sandbox import Limits, new_box, run_sandboxed, uid_processes
+from tests import REPO_DIR
+from tests.labs.conftest import mirrorlab_command
 
 SYSTEM_PYTHON = "/usr/bin/python3"
 
@@ -27,6 +38,104 @@ def user_mode(monkeypatch):
 
 
 SHORT = Limits(cpu_seconds=3, seconds=60)
+
+
+def test_a_clone_and_its_venv_two_folders_deep_check_a_lab(tmp_path):
+    """A fresh clone at TMP/x/y/clone with its own venv (the interpreter stays pyenv's under
+    /root, closed to other users): the sandbox's student side, interpreter and numpy are
+    all reached, and the solution passes from the clone's own folder."""
+    clone = tmp_path / "x" / "y" / "clone"
+    clone.mkdir(parents=True)
+    for folder in ("mirrorlab", "labs"):
+        shutil.copytree(REPO_DIR / folder, clone / folder,
+                        ignore=shutil.ignore_patterns("__pycache__"))
+    venv = clone / ".venv"
+    subprocess.run([sandbox.interpreter(), "-m", "venv", "--without-pip", str(venv)],
+                   check=True)
+    site = next(venv.glob("lib/python3*/site-packages"))
+    # the clone's mirrorlab, and the dependencies of this venv (no second download)
+    (site / "clone.pth").write_text(f"{clone}\n{Path(np.__file__).parent.parent}\n")
+    for parent in (tmp_path / "x", tmp_path / "x" / "y", clone):
+        parent.chmod(0o700)
+    cache = tmp_path / "cache"
+    done = subprocess.run(
+        [str(venv / "bin" / "python"), "-m", "mirrorlab.cli", "lab", "check", "lab20",
+         "labs/solutions/lab20_mirror.py", "--solutions", "labs/solutions", "--out",
+         str(tmp_path / "c.png"), "--timeout", "10"],
+        cwd=clone, capture_output=True, text=True,
+        env={**os.environ, "MIRRORLAB_CACHE": str(cache)})
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "8/8 tasks passed" in done.stdout
+    found = subprocess.run([str(venv / "bin" / "python"), "-c",
+                            "import mirrorlab.labs.trusted.sandbox as s; print(s.__file__)"],
+                           cwd=tmp_path, capture_output=True, text=True, check=True)
+    assert found.stdout.strip().startswith(str(clone))
+
+
+def test_a_sandbox_that_cannot_start_is_one_line_and_exit_2(tmp_path):
+    """A bubblewrap that passes the probe but cannot build the sandbox (as when a kernel
+    refuses its mounts): one line naming the sandbox, exit 2, no traceback."""
+    if sandbox.sandbox_mode() != "bwrap":
+        pytest.fail("bubblewrap is needed (./dev setup installs it)")
+    fake = tmp_path / "bin"
+    fake.mkdir()
+    (fake / "bwrap").write_text("#!/bin/sh\n"
+                                'for last; do :; done\n'
+                                'if [ "$last" = true ]; then exit 0; fi\n'
+                                'echo "bwrap: Creating new namespace failed: Operation not '
+                                'permitted" >&2\nexit 1\n')
+    (fake / "bwrap").chmod(0o755)
+    start = tmp_path / "lab"
+    done = mirrorlab_command("lab", "start", "lab20", str(start))
+    assert done.returncode == 0, done.stderr
+    done = mirrorlab_command("lab", "check", "lab20", str(start / "starter.py"), "--out",
+                             str(tmp_path / "c.png"),
+                             env={"PATH": f"{fake}:{os.environ['PATH']}"})
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1, done.stderr
+    assert "the sandbox could not start" in lines[0] and "Operation not permitted" in lines[0]
+    assert not (tmp_path / "c.png").exists()
+
+
+def test_no_temporary_folder_is_left_or_world_writable(tmp_path, lab_environment):
+    """While a check and a grading run, every folder they make in the temporary folder is
+    closed to other users; after them, none is left (a crash and a loop among them)."""
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    scratch.chmod(0o1777)
+    folder = tmp_path / "class"
+    folder.mkdir()
+    (folder / "crash.py").write_text("import ctypes\nctypes.string_at(0)\n")
+    (folder / "loop.py").write_text("while True:\n    pass\n")
+    (folder / "ok.py").write_text((REPO_DIR / "labs/solutions/lab20_mirror.py").read_text())
+    seen: dict[str, int] = {}
+    stop = threading.Event()
+
+    def watch() -> None:
+        while not stop.is_set():
+            for entry in list(scratch.iterdir()):
+                try:
+                    seen[entry.name] = max(seen.get(entry.name, 0), entry.stat().st_mode)
+                except OSError:
+                    continue
+            time.sleep(0.01)
+
+    watcher = threading.Thread(target=watch)
+    watcher.start()
+    try:
+        env = {"TMPDIR": str(scratch)}
+        check = mirrorlab_command("lab", "check", "lab20", str(folder / "ok.py"), "--out",
+                                  str(tmp_path / "c.png"), env=env)
+        grade = mirrorlab_command("lab", "grade", "lab20", str(folder), "--jobs", "2",
+                                  "--timeout", "2", "--out-dir", str(tmp_path / "g"), env=env)
+    finally:
+        stop.set()
+        watcher.join()
+    assert check.returncode == 0 and grade.returncode == 0, check.stderr + grade.stderr
+    made = {name for name in seen if name.startswith("mirrorlab-")}
+    assert any(name.startswith("mirrorlab-box-") for name in made), seen
+    assert [name for name in made if seen[name] & 0o002] == []
+    assert sorted(p.name for p in scratch.iterdir()) == []
 
 
 def run_python(code: str, tmp_path: Path, limits: Limits = SHORT):

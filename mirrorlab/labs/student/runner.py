@@ -1,0 +1,162 @@
+"""Runs one student's lab file in the sandbox, as the trusted checker directs.
+
+``python -I -S runner.py READ_FD WRITE_FD`` (the checker starts it so, in the sandbox,
+with this package's folder on the path). The checker first sends the session (the
+lab, the file, the names and values of OpenGL, the lab object's values), then commands:
+``load`` (execute the file), ``call`` (one of the lab's functions), ``exit``; the runner
+says ``ready`` before the student's code runs. Each command
+ends with a ``done`` message carrying the errors the student's code raised (the function,
+the student's line, the message); everything else that passes is the calls themselves.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import traceback
+from types import ModuleType
+from typing import Any
+
+from .gl import build_modules
+from .kit import build_kit
+from .remote import Remote, StudentShaderError
+from .wire import Channel
+
+
+class StudentFailure(Exception):
+    """A lab function raised; the error is already recorded."""
+
+
+class Run:
+    """The student's file and the errors its functions raised, once per function."""
+
+    def __init__(self, channel: Channel, path: str, functions: list[str]) -> None:
+        self.channel, self.path, self.functions = channel, path, functions
+        self.errors: list[dict[str, Any]] = []
+
+    def error(self, function: str, kind: str, message: str, line: int = 0) -> None:
+        if not any(e["function"] == function for e in self.errors):
+            self.errors.append({"function": function, "kind": kind,
+                                "message": message[:300], "line": int(line)})
+
+    def exception(self, function: str, exc: BaseException) -> None:
+        line = 0
+        for frame in traceback.extract_tb(exc.__traceback__):
+            if frame.filename == self.path:
+                line = frame.lineno or 0
+        if isinstance(exc, StudentShaderError):
+            self.error(function, "glsl", str(exc), line)
+            return
+        message = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
+        self.error(function, "exception", message, line)
+
+    def load(self) -> dict[str, Any] | None:
+        try:
+            with open(self.path, encoding="utf-8") as stream:
+                source = stream.read()
+        except (OSError, UnicodeDecodeError) as exc:
+            self.error("<file>", "unreadable", f"cannot read the file: {exc}")
+            return None
+        try:
+            code = compile(source, self.path, "exec")
+        except SyntaxError as exc:
+            self.error("<file>", "syntax", f"SyntaxError: {exc.msg}", exc.lineno or 0)
+            return None
+        namespace: dict[str, Any] = {"__name__": "student_lab", "__file__": self.path}
+        try:
+            exec(code, namespace)
+        except BaseException as exc:
+            self.exception("<file>", exc)
+            return None
+        self.wrap(namespace)
+        return namespace
+
+    def wrap(self, namespace: dict[str, Any]) -> None:
+        """Each lab function, noting its start and end to the checker and recording an
+        error once, at the function that raised; a missing one records so."""
+        for name in self.functions:
+            original = namespace.get(name)
+            if not callable(original):
+                problem = ("is missing" if original is None else
+                           f"is a {type(original).__name__}, not a function")
+                self.error(name, "missing", f"{name}() {problem}: define def {name}(): as in "
+                           f"the starter")
+
+                def missing(*args: Any, _name: str = name, **kwargs: Any) -> None:
+                    self.channel.send({"op": "enter", "function": _name, "line": 0})
+                    self.channel.send({"op": "leave", "function": _name, "raised": True})
+                    raise StudentFailure(_name)
+
+                namespace[name] = missing
+                continue
+
+            def wrapper(*args: Any, _name: str = name, _original: Any = original,
+                        **kwargs: Any) -> Any:
+                caller = sys._getframe(1)
+                line = caller.f_lineno if caller.f_code.co_filename == self.path else 0
+                self.channel.send({"op": "enter", "function": _name, "line": line})
+                raised = False
+                try:
+                    return _original(*args, **kwargs)
+                except StudentFailure:
+                    raised = True
+                    raise
+                except BaseException as exc:
+                    raised = True
+                    self.exception(_name, exc)
+                    raise StudentFailure(_name) from None
+                finally:
+                    self.channel.send({"op": "leave", "function": _name, "raised": raised})
+
+            namespace[name] = wrapper
+
+
+def install(modules: dict[str, ModuleType]) -> None:
+    for name, module in modules.items():
+        sys.modules[name] = module
+
+
+def main(argv: list[str]) -> int:
+    channel = Channel(int(argv[0]), int(argv[1]))
+    description, _ = channel.receive()
+    path = description["file"]
+    remote = Remote(channel, path, {int(k): v for k, v in description["pixel_types"].items()})
+    modules = build_modules(remote, description)
+    kit = build_kit(remote, description)
+    package, labs = ModuleType("mirrorlab"), ModuleType("mirrorlab.labs")
+    package.__path__, labs.__path__ = [], []
+    package.__dict__["labs"] = labs
+    labs.__dict__["kit"] = kit
+    install({**modules, "mirrorlab": package, "mirrorlab.labs": labs,
+             "mirrorlab.labs.kit": kit})
+    run = Run(channel, path, list(description["functions"]))
+    channel.send({"op": "ready"})
+    namespace: dict[str, Any] | None = None
+    while True:
+        command, _ = channel.receive()
+        op = command.get("op")
+        run.errors = []
+        ok = False
+        declared: dict[str, str] = {}
+        if op == "load":
+            namespace = run.load()
+            ok = namespace is not None
+            for name in description.get("declared", []):
+                value = (namespace or {}).get(name)
+                if isinstance(value, str):
+                    declared[name] = value
+        elif op == "call" and namespace is not None:
+            try:
+                namespace[command["function"]]()
+                ok = True
+            except StudentFailure:
+                ok = False
+        elif op == "exit":
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(0)
+        channel.send({"op": "done", "ok": ok, "errors": run.errors, "declared": declared})
+
+
+if __name__ == "__main__":  # pragma: no cover - the checker starts it with -c
+    sys.exit(main(sys.argv[1:]))

@@ -1,0 +1,400 @@
+"""The OpenGL and GLU calls a student's file may make, and how each argument is checked.
+
+Every call the sandbox sends is looked up here by name; one that is not here is refused.
+Each argument is checked by kind (an integer in a range, a finite number, an enum from
+the call's own list, a vector of a set length, a short string) before anything is
+executed; arrays reach only the calls that upload pixels, and their sizes are checked
+against what GL will read (:mod:`.executor`). The checks raise :class:`CallError`, which
+the student sees as the error PyOpenGL would raise (``GLError`` for a bad enum, as GL
+reports it, ``TypeError`` for a wrong argument).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from mirrorlab.gl.opengl import GL
+
+GL_INVALID_ENUM, GL_INVALID_VALUE, GL_INVALID_OPERATION = 0x0500, 0x0501, 0x0502
+GL_OUT_OF_MEMORY = 0x0505
+ERROR_NAMES = {GL_INVALID_ENUM: "invalid enumerant", GL_INVALID_VALUE: "invalid value",
+               GL_INVALID_OPERATION: "invalid operation", 0x0503: "stack overflow",
+               0x0504: "stack underflow", GL_OUT_OF_MEMORY: "out of memory"}
+
+
+class CallError(Exception):
+    """A call refused or failed: ``kind`` names the exception the student gets."""
+
+    def __init__(self, kind: str, message: str, err: int = 0) -> None:
+        super().__init__(message)
+        self.kind, self.message, self.err = kind, message, err
+
+
+def gl_error(err: int, detail: str = "") -> CallError:
+    text = ERROR_NAMES.get(err, "error")
+    return CallError("GLError", text + (f" ({detail})" if detail else ""), err)
+
+
+def enums(*names: str) -> frozenset[int]:
+    return frozenset(int(getattr(GL, name)) for name in names)
+
+
+# ------------------------------------------------------------------------------ checks
+Check = Callable[[Any, str], Any]
+
+
+def integer(lo: int = -(1 << 31), hi: int = (1 << 32) - 1) -> Check:
+    def check(value: Any, what: str) -> int:
+        if type(value) is not int:
+            raise CallError("TypeError", f"{what}: expected an integer")
+        if not lo <= value <= hi:
+            raise gl_error(GL_INVALID_VALUE, f"{what} = {value} is outside {lo}..{hi}")
+        return value
+
+    return check
+
+
+def real(lo: float = -1e9, hi: float = 1e9) -> Check:
+    def check(value: Any, what: str) -> float:
+        if type(value) not in (int, float):
+            raise CallError("TypeError", f"{what}: expected a number")
+        value = float(value)
+        if not math.isfinite(value):
+            raise CallError("ValueError", f"{what} is {value}: the labs take finite numbers")
+        if not lo <= value <= hi:
+            raise gl_error(GL_INVALID_VALUE, f"{what} = {value:g} is outside {lo:g}..{hi:g}")
+        return value
+
+    return check
+
+
+def one_of(allowed: frozenset[int]) -> Check:
+    def check(value: Any, what: str) -> int:
+        if type(value) is not int:
+            raise CallError("TypeError", f"{what}: expected a GL enum (an integer)")
+        if value not in allowed:
+            raise gl_error(GL_INVALID_ENUM, f"{what} = {value:#x} is not one the labs' "
+                           f"OpenGL takes here")
+        return value
+
+    return check
+
+
+def bits(allowed: int) -> Check:
+    def check(value: Any, what: str) -> int:
+        if type(value) is not int:
+            raise CallError("TypeError", f"{what}: expected GL bits (an integer)")
+        if value & ~allowed or value < 0:
+            raise gl_error(GL_INVALID_VALUE, f"{what} = {value:#x} has bits the labs do not "
+                           f"take")
+        return value
+
+    return check
+
+
+def vector(lengths: tuple[int, ...], lo: float = -1e9, hi: float = 1e9) -> Check:
+    number = real(lo, hi)
+
+    def check(value: Any, what: str) -> list[float]:
+        if not isinstance(value, list) or len(value) not in lengths:
+            expected = " or ".join(map(str, lengths))
+            got = len(value) if isinstance(value, list) else type(value).__name__
+            raise CallError("ValueError", f"{what}: expected {expected} numbers, got {got}")
+        return [number(v, what) for v in value]
+
+    return check
+
+
+def names(limit: int = 64) -> Check:
+    name = integer(0)
+
+    def check(value: Any, what: str) -> list[int]:
+        if not isinstance(value, list) or len(value) > limit:
+            raise CallError("ValueError", f"{what}: expected at most {limit} names")
+        return [name(v, what) for v in value]
+
+    return check
+
+
+def text(limit: int) -> Check:
+    def check(value: Any, what: str) -> str:
+        if not isinstance(value, str):
+            raise CallError("TypeError", f"{what}: expected a string")
+        if len(value) > limit:
+            raise CallError("ValueError", f"{what}: a string of {len(value)} characters; the "
+                            f"labs take {limit} at most")
+        return value
+
+    return check
+
+
+def anything(value: Any, what: str) -> Any:
+    return value
+
+
+def pixels(value: Any, what: str) -> Any:
+    """None, or an array of the message (``{"$a": i}``; :mod:`.executor` resolves it)."""
+    if value is None or (isinstance(value, dict) and set(value) == {"$a"}
+                         and type(value["$a"]) is int):
+        return value
+    raise CallError("TypeError", f"{what}: expected pixel data or None")
+
+
+# -------------------------------------------------------------------------------- enums
+MATRIX_MODES = enums("GL_MODELVIEW", "GL_PROJECTION", "GL_TEXTURE")
+CAPS = enums("GL_DEPTH_TEST", "GL_CULL_FACE", "GL_BLEND", "GL_SCISSOR_TEST",
+             "GL_STENCIL_TEST", "GL_TEXTURE_2D", "GL_TEXTURE_CUBE_MAP",
+             "GL_TEXTURE_CUBE_MAP_SEAMLESS", "GL_TEXTURE_GEN_S", "GL_TEXTURE_GEN_T",
+             "GL_TEXTURE_GEN_R", "GL_TEXTURE_GEN_Q", "GL_NORMALIZE", "GL_RESCALE_NORMAL",
+             "GL_LIGHTING", "GL_LIGHT0", "GL_LIGHT1", "GL_COLOR_MATERIAL",
+             "GL_POLYGON_OFFSET_FILL", "GL_LINE_SMOOTH", "GL_POINT_SMOOTH", "GL_MULTISAMPLE",
+             "GL_DITHER", "GL_ALPHA_TEST", "GL_FOG")
+BEGIN_MODES = enums("GL_POINTS", "GL_LINES", "GL_LINE_STRIP", "GL_LINE_LOOP", "GL_TRIANGLES",
+                    "GL_TRIANGLE_STRIP", "GL_TRIANGLE_FAN", "GL_QUADS", "GL_QUAD_STRIP",
+                    "GL_POLYGON")
+CLEAR_BITS = int(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT | GL.GL_STENCIL_BUFFER_BIT
+                 | GL.GL_ACCUM_BUFFER_BIT)
+BIND_TARGETS = enums("GL_TEXTURE_2D", "GL_TEXTURE_CUBE_MAP")
+IMAGE_TARGETS = enums("GL_TEXTURE_2D", *(f"GL_TEXTURE_CUBE_MAP_{s}_{a}" for s in
+                                         ("POSITIVE", "NEGATIVE") for a in "XYZ"))
+TEX_PARAMS = enums("GL_TEXTURE_MIN_FILTER", "GL_TEXTURE_MAG_FILTER", "GL_TEXTURE_WRAP_S",
+                   "GL_TEXTURE_WRAP_T", "GL_TEXTURE_WRAP_R", "GL_TEXTURE_BASE_LEVEL",
+                   "GL_TEXTURE_MAX_LEVEL", "GL_TEXTURE_MIN_LOD", "GL_TEXTURE_MAX_LOD",
+                   "GL_TEXTURE_LOD_BIAS", "GL_GENERATE_MIPMAP")
+TEX_PARAM_VALUES = enums("GL_NEAREST", "GL_LINEAR", "GL_NEAREST_MIPMAP_NEAREST",
+                         "GL_LINEAR_MIPMAP_NEAREST", "GL_NEAREST_MIPMAP_LINEAR",
+                         "GL_LINEAR_MIPMAP_LINEAR", "GL_CLAMP", "GL_CLAMP_TO_EDGE",
+                         "GL_CLAMP_TO_BORDER", "GL_REPEAT", "GL_MIRRORED_REPEAT")
+TEX_PARAM_VECTORS = enums("GL_TEXTURE_BORDER_COLOR")
+PIXEL_FORMATS = {int(getattr(GL, name)): channels for name, channels in (
+    ("GL_RGB", 3), ("GL_RGBA", 4), ("GL_BGR", 3), ("GL_BGRA", 4), ("GL_RED", 1),
+    ("GL_GREEN", 1), ("GL_BLUE", 1), ("GL_ALPHA", 1), ("GL_LUMINANCE", 1),
+    ("GL_LUMINANCE_ALPHA", 2), ("GL_DEPTH_COMPONENT", 1))}
+PIXEL_TYPES = {int(getattr(GL, name)): (size, code) for name, size, code in (
+    ("GL_UNSIGNED_BYTE", 1, "u1"), ("GL_BYTE", 1, "i1"), ("GL_UNSIGNED_SHORT", 2, "u2"),
+    ("GL_SHORT", 2, "i2"), ("GL_UNSIGNED_INT", 4, "u4"), ("GL_INT", 4, "i4"),
+    ("GL_FLOAT", 4, "f4"))}
+INTERNAL_FORMATS = frozenset({1, 2, 3, 4}) | enums(
+    "GL_RGB", "GL_RGBA", "GL_RGB8", "GL_RGBA8", "GL_RGB16", "GL_RGBA16", "GL_RGB16F",
+    "GL_RGBA16F", "GL_RGB32F", "GL_RGBA32F", "GL_R8", "GL_RG8", "GL_RED", "GL_LUMINANCE",
+    "GL_LUMINANCE8", "GL_ALPHA", "GL_LUMINANCE_ALPHA", "GL_SRGB8", "GL_SRGB8_ALPHA8",
+    "GL_DEPTH_COMPONENT", "GL_DEPTH_COMPONENT16", "GL_DEPTH_COMPONENT24")
+TEXGEN_COORDS = enums("GL_S", "GL_T", "GL_R", "GL_Q")
+TEXGEN_MODES = enums("GL_EYE_LINEAR", "GL_OBJECT_LINEAR", "GL_SPHERE_MAP", "GL_NORMAL_MAP",
+                     "GL_REFLECTION_MAP")
+TEXGEN_PLANES = enums("GL_EYE_PLANE", "GL_OBJECT_PLANE")
+TEXENV_MODES = enums("GL_MODULATE", "GL_REPLACE", "GL_DECAL", "GL_BLEND", "GL_ADD")
+UNITS = frozenset(int(GL.GL_TEXTURE0) + i for i in range(8))
+DEPTH_FUNCS = enums("GL_NEVER", "GL_LESS", "GL_EQUAL", "GL_LEQUAL", "GL_GREATER",
+                    "GL_NOTEQUAL", "GL_GEQUAL", "GL_ALWAYS")
+BLEND_FACTORS = enums("GL_ZERO", "GL_ONE", "GL_SRC_COLOR", "GL_ONE_MINUS_SRC_COLOR",
+                      "GL_SRC_ALPHA", "GL_ONE_MINUS_SRC_ALPHA", "GL_DST_ALPHA",
+                      "GL_ONE_MINUS_DST_ALPHA", "GL_DST_COLOR", "GL_ONE_MINUS_DST_COLOR")
+FACES = enums("GL_FRONT", "GL_BACK", "GL_FRONT_AND_BACK")
+WINDINGS = enums("GL_CW", "GL_CCW")
+POLYGON_MODES = enums("GL_POINT", "GL_LINE", "GL_FILL")
+SHADE_MODELS = enums("GL_FLAT", "GL_SMOOTH")
+HINT_TARGETS = enums("GL_PERSPECTIVE_CORRECTION_HINT", "GL_LINE_SMOOTH_HINT",
+                     "GL_POINT_SMOOTH_HINT", "GL_POLYGON_SMOOTH_HINT", "GL_FOG_HINT",
+                     "GL_GENERATE_MIPMAP_HINT")
+HINT_MODES = enums("GL_FASTEST", "GL_NICEST", "GL_DONT_CARE")
+STORE_PARAMS = enums("GL_UNPACK_ALIGNMENT", "GL_PACK_ALIGNMENT")
+STRINGS = enums("GL_VENDOR", "GL_RENDERER", "GL_VERSION", "GL_SHADING_LANGUAGE_VERSION")
+LEVEL_PARAMS = enums("GL_TEXTURE_WIDTH", "GL_TEXTURE_HEIGHT", "GL_TEXTURE_INTERNAL_FORMAT")
+READ_FORMATS = enums("GL_RGB", "GL_RGBA", "GL_RED", "GL_DEPTH_COMPONENT")
+READ_TYPES = enums("GL_UNSIGNED_BYTE", "GL_FLOAT")
+
+QUERY_SIZES = {int(getattr(GL, name)): size for name, size in (
+    ("GL_VIEWPORT", 4), ("GL_SCISSOR_BOX", 4), ("GL_COLOR_CLEAR_VALUE", 4),
+    ("GL_DEPTH_CLEAR_VALUE", 1), ("GL_MATRIX_MODE", 1), ("GL_MODELVIEW_MATRIX", 16),
+    ("GL_PROJECTION_MATRIX", 16), ("GL_TEXTURE_MATRIX", 16), ("GL_ACTIVE_TEXTURE", 1),
+    ("GL_TEXTURE_BINDING_2D", 1), ("GL_TEXTURE_BINDING_CUBE_MAP", 1),
+    ("GL_CURRENT_PROGRAM", 1), ("GL_MAX_TEXTURE_SIZE", 1), ("GL_MAX_TEXTURE_UNITS", 1),
+    ("GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS", 1), ("GL_CURRENT_COLOR", 4),
+    ("GL_CURRENT_TEXTURE_COORDS", 4), ("GL_MODELVIEW_STACK_DEPTH", 1),
+    ("GL_PROJECTION_STACK_DEPTH", 1), ("GL_DEPTH_FUNC", 1), ("GL_CULL_FACE_MODE", 1),
+    ("GL_FRONT_FACE", 1), ("GL_PACK_ALIGNMENT", 1), ("GL_UNPACK_ALIGNMENT", 1),
+    ("GL_MAX_VIEWPORT_DIMS", 2), ("GL_DEPTH_RANGE", 2), ("GL_DEPTH_WRITEMASK", 1),
+    ("GL_COLOR_WRITEMASK", 4), ("GL_POLYGON_MODE", 2), ("GL_SHADE_MODEL", 1),
+    ("GL_LINE_WIDTH", 1), ("GL_POINT_SIZE", 1), ("GL_BLEND_SRC", 1), ("GL_BLEND_DST", 1),
+    ("GL_MAX_CUBE_MAP_TEXTURE_SIZE", 1))} | {cap: 1 for cap in CAPS}
+
+SIDE = 1024
+"""The largest texture side, viewport and copy the labs accept."""
+
+
+@dataclass(frozen=True)
+class Spec:
+    """A call the student may make: what the student side packs (``kinds``), the check of
+    each argument, the executor's handler (``handler``; '' for a plain call of the GL
+    function of the same name) and whether it may run between glBegin and glEnd."""
+
+    kinds: tuple[str, ...]
+    checks: tuple[Check, ...]
+    handler: str = ""
+    in_begin: bool = False
+
+
+def spec(kinds: str, *checks: Check, handler: str = "", in_begin: bool = False) -> Spec:
+    return Spec(tuple(kinds.split()) if kinds else (), checks, handler, in_begin)
+
+
+ANY_INT, SIDE_INT = integer(), integer(-SIDE * 16, SIDE * 16)
+SIZE_INT, LEVEL = integer(0, SIDE), integer(0, 10)
+NUMBER, UNIT_RANGE = real(), real(-1e6, 1e6)
+
+GL_SPECS: dict[str, Spec] = {
+    # matrices
+    "glMatrixMode": spec("i", one_of(MATRIX_MODES), handler="matrix_mode"),
+    "glLoadIdentity": spec("", handler="matrix_op"),
+    "glPushMatrix": spec("", handler="push_matrix"),
+    "glPopMatrix": spec("", handler="pop_matrix"),
+    "glOrtho": spec("f f f f f f", *[NUMBER] * 6, handler="matrix_op"),
+    "glFrustum": spec("f f f f f f", *[NUMBER] * 6, handler="matrix_op"),
+    **{f"glTranslate{t}": spec("f f f", *[NUMBER] * 3, handler="matrix_op") for t in "fd"},
+    **{f"glScale{t}": spec("f f f", *[NUMBER] * 3, handler="matrix_op") for t in "fd"},
+    **{f"glRotate{t}": spec("f f f f", *[NUMBER] * 4, handler="matrix_op") for t in "fd"},
+    **{f"gl{op}Matrix{t}": spec("v", vector((16,)), handler="matrix_op")
+       for op in ("Load", "Mult", "LoadTranspose", "MultTranspose") for t in "fd"},
+    # the frame
+    "glViewport": spec("i i i i", SIDE_INT, SIDE_INT, SIZE_INT, SIZE_INT, handler="viewport"),
+    "glScissor": spec("i i i i", SIDE_INT, SIDE_INT, SIZE_INT, SIZE_INT),
+    "glClear": spec("i", bits(CLEAR_BITS), handler="clear"),
+    "glClearColor": spec("f f f f", *[UNIT_RANGE] * 4, handler="clear_color"),
+    "glClearDepth": spec("f", UNIT_RANGE),
+    "glDepthRange": spec("f f", UNIT_RANGE, UNIT_RANGE),
+    "glFlush": spec(""), "glFinish": spec(""),
+    "glEnable": spec("i", one_of(CAPS), handler="enable"),
+    "glDisable": spec("i", one_of(CAPS), handler="enable"),
+    "glDepthFunc": spec("i", one_of(DEPTH_FUNCS)),
+    "glDepthMask": spec("b", integer(0, 1)),
+    "glColorMask": spec("b b b b", *[integer(0, 1)] * 4),
+    "glBlendFunc": spec("i i", one_of(BLEND_FACTORS), one_of(BLEND_FACTORS)),
+    "glCullFace": spec("i", one_of(FACES)),
+    "glFrontFace": spec("i", one_of(WINDINGS)),
+    "glPolygonMode": spec("i i", one_of(FACES), one_of(POLYGON_MODES)),
+    "glShadeModel": spec("i", one_of(SHADE_MODELS)),
+    "glHint": spec("i i", one_of(HINT_TARGETS), one_of(HINT_MODES)),
+    "glLineWidth": spec("f", real(0.0, 16.0)),
+    "glPointSize": spec("f", real(0.0, 16.0)),
+    "glPolygonOffset": spec("f f", UNIT_RANGE, UNIT_RANGE),
+    "glPixelStorei": spec("i i", one_of(STORE_PARAMS), integer(1, 8), handler="pixel_store"),
+    # immediate mode
+    "glBegin": spec("i", one_of(BEGIN_MODES), handler="begin"),
+    "glEnd": spec("", handler="end", in_begin=True),
+    **{f"glVertex{n}{t}": spec(" ".join("f" * n), *[NUMBER] * n, handler="vertex",
+                               in_begin=True) for n in (2, 3, 4) for t in "fdis"},
+    **{f"glVertex{n}{t}v": spec("v", vector((n,)), handler="vertex", in_begin=True)
+       for n in (2, 3, 4) for t in "fdis"},
+    **{f"glTexCoord{n}{t}": spec(" ".join("f" * n), *[NUMBER] * n, handler="texcoord",
+                                 in_begin=True) for n in (1, 2, 3, 4) for t in "fd"},
+    **{f"glTexCoord{n}{t}v": spec("v", vector((n,)), handler="texcoord", in_begin=True)
+       for n in (1, 2, 3, 4) for t in "fd"},
+    **{f"glMultiTexCoord{n}{t}": spec("i " + " ".join("f" * n), one_of(UNITS),
+                                      *[NUMBER] * n, handler="texcoord", in_begin=True)
+       for n in (1, 2, 3, 4) for t in "fd"},
+    **{f"glColor{n}{t}": spec(" ".join("f" * n), *[real(-1e3, 1e3)] * n, handler="color",
+                              in_begin=True) for n in (3, 4) for t in ("f", "d")},
+    **{f"glColor{n}ub": spec(" ".join("i" * n), *[integer(0, 255)] * n, handler="color",
+                             in_begin=True) for n in (3, 4)},
+    **{f"glColor{n}{t}v": spec("v", vector((n,), -1e3, 1e3), handler="color", in_begin=True)
+       for n in (3, 4) for t in "fd"},
+    **{f"glNormal3{t}": spec("f f f", *[NUMBER] * 3, in_begin=True) for t in "fd"},
+    **{f"glNormal3{t}v": spec("v", vector((3,)), handler="vector_call", in_begin=True)
+       for t in "fd"},
+    # textures
+    "glGenTextures": spec("i", integer(0, 64), handler="gen_textures"),
+    "glDeleteTextures": spec("n n?", names(), names(), handler="delete_textures"),
+    "glIsTexture": spec("i", ANY_INT, handler="is_texture"),
+    "glBindTexture": spec("i i", one_of(BIND_TARGETS), ANY_INT, handler="bind_texture"),
+    "glActiveTexture": spec("i", one_of(UNITS), handler="active_texture"),
+    "glTexImage2D": spec("i i i i i i i i p", one_of(IMAGE_TARGETS), LEVEL,
+                         one_of(INTERNAL_FORMATS), SIZE_INT, SIZE_INT, integer(0, 1),
+                         one_of(frozenset(PIXEL_FORMATS)), one_of(frozenset(PIXEL_TYPES)),
+                         pixels, handler="tex_image"),
+    "glTexSubImage2D": spec("i i i i i i i i p", one_of(IMAGE_TARGETS), LEVEL, SIZE_INT,
+                            SIZE_INT, SIZE_INT, SIZE_INT, one_of(frozenset(PIXEL_FORMATS)),
+                            one_of(frozenset(PIXEL_TYPES)), pixels, handler="tex_sub_image"),
+    "glCopyTexImage2D": spec("i i i i i i i i", one_of(IMAGE_TARGETS), LEVEL,
+                             one_of(INTERNAL_FORMATS), SIDE_INT, SIDE_INT, SIZE_INT, SIZE_INT,
+                             integer(0, 1), handler="copy_tex_image"),
+    "glCopyTexSubImage2D": spec("i i i i i i i i", one_of(IMAGE_TARGETS), LEVEL, SIZE_INT,
+                                SIZE_INT, SIDE_INT, SIDE_INT, SIZE_INT, SIZE_INT,
+                                handler="copy_tex_image"),
+    "glTexParameteri": spec("i i i", one_of(BIND_TARGETS), one_of(TEX_PARAMS),
+                            integer(-1000, 1 << 16), handler="tex_parameter"),
+    "glTexParameterf": spec("i i f", one_of(BIND_TARGETS), one_of(TEX_PARAMS),
+                            real(-1000, 1 << 16), handler="tex_parameter"),
+    "glTexParameterfv": spec("i i v", one_of(BIND_TARGETS), one_of(TEX_PARAM_VECTORS),
+                             vector((4,)), handler="tex_parameter"),
+    "glGenerateMipmap": spec("i", one_of(BIND_TARGETS), handler="generate_mipmap"),
+    "glTexEnvi": spec("i i i", one_of(enums("GL_TEXTURE_ENV")),
+                      one_of(enums("GL_TEXTURE_ENV_MODE")), one_of(TEXENV_MODES)),
+    "glTexEnvf": spec("i i f", one_of(enums("GL_TEXTURE_ENV")),
+                      one_of(enums("GL_TEXTURE_ENV_MODE")), real(0, 1 << 16),
+                      handler="texenv_f"),
+    "glTexGeni": spec("i i i", one_of(TEXGEN_COORDS), one_of(enums("GL_TEXTURE_GEN_MODE")),
+                      one_of(TEXGEN_MODES), handler="texgen"),
+    "glTexGenf": spec("i i f", one_of(TEXGEN_COORDS), one_of(enums("GL_TEXTURE_GEN_MODE")),
+                      real(0, 1 << 16), handler="texgen"),
+    "glTexGenfv": spec("i i v", one_of(TEXGEN_COORDS), one_of(TEXGEN_PLANES), vector((4,)),
+                       handler="vector_call"),
+    # programs: only the lab's
+    "glUseProgram": spec("i", ANY_INT, handler="use_program"),
+    "glGetUniformLocation": spec("i s", ANY_INT, text(128), handler="uniform_location"),
+    **{f"glUniform{n}{t}": spec("i " + " ".join(t * n), integer(-1, 1 << 16),
+                                *[integer() if t == "i" else NUMBER] * n, handler="uniform")
+       for n in (1, 2, 3, 4) for t in "if"},
+    **{f"glUniform{n}{t}v": spec("i i v", integer(-1, 1 << 16), integer(0, 64),
+                                 vector(tuple(range(0, 64 * n + 1))), handler="uniform_vector")
+       for n in (1, 2, 3, 4) for t in "if"},
+    **{f"glUniformMatrix{n}fv": spec("i i b v", integer(-1, 1 << 16), integer(0, 16),
+                                     integer(0, 1), vector(tuple(range(0, 16 * n * n + 1))),
+                                     handler="uniform_matrix") for n in (2, 3, 4)},
+    # queries
+    "glGetError": spec("", handler="get_error"),
+    **{name: spec("i", one_of(frozenset(QUERY_SIZES)), handler="get")
+       for name in ("glGetIntegerv", "glGetFloatv", "glGetDoublev", "glGetBooleanv")},
+    "glIsEnabled": spec("i", one_of(CAPS), handler="is_enabled"),
+    "glGetString": spec("i", one_of(STRINGS), handler="get_string"),
+    "glGetTexParameteriv": spec("i i", one_of(BIND_TARGETS), one_of(TEX_PARAMS),
+                                handler="get_tex_parameter"),
+    "glGetTexParameterfv": spec("i i", one_of(BIND_TARGETS), one_of(TEX_PARAMS),
+                                handler="get_tex_parameter"),
+    "glGetTexLevelParameteriv": spec("i i i", one_of(IMAGE_TARGETS), LEVEL,
+                                     one_of(LEVEL_PARAMS), handler="get_level_parameter"),
+    "glGetTexGeniv": spec("i i", one_of(TEXGEN_COORDS), one_of(enums("GL_TEXTURE_GEN_MODE")),
+                          handler="get_texgen"),
+    "glReadPixels": spec("i i i i i i", SIDE_INT, SIDE_INT, SIZE_INT, SIZE_INT,
+                         one_of(READ_FORMATS), one_of(READ_TYPES), handler="read_pixels"),
+}
+
+GLU_SPECS: dict[str, Spec] = {
+    "gluLookAt": spec("f f f f f f f f f", *[NUMBER] * 9, handler="matrix_op"),
+    "gluPerspective": spec("f f f f", real(-1e4, 1e4), NUMBER, NUMBER, NUMBER,
+                           handler="matrix_op"),
+    "gluOrtho2D": spec("f f f f", *[NUMBER] * 4, handler="matrix_op"),
+}
+
+MATRIX_REPLACES = {"glLoadIdentity", "glLoadMatrixf", "glLoadMatrixd", "glLoadTransposeMatrixf",
+                   "glLoadTransposeMatrixd"}
+
+
+def offered(specs: dict[str, Spec]) -> dict[str, list[str]]:
+    """What the student side packs for each call (sent to the sandbox at the start)."""
+    return {name: list(s.kinds) for name, s in specs.items()}
+
+
+def check_arguments(name: str, call: Spec, args: Any) -> list[Any]:
+    """``args`` checked against ``call``; CallError on the first that fails."""
+    if not isinstance(args, list):
+        raise CallError("TypeError", f"{name}: malformed arguments")
+    required = sum(not k.endswith("?") for k in call.kinds)
+    if not required <= len(args) <= len(call.kinds):
+        raise CallError("TypeError", f"{name}() takes {len(call.kinds)} arguments "
+                        f"({len(args)} given)")
+    return [check(value, f"{name}() argument {i + 1}")
+            for i, (check, value) in enumerate(zip(call.checks, args, strict=False))]

@@ -1,0 +1,271 @@
+"""``mirrorlab lab check``: one student's file judged against the reference evidence of
+the student's own variant, each task with a hint.
+
+The file runs in the sandbox with no GL of its own; the trusted checker process
+(:mod:`.execute`) executes its calls and makes every observation. The reference evidence
+is made the same way from the teacher's solution where the solutions are given
+(``--solutions DIR`` or ``$MIRRORLAB_SOLUTIONS``), cached in ``$MIRRORLAB_CACHE`` or
+``~/.cache/mirrorlab`` by the files that make it; without them, the evidence shipped in
+the package (the lab's own numbers) or beside a released starter (its student's) is used.
+The sandbox can reach none of these.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import time
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from mirrorlab.labs import LabSpec, find_lab
+from mirrorlab.labs.trusted.evidence import Evidence
+from mirrorlab.labs.trusted.execute import run_job
+from mirrorlab.labs.trusted.judging import Context, TaskResult
+from mirrorlab.labs.trusted.sandbox import Limits
+from mirrorlab.labs.trusted.variants import (
+    Variant,
+    VariantError,
+    default_variant,
+    variant_from_file,
+)
+
+CHECK_SIZE = (256, 256)
+DEFAULT_LIMITS = Limits()
+VARIANT_FILE = "variant.json"
+REFERENCE_FOLDER = "reference"
+
+
+def judges():
+    from mirrorlab.labs.trusted import cubemap, lab20, spheremap
+
+    return {"lab20": lab20, "spheremap": spheremap, "cubemap": cubemap}
+
+
+@dataclass
+class CheckResult:
+    """One submission's check: its tasks' results, how its run ended, its picture (student
+    | reference | difference, ``(h, w, 3)`` uint8), the seconds it took and its variant."""
+
+    student: str
+    results: list[TaskResult]
+    status: str
+    detail: str
+    seconds: float
+    picture: np.ndarray = field(repr=False)
+    variant: str = "default"
+
+    @property
+    def passed(self) -> bool:
+        return bool(self.results) and all(r.passed for r in self.results)
+
+    @property
+    def score(self) -> int:
+        return sum(r.passed for r in self.results)
+
+
+class CheckError(RuntimeError):
+    """No usable reference: the solutions are missing or failed, or the lab is broken."""
+
+
+def solutions_dir(given: str | Path | None) -> Path | None:
+    """The teacher's solutions folder: ``given``, else ``$MIRRORLAB_SOLUTIONS``, else None;
+    ValueError when the one named is not a folder."""
+    value = given if given is not None else os.environ.get("MIRRORLAB_SOLUTIONS") or None
+    if value is None:
+        return None
+    folder = Path(value)
+    if not folder.is_dir():
+        option = "--solutions" if given is not None else "MIRRORLAB_SOLUTIONS"
+        raise ValueError(f"{option}: {str(folder)!r} is not a folder (the repository's "
+                         f"labs/solutions/)")
+    return folder
+
+
+def solution_source(spec: LabSpec, folder: Path) -> str:
+    path = folder / f"{spec.folder}.py"
+    if not path.is_file():
+        raise ValueError(f"--solutions: {str(folder)!r} holds no {path.name}")
+    return path.read_text()
+
+
+def cache_dir() -> Path:
+    return Path(os.environ.get("MIRRORLAB_CACHE", Path.home() / ".cache" / "mirrorlab"))
+
+
+@lru_cache(maxsize=1)
+def code_digest() -> str:
+    """A digest of everything that makes a reference run: the labs' code, kit shaders,
+    meshes and pictures."""
+    import mirrorlab.labs as labs_package
+    from mirrorlab.data import data_path
+    from mirrorlab.shaders import shader_source
+
+    root = Path(labs_package.__file__).parent
+    digest = hashlib.sha256()
+    for path in sorted([*root.glob("*.py"), *root.glob("student/*.py"),
+                        *root.glob("trusted/*.py")]):
+        digest.update(path.read_bytes())
+    for name in ("kit_scene.vert", "kit_scene.frag", "kit_texture.vert", "kit_texture.frag",
+                 "kit_sphere.vert", "kit_sphere.frag", "kit_cube.vert", "kit_cube.frag"):
+        digest.update(shader_source(name).encode())
+    for folder in ("models", "textures"):
+        for path in sorted(data_path(folder).glob("*")):
+            if path.is_file():
+                digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def trim_reference(evidence: Evidence) -> Evidence:
+    """What the judges read of a reference run: its pictures and the last frame's events
+    without their state snapshots."""
+    keep = {"frame", "capture", "cube_faces", "values_mask"}
+    events = []
+    for event in evidence.last_frame:
+        events.append({k: v for k, v in event.items() if k not in ("state", "vertices")})
+        if event.get("picture"):
+            keep.add(event["picture"])
+    return Evidence(evidence.lab, evidence.status, evidence.detail,
+                    frames=[{"events": events}], state=dict(evidence.state),
+                    arrays={k: v for k, v in evidence.arrays.items() if k in keep},
+                    variant=evidence.variant)
+
+
+def make_reference(spec: LabSpec, variant: Variant, solution: str, limits: Limits,
+                   size: tuple[int, int], keep: bool = False) -> Evidence:
+    """The evidence of ``solution`` (the teacher's, with ``variant``'s numbers) run like any
+    submission; CheckError when it does not run cleanly."""
+    from mirrorlab.labs.content import solution_for
+
+    text = solution_for(solution, variant)
+    evidence = run_job(spec.name, text.encode(), "solution.py", variant, limits, size,
+                       keep=keep)
+    if evidence.status != "ok":
+        raise CheckError(f"the reference solution of {spec.name} did not run: "
+                         f"{evidence.detail}")
+    problems = evidence.errors or evidence.call_errors
+    if problems:
+        problem = problems[0]
+        raise CheckError(f"the reference solution of {spec.name} raised at line "
+                         f"{problem.get('line', 0)}: {problem.get('message', '')}")
+    return trim_reference(evidence)
+
+
+def reference_evidence(spec: LabSpec, variant: Variant, solutions: Path | None,
+                       limits: Limits = DEFAULT_LIMITS, size: tuple[int, int] = CHECK_SIZE,
+                       released: Path | None = None, keep: bool = False) -> Evidence:
+    """The reference evidence for ``variant``: made from the teacher's ``solutions`` when
+    given (cached), else shipped in the package (the default variant) or in a released
+    folder (``released``); CheckError when there is none."""
+    if solutions is not None:
+        solution = solution_source(spec, solutions)
+        digest = hashlib.sha256(repr((spec.name, size, sorted(variant.values.items()),
+                                      solution, code_digest())).encode()).hexdigest()[:24]
+        folder = cache_dir() / "lab-references" / f"{spec.name}-{variant.id}-{digest}"
+        try:
+            return Evidence.load(folder)
+        except ValueError:
+            pass
+        evidence = make_reference(spec, variant, solution, limits, size, keep)
+        folder.parent.mkdir(parents=True, exist_ok=True)
+        staging = Path(f"{folder}.{os.getpid()}.tmp")
+        shutil.rmtree(staging, ignore_errors=True)
+        evidence.save(staging)
+        try:
+            os.replace(staging, folder)
+        except OSError:  # another process cached it first
+            shutil.rmtree(staging, ignore_errors=True)
+        return evidence
+    if released is not None and (released / "evidence.json").is_file():
+        try:
+            return Evidence.load(released)
+        except ValueError as exc:
+            raise CheckError(f"{released}: {exc}") from None
+    if variant.is_default:
+        from mirrorlab.labs.content import reference_folder
+
+        if size != CHECK_SIZE:
+            raise CheckError(f"the shipped reference is {CHECK_SIZE[0]}x{CHECK_SIZE[1]}; give "
+                             f"--solutions to check at another size")
+        return Evidence.load(reference_folder(spec))
+    raise CheckError(f"no reference for variant {variant.id} of {spec.name}: its released "
+                     f"folder's {REFERENCE_FOLDER}/ is missing; give --solutions DIR (the "
+                     f"teacher's labs/solutions)")
+
+
+def check_submission(spec: LabSpec, source: bytes, reference: Evidence, context: Context,
+                     student: str = "", file_name: str = "submission.py",
+                     limits: Limits = DEFAULT_LIMITS, size: tuple[int, int] = CHECK_SIZE,
+                     keep: bool = False) -> CheckResult:
+    """Run ``source`` in the sandbox through the trusted checker (with ``keep``, this
+    process's kept checker process) and judge it against ``reference`` for
+    ``context.variant``."""
+    module = judges()[spec.name]
+    started = time.perf_counter()
+    evidence = run_job(spec.name, source, file_name, context.variant, limits, size, keep)
+    try:
+        results = module.judge(spec, evidence, reference, context)
+    except Exception as exc:  # a judge's own fault: every task fails, saying so
+        results = [TaskResult(task, False, f"its run could not be judged "
+                              f"({type(exc).__name__}: {exc})") for task in spec.tasks]
+    return CheckResult(student or Path(file_name).stem, results, evidence.status,
+                       evidence.detail, time.perf_counter() - started,
+                       module.check_picture(evidence, reference), context.variant.id)
+
+
+def report_lines(spec: LabSpec, check: CheckResult) -> list[str]:
+    """The check as a student reads it, one line per task (and its hint)."""
+    variant = "" if check.variant == "default" else f" (variant {check.variant})"
+    lines = [f"{spec.title}: {check.student}{variant}"]
+    for result in check.results:
+        mark = "pass" if result.passed else "FAIL"
+        lines.append(f"  [{mark}] task {result.task.number} ({result.task.function}): "
+                     f"{result.task.title}")
+        if result.hint:
+            lines.append(f"         {'note' if result.passed else 'hint'}: {result.hint}")
+    lines.append(f"{check.score}/{len(check.results)} tasks passed")
+    return lines
+
+
+def file_variant(spec: LabSpec, path: Path) -> Variant:
+    """The variant of a student's file: its released folder's ``variant.json`` beside it,
+    else the lab's own numbers."""
+    found = path.parent / VARIANT_FILE
+    if found.is_file():
+        try:
+            return variant_from_file(found, spec.name)
+        except VariantError as exc:
+            raise ValueError(str(exc)) from None
+    return default_variant(spec.name)
+
+
+def run_check(lab: str, file: str | None, out: Path | None, limits: Limits,
+              solutions: str | Path | None = None) -> int:
+    """``mirrorlab lab check``: print the verdicts, write the picture; 0 only when every
+    task passed."""
+    from mirrorlab.files import write_png_atomic
+    from mirrorlab.labs.content import starter
+
+    spec = find_lab(lab)
+    folder = solutions_dir(solutions)
+    if file:
+        path = Path(file)
+        if not path.is_file():
+            raise FileNotFoundError(f"FILE: {str(path)!r} is not a file")
+        source, name = path.read_bytes(), path.name
+        variant = file_variant(spec, path)
+        released = path.parent / REFERENCE_FOLDER
+    else:
+        variant = default_variant(spec.name)
+        source, name, released = starter(spec, variant).encode(), "starter.py", None
+    out = out or Path("out") / f"{spec.name}_check.png"
+    reference = reference_evidence(spec, variant, folder, limits, released=released)
+    check = check_submission(spec, source, reference, Context(variant), name, name, limits)
+    print("\n".join(report_lines(spec, check)))
+    write_png_atomic(out, check.picture)
+    print(f"picture (student | reference | difference): {out}")
+    return 0 if check.passed else 1

@@ -1,0 +1,242 @@
+"""The trusted checker's GL process: one lab file run and observed, its evidence written.
+
+``python -m mirrorlab.labs.trusted.execute JOB.json`` opens a headless context, the lab's
+session for the job's variant, runs the file through :class:`~.run.LabRun` (the file
+itself in the sandbox) and writes ``evidence.json`` and ``arrays.npz`` into the job's
+output folder. It is a process of its own so that the command or grading worker that
+asked can stop it at a deadline whatever the student's GLSL does to the driver
+(:func:`run_job`), and so that its memory is its own.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import resource
+import select
+import signal
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from mirrorlab.labs.trusted.evidence import Evidence
+from mirrorlab.labs.trusted.sandbox import Limits, SandboxError
+from mirrorlab.labs.trusted.variants import Variant
+
+EXIT_SANDBOX, EXIT_FAILED = 3, 4
+MEMORY_MB = 3072
+"""The GL process's own address-space limit (Mesa's threads reserve much more than they
+touch; its resident memory is measured in the tests)."""
+
+
+class CheckerError(RuntimeError):
+    """The checker's own process failed: a fault of the machine or of mirrorlab."""
+
+
+def peak_kib() -> int:
+    """This process's peak resident memory (VmHWM), KiB."""
+    try:
+        status = Path("/proc/self/status").read_text()
+        return int(status.split("VmHWM:")[1].split()[0])
+    except (OSError, IndexError, ValueError):
+        return 0
+
+
+def execute(job: dict[str, Any]) -> Evidence:
+    """Run ``job`` in this process (which must not have loaded OpenGL for a window)."""
+    from mirrorlab.gl.context import HeadlessContext, use_platform
+
+    use_platform("egl")
+    from mirrorlab.gl.resources import Framebuffer
+    from mirrorlab.labs import find_lab
+    from mirrorlab.labs.trusted.kit import open_session
+    from mirrorlab.labs.trusted.run import LabRun
+
+    spec = find_lab(job["lab"])
+    size = (int(job["size"][0]), int(job["size"][1]))
+    variant = Variant(spec.name, dict(job["variant"]["values"]), job["variant"]["id"],
+                      job["variant"].get("student", ""))
+    limits = Limits(**job["limits"])
+    source = Path(job["file"]).read_bytes()
+    context = HeadlessContext()
+    try:
+        target = Framebuffer(context.resources, *size)
+        target.bind()
+        session = open_session(spec.name, size, variant)
+        with LabRun(spec, session, source, job["name"], limits,
+                    registry=context.resources, owner=job.get("owner")) as run:
+            evidence = run.check()
+    finally:
+        context.release()
+    evidence.state["checker_peak_kib"] = peak_kib()
+    return evidence
+
+
+def run_one(job_file: Path) -> int:
+    """Run the job in ``job_file``; its evidence (or why not) goes to the job's folder.
+    Returns the process's exit status for it."""
+    job = json.loads(job_file.read_text())
+    out = Path(job["out"])
+    try:
+        evidence = execute(job)
+    except SandboxError as exc:
+        (out / "sandbox_error.txt").write_text(str(exc))
+        return EXIT_SANDBOX
+    evidence.save(out, compress=False)
+    return 0
+
+
+def serve(reply_fd: int) -> int:
+    """Run the jobs whose files come one a line on stdin, one after another, each in a
+    context of its own; after each, its exit status on ``reply_fd``."""
+    for line in sys.stdin:
+        try:
+            code = run_one(Path(line.strip()))
+        except Exception as exc:  # the job's own folder says what failed
+            job_out = Path(json.loads(Path(line.strip()).read_text())["out"])
+            (job_out / "checker_error.txt").write_text(f"{type(exc).__name__}: {exc}")
+            code = EXIT_FAILED
+        os.write(reply_fd, f"{code}\n".encode())
+    return 0
+
+
+def main(argv: list[str]) -> int:
+    if argv[0] == "--serve":
+        return serve(int(argv[1]))
+    return run_one(Path(argv[0]))
+
+
+def _child_setup() -> None:
+    """The GL process's own memory limit, and its end when the process that asked for it
+    dies (a killed grading worker leaves no checker running)."""
+    memory = MEMORY_MB << 20
+    resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
+    try:
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+
+def _environment() -> dict[str, str]:
+    return {**os.environ, "PYOPENGL_PLATFORM": "egl", "EGL_PLATFORM": "surfaceless"}
+
+
+class CheckerProcess:
+    """A trusted GL process kept for many jobs, one at a time (a grading worker's): it
+    saves each job the start of a process, its imports and its meshes. A job that
+    outlives its deadline, or a process that dies, ends the process; the next job starts
+    a new one, as does every :data:`JOBS_PER_PROCESS`-th."""
+
+    def __init__(self) -> None:
+        reply_read, reply_write = os.pipe()
+        self.reply_read = reply_read
+        self.process = subprocess.Popen(
+            [sys.executable, "-m", "mirrorlab.labs.trusted.execute", "--serve",
+             str(reply_write)], stdin=subprocess.PIPE, text=True, env=_environment(),
+            pass_fds=(reply_write,), preexec_fn=_child_setup)
+        os.close(reply_write)
+        self.jobs = 0
+
+    def alive(self) -> bool:
+        return self.process.poll() is None and self.jobs < JOBS_PER_PROCESS
+
+    def run(self, job_file: Path, timeout: float) -> int | None:
+        """The job's exit status, or None when it did not end in ``timeout`` seconds or
+        the process died (the process is then ended)."""
+        self.jobs += 1
+        try:
+            assert self.process.stdin is not None
+            self.process.stdin.write(f"{job_file}\n")
+            self.process.stdin.flush()
+        except (BrokenPipeError, OSError):
+            self.close()
+            return None
+        ready, _, _ = select.select([self.reply_read], [], [], timeout)
+        line = os.read(self.reply_read, 64) if ready else b""
+        if not line:
+            self.close()
+            return None
+        return int(line.split()[0])
+
+    def close(self) -> None:
+        if self.process.poll() is None:
+            self.process.kill()
+        self.process.wait()
+        try:
+            os.close(self.reply_read)
+        except OSError:
+            pass
+
+
+JOBS_PER_PROCESS = 64
+_kept: CheckerProcess | None = None
+
+
+def kept_process() -> CheckerProcess:
+    """This process's checker process (made, or made again, as needed)."""
+    global _kept
+    if _kept is None or not _kept.alive():
+        if _kept is not None:
+            _kept.close()
+        _kept = CheckerProcess()
+    return _kept
+
+
+def run_job(lab: str, source: bytes, file_name: str, variant: Variant, limits: Limits,
+            size: tuple[int, int], keep: bool = False) -> Evidence:
+    """Run ``source`` (the student's file, called ``file_name``) through ``lab`` for
+    ``variant`` in a checker process of its own (with ``keep``, this process's kept one:
+    see :class:`CheckerProcess`), which is stopped if it outlives the run's own limits;
+    SandboxError when the sandbox cannot start, CheckerError when the checker's process
+    fails."""
+    from mirrorlab.labs.trusted.sandbox import sweep_stale
+
+    sweep_stale(Path(tempfile.gettempdir()))
+    with tempfile.TemporaryDirectory(prefix=f"mirrorlab-check-{os.getpid()}-") as folder:
+        base = Path(folder)
+        (base / "source.py").write_bytes(source)
+        out = base / "out"
+        out.mkdir()
+        job = {"lab": lab, "file": str(base / "source.py"), "name": file_name,
+               "variant": variant.plain(), "size": list(size), "out": str(out),
+               "owner": os.getpid(),
+               "limits": {"cpu_seconds": limits.cpu_seconds, "seconds": limits.seconds,
+                          "memory_mb": limits.memory_mb, "processes": limits.processes,
+                          "file_mb": limits.file_mb}}
+        job_file = base / "job.json"
+        job_file.write_text(json.dumps(job))
+        deadline = limits.seconds + 60
+        stderr = ""
+        if keep:
+            code = kept_process().run(job_file, deadline)
+        else:
+            try:
+                done = subprocess.run(
+                    [sys.executable, "-m", "mirrorlab.labs.trusted.execute", str(job_file)],
+                    capture_output=True, text=True, env=_environment(), timeout=deadline,
+                    preexec_fn=_child_setup)
+                code, stderr = done.returncode, done.stderr
+            except subprocess.TimeoutExpired:
+                code = None
+        if code is None:
+            return Evidence(lab, "timeout", f"stopped after {deadline:g} s: the calls took "
+                            f"too long to draw", variant=variant.plain())
+        if code == EXIT_SANDBOX:
+            raise SandboxError((out / "sandbox_error.txt").read_text().strip())
+        if code != 0:
+            failure = out / "checker_error.txt"
+            lines = [line for line in stderr.strip().splitlines() if line.strip()]
+            last = failure.read_text().strip() if failure.is_file() else \
+                (lines[-1] if lines else f"exit status {code}")
+            if code < 0:
+                last = f"it died ({-code}); {last}"
+            raise CheckerError(f"the checker's OpenGL process failed: {last[:300]}")
+        return Evidence.load(out)
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

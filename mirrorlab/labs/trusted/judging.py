@@ -1,0 +1,402 @@
+"""What every lab's judge shares: task results, the student's errors mapped to tasks, the
+whole-frame comparison, and the student | reference | difference picture. Numpy only;
+it reads :class:`~.evidence.Evidence`, which only the trusted process made."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from mirrorlab.labs import LabSpec, Task
+from mirrorlab.labs.trusted.evidence import Evidence
+from mirrorlab.labs.trusted.variants import Variant
+
+TOLERANCE = 24
+"""Whole-picture comparisons: a pixel differs when one of its channels is more than this
+many levels (of 255) from every pixel in the other picture's 3 x 3 neighbourhood, both
+ways (so an edge a driver puts half a pixel over passes, and a thin line drawn or missing
+does not)."""
+ALLOWED_SHARE = 0.0005
+"""A picture passes with at most this share of its pixels differing (32 of 256 x 256)."""
+ALLOWED_MIN = 16
+
+
+@dataclass(frozen=True)
+class TaskResult:
+    """One task's verdict: ``hint`` says what to fix when it failed (and may say something
+    useful when it passed)."""
+
+    task: Task
+    passed: bool
+    hint: str = ""
+
+
+@dataclass
+class Context:
+    """What a judge knows besides the two runs: the student's ``variant`` and the other
+    variants of the class (``others``, by student), whose numbers a copied file carries."""
+
+    variant: Variant
+    others: dict[str, Variant] = field(default_factory=dict)
+    matched: str = ""
+    """Set by a judge: the student (or ``default``) whose variant's numbers the file
+    carries instead of its own, for the teacher's report."""
+
+    def differing_others(self) -> dict[str, Variant]:
+        return {name: v for name, v in self.others.items()
+                if not v.same_numbers(self.variant)}
+
+
+Verdicts = dict[str, tuple[bool, str]]
+
+
+def error_line(error: dict[str, Any]) -> str:
+    """An error as the student should read it: where in their file, then what."""
+    line = f"line {error['line']}" if error.get("line") else ""
+    code = str(error.get("code") or "")
+    where = f"{line}: {code}" if line and code else line
+    return f"{where} -> {error.get('message', '')}" if where else str(error.get("message", ""))
+
+
+def errors_for(evidence: Evidence, task: Task, glsl_functions: tuple[str, ...] = ()) -> str:
+    """The error that makes ``task`` fail, if any: its own function's error, a GLSL error
+    for a shader task, or an error that stopped the whole file."""
+    for error in evidence.errors:
+        function, kind = error.get("function"), error.get("kind")
+        if function == "<file>":
+            return f"the file did not run: {error_line(error)}"
+        if kind == "glsl" and task.function in glsl_functions:
+            return error_line(error)
+        if function == task.function and kind != "glsl":
+            what = {"missing": "", "exception": f"{function}() raised at "}.get(str(kind), "")
+            return f"{what}{error_line(error)}"
+    return ""
+
+
+def stopped_hint(evidence: Evidence, judged: str) -> str:
+    """"not judged: ..." when an error in a function other than ``judged`` stopped the
+    last frame, else ''."""
+    stopped = evidence.raised_in()
+    return f"not judged: the frame stopped at {stopped}()" if stopped and \
+        stopped != judged else ""
+
+
+def results(spec: LabSpec, student: Evidence, verdicts: Verdicts,
+            glsl_functions: tuple[str, ...] = ()) -> list[TaskResult]:
+    """Task results from ``verdicts`` (task id -> (passed, hint)): a run that did not end
+    well fails every task with its one line; an error of a task's function takes over its
+    verdict."""
+    if student.status != "ok":
+        return [TaskResult(task, False, student.detail) for task in spec.tasks]
+    found = []
+    for task in spec.tasks:
+        passed, hint = verdicts.get(task.id, (False, "not checked"))
+        error = errors_for(student, task, glsl_functions)
+        if error:
+            passed, hint = False, error
+        found.append(TaskResult(task, passed, hint))
+    return found
+
+
+# ------------------------------------------------------------------------ pictures
+def share_within(a: np.ndarray, b: np.ndarray, tolerance: int,
+                 mask: np.ndarray | None = None) -> float:
+    """The share of pixels (in ``mask``) whose every channel of ``a`` and ``b`` (uint8 or
+    0-255 floats) is within ``tolerance``."""
+    diff = np.abs(np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64)).max(-1)
+    if mask is not None:
+        diff = diff[mask]
+    return float(np.mean(diff <= tolerance)) if diff.size else 0.0
+
+
+def _nearest(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """For each pixel of ``a``, the smallest largest-channel difference to a pixel of ``b``
+    in its 3 x 3 neighbourhood, ``(h, w)``."""
+    a16, b16 = a.astype(np.int16), b.astype(np.int16)
+    height, width = a.shape[:2]
+    padded = np.pad(b16, ((1, 1), (1, 1), (0, 0)), mode="edge")
+    best = np.full((height, width), 255, dtype=np.int16)
+    for dy in range(3):
+        for dx in range(3):
+            shifted = padded[dy:dy + height, dx:dx + width]
+            best = np.minimum(best, np.abs(a16 - shifted).max(-1))
+    return best
+
+
+def differing(student: np.ndarray, reference: np.ndarray,
+              tolerance: int = TOLERANCE) -> np.ndarray:
+    """The pixels where ``student`` and ``reference`` (``(h, w, 3)`` uint8, one size)
+    differ (see :data:`TOLERANCE`), ``(h, w)`` bool."""
+    return (_nearest(student, reference) > tolerance) | (_nearest(reference, student) >
+                                                         tolerance)
+
+
+def allowed_pixels(shape: tuple[int, ...]) -> int:
+    return max(ALLOWED_MIN, int(ALLOWED_SHARE * shape[0] * shape[1]))
+
+
+def triangles_mask(clip: list[np.ndarray], triangles: list[tuple[int, int, int]],
+                   size: tuple[int, int], grow: float = 2.0) -> np.ndarray:
+    """The pixels of a ``size`` (w, h) frame covered by ``triangles`` of points in clip
+    coordinates (``(4,)`` each; points behind the eye are left out), ``grow`` pixels
+    wider, ``(h, w)`` bool."""
+    width, height = size
+    mask = np.zeros((height, width), dtype=bool)
+    yy, xx = np.mgrid[0:height, 0:width] + 0.5
+    screen: list[tuple[float, float] | None] = []
+    for point in clip:
+        if point[3] <= 1e-6:
+            screen.append(None)
+            continue
+        ndc = point[:2] / point[3]
+        screen.append(((ndc[0] + 1) / 2 * width, (1 - ndc[1]) / 2 * height))
+    for a, b, c in triangles:
+        found = [screen[i] for i in (a, b, c)]
+        corners = [p for p in found if p is not None]
+        if len(corners) < 3:
+            continue
+        inside = np.ones_like(mask)
+        area = ((corners[1][0] - corners[0][0]) * (corners[2][1] - corners[0][1])
+                - (corners[1][1] - corners[0][1]) * (corners[2][0] - corners[0][0]))
+        if abs(area) < 1e-9:
+            continue
+        sign = 1.0 if area > 0 else -1.0
+        for (x0, y0), (x1, y1) in zip(corners, corners[1:] + corners[:1], strict=True):
+            inside &= sign * ((x1 - x0) * (yy - y0) - (y1 - y0) * (xx - x0)) >= \
+                -grow * np.hypot(x1 - x0, y1 - y0)
+        mask |= inside
+    return mask
+
+
+def where(mask: np.ndarray) -> str:
+    """Where the true pixels of ``mask`` lie, for a person: the box holding most of them,
+    in pixels from the picture's top-left corner."""
+    ys, xs = np.nonzero(mask)
+    if not len(xs):
+        return "nowhere"
+    x0, x1 = (int(v) for v in np.percentile(xs, (5, 95)))
+    y0, y1 = (int(v) for v in np.percentile(ys, (5, 95)))
+    return f"most of them between x {x0}-{x1} and y {y0}-{y1} from the top left"
+
+
+def same_picture(student: np.ndarray | None, reference: np.ndarray | None) -> bool:
+    """Whether two pictures agree as a whole (see :data:`TOLERANCE`)."""
+    if student is None or reference is None or student.shape != reference.shape:
+        return False
+    return int(differing(student, reference).sum()) <= allowed_pixels(student.shape)
+
+
+def judge_frame(verdicts: Verdicts, student: Evidence, reference: Evidence,
+                regions: dict[str, np.ndarray | None], frame_task: str,
+                owner: dict[str, tuple[str, str]]) -> Verdicts:
+    """The final frame compared with the reference frame as a whole, after the per-task
+    verdicts. A frame that differs in more pixels than allowed must be explained by a
+    failed task whose region (``regions[task]``, a mask; None for the whole frame) holds
+    the differing pixels; otherwise the task that owns them (``owner``: a region's name
+    -> (task id, what it is)) fails saying where, or ``frame_task`` fails with the count."""
+    frame, ref = student.image("frame"), reference.image("frame")
+    if frame is None or ref is None or frame.shape != ref.shape:
+        return verdicts
+    verdicts = dict(verdicts)
+    taint = student.state.get("frame_taint")
+    if taint:
+        verdicts[frame_task] = (False, f"the frame shows pixels this file uploaded ({taint}): "
+                                       f"a lab's pictures must be drawn by its calls")
+        return verdicts
+    mask = differing(frame, ref)
+    limit = allowed_pixels(frame.shape)
+    if int(mask.sum()) <= limit:
+        return verdicts
+    explained = np.zeros_like(mask)
+    for task, (passed, _) in verdicts.items():
+        if not passed:
+            region = regions.get(task)
+            if region is None:
+                return verdicts
+            explained |= region
+    left = mask & ~explained
+    count = int(left.sum())
+    if count <= limit:
+        return verdicts
+    for name, (task, what) in owner.items():
+        region = regions.get(name)
+        if region is not None and verdicts.get(task, (False, ""))[0] and \
+                int((left & region).sum()) * 2 >= count:
+            verdicts[task] = (False, f"{what} differs from the reference in "
+                                     f"{int((left & region).sum())} pixels, "
+                                     f"{where(left & region)} (see the picture)")
+            return verdicts
+    passed, hint = verdicts.get(frame_task, (True, ""))
+    message = (f"the frame differs from the reference in {count} pixels (see the picture), "
+               f"{where(left)}")
+    verdicts[frame_task] = (False, f"{hint}; {message}" if not passed and hint else message)
+    return verdicts
+
+
+def difference_picture(student: np.ndarray, reference: np.ndarray,
+                       marked: bool = False) -> np.ndarray:
+    """``|student - reference|`` amplified four times, ``(h, w, 3)`` uint8; with ``marked``
+    the pixels that differ as a whole-picture comparison counts them are red."""
+    diff = np.abs(student.astype(np.int16) - reference.astype(np.int16)) * 4
+    out = np.clip(diff, 0, 255).astype(np.uint8)
+    if marked:
+        out[differing(student, reference)] = (255, 0, 0)
+    return out
+
+
+def blank(shape: tuple[int, int]) -> np.ndarray:
+    """A grey 'nothing here' picture of ``shape`` (h, w) with a dark cross."""
+    image = np.full((*shape, 3), 96, dtype=np.uint8)
+    h, w = shape
+    for i in range(min(h, w)):
+        image[int(i * h / min(h, w)), int(i * w / min(h, w))] = 40
+        image[int(i * h / min(h, w)), w - 1 - int(i * w / min(h, w))] = 40
+    return image
+
+
+HEADER = 16
+"""Pixels above the picture's cells for their titles."""
+
+
+def picture(rows: list[tuple[np.ndarray | None, np.ndarray | None]],
+            size: tuple[int, int]) -> np.ndarray:
+    """Rows of student | reference | difference, each cell ``size`` (h, w), separated by
+    4 px, under a line of titles; in the first row (the frame) the differing pixels are
+    red."""
+    from PIL import Image, ImageDraw
+
+    h, w = size
+    gap = 4
+    out = np.full((HEADER + len(rows) * (h + gap) - gap, 3 * w + 2 * gap, 3), 255,
+                  dtype=np.uint8)
+    titles = Image.fromarray(out[:HEADER])
+    draw = ImageDraw.Draw(titles)
+    for j, title in enumerate(("student", "reference", "difference x4 (red: differs)")):
+        draw.text((j * (w + gap) + 4, 2), title, fill=(40, 40, 40))
+    out[:HEADER] = np.asarray(titles)
+    for i, (student, reference) in enumerate(rows):
+        ok_s = student is not None and student.shape == (h, w, 3)
+        ok_r = reference is not None and reference.shape == (h, w, 3)
+        cells = [student if ok_s else blank((h, w)), reference if ok_r else blank((h, w)),
+                 difference_picture(student, reference, marked=i == 0)  # type: ignore[arg-type]
+                 if ok_s and ok_r else blank((h, w))]
+        for j, cell in enumerate(cells):
+            y, x = HEADER + i * (h + gap), j * (w + gap)
+            out[y:y + h, x:x + w] = cell  # type: ignore[assignment]
+    return out
+
+
+# ---------------------------------------------------------------- the calls, for hints
+def fmt(values: Any) -> str:
+    """Numbers as a person writes them: ``-6, 2, -3``."""
+    return ", ".join(f"{v:g}" for v in np.round(np.asarray(values, dtype=np.float64), 3)
+                     .reshape(-1) + 0.0)
+
+
+def wrong_clear_colour(clear: dict[str, Any], background: tuple[float, ...],
+                       student: Evidence) -> str:
+    """'(r, g, b) (glClearColor at line N)' when a ``clear`` event cleared to another colour
+    than ``background``, else ''."""
+    color = clear.get("color", {})
+    value = color.get("value", (0, 0, 0, 1))
+    if np.allclose(value[:3], background, atol=0.02):
+        return ""
+    line = color.get("line", 0)
+    return f"({fmt(value[:3])})" + (f" (glClearColor at {student.at(line)})" if line else "")
+
+
+def matrix(values: Any) -> np.ndarray | None:
+    array = np.asarray(values, dtype=np.float64) if values is not None else None
+    if array is None or array.shape != (4, 4) or not np.all(np.isfinite(array)):
+        return None
+    return array
+
+
+def setting_line(state: dict[str, Any], *path: str) -> int:
+    """The student's line that set the snapshot entry at ``path`` (0 when unknown)."""
+    node: Any = state
+    for key in path:
+        if not isinstance(node, dict) or key not in node:
+            return 0
+        node = node[key]
+    return int(node.get("line", 0)) if isinstance(node, dict) else 0
+
+
+def matrix_ops(event: dict[str, Any], mode: int) -> list[dict[str, Any]]:
+    ops = (event.get("state") or {}).get("matrix_ops", {}).get(str(mode))
+    return [o for o in ops if isinstance(o, dict)] if isinstance(ops, list) else []
+
+
+MATRIX_NAMES = {0x1700: "GL_MODELVIEW", 0x1701: "GL_PROJECTION", 0x1702: "GL_TEXTURE"}
+
+
+def misplaced_calls(student: Evidence, within: str, wanted: dict[str, int]) -> str:
+    """A hint when, in the last frame's ``within``, a call that belongs on one matrix
+    (``wanted``: call name -> matrix mode) was applied to another."""
+    for event in student.events("matrix", within=within):
+        target, mode = wanted.get(event["op"]), int(event.get("mode") or 0)
+        if target is not None and target != mode:
+            set_by = event.get("mode_line", 0)
+            since = f", set at line {set_by}" if set_by else ""
+            return (f"{event['op']} at {student.at(event['line'])} was applied to the "
+                    f"{MATRIX_NAMES.get(mode, '?')[3:].lower()} matrix (the matrix mode was "
+                    f"{MATRIX_NAMES.get(mode, '?')}{since}): call "
+                    f"glMatrixMode({MATRIX_NAMES[target]}) before it")
+    return ""
+
+
+def stacked_ops(event: dict[str, Any], student: Evidence, mode: int, first: str) -> str:
+    """A hint when, at ``event``, the ``mode`` matrix was not started afresh before the
+    call ``first`` (it multiplied onto what an earlier call left)."""
+    ops = matrix_ops(event, mode)
+    starts = ("glLoadIdentity", "glLoadMatrixf", "glLoadMatrixd", "glLoadTransposeMatrixf",
+              "glLoadTransposeMatrixd")
+    names = [o["op"] for o in ops]
+    if first not in names:
+        return ""
+    before = ops[:names.index(first)]
+    if any(o["op"] in starts for o in before):
+        return ""
+    if before:
+        earlier = before[0]
+        what = "the viewer's matrix (lab.set_viewer)" if earlier["op"] == "lab.set_viewer" \
+            else f"{earlier['op']} at line {earlier['line']}"
+        return (f"{first} at {student.at(ops[names.index(first)]['line'])} multiplied onto "
+                f"{what}: call glLoadIdentity() before it")
+    return ""
+
+
+def viewer_camera(student: Evidence, draw: dict[str, Any], lab: Any,
+                  aspect: float | None = None, what: str = "the scene") -> tuple[bool, str]:
+    """A hint when ``draw`` (the camera pass's) was not drawn with the viewer's matrices
+    and over the whole frame (or the part ``aspect`` says)."""
+    state = draw.get("state") or {}
+    viewport = draw.get("viewport") or [0, 0, 0, 0]
+    frame = student.image("frame")
+    size = (frame.shape[1], frame.shape[0]) if frame is not None else (256, 256)
+    if aspect is None and viewport != [0, 0, size[0], size[1]]:
+        line = (state.get("viewport") or {}).get("line", 0)
+        by = f" (glViewport at {student.at(line)})" if line else ""
+        return False, (f"{what} is drawn in glViewport({fmt(viewport)}){by}; the frame is "
+                       f"{size[0]} x {size[1]}: glViewport(0, 0, WIDTH, HEIGHT)")
+    projection, modelview = matrix(draw.get("projection")), matrix(draw.get("modelview"))
+    want_p, want_v = lab.viewer_for(size, aspect)
+    if projection is None or modelview is None:
+        return False, "the camera pass's matrices could not be read"
+    if not np.allclose(projection @ modelview, want_p @ want_v, atol=1e-4):
+        call = "lab.set_viewer()" if aspect is None else "lab.set_viewer(aspect)"
+        if np.allclose(modelview, want_v, atol=1e-4) and projection[3, 2] != 0:
+            shown, wanted = (p[1, 1] / p[0, 0] for p in (projection, want_p))
+            fovy, want_fovy = (float(np.degrees(2 * np.arctan(1 / p[1, 1])))
+                               for p in (projection, want_p))
+            if abs(shown - wanted) > 1e-3:
+                return False, (f"{what} is drawn with a projection of aspect {shown:.2f}; "
+                               f"this view needs {wanted:.2f}: {call} with it")
+            if abs(fovy - want_fovy) > 0.05:
+                return False, (f"{what} is drawn with a field of view of {fovy:.0f} degrees; "
+                               f"the viewer's is {want_fovy:.0f}: {call}")
+        return False, (f"{what} is not drawn from the viewer: its projection and camera are "
+                       f"not {call}'s (set it just before drawing)")
+    return True, ""

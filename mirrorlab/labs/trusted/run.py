@@ -1,0 +1,482 @@
+"""Driving one student's file through a lab, in the sandbox, from the trusted side.
+
+:class:`LabRun` starts the student side (:mod:`mirrorlab.labs.student.runner`) in the
+sandbox with a pipe to this process, sends it the session (the names and values of
+OpenGL, the lab object's numbers), then commands: load the file, run the lab's set-up
+functions, then ``display()`` frame after frame. Every call that comes back is executed
+here (:mod:`.executor`); when the frames are drawn this process makes its own
+observations (the frame, the textures, the student's GLSL judged by the values it
+writes) and the run becomes :class:`~.evidence.Evidence`. The sandbox produces only the
+call stream; nothing it writes to its box is ever read.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import time
+from collections.abc import Callable
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mirrorlab.gl.opengl import GL
+from mirrorlab.labs import LabSpec
+from mirrorlab.labs.trusted import calls as C
+from mirrorlab.labs.trusted.evidence import Evidence
+from mirrorlab.labs.trusted.executor import Executor, RunLimits, Stop
+from mirrorlab.labs.trusted.kit import (
+    CubeMapLab,
+    Lab20,
+    LabBase,
+    LabSetupError,
+    SphereMapLab,
+    picture,
+    read_cube_faces,
+    read_texture_2d,
+    texture_parameters,
+)
+from mirrorlab.labs.trusted.pipe import (
+    PipeBudget,
+    PipeClosed,
+    PipeError,
+    PipeTimeout,
+    TrustedChannel,
+)
+from mirrorlab.labs.trusted.sandbox import (
+    SANDBOX_BOX,
+    SANDBOX_PACKAGES,
+    SANDBOX_SITE,
+    STUDENT_PACKAGE,
+    Limits,
+    Sandboxed,
+    SandboxError,
+    interpreter,
+    new_box,
+    sandbox_mode,
+    tail,
+    user_interpreter,
+)
+from mirrorlab.labs.trusted.state import GL_TEXTURE_CUBE_MAP
+
+FRAMES = 2
+"""Frames drawn by a check: the second shows what a capture left for the next frame."""
+DECLARED = {"lab20": (), "spheremap": ("SPHERE_MAP_GLSL",), "cubemap": ("CUBE_MAP_GLSL",)}
+"""Module-level strings of the student's file the checker judges even when the frame
+never draws them (the GLSL of the labs' shaders)."""
+BOX_FILE = "student.py"
+"""The student's file in its box (whatever it was called: never the box's own
+stdout.txt or stderr.txt)."""
+BOOT = ("import sys; sys.path[:0] = [{packages!r}]; sys.path.append({site!r}); "
+        "from labstudent.runner import main; sys.exit(main(sys.argv[1:]))")
+
+
+@lru_cache(maxsize=1)
+def gl_names() -> dict[str, Any]:
+    """PyOpenGL's GL and GLU names: constants with their values, and functions."""
+    from OpenGL import GLU
+
+    names: dict[str, Any] = {}
+    for key, module, prefix in (("gl", GL, "GL_"), ("glu", GLU, "GLU_")):
+        constants, functions = {}, []
+        for name in dir(module):
+            value = getattr(module, name, None)
+            if name.startswith(prefix) and isinstance(value, int):
+                constants[name] = int(value)
+            elif name.startswith(prefix.lower()[:-1]) and callable(value):
+                functions.append(name)
+        names[f"{key}_constants"], names[f"{key}_functions"] = constants, functions
+    names["gl_offered"] = C.offered(C.GL_SPECS)
+    names["glu_offered"] = C.offered(C.GLU_SPECS)
+    names["pixel_types"] = {str(k): code for k, (_, code) in C.PIXEL_TYPES.items()}
+    return names
+
+
+def _signal_name(number: int) -> str:
+    try:
+        return signal.Signals(number).name
+    except ValueError:
+        return f"signal {number}"
+
+
+class LabRun:
+    """One run of the student's ``source`` (named ``file_name``) through ``spec``'s lab in
+    ``session``; use as a context manager, then :meth:`check` (or drive it yourself with
+    :meth:`load`, :meth:`call` and :meth:`finish`)."""
+
+    def __init__(self, spec: LabSpec, session: LabBase, source: bytes, file_name: str,
+                 limits: Limits, run_limits: RunLimits | None = None,
+                 budget: PipeBudget | None = None, registry: Any = None,
+                 owner: int | None = None) -> None:
+        self.spec, self.session, self.limits = spec, session, limits
+        self.owner = owner
+        self.registry = registry
+        self.executor = Executor(session, run_limits or RunLimits())
+        self.budget = budget or PipeBudget()
+        text = source.decode("utf-8", errors="replace")
+        self.evidence = Evidence(spec.name, variant=session.variant.plain(),
+                                 source=text[:256 << 10])
+        self.evidence.frames = self.executor.tracker.frames
+        self.evidence.setup = self.executor.tracker.setup_events
+        self.source, self.file_name = source, file_name
+        self.box: Path | None = None
+        self.sandbox: Sandboxed | None = None
+        self.channel: TrustedChannel | None = None
+        self.ended = False
+        self.declared: dict[str, str] = {}
+
+    # ---------------------------------------------------------------- lifetime
+    def __enter__(self) -> LabRun:
+        self.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.release()
+
+    def release(self) -> None:
+        if self.sandbox is not None:
+            self.sandbox.kill()
+            self.sandbox.wait(timeout=10)
+            self.sandbox = None
+        if self.channel is not None:
+            self.channel.close()
+            self.channel = None
+        if self.box is not None:
+            shutil.rmtree(self.box, ignore_errors=True)
+            self.box = None
+
+    def start(self) -> None:
+        """The sandbox, the pipe, the session sent, the runner ready; RunEnded states
+        (status not ok) are kept in the evidence, SandboxError when it cannot start."""
+        self.box = new_box()
+        student = self.box / BOX_FILE
+        student.write_bytes(self.source)
+        mode = sandbox_mode()
+        if mode == "bwrap":
+            python, packages, site = interpreter(), SANDBOX_PACKAGES, SANDBOX_SITE
+            path = f"{SANDBOX_BOX}/{BOX_FILE}"
+        else:
+            python, packages, site = user_interpreter(), str(self.box / "pkg"), ""
+            shutil.copytree(STUDENT_PACKAGE, self.box / "pkg" / "labstudent",
+                            ignore=shutil.ignore_patterns("__pycache__"))
+            path = str(student)
+        child_read, parent_write = os.pipe()
+        parent_read, child_write = os.pipe()
+        argv = [str(python), "-I", "-S", "-B", "-c",
+                BOOT.format(packages=packages, site=site), str(child_read), str(child_write)]
+        try:
+            self.sandbox = Sandboxed(argv, self.box, self.limits,
+                                     pass_fds=(child_read, child_write), owner=self.owner)
+        finally:
+            os.close(child_read)
+            os.close(child_write)
+        self.channel = TrustedChannel(parent_read, parent_write, self.budget)
+        self.deadline = time.monotonic() + self.limits.seconds
+        description = {"op": "session", "lab": self.spec.name, "file": path,
+                       "functions": list(self.spec.functions),
+                       "declared": list(DECLARED[self.spec.name]),
+                       "kit": self.session.student_values(), **gl_names()}
+        try:
+            self.channel.send(description)
+            header, _ = self.channel.receive(self.deadline)
+        except (PipeClosed, PipeTimeout, PipeError):
+            self._ended_early()
+            return
+        if header.get("op") != "ready":
+            self.end("stopped", "stopped: the program broke the lab's pipe before it started")
+
+    def _ended_early(self) -> None:
+        """The runner died before it said ready: the sandbox itself failed."""
+        assert self.sandbox is not None and self.box is not None
+        code, _, stopped = self.sandbox.wait(timeout=10)
+        stderr = tail(self.box / "stderr.txt")
+        last = next((line for line in reversed(stderr.strip().splitlines()) if line.strip()),
+                    "")
+        if stopped:
+            self.end(*self._classify(code, stopped))
+            return
+        raise SandboxError(f"the sandbox could not start the lab's runner "
+                           f"({sandbox_mode()} mode, exit status {code}): {last[:200]}")
+
+    # ---------------------------------------------------------------- ending
+    def end(self, status: str, detail: str) -> None:
+        if not self.ended:
+            self.ended = True
+            self.evidence.status, self.evidence.detail = status, detail
+        if self.sandbox is not None:
+            self.sandbox.kill()
+
+    def _classify(self, code: int | None, stopped: str) -> tuple[str, str]:
+        limits = self.limits
+        if stopped == "wall":
+            return "timeout", (f"stopped after {limits.seconds:g} s of waiting (the wall-clock "
+                               f"limit)")
+        if stopped == "processes":
+            from mirrorlab.labs.trusted.sandbox import MAX_PROCESSES
+
+            return "processes", (f"stopped when it started more than {MAX_PROCESSES} "
+                                 f"processes (a fork bomb?)")
+        if code in (-signal.SIGXCPU, 128 + signal.SIGXCPU):
+            return "timeout", (f"stopped at the CPU-time limit of {limits.cpu_seconds} s "
+                               f"(an endless loop?)")
+        assert self.box is not None
+        stderr = tail(self.box / "stderr.txt")
+        if "MemoryError" in stderr or "Cannot allocate memory" in stderr:
+            return "memory", f"stopped at the memory limit of {limits.memory_mb} MB"
+        died = -code if code is not None and code < 0 else (
+            code - 128 if code is not None and code > 128 else 0)
+        if died:
+            return "crashed", f"the program died ({_signal_name(died)})"
+        last = next((line for line in reversed(stderr.strip().splitlines()) if line.strip()),
+                    "")
+        detail = f"the program ended (exit status {code}) before the lab's run was over"
+        return "crashed", detail + (f": {last.strip()[:200]}" if last else "")
+
+    def _closed(self) -> None:
+        assert self.sandbox is not None
+        code, _, stopped = self.sandbox.wait(timeout=10)
+        self.end(*self._classify(code, stopped))
+
+    # ---------------------------------------------------------------- commands
+    def command(self, message: dict[str, Any]) -> dict[str, Any] | None:
+        """Send ``message`` and execute the calls that come back until the runner says
+        ``done``; None when the run ended (the evidence says why)."""
+        if self.ended or self.channel is None:
+            return None
+        channel, functions = self.channel, tuple(self.spec.functions)
+        try:
+            channel.send(message)
+            while True:
+                header, arrays = channel.receive(self.deadline)
+                op = header["op"]
+                if op == "done":
+                    return self._done(header)
+                if op in ("enter", "leave"):
+                    self.executor.step(header, functions)
+                elif op in ("gl", "glu", "kit"):
+                    reply, payloads = self.executor.call(header, arrays)
+                    channel.send(reply, payloads)
+                else:
+                    raise PipeError("a message of an unknown kind")
+        except Stop as exc:
+            try:
+                channel.send({"stop": str(exc)})
+            except PipeClosed:
+                pass
+            self.end("stopped", str(exc))
+        except PipeError as exc:
+            self.end("stopped", f"stopped: the program sent {exc}")
+        except PipeTimeout:
+            assert self.sandbox is not None
+            self.sandbox.kill("wall")
+            self._closed()
+        except PipeClosed:
+            self._closed()
+        return None
+
+    def _done(self, header: dict[str, Any]) -> dict[str, Any]:
+        errors = header.get("errors")
+        for error in errors if isinstance(errors, list) else []:
+            if not isinstance(error, dict) or len(self.evidence.errors) >= 20:
+                continue
+            line = error.get("line")
+            line = line if type(line) is int and 0 <= line < 1 << 20 else 0
+            record = {"function": str(error.get("function", ""))[:40],
+                      "kind": str(error.get("kind", ""))[:20],
+                      "message": " ".join(str(error.get("message", "")).split())[:300],
+                      "line": line, "code": self.evidence.line_text(line)}
+            if record["function"] in ("<file>", *self.spec.functions) and not any(
+                    e["function"] == record["function"] for e in self.evidence.errors):
+                self.evidence.errors.append(record)
+        declared = header.get("declared")
+        for name in DECLARED[self.spec.name]:
+            value = declared.get(name) if isinstance(declared, dict) else None
+            if isinstance(value, str) and len(value) <= self.executor.limits.glsl_chars:
+                self.declared[name] = value
+        return {"ok": header.get("ok") is True}
+
+    def load(self) -> bool:
+        done = self.command({"op": "load"})
+        return bool(done and done["ok"])
+
+    def call(self, function: str) -> bool:
+        done = self.command({"op": "call", "function": function})
+        return bool(done and done["ok"])
+
+    def finish(self) -> None:
+        """Tell the runner to exit and wait for it; a run that had not ended is ok."""
+        if self.ended or self.channel is None or self.sandbox is None:
+            return
+        try:
+            self.channel.send({"op": "exit"})
+        except PipeClosed:
+            pass
+        code, _, stopped = self.sandbox.wait(timeout=10)
+        if stopped or code not in (0, None):
+            self.end(*self._classify(code, stopped))
+        self.ended = True
+
+    # ---------------------------------------------------------------- the check
+    def check(self, frames: int = FRAMES) -> Evidence:
+        """The whole check: load, set up, ``frames`` frames, the observations."""
+        if not self.ended and self.load():
+            for function in self.spec.setup:
+                self.call(function)
+            for _ in range(frames):
+                self.executor.begin_frame()
+                if not self.call(self.spec.frame):
+                    break
+        if not self.ended:
+            self.evidence.arrays["frame"] = self.executor.session_frame()
+            self.evidence.state["frame_taint"] = self.executor.tracker.framebuffer_taint
+        self.finish()
+        if self.evidence.status == "ok":
+            self.observe()
+        return self.collect()
+
+    def collect(self) -> Evidence:
+        evidence, executor = self.evidence, self.executor
+        evidence.frames = executor.tracker.frames
+        evidence.setup = executor.tracker.setup_events
+        evidence.textures = {str(k): t.plain() for k, t in executor.tracker.textures.items()}
+        evidence.call_errors = executor.call_errors
+        evidence.arrays.update(executor.pictures)
+        evidence.state["calls"] = executor.calls
+        evidence.state["declared"] = sorted(self.declared)
+        return evidence
+
+    # ---------------------------------------------------------------- observations
+    def observe(self) -> None:
+        """The lab's own observations, made here after the student's run."""
+        reset_state()
+        observers: dict[type, Callable[[], None]] = {
+            Lab20: self._observe_lab20, SphereMapLab: self._observe_spheremap,
+            CubeMapLab: self._observe_cubemap}
+        observers[type(self.session)]()
+        reset_state()
+
+    def _observe_lab20(self) -> None:
+        evidence, tracker = self.evidence, self.executor.tracker
+        assert isinstance(self.session, Lab20)
+        pictures = {t.name for t in tracker.textures.values() if t.picture}
+        environment = find_environment(evidence, self.session, pictures)
+        metal = next((t.name for t in tracker.textures.values() if t.picture == "metal"), 0)
+        evidence.state["environment"], evidence.state["metal"] = environment, metal
+        evidence.state["texture_shader"] = self.session.textureShader
+        if environment and GL.glIsTexture(environment):
+            evidence.arrays["capture"] = read_texture_2d(environment)
+            evidence.state["environment_parameters"] = texture_parameters(environment)
+        if metal and GL.glIsTexture(metal):
+            now = read_texture_2d(metal)
+            original = picture("metal")
+            evidence.state["metal_intact"] = bool(now.shape == original.shape
+                                                  and np.array_equal(now, original))
+
+    def _observe_spheremap(self) -> None:
+        session = self.session
+        assert isinstance(session, SphereMapLab)
+        tracker = self.executor.tracker
+        self.evidence.state["backdrop_texture"] = session.backdrop_texture
+        self.evidence.state["launch"] = next(
+            (t.name for t in tracker.textures.values() if t.picture == "launch"), 0)
+        # the GLSL the cone was drawn with, else the file's SPHERE_MAP_GLSL
+        glsl = self.executor.glsl.get("SPHERE_MAP_GLSL") or \
+            self.declared.get("SPHERE_MAP_GLSL")
+        if glsl is not None:
+            self._values(lambda mode: session.draw_cone_shader(
+                glsl, session.backdrop_texture, mode, limit=64),
+                {"r": 1, "u": 2, "n": 3, "st": 4}, "reflect_eye")
+
+    def _observe_cubemap(self) -> None:
+        session = self.session
+        assert isinstance(session, CubeMapLab)
+        evidence, tracker = self.evidence, self.executor.tracker
+        draws = evidence.events("draw", who="draw_sphere", within="display")
+        cube = int(draws[-1]["texture"]) if draws else next(
+            (t.name for t in tracker.textures.values() if t.target == GL_TEXTURE_CUBE_MAP),
+            0)
+        evidence.state["cube_texture"] = cube
+        if cube and GL.glIsTexture(cube):
+            faces = read_cube_faces(cube)
+            if faces is not None:
+                evidence.arrays["cube_faces"] = faces
+        glsl = self.executor.glsl.get("CUBE_MAP_GLSL") or self.declared.get("CUBE_MAP_GLSL")
+        if glsl is not None:
+            self._values(lambda mode: session.draw_sphere(glsl, cube, mode, limit=64),
+                         {"face_st": 1, "r": 2}, "cube_face")
+
+    def _values(self, draw: Callable[[int], None], modes: dict[str, int], function: str
+                ) -> None:
+        """Draw with each check ``mode`` of the kit's shader into a float target and keep
+        the values (``values_<name>``, ``(h, w, 3)`` float32) and the coverage mask."""
+        from mirrorlab.gl.resources import FloatFramebuffer
+
+        session = self.session
+        target = FloatFramebuffer(self.registry, session.width, session.height)
+        try:
+            target.bind()
+            GL.glViewport(0, 0, session.width, session.height)
+            session.set_viewer()
+            for name, mode in modes.items():
+                GL.glClearColor(0.0, 0.0, 0.0, 0.0)
+                GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT)
+                try:
+                    draw(mode)
+                except LabSetupError as exc:
+                    self.evidence.state["values_error"] = {"function": function,
+                                                           "message": str(exc)[:300]}
+                    return
+                rgba = target.read_rgba()
+                self.evidence.arrays[f"values_{name}"] = rgba[..., :3].astype(np.float32)
+                self.evidence.arrays["values_mask"] = rgba[..., 3] > 0.5
+        finally:
+            target.release()
+
+
+def find_environment(evidence: Evidence, session: LabBase, pictures: set[int]) -> int:
+    """Lab 20's ENVIRONMENT texture, as the calls show it: the texture the mirror quad
+    sampled in the last frame (bound on the unit the texture shader's sampler reads),
+    unless that is a picture such as METAL; else the texture create_mirror() copied
+    into, unless that is a picture; else the blank texture of the frame's size that the
+    set-up made."""
+    for event in reversed(evidence.events("draw", who="primitive", within="render_mirror")):
+        unit = event.get("sampler")
+        if isinstance(unit, int) and 0 <= unit < 8:
+            bound = event["state"]["units"].get(str(unit), {}).get("2d")
+            if bound and bound["value"] and int(bound["value"]) not in pictures:
+                return int(bound["value"])
+    for event in reversed(evidence.events("copy", within="create_mirror")):
+        if int(event["texture"]) not in pictures:
+            return int(event["texture"])
+    for event in evidence.events("upload", frame=None):
+        if not event.get("data") and (event.get("width"), event.get("height")) == \
+                (session.width, session.height) and int(event["texture"]) not in pictures:
+            return int(event["texture"])
+    return 0
+
+
+def reset_state() -> None:
+    """State a student's calls may have left that would change the checker's own drawing
+    and reading."""
+    GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, GL.glGetIntegerv(GL.GL_FRAMEBUFFER_BINDING))
+    for cap in (GL.GL_SCISSOR_TEST, GL.GL_BLEND, GL.GL_CULL_FACE, GL.GL_STENCIL_TEST,
+                GL.GL_ALPHA_TEST, GL.GL_LIGHTING, GL.GL_FOG, GL.GL_POLYGON_OFFSET_FILL):
+        GL.glDisable(cap)
+    GL.glColorMask(1, 1, 1, 1)
+    GL.glDepthMask(1)
+    GL.glDepthFunc(GL.GL_LESS)
+    GL.glPolygonMode(GL.GL_FRONT_AND_BACK, GL.GL_FILL)
+    GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 4)
+    GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 4)
+    for unit in range(8):
+        GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
+        for cap in (GL.GL_TEXTURE_2D, GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_GEN_S,
+                    GL.GL_TEXTURE_GEN_T, GL.GL_TEXTURE_GEN_R, GL.GL_TEXTURE_GEN_Q):
+            GL.glDisable(cap)
+    GL.glActiveTexture(GL.GL_TEXTURE0)
+    GL.glUseProgram(0)
+    while GL.glGetError() != GL.GL_NO_ERROR:
+        pass

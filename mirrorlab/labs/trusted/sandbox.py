@@ -1,0 +1,415 @@
+"""Running a student's file where it can harm nothing and reach nothing: its own process,
+limits on time, memory and processes, a scratch folder of its own, no network, and a file
+system that holds only what the student side needs.
+
+How, in order of preference (:func:`sandbox_mode` says which applies):
+
+- ``bwrap``: bubblewrap (Debian ``bubblewrap``) builds a new root for the run: ``/usr``
+  read-only (the system's libraries), the interpreter's own folder read-only (wherever it
+  is: every folder above it is made anew, open, holding nothing else, so an interpreter
+  under a closed home works), the student side of the labs (:mod:`mirrorlab.labs.student`)
+  and numpy read-only under ``/lab``, the run's box writable at ``/lab/box``, an empty
+  ``/tmp``. No checkout, no venv, no other package, no solution, no reference, no other
+  submission, no home. Network, process ids, IPC and the host name are unshared. Run as
+  root, the process then drops to a user id of its own (``setpriv``).
+- ``user`` (root, no working bubblewrap): the same limits, the process under a user id of
+  its own, which may write only in its box (and world-writable places). The file system
+  stays visible to it (readable files only): a warning says so.
+- Without bubblewrap and without root there is no way to keep the code from writing where
+  the user may, and :func:`start` refuses (:class:`SandboxError`).
+
+Limits (:class:`Limits`): CPU seconds (RLIMIT_CPU), wall-clock seconds (the process tree
+is killed then), address space (RLIMIT_AS), threads and processes (RLIMIT_NPROC), file
+size and open files. Run as root, a run that starts more than :data:`MAX_PROCESSES`
+processes (a fork bomb) is stopped at once.
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+import shutil
+import signal
+import subprocess
+import sys
+import sysconfig
+import tempfile
+import threading
+import time
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+UID_BASE = 200_000
+"""Sandboxed processes run as UID_BASE + the id of the process that asked for the run (the
+command or grading worker), so that two gradings running at once never share a user id
+(nor its process limit)."""
+
+MAX_PROCESSES = 8
+"""Processes a run may have at once (the runner needs one; threads are not counted)."""
+
+STUDENT_PACKAGE = Path(__file__).resolve().parent.parent / "student"
+"""The student side's folder: the only part of mirrorlab a sandbox sees."""
+
+BOX_PREFIX = "mirrorlab-box-"
+SANDBOX_BOX = "/lab/box"
+SANDBOX_PACKAGES = "/lab/pkg"
+SANDBOX_SITE = "/lab/site"
+
+
+class SandboxError(RuntimeError):
+    """No safe way to run untrusted code here, or the sandbox could not be set up; the
+    message is one line saying what to do."""
+
+
+@dataclass(frozen=True)
+class Limits:
+    """What one submission may use: ``cpu_seconds`` of CPU time, ``seconds`` of wall-clock
+    time, ``memory_mb`` of address space, ``processes`` (RLIMIT_NPROC: threads count too),
+    ``file_mb`` per file written."""
+
+    cpu_seconds: int = 20
+    seconds: float = 120.0
+    memory_mb: int = 1536
+    processes: int = 64
+    file_mb: int = 64
+
+
+def _bwrap_works() -> bool:
+    bwrap = shutil.which("bwrap")
+    if bwrap is None:
+        return False
+    try:
+        done = subprocess.run([bwrap, "--ro-bind", "/", "/", "--dev", "/dev", "--unshare-pid",
+                               "--unshare-net", "--die-with-parent", "true"],
+                              capture_output=True, timeout=30)
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+    return done.returncode == 0
+
+
+@lru_cache(maxsize=1)
+def sandbox_mode() -> str:
+    """``bwrap``, ``user`` or ``none`` (see the module's text); MIRRORLAB_SANDBOX may ask
+    for ``user`` (to test it) but never for less than this machine can do."""
+    root = os.geteuid() == 0
+    wanted = os.environ.get("MIRRORLAB_SANDBOX", "")
+    if wanted == "user" and root:
+        return "user"
+    if _bwrap_works():
+        return "bwrap"
+    return "user" if root else "none"
+
+
+def sandbox_uid(owner: int | None = None) -> int:
+    """The user id of the runs that process ``owner`` (default this one) asks for."""
+    return UID_BASE + (os.getpid() if owner is None else owner)
+
+
+def interpreter() -> Path:
+    """The real Python interpreter behind this one (a venv's python is a link to it)."""
+    return Path(getattr(sys, "_base_executable", "") or sys.executable).resolve()
+
+
+def _within(path: Path, folder: Path) -> bool:
+    return path == folder or folder in path.parents
+
+
+class _Root:
+    """bwrap arguments that build the sandbox's file system."""
+
+    def __init__(self) -> None:
+        self.arguments: list[str] = []
+        self.made: set[Path] = {Path("/")}
+        self.bound: list[Path] = []
+
+    def reachable(self, path: Path) -> bool:
+        return path in self.made or any(_within(path, b) for b in self.bound)
+
+    def parents(self, destination: Path) -> None:
+        """Every folder above ``destination`` made anew, mode 0755 (bwrap would make them
+        0700, which a dropped user cannot enter)."""
+        for parent in reversed(destination.parents):
+            if not self.reachable(parent):
+                self.arguments += ["--perms", "0755", "--dir", str(parent)]
+                self.made.add(parent)
+
+    def bind(self, source: Path, destination: Path | None = None, writable: bool = False
+             ) -> None:
+        destination = destination or source
+        if destination != source or not self.reachable(destination):
+            self.parents(destination)
+            self.arguments += ["--bind" if writable else "--ro-bind", str(source),
+                               str(destination)]
+            self.bound.append(destination)
+
+    def hide(self, folder: Path) -> None:
+        """An empty folder in place of ``folder`` where the sandbox would see it."""
+        if folder.is_dir() and any(_within(folder, b) for b in self.bound):
+            self.arguments += ["--tmpfs", str(folder)]
+
+
+def _site_folders() -> list[Path]:
+    """Folders of installed packages the sandbox may otherwise see."""
+    found = {Path(p).resolve() for p in sys.path if p and Path(p).name in
+             ("site-packages", "dist-packages")}
+    for key in ("purelib", "platlib"):
+        for scheme_vars in ({}, {"base": sys.base_prefix, "platbase": sys.base_prefix}):
+            try:
+                found.add(Path(sysconfig.get_path(key, vars=scheme_vars)).resolve())
+            except (KeyError, ValueError):
+                continue
+    found.update(Path(p) for p in ("/usr/lib/python3/dist-packages",
+                                   f"/usr/local/lib/python3.{sys.version_info.minor}"
+                                   f"/dist-packages"))
+    return sorted(found)
+
+
+def numpy_folders() -> list[Path]:
+    """numpy's package folder (and its bundled libraries), which the student side may
+    use; none when this interpreter has no numpy."""
+    try:
+        import numpy
+    except ImportError:  # pragma: no cover - a dependency of mirrorlab
+        return []
+    folder = Path(numpy.__file__).resolve().parent
+    libs = folder.parent / "numpy.libs"
+    return [folder, *([libs] if libs.is_dir() else [])]
+
+
+def bwrap_arguments(box: Path) -> list[str]:
+    """The bwrap command line before the program: the sandbox's file system (see the
+    module's text), ``box`` writable at :data:`SANDBOX_BOX`."""
+    root = _Root()
+    root.bind(Path("/usr"))
+    for link in ("bin", "sbin", "lib", "lib64", "lib32", "libx32"):
+        path = Path("/", link)
+        if path.is_symlink():
+            root.arguments += ["--symlink", os.readlink(path), str(path)]
+            root.made.add(path)
+        elif path.is_dir():
+            root.bind(path)
+    root.arguments += ["--ro-bind-try", "/etc/ld.so.cache", "/etc/ld.so.cache",
+                       "--proc", "/proc", "--dev", "/dev", "--size", str(64 << 20),
+                       "--tmpfs", "/tmp"]
+    root.made.update(Path(p) for p in ("/etc", "/etc/ld.so.cache", "/proc", "/dev", "/tmp"))
+    root.bound += [Path("/tmp")]
+    base = Path(sys.base_prefix).resolve()
+    root.bind(base)
+    executable = interpreter()
+    if not root.reachable(executable):
+        root.bind(executable.parent)
+    for folder in _site_folders():
+        root.hide(folder)
+    root.hide(STUDENT_PACKAGE.parent.parent)  # mirrorlab itself, were it under those
+    root.bind(STUDENT_PACKAGE, Path(SANDBOX_PACKAGES, "labstudent"))
+    for folder in numpy_folders():
+        root.bind(folder, Path(SANDBOX_SITE, folder.name))
+    root.bind(box, Path(SANDBOX_BOX), writable=True)
+    return [shutil.which("bwrap") or "bwrap", *root.arguments, "--chdir", SANDBOX_BOX]
+
+
+def _environment(home: str) -> dict[str, str]:
+    return {"PATH": "/usr/bin:/bin", "LANG": "C.UTF-8", "HOME": home, "TMPDIR": "/tmp",
+            "PYTHONDONTWRITEBYTECODE": "1", "PYTHONNOUSERSITE": "1",
+            "PYTHONHASHSEED": "0"}
+
+
+def _limit(limits: Limits, drop_to: int | None):
+    def apply() -> None:
+        memory = limits.memory_mb << 20
+        resource.setrlimit(resource.RLIMIT_CPU, (limits.cpu_seconds, limits.cpu_seconds + 1))
+        for kind, value in ((resource.RLIMIT_AS, memory),
+                            (resource.RLIMIT_NPROC, limits.processes),
+                            (resource.RLIMIT_FSIZE, limits.file_mb << 20),
+                            (resource.RLIMIT_NOFILE, 256), (resource.RLIMIT_CORE, 0)):
+            resource.setrlimit(kind, (value, value))
+        if drop_to is not None:
+            os.setgroups([])
+            os.setgid(drop_to)
+            os.setuid(drop_to)
+
+    return apply
+
+
+def uid_processes(uid: int) -> list[int]:
+    """The ids of the processes running as ``uid`` now."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                if entry.stat().st_uid == uid:
+                    found.append(int(entry.name))
+            except OSError:
+                continue
+    return found
+
+
+def _kill_uid(uid: int) -> None:
+    """SIGKILL every process still running as ``uid`` (a sandbox's own user id) until none
+    is left (they may still be forking while the first ones die)."""
+    for _ in range(500):
+        pids = uid_processes(uid)
+        if not pids:
+            return
+        for pid in pids:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                continue
+        time.sleep(0.01)
+
+
+def _others_may_run(path: Path) -> bool:
+    try:
+        return all(os.stat(p).st_mode & 0o001 for p in path.parents) and \
+            bool(os.stat(path).st_mode & 0o001)
+    except OSError:
+        return False
+
+
+def user_interpreter() -> Path:
+    """An interpreter another user may run (for the ``user`` mode)."""
+    for candidate in (interpreter(), Path("/usr/bin/python3")):
+        if candidate.is_file() and _others_may_run(candidate):
+            return candidate
+    raise SandboxError("no Python interpreter that another user may run: install Debian's "
+                       "python3, or bubblewrap (Debian package 'bubblewrap')")
+
+
+class Sandboxed:
+    """``argv`` running in the sandbox with ``box`` as its only writable place (started at
+    once); ``pass_fds`` stay open in it. Output goes to ``box/stdout.txt`` and
+    ``box/stderr.txt``. A watchdog thread kills the run at the wall-clock limit or when it
+    starts too many processes; :meth:`wait` ends it and says why."""
+
+    def __init__(self, argv: list[str], box: Path, limits: Limits,
+                 pass_fds: tuple[int, ...] = (), owner: int | None = None) -> None:
+        mode = sandbox_mode()
+        if mode == "none":
+            raise SandboxError(
+                "cannot run untrusted code safely here: install bubblewrap (Debian package "
+                "'bubblewrap'; ./dev setup does) or run the checker as root")
+        self.mode, self.limits, self.box = mode, limits, box.resolve()
+        root = os.geteuid() == 0
+        self.uid = sandbox_uid(owner) if root else os.getuid()
+        self.root = root
+        if root:
+            for path in [self.box, *self.box.rglob("*")]:
+                os.chown(path, self.uid, self.uid)
+        if mode == "bwrap":
+            env = _environment(SANDBOX_BOX)
+            command = [*bwrap_arguments(self.box), "--unshare-ipc", "--unshare-pid",
+                       "--unshare-net", "--unshare-uts", "--unshare-cgroup-try",
+                       "--die-with-parent", "--new-session", "--clearenv"]
+            for key, value in env.items():
+                command += ["--setenv", key, value]
+            if root:
+                command += ["--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID", "--",
+                            "setpriv", f"--reuid={self.uid}", f"--regid={self.uid}",
+                            "--clear-groups", "--inh-caps=-all", "--bounding-set=-all"]
+            else:
+                command += ["--unshare-user", "--"]
+            command += argv
+            preexec = _limit(limits, None)
+        else:
+            env = _environment(str(self.box))
+            command = argv
+            preexec = _limit(limits, self.uid)
+        self.started = time.perf_counter()
+        self.stopped = ""
+        self._done = threading.Event()
+        with open(self.box / "stdout.txt", "wb") as out, \
+                open(self.box / "stderr.txt", "wb") as err:
+            self.process = subprocess.Popen(
+                command, stdin=subprocess.DEVNULL, stdout=out, stderr=err, cwd=self.box,
+                env=env, preexec_fn=preexec, start_new_session=True, pass_fds=pass_fds)
+        self._watchdog = threading.Thread(target=self._watch, daemon=True)
+        self._watchdog.start()
+
+    def _watch(self) -> None:
+        while not self._done.wait(0.05):
+            if self.process.poll() is not None:
+                return
+            if self.root and len(uid_processes(self.uid)) > MAX_PROCESSES:
+                self.kill("processes")
+            elif time.perf_counter() - self.started > self.limits.seconds:
+                self.kill("wall")
+
+    def kill(self, why: str = "checker") -> None:
+        """Stop the run now (``why`` is kept for :meth:`wait`)."""
+        if not self.stopped:
+            self.stopped = why
+        try:
+            os.killpg(self.process.pid, signal.SIGKILL)
+        except (ProcessLookupError, PermissionError):
+            pass
+
+    def wait(self, timeout: float | None = None) -> tuple[int | None, float, str]:
+        """(exit code, or None when stopped; seconds; why it was stopped: ``""``,
+        ``"wall"``, ``"processes"`` or ``"checker"``). Kills what is left."""
+        try:
+            code: int | None = self.process.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            self.kill()
+            code = self.process.wait()
+        self._done.set()
+        self._watchdog.join()
+        if self.root:
+            _kill_uid(self.uid)
+        if self.stopped in ("wall", "processes"):
+            code = None
+        return code, time.perf_counter() - self.started, self.stopped
+
+
+def run_sandboxed(argv: list[str], box: Path, limits: Limits) -> tuple[int | None, float, str]:
+    """Run ``argv`` in the sandbox to its end (see :class:`Sandboxed`)."""
+    return Sandboxed(argv, box, limits).wait()
+
+
+def tail(path: Path, limit: int = 4000) -> str:
+    """The last ``limit`` bytes of a file the sandbox wrote, as text ('' if none)."""
+    try:
+        with open(path, "rb") as stream:
+            stream.seek(max(0, path.stat().st_size - limit))
+            return stream.read().decode(errors="replace")
+    except OSError:
+        return ""
+
+
+STALE_PREFIXES = (BOX_PREFIX, "mirrorlab-check-")
+"""Temporary folders named ``PREFIX<pid>-...`` that a killed process may leave."""
+
+
+def _stale(folder: Path, prefix: str) -> bool:
+    """Whether a folder was left by a process that has died (a killed worker)."""
+    try:
+        pid = int(folder.name[len(prefix):].split("-")[0])
+    except ValueError:
+        return False
+    if pid == os.getpid():
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except PermissionError:
+        return False
+    return False
+
+
+def sweep_stale(parent: Path) -> None:
+    """Remove the boxes and check folders that dead processes left in ``parent``."""
+    for prefix in STALE_PREFIXES:
+        for folder in parent.glob(f"{prefix}*"):
+            if folder.is_dir() and _stale(folder, prefix):
+                shutil.rmtree(folder, ignore_errors=True)
+
+
+def new_box(root: Path | None = None) -> Path:
+    """A fresh, empty folder for one run (under ``root``, default the system's temp),
+    mode 0700; what dead processes left there is removed first."""
+    parent = root if root is not None else Path(tempfile.gettempdir())
+    parent.mkdir(parents=True, exist_ok=True)
+    sweep_stale(parent)
+    return Path(tempfile.mkdtemp(prefix=f"{BOX_PREFIX}{os.getpid()}-", dir=parent))

@@ -1,0 +1,222 @@
+"""What the trusted side knows of the GL state the student's calls made, and who made it.
+
+The executor updates a :class:`Tracker` after each call it executed: the matrix mode and
+the operations on each matrix, the viewport, the clear colour, the active texture unit,
+the textures bound on each unit, the enabled switches and the texgen modes per unit, the
+current program; for each of them the student's line that set it and the lab function
+that was running. Each texture keeps where its pictures came from (:class:`Texture`):
+blank, a lab picture, a copy of the framebuffer, or pixels the student uploaded, which
+taint it; drawing with a tainted texture taints the framebuffer, and copying a tainted
+framebuffer taints the copy. Nothing here is read from the sandbox but the calls.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+GL_MODELVIEW, GL_PROJECTION, GL_TEXTURE = 0x1700, 0x1701, 0x1702
+GL_TEXTURE_2D, GL_TEXTURE_CUBE_MAP = 0x0DE1, 0x8513
+CUBE_FACES = tuple(range(0x8515, 0x851B))
+UNIT_CAPS = {0x0DE1: "GL_TEXTURE_2D", 0x8513: "GL_TEXTURE_CUBE_MAP", 0x0C60: "GL_TEXTURE_GEN_S",
+             0x0C61: "GL_TEXTURE_GEN_T", 0x0C62: "GL_TEXTURE_GEN_R",
+             0x0C63: "GL_TEXTURE_GEN_Q"}
+"""Switches that belong to the active texture unit."""
+TEXGEN_COORDS = {0x2000: "s", 0x2001: "t", 0x2002: "r", 0x2003: "q"}
+UNITS = 8
+MAX_EVENTS = 4000
+"""Events kept per frame; a frame that makes more keeps the first ones."""
+
+
+@dataclass
+class Setting:
+    """A value and where the student set it: ``line`` of their file (0: the lab or GL's
+    default) and the lab ``function`` running then."""
+
+    value: Any
+    line: int = 0
+    function: str = ""
+
+    def plain(self) -> dict[str, Any]:
+        return {"value": self.value, "line": self.line, "function": self.function}
+
+
+@dataclass
+class Image:
+    """One level of one face of a texture: its size and format, and where its texels came
+    from (``blank``, ``picture:NAME``, ``copy``, ``upload``, ``mipmap``)."""
+
+    width: int
+    height: int
+    internalformat: int
+    source: str
+    line: int
+    function: str
+    frame: int
+    tainted: bool = False
+
+    def plain(self) -> dict[str, Any]:
+        return dict(vars(self))
+
+
+@dataclass
+class Texture:
+    """A texture the student made (``glGenTextures``)."""
+
+    name: int
+    target: int = 0
+    images: dict[tuple[int, int], Image] = field(default_factory=dict)
+    params: dict[int, Setting] = field(default_factory=dict)
+    picture: str = ""
+    mipmaps: Setting | None = None
+    mipmaps_fresh: bool = False
+    """Whether glGenerateMipmap ran after the last write to a level-0 picture."""
+    writes: int = 0
+
+    @property
+    def tainted(self) -> bool:
+        return any(image.tainted for image in self.images.values())
+
+    def nbytes(self) -> int:
+        return sum(i.width * i.height * texel_bytes(i.internalformat)
+                   for i in self.images.values())
+
+    def plain(self) -> dict[str, Any]:
+        return {"name": self.name, "target": self.target, "picture": self.picture,
+                "images": [[f, lv, im.plain()] for (f, lv), im in sorted(self.images.items())],
+                "params": {str(k): v.plain() for k, v in self.params.items()},
+                "mipmaps": self.mipmaps.plain() if self.mipmaps else None,
+                "mipmaps_fresh": self.mipmaps_fresh, "tainted": self.tainted}
+
+
+TEXEL_BYTES = {0x8058: 4, 0x1907: 4, 0x1908: 4, 0x8051: 4, 3: 4, 4: 4, 1: 4, 2: 4,
+               0x881A: 8, 0x881B: 8, 0x8814: 16, 0x8815: 16, 0x805B: 8, 0x8054: 8}
+
+
+def texel_bytes(internalformat: int) -> int:
+    """What one texel of ``internalformat`` may cost (at least 4 bytes)."""
+    return TEXEL_BYTES.get(internalformat, 4)
+
+
+@dataclass
+class Primitive:
+    """A glBegin ... glEnd being drawn: its vertices as (position (4,), texture coordinates
+    of units 0-3 ((4,) each), colour (4,))."""
+
+    mode: int
+    line: int
+    function: str
+    vertices: list[tuple[list[float], list[list[float]], list[float]]] = field(
+        default_factory=list)
+
+
+class Tracker:
+    """The tracked state of one run (see the module's text)."""
+
+    def __init__(self) -> None:
+        self.matrix_mode = Setting(GL_MODELVIEW)
+        self.matrix_ops: dict[int, list[dict[str, Any]]] = {GL_MODELVIEW: [],
+                                                            GL_PROJECTION: [], GL_TEXTURE: []}
+        self.matrix_stacks: dict[int, list[list[dict[str, Any]]]] = {}
+        self.viewport: Setting = Setting(None)
+        self.clear_color = Setting((0.0, 0.0, 0.0, 0.0))
+        self.active_unit = Setting(0)
+        self.bindings: dict[tuple[int, int], Setting] = {}
+        self.enabled: dict[tuple[int, int], Setting] = {}
+        self.texgen: dict[tuple[int, int], Setting] = {}
+        self.program = Setting(0)
+        self.uniforms: dict[tuple[int, int], Setting] = {}
+        self.textures: dict[int, Texture] = {}
+        self.framebuffer_taint: str = ""
+        """Why the framebuffer holds uploaded pixels ('' when it does not)."""
+        self.texcoords = [[0.0, 0.0, 0.0, 1.0] for _ in range(4)]
+        self.color = [1.0, 1.0, 1.0, 1.0]
+        self.primitive: Primitive | None = None
+        self.steps: list[str] = []
+        self.frames: list[dict[str, Any]] = []
+        self.setup_events: list[dict[str, Any]] = []
+        self.line = 0
+
+    # ---------------------------------------------------------------- who and where
+    @property
+    def function(self) -> str:
+        return self.steps[-1] if self.steps else ""
+
+    def setting(self, value: Any) -> Setting:
+        return Setting(value, self.line, self.function)
+
+    @property
+    def events(self) -> list[dict[str, Any]]:
+        return self.frames[-1]["events"] if self.frames else self.setup_events
+
+    def event(self, kind: str, **values: Any) -> dict[str, Any]:
+        record = {"kind": kind, "line": self.line, "function": self.function,
+                  "steps": list(self.steps), **values}
+        if len(self.events) < MAX_EVENTS:
+            self.events.append(record)
+        return record
+
+    def begin_frame(self) -> None:
+        self.frames.append({"events": []})
+
+    # ---------------------------------------------------------------- state changes
+    def bound(self, target: int, unit: int | None = None) -> int:
+        setting = self.bindings.get((self.active_unit.value if unit is None else unit, target))
+        return int(setting.value) if setting else 0
+
+    def is_enabled(self, cap: int, unit: int | None = None) -> bool:
+        key = (cap, (self.active_unit.value if unit is None else unit)
+               if cap in UNIT_CAPS else -1)
+        setting = self.enabled.get(key)
+        return bool(setting and setting.value)
+
+    def set_enabled(self, cap: int, on: bool) -> None:
+        key = (cap, self.active_unit.value if cap in UNIT_CAPS else -1)
+        self.enabled[key] = self.setting(bool(on))
+
+    def matrix_op(self, name: str, args: list[Any], replaces: bool = False) -> None:
+        ops = self.matrix_ops.setdefault(self.matrix_mode.value, [])
+        if replaces:
+            ops.clear()
+        if len(ops) < 64:
+            ops.append({"op": name, "args": args, "line": self.line,
+                        "function": self.function, "mode": self.matrix_mode.value})
+
+    def texture_bound(self, target: int) -> Texture | None:
+        """The student's texture bound to ``target`` (its binding target, GL_TEXTURE_2D or
+        GL_TEXTURE_CUBE_MAP) on the active unit."""
+        return self.textures.get(self.bound(target))
+
+    def sampled_taint(self) -> str:
+        """Why a draw now would show uploaded pixels: a tainted texture bound on a unit."""
+        for (unit, _), setting in self.bindings.items():
+            texture = self.textures.get(int(setting.value))
+            if texture is not None and texture.tainted:
+                return f"texture {texture.name}, bound on unit {unit}, holds uploaded pixels"
+        return ""
+
+    def snapshot(self) -> dict[str, Any]:
+        """The state a draw or copy is judged by (JSON-able)."""
+        units = {}
+        for unit in range(UNITS):
+            entry = {}
+            for target, key in ((GL_TEXTURE_2D, "2d"), (GL_TEXTURE_CUBE_MAP, "cube")):
+                setting = self.bindings.get((unit, target))
+                if setting and setting.value:
+                    entry[key] = setting.plain()
+            for cap, name in UNIT_CAPS.items():
+                setting = self.enabled.get((cap, unit))
+                if setting and setting.value:
+                    entry[name] = setting.plain()
+            for coord, name in TEXGEN_COORDS.items():
+                setting = self.texgen.get((unit, coord))
+                if setting is not None:
+                    entry[f"texgen_{name}"] = setting.plain()
+            if entry:
+                units[str(unit)] = entry
+        enabled = {str(cap): s.plain() for (cap, unit), s in self.enabled.items() if unit == -1}
+        return {"matrix_mode": self.matrix_mode.plain(), "viewport": self.viewport.plain(),
+                "clear_color": self.clear_color.plain(),
+                "active_unit": self.active_unit.plain(), "program": self.program.plain(),
+                "units": units, "enabled": enabled,
+                "matrix_ops": {str(k): list(v) for k, v in self.matrix_ops.items()}}

@@ -1,0 +1,156 @@
+"""Each student's own numbers for a lab (a variant), derived from the course key and the
+student's name with HMAC-SHA256, so the teacher can derive them again and nobody without
+the key can. The default variant is the lab's own numbers (the handout as published).
+
+What a variant changes is what changes the answer: for lab 20 the mirror's position and
+size (so glOrtho, gluLookAt and the quad's corners) and the robot's pose; for the
+sphere-map lab the side the shader's cone goes and the texture unit texgen uses (and the
+cone's tilt); for the cube-map lab the sphere's centre, where the six cameras sit.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import hmac
+import json
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+OPTIONS: dict[str, dict[str, tuple]] = {
+    "lab20": {
+        "mirror_x": (-7.5, -7.0, -6.5),
+        "y0": (-3.5, -3.0, -2.5),
+        "height": (7.0, 7.5, 8.0, 8.5),
+        "z0": (-6.5, -6.0, -5.5),
+        "width": (7.0, 7.5, 8.0, 8.5),
+        "base_angle": (-50.0, -45.0, -40.0, -35.0, -30.0, -25.0, -20.0),
+        "lower_angle": (20.0, 25.0, 30.0, 35.0, 40.0),
+        "upper_angle": (-85.0, -80.0, -75.0, -70.0, -65.0),
+    },
+    "spheremap": {
+        "shader_side": ("left", "right"),
+        "unit": (0, 2, 3),
+        "tilt": (40.0, 50.0, 60.0),
+    },
+    "cubemap": {
+        "center_x": (-0.4, -0.2, 0.0, 0.2, 0.4),
+        "center_y": (0.0, 0.15, 0.3),
+        "center_z": (-0.4, -0.2, 0.0, 0.2, 0.4),
+    },
+}
+
+DEFAULTS: dict[str, dict[str, Any]] = {
+    "lab20": {"mirror_x": -7.0, "y0": -3.0, "height": 8.0, "z0": -6.0, "width": 8.0,
+              "base_angle": -35.0, "lower_angle": 30.0, "upper_angle": -75.0},
+    "spheremap": {"shader_side": "left", "unit": 0, "tilt": 50.0},
+    "cubemap": {"center_x": 0.0, "center_y": 0.0, "center_z": 0.0},
+}
+
+KEY_BYTES = 16
+"""The shortest course key accepted."""
+
+
+class VariantError(ValueError):
+    """A key or variant file that cannot be used; one line naming it."""
+
+
+@dataclass(frozen=True)
+class Variant:
+    """One set of a lab's numbers: ``values`` (see :data:`OPTIONS`), ``id`` (``default``
+    or 8 hex digits) and the ``student`` it was derived for ('' for the default)."""
+
+    lab: str
+    values: dict[str, Any] = field(compare=False)
+    id: str = "default"
+    student: str = ""
+
+    @property
+    def is_default(self) -> bool:
+        return self.id == "default"
+
+    def __getitem__(self, key: str) -> Any:
+        return self.values[key]
+
+    def plain(self) -> dict[str, Any]:
+        return {"lab": self.lab, "id": self.id, "student": self.student,
+                "values": dict(self.values)}
+
+    def same_numbers(self, other: Variant) -> bool:
+        return self.lab == other.lab and self.values == other.values
+
+
+def default_variant(lab: str) -> Variant:
+    return Variant(lab, dict(DEFAULTS[lab]))
+
+
+def student_key(student: str) -> str:
+    """The form of a name variants are derived from: case, spaces and punctuation do not
+    matter ("Ada Lovelace", "ada_lovelace" and "ADA-LOVELACE" are one student)."""
+    return re.sub(r"[^0-9a-z]+", "_", student.casefold()).strip("_")
+
+
+def derive_variant(lab: str, key: bytes, student: str) -> Variant:
+    """The variant of ``student`` for ``lab`` under the course ``key``."""
+    digest = hmac.new(key, f"mirrorlab variant\0{lab}\0{student_key(student)}".encode(),
+                      hashlib.sha256).digest()
+    values = {}
+    for index, (name, choices) in enumerate(OPTIONS[lab].items()):
+        values[name] = choices[int.from_bytes(digest[2 * index:2 * index + 2], "big")
+                               % len(choices)]
+    return Variant(lab, values, digest.hex()[:8], student)
+
+
+def read_key(path: Path) -> bytes:
+    """The course key in ``path`` (its bytes; at least :data:`KEY_BYTES`)."""
+    try:
+        key = path.read_bytes()
+    except OSError as exc:
+        raise VariantError(f"--key: cannot read {str(path)!r}: {exc.strerror}") from None
+    if len(key.strip()) < KEY_BYTES:
+        raise VariantError(f"--key: {str(path)!r} holds {len(key.strip())} bytes; a course "
+                           f"key needs at least {KEY_BYTES} (mirrorlab lab release makes one)")
+    return key.strip()
+
+
+def variant_from_file(path: Path, lab: str) -> Variant:
+    """The variant a released folder's ``variant.json`` names (checked against the lab's
+    options: a hand-edited file cannot ask for numbers outside them)."""
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise VariantError(f"{path}: not a variant file ({exc})") from None
+    if not isinstance(data, dict) or data.get("lab") != lab:
+        other = data.get("lab") if isinstance(data, dict) else None
+        raise VariantError(f"{path}: a variant of {other!r}, not of {lab}")
+    values = data.get("values")
+    if not isinstance(values, dict) or set(values) != set(OPTIONS[lab]):
+        raise VariantError(f"{path}: expected the values {', '.join(OPTIONS[lab])}")
+    for name, value in values.items():
+        if value not in OPTIONS[lab][name]:
+            raise VariantError(f"{path}: {name} = {value!r} is not one of "
+                               f"{', '.join(map(str, OPTIONS[lab][name]))}")
+    ident = str(data.get("id", ""))
+    if not re.fullmatch(r"default|[0-9a-f]{8}", ident):
+        raise VariantError(f"{path}: id {ident!r} is not a variant id")
+    return Variant(lab, dict(values), ident, str(data.get("student", ""))[:200])
+
+
+# ------------------------------------------------------------------ what each lab derives
+def lab20_geometry(variant: Variant) -> dict[str, Any]:
+    """Lab 20's mirror: plane ``x``, ``y0``..``y1``, ``z0``..``z1``, the four ``corners``
+    (as the handout lists them), the capture's ``extents`` (glOrtho's six numbers), its
+    ``eye`` and ``angles`` of the robot's joints."""
+    v = variant.values
+    x, y0, z0 = v["mirror_x"], v["y0"], v["z0"]
+    y1, z1 = y0 + v["height"], z0 + v["width"]
+    return {"x": x, "y0": y0, "y1": y1, "z0": z0, "z1": z1,
+            "corners": ((x, y0, z0), (x, y1, z0), (x, y1, z1), (x, y0, z1)),
+            "extents": (z0, z1, y0, y1, 0.0, 15.0), "eye": (x, 0.0, 0.0),
+            "angles": (v["base_angle"], v["lower_angle"], v["upper_angle"])}
+
+
+def cube_center(variant: Variant) -> tuple[float, float, float]:
+    v = variant.values
+    return (v["center_x"], v["center_y"], v["center_z"])

@@ -1,0 +1,196 @@
+"""The labs' executor, fed messages directly in a headless context (no sandbox): each call
+is checked before it runs, refused in the words PyOpenGL would use, and noted with the
+student's line; pixel data must hold what GL will read; pixels the student uploads taint
+what they are drawn into and copied to, and a clear cleans the frame again; every limit
+ends the run with one line; the lab's own objects are out of reach."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mirrorlab.gl.opengl import GL
+from mirrorlab.gl.resources import Framebuffer
+from mirrorlab.labs.trusted.executor import Executor, RunLimits, Stop
+from mirrorlab.labs.trusted.kit import open_session
+from mirrorlab.labs.trusted.variants import default_variant
+
+SIZE = (64, 64)
+
+
+@pytest.fixture
+def context(registry):
+    """A 64 x 64 target of the session's context, bound."""
+    target = Framebuffer(registry, *SIZE)
+    target.bind()
+    return target
+
+
+def executor(lab: str = "lab20", limits: RunLimits | None = None) -> Executor:
+    return Executor(open_session(lab, SIZE, default_variant(lab)), limits)
+
+
+def call(ex: Executor, name: str, *args, arrays=(), op: str = "gl", line: int = 1):
+    reply, payloads = ex.call({"op": op, "fn": name, "args": list(args), "line": line},
+                              list(arrays))
+    return reply, payloads
+
+
+def test_a_call_runs_and_its_line_is_noted(context):
+    ex = executor()
+    reply, _ = call(ex, "glMatrixMode", int(GL.GL_PROJECTION), line=7)
+    assert reply == {"ok": True, "value": None}
+    assert int(GL.glGetIntegerv(GL.GL_MATRIX_MODE)) == GL.GL_PROJECTION
+    assert (ex.tracker.matrix_mode.value, ex.tracker.matrix_mode.line) == (GL.GL_PROJECTION, 7)
+    reply, _ = call(ex, "glOrtho", -6, 2, -3, 5, 0, 15, line=8)
+    assert reply["ok"] and ex.tracker.matrix_ops[int(GL.GL_PROJECTION)][-1]["line"] == 8
+    GL.glMatrixMode(GL.GL_MODELVIEW)
+
+
+def test_calls_are_refused_before_they_run(context):
+    ex = executor()
+    cases = [
+        (("glDrawPixels", 1, 1, 0, 0, None), "NotImplementedError", "not one of the OpenGL"),
+        (("glMatrixMode", 12345), "GLError", "invalid enumerant"),
+        (("glOrtho", -6, 2, -3, 5, 0), "TypeError", "takes 6 arguments"),
+        (("glOrtho", -6, 2, "x", 5, 0, 15), "TypeError", "expected a number"),
+        (("glLoadMatrixf", [1.0] * 15), "ValueError", "expected 16 numbers"),
+        (("glViewport", 0, 0, 99999, 10), "GLError", "outside 0..1024"),
+        (("glPixelStorei", int(GL.GL_UNPACK_ROW_LENGTH), 4), "GLError", "invalid enumerant"),
+    ]
+    before = np.asarray(GL.glGetIntegerv(GL.GL_VIEWPORT)).tolist()
+    for (name, *args), kind, words in cases:
+        reply, _ = call(ex, name, *args)
+        assert not reply["ok"] and reply["type"] == kind and words in reply["message"], \
+            (name, reply)
+    assert np.asarray(GL.glGetIntegerv(GL.GL_VIEWPORT)).tolist() == before
+    assert int(GL.glGetError()) == GL.GL_NO_ERROR
+    assert len(ex.call_errors) == len(cases)
+
+
+def test_pixel_data_must_hold_what_gl_reads_and_uploads_taint(context):
+    ex = executor()
+    (texture,) = [call(ex, "glGenTextures", 1)[0]["value"]]
+    assert call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), texture)[0]["ok"]
+    image = (int(GL.GL_TEXTURE_2D), 0, int(GL.GL_RGB), 5, 4, 0, int(GL.GL_RGB),
+             int(GL.GL_UNSIGNED_BYTE), {"$a": 0})
+    # 5 pixels of 3 bytes: rows of 15 bytes padded to 16 at GL_UNPACK_ALIGNMENT 4
+    short = np.full(5 * 4 * 3, 200, dtype=np.uint8)
+    reply, _ = call(ex, "glTexImage2D", *image, arrays=[short])
+    assert not reply["ok"] and "GL would read 63" in reply["message"]
+    enough = np.full(63, 200, dtype=np.uint8)
+    assert call(ex, "glTexImage2D", *image, arrays=[enough])[0]["ok"]
+    assert ex.tracker.textures[texture].tainted
+    blank = (*image[:-1], None)
+    assert call(ex, "glTexImage2D", *blank)[0]["ok"]
+    assert not ex.tracker.textures[texture].tainted
+
+
+def _quad(ex: Executor) -> None:
+    call(ex, "glBegin", int(GL.GL_QUADS))
+    for x, y in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+        call(ex, "glVertex3f", x, y, 0)
+    reply, _ = call(ex, "glEnd")
+    assert reply["ok"], reply
+
+
+def test_a_frame_drawn_with_uploaded_pixels_is_tainted_and_copies_carry_it(context):
+    ex = executor()
+    picture, capture = call(ex, "glGenTextures", 2)[0]["value"]
+    call(ex, "glActiveTexture", int(GL.GL_TEXTURE3))
+    call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), picture)
+    call(ex, "glPixelStorei", int(GL.GL_UNPACK_ALIGNMENT), 1)
+    call(ex, "glTexImage2D", int(GL.GL_TEXTURE_2D), 0, int(GL.GL_RGB), 2, 2, 0, int(GL.GL_RGB),
+         int(GL.GL_UNSIGNED_BYTE), {"$a": 0}, arrays=[np.full(12, 99, dtype=np.uint8)])
+    call(ex, "glActiveTexture", int(GL.GL_TEXTURE0))
+    ex.begin_frame()
+    _quad(ex)
+    assert "bound on unit 3" in ex.tracker.framebuffer_taint
+    call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), capture)
+    copy = (int(GL.GL_TEXTURE_2D), 0, int(GL.GL_RGB), 0, 0, 64, 64, 0)
+    assert call(ex, "glCopyTexImage2D", *copy)[0]["ok"]
+    assert ex.tracker.textures[capture].tainted
+    call(ex, "glClear", int(GL.GL_COLOR_BUFFER_BIT))
+    assert ex.tracker.framebuffer_taint == ""
+    call(ex, "glActiveTexture", int(GL.GL_TEXTURE3))
+    call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), 0)
+    call(ex, "glActiveTexture", int(GL.GL_TEXTURE0))
+    call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), capture)
+    _quad(ex)  # the tainted capture is bound on unit 0 now: drawing taints again
+    assert ex.tracker.framebuffer_taint
+    call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), 0)
+    call(ex, "glClear", int(GL.GL_COLOR_BUFFER_BIT))
+    call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), capture)
+    call(ex, "glCopyTexImage2D", *copy)
+    assert not ex.tracker.textures[capture].tainted
+    copies = [e for e in ex.tracker.frames[-1]["events"] if e["kind"] == "copy"]
+    assert [e["picture"] for e in copies] == ["copy_0_0", "copy_0_1"]
+    assert ex.pictures["copy_0_0"].shape == (64, 64, 3)
+
+
+def test_the_labs_own_objects_are_out_of_reach(context):
+    ex = executor("spheremap")
+    backdrop = ex.session.backdrop_texture
+    for name, args in (("glBindTexture", (int(GL.GL_TEXTURE_2D), backdrop)),
+                       ("glDeleteTextures", ([backdrop],)),
+                       ("glUseProgram", (ex.session.scene_program,))):
+        reply, _ = call(ex, name, *args)
+        assert not reply["ok"] and reply["type"] == "GLError", (name, reply)
+    assert GL.glIsTexture(backdrop)
+    reply, _ = call(ex, "load_picture_texture", backdrop, "launch", op="kit")
+    assert not reply["ok"] and "not a texture this file made" in reply["message"]
+    reply, _ = call(ex, "load_picture_texture", call(ex, "glGenTextures", 1)[0]["value"],
+                    "../../etc/passwd", op="kit")
+    assert not reply["ok"] and "no picture" in reply["message"]
+
+
+def test_kit_calls_are_recorded_and_refused_inside_glbegin(context):
+    ex = executor()
+    ex.begin_frame()
+    reply, _ = call(ex, "draw_scene", {"textures": {"base": None}}, op="kit", line=42)
+    assert reply["ok"]
+    draws = [e for e in ex.tracker.frames[-1]["events"] if e["kind"] == "draw"]
+    assert draws[-1]["who"] == "draw_scene" and draws[-1]["line"] == 42
+    assert np.asarray(draws[-1]["projection"]).shape == (4, 4)
+    call(ex, "glBegin", int(GL.GL_TRIANGLES))
+    reply, _ = call(ex, "draw_scene", {"textures": {}}, op="kit")
+    assert not reply["ok"] and "between glBegin and glEnd" in reply["message"]
+    call(ex, "glEnd")
+    reply, _ = call(ex, "draw_scene", {"textures": {"base": 9999}}, op="kit")
+    assert not reply["ok"] and reply["type"] == "LabSetupError"
+
+
+def test_queries_return_what_pyopengl_would(context):
+    ex = executor()
+    reply, payloads = call(ex, "glGetIntegerv", int(GL.GL_VIEWPORT))
+    assert reply["value"]["as"] == "array" and payloads[0][1] == [4]
+    reply, payloads = call(ex, "glReadPixels", 0, 0, 4, 2, int(GL.GL_RGB),
+                           int(GL.GL_UNSIGNED_BYTE))
+    assert reply["value"]["as"] == "bytes" and len(payloads[0][2]) == 4 * 2 * 3
+    reply, _ = call(ex, "glGetIntegerv", int(GL.GL_ACTIVE_TEXTURE))
+    assert reply["value"] == int(GL.GL_TEXTURE0)
+
+
+def test_each_limit_ends_the_run_in_one_line(context):
+    ex = executor(limits=RunLimits(calls=5))
+    for _ in range(5):
+        call(ex, "glFlush")
+    with pytest.raises(Stop, match="stopped after 5 calls"):
+        call(ex, "glFlush")
+    ex = executor(limits=RunLimits(frame_vertices=3))
+    ex.begin_frame()
+    call(ex, "glBegin", int(GL.GL_POINTS))
+    for _ in range(3):
+        call(ex, "glVertex2f", 0, 0)
+    with pytest.raises(Stop, match="more than 3 vertices in one frame"):
+        call(ex, "glVertex2f", 0, 0)
+    GL.glEnd()
+    ex = executor(limits=RunLimits(textures=2))
+    reply, _ = call(ex, "glGenTextures", 3)
+    assert not reply["ok"] and "more than 2 textures" in reply["message"]
+    ex = executor(limits=RunLimits(texture_bytes=1 << 16))
+    texture = call(ex, "glGenTextures", 1)[0]["value"]
+    call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), texture)
+    reply, _ = call(ex, "glTexImage2D", int(GL.GL_TEXTURE_2D), 0, int(GL.GL_RGBA), 256, 256, 0,
+                    int(GL.GL_RGBA), int(GL.GL_UNSIGNED_BYTE), None)
+    assert not reply["ok"] and "more than 0 MiB" in reply["message"]

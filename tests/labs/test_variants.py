@@ -1,0 +1,204 @@
+"""Variants and giving labs out: each student's numbers follow from the course key and
+their name (HMAC) and nothing else; every variant's handout, starter and solution render
+and compile; ``lab release`` gives each student a folder with their handout, starter,
+variant and reference; ``lab solution`` prints a student's variant of the solution
+(from the teacher's copy); ``lab grade --key`` gives each honest student full marks and
+fails a file copied from another student, saying so (and the teacher's report says
+whose); a student's ``lab check`` at home judges against their own released reference."""
+
+from __future__ import annotations
+
+import html
+import json
+import re
+
+import pytest
+
+from mirrorlab.labs import LABS
+from mirrorlab.labs.content import handout, solution_for, starter
+from mirrorlab.labs.trusted.variants import (
+    OPTIONS,
+    VariantError,
+    default_variant,
+    derive_variant,
+    read_key,
+    student_key,
+    variant_from_file,
+)
+from tests.labs.conftest import LIMITS, SOLUTIONS, mirrorlab_command, read_csv
+from tests.labs.mutants import solution
+
+KEY = b"a course key for the tests: 0123456789abcdef"
+
+
+def test_a_variant_follows_from_the_key_and_the_name_alone():
+    for lab in LABS:
+        ada = derive_variant(lab, KEY, "Ada Lovelace")
+        for same in ("ada_lovelace", " ADA-LOVELACE "):
+            other = derive_variant(lab, KEY, same)
+            assert (other.id, other.values) == (ada.id, ada.values)
+        assert re.fullmatch(r"[0-9a-f]{8}", ada.id) and ada.student == "Ada Lovelace"
+        assert derive_variant(lab, KEY + b"!", "Ada Lovelace").id != ada.id
+        for name, value in ada.values.items():
+            assert value in OPTIONS[lab][name]
+        # a class of 40 gets many different numbers, not one shared set
+        ids = {tuple(sorted(derive_variant(lab, KEY, f"student {i}").values.items()))
+               for i in range(40)}
+        assert len(ids) >= (10 if lab == "spheremap" else 25), lab
+    assert student_key("Ada  Lovelace!") == "ada_lovelace"
+
+
+def test_every_variant_renders_and_compiles():
+    for lab, spec in LABS.items():
+        text = (SOLUTIONS / f"{spec.folder}.py").read_text()
+        for variant in [default_variant(lab), *(derive_variant(lab, KEY, f"s{i}")
+                                                 for i in range(12))]:
+            for rendered in (handout(spec, variant), starter(spec, variant),
+                             solution_for(text, variant)):
+                assert "{{" not in rendered and "}}" not in rendered
+            compile(starter(spec, variant), "starter.py", "exec")
+            compile(solution_for(text, variant), "solution.py", "exec")
+            if lab == "lab20":
+                x = variant["mirror_x"]
+                assert f"plane x = {x:g}" in handout(spec, variant)
+                assert f"MIRROR_X = {x:g}" in solution_for(text, variant)
+        assert solution_for(text, default_variant(lab)) == text
+
+
+def test_bad_keys_and_variant_files_are_one_line(tmp_path):
+    short = tmp_path / "short.key"
+    short.write_bytes(b"too short")
+    with pytest.raises(VariantError, match="holds 9 bytes"):
+        read_key(short)
+    path = tmp_path / "variant.json"
+    good = derive_variant("lab20", KEY, "ada").plain()
+    for change, message in (({"lab": "cubemap"}, "not of lab20"),
+                            ({"values": {**good["values"], "mirror_x": -70}}, "mirror_x = -70"),
+                            ({"values": {"mirror_x": -7}}, "expected the values"),
+                            ({"id": "../../etc"}, "not a variant id")):
+        path.write_text(json.dumps({**good, **change}))
+        with pytest.raises(VariantError, match=re.escape(message)):
+            variant_from_file(path, "lab20")
+    path.write_text(json.dumps(good))
+    assert variant_from_file(path, "lab20").same_numbers(derive_variant("lab20", KEY, "ada"))
+
+
+@pytest.fixture(scope="module")
+def released(tmp_path_factory):
+    """Lab 20 released with variants to three students, each submitting: Ada and Ben their
+    own variant's solution, Cy a copy of Ada's file."""
+    base = tmp_path_factory.mktemp("released")
+    (base / "class.txt").write_text("Ada Lovelace\nBen Ng\n\n# late enrolment\nCy Twombly\n")
+    key = base / "course.key"
+    done = mirrorlab_command("lab", "release", "lab20", str(base / "out"), "--students",
+                             str(base / "class.txt"), "--key", str(key), "--jobs", "2",
+                             "--timeout", str(LIMITS.cpu_seconds))
+    assert done.returncode == 0, done.stderr
+    assert key.stat().st_mode & 0o777 == 0o600
+    submissions = base / "submissions"
+    submissions.mkdir()
+    for student in ("Ada Lovelace", "Ben Ng"):
+        printed = mirrorlab_command("lab", "solution", "lab20", "--student", student, "--key",
+                                    str(key))
+        assert printed.returncode == 0, printed.stderr
+        (submissions / f"{student.replace(' ', '_')}.py").write_text(printed.stdout)
+    (submissions / "Cy_Twombly.py").write_text((submissions / "Ada_Lovelace.py").read_text())
+    return base, key, submissions
+
+
+def test_release_gives_each_student_their_own_numbers(released):
+    base, key, _ = released
+    folders = sorted(p.name for p in (base / "out").iterdir())
+    assert folders == ["Ada_Lovelace", "Ben_Ng", "Cy_Twombly"]
+    spec = LABS["lab20"]
+    seen = set()
+    for folder, student in zip(folders, ("Ada Lovelace", "Ben Ng", "Cy Twombly"), strict=True):
+        path = base / "out" / folder
+        variant = variant_from_file(path / "variant.json", "lab20")
+        assert variant.same_numbers(derive_variant("lab20", read_key(key), student))
+        assert (path / "starter.py").read_text() == starter(spec, variant)
+        assert (path / "README.md").read_text() == handout(spec, variant)
+        assert variant.id in (path / "starter.py").read_text()
+        assert sorted(p.name for p in (path / "reference").iterdir()) == ["arrays.npz",
+                                                                          "evidence.json"]
+        seen.add(tuple(sorted(variant.values.items())))
+    assert len(seen) == 3
+
+
+def test_grading_with_the_key_passes_the_honest_and_fails_the_copy(released, tmp_path):
+    _, key, submissions = released
+    out = tmp_path / "grades"
+    done = mirrorlab_command("lab", "grade", "lab20", str(submissions), "--key", str(key),
+                             "--out-dir", str(out), "--jobs", "2",
+                             "--timeout", str(LIMITS.cpu_seconds))
+    assert done.returncode == 0, done.stderr
+    book = {row["student"]: row for row in read_csv(out / "gradebook.csv")}
+    assert book["Ada_Lovelace"]["score"] == book["Ben_Ng"]["score"] == "8"
+    assert int(book["Cy_Twombly"]["score"]) < 8
+    assert book["Cy_Twombly"]["variant"] == derive_variant("lab20", read_key(key),
+                                                            "Cy Twombly").id
+    copied = [row for row in read_csv(out / "grades.csv") if row["student"] == "Cy_Twombly"]
+    failed = {row["task"]: row["hint"] for row in copied if row["passed"] == "no"}
+    assert "another student's" in failed["capture_camera"]
+    assert "another student's" in failed["mirror_quad"]
+    report = (out / "report.html").read_text()
+    assert "numbers of Ada_Lovelace" in report
+    page = html.unescape(re.sub(r"data:image/png;base64,[A-Za-z0-9+/=]+", "",
+                                (out / "feedback" / "Cy_Twombly.html").read_text()))
+    assert "another student's" in page and "Ada" not in page
+
+
+def test_a_student_checks_against_their_own_released_reference(released):
+    """At home: no solutions, no key; the folder's variant.json and reference/ say what is
+    right for this student."""
+    base, _, submissions = released
+    folder = base / "out" / "Ben_Ng"
+    mine = folder / "mine.py"
+    mine.write_text((submissions / "Ben_Ng.py").read_text())
+    done = mirrorlab_command("lab", "check", "lab20", str(mine), "--out",
+                             str(folder / "check.png"), "--timeout", str(LIMITS.cpu_seconds),
+                             env={"MIRRORLAB_SOLUTIONS": None, "MIRRORLAB_CACHE": str(base)})
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "8/8 tasks passed" in done.stdout
+    copied = folder / "copied.py"
+    copied.write_text((submissions / "Ada_Lovelace.py").read_text())
+    done = mirrorlab_command("lab", "check", "lab20", str(copied), "--out",
+                             str(folder / "check.png"), "--timeout", str(LIMITS.cpu_seconds),
+                             env={"MIRRORLAB_SOLUTIONS": None})
+    assert done.returncode == 1 and "your mirror needs glOrtho(" in done.stdout
+
+
+@pytest.mark.parametrize("lab", ["spheremap", "cubemap"])
+def test_the_other_labs_variants_fail_a_copied_file(lab, tmp_path):
+    """A student's own variant of the sphere- or cube-map solution passes; the lab's own
+    solution, handed in by that student, fails saying it is another variant's."""
+    spec = LABS[lab]
+    for i in range(100):  # a student whose numbers change the answer
+        variant = derive_variant(lab, KEY, f"student {i}")
+        default = default_variant(lab)
+        if (lab == "spheremap" and (variant["shader_side"], variant["unit"]) != \
+                (default["shader_side"], default["unit"])) or (lab == "cubemap" and \
+                not variant.same_numbers(default)):
+            break
+    student = variant.student
+    (tmp_path / "key").write_bytes(KEY)
+    folder = tmp_path / "class"
+    folder.mkdir()
+    name = student.replace(" ", "_")
+    (folder / f"{name}.py").write_text(solution_for(solution(lab), variant))
+    (folder / "default_copy.py").write_text(solution(lab))
+    out = tmp_path / "grades"
+    done = mirrorlab_command("lab", "grade", lab, str(folder), "--key", str(tmp_path / "key"),
+                             "--out-dir", str(out), "--jobs", "2",
+                             "--timeout", str(LIMITS.cpu_seconds))
+    assert done.returncode == 0, done.stderr
+    rows = read_csv(out / "grades.csv")
+    mine = [r for r in rows if r["student"] == name]
+    assert all(r["passed"] == "yes" for r in mine), mine
+    theirs = [r for r in rows if r["student"] == "default_copy"]
+    assert not all(r["passed"] == "yes" for r in theirs)
+    # the lab's own numbers are another variant's for this student (unless both are alike)
+    own = derive_variant(lab, KEY, "default_copy")
+    if not own.same_numbers(default_variant(lab)):
+        assert any("the lab" in r["hint"] or "another" in r["hint"] for r in theirs), theirs
+    assert len(spec.tasks) == len(theirs)
