@@ -31,7 +31,10 @@ def test_the_quick_sweep_on_two_processes_gives_the_figures_of_one(tmp_path, cap
     assert result.returncode == 0, result.stderr[-2000:]
     assert "truths and scoring on pool (2 workers)" in result.stdout
     serial, parallel = figures(one), figures(two)
-    assert len(serial) == 83
+    # 83 rows of fixed sizes, and the ortho capture sized to its footprint (two techniques,
+    # two viewpoints)
+    assert len(serial) == 87
+    assert sum(r["technique"].endswith(" footprint") for r in serial) == 4
     assert serial == parallel
     # the figures are real measurements: the ray tracer's rows score zero, others do not
     assert {r["mae"] for r in serial if r["technique"].startswith("raytrace")} == {"0.0"}
