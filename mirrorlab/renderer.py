@@ -254,6 +254,7 @@ class SceneRenderer:
             self._last_plan = None
             raise
         finally:
+            self.drawer.end_frame()
             restore_state(found)
         self.last_frame = FrameStats(plan, draws, (time.perf_counter() - start) * 1e3,
                                      parts_drawn=self.drawer.parts_drawn)

@@ -50,7 +50,7 @@ FEW_PARTS = 32
 """Up to this many parts in view, none is culled for covering no pixel centre: testing
 costs more than the draws it could save (culling never changes a pixel either way)."""
 RECORDED_VIEWS = 64
-"""Recorded views a packed drawer keeps (most recently used)."""
+"""Views whose visible parts the per-draw path keeps (most recently used; numpy only)."""
 
 
 def surface_matrix(normal: np.ndarray, color, textured: bool) -> np.ndarray:
@@ -162,8 +162,10 @@ class SceneDrawer:
             self.packed_program.use()
             self.packed_program.set_int("texture_map", 0)
         self._tables: OrderedDict[ObjectArrays, PartTable] = OrderedDict()
-        self._recorded: OrderedDict[tuple, RecordedView] = OrderedDict()
-        self._spare: list[RecordedView] = []
+        # the packed path's recorded views: those drawn in the frame being drawn or the
+        # last one (a still frame draws them again; any other is freed by end_frame)
+        self._recorded: dict[tuple, RecordedView] = {}
+        self._used: set[tuple] = set()
         self._each: OrderedDict[tuple, tuple[np.ndarray, np.ndarray]] = OrderedDict()
         """The per-draw path's record of a view: the visible parts and their models."""
         self.parts_drawn = 0
@@ -299,9 +301,9 @@ class SceneDrawer:
                 scissor: Rectangle | None, cull: bool) -> RecordedView:
         """``view``'s recorded draw of ``index`` (made when it has none)."""
         key = (*_view_key(index, view, scissor), cull)
+        self._used.add(key)
         recorded = self._recorded.get(key)
         if recorded is not None:
-            self._recorded.move_to_end(key)
             return recorded
         visible = (self.visible(index, view, scissor) if cull
                    else np.arange(len(index.parts)))
@@ -309,19 +311,24 @@ class SceneDrawer:
         data[:, 0] = self.relative_models(index, visible, view).transpose(0, 2, 1)
         data[:, 1] = table.surfaces[visible].transpose(0, 2, 1)  # GLSL's are by column
         commands, runs = indirect_commands(table, visible)
-        if self._spare:
-            recorded = self._spare.pop()
-        else:
-            registry = self.shared.registry
-            recorded = RecordedView(Buffer(registry), Buffer(registry), (), 0)
+        registry = self.shared.registry
+        recorded = RecordedView(Buffer(registry), Buffer(registry), (), 0)
         recorded.parts.upload(GL.GL_SHADER_STORAGE_BUFFER, data)
         recorded.commands.upload(GL.GL_DRAW_INDIRECT_BUFFER, commands)
         GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
         recorded.runs, recorded.drawn = runs, len(visible)
         self._recorded[key] = recorded
-        while len(self._recorded) > RECORDED_VIEWS:
-            self._spare.append(self._recorded.popitem(last=False)[1])
         return recorded
+
+    def end_frame(self) -> None:
+        """Free the recorded views the frame just drawn did not draw: what a frame holds
+        in GL is what it shows, however many views came before (a resized window, a moving
+        camera)."""
+        for key in [k for k in self._recorded if k not in self._used]:
+            recorded = self._recorded.pop(key)
+            recorded.parts.release()
+            recorded.commands.release()
+        self._used.clear()
 
     def draw_plain(self, scene: Scene, reflector: CurvedReflector | PlanarReflector,
                    view: View, quad=None, quad_model: np.ndarray | None = None) -> int:
@@ -344,11 +351,11 @@ class SceneDrawer:
 
     def release(self) -> None:
         """Free the recorded views' buffers (the programs and meshes are shared)."""
-        for recorded in (*self._recorded.values(), *self._spare):
+        for recorded in self._recorded.values():
             recorded.parts.release()
             recorded.commands.release()
         self._recorded.clear()
-        self._spare.clear()
+        self._used.clear()
         self._tables.clear()
         self._each.clear()
 

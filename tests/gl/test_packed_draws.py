@@ -200,3 +200,23 @@ def test_a_still_frame_is_replayed_into_the_same_target_from_the_same_state(
     other = Framebuffer(registry, *SIZE)
     scene_renderer.render(scene, other)
     assert len(worked) == count + 2 and np.array_equal(other.read(), images[0])
+
+
+def test_what_a_renderer_holds_in_gl_does_not_grow_with_the_views_it_has_drawn(
+        scene_renderer, registry):
+    """A resized window or a moving camera makes a new view every frame: the buffers of
+    views no longer drawn are freed, so the live GL objects after forty such frames are
+    those after the first of them."""
+    from mirrorlab.gl.resources import Framebuffer
+
+    scene = lab_reflected()
+    counts = []
+    for step in range(40):
+        size = (64 + 7 * step, 48 + 5 * step) if step % 2 else SIZE
+        moved = replace(scene, camera=replace(scene.camera, eye=(
+            scene.camera.eye[0] + 0.01 * step, *scene.camera.eye[1:])))
+        target = Framebuffer(registry, *size)
+        scene_renderer.render(moved, target)
+        target.release()
+        counts.append(len(registry))
+    assert counts[1:] == [counts[0]] * 39, counts
