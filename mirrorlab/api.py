@@ -11,7 +11,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from mirrorlab.frame import Frame
-from mirrorlab.options import apply_options, check_size, split_frame_technique
+from mirrorlab.options import (
+    DRAW_PATHS,
+    DrawPath,
+    apply_options,
+    check_size,
+    split_frame_technique,
+)
 from mirrorlab.plan import TINY_PIXELS
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import Scene
@@ -41,12 +47,19 @@ class Renderer:
     ``size`` (width, height) is the default frame size in pixels. Everything is freed on
     leaving the ``with`` block (or by :meth:`close`). ``debug`` makes a debug context
     whose KHR_debug messages are checked after every pass (a GL error is raised, naming
-    the pass, either way).
+    the pass, either way). ``draw_path`` is how objects are drawn: ``"auto"`` (one
+    multi-draw a pass where the context offers it, else a draw call a part, as on macOS's
+    OpenGL 4.1), ``"packed"`` or ``"per-draw"``; the frames are the same.
     """
 
-    def __init__(self, size: Sequence[int] | str = (512, 512), debug: bool = False) -> None:
+    def __init__(self, size: Sequence[int] | str = (512, 512), debug: bool = False, *,
+                 draw_path: DrawPath = "auto") -> None:
         self.size = check_size(size)
         self.debug = debug
+        if draw_path not in DRAW_PATHS:
+            raise ValueError(f"draw_path: expected one of {', '.join(DRAW_PATHS)}, got "
+                             f"{draw_path!r}")
+        self.draw_path = draw_path
         self._context: HeadlessContext | None = None
         self._renderer: SceneRenderer | None = None
         self._target: Framebuffer | None = None
@@ -69,7 +82,7 @@ class Renderer:
         try:
             from mirrorlab.renderer import SceneRenderer
 
-            self._renderer = SceneRenderer(self._context.resources)
+            self._renderer = SceneRenderer(self._context.resources, self.draw_path)
         except BaseException:
             self.close()
             raise

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 from collections import OrderedDict
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 
@@ -36,16 +35,13 @@ from mirrorlab.bounds import ObjectArrays, SceneIndex, scene_index
 from mirrorlab.gl.context import has_multi_draw
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Buffer, Program
+from mirrorlab.options import DRAW_PATHS, DrawPath
 from mirrorlab.passes.base import SharedResources, light_uniforms, set_view_uniforms
 from mirrorlab.plan import Rectangle
 from mirrorlab.scene.mesh import TextureSource
 from mirrorlab.scene.model import CurvedReflector, PlanarReflector, Scene
 from mirrorlab.views import View
 
-DrawPath = Literal["auto", "packed", "per-draw"]
-DRAW_PATHS: tuple[DrawPath, ...] = ("auto", "packed", "per-draw")
-"""How a drawer draws a view's parts: ``auto`` picks ``packed`` where the context offers
-it, else ``per-draw``."""
 FEW_PARTS = 32
 """Up to this many parts in view, none is culled for covering no pixel centre: testing
 costs more than the draws it could save (culling never changes a pixel either way)."""
