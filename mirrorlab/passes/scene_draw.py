@@ -47,6 +47,12 @@ FEW_PARTS = 32
 costs more than the draws it could save (culling never changes a pixel either way)."""
 RECORDED_VIEWS = 64
 """Views whose visible parts the per-draw path keeps (most recently used; numpy only)."""
+HEAVY_INDICES = 6144
+"""A part of this many indices (2,048 triangles) or more is drawn by a call of its own,
+its matrices as uniforms (scene.vert), on the packed path too: llvmpipe reads a part's
+matrices from the storage buffer at every vertex, which cost such a part more than the
+call (102,400 triangles in seven parts drew in 16.4 ms packed against 13.4 ms a call a
+part, 256x256)."""
 
 
 def surface_matrix(normal: np.ndarray, color, textured: bool) -> np.ndarray:
@@ -78,16 +84,24 @@ class PartTable:
     """``(n,)``: which mesh each part draws (equal ids, equal ranges)."""
 
 
+Run = tuple[TextureSource | None, int, int]
+"""Consecutive commands that share a texture: (texture or None, first command, count)."""
+
+
 @dataclass(eq=False)
 class RecordedView:
     """One view's packed draw, recorded: the visible parts' matrices (``parts``) and
-    indirect commands (``commands``) in GL buffers, and the ``runs`` of parts that share a
-    texture, each (texture or None, first part, count)."""
+    indirect commands (``commands``) in GL buffers, and its ``steps`` in order: a
+    :data:`Run` of commands, or an ``int``: a heavy part (:data:`HEAVY_INDICES`) drawn by
+    a call of its own, its place among the visible parts (``visible``, and ``models``
+    ``(k, 4, 4)`` float32, each relative to the view's origin)."""
 
     parts: Buffer
     commands: Buffer
-    runs: tuple[tuple[TextureSource | None, int, int], ...]
+    steps: tuple[Run | int, ...]
     drawn: int
+    visible: np.ndarray | None = None
+    models: np.ndarray | None = None
 
 
 def _few_indirect_commands(table: PartTable, visible: np.ndarray
@@ -278,20 +292,35 @@ class SceneDrawer:
                      scissor: Rectangle | None, cull: bool) -> int:
         recorded = self._record(index, view, table, scissor, cull)
         self.parts_drawn += recorded.drawn
-        if not recorded.runs:
+        if not recorded.steps:
             return 0
         assert self.packed_program is not None
-        self.begin(scene, view, self.packed_program)
         packed = self.shared.packed
         packed.bind()
         GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, recorded.commands.name)
         GL.glBindBufferBase(GL.GL_SHADER_STORAGE_BUFFER, 0, recorded.parts.name)
-        for texture, first, count in recorded.runs:
+        program = None
+        for step in recorded.steps:
+            if isinstance(step, int):  # a heavy part, drawn as the per-draw path does
+                assert recorded.visible is not None and recorded.models is not None
+                if program is not self.program:
+                    program = self.begin(scene, view)
+                part = int(recorded.visible[step])
+                program.set_mat4("model", recorded.models[step])
+                program.set_mat4("part", table.surfaces[part])
+                texture = table.textures[part]
+                if texture is not None:
+                    self.shared.texture(texture).bind(0)
+                packed.draw(*table.ranges[part])
+                continue
+            if program is not self.packed_program:
+                program = self.begin(scene, view, self.packed_program)
+            texture, first, count = step
             if texture is not None:
                 self.shared.texture(texture).bind(0)
             packed.multi_draw(first, count)
         GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
-        return len(recorded.runs)
+        return len(recorded.steps)
 
     def _record(self, index: SceneIndex, view: View, table: PartTable,
                 scissor: Rectangle | None, cull: bool) -> RecordedView:
@@ -303,16 +332,38 @@ class SceneDrawer:
             return recorded
         visible = (self.visible(index, view, scissor) if cull
                    else np.arange(len(index.parts)))
+        models = self.relative_models(index, visible, view)
         data = np.empty((len(visible), 2, 4, 4), dtype=np.float32)
-        data[:, 0] = self.relative_models(index, visible, view).transpose(0, 2, 1)
+        data[:, 0] = models.transpose(0, 2, 1)
         data[:, 1] = table.surfaces[visible].transpose(0, 2, 1)  # GLSL's are by column
-        commands, runs = indirect_commands(table, visible)
+        heavy = table.ranges[visible, 1] >= HEAVY_INDICES
+        steps: list[Run | int] = []
+        if heavy.any():
+            blocks: list[np.ndarray] = []
+            edges = np.flatnonzero(heavy[1:] != heavy[:-1]) + 1
+            for a, b in zip([0, *edges.tolist()], [*edges.tolist(), len(visible)],
+                            strict=True):
+                if heavy[a]:
+                    steps += range(a, b)
+                    continue
+                block, runs = indirect_commands(table, visible[a:b])
+                block[:, 4] += a  # the parts' data of the whole view
+                done = sum(len(c) for c in blocks)
+                steps += [(texture, done + first, count) for texture, first, count in runs]
+                blocks.append(block)
+            commands = (np.concatenate(blocks) if blocks
+                        else np.zeros((0, 5), dtype=np.uint32))
+        else:
+            commands, runs = indirect_commands(table, visible)
+            steps += runs
         registry = self.shared.registry
-        recorded = RecordedView(Buffer(registry), Buffer(registry), (), 0)
+        recorded = RecordedView(Buffer(registry), Buffer(registry), tuple(steps),
+                                len(visible))
+        if heavy.any():
+            recorded.visible, recorded.models = visible, models
         recorded.parts.upload(GL.GL_SHADER_STORAGE_BUFFER, data)
         recorded.commands.upload(GL.GL_DRAW_INDIRECT_BUFFER, commands)
         GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
-        recorded.runs, recorded.drawn = runs, len(visible)
         self._recorded[key] = recorded
         return recorded
 
