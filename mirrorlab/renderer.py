@@ -216,11 +216,9 @@ class SceneRenderer:
         self._recorded = None
         still = key is not None and self._last_plan is not None and self._last_plan[0] == (
             scene, size, use_plan, tiny_pixels, key[5])
-        recorder = CallRecorder() if still else None
-        with recorder or nullcontext():
-            stats = self._render(scene, target, size, use_plan, tiny_pixels, view, found,
-                                 start)
-        if recorder is not None and [p.name for p in stats.plan.ran] == ["camera"]:
+        stats, recorder = self._render(scene, target, size, use_plan, tiny_pixels, view,
+                                       found, start, record=still)
+        if recorder is not None:
             # nothing but the camera pass ran: the next frame like it replays this one
             assert key is not None
             self._recorded = RecordedFrame(key, found, recorder.calls, stats)
@@ -228,11 +226,25 @@ class SceneRenderer:
 
     def _render(self, scene: Scene, target: RenderTarget, size: tuple[int, int],
                 use_plan: bool, tiny_pixels: float, view: View | None,
-                found: dict[str, object], start: float) -> FrameStats:
+                found: dict[str, object], start: float, record: bool = False
+                ) -> tuple[FrameStats, CallRecorder | None]:
+        """Run the frame's plan; with ``record``, a frame that runs the camera pass alone
+        has its GL calls recorded (returned with its stats; None otherwise)."""
         self._scissor = None
-        GL.glDisable(GL.GL_SCISSOR_TEST)
+        GL.glDisable(GL.GL_SCISSOR_TEST)  # a pass made for a new scene draws unscissored
         self._use_scene(scene)
         plan = self._plan(scene, size, use_plan, tiny_pixels, view)
+        # Recording costs a patch of every GL entry point: only a frame that could be
+        # replayed pays it.
+        recorder = (CallRecorder() if record and [p.name for p in plan.ran] == ["camera"]
+                    else None)
+        with recorder or nullcontext():
+            stats = self._run(scene, plan, target, found, start, use_plan)
+        return stats, recorder
+
+    def _run(self, scene: Scene, plan: FramePlan, target: RenderTarget,
+             found: dict[str, object], start: float, use_plan: bool) -> FrameStats:
+        GL.glDisable(GL.GL_SCISSOR_TEST)  # the replay starts from the caller's state
         self._cull = use_plan
         self.drawer.parts_drawn = 0
         draws = 0
