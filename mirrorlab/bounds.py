@@ -408,16 +408,23 @@ def reach(scene: Scene, eye: np.ndarray) -> float:
     return max(distance * (1.0 + REACH_MARGIN), 1e-9)
 
 
-def nearest(scene: Scene, point: np.ndarray, leave_out: str) -> float:
-    """The distance from ``point`` ``(3,)`` to the nearest box of the scene's object parts
-    and reflectors but ``leave_out`` (inf when there is none)."""
-    point = np.asarray(point, dtype=np.float64)
+def boxes_but(scene: Scene, leave_out: str) -> tuple[np.ndarray, np.ndarray]:
+    """The low and high corners ``(n, 3)`` of the boxes of the scene's object parts and
+    reflectors, leaving out the reflector named ``leave_out`` (none when empty)."""
     index = scene_index(scene)
     low, high = index.boxes()
     if leave_out and leave_out in index.names:
         keep = np.ones(len(low), dtype=bool)
         keep[len(index.parts) + index.names[leave_out]] = False
         low, high = low[keep], high[keep]
+    return low, high
+
+
+def nearest(scene: Scene, point: np.ndarray, leave_out: str) -> float:
+    """The distance from ``point`` ``(3,)`` to the nearest box of the scene's object parts
+    and reflectors but ``leave_out`` (inf when there is none)."""
+    point = np.asarray(point, dtype=np.float64)
+    low, high = boxes_but(scene, leave_out)
     if not len(low):
         return float(np.inf)
     gaps = np.maximum(np.maximum(low - point, point - high), 0.0)
@@ -460,12 +467,7 @@ def encloses(scene: Scene, point: np.ndarray, leave_out: str = "") -> bool:
     one (a room's walls do; objects under an open sky do not). A live cube map's
     distance search reads it: enclosed, a ray the search finds no surface for meets one
     it cannot see; open, it may leave for the background."""
-    index = scene_index(scene)
-    low, high = index.boxes()
-    if leave_out and leave_out in index.names:
-        keep = np.ones(len(low), dtype=bool)
-        keep[len(index.parts) + index.names[leave_out]] = False
-        low, high = low[keep], high[keep]
+    low, high = boxes_but(scene, leave_out)
     if not len(low):
         return False
     directions = _fibonacci_directions(ENCLOSURE_RAYS)  # (n, 3)
