@@ -70,6 +70,47 @@ def test_a_clone_and_its_venv_two_folders_deep_check_a_lab(tmp_path):
                             "import mirrorlab.labs.trusted.sandbox as s; print(s.__file__)"],
                            cwd=tmp_path, capture_output=True, text=True, check=True)
     assert found.stdout.strip().startswith(str(clone))
+    # what the sandbox built from this clone shows: nothing of the clone's path (its
+    # site-packages and package folder, hidden, lie in the sandbox's own fresh /tmp)
+    probe = subprocess.run([str(venv / "bin" / "python"), "-c", LIST_SANDBOX, str(tmp_path)],
+                           cwd=tmp_path, capture_output=True, text=True)
+    assert probe.returncode == 0, probe.stderr
+    assert str(clone) not in probe.stdout and "/x/y" not in probe.stdout, probe.stdout
+
+
+LIST_SANDBOX = r"""
+import shutil, sys
+from pathlib import Path
+from mirrorlab.labs.trusted.sandbox import Limits, Sandboxed, interpreter, new_box
+box = new_box(Path(sys.argv[1]) / "boxes")
+walk = ("import os\nfor r, d, f in os.walk('/'):\n"
+        "    d[:] = [x for x in d if os.path.join(r, x) not in ('/proc', '/dev', '/usr')]\n"
+        "    print(*[os.path.join(r, n) for n in d + f], sep='\\n')\n")
+run = Sandboxed([str(interpreter()), "-I", "-S", "-c", walk], box,
+                Limits(cpu_seconds=20, seconds=60))
+code = run.wait()[0]
+print((box / "stdout.txt").read_text())
+shutil.rmtree(box)
+sys.exit(code)
+"""
+
+
+def test_a_folder_hidden_from_the_sandbox_is_made_only_where_the_host_shows_through(
+        tmp_path):
+    """Hiding a folder mounts an empty one over it where a folder bound from the host would
+    show it; within the sandbox's own fresh /tmp it shows nothing already, and a folder
+    made there would give away the host's path."""
+    assert str(tmp_path).startswith("/tmp/")
+    site = tmp_path / "deep" / "site-packages"
+    site.mkdir(parents=True)
+    root = sandbox._Root()
+    root.bound.append(Path("/tmp"))
+    root.fresh.append(Path("/tmp"))
+    root.hide(site)
+    assert root.arguments == []
+    root.bind(tmp_path / "deep")  # as an interpreter installed under the temporary folder
+    root.hide(site)
+    assert root.arguments[-2:] == ["--tmpfs", str(site)]
 
 
 def test_a_sandbox_that_cannot_start_is_one_line_and_exit_2(tmp_path):

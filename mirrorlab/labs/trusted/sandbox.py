@@ -122,9 +122,13 @@ class _Root:
         self.arguments: list[str] = []
         self.made: set[Path] = {Path("/")}
         self.bound: list[Path] = []
+        self.fresh: list[Path] = []  # empty file systems of the sandbox's own (its /tmp)
 
     def reachable(self, path: Path) -> bool:
-        return path in self.made or any(_within(path, b) for b in self.bound)
+        """Whether ``path`` shows the host's folder in the sandbox (a fresh file system
+        shows none: what lies below its top must be made or bound)."""
+        return path in self.made or any(_within(path, b) for b in self.bound
+                                        if b not in self.fresh)
 
     def parents(self, destination: Path) -> None:
         """Every folder above ``destination`` made anew, mode 0755 (bwrap would make them
@@ -144,8 +148,11 @@ class _Root:
             self.bound.append(destination)
 
     def hide(self, folder: Path) -> None:
-        """An empty folder in place of ``folder`` where the sandbox would see it."""
-        if folder.is_dir() and any(_within(folder, b) for b in self.bound):
+        """An empty folder in place of ``folder`` where the sandbox would see it: within
+        a folder bound from the host (a fresh file system such as its /tmp shows none of
+        the host's, and a folder made there would only give away the host's path)."""
+        if folder.is_dir() and any(_within(folder, b) for b in self.bound
+                                   if b not in self.fresh):
             self.arguments += ["--tmpfs", str(folder)]
 
 
@@ -194,6 +201,7 @@ def bwrap_arguments(box: Path) -> list[str]:
                        "--tmpfs", "/tmp"]
     root.made.update(Path(p) for p in ("/etc", "/etc/ld.so.cache", "/proc", "/dev", "/tmp"))
     root.bound += [Path("/tmp")]
+    root.fresh += [Path("/tmp")]
     base = Path(sys.base_prefix).resolve()
     root.bind(base)
     executable = interpreter()
