@@ -99,9 +99,8 @@ class RecordedView:
     parts: Buffer
     commands: Buffer
     steps: tuple[Run | int, ...]
-    drawn: int
-    visible: np.ndarray | None = None
-    models: np.ndarray | None = None
+    visible: np.ndarray
+    models: np.ndarray
 
 
 def _few_indirect_commands(table: PartTable, visible: np.ndarray
@@ -291,7 +290,7 @@ class SceneDrawer:
     def _draw_packed(self, scene: Scene, view: View, index: SceneIndex, table: PartTable,
                      scissor: Rectangle | None, cull: bool) -> int:
         recorded = self._record(index, view, table, scissor, cull)
-        self.parts_drawn += recorded.drawn
+        self.parts_drawn += len(recorded.visible)
         if not recorded.steps:
             return 0
         assert self.packed_program is not None
@@ -302,7 +301,6 @@ class SceneDrawer:
         program = None
         for step in recorded.steps:
             if isinstance(step, int):  # a heavy part, drawn as the per-draw path does
-                assert recorded.visible is not None and recorded.models is not None
                 if program is not self.program:
                     program = self.begin(scene, view)
                 part = int(recorded.visible[step])
@@ -337,30 +335,25 @@ class SceneDrawer:
         data[:, 0] = models.transpose(0, 2, 1)
         data[:, 1] = table.surfaces[visible].transpose(0, 2, 1)  # GLSL's are by column
         heavy = table.ranges[visible, 1] >= HEAVY_INDICES
+        edges = (np.flatnonzero(heavy[1:] != heavy[:-1]) + 1).tolist()
         steps: list[Run | int] = []
-        if heavy.any():
-            blocks: list[np.ndarray] = []
-            edges = np.flatnonzero(heavy[1:] != heavy[:-1]) + 1
-            for a, b in zip([0, *edges.tolist()], [*edges.tolist(), len(visible)],
-                            strict=True):
-                if heavy[a]:
-                    steps += range(a, b)
-                    continue
-                block, runs = indirect_commands(table, visible[a:b])
-                block[:, 4] += a  # the parts' data of the whole view
-                done = sum(len(c) for c in blocks)
-                steps += [(texture, done + first, count) for texture, first, count in runs]
-                blocks.append(block)
-            commands = (np.concatenate(blocks) if blocks
-                        else np.zeros((0, 5), dtype=np.uint32))
-        else:
-            commands, runs = indirect_commands(table, visible)
-            steps += runs
+        blocks = [np.zeros((0, 5), dtype=np.uint32)]
+        done = 0  # commands so far
+        for a, b in zip([0, *edges], [*edges, len(visible)], strict=True):
+            if a == b:  # nothing visible
+                continue
+            if heavy[a]:
+                steps += range(a, b)
+                continue
+            block, runs = indirect_commands(table, visible[a:b])
+            block[:, 4] += a  # the parts' data of the whole view
+            steps += [(texture, done + first, count) for texture, first, count in runs]
+            blocks.append(block)
+            done += len(block)
         registry = self.shared.registry
-        recorded = RecordedView(Buffer(registry), Buffer(registry), tuple(steps),
-                                len(visible))
-        if heavy.any():
-            recorded.visible, recorded.models = visible, models
+        recorded = RecordedView(Buffer(registry), Buffer(registry), tuple(steps), visible,
+                                models)
+        commands = np.concatenate(blocks)
         recorded.parts.upload(GL.GL_SHADER_STORAGE_BUFFER, data)
         recorded.commands.upload(GL.GL_DRAW_INDIRECT_BUFFER, commands)
         GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
