@@ -79,11 +79,18 @@ class Transform:
     scale: Vec3 = (1.0, 1.0, 1.0)
 
     def matrix(self) -> np.ndarray:
-        """Object frame to world, ``(4, 4)``."""
+        """Object frame to world, ``(4, 4)``, read-only (worked out once: a moving part's
+        frames keep the transforms of the parts that stay)."""
+        return self._matrix
+
+    @cached_property
+    def _matrix(self) -> np.ndarray:
         rx, ry, rz = self.rotation
         turn = (math3d.rotate(rz, (0, 0, 1)) @ math3d.rotate(ry, (0, 1, 0))
                 @ math3d.rotate(rx, (1, 0, 0)))
-        return math3d.translate(self.position) @ turn @ math3d.scale(self.scale)
+        matrix = math3d.translate(self.position) @ turn @ math3d.scale(self.scale)
+        matrix.flags.writeable = False
+        return matrix
 
 
 @dataclass(frozen=True)

@@ -94,11 +94,52 @@ def object_parts(item: SceneObject) -> tuple[Part, ...]:
     """The drawable parts of one object (remembered: objects are values)."""
     if isinstance(item, MeshObject):
         return (Part(item.name, item.mesh, item.transform.matrix(), *mesh_look(item)),)
-    graph = robot_graph(item)
-    return tuple(
-        Part(f"{item.name}.{node.name}", model_file(node.mesh), node.world_matrix(),
-             node.color, texture_file(node.texture) if node.texture else None)
-        for node in graph.nodes() if node.mesh)
+    return robot_parts(item)
+
+
+@lru_cache(maxsize=1)
+def _robot_nodes() -> tuple[tuple[Node, int, int], ...]:
+    """The robot's nodes, parents first (the order of :meth:`SceneGraph.nodes`), each with
+    its parent's position (-1: the root) and its joint's in an ``angles`` triple (-1:
+    none). Only read: the nodes' offsets, axes and looks."""
+    nodes = tuple(build_robot().walk())
+    return tuple((node, nodes.index(node.parent) if node.parent is not None else -1,
+                  JOINT_NAMES.index(node.name) if node.name in JOINT_NAMES else -1)
+                 for node in nodes)
+
+
+@lru_cache(maxsize=64)
+def _joint_rotation(angle: float, axis: tuple[float, float, float]) -> np.ndarray:
+    """:func:`mirrorlab.math3d.rotate`, read-only, kept for the joints that stay as they
+    were while another turns."""
+    rotation = math3d.rotate(angle, axis)
+    rotation.flags.writeable = False
+    return rotation
+
+
+def robot_parts(robot: RobotObject) -> tuple[Part, ...]:
+    """The robot's drawable parts posed at its angles: the parts of :func:`robot_graph`
+    with the same matrices to the last bit (the same products in the same order), without
+    building a graph for every pose."""
+    worlds: list[np.ndarray] = []
+    parts = []
+    for node, parent, joint in _robot_nodes():
+        offset = robot.transform.matrix() if parent < 0 else node.offset
+        if node.joint_axis is None:
+            local = offset
+        else:
+            angle = float(robot.angles[joint])
+            if not np.isfinite(angle):
+                raise ValueError(f"joint angle for {node.name!r} must be finite, got "
+                                 f"{robot.angles[joint]!r}")
+            local = offset @ _joint_rotation(angle, node.joint_axis)
+        world = local if parent < 0 else worlds[parent] @ local
+        worlds.append(world)
+        if node.mesh:
+            parts.append(Part(f"{robot.name}.{node.name}", model_file(node.mesh), world,
+                              node.color, texture_file(node.texture) if node.texture
+                              else None))
+    return tuple(parts)
 
 
 def scene_parts(scene: Scene) -> tuple[Part, ...]:

@@ -26,6 +26,7 @@ from mirrorlab.scene.robot import (
     JOINT_NAMES,
     hand_center,
     robot_graph,
+    robot_parts,
     scene_parts,
 )
 from tests.imagecheck import mirror_image_point
@@ -127,6 +128,32 @@ def test_the_lab_scene_draws_the_robots_parts_and_the_frame():
     assert base.texture is not None and base.texture.name == "metal.png"
     (hand,) = [p for p in parts if p.name == "robot.hand"]
     assert np.allclose(hand.model[:3, 3], hand_center(lab.robot))
+
+
+angle = st.floats(-720.0, 720.0, allow_nan=False)
+
+
+@given(st.tuples(angle, angle, angle), st.tuples(*[st.floats(-1e4, 1e4)] * 3),
+       st.tuples(angle, angle, angle), st.tuples(*[st.floats(0.01, 100.0)] * 3))
+def test_the_robots_parts_are_its_graphs_to_the_last_bit(angles, position, rotation, scale):
+    """The parts drawn for a pose (worked out without building a graph) are those of the
+    robot's scene graph: names, meshes, looks, and every matrix bit for bit."""
+    robot = RobotObject(angles=angles,
+                        transform=Transform(position=position, rotation=rotation, scale=scale))
+    graph = robot_graph(robot)
+    nodes = [node for node in graph.nodes() if node.mesh]
+    parts = robot_parts(robot)
+    assert [part.name for part in parts] == [f"robot.{node.name}" for node in nodes]
+    for part, node in zip(parts, nodes, strict=True):
+        assert part.model.tobytes() == node.world_matrix().tobytes()
+        assert part.color == node.color
+        assert part.mesh.name == f"{node.mesh}.obj"
+        assert (part.texture is None) == (node.texture is None)
+
+
+def test_a_robot_with_a_joint_angle_that_is_not_finite_is_refused():
+    with pytest.raises(ValueError, match="finite"):
+        robot_parts(RobotObject(angles=(0.0, float("nan"), 0.0)))
 
 
 # --------------------------------------------------------------------------- the mirror
