@@ -126,6 +126,14 @@ def perspective(fovy_deg: float, aspect: float, near: float, far: float) -> np.n
     return m
 
 
+def _row_is(row: np.ndarray, values: tuple[float, ...], atol: float,
+            rtol: float = 0.0) -> bool:
+    """``np.allclose(row, values, rtol, atol)`` for a short row, written out (numpy's costs
+    more than the rest of a plan's capture view; NaN is never close)."""
+    return all(abs(float(a) - b) <= atol + rtol * abs(b)
+               for a, b in zip(row, values, strict=True))
+
+
 def with_depth_range(projection: np.ndarray, near: float, far: float) -> np.ndarray:
     """``projection`` ``(4, 4)`` with its depth row set for clip distances ``near`` and
     ``far``: the x, y and w rows are kept (a flip, an off-centre frustum), the z row is
@@ -133,13 +141,13 @@ def with_depth_range(projection: np.ndarray, near: float, far: float) -> np.ndar
     (w row (0, 0, -1, 0)) or an orthographic (w row (0, 0, 0, 1)) projection; ValueError
     otherwise."""
     matrix = np.array(projection, dtype=np.float64)
-    perspective = np.allclose(matrix[3], (0.0, 0.0, -1.0, 0.0), rtol=0.0, atol=1e-12)
+    perspective = _row_is(matrix[3], (0.0, 0.0, -1.0, 0.0), 1e-12)
     if not (0.0 < near < far if perspective else near < far):
         raise ValueError(f"depth range needs {'0 < ' if perspective else ''}near < far, got "
                          f"near={near}, far={far}")
     if perspective:
         matrix[2] = (0.0, 0.0, (far + near) / (near - far), 2.0 * far * near / (near - far))
-    elif np.allclose(matrix[3], (0.0, 0.0, 0.0, 1.0), rtol=0.0, atol=1e-12):
+    elif _row_is(matrix[3], (0.0, 0.0, 0.0, 1.0), 1e-12):
         matrix[2] = (0.0, 0.0, -2.0 / (far - near), -(far + near) / (far - near))
     else:
         raise ValueError(f"not a perspective or orthographic projection: w row {matrix[3]}")
@@ -209,7 +217,7 @@ def oblique_projection(projection: np.ndarray, plane_in_eye_space: np.ndarray) -
     """
     clip_plane = np.asarray(plane_in_eye_space, dtype=np.float64)
     matrix = np.array(projection, dtype=np.float64)
-    perspective = not np.allclose(matrix[3], (0.0, 0.0, 0.0, 1.0))
+    perspective = not _row_is(matrix[3], (0.0, 0.0, 0.0, 1.0), 1e-8, 1e-5)
     if perspective and not clip_plane[3] < 0.0:
         raise ValueError(
             f"oblique near plane must have the eye strictly behind it (d < 0), got {clip_plane}")

@@ -26,7 +26,7 @@ is the same, pixel for pixel.
 from __future__ import annotations
 
 from collections import OrderedDict
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -45,6 +45,9 @@ from mirrorlab.views import View
 FEW_PARTS = 32
 """Up to this many parts in view, none is culled for covering no pixel centre: testing
 costs more than the draws it could save (culling never changes a pixel either way)."""
+SPARE_BUFFERS = 4
+"""Pairs of buffers of freed recorded views kept for the next ones (a frame records
+one view a pass)."""
 RECORDED_VIEWS = 64
 """Views whose visible parts the per-draw path keeps (most recently used; numpy only)."""
 HEAVY_INDICES = 6144
@@ -171,10 +174,15 @@ class SceneDrawer:
             self.packed_program.use()
             self.packed_program.set_int("texture_map", 0)
         self._tables: OrderedDict[ObjectArrays, PartTable] = OrderedDict()
+        self._looks: OrderedDict[tuple, PartTable] = OrderedDict()
         # the packed path's recorded views: those drawn in the frame being drawn or the
         # last one (a still frame draws them again; any other is freed by end_frame)
         self._recorded: dict[tuple, RecordedView] = {}
         self._used: set[tuple] = set()
+        self._spare: list[tuple[Buffer, Buffer]] = []
+        """Buffers of freed recorded views, filled again by the next views recorded (a
+        moving viewer records a view or two every frame: no GL buffer is made or deleted
+        for them)."""
         self._each: OrderedDict[tuple, tuple[np.ndarray, np.ndarray]] = OrderedDict()
         """The per-draw path's record of a view: the visible parts and their models."""
         self.parts_drawn = 0
@@ -183,33 +191,51 @@ class SceneDrawer:
     # ------------------------------------------------------------- parts
 
     def _table(self, index: SceneIndex) -> PartTable:
-        """The :class:`PartTable` of ``index``'s objects (kept for the last few)."""
+        """The :class:`PartTable` of ``index``'s objects (kept for the last few). Only the
+        normal matrices depend on where the parts are: the rest is kept by the parts'
+        meshes, colours and textures, so a new pose of the same parts works out those
+        alone."""
         table = self._tables.get(index.objects_part)
         if table is not None:
             self._tables.move_to_end(index.objects_part)
             return table
         parts = index.parts
-        count = len(parts)
-        surfaces = np.zeros((count, 4, 4), dtype=np.float32)
-        if count:
+        looks = tuple((part.mesh, part.color, part.texture) for part in parts)
+        held = self._looks.get(looks)
+        if held is None:
+            held = self._looks[looks] = self._look_table(looks)
+            while len(self._looks) > 4:
+                self._looks.popitem(last=False)
+        else:
+            self._looks.move_to_end(looks)
+        surfaces = held.surfaces.copy()
+        if len(parts):
             surfaces[:, :3, :3] = np.linalg.inv(index.models[:, :3, :3]).transpose(0, 2, 1)
-            surfaces[:, :3, 3] = [part.color for part in parts]
-            surfaces[:, 3, 3] = [part.texture is not None for part in parts]
-        textures = tuple(part.texture for part in parts)
-        worn = tuple(dict.fromkeys(t for t in textures if t is not None))
-        unique = {t: i for i, t in enumerate(worn)}
-        ranges = np.array([self.shared.mesh_range(part.mesh) for part in parts],
-                          dtype=np.int64).reshape(-1, 3)
-        meshes = {mesh: i for i, mesh in enumerate(dict.fromkeys(p.mesh for p in parts))}
-        table = PartTable(surfaces, textures,
-                          np.array([unique.get(t, -1) if t is not None else -1
-                                    for t in textures], dtype=np.int64),
-                          worn, ranges,
-                          np.array([meshes[part.mesh] for part in parts], dtype=np.int64))
+        table = replace(held, surfaces=surfaces)
         self._tables[index.objects_part] = table
         while len(self._tables) > 4:
             self._tables.popitem(last=False)
         return table
+
+    def _look_table(self, looks: tuple) -> PartTable:
+        """A :class:`PartTable` of parts of ``looks`` (mesh, colour, texture) each, its
+        normal matrices not filled in."""
+        count = len(looks)
+        surfaces = np.zeros((count, 4, 4), dtype=np.float32)
+        if count:
+            surfaces[:, :3, 3] = [color for _, color, _ in looks]
+            surfaces[:, 3, 3] = [texture is not None for _, _, texture in looks]
+        textures = tuple(texture for _, _, texture in looks)
+        worn = tuple(dict.fromkeys(t for t in textures if t is not None))
+        unique = {t: i for i, t in enumerate(worn)}
+        ranges = np.array([self.shared.mesh_range(mesh) for mesh, _, _ in looks],
+                          dtype=np.int64).reshape(-1, 3)
+        meshes = {mesh: i for i, mesh in enumerate(dict.fromkeys(m for m, _, _ in looks))}
+        return PartTable(surfaces, textures,
+                         np.array([unique.get(t, -1) if t is not None else -1
+                                   for t in textures], dtype=np.int64),
+                         worn, ranges,
+                         np.array([meshes[mesh] for mesh, _, _ in looks], dtype=np.int64))
 
     @staticmethod
     def visible(index: SceneIndex, view: View,
@@ -350,9 +376,10 @@ class SceneDrawer:
             steps += [(texture, done + first, count) for texture, first, count in runs]
             blocks.append(block)
             done += len(block)
-        registry = self.shared.registry
-        recorded = RecordedView(Buffer(registry), Buffer(registry), tuple(steps), visible,
-                                models)
+        parts, commands_buffer = (self._spare.pop() if self._spare
+                                  else (Buffer(self.shared.registry),
+                                        Buffer(self.shared.registry)))
+        recorded = RecordedView(parts, commands_buffer, tuple(steps), visible, models)
         commands = np.concatenate(blocks)
         recorded.parts.upload(GL.GL_SHADER_STORAGE_BUFFER, data)
         recorded.commands.upload(GL.GL_DRAW_INDIRECT_BUFFER, commands)
@@ -361,13 +388,17 @@ class SceneDrawer:
         return recorded
 
     def end_frame(self) -> None:
-        """Free the recorded views the frame just drawn did not draw: what a frame holds
-        in GL is what it shows, however many views came before (a resized window, a moving
-        camera)."""
+        """Free the recorded views the frame just drawn did not draw, their buffers kept
+        (up to :data:`SPARE_BUFFERS` pairs) for the views recorded next: what a frame
+        holds in GL is what it shows and a few spares, however many views came before (a
+        resized window, a moving camera)."""
         for key in [k for k in self._recorded if k not in self._used]:
             recorded = self._recorded.pop(key)
-            recorded.parts.release()
-            recorded.commands.release()
+            if len(self._spare) < SPARE_BUFFERS:
+                self._spare.append((recorded.parts, recorded.commands))
+            else:
+                recorded.parts.release()
+                recorded.commands.release()
         self._used.clear()
 
     def draw_plain(self, scene: Scene, reflector: CurvedReflector | PlanarReflector,
@@ -394,9 +425,14 @@ class SceneDrawer:
         for recorded in self._recorded.values():
             recorded.parts.release()
             recorded.commands.release()
+        for buffers in self._spare:
+            for buffer in buffers:
+                buffer.release()
         self._recorded.clear()
+        self._spare.clear()
         self._used.clear()
         self._tables.clear()
+        self._looks.clear()
         self._each.clear()
 
 
