@@ -128,27 +128,76 @@ def build_parser() -> argparse.ArgumentParser:
     plan.add_argument("--tiny-pixels", metavar="N", help=TINY_HELP)
 
     bench = commands.add_parser("bench", help="measure error against the ray tracer, and time")
-    bench.add_argument("what", metavar="accuracy", help="the benchmark to run: accuracy")
-    bench.add_argument("--quick", action="store_true",
-                       help="a small sweep (128-pixel frames, maps 64 and 128, few viewpoints)")
-    bench.add_argument("--out-dir", default="out/bench",
-                       help="where accuracy.csv, accuracy.md and accuracy.png go "
-                       "(default %(default)s)")
-    bench.add_argument("--frame", metavar="N", help="frame side in pixels (default 512)")
-    bench.add_argument("--sizes", metavar="N,N,...",
-                       help="texture sides (default 64,128,256,512,1024,2048)")
-    bench.add_argument("--frames", metavar="N", help="timed frames per configuration "
-                       "(default 15)")
-    bench.add_argument("--from-csv", metavar="PATH",
-                       help="measure nothing: re-make the tables and plot from a saved "
-                       "accuracy.csv")
+    benchmarks = bench.add_subparsers(dest="what", required=True, metavar="BENCHMARK")
+    accuracy = benchmarks.add_parser(
+        "accuracy", help="every technique's error against the ray-traced truth, and its time")
+    accuracy.add_argument("--quick", action="store_true", help="a small sweep (128-pixel "
+                          "frames, maps 64 and 128, few viewpoints)")
+    accuracy.add_argument("--out-dir", default="out/bench",
+                          help="where accuracy.csv, accuracy.md and accuracy.png go "
+                          "(default %(default)s)")
+    accuracy.add_argument("--frame", metavar="N", help="frame side in pixels (default 512)")
+    accuracy.add_argument("--sizes", metavar="N,N,...",
+                          help="texture sides (default 64,128,256,512,1024,2048)")
+    accuracy.add_argument("--frames", metavar="N", help="timed frames per configuration "
+                          "(default 15)")
+    accuracy.add_argument("--from-csv", metavar="PATH",
+                          help="measure nothing: re-make the tables and plot from a saved "
+                          "accuracy.csv")
     _add_executor_arguments(
-        bench, jobs="ray trace the truths and score the frames in J processes; the timed "
+        accuracy, jobs="ray trace the truths and score the frames in J processes; the timed "
         "frames stay in this process, run while the others are idle",
         scheduler="trace and score on")
-    bench.add_argument("--scene", default="all",
-                       help="lab (the mirror techniques), sphere (the environment maps), all "
-                       "(default), or a scene file: every technique its reflectors can use")
+    accuracy.add_argument("--scene", default="all",
+                          help="lab (the mirror techniques), sphere (the environment maps), "
+                          "all (default), or a scene file: every technique its reflectors "
+                          "can use")
+    speed = benchmarks.add_parser(
+        "speed", help="frame times against pyrender and at scale (many objects and mirrors)",
+        description="Time mirrorlab's frames (two passes, ortho and reflected; the capture "
+        "reused; one pass) on the lab's meshes at several sizes and subdivisions, and frames "
+        "of scenes with many objects or mirrors, seen and unseen; with --pyrender, "
+        "pyrender's frames of the same meshes beside them. Every frame is read back; the "
+        "variants take turns in blocks. Writes speed.md, speed.csv, scale.csv and speed.png.")
+    speed.add_argument("--quick", action="store_true",
+                       help="3 frames a variant at 32x32 and 64x64, the lab meshes and their "
+                       "first subdivision, scale scenes of 3 and 12 items at 64x64, for the "
+                       "--parts and --scale-modes given (checks that the benchmark works, "
+                       "not its figures)")
+    speed.add_argument("--parts", metavar="sweep,scale", default="sweep,scale",
+                       help="sweep (sizes and triangles), scale (many objects and mirrors), "
+                       "or both (default %(default)s)")
+    speed.add_argument("--sizes", metavar="N,N,...", default="256,512,1024,2048",
+                       help="frame sides of the sweep (default %(default)s)")
+    speed.add_argument("--subdivisions", metavar="N,N,...", default="0,2,4,6",
+                       help="the lab's meshes subdivided this many times, x4 triangles each "
+                       "(default %(default)s: 400 to 1.6 million triangles)")
+    speed.add_argument("--scale-size", metavar="N", default="256",
+                       help="frame side of the scale scenes (default %(default)s)")
+    speed.add_argument("--scale-objects", metavar="N,N,...", default="10,100,1000",
+                       help="object counts of the scale scenes (default %(default)s)")
+    speed.add_argument("--scale-mirrors", metavar="N,N,...", default="10,100,400",
+                       help="mirror counts of the scale scenes (default %(default)s)")
+    speed.add_argument("--scale-modes", metavar="still,moving", default="still,moving",
+                       help="still (the same scene every frame), moving (the camera moves a "
+                       "hair every frame), or both (default %(default)s)")
+    speed.add_argument("--frames", metavar="N", default="30",
+                       help="timed frames a variant (default %(default)s)")
+    speed.add_argument("--warmup", metavar="N", default="5",
+                       help="frames a variant before timing (default %(default)s)")
+    speed.add_argument("--block", metavar="N", default="5",
+                       help="frames a variant runs before the next one's turn (default "
+                       "%(default)s)")
+    speed.add_argument("--out-dir", default="out/bench/speed",
+                       help="where the report goes (default %(default)s); the meshes are "
+                       "written to its meshes folder")
+    speed.add_argument("--pyrender", metavar="PYTHON",
+                       help="the Python of an environment with pyrender==0.1.45, numpy<2 "
+                       "and Pillow, to time pyrender beside mirrorlab (./dev bench speed "
+                       "makes one in a clone)")
+    speed.add_argument("--from-csv", metavar="PATH",
+                       help="time nothing: re-make the report from a saved speed.csv (and "
+                       "the scale.csv beside it)")
 
     from mirrorlab.app.controls import control_lines
 
@@ -375,7 +424,8 @@ def run_plan(args: argparse.Namespace) -> int:
 
 
 def run_bench(args: argparse.Namespace) -> int:
-    parse_choice("bench", args.what, ("accuracy",))
+    if args.what == "speed":
+        return run_speed(args)
     from mirrorlab.accuracy import SweepSettings, run_command
 
     changes: dict = {}
@@ -397,6 +447,49 @@ def run_bench(args: argparse.Namespace) -> int:
         scenes = load_scene(args.scene)
     return run_command(settings, scenes, out_dir, Path(args.from_csv) if args.from_csv
                        else None, jobs=jobs, scheduler=args.scheduler, engine=args.engine)
+
+
+def _counts(option: str, text: str, low: int, high: int) -> tuple[int, ...]:
+    """``'1,2,3'`` -> (1, 2, 3), each ``low`` to ``high``; OptionError naming ``option``."""
+    parts = [p.strip() for p in str(text).split(",") if p.strip()]
+    if not parts:
+        raise OptionError(option, f"expected comma-separated whole numbers, got {text!r}")
+    return tuple(parse_count(option, part, low, high) for part in parts)
+
+
+def _words(option: str, text: str, choices: tuple[str, ...]) -> tuple[str, ...]:
+    """``'a,b'`` -> ("a", "b"), each one of ``choices``; OptionError naming ``option``."""
+    words = tuple(dict.fromkeys(w.strip() for w in str(text).split(",") if w.strip()))
+    if not words:
+        raise OptionError(option, f"expected {' or '.join(choices)}, got {text!r}")
+    for word in words:
+        parse_choice(option, word, choices)
+    return words
+
+
+def run_speed(args: argparse.Namespace) -> int:
+    from mirrorlab.benchmarks.speed import SpeedSettings, run_command
+
+    out_dir = check_folder("--out-dir", args.out_dir)
+    pyrender = Path(args.pyrender) if args.pyrender else None
+    if pyrender is not None and not pyrender.is_file():
+        raise OptionError("--pyrender", f"{args.pyrender!r} is not a file (give the Python "
+                          "of an environment with pyrender)")
+    settings = SpeedSettings(
+        sizes=_counts("--sizes", args.sizes, 16, 4096),
+        levels=_counts("--subdivisions", args.subdivisions, 0, 7),
+        parts=frozenset(_words("--parts", args.parts, ("sweep", "scale"))),
+        scale_size=parse_count("--scale-size", args.scale_size, 16, 4096),
+        object_counts=_counts("--scale-objects", args.scale_objects, 1, 100_000),
+        mirror_counts=_counts("--scale-mirrors", args.scale_mirrors, 1, 10_000),
+        modes=_words("--scale-modes", args.scale_modes, ("still", "moving")),
+        frames=parse_count("--frames", args.frames, 1, 100_000),
+        warmup=parse_count("--warmup", args.warmup, 1, 100_000),
+        block=parse_count("--block", args.block, 1, 100_000))
+    if args.quick:
+        settings = SpeedSettings.quick(settings.parts, settings.modes)
+    return run_command(settings, out_dir, pyrender,
+                       Path(args.from_csv) if args.from_csv else None)
 
 
 def run_demo(args: argparse.Namespace) -> int:

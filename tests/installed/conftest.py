@@ -116,3 +116,16 @@ def empty_folder(installed: Installed, request: pytest.FixtureRequest) -> Path:
 def wheel_names(installed: Installed) -> list[str]:
     with zipfile.ZipFile(installed.wheel) as archive:
         return archive.namelist()
+
+
+@pytest.fixture(scope="session")
+def pyrender_python() -> Path:
+    """The Python of pyrender's environment (the clone's ``.venv-pyrender``, made once by
+    ``bench/speed.py``'s own function, as ``./dev bench speed`` makes it)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("bench_speed", REPO / "bench" / "speed.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.pyrender_python()

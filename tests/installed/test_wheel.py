@@ -104,6 +104,19 @@ def test_without_the_dask_extra_dask_options_say_what_to_install(installed: Inst
     assert not (empty_folder / "frames").exists()
 
 
+def test_the_speed_benchmark_with_pyrender_beside_it(installed: Installed,
+                                                     empty_folder: Path,
+                                                     pyrender_python: Path):
+    """The benchmark's pyrender worker ships in the wheel and runs in pyrender's own
+    environment; the scale scenes come from the package."""
+    out = ok(installed.run("mirrorlab", "bench", "speed", "--quick", "--parts", "scale",
+                           "--scale-modes", "still", "--pyrender", str(pyrender_python),
+                           "--out-dir", "speed", cwd=empty_folder))
+    assert "| 12 objects unseen |" in out and "pyrender flat / its base" in out
+    assert (empty_folder / "speed" / "scale.csv").is_file()
+    assert not (empty_folder / "speed" / "speed.csv").exists()  # no sweep asked for
+
+
 def test_plan_as_json(installed: Installed, empty_folder: Path):
     plans = json.loads(ok(installed.run("mirrorlab", "plan", "lab20", "--frames", "2",
                                         "--json", cwd=empty_folder)))

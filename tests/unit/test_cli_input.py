@@ -65,7 +65,7 @@ def test_flags_override_the_scene_file():
     (["render", "--frame", "1", "--frames", "2"], "--frame and --frames: give one or the other"),
     (["plan", "--frames", "0"], "--frames: expected a whole number from 1"),
     (["plan", "--size", "10x0"], "--size: expected WIDTHxHEIGHT"),
-    (["bench", "speed"], "expected one of accuracy, got 'speed'"),
+    (["bench", "speed", "--scale-size", "8"], "--scale-size: expected a whole number"),
     (["bench", "accuracy", "--sizes", "64,x"], "--sizes: expected a whole number"),
     (["demo", "--size", "big"], "--size"),
 ])

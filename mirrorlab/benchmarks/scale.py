@@ -1,14 +1,10 @@
 """Cost at scale: what a frame costs when a scene holds many objects or many mirrors,
 seen and unseen, against the same frame without them, side by side in one run.
 
-Run from the repository root::
-
-    python bench/scale.py [--size 256] [--frames 30] [--warmup 3] [--block 5]
-                          [--objects 10,100,1000] [--mirrors 10,100,400] [--json PATH]
-
-(``bench/speed.py`` runs the same scenes with pyrender beside them; this script times
-mirrorlab alone.) The base scene is the lab's, with its mirror made ``reflected``: the
-robot, the mirror's frame and one mirror captured for the viewer. Added to it:
+``mirrorlab bench speed --parts scale`` times these scenes (with pyrender's flat frame of
+those without mirrors beside them, given ``--pyrender``). The base scene is the lab's,
+with its mirror made ``reflected``: the robot, the mirror's frame and one mirror
+captured for the viewer. Added to it:
 
 - ``N mirrors unseen``: N small ``reflected`` mirrors on a grid behind the camera, facing
   the scene (so the viewer is on their reflecting side): the frame is the base frame;
@@ -25,22 +21,24 @@ stands still draws them) or ``moving`` (the camera moves a hair every frame, so 
 frame is planned and its reflected captures run again). Every frame is drawn with
 :class:`mirrorlab.Renderer` (one a variant, as a program drawing that scene would keep
 it) and read back to numpy.
-The variants take turns in blocks of ``--block`` frames, the order rotating every round;
-each one's median is divided by the base frame's median measured in the same run.
+The variants take turns in blocks of frames, the order rotating every round; each one's
+median is divided by the base frame's median measured in the same run.
 """
 
 from __future__ import annotations
 
-import argparse
-import json
 import statistics
 import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from mirrorlab.scene.model import Scene
 
 BOX_SIZE = 0.3
 TINY_BOX_SIZE = 0.02
@@ -137,16 +135,17 @@ def with_boxes(scene, count: int, seen: bool, size: float):
     colors = ((0.8, 0.3, 0.2), (0.2, 0.7, 0.3), (0.25, 0.35, 0.85))
     boxes = tuple(MeshObject(name=f"box_{index}", mesh=box_mesh(),
                              color=colors[index % len(colors)],
-                             transform=Transform(position=tuple(float(v) for v in point),
+                             transform=Transform(position=(float(point[0]), float(point[1]),
+                                                           float(point[2])),
                                                  scale=(size, size, size)))
                   for index, point in enumerate(points))
     return replace(scene, objects=scene.objects + boxes)
 
 
-def scale_scenes(object_counts: list[int], mirror_counts: list[int]) -> dict[str, object]:
+def scale_scenes(object_counts: list[int], mirror_counts: list[int]) -> dict[str, Scene]:
     """Every variant's scene by name, the base first."""
     base = base_scene()
-    scenes: dict[str, object] = {"base": base}
+    scenes: dict[str, Scene] = {"base": base}
     for count in mirror_counts:
         scenes[f"{count} mirrors unseen"] = with_mirrors(base, count, seen=False)
     for count in mirror_counts:
@@ -177,19 +176,29 @@ class Variant:
     samples: list[float] = field(default_factory=list)
 
 
-def mirrorlab_frames(renderer, scene, size: int, moving: bool) -> Callable[[int], list[float]]:
+def timed_frames(renderer, scene_of_turn: Callable[[int], Scene],
+                 size: int) -> Callable[[int], list[float]]:
+    """``count`` frames -> their ms: frame n of the variant draws ``scene_of_turn(n)`` with
+    ``renderer`` (a :class:`mirrorlab.Renderer`) at ``size`` x ``size``, read back."""
     turn = [0]
 
     def frames(count: int) -> list[float]:
         times = []
         for _ in range(count):
-            frame = moved_camera(scene, turn[0]) if moving else scene
+            frame = scene_of_turn(turn[0])
             turn[0] += 1
             start = time.perf_counter()
             renderer.render(frame, size=(size, size))
             times.append((time.perf_counter() - start) * 1e3)
         return times
     return frames
+
+
+def mirrorlab_frames(renderer, scene: Scene, size: int,
+                     moving: bool) -> Callable[[int], list[float]]:
+    """Frames of ``scene``, its camera moved a hair further every frame when ``moving``."""
+    return timed_frames(renderer, (lambda turn: moved_camera(scene, turn)) if moving
+                        else (lambda turn: scene), size)
 
 
 def interleave(variants: list[Variant], frames: int, warmup: int, block: int) -> None:
@@ -214,7 +223,7 @@ scenes of more than this many are left out of the moving frames (400 take second
 frame)."""
 
 
-def mirrorlab_variants(stack, scenes: dict[str, object], size: int,
+def mirrorlab_variants(stack, scenes: dict[str, Scene], size: int,
                        modes: tuple[str, ...] = ("still",)) -> list[Variant]:
     """A :class:`Variant` of every scene in every mode (``still``, ``moving``), each with a
     renderer of its own (entered on ``stack``); an unseen scene's first frame is checked to
@@ -235,62 +244,10 @@ def mirrorlab_variants(stack, scenes: dict[str, object], size: int,
                 f"passes {len(renderer.last_stats.ran)}")
             if name == "base":
                 base_image = image
-            elif name.endswith("unseen") and not np.array_equal(image, base_image):
+            elif name.endswith("unseen") and (base_image is None
+                                              or not np.array_equal(image, base_image)):
                 raise RuntimeError(f"{name}: the frame differs from the base frame")
             variants.append(Variant(f"mirrorlab {mode}, {name}",
                                     mirrorlab_frames(renderer, scene, size,
                                                      mode == "moving")))
     return variants
-
-
-def run(object_counts: list[int], mirror_counts: list[int], size: int, frames: int,
-        warmup: int, block: int, modes: tuple[str, ...]) -> dict[str, float]:
-    """Median ms of every variant."""
-    import contextlib
-
-    scenes = scale_scenes(object_counts, mirror_counts)
-    with contextlib.ExitStack() as stack:
-        variants = mirrorlab_variants(stack, scenes, size, modes)
-        interleave(variants, frames, warmup, block)
-        return medians(variants)
-
-
-def table(result: dict[str, float]) -> str:
-    """Each variant's median and its ratio to the base frame of its own kind (mirrorlab
-    still, mirrorlab moving, pyrender flat, ...: the words before the comma)."""
-    lines = ["| variant | median ms | against its base frame |", "|---|---:|---:|"]
-    for name, ms in result.items():
-        base = result.get(f"{name.split(',')[0]}, base")
-        ratio = f"{ms / base:.2f}x" if base else ""
-        lines.append(f"| {name} | {ms:.2f} | {ratio} |")
-    return "\n".join(lines)
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--size", type=int, default=256)
-    parser.add_argument("--frames", type=int, default=30)
-    parser.add_argument("--warmup", type=int, default=3)
-    parser.add_argument("--block", type=int, default=5)
-    parser.add_argument("--objects", default="10,100,1000")
-    parser.add_argument("--mirrors", default="10,100,400")
-    parser.add_argument("--modes", default="still,moving",
-                        help="still: the same scene every frame; moving: the camera moves a "
-                        "hair every frame (every frame planned, its reflected captures run "
-                        "again); default %(default)s")
-    parser.add_argument("--json", type=Path)
-    args = parser.parse_args(argv)
-    objects = [int(c) for c in args.objects.split(",") if c]
-    mirrors = [int(c) for c in args.mirrors.split(",") if c]
-    modes = tuple(m for m in args.modes.split(",") if m)
-    if not set(modes) <= {"still", "moving"}:
-        parser.error("--modes takes still and moving")
-    result = run(objects, mirrors, args.size, args.frames, args.warmup, args.block, modes)
-    print(table(result))
-    if args.json:
-        args.json.write_text(json.dumps(result, indent=2) + "\n")
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,5 +1,6 @@
-"""pyrender's side of ``bench/speed.py``, run in pyrender's own virtual environment
-(its PyOpenGL pin conflicts with mirrorlab's, and its last release needs numpy < 2).
+"""pyrender's side of ``mirrorlab bench speed``, run as a script by the interpreter of
+pyrender's own environment (``--pyrender``; its PyOpenGL pin conflicts with mirrorlab's,
+and its last release needs numpy < 2).
 
 It reads one JSON command a line on standard input and answers each with one JSON line:
 
