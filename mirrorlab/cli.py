@@ -14,7 +14,7 @@ import warnings
 from collections.abc import Sequence
 from pathlib import Path
 
-from mirrorlab.errors import BatchError, GLContextError, GLPassError, WriteError
+from mirrorlab.errors import BatchError, BenchmarkError, GLContextError, GLPassError, WriteError
 from mirrorlab.files import OutputError, check_folder, check_output
 from mirrorlab.options import (
     OPTIONS,
@@ -633,7 +633,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         where = exc.filename or "a file"
         print(f"{command}: error: cannot read {where}: {exc.strerror or exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    except (GLContextError, GLPassError, BatchError) as exc:
+    except (GLContextError, GLPassError, BatchError, BenchmarkError) as exc:
         print(f"{command}: error: {exc}", file=sys.stderr)
         return EXIT_MACHINE
     except Exception as exc:

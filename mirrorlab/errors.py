@@ -32,6 +32,11 @@ class BatchError(RuntimeError):
     that worked stay written)."""
 
 
+class BenchmarkError(RuntimeError):
+    """A benchmark could not time what it stands for (pyrender's worker ended, a variant
+    ran other passes than it should); the message says which."""
+
+
 class GLPassError(RuntimeError):
     """An OpenGL error raised while a pass ran: ``pass_name`` (``capture:mirror``,
     ``camera``...), the GL error ``code`` and the call or driver message."""

@@ -37,6 +37,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mirrorlab.errors import BenchmarkError
+
 if TYPE_CHECKING:
     from mirrorlab.scene.model import Scene
 
@@ -246,7 +248,7 @@ def mirrorlab_variants(stack, scenes: dict[str, Scene], size: int,
                 base_image = image
             elif name.endswith("unseen") and (base_image is None
                                               or not np.array_equal(image, base_image)):
-                raise RuntimeError(f"{name}: the frame differs from the base frame")
+                raise BenchmarkError(f"{name}: the frame differs from the base frame")
             variants.append(Variant(f"mirrorlab {mode}, {name}",
                                     mirrorlab_frames(renderer, scene, size,
                                                      mode == "moving")))

@@ -52,6 +52,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mirrorlab.errors import BenchmarkError
 from mirrorlab.options import OptionError
 
 MIRRORLAB_VARIANTS = ("mirrorlab two passes", "mirrorlab reflected two passes",
@@ -95,11 +96,15 @@ class PyrenderWorker:
 
     def ask(self, **command) -> dict:
         assert self.process.stdin is not None and self.process.stdout is not None
-        self.process.stdin.write(json.dumps(command) + "\n")
-        self.process.stdin.flush()
-        line = self.process.stdout.readline()
+        try:
+            self.process.stdin.write(json.dumps(command) + "\n")
+            self.process.stdin.flush()
+            line = self.process.stdout.readline()
+        except BrokenPipeError:
+            line = ""
         if not line:
-            raise RuntimeError(f"pyrender's worker ended (exit {self.process.wait()})")
+            raise BenchmarkError(f"pyrender's worker ended (exit {self.process.wait()}) "
+                                 f"before it answered {command.get('cmd')!r}")
         return json.loads(line)
 
     def close(self) -> None:
@@ -224,7 +229,7 @@ def time_configuration(renderers, worker: PyrenderWorker | None, lab, meshes: Me
     expected = ["capture:mirror", "camera"]
     if (two_pass.last_stats.ran != expected or reflected_pass.last_stats.ran != expected
             or reused.last_stats.ran != ["camera"]):
-        raise RuntimeError(f"the variants did not run the passes they stand for: "
+        raise BenchmarkError(f"the variants did not run the passes they stand for: "
                            f"{two_pass.last_stats.ran}, {reflected_pass.last_stats.ran}, "
                            f"{reused.last_stats.ran}")
     medians = {v.name: statistics.median(v.samples) for v in variants}

@@ -112,3 +112,18 @@ def test_bad_speed_options_stop_with_one_line_and_write_nothing(tmp_path, capsys
     assert len(errors) == 1 and errors[0].startswith("mirrorlab bench: error: "), errors
     assert words in errors[0]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["garbage.csv"]
+
+
+def test_a_pyrender_worker_that_ends_stops_the_benchmark_with_one_line(tmp_path, capsys):
+    """An environment that imports pyrender but whose worker dies: exit 1, the worker and
+    what it was asked named, no report written."""
+    python = tmp_path / "python"
+    python.write_text("#!/bin/sh\n[ \"$1\" = -c ] && exit 0\nexit 3\n")
+    python.chmod(0o755)
+    out = tmp_path / "out"
+    assert main(["bench", "speed", "--quick", "--parts", "sweep", "--pyrender", str(python),
+                 "--out-dir", str(out)]) == 1
+    errors = capsys.readouterr().err.strip().splitlines()
+    assert errors == ["mirrorlab bench: error: pyrender's worker ended (exit 3) before "
+                      "it answered 'setup'"], errors
+    assert not (out / "speed.md").exists() and not (out / "speed.csv").exists()
