@@ -109,10 +109,12 @@ def _robot_nodes() -> tuple[tuple[Node, int, int], ...]:
 
 
 @lru_cache(maxsize=64)
-def _joint_rotation(angle: float, axis: tuple[float, float, float]) -> np.ndarray:
-    """:func:`mirrorlab.math3d.rotate`, read-only, kept for the joints that stay as they
-    were while another turns."""
-    rotation = math3d.rotate(angle, axis)
+def _joint_rotation(angle_hex: str, axis: tuple[float, float, float]) -> np.ndarray:
+    """:func:`mirrorlab.math3d.rotate` by the angle ``float.fromhex(angle_hex)``, read-only,
+    kept for the joints that stay as they were while another turns (keyed by the hex
+    form: about an axis with a negative component, -0.0 and 0.0 turn by rotations that
+    differ in the sign of a zero)."""
+    rotation = math3d.rotate(float.fromhex(angle_hex), axis)
     rotation.flags.writeable = False
     return rotation
 
@@ -132,7 +134,7 @@ def robot_parts(robot: RobotObject) -> tuple[Part, ...]:
             if not np.isfinite(angle):
                 raise ValueError(f"joint angle for {node.name!r} must be finite, got "
                                  f"{robot.angles[joint]!r}")
-            local = offset @ _joint_rotation(angle, node.joint_axis)
+            local = offset @ _joint_rotation(angle.hex(), node.joint_axis)
         world = local if parent < 0 else worlds[parent] @ local
         worlds.append(world)
         if node.mesh:

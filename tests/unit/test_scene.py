@@ -151,6 +151,17 @@ def test_the_robots_parts_are_its_graphs_to_the_last_bit(angles, position, rotat
         assert (part.texture is None) == (node.texture is None)
 
 
+def test_a_joint_at_minus_zero_turns_as_its_graph_does():
+    """-0.0 and 0.0 are equal keys to a cache but, about some axes, rotations that differ in
+    a zero's sign: each pose's parts are still its graph's, bit for bit, whichever came
+    first."""
+    for angles in ((0.0, 0.0, 0.0), (-0.0, -0.0, -0.0), (0.0, -0.0, 0.0)):
+        robot = RobotObject(angles=angles)
+        nodes = [node for node in robot_graph(robot).nodes() if node.mesh]
+        for part, node in zip(robot_parts(robot), nodes, strict=True):
+            assert part.model.tobytes() == node.world_matrix().tobytes(), angles
+
+
 def test_a_robot_with_a_joint_angle_that_is_not_finite_is_refused():
     with pytest.raises(ValueError, match="finite"):
         robot_parts(RobotObject(angles=(0.0, float("nan"), 0.0)))
