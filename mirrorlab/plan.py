@@ -608,6 +608,16 @@ def _overlaps(first: Rectangle | None, second: Rectangle) -> bool:
     return overlap is not None and overlap[2] > 0 and overlap[3] > 0
 
 
+def bounding(first: Rectangle | None, second: Rectangle | None) -> Rectangle | None:
+    """The smallest pixel rectangle holding both (None stands for everything)."""
+    if first is None or second is None:
+        return None
+    x0, y0 = min(first[0], second[0]), min(first[1], second[1])
+    x1 = max(first[0] + first[2], second[0] + second[2])
+    y1 = max(first[1] + first[3], second[1] + second[3])
+    return x0, y0, x1 - x0, y1 - y0
+
+
 def intersect(first: Rectangle | None, second: Rectangle | None) -> Rectangle | None:
     """The overlap of two pixel rectangles (None stands for everything); an empty overlap
     is a rectangle of no width."""

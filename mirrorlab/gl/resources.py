@@ -255,14 +255,16 @@ class Texture2D(_Resource):
         GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
 
-    def copy_from_framebuffer(self, width: int, height: int,
-                              source: tuple[int, int]) -> None:
+    def copy_from_framebuffer(self, width: int, height: int, source: tuple[int, int],
+                              region: tuple[int, int, int, int] | None = None) -> None:
         """Copy the bound read framebuffer's lower-left ``width`` x ``height`` into level 0.
 
         This is the lab's ``glCopyTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, 0, 0, w, h, 0)``;
         the texture takes the copied size. Once it has that size, later copies go into
         the storage it has (``glCopyTexSubImage2D``) rather than defining level 0 anew
-        every frame, as ``glCopyTexImage2D`` does. ``source`` is the size of the framebuffer
+        every frame, as ``glCopyTexImage2D`` does, and only ``region`` (x, y, width,
+        height in pixels, clipped to the texture) is copied when given: the caller knows
+        the rest is as the last copy left it. ``source`` is the size of the framebuffer
         read: a copy reaching outside it (whose texels GL leaves undefined) is refused.
         """
         if width > source[0] or height > source[1]:
@@ -270,7 +272,11 @@ class Texture2D(_Resource):
                              f"{source[1]} framebuffer it reads")
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
         if (int(width), int(height)) == (self.width, self.height):
-            GL.glCopyTexSubImage2D(GL.GL_TEXTURE_2D, 0, 0, 0, 0, 0, int(width), int(height))
+            x, y, w, h = (0, 0, int(width), int(height)) if region is None else region
+            x0, y0 = max(int(x), 0), max(int(y), 0)
+            x1, y1 = min(int(x + w), int(width)), min(int(y + h), int(height))
+            if x1 > x0 and y1 > y0:
+                GL.glCopyTexSubImage2D(GL.GL_TEXTURE_2D, 0, x0, y0, x0, y0, x1 - x0, y1 - y0)
             return
         GL.glCopyTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB, 0, 0, int(width), int(height), 0)
         self.width, self.height = int(width), int(height)

@@ -9,7 +9,7 @@ from mirrorlab import math3d
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import MeshBuffer, RenderTarget, Texture2D, TextureFramebuffer
 from mirrorlab.passes.base import SharedResources, ViewDrawer, set_view_uniforms
-from mirrorlab.plan import PlannedPass, ReflectorDraw, ViewPlan
+from mirrorlab.plan import PlannedPass, Rectangle, ReflectorDraw, ViewPlan, bounding
 from mirrorlab.scene.model import Background, PlanarReflector
 from mirrorlab.views import View
 
@@ -143,6 +143,9 @@ class CaptureTextures:
         self.mode = mode
         self.textures: dict[int, Texture2D] = {}
         self._framebuffers: dict[int, TextureFramebuffer] = {}
+        self._copied: dict[int, Rectangle | None] = {}
+        """Each slot's last ``copy``: the pixel rectangle outside which what it copied was
+        the cleared background (None: anything may lie anywhere)."""
 
     def texture(self, slot: int) -> Texture2D:
         if slot not in self.textures:
@@ -162,7 +165,14 @@ class CaptureTextures:
                                     else self.shared.scratch(size))
             draws = renderer.draw_view(plan, target)
             target.bind()
-            texture.copy_from_framebuffer(*size, source=(target.size[0], target.size[1]))
+            # A scissored capture drew only within plan.scissor on a cleared target: the
+            # texture is as a whole copy would leave it once this scissor and the last
+            # one are copied (outside both, both copies hold the background).
+            region = (bounding(self._copied.pop(slot), plan.scissor)
+                      if slot in self._copied else None)
+            texture.copy_from_framebuffer(*size, source=(target.size[0], target.size[1]),
+                                          region=region)
+            self._copied[slot] = plan.scissor  # (not reached when the copy failed)
             return draws
         framebuffer = self._framebuffers.get(slot)
         if framebuffer is None or framebuffer.size != size:
@@ -178,3 +188,4 @@ class CaptureTextures:
             resource.release()
         self._framebuffers.clear()
         self.textures.clear()
+        self._copied.clear()

@@ -223,3 +223,36 @@ def test_what_a_renderer_holds_in_gl_does_not_grow_with_the_views_it_has_drawn(
         counts.append(len(registry))
     assert counts[2:] == [counts[1]] * 38, counts
     assert 0 <= counts[1] - counts[0] <= 2 * SPARE_BUFFERS, counts
+
+
+def test_a_reflected_capture_copies_its_glass_and_leaves_the_texture_as_a_whole_copy(
+        monkeypatch):
+    """A moving viewer's reflected capture copies only the rectangle of its glass and the
+    last frame's (the rest of the cleared target is background in both): frame and
+    texture are those of a fresh renderer, which copies the whole target, every frame."""
+    from mirrorlab.gl.resources import Texture2D
+
+    regions = []
+    original = Texture2D.copy_from_framebuffer
+
+    def spy(self, width, height, source, region=None):
+        regions.append(region)
+        return original(self, width, height, source, region)
+
+    monkeypatch.setattr(Texture2D, "copy_from_framebuffer", spy)
+    scene = lab_reflected()
+    eye = np.asarray(scene.camera.eye, dtype=float)
+    with mirrorlab.Renderer(SIZE) as moving:
+        # the glass grows, moves across the frame and back (its rectangles at 96x96 go
+        # from x 26-80 to x 42-81: the last one's left part must be background again)
+        for step, offset in enumerate([(0, 0, 0), (0, 0, -4), (0, 3, -8), (0, -2, 3),
+                                       (0, 0, 6), (0, 0, 0)]):
+            moved = replace(scene, camera=replace(scene.camera, eye=tuple(eye + offset)))
+            frame = moving.render(moved)
+            texture = moving.read_texture("mirror")
+            with mirrorlab.Renderer(SIZE) as fresh:
+                assert np.array_equal(fresh.render(moved), frame), step
+                assert np.array_equal(fresh.read_texture("mirror"), texture), step
+    partial = [r for r in regions if r is not None]
+    assert len(partial) >= 5, regions
+    assert all(w * h < SIZE[0] * SIZE[1] for _, _, w, h in partial), partial
