@@ -20,8 +20,9 @@ from mirrorlab.options import (
     OPTIONS,
     OptionError,
     apply_options,
-    parse_choice,
+    parse_choices,
     parse_count,
+    parse_counts,
     parse_size,
 )
 from mirrorlab.scene.loader import DEFAULT_SCENE, SceneError, load_scene, shipped_scene_names
@@ -432,8 +433,7 @@ def run_bench(args: argparse.Namespace) -> int:
     if args.frame:
         changes["frame"] = parse_count("--frame", args.frame, 16, 4096)
     if args.sizes:
-        changes["sizes"] = tuple(parse_count("--sizes", p.strip(), 1, 8192)
-                                 for p in args.sizes.split(","))
+        changes["sizes"] = parse_counts("--sizes", args.sizes, 1, 8192)
     if args.frames:
         changes["frames"] = parse_count("--frames", args.frames, 1, 10000)
     jobs = parse_count("--jobs", args.jobs, 1, 1024)
@@ -449,25 +449,9 @@ def run_bench(args: argparse.Namespace) -> int:
                        else None, jobs=jobs, scheduler=args.scheduler, engine=args.engine)
 
 
-def _counts(option: str, text: str, low: int, high: int) -> tuple[int, ...]:
-    """``'1,2,3'`` -> (1, 2, 3), each ``low`` to ``high``; OptionError naming ``option``."""
-    parts = [p.strip() for p in str(text).split(",") if p.strip()]
-    if not parts:
-        raise OptionError(option, f"expected comma-separated whole numbers, got {text!r}")
-    return tuple(parse_count(option, part, low, high) for part in parts)
-
-
-def _words(option: str, text: str, choices: tuple[str, ...]) -> tuple[str, ...]:
-    """``'a,b'`` -> ("a", "b"), each one of ``choices``; OptionError naming ``option``."""
-    words = tuple(dict.fromkeys(w.strip() for w in str(text).split(",") if w.strip()))
-    if not words:
-        raise OptionError(option, f"expected {' or '.join(choices)}, got {text!r}")
-    for word in words:
-        parse_choice(option, word, choices)
-    return words
-
-
 def run_speed(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+
     from mirrorlab.benchmarks.speed import SpeedSettings, run_command
 
     out_dir = check_folder("--out-dir", args.out_dir)
@@ -476,18 +460,18 @@ def run_speed(args: argparse.Namespace) -> int:
         raise OptionError("--pyrender", f"{args.pyrender!r} is not a file (give the Python "
                           "of an environment with pyrender)")
     settings = SpeedSettings(
-        sizes=_counts("--sizes", args.sizes, 16, 4096),
-        levels=_counts("--subdivisions", args.subdivisions, 0, 7),
-        parts=frozenset(_words("--parts", args.parts, ("sweep", "scale"))),
+        sizes=parse_counts("--sizes", args.sizes, 16, 4096),
+        levels=parse_counts("--subdivisions", args.subdivisions, 0, 7),
+        parts=frozenset(parse_choices("--parts", args.parts, ("sweep", "scale"))),
         scale_size=parse_count("--scale-size", args.scale_size, 16, 4096),
-        object_counts=_counts("--scale-objects", args.scale_objects, 1, 100_000),
-        mirror_counts=_counts("--scale-mirrors", args.scale_mirrors, 1, 10_000),
-        modes=_words("--scale-modes", args.scale_modes, ("still", "moving")),
+        object_counts=parse_counts("--scale-objects", args.scale_objects, 1, 100_000),
+        mirror_counts=parse_counts("--scale-mirrors", args.scale_mirrors, 1, 10_000),
+        modes=parse_choices("--scale-modes", args.scale_modes, ("still", "moving")),
         frames=parse_count("--frames", args.frames, 1, 100_000),
         warmup=parse_count("--warmup", args.warmup, 1, 100_000),
         block=parse_count("--block", args.block, 1, 100_000))
     if args.quick:
-        settings = SpeedSettings.quick(settings.parts, settings.modes)
+        settings = replace(SpeedSettings.quick(), parts=settings.parts, modes=settings.modes)
     return run_command(settings, out_dir, pyrender,
                        Path(args.from_csv) if args.from_csv else None)
 

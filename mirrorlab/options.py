@@ -100,10 +100,26 @@ def parse_count(option: str, text: str, low: int = 1, high: int = MAX_SIZE) -> i
     raise OptionError(option, f"expected a whole number from {low} to {high}, got {text!r}")
 
 
+def parse_counts(option: str, text: str, low: int = 1,
+                 high: int = MAX_SIZE) -> tuple[int, ...]:
+    """``'1,2,3'`` -> (1, 2, 3), each :func:`parse_count`-ed; OptionError naming
+    ``option``."""
+    return tuple(parse_count(option, part, low, high) for part in str(text).split(","))
+
+
 def parse_choice(option: str, text: str, choices: Sequence[str]) -> str:
     if text not in choices:
         raise OptionError(option, f"expected one of {', '.join(choices)}, got {text!r}")
     return text
+
+
+def parse_choices(option: str, text: str, choices: Sequence[str]) -> tuple[str, ...]:
+    """``'a,b'`` -> ("a", "b") (each once), each one of ``choices``; OptionError naming
+    ``option``."""
+    words = tuple(dict.fromkeys(w.strip() for w in str(text).split(",") if w.strip()))
+    if not words:
+        raise OptionError(option, f"expected {' or '.join(choices)}, got {text!r}")
+    return tuple(parse_choice(option, word, choices) for word in words)
 
 
 # --------------------------------------------------------------------------- scene options
