@@ -52,6 +52,13 @@ from pathlib import Path
 
 import numpy as np
 
+from mirrorlab.benchmarks.scale import (
+    Variant,
+    interleave,
+    mirrorlab_variants,
+    scale_scenes,
+    timed_frames,
+)
 from mirrorlab.errors import BenchmarkError
 from mirrorlab.options import OptionError
 
@@ -164,17 +171,8 @@ def write_mesh_sets(folder: Path, levels: tuple[int, ...]) -> list[MeshSet]:
 # --------------------------------------------------------------------------- timing
 
 
-@dataclass
-class Variant:
-    name: str
-    frames: Callable[[int], list[float]]  # draws n frames, returns each one's ms
-    samples: list[float]
-
-
 def mirrorlab_variant(renderer, scenes: list, size: int) -> Callable[[int], list[float]]:
     """Frames of ``scenes`` in turn (one scene: a still frame), each read back."""
-    from mirrorlab.benchmarks.scale import timed_frames
-
     return timed_frames(renderer, lambda turn: scenes[turn % len(scenes)], size)
 
 
@@ -210,28 +208,21 @@ def time_configuration(renderers, worker: PyrenderWorker | None, lab, meshes: Me
                                                  for r in scene.reflectors))
                  for scene in (mirrored, moved)]
     variants = [
-        Variant(MIRRORLAB_VARIANTS[0], mirrorlab_variant(two_pass, [mirrored, moved], size), []),
-        Variant(MIRRORLAB_VARIANTS[1], mirrorlab_variant(reflected_pass, reflected, size), []),
-        Variant(MIRRORLAB_VARIANTS[2], mirrorlab_variant(reused, [mirrored], size), []),
-        Variant(MIRRORLAB_VARIANTS[3], mirrorlab_variant(one_pass, [plain], size), []),
+        Variant(MIRRORLAB_VARIANTS[0], mirrorlab_variant(two_pass, [mirrored, moved], size)),
+        Variant(MIRRORLAB_VARIANTS[1], mirrorlab_variant(reflected_pass, reflected, size)),
+        Variant(MIRRORLAB_VARIANTS[2], mirrorlab_variant(reused, [mirrored], size)),
+        Variant(MIRRORLAB_VARIANTS[3], mirrorlab_variant(one_pass, [plain], size)),
     ]
     if worker is not None:
-        variants += [Variant(name, pyrender_variant(worker, name.split()[1]), [])
+        variants += [Variant(name, pyrender_variant(worker, name.split()[1]))
                      for name in PYRENDER_VARIANTS]
-    for variant in variants:
-        variant.frames(warmup)
-    turn = 0
-    while min(len(v.samples) for v in variants) < frames:
-        order = variants[turn % len(variants):] + variants[:turn % len(variants)]
-        for variant in order:
-            variant.samples += variant.frames(block)
-        turn += 1
+    interleave(variants, frames, warmup, block)
     expected = ["capture:mirror", "camera"]
     if (two_pass.last_stats.ran != expected or reflected_pass.last_stats.ran != expected
             or reused.last_stats.ran != ["camera"]):
         raise BenchmarkError(f"the variants did not run the passes they stand for: "
-                           f"{two_pass.last_stats.ran}, {reflected_pass.last_stats.ran}, "
-                           f"{reused.last_stats.ran}")
+                             f"{two_pass.last_stats.ran}, {reflected_pass.last_stats.ran}, "
+                             f"{reused.last_stats.ran}")
     medians = {v.name: statistics.median(v.samples) for v in variants}
     log(f"{meshes.triangles} triangles, {size}x{size}: " + ", ".join(
         f"{name} {ms:.2f} ms" for name, ms in medians.items()))
@@ -285,11 +276,9 @@ def scale_rows(worker: PyrenderWorker | None, lab: MeshSet, size: int, object_co
     """Median frame times of the scale scenes: mirrorlab in each of ``modes``, and
     pyrender's flat frame of every scene without mirrors (it has none; with a
     ``worker``), interleaved."""
-    from mirrorlab.benchmarks import scale
-
-    scenes = scale.scale_scenes(object_counts, mirror_counts)
+    scenes = scale_scenes(object_counts, mirror_counts)
     with contextlib.ExitStack() as stack:
-        variants = scale.mirrorlab_variants(stack, scenes, size, modes)
+        variants = mirrorlab_variants(stack, scenes, size, modes)
         camera = scenes["base"].camera
         for name, scene in scenes.items():
             if "mirrors" in name or worker is None:
@@ -302,9 +291,9 @@ def scale_rows(worker: PyrenderWorker | None, lab: MeshSet, size: int, object_co
                                light={"direction": list(scene.lights[0].direction),
                                       "intensity": 3.0})
             log(f"pyrender {name}: {setup['nodes']} nodes, {setup['triangles']} triangles")
-            variants.append(scale.Variant(f"pyrender flat, {name}",
-                                          pyrender_variant(worker, "flat", name)))
-        scale.interleave(variants, frames, warmup, block)
+            variants.append(Variant(f"pyrender flat, {name}",
+                                    pyrender_variant(worker, "flat", name)))
+        interleave(variants, frames, warmup, block)
     return [{"variant": v.name, "size": size,
              "median_ms": round(statistics.median(v.samples), 3),
              "p10_ms": round(float(np.percentile(v.samples, 10)), 3),
