@@ -195,9 +195,8 @@ def spheres_in_view(centers: np.ndarray, radii: np.ndarray, view_projection: np.
         return np.zeros(0, dtype=bool)
     points = np.concatenate([centers, np.ones((len(centers), 1))], axis=1)
     inside = np.ones(len(centers), dtype=bool)
-    if clip_plane is not None:
-        inside &= points @ np.asarray(clip_plane, dtype=np.float64) >= -radii
-    planes = volume_planes(view_projection)
+    planes = view_planes(view_projection, clip_plane)
+    # distances, not multiples of them: no plane here need have a unit normal
     lengths = np.linalg.norm(planes[:, :3], axis=1)
     for plane, length in zip(planes, lengths, strict=True):
         if length > 0:

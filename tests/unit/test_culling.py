@@ -6,7 +6,7 @@ pixel is tested with the rasteriser in tests/gl/test_plan_lossless.py.)"""
 from __future__ import annotations
 
 import numpy as np
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from mirrorlab import math3d
@@ -40,6 +40,7 @@ def views(draw):
         normal = np.array([draw(st.floats(-1, 1)) for _ in range(3)])
         normal[2] += 1e-3
         clip = np.append(normal, draw(st.floats(-3, 3)))
+        clip *= draw(st.sampled_from([1.0, 0.05, 20.0]))  # no unit normal is promised
     return projection @ view, clip
 
 
@@ -160,8 +161,15 @@ def _near_a_side(quad, matrix, clip) -> bool:
     return bool(near)
 
 
+# a clip plane whose normal is not a unit vector: the sphere test once read its value as
+# a distance and culled spheres reaching just across it
+LONG_NORMAL_VIEW = (math3d.perspective(120.0, SIZE[0] / SIZE[1], 0.05, 10.0),
+                    np.array([1.0, 0.125, 1.001, 0.0]))
+
+
 @settings(max_examples=100, deadline=None)
 @given(view=views(), seed=st.integers(0, 2 ** 16))
+@example(view=LONG_NORMAL_VIEW, seed=0)
 def test_a_culled_sphere_has_no_point_in_view(view, seed):
     matrix, clip = view
     rng = np.random.default_rng(seed)
