@@ -939,10 +939,19 @@ def mutated_documents(draw) -> tuple[Path, dict]:
             value = parent[step]
             factor = draw(st.sampled_from([0, -1, 0.5, 1e-300, 1e300, 2 ** 64]))
             if isinstance(value, int | float) and not isinstance(value, bool):
-                parent[step] = value * factor
+                parent[step] = scaled(value, factor)
             elif isinstance(value, list) and all(isinstance(v, int | float) for v in value):
-                parent[step] = [v * factor for v in value]
+                parent[step] = [scaled(v, factor) for v in value]
     return source, document
+
+
+def scaled(value: int | float, factor: int | float) -> int | float:
+    """``value * factor``; an integer too large for a float scaled by a float is an
+    infinity of its sign (Python refuses the product; a document may hold either)."""
+    try:
+        return value * factor
+    except OverflowError:
+        return math.inf if (value > 0) == (factor > 0) else -math.inf
 
 
 @FUZZ
