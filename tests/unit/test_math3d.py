@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from mirrorlab import math3d
@@ -129,6 +129,7 @@ FLIP_X = np.diag([-1.0, 1.0, 1.0, 1.0])
 @given(normal=st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, -0.05)),
        distance=st.floats(0.2, 20.0), flip=st.booleans(), shift=st.floats(-0.5, 0.5),
        seed=st.integers(0, 2**31 - 1))
+@example(normal=(-1.0, 0.0, -0.0625), distance=15.0, flip=False, shift=0.5, seed=0)  # no view
 def test_the_oblique_projection_keeps_everything_of_the_view_beyond_its_plane(
         normal, distance, flip, shift, seed):
     """Lengyel's far plane goes through the view volume's corner opposite the new near
@@ -142,10 +143,17 @@ def test_the_oblique_projection_keeps_everything_of_the_view_beyond_its_plane(
     n = np.asarray(normal)
     n /= np.linalg.norm(n)
     plane = np.append(n, -distance)  # the eye (origin) behind it: d < 0
+    inverse = np.linalg.inv(projection)
+    corners = np.array([[x, y, z, 1.0] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+    corners = corners @ inverse.T
+    if not np.max((corners / corners[:, 3:]) @ plane) > 0.0:
+        # the whole view volume lies before the plane: no projection keeps anything
+        with pytest.raises(ValueError, match="leaves nothing"):
+            math3d.oblique_projection(projection, plane)
+        return
     oblique = math3d.oblique_projection(projection, plane)
     rng = np.random.default_rng(seed)
     ndc = rng.uniform(-1.0, 1.0, size=(400, 3))
-    inverse = np.linalg.inv(projection)
     points = np.column_stack([ndc, np.ones(len(ndc))]) @ inverse.T
     points = points / points[:, 3:]
     beyond = points @ plane > 1e-9
