@@ -286,10 +286,11 @@ def _light_arrays(lights: tuple[Light, ...]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def light_uniforms(program: Program, scene: Scene) -> None:
-    """The scene's lights on the bound ``program`` (see lighting.glsl)."""
+    """The scene's lights on the bound ``program``, built with ``LIGHT_COUNT`` defined as
+    their number (see lighting.glsl)."""
     count = len(scene.lights)
-    directions, colors = _light_arrays(tuple(scene.lights))
-    program.set_int("light_count", count)
-    program.set_vec3_array("light_directions", directions)
-    program.set_vec3_array("light_colors", colors)
+    if count:  # with none, the arrays are not read, so not in the program
+        directions, colors = _light_arrays(tuple(scene.lights))
+        program.set_vec3_array("light_directions", directions[:count])
+        program.set_vec3_array("light_colors", colors[:count])
     program.set_float("ambient", scene.ambient)

@@ -165,14 +165,7 @@ class SceneDrawer:
                              "GL_ARB_shader_draw_parameters; this context has neither")
         self.draw_path: DrawPath = draw_path
         self.shared = shared
-        self.program: Program = shared.program("scene.vert", "scene.frag")
-        self.program.use()
-        self.program.set_int("texture_map", 0)
-        self.packed_program: Program | None = None
-        if draw_path == "packed":
-            self.packed_program = shared.program("scene_packed.vert", "scene.frag")
-            self.packed_program.use()
-            self.packed_program.set_int("texture_map", 0)
+        self._programs: dict[int, tuple[Program, Program | None]] = {}  # by light count
         self._tables: OrderedDict[ObjectArrays, PartTable] = OrderedDict()
         self._looks: OrderedDict[tuple, PartTable] = OrderedDict()
         # the packed path's recorded views: those drawn in the frame being drawn or the
@@ -266,9 +259,27 @@ class SceneDrawer:
 
     # ------------------------------------------------------------- drawing
 
-    def begin(self, scene: Scene, view: View, program: Program | None = None) -> Program:
-        program = program or self.program
+    def programs(self, scene: Scene) -> tuple[Program, Program | None]:
+        """The lit programs for ``scene``'s number of lights (each count has its own,
+        ``LIGHT_COUNT`` defined in lighting.glsl): one drawing a part by uniforms, and
+        on the packed path one drawing the parts of a multi-draw (None otherwise)."""
+        count = len(scene.lights)
+        held = self._programs.get(count)
+        if held is None:
+            held = self._programs[count] = (
+                self.shared.program("scene.vert", "scene.frag", LIGHT_COUNT=count),
+                self.shared.program("scene_packed.vert", "scene.frag", LIGHT_COUNT=count)
+                if self.draw_path == "packed" else None)
+        return held
+
+    def begin(self, scene: Scene, view: View, packed: bool = False) -> Program:
+        """Bind the lit program for ``scene`` (the multi-draw one with ``packed``) and
+        set ``view``'s and the lights' uniforms on it."""
+        per_draw, packed_program = self.programs(scene)
+        program = packed_program if packed else per_draw
+        assert program is not None
         program.use()
+        program.set_int("texture_map", 0)
         set_view_uniforms(program, view)
         light_uniforms(program, scene)
         return program
@@ -319,7 +330,7 @@ class SceneDrawer:
         self.parts_drawn += len(recorded.visible)
         if not recorded.steps:
             return 0
-        assert self.packed_program is not None
+        per_draw, packed_program = self.programs(scene)
         packed = self.shared.packed
         packed.bind()
         GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, recorded.commands.name)
@@ -327,7 +338,7 @@ class SceneDrawer:
         program = None
         for step in recorded.steps:
             if isinstance(step, int):  # a heavy part, drawn as the per-draw path does
-                if program is not self.program:
+                if program is not per_draw:
                     program = self.begin(scene, view)
                 part = int(recorded.visible[step])
                 program.set_mat4("model", recorded.models[step])
@@ -337,8 +348,8 @@ class SceneDrawer:
                     self.shared.texture(texture).bind(0)
                 packed.draw(*table.ranges[part])
                 continue
-            if program is not self.packed_program:
-                program = self.begin(scene, view, self.packed_program)
+            if program is not packed_program:
+                program = self.begin(scene, view, packed=True)
             texture, first, count = step
             if texture is not None:
                 self.shared.texture(texture).bind(0)
@@ -434,6 +445,7 @@ class SceneDrawer:
         self._tables.clear()
         self._looks.clear()
         self._each.clear()
+        self._programs.clear()  # the shared resources own them
 
 
 def _view_key(index: SceneIndex, view: View, scissor: Rectangle | None) -> tuple:
