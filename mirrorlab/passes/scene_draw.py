@@ -270,6 +270,10 @@ class SceneDrawer:
                 self.shared.program("scene.vert", "scene.frag", LIGHT_COUNT=count),
                 self.shared.program("scene_packed.vert", "scene.frag", LIGHT_COUNT=count)
                 if self.draw_path == "packed" else None)
+            for program in held:
+                if program is not None:  # the texture unit is set once, when made
+                    program.use()
+                    program.set_int("texture_map", 0)
         return held
 
     def begin(self, scene: Scene, view: View, packed: bool = False) -> Program:
@@ -279,7 +283,6 @@ class SceneDrawer:
         program = packed_program if packed else per_draw
         assert program is not None
         program.use()
-        program.set_int("texture_map", 0)
         set_view_uniforms(program, view)
         light_uniforms(program, scene)
         return program
