@@ -26,7 +26,7 @@ is the same, pixel for pixel.
 from __future__ import annotations
 
 from collections import OrderedDict
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -69,12 +69,21 @@ def surface_matrix(normal: np.ndarray, color, textured: bool) -> np.ndarray:
     return matrix
 
 
+Run = tuple[TextureSource | None, int, int]
+"""Consecutive commands that share a texture: (texture or None, first command, count)."""
+Layout = tuple[tuple[Run | int, ...], np.ndarray]
+"""How a view's visible parts are drawn (:func:`draw_layout`): its steps and its indirect
+commands ``(c, 5)`` uint32."""
+LAYOUTS_KEPT = 8
+"""Layouts a part table keeps (a frame draws a view or two a pass)."""
+
+
 @dataclass(frozen=True, eq=False)
 class PartTable:
     """What drawing a scene index's parts takes, worked out once per index: ``surfaces``
     ``(n, 4, 4)`` float32 (:func:`surface_matrix` of each part), ``textures`` (each part's,
     or None), ``ranges`` ``(n, 3)`` int (first index, index count, base vertex in the
-    packed meshes) and ``commands`` ``(n, 5)`` uint32 (each part's indirect command)."""
+    packed meshes), and the layouts of the views drawn lately."""
 
     surfaces: np.ndarray
     textures: tuple[TextureSource | None, ...]
@@ -85,10 +94,10 @@ class PartTable:
     ranges: np.ndarray
     mesh_ids: np.ndarray
     """``(n,)``: which mesh each part draws (equal ids, equal ranges)."""
-
-
-Run = tuple[TextureSource | None, int, int]
-"""Consecutive commands that share a texture: (texture or None, first command, count)."""
+    layouts: OrderedDict[bytes, Layout] = field(default_factory=OrderedDict)
+    """The last few :func:`draw_layout` s, by the visible parts' bytes: shared by every
+    pose's table of the same parts (``replace`` keeps the dictionary), since a layout
+    depends on the meshes and textures alone."""
 
 
 @dataclass(eq=False)
@@ -374,27 +383,11 @@ class SceneDrawer:
         data = np.empty((len(visible), 2, 4, 4), dtype=np.float32)
         data[:, 0] = models.transpose(0, 2, 1)
         data[:, 1] = table.surfaces[visible].transpose(0, 2, 1)  # GLSL's are by column
-        heavy = table.ranges[visible, 1] >= HEAVY_INDICES
-        edges = (np.flatnonzero(heavy[1:] != heavy[:-1]) + 1).tolist()
-        steps: list[Run | int] = []
-        blocks = [np.zeros((0, 5), dtype=np.uint32)]
-        done = 0  # commands so far
-        for a, b in zip([0, *edges], [*edges, len(visible)], strict=True):
-            if a == b:  # nothing visible
-                continue
-            if heavy[a]:
-                steps += range(a, b)
-                continue
-            block, runs = indirect_commands(table, visible[a:b])
-            block[:, 4] += a  # the parts' data of the whole view
-            steps += [(texture, done + first, count) for texture, first, count in runs]
-            blocks.append(block)
-            done += len(block)
+        steps, commands = draw_layout(table, visible)
         parts, commands_buffer = (self._spare.pop() if self._spare
                                   else (Buffer(self.shared.registry),
                                         Buffer(self.shared.registry)))
-        recorded = RecordedView(parts, commands_buffer, tuple(steps), visible, models)
-        commands = np.concatenate(blocks)
+        recorded = RecordedView(parts, commands_buffer, steps, visible, models)
         recorded.parts.upload(GL.GL_SHADER_STORAGE_BUFFER, data)
         recorded.commands.upload(GL.GL_DRAW_INDIRECT_BUFFER, commands)
         GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
@@ -458,6 +451,41 @@ def _view_key(index: SceneIndex, view: View, scissor: Rectangle | None) -> tuple
     return (index.objects_part, np.asarray(view.view).tobytes(),
             np.asarray(view.projection).tobytes(), view.origin.tobytes(), clip, scissor,
             view.size)
+
+
+def draw_layout(table: PartTable, visible: np.ndarray) -> Layout:
+    """How the ``visible`` parts ``(k,)`` of ``table`` are drawn, in order: the steps (a
+    :data:`Run` of indirect commands, or a heavy part's place among them) and the indirect
+    commands ``(c, 5)`` uint32, the parts' data being that of the whole view. Kept by the
+    table for the last few sets of parts (read-only): a moving part makes a new pose
+    every frame, with its layout unchanged."""
+    key = visible.tobytes()
+    held = table.layouts.get(key)
+    if held is not None:
+        table.layouts.move_to_end(key)
+        return held
+    heavy = table.ranges[visible, 1] >= HEAVY_INDICES
+    edges = (np.flatnonzero(heavy[1:] != heavy[:-1]) + 1).tolist()
+    steps: list[Run | int] = []
+    blocks = [np.zeros((0, 5), dtype=np.uint32)]
+    done = 0  # commands so far
+    for a, b in zip([0, *edges], [*edges, len(visible)], strict=True):
+        if a == b:  # nothing visible
+            continue
+        if heavy[a]:
+            steps += range(a, b)
+            continue
+        block, runs = indirect_commands(table, visible[a:b])
+        block[:, 4] += a  # the parts' data of the whole view
+        steps += [(texture, done + first, count) for texture, first, count in runs]
+        blocks.append(block)
+        done += len(block)
+    commands = np.concatenate(blocks)
+    commands.flags.writeable = False
+    layout = table.layouts[key] = (tuple(steps), commands)
+    while len(table.layouts) > LAYOUTS_KEPT:
+        table.layouts.popitem(last=False)
+    return layout
 
 
 def indirect_commands(table: PartTable, visible: np.ndarray

@@ -19,6 +19,7 @@ from mirrorlab.bounds import scene_index
 from mirrorlab.data import data_path
 from mirrorlab.gl.resources import Buffer
 from mirrorlab.options import apply_options
+from mirrorlab.passes import scene_draw
 from mirrorlab.passes.scene_draw import indirect_commands, texture_runs
 from mirrorlab.renderer import SceneRenderer
 from mirrorlab.scene.model import MeshObject, Transform
@@ -81,6 +82,39 @@ def test_a_still_frame_replays_and_a_moving_one_records_anew(scene_renderer, mon
     moved = replace(scene, camera=replace(scene.camera, eye=(eye[0] + 0.01, *eye[1:])))
     _, stats = draw(scene_renderer, moved, SIZE)
     assert uploads and stats.ran == ["capture:mirror", "camera"]
+
+
+def test_a_new_pose_keeps_the_layout_of_its_parts_and_draws_as_a_fresh_renderer(
+        scene_renderer, registry, monkeypatch):
+    """A view's layout (its steps and indirect commands) is kept by the visible parts:
+    a new pose of the same visible parts makes none, a different set of parts its own,
+    and every frame is a fresh renderer's, pixel for pixel."""
+    made = []
+    original = scene_draw.indirect_commands
+    monkeypatch.setattr(scene_draw, "indirect_commands", lambda table, visible: (
+        made.append(len(visible)), original(table, visible))[1])
+    scene = lab_reflected()
+    base, shoulder, elbow = scene.robot.angles
+    frames = [(elbow, 45.0), (elbow + 3.0, 45.0), (elbow + 3.0, 12.0), (elbow + 3.5, 12.0),
+              (elbow, 45.0), (elbow + 6.0, 20.0)]
+    made_per_frame, drawn = [], []
+    for turn, fovy in frames:
+        posed = replace(scene.with_angles((base, shoulder, turn)),
+                        camera=replace(scene.camera, fovy=fovy))
+        made.clear()
+        image, stats = draw(scene_renderer, posed, SIZE)
+        made_per_frame.append(len(made))
+        drawn.append(stats.parts_drawn)
+        fresh = SceneRenderer(registry)
+        try:
+            fresh_image, _ = draw(fresh, posed, SIZE)
+        finally:
+            fresh.release()
+        assert np.array_equal(image, fresh_image), (turn, fovy)
+    assert drawn[2] < drawn[0]  # the narrow view culls parts: a layout of its own
+    # frames 1 and 3 are new poses of the parts the frame before saw: no layout is made
+    assert made_per_frame[0] > 0 and made_per_frame[1] == 0 and made_per_frame[3] == 0
+    assert made_per_frame[2] > 0 and made_per_frame[5] > 0
 
 
 def test_a_thousand_boxes_of_one_mesh_are_one_command(scene_renderer, registry):
