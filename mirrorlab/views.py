@@ -59,15 +59,18 @@ class View:
     clip_plane: np.ndarray | None = None
     depth_range: tuple[float, float] | None = None
 
+    # What a view works out is kept, read-only: one view may be drawn in many frames
+    # (camera_view gives a still camera's view again).
+
     @cached_property
     def view_projection(self) -> np.ndarray:
-        return self.projection @ self.view
+        return _read_only(self.projection @ self.view)
 
     @cached_property
     def cull_planes(self) -> np.ndarray:
         """``(6, 4)`` or ``(7, 4)``: the view's clip volume (and clip plane) as planes of
         homogeneous world points (:func:`mirrorlab.culling.view_planes`)."""
-        return culling.view_planes(self.view_projection, self.clip_plane)
+        return _read_only(culling.view_planes(self.view_projection, self.clip_plane))
 
     @cached_property
     def origin(self) -> np.ndarray:
@@ -75,20 +78,29 @@ class View:
         rendering, see :meth:`relative`): the eye, or an orthographic view's camera
         position."""
         if self.eye is not None:
-            return np.asarray(self.eye, dtype=np.float64)
-        return eye_position(self.view)
+            return _read_only(np.array(self.eye, dtype=np.float64))
+        return _read_only(eye_position(self.view))
 
     @cached_property
     def relative_view_projection(self) -> np.ndarray:
         """``(4, 4)`` float64: :attr:`view_projection` for points given relative to
         :attr:`origin` (its translation is the eye's own, near zero), so that float32 on
         the GL side never holds a large world position."""
-        return np.asarray(self.projection, dtype=np.float64) @ self.relative_view
+        return _read_only(np.asarray(self.projection, dtype=np.float64) @ self.relative_view)
 
     @cached_property
     def relative_view(self) -> np.ndarray:
         """``(4, 4)``: the rigid :attr:`view` for points relative to :attr:`origin`."""
-        return np.asarray(self.view, dtype=np.float64) @ math3d.translate(self.origin)
+        return _read_only(np.asarray(self.view, dtype=np.float64)
+                          @ math3d.translate(self.origin))
+
+    @cached_property
+    def draw_key(self) -> tuple:
+        """Equal for views that draw the same way, exactly (matrices, origin, clip plane,
+        size): what a recorded draw of the view is kept by."""
+        clip = None if self.clip_plane is None else np.asarray(self.clip_plane).tobytes()
+        return (np.asarray(self.view).tobytes(), np.asarray(self.projection).tobytes(),
+                self.origin.tobytes(), clip, self.size)
 
     def relative(self, model: np.ndarray) -> np.ndarray:
         """``model`` ``(4, 4)`` (object to world) composed in float64 with the move to
@@ -105,7 +117,7 @@ class View:
     @cached_property
     def forward(self) -> np.ndarray:
         """Unit world direction ``(3,)`` the view looks along."""
-        return -np.asarray(self.view, dtype=np.float64)[2, :3]
+        return _read_only(-np.asarray(self.view, dtype=np.float64)[2, :3])
 
     @cached_property
     def key(self) -> tuple:
@@ -124,6 +136,11 @@ class View:
         return _BIAS @ self.view_projection
 
 
+def _read_only(array: np.ndarray) -> np.ndarray:
+    array.flags.writeable = False
+    return array
+
+
 @functools.lru_cache(maxsize=64)
 def _camera_matrices(camera: Camera, aspect: float) -> tuple[np.ndarray, np.ndarray,
                                                               np.ndarray]:
@@ -137,10 +154,17 @@ def _camera_matrices(camera: Camera, aspect: float) -> tuple[np.ndarray, np.ndar
 
 
 def camera_view(camera: Camera, size: tuple[int, int], label: str = "camera") -> View:
-    """The viewer's view of a ``size`` (width, height) target."""
+    """The viewer's view of a ``size`` (width, height) target: the same :class:`View`
+    object for the same camera, size and label (read-only, with what it works out
+    kept), so a still camera's view is worked out once, not every frame."""
+    return _camera_view(camera, (int(size[0]), int(size[1])), label)
+
+
+@functools.lru_cache(maxsize=64)
+def _camera_view(camera: Camera, size: tuple[int, int], label: str) -> View:
     view, projection, eye = _camera_matrices(camera, size[0] / size[1])
-    return View(view=view, projection=projection, size=(int(size[0]), int(size[1])),
-                eye=eye, label=label, depth_range=camera.depth_range)
+    return View(view=view, projection=projection, size=size, eye=eye, label=label,
+                depth_range=camera.depth_range)
 
 
 def eye_position(view: np.ndarray) -> np.ndarray:
@@ -224,10 +248,18 @@ def _ortho_matrices(capture: OrthoCapture) -> tuple[np.ndarray, np.ndarray]:
 
 
 def ortho_capture_view(reflector: PlanarReflector, size: tuple[int, int]) -> View:
-    """The ``ortho`` technique's capture camera (the lab's pass 1) on a ``size`` target."""
-    view, projection = _ortho_matrices(reflector.ortho_capture)
-    return View(view=view, projection=projection, size=(int(size[0]), int(size[1])),
-                eye=None, label=f"{reflector.name} ortho capture")
+    """The ``ortho`` technique's capture camera (the lab's pass 1) on a ``size`` target
+    (one :class:`View` object for the same capture, size and name, as
+    :func:`camera_view`)."""
+    return _ortho_capture_view(reflector.ortho_capture, (int(size[0]), int(size[1])),
+                               reflector.name)
+
+
+@functools.lru_cache(maxsize=64)
+def _ortho_capture_view(capture: OrthoCapture, size: tuple[int, int], name: str) -> View:
+    view, projection = _ortho_matrices(capture)
+    return View(view=view, projection=projection, size=size, eye=None,
+                label=f"{name} ortho capture")
 
 
 def cube_face_views(reflector: CurvedReflector,

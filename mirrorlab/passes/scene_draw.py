@@ -445,12 +445,9 @@ class SceneDrawer:
 
 
 def _view_key(index: SceneIndex, view: View, scissor: Rectangle | None) -> tuple:
-    """Equal for the same scene index seen through the same view (matrices, origin, clip
-    plane) and scissor."""
-    clip = None if view.clip_plane is None else np.asarray(view.clip_plane).tobytes()
-    return (index.objects_part, np.asarray(view.view).tobytes(),
-            np.asarray(view.projection).tobytes(), view.origin.tobytes(), clip, scissor,
-            view.size)
+    """Equal for the same scene index seen through the same view (its
+    :attr:`~mirrorlab.views.View.draw_key`) and scissor."""
+    return (index.objects_part, view.draw_key, scissor)
 
 
 def draw_layout(table: PartTable, visible: np.ndarray) -> Layout:

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from mirrorlab.plan import (
@@ -429,3 +430,22 @@ def test_a_moved_curved_reflector_is_captured_again_from_its_new_centre():
     (capture,) = [p for p in plan.ran if p.reflector == "sphere" and p.bounce == 2]
     assert all(v.view.eye is not None for v in capture.views)
     assert all(abs(v.view.eye[1] - 2.5) < 1e-9 for v in capture.views)
+
+
+def test_a_still_camera_has_one_read_only_view_and_a_moved_one_a_new_view():
+    """A still camera's view, and what it works out, serve every frame; none of it can be
+    changed by a caller, and a camera moved or a target resized makes another view."""
+    scene = load_scene("lab20")
+    view = camera_view(scene.camera, (64, 48))
+    assert camera_view(scene.camera, [64, 48]) is view
+    for array in (view.view, view.projection, view.view_projection, view.cull_planes,
+                  view.origin, view.relative_view, view.relative_view_projection,
+                  view.forward):
+        with pytest.raises(ValueError, match="read-only"):
+            array[0] += 1.0
+    moved = replace(scene.camera, eye=(scene.camera.eye[0] + 1e-9, *scene.camera.eye[1:]))
+    other = camera_view(moved, (64, 48))
+    assert other is not view and other.draw_key != view.draw_key
+    assert not np.array_equal(other.view, view.view)
+    resized = camera_view(scene.camera, (64, 64))
+    assert resized is not view and resized.draw_key != view.draw_key
