@@ -196,8 +196,9 @@ def spheres_in_view(centers: np.ndarray, radii: np.ndarray, view_projection: np.
     points = np.concatenate([centers, np.ones((len(centers), 1))], axis=1)
     inside = np.ones(len(centers), dtype=bool)
     planes = view_planes(view_projection, clip_plane)
-    # distances, not multiples of them: no plane here need have a unit normal
-    lengths = np.linalg.norm(planes[:, :3], axis=1)
+    # distances, not multiples of them: no plane here need have a unit normal (hypot's
+    # length does not overflow where a sum of squares would: a needle-thin view's planes)
+    lengths = np.hypot.reduce(planes[:, :3], axis=1)
     for plane, length in zip(planes, lengths, strict=True):
         if length > 0:
             inside &= (points @ plane) / length >= -radii

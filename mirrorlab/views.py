@@ -122,9 +122,9 @@ class View:
     @cached_property
     def key(self) -> tuple:
         """Equal for views that draw the same picture (for reusing captures)."""
-        clip = () if self.clip_plane is None else tuple(np.round(self.clip_plane, 12))
-        return (tuple(np.round(self.view, 12).ravel()),
-                tuple(np.round(self.projection, 12).ravel()), self.size, clip)
+        clip = () if self.clip_plane is None else tuple(_rounded(self.clip_plane))
+        return (tuple(_rounded(self.view).ravel()), tuple(_rounded(self.projection).ravel()),
+                self.size, clip)
 
     @property
     def aspect(self) -> float:
@@ -134,6 +134,15 @@ class View:
         """``(4, 4)``: world point to homogeneous texture coordinate of this view's image
         (for projective lookups of a capture drawn with it)."""
         return _BIAS @ self.view_projection
+
+
+def _rounded(array: np.ndarray) -> np.ndarray:
+    """``array`` rounded to 12 decimals; an entry too large for that (rounding would
+    overflow: a needle-thin view's projection) is kept as it is, being a whole number."""
+    array = np.asarray(array, dtype=np.float64)
+    with np.errstate(over="ignore", invalid="ignore"):
+        rounded = np.round(array, 12)
+    return np.where(np.isfinite(rounded), rounded, array)
 
 
 def _read_only(array: np.ndarray) -> np.ndarray:

@@ -74,6 +74,12 @@ MAX_MAGNITUDE = 1e6
 about 7 digits, so beyond a million units a scene has no precision left (and beyond 3.4e38
 no value at all)."""
 
+MIN_FOVY = 0.01
+"""Narrowest vertical field of view, in degrees. GL places a vertex in 32-bit floats
+(about 7 digits) relative to the eye. Their rounding, seen through a view this narrow,
+is about a fifth of a pixel of a 512-pixel frame (1.4 pixels of a 4096-pixel one), and
+grows as the view narrows; below about 1e-36 degrees the projection overflows them."""
+
 _TOP_KEYS = ("name", "description", "max_bounces", "ambient", "camera", "background",
              "lights", "objects", "reflectors", "animation")
 _CAMERA_KEYS = ("eye", "target", "up", "fovy", "near", "far")
@@ -379,6 +385,15 @@ class _Reader:
             raise self.fail(key, f"expected a number at most {high:g}, got {value}")
         return number
 
+    def fovy(self, value: Any, key: str) -> float:
+        """A vertical field of view in degrees, from :data:`MIN_FOVY` to 179."""
+        degrees = self.number(value, key, 0.0, 179.0, low_open=True)
+        if degrees < MIN_FOVY:
+            raise self.fail(key, f"{degrees:g} degrees is too narrow: below {MIN_FOVY:g} "
+                            f"degrees, GL's 32-bit floats move vertices by a good part of a "
+                            f"pixel or more; expected {MIN_FOVY:g} to 179")
+        return degrees
+
     def integer(self, value: Any, key: str, low: int, high: int) -> int:
         if isinstance(value, bool) or not isinstance(value, int):
             raise self.fail(key, f"expected a whole number, got {_kind(value)}")
@@ -485,8 +500,7 @@ class _Reader:
         eye = self.vec3(table.get("eye", list(default.eye)), f"{key}.eye")
         target = self.vec3(table.get("target", list(default.target)), f"{key}.target")
         up = self.direction(table.get("up", list(default.up)), f"{key}.up")
-        fovy = self.number(table.get("fovy", default.fovy), f"{key}.fovy", 0.0, 179.0,
-                           low_open=True)
+        fovy = self.fovy(table.get("fovy", default.fovy), f"{key}.fovy")
         near = self.number(table.get("near", default.near), f"{key}.near", 0.0, low_open=True)
         far = self.number(table.get("far", default.far), f"{key}.far")
         if not far > near:
@@ -910,7 +924,7 @@ class _Reader:
             for field, raw in values.items():
                 where = f"{key}.camera.{field}"
                 if field == "fovy":
-                    camera[field] = self.number(raw, where, 0.0, 179.0, low_open=True)
+                    camera[field] = self.fovy(raw, where)
                 elif field == "up":
                     camera[field] = self.direction(raw, where)
                 else:

@@ -183,3 +183,15 @@ def test_a_culled_sphere_has_no_point_in_view(view, seed):
         directions /= np.linalg.norm(directions, axis=1, keepdims=True)
         points = center + directions * radius * rng.uniform(0, 1, size=(300, 1)) ** (1 / 3)
         assert not inside(points, matrix, clip).any()
+
+
+def test_a_needle_thin_views_planes_measure_spheres_without_overflow():
+    """A view's plane normals as long as 1e300 (a projection that magnifies that much):
+    the distances to them are measured without a square that overflows, and a sphere on
+    the axis is in view while one beside it is not."""
+    projection = np.diag([1e300, 1e300, -1.0, 0.0])
+    projection[2, 3], projection[3, 2] = -0.2, -1.0  # looks down -z, near 0.1
+    centers = np.array([[0.0, 0.0, -10.0], [5.0, 0.0, -10.0]])
+    with np.errstate(all="raise"):
+        inside = spheres_in_view(centers, np.array([1.0, 1.0]), projection, None)
+    assert inside.tolist() == [True, False]

@@ -22,6 +22,7 @@ from hypothesis import strategies as st
 from mirrorlab.data import data_path, scenes_dir
 from mirrorlab.plan import plan_frame
 from mirrorlab.scene.loader import (
+    MIN_FOVY,
     SceneError,
     check_quad,
     dumps,
@@ -689,6 +690,25 @@ def test_keyframes_out_of_order_or_range_are_refused(tmp_path):
                    "frame 3 is already keyframes[0]")
     document["animation"] = {"frames": 3, "keyframes": []}
     assert_refused(tmp_path, document, "animation.keyframes", "at least one keyframe")
+
+
+def test_a_view_too_narrow_for_32_bit_floats_is_refused_and_the_narrowest_loads(tmp_path):
+    # (A random fuzz run found a 1e-200 degree view that loaded; its projection
+    # overflows GL's floats.)
+    for fovy in (1e-200, 1e-5, 0.009):
+        document = base_document()
+        document["camera"] = {"fovy": fovy}
+        assert_refused(tmp_path, document, "camera.fovy", "too narrow", "0.01 to 179")
+        document = base_document()
+        document["animation"] = {"frames": 3, "keyframes": [
+            {"frame": 0, "camera": {"fovy": 30.0}}, {"frame": 2, "camera": {"fovy": fovy}}]}
+        assert_refused(tmp_path, document, "animation.keyframes[1].camera.fovy",
+                       "too narrow")
+    document = base_document()
+    document["camera"] = {"fovy": MIN_FOVY}
+    path = tmp_path / "narrow.toml"
+    path.write_text(tomlkit.dumps(document))
+    assert load_scene(path).camera.fovy == MIN_FOVY
 
 
 def test_a_camera_that_passes_through_its_target_between_keyframes_is_refused(tmp_path):

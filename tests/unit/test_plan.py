@@ -449,3 +449,15 @@ def test_a_still_camera_has_one_read_only_view_and_a_moved_one_a_new_view():
     assert not np.array_equal(other.view, view.view)
     resized = camera_view(scene.camera, (64, 64))
     assert resized is not view and resized.draw_key != view.draw_key
+
+
+def test_views_too_magnified_to_round_still_have_keys_of_their_own():
+    from mirrorlab.views import View
+
+    def magnified(scale: float) -> View:
+        return View(view=np.eye(4), projection=np.diag([scale, scale, -1.0, 1.0]),
+                    size=(8, 8), eye=None, label="thin")
+
+    with np.errstate(all="raise"):
+        keys = [magnified(scale).key for scale in (1e300, 2e300, 1e300)]
+    assert keys[0] != keys[1] and keys[0] == keys[2]
