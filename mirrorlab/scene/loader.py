@@ -80,6 +80,12 @@ MIN_FOVY = 0.01
 is about a fifth of a pixel of a 512-pixel frame (1.4 pixels of a 4096-pixel one), and
 grows as the view narrows; below about 1e-36 degrees the projection overflows them."""
 
+MAX_DEPTH_RATIO = 1e7
+"""Largest ``far / near`` of a camera. The depth buffer keeps 24 bits of ``1 - near /
+distance`` (roughly), so the farther part of a range is lost to its last step: the
+farthest 0.6% of a range of 1e5, 6% of 1e6, a third of 1e7, and beyond that most of it,
+everything at 1e30 (where the ray tracer's inverse of the projection fails as well)."""
+
 _TOP_KEYS = ("name", "description", "max_bounces", "ambient", "camera", "background",
              "lights", "objects", "reflectors", "animation")
 _CAMERA_KEYS = ("eye", "target", "up", "fovy", "near", "far")
@@ -505,6 +511,11 @@ class _Reader:
         far = self.number(table.get("far", default.far), f"{key}.far")
         if not far > near:
             raise self.fail(f"{key}.far", f"expected more than near ({near:g}), got {far:g}")
+        if far > MAX_DEPTH_RATIO * near:
+            raise self.fail(f"{key}.near", f"{near:g} is too small for far {far:g}: the depth "
+                            f"buffer loses the farther part of a range more than "
+                            f"{MAX_DEPTH_RATIO:g} times near; expected at least "
+                            f"{far / MAX_DEPTH_RATIO:.8g}")
         self.check_view(eye, target, up, key)
         return Camera(eye=eye, target=target, up=up, fovy=fovy, near=near, far=far)
 

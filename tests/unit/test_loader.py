@@ -22,6 +22,7 @@ from hypothesis import strategies as st
 from mirrorlab.data import data_path, scenes_dir
 from mirrorlab.plan import plan_frame
 from mirrorlab.scene.loader import (
+    MAX_DEPTH_RATIO,
     MIN_FOVY,
     SceneError,
     check_quad,
@@ -198,7 +199,7 @@ def cameras(draw) -> dict[str, Any]:
     near = draw(st.floats(1e-3, 10.0))
     return {"eye": eye, "target": [e + o for e, o in zip(eye, offset, strict=True)],
             "up": up, "fovy": draw(st.floats(1.0, 179.0)), "near": near,
-            "far": near + draw(st.floats(1e-3, 1e4))}
+            "far": near + draw(st.floats(1e-3, min(1e4, near * (MAX_DEPTH_RATIO - 2))))}
 
 
 @st.composite
@@ -709,6 +710,21 @@ def test_a_view_too_narrow_for_32_bit_floats_is_refused_and_the_narrowest_loads(
     path = tmp_path / "narrow.toml"
     path.write_text(tomlkit.dumps(document))
     assert load_scene(path).camera.fovy == MIN_FOVY
+
+
+def test_a_depth_range_the_depth_buffer_cannot_hold_is_refused(tmp_path):
+    # near 1e-30 loaded before: the depth test then failed every fragment, and the ray
+    # tracer's inverse of the projection raised LinAlgError
+    for near, far in ((1e-30, 100.0), (1e-6, 100.0), (0.09, 9.5e5)):
+        document = base_document()
+        document["camera"] = {"near": near, "far": far}
+        assert_refused(tmp_path, document, "camera.near", "too small for far",
+                       f"expected at least {far / MAX_DEPTH_RATIO:.8g}")
+    document = base_document()
+    document["camera"] = {"near": 1e-5, "far": 100.0}
+    path = tmp_path / "deep.toml"
+    path.write_text(tomlkit.dumps(document))
+    assert load_scene(path).camera.near == 1e-5
 
 
 def test_a_camera_that_passes_through_its_target_between_keyframes_is_refused(tmp_path):
