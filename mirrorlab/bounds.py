@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mirrorlab import math3d
+from mirrorlab.math3d import read_only
 from mirrorlab.scene.model import CurvedReflector, PlanarReflector, Reflector, Scene
 
 if TYPE_CHECKING:
@@ -81,7 +82,7 @@ def _mesh_local_box(mesh: Path) -> tuple[np.ndarray, np.ndarray]:
     """A mesh file's own centre and half-size ``(3,)`` of its vertices' box (read-only)."""
     positions = _mesh_points(mesh)
     low, high = positions.min(axis=0), positions.max(axis=0)
-    return _frozen((low + high) / 2.0), _frozen((high - low) / 2.0)
+    return read_only((low + high) / 2.0), read_only((high - low) / 2.0)
 
 
 @dataclass(frozen=True, eq=False)
@@ -94,8 +95,8 @@ class ObjectBounds:
     @cached_property
     def boxes(self) -> tuple[np.ndarray, np.ndarray]:
         boxes = [mesh_box(part.mesh, part.model) for part in self.parts]
-        return (_frozen(np.array([b[0] for b in boxes]).reshape(-1, 3)),
-                _frozen(np.array([b[1] for b in boxes]).reshape(-1, 3)))
+        return (read_only(np.array([b[0] for b in boxes]).reshape(-1, 3)),
+                read_only(np.array([b[1] for b in boxes]).reshape(-1, 3)))
 
 
 @dataclass(frozen=True, eq=False)
@@ -114,12 +115,12 @@ class ObjectArrays:
 
     @cached_property
     def part_low(self) -> np.ndarray:
-        return _frozen(np.concatenate([b.boxes[0] for b in self.bounds])
+        return read_only(np.concatenate([b.boxes[0] for b in self.bounds])
                        if self.bounds else np.zeros((0, 3)))
 
     @cached_property
     def part_high(self) -> np.ndarray:
-        return _frozen(np.concatenate([b.boxes[1] for b in self.bounds])
+        return read_only(np.concatenate([b.boxes[1] for b in self.bounds])
                        if self.bounds else np.zeros((0, 3)))
 
     @cached_property
@@ -132,7 +133,7 @@ class ObjectArrays:
         turn = self.models[:, :3, :3]
         world = np.einsum("nij,nj->ni", turn, centers) + self.models[:, :3, 3]
         reach = np.einsum("nij,nj->ni", np.abs(turn), halves)  # the turned box's box
-        return _frozen(world), _frozen(reach)
+        return read_only(world), read_only(reach)
 
     @property
     def part_centers(self) -> np.ndarray:
@@ -268,8 +269,8 @@ class SceneIndex:
     @cached_property
     def _boxes(self) -> tuple[np.ndarray, np.ndarray]:
         objects, reflectors = self.objects_part, self.reflectors_part
-        return (_frozen(np.concatenate([objects.part_low, reflectors.reflector_low])),
-                _frozen(np.concatenate([objects.part_high, reflectors.reflector_high])))
+        return (read_only(np.concatenate([objects.part_low, reflectors.reflector_low])),
+                read_only(np.concatenate([objects.part_high, reflectors.reflector_high])))
 
     @cached_property
     def sphere(self) -> tuple[np.ndarray, float]:
@@ -280,12 +281,7 @@ class SceneIndex:
             return np.zeros(3), 0.0
         top = high.max(axis=0)
         center = (low.min(axis=0) + top) / 2.0
-        return _frozen(center), float(np.linalg.norm(top - center))
-
-
-def _frozen(array: np.ndarray) -> np.ndarray:
-    array.flags.writeable = False
-    return array
+        return read_only(center), float(np.linalg.norm(top - center))
 
 
 class _IndexCache:
@@ -349,7 +345,7 @@ class _IndexCache:
         bounds = tuple(self.object_bounds(item) for item in objects)
         parts = tuple(part for b in bounds for part in b.parts)
         models = np.array([part.model for part in parts], dtype=np.float64).reshape(-1, 4, 4)
-        return ObjectArrays(objects, bounds, parts, _frozen(models))
+        return ObjectArrays(objects, bounds, parts, read_only(models))
 
     def reflector_arrays(self, reflectors: tuple) -> ReflectorArrays:
         self._forget((), reflectors)
@@ -359,19 +355,19 @@ class _IndexCache:
         spheres = [bounding_sphere(reflectors[i]) for i in curved]
         return ReflectorArrays(
             reflectors=reflectors, names={r.name: i for i, r in enumerate(reflectors)},
-            reflector_low=_frozen(np.array([b[0] for b in reflector_boxes]).reshape(-1, 3)),
-            reflector_high=_frozen(np.array([b[1] for b in reflector_boxes]).reshape(-1, 3)),
-            planar=_frozen(np.array(planar, dtype=np.intp)),
-            corners=_frozen(np.array([reflectors[i].corner_array for i in planar],
+            reflector_low=read_only(np.array([b[0] for b in reflector_boxes]).reshape(-1, 3)),
+            reflector_high=read_only(np.array([b[1] for b in reflector_boxes]).reshape(-1, 3)),
+            planar=read_only(np.array(planar, dtype=np.intp)),
+            corners=read_only(np.array([reflectors[i].corner_array for i in planar],
                                      dtype=np.float64).reshape(-1, 4, 3)),
-            normals=_frozen(np.array([reflectors[i].normal for i in planar],
+            normals=read_only(np.array([reflectors[i].normal for i in planar],
                                      dtype=np.float64).reshape(-1, 3)),
-            centers=_frozen(np.array([reflectors[i].center for i in planar],
+            centers=read_only(np.array([reflectors[i].center for i in planar],
                                      dtype=np.float64).reshape(-1, 3)),
-            curved=_frozen(np.array(curved, dtype=np.intp)),
-            sphere_centers=_frozen(np.array([c for c, _ in spheres],
+            curved=read_only(np.array(curved, dtype=np.intp)),
+            sphere_centers=read_only(np.array([c for c, _ in spheres],
                                             dtype=np.float64).reshape(-1, 3)),
-            sphere_radii=_frozen(np.array([r for _, r in spheres], dtype=np.float64)))
+            sphere_radii=read_only(np.array([r for _, r in spheres], dtype=np.float64)))
 
 
 _CACHE = _IndexCache()

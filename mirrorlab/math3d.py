@@ -16,6 +16,12 @@ import numpy as np
 Vec3 = Sequence[float] | np.ndarray
 
 
+def read_only(array: np.ndarray) -> np.ndarray:
+    """``array`` itself, made read-only (for arrays worked out once and shared)."""
+    array.flags.writeable = False
+    return array
+
+
 def identity() -> np.ndarray:
     """The ``(4, 4)`` identity."""
     return np.eye(4)

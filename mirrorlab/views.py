@@ -64,13 +64,13 @@ class View:
 
     @cached_property
     def view_projection(self) -> np.ndarray:
-        return _read_only(self.projection @ self.view)
+        return math3d.read_only(self.projection @ self.view)
 
     @cached_property
     def cull_planes(self) -> np.ndarray:
         """``(6, 4)`` or ``(7, 4)``: the view's clip volume (and clip plane) as planes of
         homogeneous world points (:func:`mirrorlab.culling.view_planes`)."""
-        return _read_only(culling.view_planes(self.view_projection, self.clip_plane))
+        return math3d.read_only(culling.view_planes(self.view_projection, self.clip_plane))
 
     @cached_property
     def origin(self) -> np.ndarray:
@@ -78,20 +78,20 @@ class View:
         rendering, see :meth:`relative`): the eye, or an orthographic view's camera
         position."""
         if self.eye is not None:
-            return _read_only(np.array(self.eye, dtype=np.float64))
-        return _read_only(eye_position(self.view))
+            return math3d.read_only(np.array(self.eye, dtype=np.float64))
+        return math3d.read_only(eye_position(self.view))
 
     @cached_property
     def relative_view_projection(self) -> np.ndarray:
         """``(4, 4)`` float64: :attr:`view_projection` for points given relative to
         :attr:`origin` (its translation is the eye's own, near zero), so that float32 on
         the GL side never holds a large world position."""
-        return _read_only(np.asarray(self.projection, dtype=np.float64) @ self.relative_view)
+        return math3d.read_only(np.asarray(self.projection, dtype=np.float64) @ self.relative_view)
 
     @cached_property
     def relative_view(self) -> np.ndarray:
         """``(4, 4)``: the rigid :attr:`view` for points relative to :attr:`origin`."""
-        return _read_only(np.asarray(self.view, dtype=np.float64)
+        return math3d.read_only(np.asarray(self.view, dtype=np.float64)
                           @ math3d.translate(self.origin))
 
     @cached_property
@@ -117,7 +117,7 @@ class View:
     @cached_property
     def forward(self) -> np.ndarray:
         """Unit world direction ``(3,)`` the view looks along."""
-        return _read_only(-np.asarray(self.view, dtype=np.float64)[2, :3])
+        return math3d.read_only(-np.asarray(self.view, dtype=np.float64)[2, :3])
 
     @cached_property
     def key(self) -> tuple:
@@ -143,11 +143,6 @@ def _rounded(array: np.ndarray) -> np.ndarray:
     with np.errstate(over="ignore", invalid="ignore"):
         rounded = np.round(array, 12)
     return np.where(np.isfinite(rounded), rounded, array)
-
-
-def _read_only(array: np.ndarray) -> np.ndarray:
-    array.flags.writeable = False
-    return array
 
 
 @functools.lru_cache(maxsize=64)

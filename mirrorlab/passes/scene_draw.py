@@ -477,9 +477,7 @@ def draw_layout(table: PartTable, visible: np.ndarray) -> Layout:
         steps += [(texture, done + first, count) for texture, first, count in runs]
         blocks.append(block)
         done += len(block)
-    commands = np.concatenate(blocks)
-    commands.flags.writeable = False
-    layout = table.layouts[key] = (tuple(steps), commands)
+    layout = table.layouts[key] = (tuple(steps), math3d.read_only(np.concatenate(blocks)))
     while len(table.layouts) > LAYOUTS_KEPT:
         table.layouts.popitem(last=False)
     return layout
