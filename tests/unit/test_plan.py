@@ -27,7 +27,7 @@ from mirrorlab.scene.model import (
     SphereProxy,
     Transform,
 )
-from mirrorlab.views import camera_view
+from mirrorlab.views import View, camera_view
 
 SIZE = (64, 64)
 LAB_CENTER = (-7.0, 1.0, -2.0)
@@ -452,8 +452,6 @@ def test_a_still_camera_has_one_read_only_view_and_a_moved_one_a_new_view():
 
 
 def test_views_too_magnified_to_round_still_have_keys_of_their_own():
-    from mirrorlab.views import View
-
     def magnified(scale: float) -> View:
         return View(view=np.eye(4), projection=np.diag([scale, scale, -1.0, 1.0]),
                     size=(8, 8), eye=None, label="thin")
