@@ -50,6 +50,10 @@ class Renderer:
     the pass, either way). ``draw_path`` is how objects are drawn: ``"auto"`` (one
     multi-draw a pass where the context offers it, else a draw call a part, as on macOS's
     OpenGL 4.1), ``"packed"`` or ``"per-draw"``; the frames are the same.
+
+    The context is the renderer's own: GL calls made in it between frames (with it
+    current after a :meth:`render`) are not kept: every frame leaves it in the state it
+    had at the first.
     """
 
     def __init__(self, size: Sequence[int] | str = (512, 512), debug: bool = False, *,
@@ -82,7 +86,8 @@ class Renderer:
         try:
             from mirrorlab.renderer import SceneRenderer
 
-            self._renderer = SceneRenderer(self._context.resources, self.draw_path)
+            self._renderer = SceneRenderer(self._context.resources, self.draw_path,
+                                           own_context=True)
         except BaseException:
             self.close()
             raise

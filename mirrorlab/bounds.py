@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mirrorlab import math3d
+from mirrorlab import culling, math3d
 from mirrorlab.math3d import read_only
 from mirrorlab.scene.model import CurvedReflector, PlanarReflector, Reflector, Scene
 
@@ -144,6 +144,11 @@ class ObjectArrays:
     def part_halves(self) -> np.ndarray:
         """``(n, 3)``: half the size of each part's culling box."""
         return self._carried[1]
+
+    @cached_property
+    def part_rows(self) -> np.ndarray:
+        """``(n, 10)``: the culling boxes as :func:`mirrorlab.culling.box_rows`."""
+        return read_only(culling.box_rows(self.part_centers, self.part_halves))
 
     @cached_property
     def digest(self) -> int:

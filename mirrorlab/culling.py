@@ -81,17 +81,45 @@ def scissor_planes(view_projection: np.ndarray, size: tuple[int, int],
                      top * m[3] - m[1]])
 
 
+def box_rows(centers: np.ndarray, halves: np.ndarray) -> np.ndarray:
+    """``(n, 10)``: the world boxes given by their ``centers`` and half-sizes ``halves``
+    ``(n, 3)`` as the rows :func:`rows_in_view` tests: centre, half-size, the centre's
+    absolute value and 1 (worked out once for a scene's boxes)."""
+    rows = np.ones((len(centers), 10))
+    rows[:, 0:3] = centers
+    rows[:, 3:6] = halves
+    rows[:, 6:9] = np.abs(centers)
+    return rows
+
+
+def plane_test(planes: np.ndarray) -> np.ndarray:
+    """``(10, k)``: the test of :func:`rows_in_view` against ``planes`` ``(k, 4)``
+    (worked out once for a view). A box may show unless, for one plane, even its corner
+    farthest along the normal lies beyond it by more than :data:`CULL_SLACK` of the terms
+    compared: ``value + CULL_SLACK * size >= 0``, where ``value`` (the farthest corner's
+    side) is ``centre . n + half . |n| + d`` and ``size`` is ``|centre| . |n| + half . |n|
+    + |d|``; both are linear in a box's row, so the whole test is one matrix."""
+    normals = np.asarray(planes, dtype=np.float64)[:, :3]
+    offsets = np.asarray(planes, dtype=np.float64)[:, 3]
+    reach = np.abs(normals).T
+    return np.vstack([normals.T, (1.0 + CULL_SLACK) * reach, CULL_SLACK * reach,
+                      (offsets + CULL_SLACK * np.abs(offsets))[None, :]])
+
+
+def rows_in_view(rows: np.ndarray, test: np.ndarray) -> np.ndarray:
+    """``(n,)`` bool: which boxes (:func:`box_rows` ``(n, 10)``) may show within the planes
+    of ``test`` (:func:`plane_test` ``(10, k)``, or several side by side): one product."""
+    if not len(rows):
+        return np.zeros(0, dtype=bool)
+    return (rows @ test >= 0.0).all(axis=1)
+
+
 def boxes_in_view(centers: np.ndarray, halves: np.ndarray, planes: np.ndarray) -> np.ndarray:
     """``(n,)`` bool: which of the world boxes given by their ``centers`` and half-sizes
     ``halves`` ``(n, 3)`` may show within ``planes`` ``(k, 4)`` (False only for a box
-    wholly beyond one plane: even its corner farthest along the plane's normal is)."""
-    if not len(centers):
-        return np.zeros(0, dtype=bool)
-    normals, offsets = planes[:, :3], planes[:, 3]
-    reach = halves @ np.abs(normals).T  # (n, k): the farthest corner's lead on the centre
-    value = centers @ normals.T + reach + offsets
-    size = np.abs(centers) @ np.abs(normals).T + reach + np.abs(offsets)
-    return np.all(value >= -CULL_SLACK * size, axis=1)
+    wholly beyond one plane: even its corner farthest along the plane's normal is).
+    :func:`rows_in_view` of :func:`box_rows` and :func:`plane_test`."""
+    return rows_in_view(box_rows(centers, halves), plane_test(planes))
 
 
 PIXEL_MARGIN = 0.05

@@ -102,9 +102,15 @@ class SceneRenderer:
     """Runs frame plans: captures and bakes first, then the camera's view. ``draw_path``
     chooses how objects are drawn (:mod:`mirrorlab.passes.scene_draw`): ``auto`` (one
     multi-draw a pass where the context offers it, else a draw call a part),
-    ``packed`` or ``per-draw``; the frames are the same."""
+    ``packed`` or ``per-draw``; the frames are the same.
 
-    def __init__(self, registry: ResourceRegistry, draw_path: DrawPath = "auto") -> None:
+    A frame leaves GL as it found it: it reads the GL state it changes first and puts it
+    back after. ``own_context`` True says nothing but this renderer makes GL calls in its
+    context (:class:`mirrorlab.Renderer`'s headless one): the state is then read once, at
+    the first frame, and every frame puts that back, so none reads it again."""
+
+    def __init__(self, registry: ResourceRegistry, draw_path: DrawPath = "auto",
+                 own_context: bool = False) -> None:
         self._gl_version = gl_version()
         self.registry = registry
         self.shared = SharedResources(registry)
@@ -118,6 +124,8 @@ class SceneRenderer:
         self._recorded: RecordedFrame | None = None  # the still frame to replay
         self._scissor: Rectangle | None = None  # the scissor rectangle set, None: off
         self._cull = True  # whether this frame's views cull objects (not with use_plan off)
+        self.own_context = own_context
+        self._home: dict[str, object] | None = None  # the state every frame leaves (own_context)
 
     @property
     def scene(self) -> Scene:
@@ -195,7 +203,12 @@ class SceneRenderer:
         draws a reflector covering fewer pixels than that plain (off by default).
         """
         start = time.perf_counter()
-        found = gl_state()
+        if not self.own_context:
+            found = gl_state()
+        elif self._home is None:
+            found = self._home = gl_state()
+        else:
+            found = self._home  # what the last frame left
         size = (int(target.size[0]), int(target.size[1]))
         key = None if view is not None else (scene, target, size, use_plan, tiny_pixels,
                                              tuple(self.state.held.items()))
@@ -349,6 +362,7 @@ class SceneRenderer:
         self.shared.release()
         self.state.clear()
         self._last_plan = None
+        self._home = None
 
     def pass_for(self, name: str) -> ReflectorPass:
         """The pass of the current scene's reflector ``name`` (for checks and the demo).

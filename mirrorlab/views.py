@@ -34,6 +34,8 @@ CUBE_FACES = (
     ((0.0, 0.0, -1.0), (0.0, -1.0, 0.0)),
 )
 CUBE_FACE_NAMES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
+CULL_TESTS_KEPT = 8
+"""Scissors whose culling test (:meth:`View.cull_test`) a view keeps."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -71,6 +73,26 @@ class View:
         """``(6, 4)`` or ``(7, 4)``: the view's clip volume (and clip plane) as planes of
         homogeneous world points (:func:`mirrorlab.culling.view_planes`)."""
         return math3d.read_only(culling.view_planes(self.view_projection, self.clip_plane))
+
+    @cached_property
+    def _cull_tests(self) -> dict:
+        return {}
+
+    def cull_test(self, scissor: tuple[int, int, int, int] | None = None) -> np.ndarray:
+        """``(10, k)``: :func:`mirrorlab.culling.plane_test` of :attr:`cull_planes`, and of
+        the sides of the pixel rectangle ``scissor`` when given
+        (:func:`mirrorlab.culling.scissor_planes`); kept for the last few scissors."""
+        tests = self._cull_tests
+        held = tests.get(scissor)
+        if held is None:
+            planes = self.cull_planes if scissor is None else np.vstack(
+                [self.cull_planes, culling.scissor_planes(self.view_projection, self.size,
+                                                          scissor)])
+            held = math3d.read_only(culling.plane_test(planes))
+            if len(tests) >= CULL_TESTS_KEPT:
+                del tests[next(iter(tests))]
+            tests[scissor] = held
+        return held
 
     @cached_property
     def origin(self) -> np.ndarray:

@@ -19,6 +19,7 @@ current, and hands the renderer a framebuffer to draw into.
 from __future__ import annotations
 
 import ctypes
+import functools
 import os
 import re
 import sys
@@ -151,21 +152,30 @@ class ResourceRegistry:
         return count
 
 
+@functools.cache
+def _pyopengl() -> tuple:
+    """PyOpenGL's ``GL`` and ``GLError``, imported on first use (after the platform is
+    chosen) and then kept: a frame checks for errors after every pass."""
+    from OpenGL import GL
+    from OpenGL.error import GLError
+
+    return GL, GLError
+
+
 def check_gl_errors(where: str) -> None:
     """Raise :class:`~mirrorlab.errors.GLPassError` naming ``where`` if the GL error queue
     holds anything, or the debug callback (see :func:`enable_debug_output`) caught an
     error; :class:`~mirrorlab.errors.GLOutOfMemoryError` for GL_OUT_OF_MEMORY."""
-    from OpenGL import GL
-
+    gl = _pyopengl()[0]
     errors = []
     for _ in range(16):
-        code = int(GL.glGetError())
-        if code == GL.GL_NO_ERROR:
+        code = int(gl.glGetError())
+        if code == 0:  # GL_NO_ERROR
             break
         errors.append(code)
-    messages = [m for m in _debug_errors]
-    _debug_errors.clear()
-    if errors or messages:
+    if errors or _debug_errors:
+        messages = list(_debug_errors)
+        _debug_errors.clear()
         code = errors[0] if errors else messages[0][0]
         detail = "; ".join(text for _, text in messages) or "found by glGetError"
         raise pass_error(where, code, detail)
@@ -176,11 +186,9 @@ def gl_pass(name: str) -> Iterator[None]:
     """Run a pass's GL calls: a GL error raised by PyOpenGL inside, or left in the error
     queue or the debug log after, becomes a :class:`~mirrorlab.errors.GLPassError` that
     names the pass ``name`` (``capture:mirror``, ``camera``)."""
-    from OpenGL.error import GLError
-
     try:
         yield
-    except GLError as exc:
+    except _pyopengl()[1] as exc:
         operation = getattr(exc.baseOperation, "__name__", str(exc.baseOperation))
         messages = "; ".join(text for _, text in _debug_errors)
         _debug_errors.clear()

@@ -94,6 +94,9 @@ class PartTable:
     ranges: np.ndarray
     mesh_ids: np.ndarray
     """``(n,)``: which mesh each part draws (equal ids, equal ranges)."""
+    columns: np.ndarray | None = None
+    """``(n, 2, 4, 4)`` float64: each part's model and surface matrix by column, as the
+    packed path's parts buffer holds them (None until a pose fills them in)."""
     layouts: OrderedDict[bytes, Layout] = field(default_factory=OrderedDict)
     """The last few :func:`draw_layout` s, by the visible parts' bytes: shared by every
     pose's table of the same parts (``replace`` keeps the dictionary), since a layout
@@ -110,6 +113,9 @@ class RecordedView:
 
     parts: Buffer
     commands: Buffer
+    commands_held: np.ndarray
+    """The layout's commands the ``commands`` buffer holds (read-only: a buffer given to
+    another view of the same layout is not filled again)."""
     steps: tuple[Run | int, ...]
     visible: np.ndarray
     models: np.ndarray
@@ -181,7 +187,7 @@ class SceneDrawer:
         # last one (a still frame draws them again; any other is freed by end_frame)
         self._recorded: dict[tuple, RecordedView] = {}
         self._used: set[tuple] = set()
-        self._spare: list[tuple[Buffer, Buffer]] = []
+        self._spare: list[tuple[Buffer, Buffer, np.ndarray | None]] = []
         """Buffers of freed recorded views, filled again by the next views recorded (a
         moving viewer records a view or two every frame: no GL buffer is made or deleted
         for them)."""
@@ -211,9 +217,12 @@ class SceneDrawer:
         else:
             self._looks.move_to_end(looks)
         surfaces = held.surfaces.copy()
+        columns = np.empty((len(parts), 2, 4, 4))
         if len(parts):
             surfaces[:, :3, :3] = np.linalg.inv(index.models[:, :3, :3]).transpose(0, 2, 1)
-        table = replace(held, surfaces=surfaces)
+            columns[:, 0] = index.models.transpose(0, 2, 1)  # GLSL's are by column
+            columns[:, 1] = surfaces.transpose(0, 2, 1)
+        table = replace(held, surfaces=surfaces, columns=columns)
         self._tables[index.objects_part] = table
         while len(self._tables) > 4:
             self._tables.popitem(last=False)
@@ -245,12 +254,8 @@ class SceneDrawer:
         """Positions ``(k,)`` of the parts of ``index`` that may show in ``view`` (within
         ``scissor``, when given): boxes within its clip volume, then of those, the ones
         that may colour a pixel (:func:`mirrorlab.culling.boxes_cover_pixels`)."""
-        planes = view.cull_planes
-        if scissor is not None:
-            planes = np.vstack([planes, culling.scissor_planes(view.view_projection,
-                                                               view.size, scissor)])
-        inside = np.flatnonzero(culling.boxes_in_view(index.part_centers, index.part_halves,
-                                                      planes))
+        inside = np.flatnonzero(culling.rows_in_view(index.objects_part.part_rows,
+                                                     view.cull_test(scissor)))
         if len(inside) <= FEW_PARTS:
             return inside  # too few for the pixel test to pay for itself
         covering = culling.boxes_cover_pixels(index.part_centers[inside],
@@ -353,7 +358,7 @@ class SceneDrawer:
                 if program is not per_draw:
                     program = self.begin(scene, view)
                 part = int(recorded.visible[step])
-                program.set_mat4("model", recorded.models[step])
+                program.set_mat4("model", np.ascontiguousarray(recorded.models[step]))
                 program.set_mat4("part", table.surfaces[part])
                 texture = table.textures[part]
                 if texture is not None:
@@ -379,20 +384,33 @@ class SceneDrawer:
             return recorded
         visible = (self.visible(index, view, scissor) if cull
                    else np.arange(len(index.parts)))
-        models = self.relative_models(index, visible, view)
-        data = np.empty((len(visible), 2, 4, 4), dtype=np.float32)
-        data[:, 0] = models.transpose(0, 2, 1)
-        data[:, 1] = table.surfaces[visible].transpose(0, 2, 1)  # GLSL's are by column
+        assert table.columns is not None
+        # relative to the view's origin in float64 (camera-relative rendering), then as
+        # float32: a model's translation is the last row of its columns
+        columns = table.columns[visible]  # a copy (fancy indexing)
+        columns[:, 0, 3, :3] -= view.origin
+        data = columns.astype(np.float32)
         steps, commands = draw_layout(table, visible)
-        parts, commands_buffer = (self._spare.pop() if self._spare
-                                  else (Buffer(self.shared.registry),
-                                        Buffer(self.shared.registry)))
-        recorded = RecordedView(parts, commands_buffer, steps, visible, models)
+        parts, commands_buffer, held = self._spare_for(commands)
+        recorded = RecordedView(parts, commands_buffer, commands, steps, visible,
+                                data[:, 0].transpose(0, 2, 1))
         recorded.parts.upload(GL.GL_SHADER_STORAGE_BUFFER, data)
-        recorded.commands.upload(GL.GL_DRAW_INDIRECT_BUFFER, commands)
-        GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
+        if held is not commands:
+            recorded.commands.upload(GL.GL_DRAW_INDIRECT_BUFFER, commands)
+            GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
         self._recorded[key] = recorded
         return recorded
+
+    def _spare_for(self, commands: np.ndarray) -> tuple[Buffer, Buffer, np.ndarray | None]:
+        """A pair of buffers for a view to record, and the commands the second holds:
+        the spare pair that holds ``commands`` already if there is one, else the last
+        spare, else a new pair."""
+        for position, (_, _, held) in enumerate(self._spare):
+            if held is commands:
+                return self._spare.pop(position)
+        if self._spare:
+            return self._spare.pop()
+        return Buffer(self.shared.registry), Buffer(self.shared.registry), None
 
     def end_frame(self) -> None:
         """Free the recorded views the frame just drawn did not draw, their buffers kept
@@ -402,7 +420,8 @@ class SceneDrawer:
         for key in [k for k in self._recorded if k not in self._used]:
             recorded = self._recorded.pop(key)
             if len(self._spare) < SPARE_BUFFERS:
-                self._spare.append((recorded.parts, recorded.commands))
+                self._spare.append((recorded.parts, recorded.commands,
+                                    recorded.commands_held))
             else:
                 recorded.parts.release()
                 recorded.commands.release()
@@ -432,9 +451,9 @@ class SceneDrawer:
         for recorded in self._recorded.values():
             recorded.parts.release()
             recorded.commands.release()
-        for buffers in self._spare:
-            for buffer in buffers:
-                buffer.release()
+        for parts, commands, _ in self._spare:
+            parts.release()
+            commands.release()
         self._recorded.clear()
         self._spare.clear()
         self._used.clear()

@@ -132,6 +132,34 @@ def test_the_renderer_draws_the_same_frames_by_either_draw_path():
 
 # --------------------------------------------------------------------------- testing plugin
 
+def test_the_renderer_reads_its_own_contexts_gl_state_once(monkeypatch):
+    """A Renderer's context is its own: the GL state is read at the first frame only,
+    and every frame, replayed or not, leaves that state (a caller's change made in it
+    between frames is not kept); the frames are those of a fresh renderer."""
+    import mirrorlab.renderer
+    from mirrorlab.gl.opengl import GL
+    from mirrorlab.passes.base import gl_state
+
+    lab = mirrorlab.load_scene("lab20")
+    poses = [lab, lab.with_angles((10.0, 20.0, 30.0)), lab, lab, lab]
+    with mirrorlab.Renderer(size=(64, 48)) as fresh:
+        expected = [fresh.render(posed) for posed in poses]
+    reads = []
+    monkeypatch.setattr(mirrorlab.renderer, "gl_state", lambda: reads.append(1) or gl_state())
+    with mirrorlab.Renderer(size=(64, 48)) as renderer:
+        home = None
+        for number, posed in enumerate(poses):
+            if number == 3:
+                GL.glEnable(GL.GL_BLEND)  # the caller's, in the renderer's context
+                GL.glViewport(0, 0, 3, 3)
+            image = renderer.render(posed)
+            home = home or gl_state()
+            assert gl_state() == home, f"frame {number} left another state"
+            assert_image_close(image, expected[number], tolerance=0,
+                               name=f"own_context_{number}")
+        assert renderer.last_stats.ran == ["camera"]  # still frames at the end
+    assert len(reads) == 1
+
 
 def test_the_plugin_renderer_fixture_draws_the_golden_frame(renderer):
     """A user's test as the mirrorlab.testing docstring shows it: the session's
