@@ -25,6 +25,7 @@ Pure numpy; the renderer (:mod:`mirrorlab.renderer`) runs what this decides.
 
 from __future__ import annotations
 
+import functools
 from collections import OrderedDict
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -362,11 +363,9 @@ class _Planner:
     def reach(self, view: View, reflector: PlanarReflector) -> float:
         """How far the world seen in ``reflector`` from ``view`` extends: reflections see
         the whole scene, whatever the camera's far plane (the truth's definition)."""
-        eye = view.eye
-        if eye is None:
+        if view.eye is None:
             return 0.0  # orthographic: no eye to measure from (not used)
-        mirrored = math3d.transform_points(math3d.reflection_matrix(reflector.plane), eye)[:3]
-        return bounds.reach(self.scene, mirrored)
+        return bounds.reach(self.scene, _mirrored_eye(view, reflector))
 
     def capture(self, reflector: Reflector, view: View, bounce: int,
                 footprint: Footprint | None = None) -> tuple[int, View | None]:
@@ -585,17 +584,27 @@ def reflector_footprint(reflector: Reflector, view: View) -> Footprint:
     return sphere_footprint(center, radius, view.view, view.projection, view.size)
 
 
+@functools.lru_cache(maxsize=64)
+def _mirrored_eye(view: View, reflector: PlanarReflector) -> np.ndarray:
+    """``view``'s eye ``(3,)`` reflected in ``reflector``'s plane (read-only; kept for the
+    last few: a still viewer's is the same every frame)."""
+    eye = math3d.transform_points(math3d.reflection_matrix(reflector.plane), view.eye)[:3]
+    return math3d.read_only(eye)
+
+
 GLASS_MARGIN = 2
 """Pixels a reflected capture's scissor reaches beyond its glass's footprint: the
 lookup's bilinear taps reach one texel past the point sampled, and one more for the
 rounding of the projective coordinates."""
 
 
+@functools.lru_cache(maxsize=64)
 def glass_scissor(reflector: PlanarReflector, capture: View) -> Rectangle | None:
     """The part of a reflected capture ``capture`` that its mirror ever samples: the
     glass's footprint in the capture, clipped to its sides only (the glass lies on the
     capture's oblique near plane), grown by :data:`GLASS_MARGIN`. None (all of it) when
-    the glass has no footprint there."""
+    the glass has no footprint there. Kept for the last few captures (a still viewer's
+    capture view is the same object every frame)."""
     footprint = polygon_footprint(reflector.corner_array, capture.view_projection,
                                   capture.size, depth=False)
     return footprint.rectangle(GLASS_MARGIN)

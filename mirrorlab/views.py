@@ -233,8 +233,18 @@ def reflected_capture_view(view: View, reflector: PlanarReflector,
     onto the glass (Lengyel's oblique projection), drawn at ``size`` (default:
     ``view``'s). Its :meth:`View.texture_matrix` maps a point on the glass to where
     ``view`` sees it. None when the viewer is in or behind the mirror's plane, where no
-    such camera exists (nothing of the glass's front is seen).
+    such camera exists (nothing of the glass's front is seen). The same (read-only)
+    :class:`View` object for the same view, mirror, size and far plane: a still viewer's
+    capture camera is worked out once.
     """
+    return _reflected_capture_view(view, reflector,
+                                   None if size is None else (int(size[0]), int(size[1])),
+                                   None if far is None else float(far))
+
+
+@functools.lru_cache(maxsize=64)
+def _reflected_capture_view(view: View, reflector: PlanarReflector,
+                            size: tuple[int, int] | None, far: float | None) -> View | None:
     plane = reflector.plane
     rigid, eye = _mirror_of(view, plane)
     # Flip clip-space x back as well: the capture keeps view's winding, and x runs the
@@ -255,7 +265,13 @@ def reflected_capture_view(view: View, reflector: PlanarReflector,
 def stencil_view(view: View, reflector: PlanarReflector, far: float | None = None) -> View:
     """The world seen in a stencil mirror from ``view``: drawn straight into ``view``'s
     target through ``view_projection @ reflection`` (its far plane at ``far``, default
-    ``view``'s), clipped by the mirror's plane."""
+    ``view``'s), clipped by the mirror's plane. The same (read-only) :class:`View` object
+    for the same view, mirror and far plane, as :func:`reflected_capture_view`."""
+    return _stencil_view(view, reflector, None if far is None else float(far))
+
+
+@functools.lru_cache(maxsize=64)
+def _stencil_view(view: View, reflector: PlanarReflector, far: float | None) -> View:
     rigid, eye = _mirror_of(view, reflector.plane)
     projection, depth_range = _reaching(view.projection @ _FLIP_X, view, far)
     return View(view=rigid, projection=projection, size=view.size, eye=eye,

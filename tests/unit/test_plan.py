@@ -451,6 +451,39 @@ def test_a_still_camera_has_one_read_only_view_and_a_moved_one_a_new_view():
     assert resized is not view and resized.draw_key != view.draw_key
 
 
+@pytest.mark.parametrize("method", ["reflected", "stencil"])
+def test_a_still_viewers_mirror_views_are_worked_out_once_and_a_moved_mirror_anew(method):
+    """The world a still viewer sees in a still mirror is one read-only view across frames
+    (a new pose of the robot does not change it); a mirror moved makes another, the one a
+    first computation gives."""
+    from mirrorlab import views
+    from mirrorlab.options import apply_options
+
+    lab = apply_options(load_scene("lab20"), {"method": method})
+
+    def mirror_view(scene: Scene) -> View:
+        plan = plan_frame(scene, SIZE, TextureState())
+        (draw,) = plan.top.shown
+        return draw.nested.view if method == "stencil" else draw.source
+
+    view = mirror_view(lab)
+    base, shoulder, elbow = lab.robot.angles
+    assert mirror_view(lab.with_angles((base, shoulder + 20.0, elbow))) is view
+    with pytest.raises(ValueError, match="read-only"):
+        view.cull_test()[0, 0] = 1.0
+    mirror = lab.reflector("mirror")
+    moved = lab.with_reflector("mirror", corners=tuple(  # a quarter unit off its plane
+        tuple(corner) for corner in mirror.corner_array + 0.25 * mirror.normal))
+    other = mirror_view(moved)
+    assert other is not view and other.draw_key != view.draw_key
+    views._reflected_capture_view.cache_clear()
+    views._stencil_view.cache_clear()
+    fresh = mirror_view(moved)
+    assert fresh is not other
+    for name in ("view", "projection", "view_projection", "cull_planes", "origin"):
+        assert np.array_equal(getattr(fresh, name), getattr(other, name)), name
+
+
 def test_views_too_magnified_to_round_still_have_keys_of_their_own():
     def magnified(scale: float) -> View:
         return View(view=np.eye(4), projection=np.diag([scale, scale, -1.0, 1.0]),
