@@ -588,6 +588,7 @@ def reflector_footprint(reflector: Reflector, view: View) -> Footprint:
 def _mirrored_eye(view: View, reflector: PlanarReflector) -> np.ndarray:
     """``view``'s eye ``(3,)`` reflected in ``reflector``'s plane (read-only; kept for the
     last few: a still viewer's is the same every frame)."""
+    assert view.eye is not None
     eye = math3d.transform_points(math3d.reflection_matrix(reflector.plane), view.eye)[:3]
     return math3d.read_only(eye)
 
