@@ -22,14 +22,18 @@ def read_only(array: np.ndarray) -> np.ndarray:
     return array
 
 
+_IDENTITY = np.eye(4)
+_IDENTITY.flags.writeable = False
+
+
 def identity() -> np.ndarray:
-    """The ``(4, 4)`` identity."""
-    return np.eye(4)
+    """The ``(4, 4)`` identity (a new array: a copy is cheaper than ``np.eye``)."""
+    return _IDENTITY.copy()
 
 
 def translate(offset: Vec3) -> np.ndarray:
     """Translation by ``offset`` ``(3,)``."""
-    m = np.eye(4)
+    m = identity()
     m[:3, 3] = np.asarray(offset, dtype=np.float64)
     return m
 
@@ -51,7 +55,7 @@ def rotate(angle_deg: float, axis: Vec3) -> np.ndarray:
     x, y, z = a / length
     c, s = np.cos(np.radians(angle_deg)), np.sin(np.radians(angle_deg))
     t = 1.0 - c
-    m = np.eye(4)
+    m = identity()
     m[:3, :3] = [
         [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
         [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
@@ -91,7 +95,7 @@ def look_at(eye: Vec3, target: Vec3, up: Vec3) -> np.ndarray:
         raise ValueError(f"up vector {tuple(up)} is parallel to the view direction")
     side /= s_len
     true_up = _cross3(side, forward)
-    m = np.eye(4)
+    m = identity()
     m[0, :3], m[1, :3], m[2, :3] = side, true_up, -forward
     m[:3, 3] = -m[:3, :3] @ eye_v
     return m
@@ -105,7 +109,7 @@ def ortho(
         raise ValueError(
             f"ortho extents must be non-degenerate, got {(left, right, bottom, top, near, far)}"
         )
-    m = np.eye(4)
+    m = identity()
     m[0, 0] = 2.0 / (right - left)
     m[1, 1] = 2.0 / (top - bottom)
     m[2, 2] = -2.0 / (far - near)

@@ -273,14 +273,14 @@ class _Planner:
             if excluded is not None and excluded in index.names:
                 codes[index.names[excluded]] = EXCLUDED
         shown = []
-        for i in np.flatnonzero(codes <= BACK):
+        for i in (codes <= BACK).nonzero()[0]:
             reflector = reflectors[i]
             footprint = footprints.get(int(i))
             if codes[i] == BACK:
                 shown.append(ReflectorDraw(reflector, "back", BACK_REASON, footprint=footprint))
             else:
                 shown.append(self.draw(reflector, view, bounce, footprint, scissor))
-        hidden = np.flatnonzero(codes > EXCLUDED)
+        hidden = (codes > EXCLUDED).nonzero()[0]
         return ViewPlan(view, tuple(shown), excluded, reflectors, hidden, codes[hidden],
                         scissor)
 

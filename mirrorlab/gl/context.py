@@ -23,8 +23,6 @@ import functools
 import os
 import re
 import sys
-from collections.abc import Iterator
-from contextlib import contextmanager
 from typing import Literal, Protocol, Self
 
 from mirrorlab.errors import (
@@ -181,20 +179,31 @@ def check_gl_errors(where: str) -> None:
         raise pass_error(where, code, detail)
 
 
-@contextmanager
-def gl_pass(name: str) -> Iterator[None]:
+class gl_pass:
     """Run a pass's GL calls: a GL error raised by PyOpenGL inside, or left in the error
     queue or the debug log after, becomes a :class:`~mirrorlab.errors.GLPassError` that
-    names the pass ``name`` (``capture:mirror``, ``camera``)."""
-    try:
-        yield
-    except _pyopengl()[1] as exc:
-        operation = getattr(exc.baseOperation, "__name__", str(exc.baseOperation))
-        messages = "; ".join(text for _, text in _debug_errors)
-        _debug_errors.clear()
-        detail = f"{operation} failed" + (f": {messages}" if messages else "")
-        raise pass_error(name, int(exc.err), detail) from None
-    check_gl_errors(name)
+    names the pass ``name`` (``capture:mirror``, ``camera``). (A class, not a generator:
+    a frame enters a few every time.)"""
+
+    __slots__ = ("name",)
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, kind: type[BaseException] | None, exc: BaseException | None,
+                 traceback: object) -> None:
+        if kind is None:
+            check_gl_errors(self.name)
+            return
+        if isinstance(exc, _pyopengl()[1]):
+            operation = getattr(exc.baseOperation, "__name__", str(exc.baseOperation))
+            messages = "; ".join(text for _, text in _debug_errors)
+            _debug_errors.clear()
+            detail = f"{operation} failed" + (f": {messages}" if messages else "")
+            raise pass_error(self.name, int(exc.err), detail) from None
 
 
 _debug_errors: list[tuple[int, str]] = []

@@ -254,8 +254,8 @@ class SceneDrawer:
         """Positions ``(k,)`` of the parts of ``index`` that may show in ``view`` (within
         ``scissor``, when given): boxes within its clip volume, then of those, the ones
         that may colour a pixel (:func:`mirrorlab.culling.boxes_cover_pixels`)."""
-        inside = np.flatnonzero(culling.rows_in_view(index.objects_part.part_rows,
-                                                     view.cull_test(scissor)))
+        inside = culling.rows_in_view(index.objects_part.part_rows,
+                                      view.cull_test(scissor)).nonzero()[0]
         if len(inside) <= FEW_PARTS:
             return inside  # too few for the pixel test to pay for itself
         covering = culling.boxes_cover_pixels(index.part_centers[inside],
