@@ -127,13 +127,16 @@ class Renderer:
         return self._renderer
 
     def _target_of(self, size: tuple[int, int]) -> Framebuffer:
+        from mirrorlab.gl.context import gl_pass
         from mirrorlab.gl.resources import Framebuffer
 
         if self._target is None or self._target.size != size:
-            if self._target is not None:
-                self._target.release()
-            assert self._context is not None
-            self._target = Framebuffer(self._context.resources, *size)
+            with gl_pass("the frame's target"):
+                if self._target is not None:
+                    self._target.release()
+                    self._target = None
+                assert self._context is not None
+                self._target = Framebuffer(self._context.resources, *size)
         return self._target
 
     def render(self, scene: SceneLike, *, frame: int = 0,
@@ -151,8 +154,7 @@ class Renderer:
         self.open()
         assert self._context is not None and self._renderer is not None
         self._context.make_current()
-        with gl_pass("the frame's target"):
-            target = self._target_of(check_size(size) if size is not None else self.size)
+        target = self._target_of(check_size(size) if size is not None else self.size)
         self.last_stats = self._renderer.render(posed, target, use_plan, tiny_pixels)
         with gl_pass("reading the frame back"):
             return Frame(target.read())

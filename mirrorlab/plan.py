@@ -273,9 +273,9 @@ class _Planner:
             if excluded is not None and excluded in index.names:
                 codes[index.names[excluded]] = EXCLUDED
         shown = []
-        for i in (codes <= BACK).nonzero()[0]:
+        for i in (codes <= BACK).nonzero()[0].tolist():
             reflector = reflectors[i]
-            footprint = footprints.get(int(i))
+            footprint = footprints.get(i)
             if codes[i] == BACK:
                 shown.append(ReflectorDraw(reflector, "back", BACK_REASON, footprint=footprint))
             else:

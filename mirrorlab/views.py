@@ -104,6 +104,16 @@ class View:
         return math3d.read_only(eye_position(self.view))
 
     @cached_property
+    def column_offset(self) -> np.ndarray:
+        """``(2, 4, 4)``: :attr:`origin` where a part's model matrix, given by columns (as
+        the packed draw's parts buffer holds it, beside its surface matrix), keeps its
+        translation, 0 elsewhere: what is taken from a part's columns to make them
+        origin-relative."""
+        offset = np.zeros((2, 4, 4))
+        offset[0, 3, :3] = self.origin
+        return math3d.read_only(offset)
+
+    @cached_property
     def relative_view_projection(self) -> np.ndarray:
         """``(4, 4)`` float64: :attr:`view_projection` for points given relative to
         :attr:`origin` (its translation is the eye's own, near zero), so that float32 on

@@ -152,22 +152,23 @@ class ResourceRegistry:
 
 @functools.cache
 def _pyopengl() -> tuple:
-    """PyOpenGL's ``GL`` and ``GLError``, imported on first use (after the platform is
-    chosen) and then kept: a frame checks for errors after every pass."""
-    from OpenGL import GL
+    """PyOpenGL's raw ``glGetError`` (a plain ctypes call) and ``GLError``, imported on
+    first use (after the platform is chosen) and then kept: a frame checks for errors
+    after every pass."""
     from OpenGL.error import GLError
+    from OpenGL.raw.GL.VERSION.GL_1_0 import glGetError
 
-    return GL, GLError
+    return glGetError, GLError
 
 
 def check_gl_errors(where: str) -> None:
     """Raise :class:`~mirrorlab.errors.GLPassError` naming ``where`` if the GL error queue
     holds anything, or the debug callback (see :func:`enable_debug_output`) caught an
     error; :class:`~mirrorlab.errors.GLOutOfMemoryError` for GL_OUT_OF_MEMORY."""
-    gl = _pyopengl()[0]
+    get_error = _pyopengl()[0]
     errors = []
     for _ in range(16):
-        code = int(gl.glGetError())
+        code = int(get_error())
         if code == 0:  # GL_NO_ERROR
             break
         errors.append(code)

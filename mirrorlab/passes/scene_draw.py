@@ -386,10 +386,10 @@ class SceneDrawer:
                    else np.arange(len(index.parts)))
         assert table.columns is not None
         # relative to the view's origin in float64 (camera-relative rendering), then as
-        # float32: a model's translation is the last row of its columns
-        columns = table.columns[visible]  # a copy (fancy indexing)
-        columns[:, 0, 3, :3] -= view.origin
-        data = columns.astype(np.float32)
+        # float32 (the view sees every part more often than not: no copy of them first)
+        columns = (table.columns if len(visible) == len(table.columns)
+                   else table.columns[visible])
+        data = (columns - view.column_offset).astype(np.float32)
         steps, commands = draw_layout(table, visible)
         parts, commands_buffer, held = self._spare_for(commands)
         recorded = RecordedView(parts, commands_buffer, commands, steps, visible,
