@@ -131,8 +131,8 @@ class ObjectArrays:
         centers = np.array([c for c, _ in local])
         halves = np.array([h for _, h in local])
         turn = self.models[:, :3, :3]
-        world = np.einsum("nij,nj->ni", turn, centers) + self.models[:, :3, 3]
-        reach = np.einsum("nij,nj->ni", np.abs(turn), halves)  # the turned box's box
+        world = (turn @ centers[:, :, None])[:, :, 0] + self.models[:, :3, 3]
+        reach = (np.abs(turn) @ halves[:, :, None])[:, :, 0]  # the turned box's box
         return read_only(world), read_only(reach)
 
     @property

@@ -26,7 +26,7 @@ is the same, pixel for pixel.
 from __future__ import annotations
 
 from collections import OrderedDict
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -99,8 +99,8 @@ class PartTable:
     packed path's parts buffer holds them (None until a pose fills them in)."""
     layouts: OrderedDict[bytes, Layout] = field(default_factory=OrderedDict)
     """The last few :func:`draw_layout` s, by the visible parts' bytes: shared by every
-    pose's table of the same parts (``replace`` keeps the dictionary), since a layout
-    depends on the meshes and textures alone."""
+    pose's table of the same parts (the same dictionary), since a layout depends on the
+    meshes and textures alone."""
 
 
 @dataclass(eq=False)
@@ -222,7 +222,8 @@ class SceneDrawer:
             surfaces[:, :3, :3] = np.linalg.inv(index.models[:, :3, :3]).transpose(0, 2, 1)
             columns[:, 0] = index.models.transpose(0, 2, 1)  # GLSL's are by column
             columns[:, 1] = surfaces.transpose(0, 2, 1)
-        table = replace(held, surfaces=surfaces, columns=columns)
+        table = PartTable(surfaces, held.textures, held.texture_ids, held.worn, held.ranges,
+                          held.mesh_ids, columns, held.layouts)
         self._tables[index.objects_part] = table
         while len(self._tables) > 4:
             self._tables.popitem(last=False)

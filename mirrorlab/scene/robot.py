@@ -7,6 +7,7 @@ mirror-symmetric and a flipped reflection shows. World units. Numpy only.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -131,7 +132,7 @@ def robot_parts(robot: RobotObject) -> tuple[Part, ...]:
             local = offset
         else:
             angle = float(robot.angles[joint])
-            if not np.isfinite(angle):
+            if not math.isfinite(angle):
                 raise ValueError(f"joint angle for {node.name!r} must be finite, got "
                                  f"{robot.angles[joint]!r}")
             local = offset @ _joint_rotation(angle.hex(), node.joint_axis)
