@@ -12,6 +12,7 @@ being drawn has it any more.
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
 from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
 
@@ -78,6 +79,20 @@ class RecordedFrame:
     found: dict[str, object]
     calls: list
     stats: FrameStats
+
+
+def _drawn_views(plan: FramePlan) -> Iterator[tuple[View, Rectangle | None]]:
+    """Each view (with its scissor) the frame of ``plan`` draws the scene's objects in:
+    the captures' cameras, the camera's view, and the worlds seen in stencil mirrors in
+    any of them."""
+    pending = [view for step in plan.passes if step.runs and step.name != "camera"
+               for view in step.views]
+    pending.append(plan.top)
+    while pending:
+        view_plan = pending.pop()
+        yield view_plan.view, view_plan.scissor
+        pending += [draw.nested for draw in view_plan.shown
+                    if draw.mode == "stencil" and draw.nested is not None]
 
 
 def _pass_key(reflector: Reflector, background: Background) -> tuple:
@@ -263,6 +278,7 @@ class SceneRenderer:
         draws = 0
         index = scene_index(scene)
         try:
+            self.drawer.prepare(scene, _drawn_views(plan), use_plan)
             for step in plan.passes:
                 if not step.runs or step.name == "camera":
                     continue

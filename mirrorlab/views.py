@@ -121,6 +121,15 @@ class View:
         return math3d.read_only(np.asarray(self.projection, dtype=np.float64) @ self.relative_view)
 
     @cached_property
+    def uniforms(self) -> tuple[np.ndarray, tuple[float, float, float, float] | None]:
+        """What a program draws the view with: :attr:`relative_view_projection` as float32
+        ``(4, 4)`` (read-only) and the clip plane for origin-relative points
+        (:meth:`relative_plane`), None without one; worked out once for a view."""
+        plane = self.relative_plane(self.clip_plane)
+        return (math3d.read_only(self.relative_view_projection.astype(np.float32)),
+                None if plane is None else tuple(float(v) for v in plane))  # type: ignore[return-value]
+
+    @cached_property
     def relative_view(self) -> np.ndarray:
         """``(4, 4)``: the rigid :attr:`view` for points relative to :attr:`origin`."""
         return math3d.read_only(np.asarray(self.view, dtype=np.float64)

@@ -364,6 +364,7 @@ class HeadlessContext(_Context):
                                             flags if debug else None)
         if not self.context:
             raise GLContextError("eglCreateContext failed for desktop OpenGL")
+        self._address = ctypes.cast(self.context, ctypes.c_void_p).value
         super().__init__()
         self.make_current()
         if debug:
@@ -371,6 +372,9 @@ class HeadlessContext(_Context):
 
     def make_current(self) -> None:
         egl = self._egl
+        current = egl.eglGetCurrentContext()  # a query: cheaper than making it current again
+        if current and ctypes.cast(current, ctypes.c_void_p).value == self._address:
+            return
         if not egl.eglMakeCurrent(self.display, egl.EGL_NO_SURFACE, egl.EGL_NO_SURFACE,
                                   self.context):
             raise GLContextError("eglMakeCurrent failed (surfaceless contexts need Mesa)")

@@ -140,13 +140,13 @@ def set_view_uniforms(program: Program, view: View) -> None:
     positions relative to the view's origin (camera-relative rendering: the shader's
     ``model`` matrices are :meth:`View.relative`, so float32 never holds a large world
     position; see :attr:`View.origin`)."""
-    program.set_mat4("view_projection", view.relative_view_projection)
+    program.set_mat4("view_projection", view.uniforms[0])
     set_clip_plane(program, view)
 
 
 def set_clip_plane(program: Program, view: View) -> None:
     """``clip_plane`` of ``view`` on the bound ``program``, for origin-relative positions."""
-    plane = view.relative_plane(view.clip_plane)
+    plane = view.uniforms[1]
     program.set_vec4("clip_plane", NO_CLIP if plane is None else plane)
 
 

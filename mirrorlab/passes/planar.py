@@ -30,6 +30,10 @@ def mirror_model(reflector: PlanarReflector) -> np.ndarray:
     return math3d.translate(reflector.center)
 
 
+QUAD_MODELS_KEPT = 4
+"""Views whose quad model a planar pass keeps (a frame draws a mirror in a view or two)."""
+
+
 class PlanarPass:
     """The parts of a planar technique that do not depend on the technique: drawing the
     mirror plain, its back alone, or its front with a texture. The mirror may move
@@ -42,6 +46,8 @@ class PlanarPass:
         self.reflector = reflector
         self.quad = MeshBuffer(shared.registry, *mirror_vertices(reflector))
         self._quad_of = reflector
+        self._placed: list[tuple[View, PlanarReflector, np.ndarray]] = []
+        """The quad's origin-relative model in the last few views (:meth:`quad_model`)."""
         self.mirror_program = shared.program("mirror.vert", "mirror.frag")
         self.flat_program = shared.program("flat.vert", "flat.frag")
         self.mirror_program.use()
@@ -57,12 +63,23 @@ class PlanarPass:
             self.quad.update_vertices(mirror_vertices(reflector)[0])
             self._quad_of = reflector
 
+    def quad_model(self, view: View) -> np.ndarray:
+        """``(4, 4)``: the quad's model relative to ``view``'s origin (:meth:`View.relative`
+        of :func:`mirror_model`), kept for the last few views while the mirror stays."""
+        reflector = self.reflector
+        for held_view, held_reflector, model in self._placed:
+            if held_view is view and held_reflector is reflector:
+                return model
+        model = math3d.read_only(view.relative(mirror_model(reflector)))
+        self._placed = [(view, reflector, model), *self._placed[:QUAD_MODELS_KEPT - 1]]
+        return model
+
     def flat_quad(self, view: View, color, far_depth: bool) -> None:
         """The quad in one flat colour (``far_depth``: at the far plane's depth)."""
         program = self.flat_program
         program.use()
         set_view_uniforms(program, view)
-        program.set_mat4("model", view.relative(mirror_model(self.reflector)))
+        program.set_mat4("model", self.quad_model(view))
         program.set_vec3("color", color)
         program.set_int("far_depth", far_depth)
         self.quad.draw()
@@ -84,7 +101,7 @@ class PlanarPass:
         GL.glDisable(GL.GL_CULL_FACE)
         program.use()
         set_view_uniforms(program, view)
-        program.set_mat4("model", view.relative(mirror_model(self.reflector)))
+        program.set_mat4("model", self.quad_model(view))
         program.set_vec3("backing_color", self.reflector.backing)
         program.set_int("projective", texture_matrix is not None)
         if texture_matrix is not None:

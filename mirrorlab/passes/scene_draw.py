@@ -26,6 +26,7 @@ is the same, pixel for pixel.
 from __future__ import annotations
 
 from collections import OrderedDict
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -374,6 +375,21 @@ class SceneDrawer:
             packed.multi_draw(first, count)
         GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
         return len(recorded.steps)
+
+    def prepare(self, scene: Scene, views: Iterable[tuple[View, Rectangle | None]],
+                cull: bool = True) -> None:
+        """Record, on the packed path, the draws of the ``views`` (each with its scissor) a
+        frame is about to draw: culling and the parts' data of every view are worked out
+        in one stretch, before the frame's first pass makes Python wait for the
+        rasteriser (after which its caches are cold). A view recorded already is left."""
+        if self.draw_path != "packed":
+            return
+        index = scene_index(scene)
+        if not index.parts:
+            return
+        table = self._table(index)
+        for view, scissor in views:
+            self._record(index, view, table, scissor, cull)
 
     def _record(self, index: SceneIndex, view: View, table: PartTable,
                 scissor: Rectangle | None, cull: bool) -> RecordedView:

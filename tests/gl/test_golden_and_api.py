@@ -132,6 +132,28 @@ def test_the_renderer_draws_the_same_frames_by_either_draw_path():
 
 # --------------------------------------------------------------------------- testing plugin
 
+def test_two_renderers_in_turn_each_draw_in_their_own_context():
+    """Each frame makes its renderer's context current (when another one is), so two
+    renderers used in turn on one thread draw what each draws alone."""
+    scenes = [("lab20", {}), ("mirror_and_sphere", {}), ("lab20", {"method": "stencil"})]
+    sizes = ((48, 40), (40, 56))  # GL names alike in both contexts: the sizes tell them apart
+    expected = {}
+    for size in sizes:
+        with mirrorlab.Renderer(size=size) as alone:
+            expected[size] = [alone.render(name, **options) for name, options in scenes]
+    with mirrorlab.Renderer(size=sizes[0]) as first, \
+            mirrorlab.Renderer(size=sizes[1]) as second:
+        for _ in range(2):
+            for number, (name, options) in enumerate(scenes):
+                for renderer in (first, second):
+                    assert_image_close(renderer.render(name, **options),
+                                       expected[renderer.size][number], tolerance=0,
+                                       name=f"two_renderers_{name}")
+        first.close()  # its objects and context go; the other's stay
+        assert_image_close(second.render("lab20"), expected[sizes[1]][0], tolerance=0,
+                           name="two_renderers_after_close")
+
+
 def test_the_renderer_reads_its_own_contexts_gl_state_once(monkeypatch):
     """A Renderer's context is its own: the GL state is read at the first frame only,
     and every frame, replayed or not, leaves that state (a caller's change made in it

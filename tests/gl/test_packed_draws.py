@@ -117,6 +117,33 @@ def test_a_new_pose_keeps_the_layout_of_its_parts_and_draws_as_a_fresh_renderer(
     assert made_per_frame[2] > 0 and made_per_frame[5] > 0
 
 
+@pytest.mark.parametrize("method", ["reflected", "stencil", "ortho"])
+def test_a_frames_views_are_recorded_before_its_first_draw(scene_renderer, monkeypatch,
+                                                            method):
+    """Every view a frame draws objects in (a capture's camera, the camera's view, the
+    world in a stencil mirror) has its draw recorded before the first multi-draw, and
+    the drawing uploads nothing more."""
+    events = []
+    record = scene_draw.SceneDrawer._record
+    draw_packed = scene_draw.SceneDrawer._draw_packed
+    monkeypatch.setattr(scene_draw.SceneDrawer, "_record", lambda self, index, view, *rest: (
+        events.append(("record", view.label)), record(self, index, view, *rest))[1])
+    monkeypatch.setattr(scene_draw.SceneDrawer, "_draw_packed", lambda self, scene, view, *a: (
+        events.append(("draw", view.label)), draw_packed(self, scene, view, *a))[1])
+    upload = Buffer.upload
+    monkeypatch.setattr(Buffer, "upload", lambda self, target, data: (
+        events.append(("upload", "")), upload(self, target, data))[1])
+    scene = apply_options(mirrorlab.load_scene("lab20"), {"method": method})
+    base, shoulder, elbow = scene.robot.angles
+    draw(scene_renderer, scene.with_angles((base, shoulder, elbow + 7.0)), SIZE)
+    drawn = [label for kind, label in events if kind == "draw"]
+    assert len(drawn) == 2, events  # the mirror's world and the camera's view
+    first_draw = events.index(("draw", drawn[0]))
+    prepared = {label for kind, label in events[:first_draw] if kind == "record"}
+    assert prepared == set(drawn), events
+    assert ("upload", "") not in events[first_draw:], events  # drawing finds them recorded
+
+
 def test_a_thousand_boxes_of_one_mesh_are_one_command(scene_renderer, registry):
     scene = lab_reflected()
     camera = scene.camera
