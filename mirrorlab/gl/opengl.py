@@ -2,9 +2,10 @@
 the platform. Modules that call GL directly import it from here (``from
 mirrorlab.gl.opengl import GL``), so import order can never pick the wrong platform.
 
-``RAW`` holds PyOpenGL's raw entry points of the few calls a frame makes around itself
-(saving and restoring the state it changes): plain ctypes calls, without PyOpenGL's
-argument conversion and per-call error check, a few times cheaper. Errors still show at
+``RAW`` holds PyOpenGL's raw entry points of the calls a frame makes around itself
+(saving and restoring the state it changes) and of those whose wrappers convert their
+arguments in Python (a buffer's upload, the readback): plain ctypes calls, without
+PyOpenGL's argument conversion and per-call error check, cheaper. Errors still show at
 the next checked call or pass check (:func:`mirrorlab.gl.context.check_gl_errors`)."""
 
 from types import SimpleNamespace
@@ -12,14 +13,14 @@ from types import SimpleNamespace
 from mirrorlab.gl import context as _context  # noqa: F401  (sets PYOPENGL_PLATFORM first)
 
 from OpenGL import GL  # isort: skip
-from OpenGL.raw.GL.VERSION import GL_1_0, GL_1_3, GL_2_0, GL_3_0  # isort: skip
+from OpenGL.raw.GL.VERSION import GL_1_0, GL_1_3, GL_1_5, GL_2_0, GL_3_0  # isort: skip
 
 RAW = SimpleNamespace(**{name: getattr(module, name) for module, names in (
     (GL_1_0, ("glIsEnabled", "glGetIntegerv", "glGetBooleanv", "glGetFloatv", "glEnable",
               "glDisable", "glFrontFace", "glCullFace", "glDepthFunc", "glDepthMask",
               "glStencilMask", "glStencilFunc", "glStencilOp", "glColorMask", "glViewport",
-              "glScissor", "glClearColor")),
-    (GL_1_3, ("glActiveTexture",)), (GL_2_0, ("glUseProgram",)),
+              "glScissor", "glClearColor", "glReadPixels")),
+    (GL_1_3, ("glActiveTexture",)), (GL_1_5, ("glBufferSubData",)), (GL_2_0, ("glUseProgram",)),
     (GL_3_0, ("glBindVertexArray", "glBindFramebuffer"))) for name in names})
 
 __all__ = ["GL", "RAW"]

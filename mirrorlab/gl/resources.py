@@ -21,7 +21,7 @@ import numpy as np
 
 from mirrorlab.errors import GLLimitError
 from mirrorlab.gl.context import GLContextError, ResourceRegistry
-from mirrorlab.gl.opengl import GL
+from mirrorlab.gl.opengl import GL, RAW
 from mirrorlab.shaders import shader_source
 
 
@@ -312,7 +312,7 @@ def read_pixels(width: int, height: int, rows: np.ndarray | None = None) -> np.n
     # of Python at 512 x 512, more than the driver's copy (0.27 ms).
     if rows is None:
         rows = np.empty((height, width, 3), dtype=np.uint8)
-    GL.glReadPixels(0, 0, width, height, GL.GL_RGB, GL.GL_UNSIGNED_BYTE, rows)
+    RAW.glReadPixels(0, 0, width, height, GL.GL_RGB, GL.GL_UNSIGNED_BYTE, rows)
     return rows[::-1].copy()
 
 
@@ -537,7 +537,7 @@ class Buffer(_Resource):
             GL.glBufferData(target, data.nbytes, data, GL.GL_DYNAMIC_DRAW)
             self.capacity = data.nbytes
         elif data.nbytes:
-            GL.glBufferSubData(target, 0, data.nbytes, data)
+            RAW.glBufferSubData(target, 0, data.nbytes, data)
         self.size = data.nbytes
 
     def _free(self) -> None:

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+from mirrorlab import math3d
 from mirrorlab.gl.context import ResourceRegistry
 from mirrorlab.gl.opengl import GL, RAW
 from mirrorlab.gl.resources import (
@@ -273,16 +274,15 @@ class ReflectorPass(Protocol):
 
 @functools.lru_cache(maxsize=32)
 def _light_arrays(lights: tuple[Light, ...]) -> tuple[np.ndarray, np.ndarray]:
-    """Unit directions and colour times intensity, ``(4, 3)`` float32 each (zero rows past
-    the last light), worked out once per set of lights."""
+    """Unit directions and colour times intensity, ``(k, 3)`` float32 each for the ``k``
+    lights, worked out once per set of lights."""
     directions = np.zeros((4, 3), dtype=np.float32)
     colors = np.zeros((4, 3), dtype=np.float32)
     for i, light in enumerate(lights):
         direction = np.asarray(light.direction, dtype=np.float64)
         directions[i] = direction / np.linalg.norm(direction)
         colors[i] = np.asarray(light.color, dtype=np.float64) * light.intensity
-    directions.flags.writeable = colors.flags.writeable = False
-    return directions, colors
+    return math3d.read_only(directions[:len(lights)]), math3d.read_only(colors[:len(lights)])
 
 
 def light_uniforms(program: Program, scene: Scene) -> None:
@@ -291,6 +291,6 @@ def light_uniforms(program: Program, scene: Scene) -> None:
     count = len(scene.lights)
     if count:  # with none, the arrays are not read, so not in the program
         directions, colors = _light_arrays(tuple(scene.lights))
-        program.set_vec3_array("light_directions", directions[:count])
-        program.set_vec3_array("light_colors", colors[:count])
+        program.set_vec3_array("light_directions", directions)
+        program.set_vec3_array("light_colors", colors)
     program.set_float("ambient", scene.ambient)

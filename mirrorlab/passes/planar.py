@@ -64,13 +64,14 @@ class PlanarPass:
             self._quad_of = reflector
 
     def quad_model(self, view: View) -> np.ndarray:
-        """``(4, 4)``: the quad's model relative to ``view``'s origin (:meth:`View.relative`
-        of :func:`mirror_model`), kept for the last few views while the mirror stays."""
+        """``(4, 4)`` float32: the quad's model relative to ``view``'s origin
+        (:meth:`View.relative` of :func:`mirror_model`, composed in float64), kept for the
+        last few views while the mirror stays."""
         reflector = self.reflector
         for held_view, held_reflector, model in self._placed:
             if held_view is view and held_reflector is reflector:
                 return model
-        model = math3d.read_only(view.relative(mirror_model(reflector)))
+        model = math3d.read_only(view.relative(mirror_model(reflector)).astype(np.float32))
         self._placed = [(view, reflector, model), *self._placed[:QUAD_MODELS_KEPT - 1]]
         return model
 
