@@ -4,9 +4,10 @@ mirrorlab.gl.opengl import GL``), so import order can never pick the wrong platf
 
 ``RAW`` holds PyOpenGL's raw entry points of the calls a frame makes around itself
 (saving and restoring the state it changes) and of those whose wrappers convert their
-arguments in Python (a buffer's upload, the readback): plain ctypes calls, without
-PyOpenGL's argument conversion and per-call error check, cheaper. Errors still show at
-the next checked call or pass check (:func:`mirrorlab.gl.context.check_gl_errors`)."""
+arguments in Python (a buffer's upload, matrix and array uniforms, the readback): plain
+ctypes calls, without PyOpenGL's argument conversion and per-call error check, cheaper.
+Errors still show at the next checked call or pass check
+(:func:`mirrorlab.gl.context.check_gl_errors`)."""
 
 from types import SimpleNamespace
 
@@ -20,7 +21,8 @@ RAW = SimpleNamespace(**{name: getattr(module, name) for module, names in (
               "glDisable", "glFrontFace", "glCullFace", "glDepthFunc", "glDepthMask",
               "glStencilMask", "glStencilFunc", "glStencilOp", "glColorMask", "glViewport",
               "glScissor", "glClearColor", "glReadPixels")),
-    (GL_1_3, ("glActiveTexture",)), (GL_1_5, ("glBufferSubData",)), (GL_2_0, ("glUseProgram",)),
+    (GL_1_3, ("glActiveTexture",)), (GL_1_5, ("glBufferSubData",)),
+    (GL_2_0, ("glUseProgram", "glUniformMatrix4fv", "glUniform3fv")),
     (GL_3_0, ("glBindVertexArray", "glBindFramebuffer"))) for name in names})
 
 __all__ = ["GL", "RAW"]

@@ -143,7 +143,7 @@ class Program(_Resource):
         data = np.asarray(matrix, dtype=np.float32)
         location = self.location(uniform)
         if not self._unchanged(location, data.tobytes()):
-            GL.glUniformMatrix4fv(location, 1, GL.GL_TRUE, data)
+            RAW.glUniformMatrix4fv(location, 1, GL.GL_TRUE, data)
 
     def set_mat3(self, uniform: str, matrix: np.ndarray) -> None:
         """Set a ``(3, 3)`` row-major (numpy) matrix."""
@@ -175,7 +175,7 @@ class Program(_Resource):
         data = np.asarray(values, dtype=np.float32)
         location = self.location(uniform)
         if not self._unchanged(location, data.tobytes()):
-            GL.glUniform3fv(location, len(data), data)
+            RAW.glUniform3fv(location, len(data), data)
 
     def set_float(self, uniform: str, value: float) -> None:
         location = self.location(uniform)
