@@ -196,6 +196,8 @@ class SceneDrawer:
         """The per-draw path's record of a view: the visible parts and their models."""
         self.parts_drawn = 0
         """Parts drawn since it was last set to 0 (the renderer does, each frame)."""
+        self._lit: dict[Program, tuple] = {}
+        """The lights and ambient light each lit program was last given."""
 
     # ------------------------------------------------------------- parts
 
@@ -300,7 +302,10 @@ class SceneDrawer:
         assert program is not None
         program.use()
         set_view_uniforms(program, view)
-        light_uniforms(program, scene)
+        lights = (scene.lights, scene.ambient)
+        if self._lit.get(program) != lights:  # only this drawer lights its programs
+            light_uniforms(program, scene)
+            self._lit[program] = lights
         return program
 
     def draw(self, scene: Scene, view: View, scissor: Rectangle | None = None,
@@ -478,6 +483,7 @@ class SceneDrawer:
         self._looks.clear()
         self._each.clear()
         self._programs.clear()  # the shared resources own them
+        self._lit.clear()
 
 
 def _view_key(index: SceneIndex, view: View, scissor: Rectangle | None) -> tuple:

@@ -74,3 +74,26 @@ def test_every_light_count_is_lit_as_the_tracer_lights_it(registry, truths, draw
             previous = image
     finally:
         renderer.release()
+
+
+def test_lights_changed_at_the_same_count_are_the_ones_drawn(registry):
+    """One program draws every scene of a light count: a change of the lights' directions,
+    colours or the ambient light (the program kept) shows in the next frame, as a fresh
+    renderer draws it."""
+    lab = lit_scene(2)
+    scenes = [lab, replace(lab, lights=LIGHTS[2:4]), replace(lab, ambient=lab.ambient + 0.2),
+              lab]
+    renderer = SceneRenderer(registry)
+    try:
+        images = [draw(renderer, scene, SIZE)[0] for scene in scenes]
+    finally:
+        renderer.release()
+    for scene, image in zip(scenes, images, strict=True):
+        fresh = SceneRenderer(registry)
+        try:
+            assert np.array_equal(image, draw(fresh, scene, SIZE)[0])
+        finally:
+            fresh.release()
+    assert not np.array_equal(images[0], images[1])
+    assert not np.array_equal(images[0], images[2])
+    assert np.array_equal(images[0], images[3])
