@@ -177,6 +177,16 @@ class View:
         return _BIAS @ self.view_projection
 
 
+@functools.lru_cache(maxsize=64)
+def projective_lookup(source: View, viewer: View) -> np.ndarray:
+    """``(4, 4)`` float32, read-only: :meth:`View.texture_matrix` of the capture view
+    ``source`` for points given relative to ``viewer``'s origin (composed in float64), the
+    texture lookup of a surface ``viewer`` draws with what ``source`` captured; kept for
+    the last few pairs (a still viewer's is the same every frame)."""
+    lookup = source.texture_matrix() @ math3d.translate(viewer.origin)
+    return math3d.read_only(lookup.astype(np.float32))
+
+
 def _rounded(array: np.ndarray) -> np.ndarray:
     """``array`` rounded to 12 decimals; an entry too large for that (rounding would
     overflow: a needle-thin view's projection) is kept as it is, being a whole number."""

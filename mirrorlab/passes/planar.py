@@ -11,7 +11,7 @@ from mirrorlab.gl.resources import MeshBuffer, RenderTarget, Texture2D, TextureF
 from mirrorlab.passes.base import SharedResources, ViewDrawer, set_view_uniforms
 from mirrorlab.plan import PlannedPass, Rectangle, ReflectorDraw, ViewPlan, bounding
 from mirrorlab.scene.model import Background, PlanarReflector
-from mirrorlab.views import View
+from mirrorlab.views import View, projective_lookup
 
 
 def mirror_vertices(reflector: PlanarReflector) -> tuple[np.ndarray, np.ndarray]:
@@ -93,21 +93,19 @@ class PlanarPass:
         GL.glCullFace(GL.GL_BACK)
         return 1
 
-    def draw_textured(self, view: View, texture: Texture2D,
-                      texture_matrix: np.ndarray | None) -> int:
-        """Front textured (by the quad's own coordinates, or projectively through
-        ``texture_matrix`` ``(4, 4)``, world to texture), back in its backing colour;
-        returns 1."""
+    def draw_textured(self, view: View, texture: Texture2D, source: View | None) -> int:
+        """Front textured (by the quad's own coordinates, or projectively: where the
+        capture view ``source`` saw each point, :func:`~mirrorlab.views.projective_lookup`),
+        back in its backing colour; returns 1."""
         program = self.mirror_program
         GL.glDisable(GL.GL_CULL_FACE)
         program.use()
         set_view_uniforms(program, view)
         program.set_mat4("model", self.quad_model(view))
         program.set_vec3("backing_color", self.reflector.backing)
-        program.set_int("projective", texture_matrix is not None)
-        if texture_matrix is not None:
-            # for origin-relative positions, composed in float64
-            program.set_mat4("texture_matrix", texture_matrix @ math3d.translate(view.origin))
+        program.set_int("projective", source is not None)
+        if source is not None:
+            program.set_mat4("texture_matrix", projective_lookup(source, view))
         texture.bind(0)
         self.quad.draw()
         GL.glEnable(GL.GL_CULL_FACE)

@@ -19,5 +19,4 @@ class ReflectedMirror(CapturingMirror):
     def draw_own(self, draw: ReflectorDraw, view: View, renderer: ViewDrawer,
                  target: RenderTarget, stencil_level: int) -> int:
         assert draw.source is not None
-        return self.draw_textured(view, self.captures.texture(draw.slot),
-                                  draw.source.texture_matrix())
+        return self.draw_textured(view, self.captures.texture(draw.slot), draw.source)
