@@ -507,11 +507,9 @@ def visibility(index: bounds.SceneIndex, view: View, excluded: str | None = None
     drawing it could not change a pixel that matters. The answer is remembered for the
     same reflectors seen through the same view (read-only).
     """
-    clip = None if view.clip_plane is None else np.asarray(view.clip_plane).tobytes()
-    key = (index.reflectors_part, np.asarray(view.view).tobytes(),
-           np.asarray(view.projection).tobytes(),
-           view.size, None if view.eye is None else np.asarray(view.eye).tobytes(), clip,
-           excluded, scissor)
+    # the view's draw key holds its matrices, size, clip plane and origin (its eye, when
+    # it has one)
+    key = (index.reflectors_part, view.draw_key, view.eye is None, excluded, scissor)
     known = _VISIBILITY.get(key)
     if known is not None:
         _VISIBILITY.move_to_end(key)

@@ -225,8 +225,10 @@ class SceneRenderer:
         else:
             found = self._home  # what the last frame left
         size = (int(target.size[0]), int(target.size[1]))
-        key = None if view is not None else (scene, target, size, use_plan, tiny_pixels,
-                                             tuple(self.state.held.items()))
+        # the scene last: a scene unlike the last frame's is told apart by what the
+        # textures hold before its (deeper) comparison
+        key = None if view is not None else (target, size, use_plan, tiny_pixels,
+                                             tuple(self.state.held.items()), scene)
         recorded = self._recorded
         if recorded is not None and key is not None and recorded.key == key and (
                 recorded.found == found):
@@ -243,7 +245,7 @@ class SceneRenderer:
             return self.last_frame
         self._recorded = None
         still = key is not None and self._last_plan is not None and self._last_plan[0] == (
-            scene, size, use_plan, tiny_pixels, key[5])
+            size, use_plan, tiny_pixels, key[4], scene)
         stats, recorder = self._render(scene, target, size, use_plan, tiny_pixels, view,
                                        found, start, record=still)
         if recorder is not None:
@@ -305,7 +307,7 @@ class SceneRenderer:
               view: View | None) -> FramePlan:
         """The frame's plan; the last one again when the scene, the size and what the
         textures hold are all as they were (a still scene: planning is pure Python)."""
-        key = (scene, size, use_plan, tiny_pixels, tuple(self.state.held.items()))
+        key = (size, use_plan, tiny_pixels, tuple(self.state.held.items()), scene)
         if view is None and self._last_plan is not None and self._last_plan[0] == key:
             return self._last_plan[1]
         plan = plan_frame(scene, size, self.state, use_plan, tiny_pixels, view)
