@@ -33,7 +33,7 @@ from typing import Literal
 
 import numpy as np
 
-from mirrorlab import bounds, culling, math3d
+from mirrorlab import bounds, culling
 from mirrorlab.culling import OUTSIDE_REASONS
 from mirrorlab.footprint import Footprint, polygon_footprint, sphere_footprint
 from mirrorlab.scene.model import (
@@ -50,6 +50,7 @@ from mirrorlab.views import (
     camera_view,
     cube_face_views,
     is_orthographic,
+    mirrored_eye,
     ortho_capture_view,
     reflected_capture_view,
     stencil_view,
@@ -363,9 +364,10 @@ class _Planner:
     def reach(self, view: View, reflector: PlanarReflector) -> float:
         """How far the world seen in ``reflector`` from ``view`` extends: reflections see
         the whole scene, whatever the camera's far plane (the truth's definition)."""
-        if view.eye is None:
+        eye = mirrored_eye(view, reflector)
+        if eye is None:
             return 0.0  # orthographic: no eye to measure from (not used)
-        return bounds.reach(self.scene, _mirrored_eye(view, reflector))
+        return bounds.reach(self.scene, eye)
 
     def capture(self, reflector: Reflector, view: View, bounce: int,
                 footprint: Footprint | None = None) -> tuple[int, View | None]:
@@ -580,15 +582,6 @@ def reflector_footprint(reflector: Reflector, view: View) -> Footprint:
                                  view.clip_plane)
     center, radius = bounding_sphere(reflector)
     return sphere_footprint(center, radius, view.view, view.projection, view.size)
-
-
-@functools.lru_cache(maxsize=64)
-def _mirrored_eye(view: View, reflector: PlanarReflector) -> np.ndarray:
-    """``view``'s eye ``(3,)`` reflected in ``reflector``'s plane (read-only; kept for the
-    last few: a still viewer's is the same every frame)."""
-    assert view.eye is not None
-    eye = math3d.transform_points(math3d.reflection_matrix(reflector.plane), view.eye)[:3]
-    return math3d.read_only(eye)
 
 
 GLASS_MARGIN = 2

@@ -125,15 +125,18 @@ class View:
         """What a program draws the view with: :attr:`relative_view_projection` as float32
         ``(4, 4)`` (read-only) and the clip plane for origin-relative points
         (:meth:`relative_plane`), None without one; worked out once for a view."""
+        matrix = math3d.read_only(self.relative_view_projection.astype(np.float32))
         plane = self.relative_plane(self.clip_plane)
-        return (math3d.read_only(self.relative_view_projection.astype(np.float32)),
-                None if plane is None else tuple(float(v) for v in plane))  # type: ignore[return-value]
+        if plane is None:
+            return matrix, None
+        a, b, c, d = (float(v) for v in plane)
+        return matrix, (a, b, c, d)
 
     @cached_property
     def relative_view(self) -> np.ndarray:
         """``(4, 4)``: the rigid :attr:`view` for points relative to :attr:`origin`."""
         return math3d.read_only(np.asarray(self.view, dtype=np.float64)
-                          @ math3d.translate(self.origin))
+                                @ math3d.translate(self.origin))
 
     @cached_property
     def draw_key(self) -> tuple:
@@ -235,13 +238,22 @@ def is_orthographic(projection: np.ndarray) -> bool:
     return max(abs(x), abs(y), abs(z)) <= 1e-8 and abs(w - 1.0) <= 1e-8 + 1e-5
 
 
-def _mirror_of(view: View, plane: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-    """The rigid view of ``view`` reflected in ``plane`` (``F @ view @ R``, F flipping the
-    eye's x so the matrix stays a rotation) and the reflected eye."""
-    reflection = math3d.reflection_matrix(plane)
-    mirrored = _FLIP_X @ view.view @ reflection
-    eye = None if view.eye is None else math3d.transform_points(reflection, view.eye)[:3]
-    return mirrored, eye
+@functools.lru_cache(maxsize=64)
+def mirrored_eye(view: View, reflector: PlanarReflector) -> np.ndarray | None:
+    """``view``'s eye ``(3,)`` reflected in ``reflector``'s plane (read-only; None for a
+    view without an eye), kept for the last few: a still viewer's is the same every
+    frame."""
+    if view.eye is None:
+        return None
+    reflection = math3d.reflection_matrix(reflector.plane)
+    return math3d.read_only(math3d.transform_points(reflection, view.eye)[:3])
+
+
+def _mirror_of(view: View, reflector: PlanarReflector) -> tuple[np.ndarray, np.ndarray | None]:
+    """The rigid view of ``view`` reflected in ``reflector``'s plane (``F @ view @ R``, F
+    flipping the eye's x so the matrix stays a rotation) and the reflected eye."""
+    mirrored = _FLIP_X @ view.view @ math3d.reflection_matrix(reflector.plane)
+    return mirrored, mirrored_eye(view, reflector)
 
 
 def _reaching(projection: np.ndarray, view: View, far: float | None
@@ -275,7 +287,7 @@ def reflected_capture_view(view: View, reflector: PlanarReflector,
 def _reflected_capture_view(view: View, reflector: PlanarReflector,
                             size: tuple[int, int] | None, far: float | None) -> View | None:
     plane = reflector.plane
-    rigid, eye = _mirror_of(view, plane)
+    rigid, eye = _mirror_of(view, reflector)
     # Flip clip-space x back as well: the capture keeps view's winding, and x runs the
     # other way across the image, which the projective lookup undoes.
     projection, depth_range = _reaching(_FLIP_X @ view.projection @ _FLIP_X, view, far)
@@ -301,7 +313,7 @@ def stencil_view(view: View, reflector: PlanarReflector, far: float | None = Non
 
 @functools.lru_cache(maxsize=64)
 def _stencil_view(view: View, reflector: PlanarReflector, far: float | None) -> View:
-    rigid, eye = _mirror_of(view, reflector.plane)
+    rigid, eye = _mirror_of(view, reflector)
     projection, depth_range = _reaching(view.projection @ _FLIP_X, view, far)
     return View(view=rigid, projection=projection, size=view.size, eye=eye,
                 label=f"{reflector.name} (stencil) in {view.label}",
