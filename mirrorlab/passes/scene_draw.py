@@ -268,12 +268,15 @@ class SceneDrawer:
         return inside[covering]
 
     @staticmethod
-    def relative_models(index: SceneIndex, visible: np.ndarray, view: View) -> np.ndarray:
-        """``(k, 4, 4)`` float32: the visible parts' models relative to the view's origin,
-        composed in float64 (camera-relative rendering)."""
-        relative = index.models[visible]  # a copy (fancy indexing)
-        relative[:, :3, 3] -= view.origin
-        return relative.astype(np.float32)
+    def relative_columns(table: PartTable, visible: np.ndarray, view: View) -> np.ndarray:
+        """``(k, 2, 4, 4)`` float32: the ``visible`` parts' model and surface matrices by
+        column (the packed path's parts buffer), the models relative to the view's origin,
+        composed in float64 (camera-relative rendering). When the view sees every part,
+        they are not copied first."""
+        assert table.columns is not None
+        columns = (table.columns if len(visible) == len(table.columns)
+                   else table.columns[visible])
+        return (columns - view.column_offset).astype(np.float32)
 
     # ------------------------------------------------------------- drawing
 
@@ -331,7 +334,8 @@ class SceneDrawer:
         else:
             visible = (self.visible(index, view, scissor) if cull
                        else np.arange(len(index.parts)))
-            models = self.relative_models(index, visible, view)
+            models = np.ascontiguousarray(  # row-major, one a part
+                self.relative_columns(table, visible, view)[:, 0].transpose(0, 2, 1))
             self._each[key] = (visible, models)
             while len(self._each) > RECORDED_VIEWS:
                 self._each.popitem(last=False)
@@ -406,12 +410,7 @@ class SceneDrawer:
             return recorded
         visible = (self.visible(index, view, scissor) if cull
                    else np.arange(len(index.parts)))
-        assert table.columns is not None
-        # relative to the view's origin in float64 (camera-relative rendering), then as
-        # float32 (the view sees every part more often than not: no copy of them first)
-        columns = (table.columns if len(visible) == len(table.columns)
-                   else table.columns[visible])
-        data = (columns - view.column_offset).astype(np.float32)
+        data = self.relative_columns(table, visible, view)
         steps, commands = draw_layout(table, visible)
         parts, commands_buffer, held = self._spare_for(commands)
         recorded = RecordedView(parts, commands_buffer, commands, steps, visible,
