@@ -296,17 +296,22 @@ class MinimalRenderer:
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.environment)
         GL.glCopyTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB, 0, 0, self.width, self.height, 0)
 
-        # Pass 2: the viewer's perspective, then the mirror quad showing the capture.
+        # Pass 2: the viewer's perspective, the mirror quad showing the capture first (what
+        # it hides is then not shaded, as mirrorlab draws it), then the parts.
         GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT)
-        self._draw_parts(camera.projection(self.width / self.height) @ camera.view())
+        view_projection = camera.projection(self.width / self.height) @ camera.view()
+        GL.glUniformMatrix4fv(loc["view_projection"], 1, GL.GL_TRUE,
+                              view_projection.astype(np.float32))
         GL.glDisable(GL.GL_CULL_FACE)  # the mirror's back face shows its backing
         GL.glUniformMatrix4fv(loc["model"], 1, GL.GL_TRUE, IDENTITY)
         GL.glUniform1i(loc["mode"], MODE_MIRROR)
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.environment)
         GL.glBindVertexArray(self.quad_vao)
         GL.glDrawElements(GL.GL_TRIANGLES, 6, GL.GL_UNSIGNED_INT, None)
+        GL.glEnable(GL.GL_CULL_FACE)
         self.draw_calls += 1
         self.triangles += 2
+        self._draw_parts(view_projection)
 
     def read(self) -> np.ndarray:
         """The frame as ``(height, width, 3)`` uint8, row 0 at the top."""

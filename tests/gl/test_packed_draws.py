@@ -144,6 +144,37 @@ def test_a_frames_views_are_recorded_before_its_first_draw(scene_renderer, monke
     assert ("upload", "") not in events[first_draw:], events  # drawing finds them recorded
 
 
+@pytest.mark.parametrize("scene_name, method", [
+    ("lab20", "ortho"), ("lab20", "reflected"), ("lab20", "stencil"),
+    ("mirror_and_sphere", None)])
+def test_a_view_draws_its_reflectors_before_the_objects_and_stencil_mirrors_after(
+        scene_renderer, monkeypatch, scene_name, method):
+    """In the camera's view, a reflector drawn on its own (a textured mirror, a mapped
+    sphere) comes before the objects, so what it hides fails the depth test unshaded; a
+    stencil mirror comes after them, as it marks only the pixels they leave showing."""
+    from mirrorlab.passes.envmap import CurvedPass
+    from mirrorlab.passes.planar import PlanarPass
+
+    events = []
+    for owner in (PlanarPass, CurvedPass):
+        original = owner.draw
+        monkeypatch.setattr(owner, "draw", lambda self, step, view, *rest, _o=original: (
+            events.append((step.mode, view.label)), _o(self, step, view, *rest))[1])
+    objects = scene_draw.SceneDrawer.draw
+    monkeypatch.setattr(scene_draw.SceneDrawer, "draw", lambda self, scene, view, *a, **k: (
+        events.append(("objects", view.label)), objects(self, scene, view, *a, **k))[1])
+    scene = mirrorlab.load_scene(scene_name)
+    if method is not None:
+        scene = apply_options(scene, {"method": method})
+    draw(scene_renderer, scene, SIZE)
+    camera = [mode for mode, label in events if label == "camera"]
+    assert camera.count("objects") == 1, events
+    before, after = camera[:camera.index("objects")], camera[camera.index("objects") + 1:]
+    assert before or after, events  # the view shows a reflector
+    assert "stencil" not in before and set(after) <= {"stencil"}, events
+    assert bool(after) == (method == "stencil"), events
+
+
 def test_a_thousand_boxes_of_one_mesh_are_one_command(scene_renderer, registry):
     scene = lab_reflected()
     camera = scene.camera
