@@ -3,8 +3,8 @@
 Run from the repository root as root or with perf allowed (``./dev bench profile`` does the
 set-up, with Debian's ``linux-perf``)::
 
-    python bench/frame_profile.py [--size 512] [--seconds 6] [--frames 100]
-                                  [--json PATH]
+    python bench/frame_profile.py [--size 512] [--seconds 6] [--chain-seconds 3]
+                                  [--frames 100] [--json PATH]
 
 Three frames of the lab scene are measured: ``two passes`` (the robot's elbow turns
 between two poses every frame, so the planner plans again and the capture runs),
@@ -28,7 +28,14 @@ by the library it fell in:
   Mesa's).
 
 Python's share is Python's samples over all samples, given with "either" counted out and
-in (a lower and an upper bound).
+in (a lower and an upper bound). Then ``perf record --call-graph dwarf`` samples the same
+process for ``--chain-seconds`` more, at half the rate, and each "either" sample of that
+run goes to the nearest caller on its stack that is Python's or the driver's (a
+``memcpy`` called by Mesa's readback is the driver's; the kernel's wait inside a
+``glReadPixels`` is too). The share of the "either" samples that went to Python (or to
+no one: counted as Python) gives the first run's "either" samples their owner: the
+attributed share, between the bounds. The split comes from its own run because taking
+the stacks costs every sample more, and would weigh on what is measured.
 
 **Per-pass times.** In this process, without perf: every pass of the frame, and the
 readback, end with ``glFinish``, so each one's wall time includes its rasterisation.
@@ -53,9 +60,11 @@ from collections import Counter, defaultdict
 from pathlib import Path
 
 VARIANTS = ("two passes", "two passes, a new pose every frame", "capture reused")
-DRIVER = re.compile(r"swrast_dri|libgallium|libGL|libEGL|libOpenGL|libglapi|libLLVM|\[JIT\]")
+DRIVER = re.compile(r"swrast_dri|libgallium|libGL|libEGL|libOpenGL|libglapi|libLLVM|\[JIT\]"
+                    r"|^perf-\d+\.map$")  # llvmpipe's compiled shaders, as perf script names them
 PYTHON = re.compile(r"libpython|^python|\.cpython-|libffi|openblas|_umath")
 RATE = 999
+CHAIN_RATE = 499
 
 
 def log(message: str) -> None:
@@ -110,26 +119,58 @@ def classify(thread: str, library: str) -> str:
     return "python" if PYTHON.search(library) else "either"
 
 
-def python_share(variant: str, size: int, seconds: float) -> dict:
+def record(pid: int, data: Path, seconds: float, options: list[str]) -> None:
+    """``perf record`` of every thread of ``pid`` for ``seconds`` into ``data``."""
+    sampled = subprocess.run([perf(), "record", *options, "-p", str(pid), "-o", str(data),
+                              "--", "sleep", str(seconds)], capture_output=True, text=True)
+    if sampled.returncode != 0 or not data.exists():
+        raise SystemExit(f"frame_profile.py: perf record failed: "
+                         f"{sampled.stderr.strip()[-500:]}")
+
+
+def either_callers(script: str) -> Counter:
+    """The "either" samples of ``perf script -F comm,ip,dso`` output with call chains
+    (blank-line separated; a sample's first line names its thread, then one ``ip (dso)``
+    line a frame, the sampled one first), each counted for the nearest caller whose
+    library is ``python``'s or the ``driver``'s; ``either`` when no frame is."""
+    callers: Counter = Counter()
+    for block in script.split("\n\n"):
+        lines = block.strip().splitlines()
+        if not lines:
+            continue
+        thread = lines[0].split()[0]
+        libraries = [Path(line[line.rfind("(") + 1:-1]).name for line in lines[1:]
+                     if line.rstrip().endswith(")")]
+        if not libraries or classify(thread, libraries[0]) != "either":
+            continue
+        owners = (classify(thread, library) for library in libraries[1:])
+        callers[next((kind for kind in owners if kind != "either"), "either")] += 1
+    return callers
+
+
+def python_share(variant: str, size: int, seconds: float, chain_seconds: float) -> dict:
     """Sample ``variant``'s process with perf and split its CPU time."""
     with tempfile.TemporaryDirectory() as folder:
-        data = Path(folder) / "perf.data"
+        data, chains = Path(folder) / "perf.data", Path(folder) / "chains.data"
         process = subprocess.Popen([sys.executable, __file__, "--child", variant, "--size",
-                                    str(size), "--seconds", str(seconds + 3)],
+                                    str(size), "--seconds", str(seconds + chain_seconds + 3)],
                                    stdout=subprocess.PIPE, text=True)
         assert process.stdout is not None
         try:
             if process.stdout.readline().strip() != "ready":
                 raise SystemExit(f"frame_profile.py: the {variant} process did not start")
-            sampled = subprocess.run([perf(), "record", "-F", str(RATE), "-p",
-                                      str(process.pid), "-o", str(data), "--", "sleep",
-                                      str(seconds)], capture_output=True, text=True)
-            if sampled.returncode != 0 or not data.exists():
-                raise SystemExit(f"frame_profile.py: perf record failed: "
-                                 f"{sampled.stderr.strip()[-500:]}")
+            record(process.pid, data, seconds, ["-F", str(RATE)])
+            if chain_seconds > 0:
+                record(process.pid, chains, chain_seconds,
+                       ["-F", str(CHAIN_RATE), "--call-graph", "dwarf,8192"])
             frames = json.loads(process.stdout.readline())["frames"]
         finally:
             process.wait()
+        callers: Counter = Counter()
+        if chain_seconds > 0:
+            callers = either_callers(subprocess.run(
+                [perf(), "script", "--no-inline", "-i", str(chains), "-F", "comm,ip,dso"],
+                capture_output=True, text=True, check=True).stdout)
         table = subprocess.run([perf(), "report", "-i", str(data), "--stdio", "--sort",
                                 "comm,dso", "-F", "sample,comm,dso", "--percent-limit", "0"],
                                capture_output=True, text=True, check=True).stdout
@@ -145,10 +186,15 @@ def python_share(variant: str, size: int, seconds: float) -> dict:
         if not thread.startswith("llvmpipe"):
             libraries[f"{library} ({kind})"] += count
     total = sum(samples.values())
+    split = sum(callers.values())
+    either_to_python = (callers["python"] + callers["either"]) / split if split else 1.0
     return {"variant": variant, "size": size, "frames_while_sampled": frames,
             "samples": dict(samples),
             "python_share_low": round(samples["python"] / total, 4),
             "python_share_high": round((samples["python"] + samples["either"]) / total, 4),
+            "either_callers": dict(callers),
+            "python_share_attributed": round(
+                (samples["python"] + samples["either"] * either_to_python) / total, 4),
             "driver_share": round(samples["driver"] / total, 4),
             "main_thread_libraries": libraries.most_common(8)}
 
@@ -205,6 +251,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--size", type=int, default=512)
     parser.add_argument("--seconds", type=float, default=6.0)
+    parser.add_argument("--chain-seconds", type=float, default=3.0,
+                        help="seconds sampled with call chains, to split the C library's "
+                             "and the kernel's samples by caller (0: not done)")
     parser.add_argument("--frames", type=int, default=100)
     parser.add_argument("--json", metavar="PATH")
     parser.add_argument("--child", choices=VARIANTS, help=argparse.SUPPRESS)
@@ -212,16 +261,25 @@ def main(argv: list[str] | None = None) -> int:
     if args.child:
         child(args.child, args.size, args.seconds)
         return 0
-    if not 16 <= args.size <= 4096 or args.seconds <= 0 or args.frames < 1:
-        parser.error("--size 16 to 4096, --seconds above 0, --frames at least 1")
+    if (not 16 <= args.size <= 4096 or args.seconds <= 0 or args.chain_seconds < 0
+            or args.frames < 1):
+        parser.error("--size 16 to 4096, --seconds above 0, --chain-seconds 0 or more, "
+                     "--frames at least 1")
     report = {"shares": [], "passes": {}}
     for variant in VARIANTS:
-        log(f"{variant}: {args.seconds:g} s under perf")
-        share = python_share(variant, args.size, args.seconds)
+        log(f"{variant}: {args.seconds:g} s under perf, {args.chain_seconds:g} s with call "
+            f"chains")
+        share = python_share(variant, args.size, args.seconds, args.chain_seconds)
         report["shares"].append(share)
         print(f"{variant}, {args.size}x{args.size}: Python's share {share['python_share_low']:.1%}"
               f" to {share['python_share_high']:.1%} of the CPU time (the GL driver "
               f"{share['driver_share']:.1%}; {sum(share['samples'].values())} samples)")
+        if args.chain_seconds > 0:
+            callers = share["either_callers"]
+            print(f"  the C library's and the kernel's samples by caller: "
+                  f"{callers.get('python', 0)} Python's, {callers.get('driver', 0)} the "
+                  f"driver's, {callers.get('either', 0)} no one's; so Python's share is "
+                  f"{share['python_share_attributed']:.1%}")
         print("  main thread: " + ", ".join(f"{name} {count}" for name, count in
                                             share["main_thread_libraries"]))
     for variant in VARIANTS:
