@@ -314,10 +314,12 @@ class SceneRenderer:
         self._last_plan = (key, plan) if view is None else None
         return plan
 
-    def draw_view(self, plan: ViewPlan, target: RenderTarget, stencil_level: int = 0) -> int:
+    def draw_view(self, plan: ViewPlan, target: RenderTarget, stencil_level: int = 0,
+                  cleared: Rectangle | None = None) -> int:
         """Draw ``plan``'s view into ``target``: the whole target at ``stencil_level`` 0
-        (cleared first), else only where a stencil mirror marked that level. Returns the
-        number of draw calls."""
+        (cleared first: all of it, or the pixel rectangle ``cleared`` alone, which must
+        hold the view's scissor), else only where a stencil mirror marked that level.
+        Returns the number of draw calls."""
         scene = self.scene
         view = plan.view
         outer = self._scissor
@@ -327,7 +329,7 @@ class SceneRenderer:
             GL.glStencilMask(0xFF)
             GL.glClearColor(*scene.background.color, 1.0)
             GL.glClearStencil(0)
-            self._set_scissor(None)  # the whole target is cleared, whatever is drawn
+            self._set_scissor(cleared)  # whatever is drawn, all of it is cleared
             GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT
                        | GL.GL_STENCIL_BUFFER_BIT)
         # Only the pixels that matter are rasterised (a capture's glass, a stencil

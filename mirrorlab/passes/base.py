@@ -27,7 +27,7 @@ from mirrorlab.scene.mesh import MeshData, TextureSource, load_mesh, texture_pic
 
 if TYPE_CHECKING:
     from mirrorlab.gl.resources import RenderTarget
-    from mirrorlab.plan import PlannedPass, ReflectorDraw, ViewPlan
+    from mirrorlab.plan import PlannedPass, Rectangle, ReflectorDraw, ViewPlan
     from mirrorlab.scene.model import Light, Reflector, Scene
     from mirrorlab.views import View
 
@@ -245,7 +245,8 @@ class ViewDrawer(Protocol):
     def scene(self) -> Scene:
         ...
 
-    def draw_view(self, plan: ViewPlan, target: RenderTarget, stencil_level: int = 0) -> int:
+    def draw_view(self, plan: ViewPlan, target: RenderTarget, stencil_level: int = 0,
+                  cleared: Rectangle | None = None) -> int:
         ...
 
 

@@ -179,13 +179,17 @@ class CaptureTextures:
             # was drawn, whatever size the window has.
             target: RenderTarget = (frame_target if tuple(frame_target.size) == size
                                     else self.shared.scratch(size))
-            draws = renderer.draw_view(plan, target)
+            # A scissored capture draws only within plan.scissor: once the texture has
+            # the capture's size, it is as a whole copy would leave it when the rectangle
+            # holding this scissor and the last one is cleared, drawn and copied (outside
+            # both, both copies hold the background). Nothing outside that rectangle is
+            # read, so nothing outside it is cleared.
+            region = (bounding(self._copied[slot], plan.scissor)
+                      if slot in self._copied and (texture.width, texture.height) == size
+                      else None)
+            draws = renderer.draw_view(plan, target, cleared=region)
             target.bind()
-            # A scissored capture drew only within plan.scissor on a cleared target: the
-            # texture is as a whole copy would leave it once this scissor and the last
-            # one are copied (outside both, both copies hold the background).
-            region = (bounding(self._copied.pop(slot), plan.scissor)
-                      if slot in self._copied else None)
+            self._copied.pop(slot, None)  # a failed copy leaves the texture unknown
             texture.copy_from_framebuffer(*size, source=(target.size[0], target.size[1]),
                                           region=region)
             self._copied[slot] = plan.scissor  # (not reached when the copy failed)

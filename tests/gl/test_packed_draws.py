@@ -319,9 +319,10 @@ def test_what_a_renderer_holds_in_gl_does_not_grow_with_the_views_it_has_drawn(
 
 def test_a_reflected_capture_copies_its_glass_and_leaves_the_texture_as_a_whole_copy(
         monkeypatch):
-    """A moving viewer's reflected capture copies only the rectangle of its glass and the
-    last frame's (the rest of the cleared target is background in both): frame and
-    texture are those of a fresh renderer, which copies the whole target, every frame."""
+    """A moving viewer's reflected capture clears and copies only the rectangle holding its
+    glass and the last frame's (outside it, the texture holds background from before):
+    frame and texture are those of a fresh renderer, which clears and copies the whole
+    target, every frame, at every size."""
     from mirrorlab.gl.resources import Texture2D
 
     regions = []
@@ -336,13 +337,16 @@ def test_a_reflected_capture_copies_its_glass_and_leaves_the_texture_as_a_whole_
     eye = np.asarray(scene.camera.eye, dtype=float)
     with mirrorlab.Renderer(SIZE) as moving:
         # the glass grows, moves across the frame and back (its rectangles at 96x96 go
-        # from x 26-80 to x 42-81: the last one's left part must be background again)
-        for step, offset in enumerate([(0, 0, 0), (0, 0, -4), (0, 3, -8), (0, -2, 3),
-                                       (0, 0, 6), (0, 0, 0)]):
+        # from x 26-80 to x 42-81: the last one's left part must be background again),
+        # then the frame changes size twice (a texture of a new size is copied whole)
+        for step, (offset, size) in enumerate([
+                ((0, 0, 0), SIZE), ((0, 0, -4), SIZE), ((0, 3, -8), SIZE),
+                ((0, -2, 3), SIZE), ((0, 0, 6), SIZE), ((0, 0, 0), SIZE),
+                ((0, 0, -4), (80, 72)), ((0, 0, 0), SIZE)]):
             moved = replace(scene, camera=replace(scene.camera, eye=tuple(eye + offset)))
-            frame = moving.render(moved)
+            frame = moving.render(moved, size=size)
             texture = moving.read_texture("mirror")
-            with mirrorlab.Renderer(SIZE) as fresh:
+            with mirrorlab.Renderer(size) as fresh:
                 assert np.array_equal(fresh.render(moved), frame), step
                 assert np.array_equal(fresh.read_texture("mirror"), texture), step
     partial = [r for r in regions if r is not None]
