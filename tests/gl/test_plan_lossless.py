@@ -5,7 +5,8 @@ corners of the view (reaching behind the eye, long and thin, tiny and huge), sma
 sub-pixel objects, turned, near the edges too, cameras rolled and tilted with lenses
 from 3 to 178 degrees, one to three bounces, and a second frame in which a mirror moves
 and turns and the camera shifts, then the first frame again (whose captures the
-planner may reuse).
+planner may reuse). And a mirror flush with a wall, where the draws' order decides the
+depth ties (which generated scenes hardly ever hold), on both draw paths.
 
 The planner keeps its textures from one generated scene to the next, as a renderer
 does; the unplanned renderer draws every pass of every frame. Examples are generated
@@ -18,6 +19,7 @@ import os
 from dataclasses import replace
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -26,6 +28,8 @@ from mirrorlab.scene.model import (
     Background,
     BoxProxy,
     DistanceSearch,
+    MeshObject,
+    OrthoCapture,
     PlanarReflector,
     RobotObject,
     Scene,
@@ -35,7 +39,7 @@ from mirrorlab.scene.model import (
 from mirrorlab.techniques import technique_names
 from tests.gl.frames import draw
 from tests.imagecheck import save_failure
-from tests.scenekit import ball, block, looking, mirror
+from tests.scenekit import PANEL_MESH, ball, block, looking, mirror
 
 EXAMPLES = int(os.environ.get("MIRRORLAB_PLAN_EXAMPLES", "30"))
 SIZES = [(64, 64), (80, 48), (48, 72)]
@@ -171,3 +175,38 @@ def test_planned_frames_equal_unplanned_frames_on_generated_scenes(scene_rendere
                                      + "\n".join(plan.describe()) + f"\n{frame}")
     finally:
         unplanned.release()
+
+
+@pytest.mark.parametrize("method", ["reflected", "stencil", "ortho"])
+def test_a_mirror_flush_with_a_wall_comes_out_the_same_planned_or_not_on_either_path(
+        scene_renderer, method):
+    """A mirror hung flat on a wall (the two in one plane: their depths tie wherever
+    rounding lets them) is drawn in one order whatever the plan skips, culls or scissors,
+    and on either draw path: the frames are the same, pixel for pixel, moving or still."""
+    wall = MeshObject(name="wall", mesh=PANEL_MESH, color=(0.7, 0.6, 0.5),
+                      transform=Transform(scale=(8.0, 6.0, 1.0)))
+    glass = mirror("glass", (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), 3.0, 2.0, method)
+    if method == "ortho":
+        glass = replace(glass, ortho=OrthoCapture(eye=(0.0, 0.0, 0.0), target=(0.0, 0.0, 1.0),
+                                                  up=(0.0, 1.0, 0.0),
+                                                  extents=(-1.5, 1.5, -1.0, 1.0, 0.0, 20.0)))
+    scene = Scene(name="flush", camera=looking((1.5, 0.8, 6.0), (0.0, 0.0, 0.0)),
+                  objects=(wall, block("block", (0.6, -0.2, 2.0), 0.8, (0.2, 0.8, 0.3))),
+                  reflectors=(glass,), max_bounces=1)
+    turned = replace(scene, camera=looking((-1.0, 0.5, 5.0), (0.0, 0.0, 0.0)))
+    unplanned = SceneRenderer(scene_renderer.registry)
+    per_draw = SceneRenderer(scene_renderer.registry, draw_path="per-draw")
+    try:
+        for index, frame in enumerate((scene, turned, scene)):
+            planned_image = draw(scene_renderer, frame, (96, 80))[0]
+            for name, other, options in (("every_pass", unplanned, {"use_plan": False}),
+                                         ("per_draw", per_draw, {})):
+                image = draw(other, frame, (96, 80), **options)[0]
+                if not np.array_equal(planned_image, image):
+                    save_failure(f"flush_{method}_{name}_{index}", planned=planned_image,
+                                 other=image)
+                    differing = int((planned_image != image).any(axis=-1).sum())
+                    raise AssertionError(f"frame {index}, {name}: {differing} pixels differ")
+    finally:
+        unplanned.release()
+        per_draw.release()
