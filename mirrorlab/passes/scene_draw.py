@@ -2,8 +2,9 @@
 view uses.
 
 Each view draws only the parts it can see: every part's world box lives in the scene's
-bounds arrays (:class:`mirrorlab.bounds.SceneIndex`) and all of them are tested against
-the view's clip volume in one vectorised step (:func:`mirrorlab.culling.boxes_in_view`).
+bounds arrays (:class:`mirrorlab.bounds.SceneIndex`, as rows kept for each pose) and all
+of them are tested against the view's clip volume in one matrix product
+(:func:`mirrorlab.culling.rows_in_view` with the view's :meth:`~mirrorlab.views.View.cull_test`).
 The meshes are packed into one vertex and one index buffer
 (:class:`~mirrorlab.gl.resources.PackedMeshes`). What is left is drawn one of two ways,
 chosen when the drawer is made, from what the context offers:
