@@ -13,12 +13,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mirrorlab import culling, math3d
+from mirrorlab import math3d
 from mirrorlab.math3d import read_only
 from mirrorlab.scene.model import CurvedReflector, PlanarReflector, Reflector, Scene
 
 if TYPE_CHECKING:
-    from mirrorlab.scene.robot import Part
+    from mirrorlab.scene.robot import Part, PartLooks
 
 REACH_MARGIN = 1e-3
 """A far plane set from a bounding sphere lies this share of the distance beyond it."""
@@ -87,68 +87,90 @@ def _mesh_local_box(mesh: Path) -> tuple[np.ndarray, np.ndarray]:
 
 @dataclass(frozen=True, eq=False)
 class ObjectBounds:
-    """One object's drawable parts (:func:`mirrorlab.scene.robot.object_parts`) and, worked
-    out when first asked for, each part's exact world box ``low``, ``high`` ``(k, 3)``."""
+    """One object's drawable parts: their ``looks`` (:func:`mirrorlab.scene.robot.object_looks`,
+    shared by every pose) and ``models`` ``(k, 4, 4)``; and, worked out when first asked
+    for, each part's exact world box ``low``, ``high`` ``(k, 3)``."""
 
-    parts: tuple[Part, ...]
+    looks: PartLooks
+    models: np.ndarray
+
+    @cached_property
+    def parts(self) -> tuple[Part, ...]:
+        return self.looks.parts(self.models)
 
     @cached_property
     def boxes(self) -> tuple[np.ndarray, np.ndarray]:
-        boxes = [mesh_box(part.mesh, part.model) for part in self.parts]
+        boxes = [mesh_box(mesh, model)
+                 for mesh, model in zip(self.looks.meshes, self.models, strict=True)]
         return (read_only(np.array([b[0] for b in boxes]).reshape(-1, 3)),
                 read_only(np.array([b[1] for b in boxes]).reshape(-1, 3)))
 
 
+@lru_cache(maxsize=64)
+def _looks_boxes(looks: tuple[PartLooks, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """The centres and half-sizes ``(n, 3)`` of the meshes' own boxes of every part of
+    ``looks`` (read-only), in order."""
+    local = [_mesh_local_box(mesh) for look in looks for mesh in look.meshes]
+    return (read_only(np.array([c for c, _ in local]).reshape(-1, 3)),
+            read_only(np.array([h for _, h in local]).reshape(-1, 3)))
+
+
 @dataclass(frozen=True, eq=False)
 class ObjectArrays:
-    """The bounds of a scene's objects: ``parts`` (every drawable part, in drawing order)
-    with ``models`` ``(n, 4, 4)`` float64; for culling, each part's mesh box carried into
-    the world, ``part_centers`` and ``part_halves`` ``(n, 3)`` (it holds the part, a little
-    larger than its own box when turned); and, worked out when first asked for (what a
-    view's reach is set by), each part's exact world box ``part_low``, ``part_high``.
-    Read-only; made once for an ``objects`` tuple."""
+    """The bounds of a scene's objects: each object's ``bounds``, the parts' ``looks``
+    (each object's :class:`~mirrorlab.scene.robot.PartLooks`, hashed by identity: equal
+    for every pose of the same objects) and ``models`` ``(n, 4, 4)`` float64 of every
+    part, in drawing order; for culling, each part's mesh box carried into the world,
+    ``part_centers`` and ``part_halves`` ``(n, 3)`` (it holds the part, a little larger
+    than its own box when turned); and, worked out when first asked for, the ``parts``
+    themselves and each part's exact world box ``part_low``, ``part_high`` (what a
+    view's reach is set by). Read-only; made once for an ``objects`` tuple."""
 
     objects: tuple
     bounds: tuple[ObjectBounds, ...]
-    parts: tuple[Part, ...]
+    looks: tuple[PartLooks, ...]
     models: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.models)
+
+    @cached_property
+    def parts(self) -> tuple[Part, ...]:
+        return tuple(part for b in self.bounds for part in b.parts)
 
     @cached_property
     def part_low(self) -> np.ndarray:
         return read_only(np.concatenate([b.boxes[0] for b in self.bounds])
-                       if self.bounds else np.zeros((0, 3)))
+                         if self.bounds else np.zeros((0, 3)))
 
     @cached_property
     def part_high(self) -> np.ndarray:
         return read_only(np.concatenate([b.boxes[1] for b in self.bounds])
-                       if self.bounds else np.zeros((0, 3)))
+                         if self.bounds else np.zeros((0, 3)))
 
     @cached_property
-    def _carried(self) -> tuple[np.ndarray, np.ndarray]:
-        if not self.parts:
-            return np.zeros((0, 3)), np.zeros((0, 3))
-        local = [_mesh_local_box(part.mesh) for part in self.parts]
-        centers = np.array([c for c, _ in local])
-        halves = np.array([h for _, h in local])
+    def part_rows(self) -> np.ndarray:
+        """``(n, 10)``: each part's culling box as :func:`mirrorlab.culling.box_rows` makes
+        them, worked out in place (a new pose makes them every frame)."""
+        centers, halves = _looks_boxes(self.looks)
         turn = self.models[:, :3, :3]
-        world = (turn @ centers[:, :, None])[:, :, 0] + self.models[:, :3, 3]
-        reach = (np.abs(turn) @ halves[:, :, None])[:, :, 0]  # the turned box's box
-        return read_only(world), read_only(reach)
+        rows = np.empty((len(turn), 10))
+        np.matmul(turn, centers[:, :, None], out=rows[:, 0:3, None])
+        rows[:, 0:3] += self.models[:, :3, 3]
+        np.matmul(np.abs(turn), halves[:, :, None], out=rows[:, 3:6, None])  # the turned box's box
+        np.abs(rows[:, 0:3], out=rows[:, 6:9])
+        rows[:, 9] = 1.0
+        return read_only(rows)
 
     @property
     def part_centers(self) -> np.ndarray:
         """``(n, 3)``: the middle of each part's culling box."""
-        return self._carried[0]
+        return self.part_rows[:, 0:3]
 
     @property
     def part_halves(self) -> np.ndarray:
         """``(n, 3)``: half the size of each part's culling box."""
-        return self._carried[1]
-
-    @cached_property
-    def part_rows(self) -> np.ndarray:
-        """``(n, 10)``: the culling boxes as :func:`mirrorlab.culling.box_rows`."""
-        return read_only(culling.box_rows(self.part_centers, self.part_halves))
+        return self.part_rows[:, 3:6]
 
     @cached_property
     def digest(self) -> int:
@@ -265,7 +287,7 @@ class SceneIndex:
     @property
     def box_names(self) -> tuple[str, ...]:
         """The owner of every box of :meth:`boxes`: "" for a part, else a reflector's name."""
-        return ("",) * len(self.objects_part.parts) + tuple(r.name for r in self.reflectors)
+        return ("",) * len(self.objects_part) + tuple(r.name for r in self.reflectors)
 
     def boxes(self) -> tuple[np.ndarray, np.ndarray]:
         """Every part's box, then every reflector's: low and high ``(n + m, 3)``."""
@@ -329,9 +351,9 @@ class _IndexCache:
         held = self.objects.get(id(item))
         if held is not None and held[0] is item:
             return held[1]
-        from mirrorlab.scene.robot import object_parts
+        from mirrorlab.scene.robot import object_looks, object_models
 
-        made = ObjectBounds(object_parts(item))
+        made = ObjectBounds(object_looks(item), object_models(item))
         self.objects[id(item)] = (item, made)
         return made
 
@@ -348,9 +370,10 @@ class _IndexCache:
     def object_arrays(self, objects: tuple) -> ObjectArrays:
         self._forget(objects, ())
         bounds = tuple(self.object_bounds(item) for item in objects)
-        parts = tuple(part for b in bounds for part in b.parts)
-        models = np.array([part.model for part in parts], dtype=np.float64).reshape(-1, 4, 4)
-        return ObjectArrays(objects, bounds, parts, read_only(models))
+        models = (np.concatenate([b.models for b in bounds]) if bounds
+                  else np.zeros((0, 4, 4)))
+        return ObjectArrays(objects, bounds, tuple(b.looks for b in bounds),
+                            read_only(models))
 
     def reflector_arrays(self, reflectors: tuple) -> ReflectorArrays:
         self._forget((), reflectors)
@@ -416,7 +439,7 @@ def boxes_but(scene: Scene, leave_out: str) -> tuple[np.ndarray, np.ndarray]:
     low, high = index.boxes()
     if leave_out and leave_out in index.names:
         keep = np.ones(len(low), dtype=bool)
-        keep[len(index.parts) + index.names[leave_out]] = False
+        keep[len(index.objects_part) + index.names[leave_out]] = False
         low, high = low[keep], high[keep]
     return low, high
 

@@ -235,17 +235,95 @@ def plan_frame(scene: Scene, size: tuple[int, int], state: TextureState | None =
     ``tiny_pixels`` above 0 turns on the lossy rule: a reflector whose footprint may
     cover fewer pixels than that is drawn plain.
     """
-    planner = _Planner(scene, state or TextureState(), use_plan,
-                       tiny_pixels if use_plan else 0.0)
+    return _plan(_Planner(scene, state or TextureState(), use_plan,
+                          tiny_pixels if use_plan else 0.0), size, view)
+
+
+def _plan(planner: _Planner, size: tuple[int, int], view: View | None) -> FramePlan:
+    scene = planner.scene
     top_view = view or camera_view(scene.camera, size)
     top = planner.plan_view(top_view, scene.max_bounces, None)
     camera = PlannedPass("camera", True, "the frame itself", for_view="camera")
     return FramePlan(tuple([*planner.passes, camera]), top)
 
 
+def _plan_fields(scene: Scene) -> tuple:
+    """What of ``scene`` but its objects a plan is made from."""
+    return (scene.camera, scene.background, scene.ambient, scene.lights, scene.reflectors,
+            scene.max_bounces)
+
+
+def _held_as_seen(state: TextureState, content: ContentKey) -> tuple:
+    """What ``state`` holds as a planner sees it for a scene of ``content``: the keys
+    of the textures, a capture's content given only as whether it is ``content``
+    (the planner compares what it shows with that alone)."""
+    return tuple((slot, (*key[:3], key[3] == content)
+                  if len(key) == 4 and isinstance(key[3], ContentKey) else key)
+                 for slot, key in state.held.items())
+
+
+@dataclass(frozen=True, eq=False)
+class _Planned:
+    inputs: tuple
+    content: ContentKey
+    plan: FramePlan
+
+
+class PlanMemo:
+    """Plans frames (:func:`plan_frame`, of a scene seen by its camera), keeping the last
+    plan with what it was made from. A plan depends on the scene's objects only through
+    what its captures show (their content, in the capture keys) and, for a view that
+    sees as far as the scene reaches (a ``reflected`` or ``stencil`` mirror's, a live
+    cube map's), where they are. So a frame whose scene differs from the last one's in
+    its objects alone, with its textures holding the same (the last frame's captures,
+    of other content), gets the last plan with the new content put into its capture
+    keys, when that plan looked at no object's place: the plan the planner would make,
+    without making it (an animated robot's frames are planned once). :attr:`reused`
+    says whether the last plan came that way."""
+
+    def __init__(self) -> None:
+        self._last: _Planned | None = None
+        self.reused = False
+
+    def plan(self, scene: Scene, size: tuple[int, int], state: TextureState,
+             use_plan: bool = True, tiny_pixels: float = TINY_PIXELS) -> FramePlan:
+        """The plan of a frame of ``scene`` at ``size``, given ``state``: the same as
+        :func:`plan_frame`'s."""
+        index = bounds.scene_index(scene)
+        content = content_key(scene, index)
+        inputs = (size, use_plan, tiny_pixels, _plan_fields(scene),
+                  _held_as_seen(state, content))
+        last = self._last
+        if last is not None and last.inputs == inputs:
+            plan = last.plan if last.content == content else _with_content(
+                last.plan, last.content, content)
+            self._last = _Planned(inputs, content, plan)
+            self.reused = True
+            return plan
+        planner = _Planner(scene, state, use_plan, tiny_pixels if use_plan else 0.0,
+                           content)
+        plan = _plan(planner, size, None)
+        self._last = None if planner.geometry else _Planned(inputs, content, plan)
+        self.reused = False
+        return plan
+
+    def clear(self) -> None:
+        """Forget the last plan."""
+        self._last = None
+        self.reused = False
+
+
+def _with_content(plan: FramePlan, old: ContentKey, new: ContentKey) -> FramePlan:
+    """``plan`` with the content ``new`` in place of ``old`` in its capture keys."""
+    return FramePlan(tuple(
+        replace(step, key=(*step.key[:3], new))
+        if len(step.key) == 4 and isinstance(step.key[3], ContentKey) and step.key[3] == old
+        else step for step in plan.passes), plan.top)
+
+
 class _Planner:
     def __init__(self, scene: Scene, state: TextureState, use_plan: bool,
-                 tiny_pixels: float) -> None:
+                 tiny_pixels: float, content: ContentKey | None = None) -> None:
         self.scene = scene
         self.state = state
         self.held: dict[str, list[tuple[int, tuple]]] = {}  # state.held by reflector
@@ -256,7 +334,9 @@ class _Planner:
         self.passes: list[PlannedPass] = []
         self.planned: set[tuple[str, tuple]] = set()  # (reflector, key) of every pass so far
         self.index = bounds.scene_index(scene)
-        self.content = content_key(scene, self.index)
+        self.content = content if content is not None else content_key(scene, self.index)
+        self.geometry = False
+        """Whether the plan looked at where the objects are (how far the scene reaches)."""
         self.assigned: dict[tuple[str, tuple], int] = {}  # this frame's (reflector, key) slots
         self.used: dict[str, set[int]] = {}
 
@@ -367,6 +447,7 @@ class _Planner:
         eye = mirrored_eye(view, reflector)
         if eye is None:
             return 0.0  # orthographic: no eye to measure from (not used)
+        self.geometry = True
         return bounds.reach(self.scene, eye)
 
     def capture(self, reflector: Reflector, view: View, bounce: int,
@@ -394,6 +475,7 @@ class _Planner:
                 key = ("fixed", bounce, texture_size, self.content)
         elif entry.capture_camera == "cube":
             assert isinstance(reflector, CurvedReflector)
+            self.geometry = True
             cameras = cube_face_views(reflector, bounds.cube_depth_range(self.scene, reflector))
             scissors = [None] * len(cameras)
             key = ("fixed", bounce, (reflector.map_size,), self.own_content(reflector))

@@ -16,7 +16,7 @@ from collections.abc import Iterator
 from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
 
-from mirrorlab.bounds import scene_index
+from mirrorlab.bounds import ObjectArrays, scene_index
 from mirrorlab.gl.context import ResourceRegistry, gl_pass, gl_version, require_gl_version
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.record import CallRecorder, replay
@@ -30,7 +30,15 @@ from mirrorlab.passes.base import (
 )
 from mirrorlab.passes.scene_draw import DrawPath, SceneDrawer
 from mirrorlab.passes.sky import SkyPass
-from mirrorlab.plan import TINY_PIXELS, FramePlan, Rectangle, TextureState, ViewPlan, plan_frame
+from mirrorlab.plan import (
+    TINY_PIXELS,
+    FramePlan,
+    PlanMemo,
+    Rectangle,
+    TextureState,
+    ViewPlan,
+    plan_frame,
+)
 from mirrorlab.scene.model import (
     Background,
     CurvedReflector,
@@ -69,14 +77,22 @@ class FrameStats:
                 for p in self.plan.skipped]
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(eq=False)
 class RecordedFrame:
-    """A still frame's GL calls (:class:`~mirrorlab.gl.record.CallRecorder`), with what
-    it was drawn from: ``key`` (the scene, target, size, options and what the textures
-    held) and ``found`` (the GL state it started from), and its ``stats``."""
+    """A frame's GL calls from its first pass to its end
+    (:class:`~mirrorlab.gl.record.CallRecorder`), to draw the frames after it that plan
+    the same again: what it was drawn into and
+    with (``key``: target, size and options), the GL state it started from (``found``),
+    the ``objects`` (:class:`~mirrorlab.bounds.ObjectArrays`) it drew, the ``views`` it
+    drew them in (each with its scissor, as the drawer recorded them), whether its calls
+    draw any pose of those objects once their parts' data is sent again
+    (``follows_pose``) and its ``stats``."""
 
     key: tuple
     found: dict[str, object]
+    objects: ObjectArrays
+    views: tuple[tuple[View, Rectangle | None], ...]
+    follows_pose: bool
     calls: list
     stats: FrameStats
 
@@ -135,8 +151,8 @@ class SceneRenderer:
         self._passes: dict[str, tuple[tuple, ReflectorPass]] = {}
         self._sky: SkyPass | None = None
         self.last_frame: FrameStats | None = None
-        self._last_plan: tuple[tuple, FramePlan] | None = None
-        self._recorded: RecordedFrame | None = None  # the still frame to replay
+        self.memo = PlanMemo()
+        self._recorded: RecordedFrame | None = None  # the last frame, to draw again
         self._scissor: Rectangle | None = None  # the scissor rectangle set, None: off
         self._cull = True  # whether this frame's views cull objects (not with use_plan off)
         self.own_context = own_context
@@ -193,6 +209,8 @@ class SceneRenderer:
         if self._gl_version < RENDERER_GL_VERSION:
             require_gl_version(RENDERER_GL_VERSION, "mirrorlab's renderer (GLSL 3.30)")
         self._scene = scene
+        self._scissor = None
+        GL.glDisable(GL.GL_SCISSOR_TEST)  # a pass made for a new scene draws unscissored
         names = {r.name: r for r in scene.reflectors}
         for name in list(self._passes):
             if name not in names or self._passes[name][0] != _pass_key(names[name],
@@ -216,6 +234,11 @@ class SceneRenderer:
         scissors nothing and draws every object in every view, culling none; the frame is
         the same either way. ``tiny_pixels`` above 0 turns on the lossy rule that
         draws a reflector covering fewer pixels than that plain (off by default).
+
+        A frame planned as the last one was (:class:`~mirrorlab.plan.PlanMemo`: a still
+        scene, or one whose objects alone moved) into the same target from the same GL
+        state is drawn by making the last frame's GL calls again, the objects' new
+        places sent first, when the views see the same parts of them.
         """
         start = time.perf_counter()
         if not self.own_context:
@@ -225,94 +248,96 @@ class SceneRenderer:
         else:
             found = self._home  # what the last frame left
         size = (int(target.size[0]), int(target.size[1]))
-        # the scene last: a scene unlike the last frame's is told apart by what the
-        # textures hold before its (deeper) comparison
-        key = None if view is not None else (target, size, use_plan, tiny_pixels,
-                                             tuple(self.state.held.items()), scene)
+        self._use_scene(scene)
+        if view is not None:
+            self.memo.clear()
+            plan = plan_frame(scene, size, self.state, use_plan, tiny_pixels, view)
+        else:
+            plan = self.memo.plan(scene, size, self.state, use_plan, tiny_pixels)
         recorded = self._recorded
-        if recorded is not None and key is not None and recorded.key == key and (
-                recorded.found == found):
-            # A still frame: the same calls as the frame recorded, drawn into the same
-            # target from the same state, made again without working them out.
-            try:
-                with gl_pass("camera (replayed)"):
-                    replay(recorded.calls)
-            except BaseException:
-                self._recorded = None
-                raise
-            self.last_frame = replace(recorded.stats,
-                                      milliseconds=(time.perf_counter() - start) * 1e3)
-            return self.last_frame
         self._recorded = None
-        still = key is not None and self._last_plan is not None and self._last_plan[0] == (
-            size, use_plan, tiny_pixels, key[4], scene)
-        stats, recorder = self._render(scene, target, size, use_plan, tiny_pixels, view,
-                                       found, start, record=still)
+        key = (target, size, use_plan, tiny_pixels)
+        if (recorded is not None and self.memo.reused and recorded.key == key
+                and recorded.found == found and self._replay(recorded, scene, plan, start)):
+            self._recorded = recorded
+            assert self.last_frame is not None
+            return self.last_frame
+        # Recording costs a patch of every GL entry point: only a frame planned as the
+        # last one was, which the next one may be too, pays it.
+        recorder = CallRecorder() if view is None and self.memo.reused else None
+        stats = self._run(scene, plan, target, found, start, use_plan, recorder)
         if recorder is not None:
-            # nothing but the camera pass ran: the next frame like it replays this one
-            assert key is not None
-            self._recorded = RecordedFrame(key, found, recorder.calls, stats)
+            views = tuple(_drawn_views(plan))
+            objects = scene_index(scene).objects_part
+            self._recorded = RecordedFrame(key, found, objects, views,
+                                           self.drawer.follows_pose(objects, views, use_plan),
+                                           recorder.calls, stats)
         return stats
 
-    def _render(self, scene: Scene, target: RenderTarget, size: tuple[int, int],
-                use_plan: bool, tiny_pixels: float, view: View | None,
-                found: dict[str, object], start: float, record: bool = False
-                ) -> tuple[FrameStats, CallRecorder | None]:
-        """Run the frame's plan; with ``record``, a frame that runs the camera pass alone
-        has its GL calls recorded (returned with its stats; None otherwise)."""
-        self._scissor = None
-        GL.glDisable(GL.GL_SCISSOR_TEST)  # a pass made for a new scene draws unscissored
-        self._use_scene(scene)
-        plan = self._plan(scene, size, use_plan, tiny_pixels, view)
-        # Recording costs a patch of every GL entry point: only a frame that could be
-        # replayed pays it.
-        recorder = (CallRecorder() if record and [p.name for p in plan.ran] == ["camera"]
-                    else None)
-        with recorder or nullcontext():
-            stats = self._run(scene, plan, target, found, start, use_plan)
-        return stats, recorder
+    def _replay(self, recorded: RecordedFrame, scene: Scene, plan: FramePlan,
+                start: float) -> bool:
+        """Draw ``recorded``'s frame again for ``scene``, whose ``plan`` is the one it was
+        drawn with but for what its captures show: False (nothing drawn) when the objects
+        moved and its views see other parts of them, or its calls cannot follow them."""
+        objects = scene_index(scene).objects_part
+        if objects is not recorded.objects:
+            if not recorded.follows_pose or not self.drawer.repose(
+                    recorded.objects, scene_index(scene), recorded.views,
+                    cull=recorded.key[2]):
+                return False
+            recorded.objects = objects
+        try:
+            with gl_pass("frame (replayed)"):
+                replay(recorded.calls)
+        except BaseException:
+            self.state.clear()
+            self.memo.clear()
+            raise
+        for step in plan.passes:
+            if step.runs and step.name != "camera":
+                self.state.record(step)
+        self.last_frame = replace(recorded.stats, plan=plan,
+                                  milliseconds=(time.perf_counter() - start) * 1e3)
+        return True
 
     def _run(self, scene: Scene, plan: FramePlan, target: RenderTarget,
-             found: dict[str, object], start: float, use_plan: bool) -> FrameStats:
-        GL.glDisable(GL.GL_SCISSOR_TEST)  # the replay starts from the caller's state
+             found: dict[str, object], start: float, use_plan: bool,
+             recorder: CallRecorder | None = None) -> FrameStats:
+        """Run the frame's plan: with ``recorder``, record its GL calls from the first
+        pass on (the views' data, sent before, is not in them)."""
+        self._scissor = None
         self._cull = use_plan
         self.drawer.parts_drawn = 0
         draws = 0
         index = scene_index(scene)
         try:
             self.drawer.prepare(scene, _drawn_views(plan), use_plan)
-            for step in plan.passes:
-                if not step.runs or step.name == "camera":
-                    continue
-                assert step.reflector is not None
-                reflector = index.reflectors[index.names[step.reflector]]
-                with gl_pass(f"{step.name}:{step.reflector}"):
-                    draws += self._pass(reflector).update(step, reflector, self, target)
-                self.state.record(step)
-            with gl_pass("camera"):
-                draws += self.draw_view(plan.top, target)
+            with recorder or nullcontext():
+                try:
+                    GL.glDisable(GL.GL_SCISSOR_TEST)  # from the caller's state
+                    for step in plan.passes:
+                        if not step.runs or step.name == "camera":
+                            continue
+                        assert step.reflector is not None
+                        reflector = index.reflectors[index.names[step.reflector]]
+                        with gl_pass(f"{step.name}:{step.reflector}"):
+                            draws += self._pass(reflector).update(step, reflector, self,
+                                                                  target)
+                        self.state.record(step)
+                    with gl_pass("camera"):
+                        draws += self.draw_view(plan.top, target)
+                finally:
+                    restore_state(found)
         except BaseException:
             # What a failed pass left half made cannot be trusted by the next frame.
             self.state.clear()
-            self._last_plan = None
+            self.memo.clear()
             raise
         finally:
             self.drawer.end_frame()
-            restore_state(found)
         self.last_frame = FrameStats(plan, draws, (time.perf_counter() - start) * 1e3,
                                      parts_drawn=self.drawer.parts_drawn)
         return self.last_frame
-
-    def _plan(self, scene: Scene, size: tuple[int, int], use_plan: bool, tiny_pixels: float,
-              view: View | None) -> FramePlan:
-        """The frame's plan; the last one again when the scene, the size and what the
-        textures hold are all as they were (a still scene: planning is pure Python)."""
-        key = (size, use_plan, tiny_pixels, tuple(self.state.held.items()), scene)
-        if view is None and self._last_plan is not None and self._last_plan[0] == key:
-            return self._last_plan[1]
-        plan = plan_frame(scene, size, self.state, use_plan, tiny_pixels, view)
-        self._last_plan = (key, plan) if view is None else None
-        return plan
 
     def draw_view(self, plan: ViewPlan, target: RenderTarget, stencil_level: int = 0,
                   cleared: Rectangle | None = None) -> int:
@@ -388,7 +413,7 @@ class SceneRenderer:
         self.drawer.release()
         self.shared.release()
         self.state.clear()
-        self._last_plan = None
+        self.memo.clear()
         self._home = None
 
     def pass_for(self, name: str) -> ReflectorPass:

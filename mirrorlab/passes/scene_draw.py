@@ -42,6 +42,7 @@ from mirrorlab.passes.base import SharedResources, light_uniforms, set_view_unif
 from mirrorlab.plan import Rectangle
 from mirrorlab.scene.mesh import TextureSource
 from mirrorlab.scene.model import CurvedReflector, PlanarReflector, Scene
+from mirrorlab.scene.robot import PartLooks
 from mirrorlab.views import View
 
 FEW_PARTS = 32
@@ -184,7 +185,7 @@ class SceneDrawer:
         self.shared = shared
         self._programs: dict[int, tuple[Program, Program | None]] = {}  # by light count
         self._tables: OrderedDict[ObjectArrays, PartTable] = OrderedDict()
-        self._looks: OrderedDict[tuple, PartTable] = OrderedDict()
+        self._looks: OrderedDict[tuple[PartLooks, ...], PartTable] = OrderedDict()
         # the packed path's recorded views: those drawn in the frame being drawn or the
         # last one (a still frame draws them again; any other is freed by end_frame)
         self._recorded: dict[tuple, RecordedView] = {}
@@ -205,53 +206,55 @@ class SceneDrawer:
     def _table(self, index: SceneIndex) -> PartTable:
         """The :class:`PartTable` of ``index``'s objects (kept for the last few). Only the
         normal matrices depend on where the parts are: the rest is kept by the parts'
-        meshes, colours and textures, so a new pose of the same parts works out those
-        alone."""
-        table = self._tables.get(index.objects_part)
+        looks (:attr:`~mirrorlab.bounds.ObjectArrays.looks`), so a new pose of the same
+        parts works out those alone."""
+        objects = index.objects_part
+        table = self._tables.get(objects)
         if table is not None:
-            self._tables.move_to_end(index.objects_part)
+            self._tables.move_to_end(objects)
             return table
-        parts = index.parts
-        looks = tuple((part.mesh, part.color, part.texture) for part in parts)
-        held = self._looks.get(looks)
+        held = self._looks.get(objects.looks)
         if held is None:
-            held = self._looks[looks] = self._look_table(looks)
+            held = self._looks[objects.looks] = self._look_table(objects.looks)
             while len(self._looks) > 4:
                 self._looks.popitem(last=False)
         else:
-            self._looks.move_to_end(looks)
+            self._looks.move_to_end(objects.looks)
+        models = objects.models
         surfaces = held.surfaces.copy()
-        columns = np.empty((len(parts), 2, 4, 4))
-        if len(parts):
-            surfaces[:, :3, :3] = np.linalg.inv(index.models[:, :3, :3]).transpose(0, 2, 1)
-            columns[:, 0] = index.models.transpose(0, 2, 1)  # GLSL's are by column
+        columns = np.empty((len(models), 2, 4, 4))
+        if len(models):
+            surfaces[:, :3, :3] = np.linalg.inv(models[:, :3, :3]).transpose(0, 2, 1)
+            columns[:, 0] = models.transpose(0, 2, 1)  # GLSL's are by column
             columns[:, 1] = surfaces.transpose(0, 2, 1)
         table = PartTable(surfaces, held.textures, held.texture_ids, held.worn, held.ranges,
                           held.mesh_ids, columns, held.layouts)
-        self._tables[index.objects_part] = table
+        self._tables[objects] = table
         while len(self._tables) > 4:
             self._tables.popitem(last=False)
         return table
 
-    def _look_table(self, looks: tuple) -> PartTable:
-        """A :class:`PartTable` of parts of ``looks`` (mesh, colour, texture) each, its
-        normal matrices not filled in."""
-        count = len(looks)
+    def _look_table(self, looks: tuple[PartLooks, ...]) -> PartTable:
+        """A :class:`PartTable` of the parts of ``looks``, its normal matrices not filled
+        in."""
+        meshes = [mesh for look in looks for mesh in look.meshes]
+        colors = [color for look in looks for color in look.colors]
+        textures = tuple(texture for look in looks for texture in look.textures)
+        count = len(meshes)
         surfaces = np.zeros((count, 4, 4), dtype=np.float32)
         if count:
-            surfaces[:, :3, 3] = [color for _, color, _ in looks]
-            surfaces[:, 3, 3] = [texture is not None for _, _, texture in looks]
-        textures = tuple(texture for _, _, texture in looks)
+            surfaces[:, :3, 3] = colors
+            surfaces[:, 3, 3] = [texture is not None for texture in textures]
         worn = tuple(dict.fromkeys(t for t in textures if t is not None))
         unique = {t: i for i, t in enumerate(worn)}
-        ranges = np.array([self.shared.mesh_range(mesh) for mesh, _, _ in looks],
+        ranges = np.array([self.shared.mesh_range(mesh) for mesh in meshes],
                           dtype=np.int64).reshape(-1, 3)
-        meshes = {mesh: i for i, mesh in enumerate(dict.fromkeys(m for m, _, _ in looks))}
+        mesh_ids = {mesh: i for i, mesh in enumerate(dict.fromkeys(meshes))}
         return PartTable(surfaces, textures,
                          np.array([unique.get(t, -1) if t is not None else -1
                                    for t in textures], dtype=np.int64),
                          worn, ranges,
-                         np.array([meshes[mesh] for mesh, _, _ in looks], dtype=np.int64))
+                         np.array([mesh_ids[mesh] for mesh in meshes], dtype=np.int64))
 
     @staticmethod
     def visible(index: SceneIndex, view: View,
@@ -318,7 +321,7 @@ class SceneDrawer:
         part of it that matters, when given; every part, with ``cull`` False); returns the
         number of draw calls."""
         index = scene_index(scene)
-        if not index.parts:
+        if not len(index.objects_part):
             return 0
         table = self._table(index)
         if self.draw_path == "packed":
@@ -334,7 +337,7 @@ class SceneDrawer:
             visible, models = held
         else:
             visible = (self.visible(index, view, scissor) if cull
-                       else np.arange(len(index.parts)))
+                       else np.arange(len(index.objects_part)))
             models = np.ascontiguousarray(  # row-major, one a part
                 self.relative_columns(table, visible, view)[:, 0].transpose(0, 2, 1))
             self._each[key] = (visible, models)
@@ -395,7 +398,7 @@ class SceneDrawer:
         if self.draw_path != "packed":
             return
         index = scene_index(scene)
-        if not index.parts:
+        if not len(index.objects_part):
             return
         table = self._table(index)
         for view, scissor in views:
@@ -410,7 +413,7 @@ class SceneDrawer:
         if recorded is not None:
             return recorded
         visible = (self.visible(index, view, scissor) if cull
-                   else np.arange(len(index.parts)))
+                   else np.arange(len(index.objects_part)))
         data = self.relative_columns(table, visible, view)
         steps, commands = draw_layout(table, visible)
         parts, commands_buffer, held = self._spare_for(commands)
@@ -422,6 +425,54 @@ class SceneDrawer:
             GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
         self._recorded[key] = recorded
         return recorded
+
+    def follows_pose(self, objects: ObjectArrays,
+                     views: Iterable[tuple[View, Rectangle | None]], cull: bool) -> bool:
+        """Whether the calls that drew ``objects`` in ``views`` (each with its scissor, as
+        recorded by :meth:`prepare`) draw another pose of the same parts as well once
+        :meth:`repose` has sent its data: on the packed path, where every part's matrices
+        are in the recorded views' buffers, unless a view draws a heavy part by a call of
+        its own (its matrices are in the call)."""
+        if self.draw_path != "packed":
+            return False
+        for view, scissor in views:
+            recorded = self._recorded.get((objects, view.draw_key, scissor, cull))
+            if recorded is None or any(isinstance(step, int) for step in recorded.steps):
+                return False
+        return True
+
+    def repose(self, objects: ObjectArrays, index: SceneIndex,
+               views: Iterable[tuple[View, Rectangle | None]], cull: bool) -> bool:
+        """Send the new pose of ``objects`` that ``index`` holds into the buffers of their
+        recorded ``views`` (each with its scissor), which then hold it: the same calls
+        draw it (:meth:`follows_pose`). False, and nothing sent, when the new pose is of
+        other parts, or a view sees other parts of it than before (its commands would
+        differ)."""
+        if index.objects_part.looks != objects.looks:
+            return False
+        table = self._table(index)
+        moved = []
+        for view, scissor in views:
+            key = (objects, view.draw_key, scissor, cull)
+            recorded = self._recorded.get(key)
+            if recorded is None:
+                return False
+            visible = (self.visible(index, view, scissor) if cull
+                       else np.arange(len(index.objects_part)))
+            if not np.array_equal(visible, recorded.visible):
+                return False
+            moved.append((key, recorded, view))
+        for key, recorded, view in moved:
+            data = self.relative_columns(table, recorded.visible, view)
+            recorded.parts.upload(GL.GL_SHADER_STORAGE_BUFFER, data)
+            recorded.models = data[:, 0].transpose(0, 2, 1)
+            del self._recorded[key]
+            new_key = (index.objects_part, *key[1:])
+            held = self._recorded.get(new_key)
+            if held is not None:  # the new pose's own record of the view, made earlier
+                self._free(held)
+            self._recorded[new_key] = recorded
+        return True
 
     def _spare_for(self, commands: np.ndarray) -> tuple[Buffer, Buffer, np.ndarray | None]:
         """A pair of buffers for a view to record, and the commands the second holds:
@@ -440,14 +491,16 @@ class SceneDrawer:
         holds in GL is what it shows and a few spares, however many views came before (a
         resized window, a moving camera)."""
         for key in [k for k in self._recorded if k not in self._used]:
-            recorded = self._recorded.pop(key)
-            if len(self._spare) < SPARE_BUFFERS:
-                self._spare.append((recorded.parts, recorded.commands,
-                                    recorded.commands_held))
-            else:
-                recorded.parts.release()
-                recorded.commands.release()
+            self._free(self._recorded.pop(key))
         self._used.clear()
+
+    def _free(self, recorded: RecordedView) -> None:
+        """Keep a freed recorded view's buffers as spares (a few), else release them."""
+        if len(self._spare) < SPARE_BUFFERS:
+            self._spare.append((recorded.parts, recorded.commands, recorded.commands_held))
+        else:
+            recorded.parts.release()
+            recorded.commands.release()
 
     def draw_plain(self, scene: Scene, reflector: CurvedReflector | PlanarReflector,
                    view: View, quad=None, quad_model: np.ndarray | None = None) -> int:

@@ -16,6 +16,7 @@ import numpy as np
 
 from mirrorlab import math3d
 from mirrorlab.data import model_file, texture_file
+from mirrorlab.math3d import read_only
 from mirrorlab.scene.graph import Node, SceneGraph
 from mirrorlab.scene.mesh import MeshTexture, TextureSource, mesh_material
 from mirrorlab.scene.model import MeshObject, RobotObject, Scene, SceneObject
@@ -90,12 +91,56 @@ def mesh_look(item: MeshObject) -> tuple[tuple[float, float, float], TextureSour
     return color, texture
 
 
+@dataclass(frozen=True, eq=False)
+class PartLooks:
+    """What one object's drawable parts are, whatever its pose: each part's ``names``,
+    ``meshes``, ``colors`` and ``textures`` (see :class:`Part`), in drawing order. One
+    object is kept for each look (:func:`object_looks`), compared and hashed by identity:
+    every pose of an object shares it."""
+
+    names: tuple[str, ...]
+    meshes: tuple[Path, ...]
+    colors: tuple[tuple[float, float, float], ...]
+    textures: tuple[TextureSource | None, ...]
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    def parts(self, models: np.ndarray) -> tuple[Part, ...]:
+        """The parts placed by ``models`` ``(k, 4, 4)``, one a part."""
+        return tuple(Part(name, mesh, model, color, texture)
+                     for name, mesh, color, texture, model in zip(
+                         self.names, self.meshes, self.colors, self.textures, models,
+                         strict=True))
+
+
+@lru_cache(maxsize=256)
+def _looks(names: tuple[str, ...], meshes: tuple[Path, ...],
+           colors: tuple[tuple[float, float, float], ...],
+           textures: tuple[TextureSource | None, ...]) -> PartLooks:
+    return PartLooks(names, meshes, colors, textures)
+
+
+def object_looks(item: SceneObject) -> PartLooks:
+    """The :class:`PartLooks` of one object (the same object for equal looks)."""
+    if isinstance(item, MeshObject):
+        color, texture = mesh_look(item)
+        return _looks((item.name,), (item.mesh,), (tuple(color),), (texture,))
+    return robot_looks(item.name)
+
+
+def object_models(item: SceneObject) -> np.ndarray:
+    """Where one object's parts are: their models ``(k, 4, 4)`` (read-only), in the order of
+    :func:`object_looks`."""
+    if isinstance(item, MeshObject):
+        return item.transform.matrix()[None]
+    return robot_models(item)
+
+
 @lru_cache(maxsize=256)
 def object_parts(item: SceneObject) -> tuple[Part, ...]:
     """The drawable parts of one object (remembered: objects are values)."""
-    if isinstance(item, MeshObject):
-        return (Part(item.name, item.mesh, item.transform.matrix(), *mesh_look(item)),)
-    return robot_parts(item)
+    return object_looks(item).parts(object_models(item))
 
 
 @lru_cache(maxsize=1)
@@ -109,40 +154,70 @@ def _robot_nodes() -> tuple[tuple[Node, int, int], ...]:
                  for node in nodes)
 
 
-@lru_cache(maxsize=64)
-def _joint_rotation(angle_hex: str, axis: tuple[float, float, float]) -> np.ndarray:
-    """:func:`mirrorlab.math3d.rotate` by the angle ``float.fromhex(angle_hex)``, read-only,
-    kept for the joints that stay as they were while another turns (keyed by the hex
-    form: about an axis with a negative component, -0.0 and 0.0 turn by rotations that
-    differ in the sign of a zero)."""
-    rotation = math3d.rotate(float.fromhex(angle_hex), axis)
-    rotation.flags.writeable = False
-    return rotation
+@lru_cache(maxsize=1)
+def _unit_axes() -> tuple[tuple[float, float, float], ...]:
+    """Each joint's unit axis, in the order of ``angles``, as :func:`math3d.rotate` makes
+    it (the same division, so the same bits)."""
+    axes = {node.name: node.joint_axis for node, _, _ in _robot_nodes()}
+    units = []
+    for name in JOINT_NAMES:
+        axis = np.asarray(axes[name], dtype=np.float64)
+        x, y, z = (float(v) for v in axis / np.linalg.norm(axis))
+        units.append((x, y, z))
+    return tuple(units)
 
 
-def robot_parts(robot: RobotObject) -> tuple[Part, ...]:
-    """The robot's drawable parts posed at its angles: the parts of :func:`robot_graph`
-    with the same matrices to the last bit (the same products in the same order), without
-    building a graph for every pose."""
+def _joint_rotations(angles) -> list[np.ndarray]:
+    """The three joints' rotations ``(4, 4)``: :func:`math3d.rotate` of each angle about its
+    joint's axis, to the last bit (its products and sums in its order, in Python floats;
+    the cosines and sines by numpy in one call each)."""
+    radians = np.radians(np.asarray(angles, dtype=np.float64))
+    rotations = []
+    for c, s, (x, y, z) in zip(np.cos(radians).tolist(), np.sin(radians).tolist(),
+                               _unit_axes(), strict=True):
+        t = 1.0 - c
+        rotations.append(np.array([
+            [t * x * x + c, t * x * y - s * z, t * x * z + s * y, 0.0],
+            [t * x * y + s * z, t * y * y + c, t * y * z - s * x, 0.0],
+            [t * x * z - s * y, t * y * z + s * x, t * z * z + c, 0.0],
+            [0.0, 0.0, 0.0, 1.0]]))
+    return rotations
+
+
+@lru_cache(maxsize=256)
+def robot_looks(name: str) -> PartLooks:
+    """The looks of the parts of a robot called ``name``."""
+    drawn = [(node, node.mesh) for node, _, _ in _robot_nodes() if node.mesh]
+    return PartLooks(tuple(f"{name}.{node.name}" for node, _ in drawn),
+                     tuple(model_file(mesh) for _, mesh in drawn),
+                     tuple(node.color for node, _ in drawn),
+                     tuple(texture_file(node.texture) if node.texture else None
+                           for node, _ in drawn))
+
+
+def robot_models(robot: RobotObject) -> np.ndarray:
+    """The models ``(k, 4, 4)`` (read-only) of the robot's drawable parts posed at its
+    angles: those of :func:`robot_graph`'s nodes to the last bit (the same products in
+    the same order), without building a graph."""
+    for name, angle in zip(JOINT_NAMES, robot.angles, strict=True):
+        if not math.isfinite(angle):
+            raise ValueError(f"joint angle for {name!r} must be finite, got {angle!r}")
+    rotations = _joint_rotations(robot.angles)
     worlds: list[np.ndarray] = []
-    parts = []
+    drawn = []
     for node, parent, joint in _robot_nodes():
         offset = robot.transform.matrix() if parent < 0 else node.offset
-        if node.joint_axis is None:
-            local = offset
-        else:
-            angle = float(robot.angles[joint])
-            if not math.isfinite(angle):
-                raise ValueError(f"joint angle for {node.name!r} must be finite, got "
-                                 f"{robot.angles[joint]!r}")
-            local = offset @ _joint_rotation(angle.hex(), node.joint_axis)
+        local = offset if joint < 0 else offset @ rotations[joint]
         world = local if parent < 0 else worlds[parent] @ local
         worlds.append(world)
         if node.mesh:
-            parts.append(Part(f"{robot.name}.{node.name}", model_file(node.mesh), world,
-                              node.color, texture_file(node.texture) if node.texture
-                              else None))
-    return tuple(parts)
+            drawn.append(world)
+    return read_only(np.array(drawn))
+
+
+def robot_parts(robot: RobotObject) -> tuple[Part, ...]:
+    """The robot's drawable parts posed at its angles (:func:`robot_models`)."""
+    return robot_looks(robot.name).parts(robot_models(robot))
 
 
 def scene_parts(scene: Scene) -> tuple[Part, ...]:

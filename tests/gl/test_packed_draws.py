@@ -263,8 +263,8 @@ def test_a_still_frame_is_replayed_into_the_same_target_from_the_same_state(
 
     target = Framebuffer(registry, *SIZE)
     worked = []
-    original = SceneRenderer._render
-    monkeypatch.setattr(SceneRenderer, "_render", lambda self, *a, **k: (
+    original = SceneRenderer._run
+    monkeypatch.setattr(SceneRenderer, "_run", lambda self, *a, **k: (
         worked.append(1), original(self, *a, **k))[1])
     scene = mirrorlab.load_scene("lab20")
     images = []

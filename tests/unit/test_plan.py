@@ -492,3 +492,94 @@ def test_views_too_magnified_to_round_still_have_keys_of_their_own():
     with np.errstate(all="raise"):
         keys = [magnified(scale).key for scale in (1e300, 2e300, 1e300)]
     assert keys[0] != keys[1] and keys[0] == keys[2]
+
+
+# --------------------------------------------------------------------------- plan memo
+
+MEMO_SCENES = ("lab20", "two_mirrors", "mirror_and_sphere", "chrome_sphere", "no_mirror")
+MEMO_STEPS = ("pose", "pose", "pose", "still", "camera", "bounces", "method", "size",
+              "no-plan", "cleared", "back")
+
+
+def _memo_step(step: str, scene: Scene, first: Scene, data) -> Scene:
+    from hypothesis import strategies as st
+
+    from mirrorlab.options import apply_options
+
+    if step == "pose" and scene.robot is not None:
+        return scene.with_angles(tuple(data.draw(st.floats(-90, 90)) for _ in range(3)))
+    if step == "pose" and scene.objects:
+        item = scene.objects[0]
+        position = tuple(data.draw(st.floats(-3, 3)) for _ in range(3))
+        return scene.with_object(item.name, transform=replace(item.transform,
+                                                              position=position))
+    if step == "camera":
+        return replace(scene, camera=data.draw(st.sampled_from([FRONT, ELSEWHERE])))
+    if step == "bounces":
+        return replace(scene, max_bounces=data.draw(st.integers(0, 3)))
+    if step == "method" and any(r.kind == "planar" for r in scene.reflectors):
+        method = data.draw(st.sampled_from(["ortho", "reflected", "stencil"]))
+        return apply_options(scene, {"method": method})
+    if step == "back":
+        return first
+    return scene
+
+
+def test_the_plan_memo_plans_what_the_planner_plans_on_generated_sequences():
+    """:class:`PlanMemo` gives, frame after frame, the plan :func:`plan_frame` makes from
+    the same textures (its passes, reasons, keys and draws), whether it planned or put
+    the new content into the last plan."""
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    from mirrorlab.plan import PlanMemo
+
+    @settings(max_examples=60, deadline=None, derandomize=True)
+    @given(name=st.sampled_from(MEMO_SCENES),
+           steps=st.lists(st.sampled_from(MEMO_STEPS), min_size=3, max_size=12),
+           data=st.data())
+    def check(name, steps, data):
+        first = load_scene(name)
+        memo, state = PlanMemo(), TextureState()
+        scene, size, use_plan = first, SIZE, True
+        for step in ("first", *steps):
+            scene = _memo_step(step, scene, first, data)
+            if step == "size":
+                size = (48, 80) if size == SIZE else SIZE
+            if step == "no-plan":
+                use_plan = not use_plan
+            if step == "cleared":
+                state.clear()
+            expected = plan_frame(scene, size, TextureState(dict(state.held)), use_plan)
+            plan = memo.plan(scene, size, state, use_plan)
+            assert plan.describe() == expected.describe(), step
+            assert [p.key for p in plan.passes] == [p.key for p in expected.passes], step
+            assert [p.slot for p in plan.passes] == [p.slot for p in expected.passes], step
+            for done in plan.ran:
+                if done.reflector is not None:
+                    state.record(done)
+
+    check()
+
+
+def test_the_plan_memo_plans_an_animated_robots_frames_once():
+    """The lab's robot in a new pose every frame: planned for the blank texture, then for
+    a texture holding another pose's capture; every frame after puts its own content
+    into that plan. A mirror whose views reach as far as the scene (``reflected``) is
+    planned every frame."""
+    from mirrorlab.options import apply_options
+    from mirrorlab.plan import PlanMemo
+
+    for method, reused in (("ortho", [False, False, True, True, True]),
+                           ("reflected", [False] * 5)):
+        scene = apply_options(load_scene("lab20"), {"method": method})
+        memo, state = PlanMemo(), TextureState()
+        base, lower, upper = scene.robot.angles
+        seen = []
+        for turn in range(5):
+            plan = memo.plan(scene.with_angles((base, lower, upper + turn)), SIZE, state)
+            seen.append(memo.reused)
+            for done in plan.ran:
+                if done.reflector is not None:
+                    state.record(done)
+        assert seen == reused, method

@@ -1,0 +1,173 @@
+"""A frame planned as the last one was (:class:`mirrorlab.plan.PlanMemo`), into the same
+target from the same GL state, is drawn again from the last frame's GL calls: a still
+scene's frames, and an animated robot's, whose new pose is sent to the views' buffers
+first. On generated sequences of frames (new poses, still frames, a camera that moves,
+other techniques, another size, an object added, the robot carried out of a view, a
+pose or the camera coming back), every frame is the frame a renderer that never
+replays draws, pixel for pixel, planned as the planner plans it, on both draw paths."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import mirrorlab
+from mirrorlab.gl.resources import Framebuffer
+from mirrorlab.options import apply_options
+from mirrorlab.plan import TextureState, plan_frame
+from mirrorlab.renderer import SceneRenderer
+from mirrorlab.scene.model import Transform
+from tests.gl.frames import draw
+from tests.imagecheck import save_failure
+from tests.scenekit import block
+
+SIZES = ((64, 64), (72, 48))
+STEPS = ("pose", "pose", "pose", "still", "camera", "method", "size", "block", "away",
+         "back")
+
+
+def lab(method: str):
+    return apply_options(mirrorlab.load_scene("lab20"), {"method": method})
+
+
+def step_scene(step: str, scene, first, data):
+    """The scene after ``scene`` for a generated ``step`` (``first``: the sequence's first
+    scene, which ``back`` returns to)."""
+    if step == "pose":
+        return scene.with_angles(tuple(data.draw(st.floats(-120, 120)) for _ in range(3)))
+    if step == "camera":
+        eye = scene.camera.eye
+        return replace(scene, camera=replace(scene.camera, eye=(eye[0] + 0.4, *eye[1:])))
+    if step == "method":
+        method = data.draw(st.sampled_from(["ortho", "reflected", "stencil"]))
+        return apply_options(scene, {"method": method})
+    if step == "block":
+        where = tuple(data.draw(st.floats(-3, 3)) for _ in range(3))
+        added = block(f"block{len(scene.objects)}", where, 1.0, (0.2, 0.8, 0.3))
+        return replace(scene, objects=(*scene.objects, added))
+    if step == "away":  # the robot carried out of the camera's view, or partly
+        robot = scene.robot
+        offset = data.draw(st.sampled_from([(0.0, 40.0, 0.0), (0.0, 0.0, 4.0)]))
+        return scene.with_object(robot.name, transform=Transform(position=offset))
+    if step == "back":
+        return first
+    return scene  # still
+
+
+class Drawer:
+    """Draws a sequence two ways: ``renderer`` into one target for each size (so frames
+    replay), ``reference`` into a new target every frame (so none does)."""
+
+    def __init__(self, registry, draw_path: str) -> None:
+        self.renderer = SceneRenderer(registry, draw_path=draw_path)
+        self.reference = SceneRenderer(registry, draw_path=draw_path)
+        self.targets = {size: Framebuffer(registry, *size) for size in SIZES}
+        self.replays = 0
+        replay = self.renderer._replay
+
+        def counted(*args):
+            done = replay(*args)
+            self.replays += done
+            return done
+
+        self.renderer._replay = counted  # type: ignore[method-assign]
+
+    def frame(self, scene, size, label: str) -> None:
+        expected_plan = plan_frame(scene, size, TextureState(dict(self.renderer.state.held)))
+        target = self.targets[size]
+        stats = self.renderer.render(scene, target)
+        image = target.read()
+        expected, _ = draw(self.reference, scene, size)
+        if not np.array_equal(image, expected):
+            save_failure(f"replay_{label}", replayed=image, expected=expected)
+            differing = int((image != expected).any(axis=-1).sum())
+            raise AssertionError(f"{label}: {differing} pixels differ\n"
+                                 + "\n".join(stats.plan.describe()))
+        assert stats.plan.describe() == expected_plan.describe(), label
+        assert [p.key for p in stats.plan.passes] == [p.key for p in expected_plan.passes]
+        assert stats.draw_calls == self.reference.last_frame.draw_calls, label
+        assert stats.parts_drawn == self.reference.last_frame.parts_drawn, label
+
+    def release(self) -> None:
+        self.renderer.release()
+        self.reference.release()
+        for target in self.targets.values():
+            target.release()
+
+
+@settings(max_examples=25, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(method=st.sampled_from(["ortho", "reflected", "stencil"]),
+       draw_path=st.sampled_from(["packed", "packed", "per-draw"]),
+       steps=st.lists(st.sampled_from(STEPS), min_size=4, max_size=10), data=st.data())
+def test_replayed_frames_are_the_frames_of_a_renderer_that_never_replays(
+        registry, method, draw_path, steps, data):
+    first = lab(method)
+    drawer = Drawer(registry, draw_path)
+    try:
+        scene, size = first, SIZES[0]
+        drawer.frame(scene, size, "first")
+        for index, step in enumerate(steps):
+            scene = step_scene(step, scene, first, data)
+            if step == "size":
+                size = SIZES[1] if size == SIZES[0] else SIZES[0]
+            drawer.frame(scene, size, f"{index}-{step}")
+    finally:
+        drawer.release()
+
+
+def test_an_animated_robots_frames_replay_from_the_fourth_on(registry):
+    """A new pose every frame: the first frame captures into a blank texture, the second
+    plans anew (its texture holds a capture), the third plans as the second did (and is
+    recorded), and every one after is the third's calls with its own pose sent first."""
+    drawer = Drawer(registry, "packed")
+    try:
+        scene = lab("ortho")
+        base, lower, upper = scene.robot.angles
+        for turn in range(8):
+            drawer.frame(scene.with_angles((base, lower, upper + 2.0 * turn)), SIZES[0],
+                         f"pose {turn}")
+        assert drawer.replays == 5
+        # two poses in turn replay too
+        for turn in range(4):
+            drawer.frame(scene.with_angles((base, lower, upper + 2.0 * (turn % 2))),
+                         SIZES[0], f"in turn {turn}")
+        assert drawer.replays == 9
+        # standing still: the camera pass alone, planned anew, then recorded, then replayed
+        for _ in range(3):
+            drawer.frame(scene.with_angles((base, lower, upper + 2.0)), SIZES[0], "still")
+        assert drawer.replays == 10
+    finally:
+        drawer.release()
+
+
+@pytest.mark.parametrize("change", ["culled", "per-draw"])
+def test_a_pose_is_not_replayed_where_the_calls_cannot_follow_it(registry, change):
+    """A new pose whose parts a view sees otherwise (the robot half out of the view: the
+    commands differ), or drawn a call a part (its matrices are in the calls), is drawn
+    anew; a still frame replays on either path."""
+    drawer = Drawer(registry, "per-draw" if change == "per-draw" else "packed")
+    try:
+        scene = lab("ortho")
+        base, lower, upper = scene.robot.angles
+        for turn in range(4):
+            scene = scene.with_angles((base, lower, upper + turn))
+            drawer.frame(scene, SIZES[0], "pose")
+        replays = drawer.replays
+        if change == "culled":
+            assert replays == 1
+            scene = scene.with_object("robot", transform=Transform(position=(0.0, 0.0, 4.0)))
+            drawer.frame(scene, SIZES[0], "half out of view")
+            assert drawer.renderer.last_frame.parts_drawn < 13
+            assert drawer.replays == replays
+        else:
+            assert replays == 0
+        for _ in range(3):
+            drawer.frame(scene, SIZES[0], "still")
+        assert drawer.replays == replays + 1
+    finally:
+        drawer.release()
