@@ -326,15 +326,16 @@ class _IndexCache:
         self.hashes: dict[int, tuple[object, int]] = {}
 
     def index(self, scene: Scene) -> SceneIndex:
+        objects = reflectors = None
         for index in self.indexes:
-            if index.objects is scene.objects and index.reflectors is scene.reflectors:
-                return index
-        objects = next((i.objects_part for i in self.indexes if i.objects is scene.objects),
-                       None) or self.object_arrays(scene.objects)
-        reflectors = next((i.reflectors_part for i in self.indexes
-                           if i.reflectors is scene.reflectors),
-                          None) or self.reflector_arrays(scene.reflectors)
-        index = SceneIndex(objects, reflectors)
+            if index.objects is scene.objects:
+                if index.reflectors is scene.reflectors:
+                    return index
+                objects = index.objects_part
+            elif index.reflectors is scene.reflectors:
+                reflectors = index.reflectors_part
+        index = SceneIndex(objects or self.object_arrays(scene.objects),
+                           reflectors or self.reflector_arrays(scene.reflectors))
         self.indexes = [index, *self.indexes[:self.KEPT - 1]]
         return index
 
@@ -399,6 +400,12 @@ class _IndexCache:
 
 
 _CACHE = _IndexCache()
+
+
+def hash_of(item) -> int:
+    """``hash(item)``, worked out once while ``item`` lives in a kept scene (a scene's
+    background and lights, hashed into every frame's content key)."""
+    return _CACHE.hash_of(item)
 
 
 def scene_index(scene: Scene) -> SceneIndex:

@@ -111,7 +111,7 @@ def rows_in_view(rows: np.ndarray, test: np.ndarray) -> np.ndarray:
     of ``test`` (:func:`plane_test` ``(10, k)``, or several side by side): one product."""
     if not len(rows):
         return np.zeros(0, dtype=bool)
-    return (rows @ test >= 0.0).all(axis=1)
+    return np.logical_and.reduce(rows @ test >= 0.0, axis=1)
 
 
 def boxes_in_view(centers: np.ndarray, halves: np.ndarray, planes: np.ndarray) -> np.ndarray:

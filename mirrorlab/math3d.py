@@ -18,7 +18,7 @@ Vec3 = Sequence[float] | np.ndarray
 
 def read_only(array: np.ndarray) -> np.ndarray:
     """``array`` itself, made read-only (for arrays worked out once and shared)."""
-    array.flags.writeable = False
+    array.setflags(write=False)  # (cheaper than setting array.flags.writeable)
     return array
 
 

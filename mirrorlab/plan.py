@@ -93,7 +93,8 @@ def content_key(scene: Scene, index: bounds.SceneIndex) -> ContentKey:
     """``scene``'s :class:`ContentKey` (``index`` is its scene index)."""
     background, ambient, lights, objects, reflectors, bounces = scene.content_key()
     return ContentKey((background, ambient, lights, objects, reflectors, bounces),
-                      hash((background, ambient, lights, bounces, index.objects_part.digest,
+                      hash((bounds.hash_of(background), ambient, bounds.hash_of(lights),
+                            bounces, index.objects_part.digest,
                             index.reflectors_part.digest)))
 
 
@@ -115,6 +116,12 @@ class PlannedPass:
     slot: int = 0
     key: tuple = ()
     views: tuple[ViewPlan, ...] = ()
+
+    def with_key(self, key: tuple) -> PlannedPass:
+        """The same pass for a texture of ``key``."""
+        return PlannedPass(self.name, self.runs, self.reason, self.reflector,
+                           self.technique, self.bounce, self.for_view, self.slot, key,
+                           self.views)
 
     def describe(self) -> str:
         what = self.name if self.reflector is None else (
@@ -316,7 +323,7 @@ class PlanMemo:
 def _with_content(plan: FramePlan, old: ContentKey, new: ContentKey) -> FramePlan:
     """``plan`` with the content ``new`` in place of ``old`` in its capture keys."""
     return FramePlan(tuple(
-        replace(step, key=(*step.key[:3], new))
+        step.with_key((*step.key[:3], new))
         if len(step.key) == 4 and isinstance(step.key[3], ContentKey) and step.key[3] == old
         else step for step in plan.passes), plan.top)
 

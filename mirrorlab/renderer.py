@@ -19,7 +19,7 @@ from dataclasses import dataclass, field, replace
 from mirrorlab.bounds import ObjectArrays, scene_index
 from mirrorlab.gl.context import ResourceRegistry, gl_pass, gl_version, require_gl_version
 from mirrorlab.gl.opengl import GL
-from mirrorlab.gl.record import CallRecorder, replay
+from mirrorlab.gl.record import CallRecorder, for_replay, replay
 from mirrorlab.gl.resources import RenderTarget
 from mirrorlab.passes.base import (
     ReflectorPass,
@@ -258,7 +258,8 @@ class SceneRenderer:
         self._recorded = None
         key = (target, size, use_plan, tiny_pixels)
         if (recorded is not None and self.memo.reused and recorded.key == key
-                and recorded.found == found and self._replay(recorded, scene, plan, start)):
+                and (recorded.found is found or recorded.found == found)
+                and self._replay(recorded, scene, plan, start)):
             self._recorded = recorded
             assert self.last_frame is not None
             return self.last_frame
@@ -271,7 +272,7 @@ class SceneRenderer:
             objects = scene_index(scene).objects_part
             self._recorded = RecordedFrame(key, found, objects, views,
                                            self.drawer.follows_pose(objects, views, use_plan),
-                                           recorder.calls, stats)
+                                           for_replay(recorder.calls), stats)
         return stats
 
     def _replay(self, recorded: RecordedFrame, scene: Scene, plan: FramePlan,
@@ -296,8 +297,10 @@ class SceneRenderer:
         for step in plan.passes:
             if step.runs and step.name != "camera":
                 self.state.record(step)
-        self.last_frame = replace(recorded.stats, plan=plan,
-                                  milliseconds=(time.perf_counter() - start) * 1e3)
+        stats = recorded.stats
+        self.last_frame = FrameStats(plan, stats.draw_calls,
+                                     (time.perf_counter() - start) * 1e3, stats.passes_run,
+                                     stats.parts_drawn)
         return True
 
     def _run(self, scene: Scene, plan: FramePlan, target: RenderTarget,

@@ -13,6 +13,7 @@ checked call or pass check (:func:`mirrorlab.gl.context.check_gl_errors`).
 
 from __future__ import annotations
 
+import ctypes
 from collections.abc import Callable, Sequence
 from functools import lru_cache
 from types import ModuleType, SimpleNamespace
@@ -71,3 +72,110 @@ def replay(calls: Sequence[Call]) -> None:
     """Make ``calls`` again, in order."""
     for function, args, kwargs in calls:
         function(*args, **kwargs)
+
+
+def for_replay(calls: Sequence[Call]) -> list[Call]:
+    """``calls`` made cheaper to make again, to the same effect: :func:`without_repeats`,
+    and each entry point whose arguments are plain numbers (or None, or a pointer)
+    called without PyOpenGL's check for an error after every call (an error still shows
+    at the next check, as after :func:`replay`)."""
+    return [(_unchecked(function) if not kwargs and all(
+        a is None or isinstance(a, (int, float, ctypes.c_void_p)) for a in args)
+        else function, args, kwargs) for function, args, kwargs in without_repeats(calls)]
+
+
+_SIMPLE = (ctypes.c_uint, ctypes.c_int, ctypes.c_ubyte, ctypes.c_float, ctypes.c_double,
+           ctypes.c_void_p, ctypes.c_ushort, ctypes.c_short, ctypes.c_byte,
+           ctypes.c_uint64, ctypes.c_int64, ctypes.c_size_t, ctypes.c_ssize_t)
+
+
+@lru_cache(maxsize=512)
+def _unchecked(function: Callable[..., Any]) -> Callable[..., Any]:
+    """PyOpenGL's entry point ``function`` (or the one a wrapper of it calls) as a plain
+    ctypes function of the same arguments, without the check for an error after each
+    call; ``function`` itself where its arguments are not all plain ctypes types or it is
+    not such an entry point."""
+    from OpenGL import platform
+    from OpenGL.platform.baseplatform import _NullFunctionPointer
+
+    entry = getattr(function, "wrappedOperation", function)
+    if not isinstance(entry, _NullFunctionPointer) or not all(
+            t in _SIMPLE for t in entry.argtypes):
+        return function
+    try:
+        return platform.PLATFORM.constructFunction(
+            entry.__name__, entry.DLL, resultType=entry.restype, argTypes=entry.argtypes,
+            argNames=entry.argNames, extension=entry.extension,
+            force_extension=entry.force_extension)
+    except AttributeError:  # pragma: no cover - the entry point was found before
+        return function
+
+
+_SETTERS = ("glFrontFace", "glCullFace", "glDepthFunc", "glDepthMask", "glStencilMask",
+            "glStencilFunc", "glStencilOp", "glColorMask", "glClearColor", "glClearStencil",
+            "glViewport", "glScissor", "glUseProgram", "glBindVertexArray",
+            "glActiveTexture")
+"""Calls that set one piece of GL state, whole, to their arguments."""
+_HARMLESS = ("glDraw", "glMultiDraw", "glUniform", "glCopyTex", "glBufferSubData",
+             "glBufferData", "glReadPixels", "glGenerateMipmap", "glTexParameter",
+             "glTexImage", "glTexSubImage", "glBlitFramebuffer")
+"""Calls that change none of the state :func:`without_repeats` follows."""
+
+
+def _value(args: tuple) -> tuple:
+    return tuple(float(a) if isinstance(a, float) else int(a) for a in args)
+
+
+def without_repeats(calls: Sequence[Call]) -> list[Call]:
+    """``calls`` without those that set a piece of GL state to the value an earlier one of
+    them set it to (what it was before them is not known): switches, winding, depth
+    and stencil settings, masks, the clear values, the viewport and scissor box, the
+    program, vertex array, framebuffers, active texture unit and each unit's textures,
+    buffer bindings and pixel storage. Making the rest leaves GL as making them all
+    would. A call that could change what is followed in another way (a deletion, say)
+    makes everything unknown again."""
+    state: dict[tuple, tuple] = {}
+    kept = []
+    for call in calls:
+        function, args, _ = call
+        name = getattr(function, "__name__", "")
+        sets: list[tuple[tuple, tuple]] = []
+        if name in ("glEnable", "glDisable"):
+            sets = [(("switch", int(args[0])), (name == "glEnable",))]
+        elif name in _SETTERS:
+            value = _value(tuple(bool(a) for a in args) if name in ("glDepthMask",
+                                                                   "glColorMask") else args)
+            sets = [((name,), value)]
+        elif name == "glBindFramebuffer":
+            target, framebuffer = int(args[0]), int(args[1])
+            targets = ((GL.GL_DRAW_FRAMEBUFFER, GL.GL_READ_FRAMEBUFFER)
+                       if target == GL.GL_FRAMEBUFFER else (target,))
+            sets = [(("framebuffer", int(t)), (framebuffer,)) for t in targets]
+        elif name == "glPixelStorei":
+            sets = [(("pixel", int(args[0])), (int(args[1]),))]
+        elif name == "glBindTexture":
+            unit = state.get(("glActiveTexture",))
+            if unit is None:  # some unit's binding changes: none is known any more
+                for key in [k for k in state if k[0] == "texture"]:
+                    del state[key]
+                kept.append(call)
+                continue
+            sets = [(("texture", unit[0], int(args[0])), (int(args[1]),))]
+        elif name == "glBindBuffer" and int(args[0]) != GL.GL_ELEMENT_ARRAY_BUFFER:
+            sets = [(("buffer", int(args[0])), (int(args[1]),))]
+        elif name == "glBindBufferBase":
+            target, index, buffer = (int(a) for a in args)
+            sets = [(("buffer", target), (buffer,)), (("base", target, index), (buffer,))]
+        elif name == "glBindBuffer" or name.startswith(_HARMLESS) or name == "glClear":
+            kept.append(call)
+            continue
+        else:
+            state.clear()  # what it changes is not followed: nothing is known any more
+            kept.append(call)
+            continue
+        if sets and all(state.get(key) == value for key, value in sets):
+            continue
+        for key, value in sets:
+            state[key] = value
+        kept.append(call)
+    return kept

@@ -29,6 +29,7 @@ from __future__ import annotations
 from collections import OrderedDict
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -81,14 +82,17 @@ LAYOUTS_KEPT = 8
 """Layouts a part table keeps (a frame draws a view or two a pass)."""
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(eq=False)
 class PartTable:
-    """What drawing a scene index's parts takes, worked out once per index: ``surfaces``
-    ``(n, 4, 4)`` float32 (:func:`surface_matrix` of each part), ``textures`` (each part's,
-    or None), ``ranges`` ``(n, 3)`` int (first index, index count, base vertex in the
-    packed meshes), and the layouts of the views drawn lately."""
+    """What drawing a scene index's parts takes, worked out once per index: ``columns``
+    ``(n, 2, 4, 4)`` float64, each part's model and surface matrix by column, as the
+    packed path's parts buffer holds them (in the table of the parts' looks, which the
+    tables of their poses are made from, the model and the normal matrix are left 0);
+    ``textures`` (each part's, or None), ``ranges`` ``(n, 3)`` int (first index, index
+    count, base vertex in the packed meshes), and the layouts of the views drawn lately.
+    Read-only."""
 
-    surfaces: np.ndarray
+    columns: np.ndarray
     textures: tuple[TextureSource | None, ...]
     texture_ids: np.ndarray
     """``(n,)``: each part's position in ``worn`` (-1: none)."""
@@ -97,13 +101,17 @@ class PartTable:
     ranges: np.ndarray
     mesh_ids: np.ndarray
     """``(n,)``: which mesh each part draws (equal ids, equal ranges)."""
-    columns: np.ndarray | None = None
-    """``(n, 2, 4, 4)`` float64: each part's model and surface matrix by column, as the
-    packed path's parts buffer holds them (None until a pose fills them in)."""
     layouts: OrderedDict[bytes, Layout] = field(default_factory=OrderedDict)
     """The last few :func:`draw_layout` s, by the visible parts' bytes: shared by every
     pose's table of the same parts (the same dictionary), since a layout depends on the
     meshes and textures alone."""
+
+    @cached_property
+    def surfaces(self) -> np.ndarray:
+        """``(n, 4, 4)`` float32: each part's :func:`surface_matrix` (its ``part``
+        uniform)."""
+        return math3d.read_only(
+            self.columns[:, 1].transpose(0, 2, 1).astype(np.float32, order="C"))
 
 
 @dataclass(eq=False)
@@ -221,14 +229,12 @@ class SceneDrawer:
         else:
             self._looks.move_to_end(objects.looks)
         models = objects.models
-        surfaces = held.surfaces.copy()
-        columns = np.empty((len(models), 2, 4, 4))
+        columns = held.columns.copy()
         if len(models):
-            surfaces[:, :3, :3] = np.linalg.inv(models[:, :3, :3]).transpose(0, 2, 1)
             columns[:, 0] = models.transpose(0, 2, 1)  # GLSL's are by column
-            columns[:, 1] = surfaces.transpose(0, 2, 1)
-        table = PartTable(surfaces, held.textures, held.texture_ids, held.worn, held.ranges,
-                          held.mesh_ids, columns, held.layouts)
+            columns[:, 1, :3, :3] = np.linalg.inv(models[:, :3, :3])  # the normal matrix's
+        table = PartTable(columns, held.textures, held.texture_ids, held.worn, held.ranges,
+                          held.mesh_ids, held.layouts)
         self._tables[objects] = table
         while len(self._tables) > 4:
             self._tables.popitem(last=False)
@@ -241,16 +247,16 @@ class SceneDrawer:
         colors = [color for look in looks for color in look.colors]
         textures = tuple(texture for look in looks for texture in look.textures)
         count = len(meshes)
-        surfaces = np.zeros((count, 4, 4), dtype=np.float32)
-        if count:
-            surfaces[:, :3, 3] = colors
-            surfaces[:, 3, 3] = [texture is not None for texture in textures]
+        columns = np.zeros((count, 2, 4, 4))
+        if count:  # the surface matrix's colour and texture switch, by column
+            columns[:, 1, 3, :3] = colors
+            columns[:, 1, 3, 3] = [texture is not None for texture in textures]
         worn = tuple(dict.fromkeys(t for t in textures if t is not None))
         unique = {t: i for i, t in enumerate(worn)}
         ranges = np.array([self.shared.mesh_range(mesh) for mesh in meshes],
                           dtype=np.int64).reshape(-1, 3)
         mesh_ids = {mesh: i for i, mesh in enumerate(dict.fromkeys(meshes))}
-        return PartTable(surfaces, textures,
+        return PartTable(columns, textures,
                          np.array([unique.get(t, -1) if t is not None else -1
                                    for t in textures], dtype=np.int64),
                          worn, ranges,
@@ -262,8 +268,8 @@ class SceneDrawer:
         """Positions ``(k,)`` of the parts of ``index`` that may show in ``view`` (within
         ``scissor``, when given): boxes within its clip volume, then of those, the ones
         that may colour a pixel (:func:`mirrorlab.culling.boxes_cover_pixels`)."""
-        inside = culling.rows_in_view(index.objects_part.part_rows,
-                                      view.cull_test(scissor)).nonzero()[0]
+        inside = np.flatnonzero(culling.rows_in_view(index.objects_part.part_rows,
+                                                     view.cull_test(scissor)))
         if len(inside) <= FEW_PARTS:
             return inside  # too few for the pixel test to pay for itself
         covering = culling.boxes_cover_pixels(index.part_centers[inside],
@@ -277,7 +283,6 @@ class SceneDrawer:
         column (the packed path's parts buffer), the models relative to the view's origin,
         composed in float64 (camera-relative rendering). When the view sees every part,
         they are not copied first."""
-        assert table.columns is not None
         columns = (table.columns if len(visible) == len(table.columns)
                    else table.columns[visible])
         return (columns - view.column_offset).astype(np.float32)
@@ -459,7 +464,7 @@ class SceneDrawer:
                 return False
             visible = (self.visible(index, view, scissor) if cull
                        else np.arange(len(index.objects_part)))
-            if not np.array_equal(visible, recorded.visible):
+            if visible.tobytes() != recorded.visible.tobytes():
                 return False
             moved.append((key, recorded, view))
         for key, recorded, view in moved:

@@ -167,21 +167,30 @@ def _unit_axes() -> tuple[tuple[float, float, float], ...]:
     return tuple(units)
 
 
-def _joint_rotations(angles) -> list[np.ndarray]:
-    """The three joints' rotations ``(4, 4)``: :func:`math3d.rotate` of each angle about its
-    joint's axis, to the last bit (its products and sums in its order, in Python floats;
-    the cosines and sines by numpy in one call each)."""
+def _joint_rotations(angles) -> np.ndarray:
+    """The three joints' rotations ``(3, 4, 4)``: :func:`math3d.rotate` of each angle about
+    its joint's axis, to the last bit (its products and sums in its order, in Python
+    floats; the cosines and sines by numpy in one call each)."""
     radians = np.radians(np.asarray(angles, dtype=np.float64))
-    rotations = []
+    entries: list[float] = []
     for c, s, (x, y, z) in zip(np.cos(radians).tolist(), np.sin(radians).tolist(),
                                _unit_axes(), strict=True):
         t = 1.0 - c
-        rotations.append(np.array([
-            [t * x * x + c, t * x * y - s * z, t * x * z + s * y, 0.0],
-            [t * x * y + s * z, t * y * y + c, t * y * z - s * x, 0.0],
-            [t * x * z - s * y, t * y * z + s * x, t * z * z + c, 0.0],
-            [0.0, 0.0, 0.0, 1.0]]))
-    return rotations
+        entries += (t * x * x + c, t * x * y - s * z, t * x * z + s * y, 0.0,
+                    t * x * y + s * z, t * y * y + c, t * y * z - s * x, 0.0,
+                    t * x * z - s * y, t * y * z + s * x, t * z * z + c, 0.0,
+                    0.0, 0.0, 0.0, 1.0)
+    return np.array(entries).reshape(-1, 4, 4)
+
+
+@lru_cache(maxsize=1)
+def _robot_steps() -> tuple[tuple[tuple[int, int, np.ndarray], ...], list[int]]:
+    """How each node below the robot's root is placed, parents first: (its parent's
+    position, 0 for the root; its joint's in ``angles``, -1 for none; its offset); and
+    the positions, among those nodes, of the ones with a mesh."""
+    nodes = _robot_nodes()
+    steps = tuple((parent, joint, node.offset) for node, parent, joint in nodes[1:])
+    return steps, [i for i, (node, _, _) in enumerate(nodes[1:]) if node.mesh]
 
 
 @lru_cache(maxsize=256)
@@ -203,16 +212,11 @@ def robot_models(robot: RobotObject) -> np.ndarray:
         if not math.isfinite(angle):
             raise ValueError(f"joint angle for {name!r} must be finite, got {angle!r}")
     rotations = _joint_rotations(robot.angles)
-    worlds: list[np.ndarray] = []
-    drawn = []
-    for node, parent, joint in _robot_nodes():
-        offset = robot.transform.matrix() if parent < 0 else node.offset
-        local = offset if joint < 0 else offset @ rotations[joint]
-        world = local if parent < 0 else worlds[parent] @ local
-        worlds.append(world)
-        if node.mesh:
-            drawn.append(world)
-    return read_only(np.array(drawn))
+    steps, drawn = _robot_steps()
+    worlds = [robot.transform.matrix()]
+    for parent, joint, offset in steps:
+        worlds.append(worlds[parent] @ (offset if joint < 0 else offset @ rotations[joint]))
+    return read_only(np.array([worlds[i + 1] for i in drawn]))
 
 
 def robot_parts(robot: RobotObject) -> tuple[Part, ...]:

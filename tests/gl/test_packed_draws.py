@@ -240,7 +240,7 @@ def test_few_and_many_parts_make_the_same_commands(parts, seed):
     rng = np.random.default_rng(seed)
     count = len(parts)
     ranges = np.array([(10 * m, 3 + m, 100 * m) for _, m in parts], dtype=np.int64)
-    table = PartTable(np.zeros((count, 4, 4), np.float32), tuple(
+    table = PartTable(np.zeros((count, 2, 4, 4)), tuple(
         f"t{t}" if t >= 0 else None for t, _ in parts),
         np.array([t for t, _ in parts], dtype=np.int64), ("t0", "t1", "t2"), ranges,
         np.array([m for _, m in parts], dtype=np.int64))
