@@ -171,3 +171,82 @@ def test_a_pose_is_not_replayed_where_the_calls_cannot_follow_it(registry, chang
         assert drawer.replays == replays + 1
     finally:
         drawer.release()
+
+
+def _call(name: str, *args):
+    def function(*_: object) -> None:
+        return None
+
+    function.__name__ = name
+    return (function, args, {})
+
+
+def _names(calls) -> list[str]:
+    return [f"{function.__name__}{args}" for function, args, _ in calls]
+
+
+def test_a_replay_leaves_out_the_settings_an_earlier_call_of_it_made_already():
+    """Within a recorded frame, a call that sets a piece of state to the value an earlier
+    one set is left out, and only then: what each binding depends on is followed (the
+    active texture unit, a framebuffer target that is both draw and read, the generic
+    binding a glBindBufferBase sets too), what nothing earlier set is kept, and a call
+    whose effect is not followed forgets everything."""
+    from mirrorlab.gl.opengl import GL
+    from mirrorlab.gl.record import without_repeats
+
+    T2D, SSBO = GL.GL_TEXTURE_2D, GL.GL_SHADER_STORAGE_BUFFER
+    calls = [
+        _call("glEnable", GL.GL_DEPTH_TEST), _call("glEnable", GL.GL_DEPTH_TEST),
+        _call("glDisable", GL.GL_DEPTH_TEST), _call("glViewport", 0, 0, 8, 8),
+        _call("glViewport", 0, 0, 8, 8), _call("glViewport", 0, 0, 8, 9),
+        _call("glBindTexture", T2D, 3),  # the unit is not known: kept
+        _call("glBindTexture", T2D, 3),  # nor here
+        _call("glActiveTexture", GL.GL_TEXTURE0), _call("glBindTexture", T2D, 3),
+        _call("glBindTexture", T2D, 3),  # left out
+        _call("glActiveTexture", GL.GL_TEXTURE1), _call("glBindTexture", T2D, 3),  # kept
+        _call("glBindFramebuffer", GL.GL_FRAMEBUFFER, 5),
+        _call("glBindFramebuffer", GL.GL_DRAW_FRAMEBUFFER, 5),  # left out
+        _call("glBindFramebuffer", GL.GL_READ_FRAMEBUFFER, 6),
+        _call("glBindFramebuffer", GL.GL_FRAMEBUFFER, 5),  # read was 6: kept
+        _call("glBindBufferBase", SSBO, 0, 7), _call("glBindBuffer", SSBO, 7),  # left out
+        _call("glBindBuffer", GL.GL_ELEMENT_ARRAY_BUFFER, 2),
+        _call("glBindBuffer", GL.GL_ELEMENT_ARRAY_BUFFER, 2),  # the vertex array's: kept
+        _call("glClear", GL.GL_COLOR_BUFFER_BIT), _call("glDepthMask", True),
+        _call("glDepthMask", 1),  # the same value given another way: left out
+        _call("glDeleteTextures", 1, [3]),  # not followed: everything is forgotten
+        _call("glViewport", 0, 0, 8, 9), _call("glActiveTexture", GL.GL_TEXTURE1),
+    ]
+    expected = _names(calls)
+    for index in (23, 18, 14, 10, 4, 1):  # the repeats
+        del expected[index]
+    assert _names(without_repeats(calls)) == expected
+
+
+def test_an_error_in_a_replayed_frame_is_raised_naming_it_and_the_next_frame_plans_anew(
+        registry):
+    """The replayed calls skip PyOpenGL's check after each call: an error they make is
+    raised by the frame's own check, naming the replayed frame, and the renderer forgets
+    what it held (the next frame is drawn anew, and right)."""
+    from mirrorlab.errors import GLPassError
+    from mirrorlab.gl.opengl import GL
+    from mirrorlab.gl.record import for_replay
+
+    drawer = Drawer(registry, "packed")
+    try:
+        scene = lab("ortho")
+        base, lower, upper = scene.robot.angles
+        for turn in range(4):
+            drawer.frame(scene.with_angles((base, lower, upper + turn)), SIZES[0], "pose")
+        assert drawer.replays == 1
+        recorded = drawer.renderer._recorded
+        assert recorded is not None
+        recorded.calls.extend(for_replay([(GL.glEnable, (0x7FFF,), {})]))
+        with pytest.raises(GLPassError, match="frame \\(replayed\\)"):
+            drawer.renderer.render(scene.with_angles((base, lower, upper + 9.0)),
+                                   drawer.targets[SIZES[0]])
+        assert GL.glGetError() == GL.GL_NO_ERROR
+        assert drawer.renderer.state.held == {}
+        drawer.frame(scene.with_angles((base, lower, upper + 10.0)), SIZES[0], "after")
+        assert drawer.replays == 1
+    finally:
+        drawer.release()
