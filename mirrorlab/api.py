@@ -23,7 +23,7 @@ from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import Scene
 
 if TYPE_CHECKING:
-    from mirrorlab.gl.context import HeadlessContext
+    from mirrorlab.gl.context import HeadlessContext, gl_pass
     from mirrorlab.gl.resources import Framebuffer
     from mirrorlab.plan import FramePlan
     from mirrorlab.renderer import FrameStats, SceneRenderer
@@ -67,6 +67,7 @@ class Renderer:
         self._context: HeadlessContext | None = None
         self._renderer: SceneRenderer | None = None
         self._target: Framebuffer | None = None
+        self._reading: gl_pass | None = None
         self.last_stats: FrameStats | None = None
 
     def __enter__(self) -> Renderer:
@@ -80,8 +81,9 @@ class Renderer:
         """Make the context (done by ``with`` or the first :meth:`render`)."""
         if self._context is not None:
             return
-        from mirrorlab.gl.context import HeadlessContext
+        from mirrorlab.gl.context import HeadlessContext, gl_pass
 
+        self._reading = gl_pass("reading the frame back")
         self._context = HeadlessContext(debug=self.debug)
         try:
             from mirrorlab.renderer import SceneRenderer
@@ -127,6 +129,9 @@ class Renderer:
         return self._renderer
 
     def _target_of(self, size: tuple[int, int]) -> Framebuffer:
+        target = self._target
+        if target is not None and target.size == size:
+            return target
         from mirrorlab.gl.context import gl_pass
         from mirrorlab.gl.resources import Framebuffer
 
@@ -148,15 +153,14 @@ class Renderer:
         ``use_plan`` False runs every pass. Returns the frame as a :class:`Frame`, an
         ``(height, width, 3)`` uint8 RGB array, row 0 at the top, that Jupyter shows as a
         picture; :attr:`last_stats` says what ran."""
-        from mirrorlab.gl.context import gl_pass
-
         posed = resolve_scene(scene, **options).at_frame(frame)
         self.open()
         assert self._context is not None and self._renderer is not None
+        assert self._reading is not None
         self._context.make_current()
         target = self._target_of(check_size(size) if size is not None else self.size)
         self.last_stats = self._renderer.render(posed, target, use_plan, tiny_pixels)
-        with gl_pass("reading the frame back"):
+        with self._reading:
             return Frame(target.read())
 
     def frames(self, scene: SceneLike, *, frames: Sequence[int] | None = None,

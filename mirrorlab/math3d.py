@@ -9,6 +9,7 @@ No OpenGL is imported here.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -52,16 +53,22 @@ def rotate(angle_deg: float, axis: Vec3) -> np.ndarray:
     length = np.linalg.norm(a)
     if not np.isfinite(length) or length == 0.0:
         raise ValueError(f"rotation axis must be a non-zero finite vector, got {tuple(a)}")
-    x, y, z = a / length
-    c, s = np.cos(np.radians(angle_deg)), np.sin(np.radians(angle_deg))
-    t = 1.0 - c
+    x, y, z = (float(v) for v in a / length)
     m = identity()
-    m[:3, :3] = [
-        [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
-        [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
-        [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
-    ]
+    m[:3, :3] = rotation_entries(angle_deg, x, y, z)
     return m
+
+
+def rotation_entries(angle_deg: float, x: float, y: float, z: float) -> list[list[float]]:
+    """The ``(3, 3)`` rotation by ``angle_deg`` about the unit axis ``(x, y, z)``, as rows of
+    Python floats: the one formula every rotation of mirrorlab is made by (a robot's
+    joints too), so that equal angles give equal matrices to the last bit."""
+    radians = math.radians(angle_deg)
+    c, s = math.cos(radians), math.sin(radians)
+    t = 1.0 - c
+    return [[t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+            [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+            [t * x * z - s * y, t * y * z + s * x, t * z * z + c]]
 
 
 def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -29,7 +29,7 @@ import functools
 from collections import OrderedDict
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import Literal
+from typing import Literal, NamedTuple
 
 import numpy as np
 
@@ -118,10 +118,11 @@ class PlannedPass:
     views: tuple[ViewPlan, ...] = ()
 
     def with_key(self, key: tuple) -> PlannedPass:
-        """The same pass for a texture of ``key``."""
-        return PlannedPass(self.name, self.runs, self.reason, self.reflector,
-                           self.technique, self.bounce, self.for_view, self.slot, key,
-                           self.views)
+        """The same pass for a texture of ``key`` (made by copying its fields: a replayed
+        frame's plan is made this way every frame)."""
+        made = object.__new__(PlannedPass)
+        made.__dict__.update(self.__dict__, key=key)
+        return made
 
     def describe(self) -> str:
         what = self.name if self.reflector is None else (
@@ -269,8 +270,7 @@ def _held_as_seen(state: TextureState, content: ContentKey) -> tuple:
                  for slot, key in state.held.items())
 
 
-@dataclass(frozen=True, eq=False)
-class _Planned:
+class _Planned(NamedTuple):
     inputs: tuple
     content: ContentKey
     plan: FramePlan

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field, replace
 from mirrorlab.bounds import ObjectArrays, scene_index
 from mirrorlab.gl.context import ResourceRegistry, gl_pass, gl_version, require_gl_version
 from mirrorlab.gl.opengl import GL
-from mirrorlab.gl.record import CallRecorder, for_replay, replay
+from mirrorlab.gl.record import CallRecorder, for_replay, known_state, replay
 from mirrorlab.gl.resources import RenderTarget
 from mirrorlab.passes.base import (
     ReflectorPass,
@@ -272,7 +272,7 @@ class SceneRenderer:
             objects = scene_index(scene).objects_part
             self._recorded = RecordedFrame(key, found, objects, views,
                                            self.drawer.follows_pose(objects, views, use_plan),
-                                           for_replay(recorder.calls), stats)
+                                           for_replay(recorder.calls, known_state(found)), stats)
         return stats
 
     def _replay(self, recorded: RecordedFrame, scene: Scene, plan: FramePlan,

@@ -74,14 +74,15 @@ def replay(calls: Sequence[Call]) -> None:
         function(*args, **kwargs)
 
 
-def for_replay(calls: Sequence[Call]) -> list[Call]:
-    """``calls`` made cheaper to make again, to the same effect: :func:`without_repeats`,
-    and each entry point whose arguments are plain numbers (or None, or a pointer)
-    called without PyOpenGL's check for an error after every call (an error still shows
-    at the next check, as after :func:`replay`)."""
+def for_replay(calls: Sequence[Call], known: dict[tuple, tuple] | None = None) -> list[Call]:
+    """``calls`` made cheaper to make again from a state ``known`` describes, to the same
+    effect: :func:`without_repeats`, and each entry point whose arguments are plain
+    numbers (or None, or a pointer) called without PyOpenGL's check for an error after
+    every call (an error still shows at the next check, as after :func:`replay`)."""
     return [(_unchecked(function) if not kwargs and all(
         a is None or isinstance(a, (int, float, ctypes.c_void_p)) for a in args)
-        else function, args, kwargs) for function, args, kwargs in without_repeats(calls)]
+        else function, args, kwargs)
+        for function, args, kwargs in without_repeats(calls, known)]
 
 
 _SIMPLE = (ctypes.c_uint, ctypes.c_int, ctypes.c_ubyte, ctypes.c_float, ctypes.c_double,
@@ -122,19 +123,59 @@ _HARMLESS = ("glDraw", "glMultiDraw", "glUniform", "glCopyTex", "glBufferSubData
 """Calls that change none of the state :func:`without_repeats` follows."""
 
 
-def _value(args: tuple) -> tuple:
+def _value(args: tuple, setter: str = "") -> tuple:
+    """A setter's arguments as comparable numbers (masks as truth values)."""
+    if setter in ("glDepthMask", "glColorMask"):
+        return tuple(bool(a) for a in args)
     return tuple(float(a) if isinstance(a, float) else int(a) for a in args)
 
 
-def without_repeats(calls: Sequence[Call]) -> list[Call]:
+_FOUND_SWITCHES = ("GL_DEPTH_TEST", "GL_CULL_FACE", "GL_STENCIL_TEST", "GL_CLIP_DISTANCE0",
+                   "GL_TEXTURE_CUBE_MAP_SEAMLESS", "GL_BLEND", "GL_SCISSOR_TEST")
+_FOUND_SETTINGS = (
+    ("glFrontFace", ("GL_FRONT_FACE",)), ("glCullFace", ("GL_CULL_FACE_MODE",)),
+    ("glDepthFunc", ("GL_DEPTH_FUNC",)), ("glDepthMask", ("GL_DEPTH_WRITEMASK",)),
+    ("glStencilMask", ("GL_STENCIL_WRITEMASK",)),
+    ("glStencilFunc", ("GL_STENCIL_FUNC", "GL_STENCIL_REF", "GL_STENCIL_VALUE_MASK")),
+    ("glStencilOp", ("GL_STENCIL_FAIL", "GL_STENCIL_PASS_DEPTH_FAIL",
+                     "GL_STENCIL_PASS_DEPTH_PASS")),
+    ("glUseProgram", ("GL_CURRENT_PROGRAM",)),
+    ("glBindVertexArray", ("GL_VERTEX_ARRAY_BINDING",)),
+    ("glActiveTexture", ("GL_ACTIVE_TEXTURE",)))
+_FOUND_BOXES = (("glColorMask", "GL_COLOR_WRITEMASK"), ("glViewport", "GL_VIEWPORT"),
+                ("glScissor", "GL_SCISSOR_BOX"))
+
+
+def known_state(found: dict[str, Any]) -> dict[tuple, tuple]:
+    """What :func:`without_repeats` may take as known before its calls from the GL state
+    ``found`` (:func:`mirrorlab.passes.base.gl_state`): its switches, winding, depth and
+    stencil settings, masks, program, vertex array, active texture unit, viewport and
+    scissor box; not the framebuffer bindings (reading a frame back changes them) nor
+    the clear colour (``found`` holds it rounded)."""
+    known: dict[tuple, tuple] = {}
+    for name in _FOUND_SWITCHES:
+        if name in found:
+            known[("switch", int(getattr(GL, name)))] = (bool(found[name]),)
+    for setter, names in _FOUND_SETTINGS:
+        if all(name in found for name in names):
+            known[(setter,)] = _value(tuple(found[name] for name in names), setter)
+    for setter, name in _FOUND_BOXES:
+        if name in found:
+            known[(setter,)] = _value(tuple(found[name]), setter)
+    return known
+
+
+def without_repeats(calls: Sequence[Call],
+                    known: dict[tuple, tuple] | None = None) -> list[Call]:
     """``calls`` without those that set a piece of GL state to the value an earlier one of
-    them set it to (what it was before them is not known): switches, winding, depth
-    and stencil settings, masks, the clear values, the viewport and scissor box, the
-    program, vertex array, framebuffers, active texture unit and each unit's textures,
-    buffer bindings and pixel storage. Making the rest leaves GL as making them all
+    them set it to, or that it had before them where ``known`` says so
+    (:func:`known_state`): switches, winding, depth and stencil settings, masks, the
+    clear values, the viewport and scissor box, the program, vertex array,
+    framebuffers, active texture unit and each unit's textures, buffer bindings and
+    pixel storage. Making the rest, from that state, leaves GL as making them all
     would. A call that could change what is followed in another way (a deletion, say)
     makes everything unknown again."""
-    state: dict[tuple, tuple] = {}
+    state: dict[tuple, tuple] = dict(known or {})
     kept = []
     for call in calls:
         function, args, _ = call
@@ -143,9 +184,7 @@ def without_repeats(calls: Sequence[Call]) -> list[Call]:
         if name in ("glEnable", "glDisable"):
             sets = [(("switch", int(args[0])), (name == "glEnable",))]
         elif name in _SETTERS:
-            value = _value(tuple(bool(a) for a in args) if name in ("glDepthMask",
-                                                                   "glColorMask") else args)
-            sets = [((name,), value)]
+            sets = [((name,), _value(args, name))]
         elif name == "glBindFramebuffer":
             target, framebuffer = int(args[0]), int(args[1])
             targets = ((GL.GL_DRAW_FRAMEBUFFER, GL.GL_READ_FRAMEBUFFER)

@@ -131,6 +131,11 @@ class RecordedView:
     visible: np.ndarray
     models: np.ndarray
 
+    @cached_property
+    def drawn(self) -> frozenset[int]:
+        """The positions of the parts it draws (``visible``), as a set."""
+        return frozenset(self.visible.tolist())
+
 
 def _few_indirect_commands(table: PartTable, visible: np.ndarray
                            ) -> tuple[np.ndarray, tuple[tuple[TextureSource | None, int, int],
@@ -451,31 +456,40 @@ class SceneDrawer:
         """Send the new pose of ``objects`` that ``index`` holds into the buffers of their
         recorded ``views`` (each with its scissor), which then hold it: the same calls
         draw it (:meth:`follows_pose`). False, and nothing sent, when the new pose is of
-        other parts, or a view sees other parts of it than before (its commands would
-        differ)."""
-        if index.objects_part.looks != objects.looks:
+        other parts, or a part might show in a view that did not draw it.
+
+        A view keeps drawing the parts it drew: one that left it is clipped away, which
+        changes no pixel. Whether a part might now show where it was not drawn is known
+        without a test when every part that moved is one the views drew already (the
+        parts of an object that is not the same object as before moved; those of the
+        same object did not), and at most :data:`FEW_PARTS` moved: testing would cost
+        more than drawing a part that left. Otherwise each view must see exactly the
+        parts it saw (culled anew), so that what is unseen stays undrawn."""
+        posed = index.objects_part
+        if posed.looks != objects.looks:
             return False
-        table = self._table(index)
-        moved = []
-        for view, scissor in views:
-            key = (objects, view.draw_key, scissor, cull)
+        keys = [(objects, view.draw_key, scissor, cull) for view, scissor in views]
+        recorded_views = []
+        for key in keys:
             recorded = self._recorded.get(key)
             if recorded is None:
                 return False
-            visible = (self.visible(index, view, scissor) if cull
-                       else np.arange(len(index.objects_part)))
-            if visible.tobytes() != recorded.visible.tobytes():
-                return False
-            moved.append((key, recorded, view))
-        for key, recorded, view in moved:
+            recorded_views.append(recorded)
+        if cull and not _still_drawn(objects, posed, recorded_views):
+            for (view, scissor), recorded in zip(views, recorded_views, strict=True):
+                if (self.visible(index, view, scissor).tobytes()
+                        != recorded.visible.tobytes()):
+                    return False
+        table = self._table(index)
+        for key, recorded, (view, _) in zip(keys, recorded_views, views, strict=True):
             data = self.relative_columns(table, recorded.visible, view)
             recorded.parts.upload(GL.GL_SHADER_STORAGE_BUFFER, data)
             recorded.models = data[:, 0].transpose(0, 2, 1)
             del self._recorded[key]
-            new_key = (index.objects_part, *key[1:])
-            held = self._recorded.get(new_key)
-            if held is not None:  # the new pose's own record of the view, made earlier
-                self._free(held)
+            new_key = (posed, *key[1:])
+            earlier = self._recorded.get(new_key)
+            if earlier is not None:  # the new pose's own record of the view, made earlier
+                self._free(earlier)
             self._recorded[new_key] = recorded
         return True
 
@@ -542,6 +556,23 @@ class SceneDrawer:
         self._each.clear()
         self._programs.clear()  # the shared resources own them
         self._lit.clear()
+
+
+def _still_drawn(before: ObjectArrays, after: ObjectArrays,
+                 views: list[RecordedView]) -> bool:
+    """Whether every part of ``after`` that is not where it was in ``before`` (of the same
+    parts: its object is not the same object) is one that each of ``views`` draws, and
+    at most :data:`FEW_PARTS` moved."""
+    moved: list[int] = []
+    start = 0
+    for old, new, look in zip(before.objects, after.objects, after.looks, strict=True):
+        count = len(look)
+        if old is not new:
+            moved += range(start, start + count)
+            if len(moved) > FEW_PARTS:
+                return False
+        start += count
+    return all(recorded.drawn.issuperset(moved) for recorded in views)
 
 
 def _view_key(index: SceneIndex, view: View, scissor: Rectangle | None) -> tuple:

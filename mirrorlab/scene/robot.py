@@ -169,17 +169,11 @@ def _unit_axes() -> tuple[tuple[float, float, float], ...]:
 
 def _joint_rotations(angles) -> np.ndarray:
     """The three joints' rotations ``(3, 4, 4)``: :func:`math3d.rotate` of each angle about
-    its joint's axis, to the last bit (its products and sums in its order, in Python
-    floats; the cosines and sines by numpy in one call each)."""
-    radians = np.radians(np.asarray(angles, dtype=np.float64))
+    its joint's axis, to the last bit (the same entries, :func:`math3d.rotation_entries`)."""
     entries: list[float] = []
-    for c, s, (x, y, z) in zip(np.cos(radians).tolist(), np.sin(radians).tolist(),
-                               _unit_axes(), strict=True):
-        t = 1.0 - c
-        entries += (t * x * x + c, t * x * y - s * z, t * x * z + s * y, 0.0,
-                    t * x * y + s * z, t * y * y + c, t * y * z - s * x, 0.0,
-                    t * x * z - s * y, t * y * z + s * x, t * z * z + c, 0.0,
-                    0.0, 0.0, 0.0, 1.0)
+    for angle, (x, y, z) in zip(angles, _unit_axes(), strict=True):
+        (a, b, c), (d, e, f), (g, h, i) = math3d.rotation_entries(angle, x, y, z)
+        entries += (a, b, c, 0.0, d, e, f, 0.0, g, h, i, 0.0, 0.0, 0.0, 0.0, 1.0)
     return np.array(entries).reshape(-1, 4, 4)
 
 
@@ -213,10 +207,12 @@ def robot_models(robot: RobotObject) -> np.ndarray:
             raise ValueError(f"joint angle for {name!r} must be finite, got {angle!r}")
     rotations = _joint_rotations(robot.angles)
     steps, drawn = _robot_steps()
-    worlds = [robot.transform.matrix()]
-    for parent, joint, offset in steps:
-        worlds.append(worlds[parent] @ (offset if joint < 0 else offset @ rotations[joint]))
-    return read_only(np.array([worlds[i + 1] for i in drawn]))
+    worlds = np.empty((len(steps), 4, 4))  # of the nodes below the root
+    root = robot.transform.matrix()
+    for node, (parent, joint, offset) in enumerate(steps):
+        np.matmul(root if parent == 0 else worlds[parent - 1],
+                  offset if joint < 0 else offset @ rotations[joint], out=worlds[node])
+    return read_only(worlds if len(drawn) == len(steps) else worlds[drawn])
 
 
 def robot_parts(robot: RobotObject) -> tuple[Part, ...]:
