@@ -130,6 +130,14 @@ class ResourceRegistry:
 
     def __init__(self) -> None:
         self._live: list[Releasable] = []
+        self._extensions: frozenset[str] | None = None
+
+    def extensions(self) -> frozenset[str]:
+        """The context's OpenGL extensions (:func:`gl_extensions`, asked once: call it with
+        the context current)."""
+        if self._extensions is None:
+            self._extensions = gl_extensions()
+        return self._extensions
 
     def add(self, resource: Releasable) -> None:
         self._live.append(resource)
@@ -365,16 +373,19 @@ class HeadlessContext(_Context):
         if not self.context:
             raise GLContextError("eglCreateContext failed for desktop OpenGL")
         self._address = ctypes.cast(self.context, ctypes.c_void_p).value
+        # The current context's address, as a number: PyOpenGL's entry point returns an
+        # opaque pointer that costs a cast to compare, and a frame asks every time.
+        self._current = ctypes.CFUNCTYPE(ctypes.c_void_p)(
+            ("eglGetCurrentContext", EGL.eglGetCurrentContext.DLL))
         super().__init__()
         self.make_current()
         if debug:
             enable_debug_output()
 
     def make_current(self) -> None:
-        egl = self._egl
-        current = egl.eglGetCurrentContext()  # a query: cheaper than making it current again
-        if current and ctypes.cast(current, ctypes.c_void_p).value == self._address:
+        if self._current() == self._address:  # a query: cheaper than making it current
             return
+        egl = self._egl
         if not egl.eglMakeCurrent(self.display, egl.EGL_NO_SURFACE, egl.EGL_NO_SURFACE,
                                   self.context):
             raise GLContextError("eglMakeCurrent failed (surfaceless contexts need Mesa)")

@@ -303,13 +303,29 @@ class Texture2D(_Resource):
         GL.glDeleteTextures([self.name])
 
 
-def read_pixels(width: int, height: int, rows: np.ndarray | None = None) -> np.ndarray:
+PACK_INVERT_MESA = 0x8758
+"""``GL_PACK_INVERT_MESA`` (``GL_MESA_pack_invert``): pixels read back top row first."""
+
+
+def read_pixels(width: int, height: int, rows: np.ndarray | None = None,
+                top_first: bool = False) -> np.ndarray:
     """The bound read framebuffer's lower-left region as a new ``(height, width, 3)`` uint8
-    array, top row first. ``rows``, a C-contiguous ``(height, width, 3)`` uint8 array, is
-    where GL writes them first (bottom row first); one is made when not given."""
+    array, top row first. With ``top_first`` (the context has ``GL_MESA_pack_invert``)
+    GL writes the rows in that order straight into the new array; else ``rows``, a
+    C-contiguous ``(height, width, 3)`` uint8 array, is where GL writes them first
+    (bottom row first, as GL keeps them), and they are copied over in the other order
+    (one is made when not given)."""
     GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
     # Into an array of ours: PyOpenGL's own result array and its conversion cost 0.8 ms
     # of Python at 512 x 512, more than the driver's copy (0.27 ms).
+    if top_first:
+        image = np.empty((height, width, 3), dtype=np.uint8)
+        GL.glPixelStorei(PACK_INVERT_MESA, 1)
+        try:
+            RAW.glReadPixels(0, 0, width, height, GL.GL_RGB, GL.GL_UNSIGNED_BYTE, image)
+        finally:
+            GL.glPixelStorei(PACK_INVERT_MESA, 0)  # glGetTexImage follows it too
+        return image
     if rows is None:
         rows = np.empty((height, width, 3), dtype=np.uint8)
     RAW.glReadPixels(0, 0, width, height, GL.GL_RGB, GL.GL_UNSIGNED_BYTE, rows)
@@ -324,8 +340,12 @@ class _FramebufferObject(_Resource):
     width: int
     height: int
     _rows: np.ndarray | None = None
-    """Where :meth:`read` has GL write the rows, kept from frame to frame: a fresh 0.8 MB
-    array a frame (at 512 x 512) would be fresh pages for the kernel to zero."""
+    """Where :meth:`read` has GL write the rows when GL cannot write them top row first,
+    kept from frame to frame: a fresh 0.8 MB array a frame (at 512 x 512) would be
+    fresh pages for the kernel to zero."""
+    top_first: bool | None = None
+    """Whether :meth:`read` has GL write the rows top row first (``GL_MESA_pack_invert``;
+    asked of the context at the first read)."""
 
     @property
     def size(self) -> tuple[int, int]:
@@ -337,6 +357,10 @@ class _FramebufferObject(_Resource):
     def read(self) -> np.ndarray:
         """Colour as ``(height, width, 3)`` uint8, row 0 at the top (a new array)."""
         self.bind()
+        if self.top_first is None:
+            self.top_first = "GL_MESA_pack_invert" in self._registry.extensions()
+        if self.top_first:
+            return read_pixels(self.width, self.height, top_first=True)
         if self._rows is None or self._rows.shape[:2] != (self.height, self.width):
             self._rows = np.empty((self.height, self.width, 3), dtype=np.uint8)
         return read_pixels(self.width, self.height, self._rows)

@@ -27,7 +27,7 @@ is the same, pixel for pixel.
 from __future__ import annotations
 
 from collections import OrderedDict
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -213,6 +213,7 @@ class SceneDrawer:
         """Parts drawn since it was last set to 0 (the renderer does, each frame)."""
         self._lit: dict[Program, tuple] = {}
         """The lights and ambient light each lit program was last given."""
+        self._offsets: tuple[Sequence, np.ndarray] | None = None
 
     # ------------------------------------------------------------- parts
 
@@ -452,7 +453,7 @@ class SceneDrawer:
         return True
 
     def repose(self, objects: ObjectArrays, index: SceneIndex,
-               views: Iterable[tuple[View, Rectangle | None]], cull: bool) -> bool:
+               views: Sequence[tuple[View, Rectangle | None]], cull: bool) -> bool:
         """Send the new pose of ``objects`` that ``index`` holds into the buffers of their
         recorded ``views`` (each with its scissor), which then hold it: the same calls
         draw it (:meth:`follows_pose`). False, and nothing sent, when the new pose is of
@@ -480,11 +481,14 @@ class SceneDrawer:
                 if (self.visible(index, view, scissor).tobytes()
                         != recorded.visible.tobytes()):
                     return False
-        table = self._table(index)
-        for key, recorded, (view, _) in zip(keys, recorded_views, views, strict=True):
-            data = self.relative_columns(table, recorded.visible, view)
-            recorded.parts.upload(GL.GL_SHADER_STORAGE_BUFFER, data)
-            recorded.models = data[:, 0].transpose(0, 2, 1)
+        columns = self._table(index).columns
+        # every view's parts data in one go, composed in float64 as relative_columns does
+        data = (columns - self._column_offsets(views)).astype(np.float32)
+        for position, (key, recorded) in enumerate(zip(keys, recorded_views, strict=True)):
+            drawn = (data[position] if len(recorded.visible) == len(columns)
+                     else data[position][recorded.visible])
+            recorded.parts.upload(GL.GL_SHADER_STORAGE_BUFFER, drawn)
+            recorded.models = drawn[:, 0].transpose(0, 2, 1)
             del self._recorded[key]
             new_key = (posed, *key[1:])
             earlier = self._recorded.get(new_key)
@@ -492,6 +496,16 @@ class SceneDrawer:
                 self._free(earlier)
             self._recorded[new_key] = recorded
         return True
+
+    def _column_offsets(self, views: Sequence[tuple[View, Rectangle | None]]) -> np.ndarray:
+        """``(v, 1, 2, 4, 4)``: each view's :attr:`~mirrorlab.views.View.column_offset`, kept
+        for the last sequence of views asked for (a replayed frame's, the same each
+        frame)."""
+        held = self._offsets
+        if held is None or held[0] is not views:
+            held = self._offsets = (views, math3d.read_only(
+                np.array([view.column_offset for view, _ in views])[:, None]))
+        return held[1]
 
     def _spare_for(self, commands: np.ndarray) -> tuple[Buffer, Buffer, np.ndarray | None]:
         """A pair of buffers for a view to record, and the commands the second holds:
@@ -556,6 +570,7 @@ class SceneDrawer:
         self._each.clear()
         self._programs.clear()  # the shared resources own them
         self._lit.clear()
+        self._offsets = None
 
 
 def _still_drawn(before: ObjectArrays, after: ObjectArrays,

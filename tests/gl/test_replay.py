@@ -307,3 +307,32 @@ def test_a_replay_takes_the_state_it_starts_from_as_known_but_the_framebuffers()
              _call("glViewport", 0, 0, 1, 1)]
     assert _names(without_repeats(calls, known_state(found))) == _names(calls[4:])
     assert _names(without_repeats(calls)) == _names(calls)
+
+
+def test_a_frame_read_back_top_row_first_by_gl_is_the_one_flipped_after(registry):
+    """Where the context has ``GL_MESA_pack_invert`` (llvmpipe does), GL writes a frame's
+    rows top row first straight into the array returned; without it they are read as GL
+    keeps them and flipped. Both give the same array, and a texture read afterwards
+    (glGetTexImage also follows the switch) still comes the right way up."""
+    from mirrorlab.gl.resources import Texture2D
+
+    assert "GL_MESA_pack_invert" in registry.extensions()
+    renderer = SceneRenderer(registry)
+    target = Framebuffer(registry, *SIZES[1])
+    picture = np.arange(4 * 6 * 3, dtype=np.uint8).reshape(4, 6, 3)
+    texture = Texture2D.from_image(registry, picture)
+    try:
+        renderer.render(lab("ortho"), target)
+        top_first = target.read()
+        assert target.top_first is True
+        target.top_first = False
+        flipped = target.read()
+        assert np.array_equal(top_first, flipped) and top_first.flags.c_contiguous
+        assert not np.array_equal(flipped, flipped[::-1])  # so the order shows
+        target.top_first = True
+        target.read()
+        assert np.array_equal(texture.read(), picture)
+    finally:
+        renderer.release()
+        target.release()
+        texture.release()
