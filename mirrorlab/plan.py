@@ -274,6 +274,8 @@ class _Planned(NamedTuple):
     inputs: tuple
     content: ContentKey
     plan: FramePlan
+    placed: tuple | None
+    """The objects whose places the plan looked at (None: it looked at none)."""
 
 
 class PlanMemo:
@@ -284,8 +286,9 @@ class PlanMemo:
     cube map's), where they are. So a frame whose scene differs from the last one's in
     its objects alone, with its textures holding the same (the last frame's captures,
     of other content), gets the last plan with the new content put into its capture
-    keys, when that plan looked at no object's place: the plan the planner would make,
-    without making it (an animated robot's frames are planned once). :attr:`reused`
+    keys when that plan looked at no object's place, and the last plan itself when the
+    objects are the same: the plan the planner would make, without making it (an
+    animated robot's frames are planned once, a still scene's too). :attr:`reused`
     says whether the last plan came that way."""
 
     def __init__(self) -> None:
@@ -301,16 +304,18 @@ class PlanMemo:
         inputs = (size, use_plan, tiny_pixels, _plan_fields(scene),
                   _held_as_seen(state, content))
         last = self._last
-        if last is not None and last.inputs == inputs:
+        if last is not None and last.inputs == inputs and (
+                last.placed is None or last.placed == scene.objects):
             plan = last.plan if last.content == content else _with_content(
                 last.plan, last.content, content)
-            self._last = _Planned(inputs, content, plan)
+            self._last = _Planned(inputs, content, plan, last.placed)
             self.reused = True
             return plan
         planner = _Planner(scene, state, use_plan, tiny_pixels if use_plan else 0.0,
                            content)
         plan = _plan(planner, size, None)
-        self._last = None if planner.geometry else _Planned(inputs, content, plan)
+        self._last = _Planned(inputs, content, plan,
+                              scene.objects if planner.geometry else None)
         self.reused = False
         return plan
 

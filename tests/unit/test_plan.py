@@ -571,7 +571,7 @@ def test_the_plan_memo_plans_an_animated_robots_frames_once():
     from mirrorlab.plan import PlanMemo
 
     for method, reused in (("ortho", [False, False, True, True, True]),
-                           ("reflected", [False] * 5)):
+                           ("reflected", [False] * 5), ("stencil", [False] * 5)):
         scene = apply_options(load_scene("lab20"), {"method": method})
         memo, state = PlanMemo(), TextureState()
         base, lower, upper = scene.robot.angles
@@ -583,3 +583,28 @@ def test_the_plan_memo_plans_an_animated_robots_frames_once():
                 if done.reflector is not None:
                     state.record(done)
         assert seen == reused, method
+
+
+@pytest.mark.parametrize("name", ["lab20", "two_mirrors", "mirror_and_sphere",
+                                  "chrome_sphere", "sphere_room", "robot_wave"])
+@pytest.mark.parametrize("method", [None, "reflected", "stencil"])
+def test_the_plan_memo_plans_a_still_scene_once_whatever_its_reflectors(name, method):
+    """A scene standing still (the same objects) is planned from the third frame on as the
+    frame before was (the first captures, the second reuses the captures; without
+    captures, from the second), whether or not its views reach as far as the scene
+    does."""
+    from mirrorlab.options import apply_options
+    from mirrorlab.plan import PlanMemo
+
+    scene = load_scene(name)
+    if method is not None and any(r.kind == "planar" for r in scene.reflectors):
+        scene = apply_options(scene, {"method": method})
+    memo, state = PlanMemo(), TextureState()
+    seen = []
+    for _ in range(5):
+        plan = memo.plan(scene, SIZE, state)
+        seen.append(memo.reused)
+        for done in plan.ran:
+            if done.reflector is not None:
+                state.record(done)
+    assert not seen[0] and seen[2:] == [True, True, True]
