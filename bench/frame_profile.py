@@ -39,8 +39,10 @@ the stacks costs every sample more, and would weigh on what is measured.
 
 **Per-pass times.** In this process, without perf: every pass of the frame, and the
 readback, end with ``glFinish``, so each one's wall time includes its rasterisation.
-The medians of ``--frames`` frames are printed. (The finishes cost a little: the sum is a
-little more than an unmeasured frame.)
+A frame planned as the last one was makes the recorded calls of the frame before it as
+one pass, ``frame (replayed)`` (its capture and camera pass together). The medians of
+``--frames`` frames are printed. (The finishes cost a little: the sum is a little more
+than an unmeasured frame.)
 """
 
 from __future__ import annotations

@@ -275,21 +275,31 @@ class _Planned(NamedTuple):
     content: ContentKey
     plan: FramePlan
     placed: tuple | None
-    """The objects whose places the plan looked at (None: it looked at none)."""
+    """The objects whose places the plan looked at (None: it looked at none but, maybe,
+    how far they reach)."""
+    reach: tuple | None
+    """The scene's bounding sphere, as :func:`_reach_key` gives it, where the plan
+    looked at how far the scene reaches (None: it did not)."""
+
+
+def _reach_key(index: bounds.SceneIndex) -> tuple:
+    center, radius = index.sphere
+    return center.tobytes(), radius
 
 
 class PlanMemo:
     """Plans frames (:func:`plan_frame`, of a scene seen by its camera), keeping the last
     plan with what it was made from. A plan depends on the scene's objects only through
-    what its captures show (their content, in the capture keys) and, for a view that
-    sees as far as the scene reaches (a ``reflected`` or ``stencil`` mirror's, a live
-    cube map's), where they are. So a frame whose scene differs from the last one's in
-    its objects alone, with its textures holding the same (the last frame's captures,
-    of other content), gets the last plan with the new content put into its capture
-    keys when that plan looked at no object's place, and the last plan itself when the
-    objects are the same: the plan the planner would make, without making it (an
-    animated robot's frames are planned once, a still scene's too). :attr:`reused`
-    says whether the last plan came that way."""
+    what its captures show (their content, in the capture keys) and where they are: how
+    far the scene reaches, for a view that sees all of it (a ``reflected`` or
+    ``stencil`` mirror's), and the nearest one's distance too for a live cube map. So a
+    frame whose scene differs from the last one's in its objects alone, with its
+    textures holding the same (the last frame's captures, of other content), gets the
+    last plan with the new content put into its capture keys, when that plan looked at
+    no object's place, or at how far the scene reaches and it reaches as far as before,
+    or the objects are the same: the plan the planner would make, without making it (an
+    animated robot's frames are planned once, a still scene's too). :attr:`reused` says
+    whether the last plan came that way."""
 
     def __init__(self) -> None:
         self._last: _Planned | None = None
@@ -305,17 +315,19 @@ class PlanMemo:
                   _held_as_seen(state, content))
         last = self._last
         if last is not None and last.inputs == inputs and (
-                last.placed is None or last.placed == scene.objects):
+                last.placed == scene.objects if last.placed is not None
+                else last.reach is None or last.reach == _reach_key(index)):
             plan = last.plan if last.content == content else _with_content(
                 last.plan, last.content, content)
-            self._last = _Planned(inputs, content, plan, last.placed)
+            self._last = last._replace(inputs=inputs, content=content, plan=plan)
             self.reused = True
             return plan
         planner = _Planner(scene, state, use_plan, tiny_pixels if use_plan else 0.0,
                            content)
         plan = _plan(planner, size, None)
         self._last = _Planned(inputs, content, plan,
-                              scene.objects if planner.geometry else None)
+                              scene.objects if planner.geometry else None,
+                              _reach_key(index) if planner.reach_used else None)
         self.reused = False
         return plan
 
@@ -348,7 +360,10 @@ class _Planner:
         self.index = bounds.scene_index(scene)
         self.content = content if content is not None else content_key(scene, self.index)
         self.geometry = False
-        """Whether the plan looked at where the objects are (how far the scene reaches)."""
+        """Whether the plan looked at where the objects are, beyond how far the scene
+        reaches (:attr:`reach_used`)."""
+        self.reach_used = False
+        """Whether the plan looked at how far the scene reaches (its bounding sphere)."""
         self.assigned: dict[tuple[str, tuple], int] = {}  # this frame's (reflector, key) slots
         self.used: dict[str, set[int]] = {}
 
@@ -459,7 +474,7 @@ class _Planner:
         eye = mirrored_eye(view, reflector)
         if eye is None:
             return 0.0  # orthographic: no eye to measure from (not used)
-        self.geometry = True
+        self.reach_used = True
         return bounds.reach(self.scene, eye)
 
     def capture(self, reflector: Reflector, view: View, bounce: int,

@@ -342,8 +342,7 @@ def test_a_frame_read_back_top_row_first_by_gl_is_the_one_flipped_after(registry
 def test_a_still_scene_replays_whatever_its_mirror(registry, method):
     """A scene standing still replays from its fourth frame on (captured, reused, planned
     as the frame before and recorded; a stencil mirror captures nothing, so from its
-    third), also where its views reach as far as the scene does, which a new pose plans
-    anew: the robot's places are looked at."""
+    third), also where its views reach as far as the scene does."""
     drawer = Drawer(registry, "packed")
     try:
         scene = lab(method)
