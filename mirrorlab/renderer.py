@@ -79,19 +79,20 @@ class FrameStats:
 
 @dataclass(eq=False)
 class RecordedFrame:
-    """A frame's GL calls from its first pass to its end
-    (:class:`~mirrorlab.gl.record.CallRecorder`), to draw the frames after it that plan
-    the same again: what it was drawn into and
-    with (``key``: target, size and options), the GL state it started from (``found``),
-    the ``objects`` (:class:`~mirrorlab.bounds.ObjectArrays`) it drew, the ``views`` it
-    drew them in (each with its scissor, as the drawer recorded them), whether its calls
-    draw any pose of those objects once their parts' data is sent again
-    (``follows_pose``) and its ``stats``."""
+    """A frame's GL calls from its first pass to its end, made ready to be made again
+    (:func:`~mirrorlab.gl.record.for_replay`), for the frames after it planned the same
+    way: what it was drawn into and with (``key``: target, size and options), the GL
+    state it started from (``found``), the ``objects``
+    (:class:`~mirrorlab.bounds.ObjectArrays`) it drew, the ``views`` it drew them in
+    (each with its scissor, as the drawer recorded them) and whether they were culled
+    (``cull``), whether its calls draw another pose of those objects once the parts'
+    data is sent again (``follows_pose``), and its ``stats``."""
 
     key: tuple
     found: dict[str, object]
     objects: ObjectArrays
     views: tuple[tuple[View, Rectangle | None], ...]
+    cull: bool
     follows_pose: bool
     calls: list
     stats: FrameStats
@@ -270,9 +271,10 @@ class SceneRenderer:
         if recorder is not None:
             views = tuple(_drawn_views(plan))
             objects = scene_index(scene).objects_part
-            self._recorded = RecordedFrame(key, found, objects, views,
-                                           self.drawer.follows_pose(objects, views, use_plan),
-                                           for_replay(recorder.calls, known_state(found)), stats)
+            self._recorded = RecordedFrame(
+                key, found, objects, views, use_plan,
+                self.drawer.follows_pose(objects, views, use_plan),
+                for_replay(recorder.calls, known_state(found)), stats)
         return stats
 
     def _replay(self, recorded: RecordedFrame, scene: Scene, plan: FramePlan,
@@ -283,8 +285,7 @@ class SceneRenderer:
         objects = scene_index(scene).objects_part
         if objects is not recorded.objects:
             if not recorded.follows_pose or not self.drawer.repose(
-                    recorded.objects, scene_index(scene), recorded.views,
-                    cull=recorded.key[2]):
+                    recorded.objects, scene_index(scene), recorded.views, recorded.cull):
                 return False
             recorded.objects = objects
         try:

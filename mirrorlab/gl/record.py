@@ -1,13 +1,17 @@
 """Recording a stretch of GL calls to replay them: code that would issue exactly the same
-calls again (a still frame, drawn by the same renderer into the same target) replays the
-list instead of working it out once more.
+calls again (a frame planned as the last one was, drawn by the same renderer into the
+same target) replays the list instead of working it out once more.
 
 :class:`CallRecorder` records, while it is entered, every call made through PyOpenGL's
 ``GL`` namespace and mirrorlab's raw entry points (:data:`mirrorlab.gl.opengl.RAW`), with
 its arguments, and still makes each call: what is recorded is what ran. The arguments
 are kept as they were given, so whoever records must not change an array it passed
-afterwards (mirrorlab's passes hand GL fresh or read-only arrays). :func:`replay` makes
-the calls again, in order, ignoring what they return; errors surface at the next
+afterwards (mirrorlab's passes hand GL fresh or read-only arrays; a buffer they fill
+may be filled again before a replay, which then draws what it holds).
+:func:`for_replay` makes the list cheaper to make again to the same effect: without
+the calls that set state to the value it already has (:func:`without_repeats`), and
+with the entry points called without PyOpenGL's check after each call. :func:`replay`
+makes the calls again, in order, ignoring what they return; errors surface at the next
 checked call or pass check (:func:`mirrorlab.gl.context.check_gl_errors`).
 """
 

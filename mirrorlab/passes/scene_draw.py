@@ -14,9 +14,10 @@ chosen when the drawer is made, from what the context offers:
   indirect command (consecutive parts of one mesh as the instances of one command), and
   the pass one ``glMultiDrawElementsIndirect`` for each run of parts that share a
   texture (``scene_packed.vert`` reads part ``gl_BaseInstance + gl_InstanceID``). A
-  view's commands and buffer are recorded once and replayed while the scene's objects
-  and the view stay as they were: a still frame re-sends nothing but the calls that
-  draw.
+  view's commands and buffer are recorded once and kept while the scene's objects and
+  the view stay as they were (a still frame re-sends nothing but the calls that draw),
+  and a new pose of the same parts is sent into the same buffer (:meth:`SceneDrawer.repose`),
+  so that a replayed frame's calls draw it.
 - ``per-draw`` (any OpenGL 3.3, macOS's 4.1 among them): one
   ``glDrawElementsBaseVertex`` a part, its matrices as uniforms (``scene.vert``).
 
@@ -274,8 +275,8 @@ class SceneDrawer:
         """Positions ``(k,)`` of the parts of ``index`` that may show in ``view`` (within
         ``scissor``, when given): boxes within its clip volume, then of those, the ones
         that may colour a pixel (:func:`mirrorlab.culling.boxes_cover_pixels`)."""
-        inside = np.flatnonzero(culling.rows_in_view(index.objects_part.part_rows,
-                                                     view.cull_test(scissor)))
+        inside = culling.rows_in_view(index.objects_part.part_rows,
+                                      view.cull_test(scissor)).nonzero()[0]
         if len(inside) <= FEW_PARTS:
             return inside  # too few for the pixel test to pay for itself
         covering = culling.boxes_cover_pixels(index.part_centers[inside],
