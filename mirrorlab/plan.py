@@ -319,7 +319,7 @@ class PlanMemo:
                 else last.reach is None or last.reach == _reach_key(index)):
             plan = last.plan if last.content == content else _with_content(
                 last.plan, last.content, content)
-            self._last = last._replace(inputs=inputs, content=content, plan=plan)
+            self._last = _Planned(inputs, content, plan, last.placed, last.reach)
             self.reused = True
             return plan
         planner = _Planner(scene, state, use_plan, tiny_pixels if use_plan else 0.0,

@@ -23,7 +23,8 @@ import functools
 import os
 import re
 import sys
-from typing import Literal, Protocol, Self
+from collections.abc import Callable
+from typing import Any, Literal, Protocol, Self
 
 from mirrorlab.errors import (
     DEBIAN_GL_PACKAGES,
@@ -158,15 +159,43 @@ class ResourceRegistry:
         return count
 
 
+_SIMPLE = (ctypes.c_uint, ctypes.c_int, ctypes.c_ubyte, ctypes.c_float, ctypes.c_double,
+           ctypes.c_void_p, ctypes.c_ushort, ctypes.c_short, ctypes.c_byte,
+           ctypes.c_uint64, ctypes.c_int64, ctypes.c_size_t, ctypes.c_ssize_t)
+
+
+@functools.lru_cache(maxsize=512)
+def unchecked(function: Callable[..., Any]) -> Callable[..., Any]:
+    """PyOpenGL's entry point ``function`` (or the one a wrapper of it calls) as a plain
+    ctypes function of the same arguments, without the check for an error after each
+    call; ``function`` itself where its arguments are not all plain ctypes types or it is
+    not such an entry point."""
+    from OpenGL import platform
+    from OpenGL.platform.baseplatform import _NullFunctionPointer
+
+    entry = getattr(function, "wrappedOperation", function)
+    if not isinstance(entry, _NullFunctionPointer) or not all(
+            t in _SIMPLE for t in entry.argtypes):
+        return function
+    try:
+        return platform.PLATFORM.constructFunction(
+            entry.__name__, entry.DLL, resultType=entry.restype, argTypes=entry.argtypes,
+            argNames=entry.argNames, extension=entry.extension,
+            force_extension=entry.force_extension)
+    except AttributeError:  # pragma: no cover - the entry point was found before
+        return function
+
+
 @functools.cache
 def _pyopengl() -> tuple:
-    """PyOpenGL's raw ``glGetError`` (a plain ctypes call) and ``GLError``, imported on
-    first use (after the platform is chosen) and then kept: a frame checks for errors
-    after every pass."""
+    """PyOpenGL's raw ``glGetError`` as a plain ctypes call (:func:`unchecked`: without
+    PyOpenGL's own check after it, which would ask for the next error) and ``GLError``,
+    imported on first use (after the platform is chosen) and then kept: a frame checks
+    for errors after every pass."""
     from OpenGL.error import GLError
     from OpenGL.raw.GL.VERSION.GL_1_0 import glGetError
 
-    return glGetError, GLError
+    return unchecked(glGetError), GLError
 
 
 def check_gl_errors(where: str) -> None:

@@ -23,6 +23,7 @@ from functools import lru_cache
 from types import ModuleType, SimpleNamespace
 from typing import Any
 
+from mirrorlab.gl.context import unchecked
 from mirrorlab.gl.opengl import GL, RAW
 
 Call = tuple[Callable[..., Any], tuple, dict]
@@ -83,37 +84,10 @@ def for_replay(calls: Sequence[Call], known: dict[tuple, tuple] | None = None) -
     effect: :func:`without_repeats`, and each entry point whose arguments are plain
     numbers (or None, or a pointer) called without PyOpenGL's check for an error after
     every call (an error still shows at the next check, as after :func:`replay`)."""
-    return [(_unchecked(function) if not kwargs and all(
+    return [(unchecked(function) if not kwargs and all(
         a is None or isinstance(a, (int, float, ctypes.c_void_p)) for a in args)
         else function, args, kwargs)
         for function, args, kwargs in without_repeats(calls, known)]
-
-
-_SIMPLE = (ctypes.c_uint, ctypes.c_int, ctypes.c_ubyte, ctypes.c_float, ctypes.c_double,
-           ctypes.c_void_p, ctypes.c_ushort, ctypes.c_short, ctypes.c_byte,
-           ctypes.c_uint64, ctypes.c_int64, ctypes.c_size_t, ctypes.c_ssize_t)
-
-
-@lru_cache(maxsize=512)
-def _unchecked(function: Callable[..., Any]) -> Callable[..., Any]:
-    """PyOpenGL's entry point ``function`` (or the one a wrapper of it calls) as a plain
-    ctypes function of the same arguments, without the check for an error after each
-    call; ``function`` itself where its arguments are not all plain ctypes types or it is
-    not such an entry point."""
-    from OpenGL import platform
-    from OpenGL.platform.baseplatform import _NullFunctionPointer
-
-    entry = getattr(function, "wrappedOperation", function)
-    if not isinstance(entry, _NullFunctionPointer) or not all(
-            t in _SIMPLE for t in entry.argtypes):
-        return function
-    try:
-        return platform.PLATFORM.constructFunction(
-            entry.__name__, entry.DLL, resultType=entry.restype, argTypes=entry.argtypes,
-            argNames=entry.argNames, extension=entry.extension,
-            force_extension=entry.force_extension)
-    except AttributeError:  # pragma: no cover - the entry point was found before
-        return function
 
 
 _SETTERS = ("glFrontFace", "glCullFace", "glDepthFunc", "glDepthMask", "glStencilMask",

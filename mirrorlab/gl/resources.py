@@ -20,7 +20,7 @@ from typing import Protocol
 import numpy as np
 
 from mirrorlab.errors import GLLimitError
-from mirrorlab.gl.context import GLContextError, ResourceRegistry
+from mirrorlab.gl.context import GLContextError, ResourceRegistry, unchecked
 from mirrorlab.gl.opengl import GL, RAW
 from mirrorlab.shaders import shader_source
 
@@ -315,16 +315,17 @@ def read_pixels(width: int, height: int, rows: np.ndarray | None = None,
     C-contiguous ``(height, width, 3)`` uint8 array, is where GL writes them first
     (bottom row first, as GL keeps them), and they are copied over in the other order
     (one is made when not given)."""
-    GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
+    pixel_store = unchecked(GL.glPixelStorei)  # an error shows at the caller's check
+    pixel_store(GL.GL_PACK_ALIGNMENT, 1)
     # Into an array of ours: PyOpenGL's own result array and its conversion cost 0.8 ms
     # of Python at 512 x 512, more than the driver's copy (0.27 ms).
     if top_first:
         image = np.empty((height, width, 3), dtype=np.uint8)
-        GL.glPixelStorei(PACK_INVERT_MESA, 1)
+        pixel_store(PACK_INVERT_MESA, 1)
         try:
             RAW.glReadPixels(0, 0, width, height, GL.GL_RGB, GL.GL_UNSIGNED_BYTE, image)
         finally:
-            GL.glPixelStorei(PACK_INVERT_MESA, 0)  # glGetTexImage follows it too
+            pixel_store(PACK_INVERT_MESA, 0)  # glGetTexImage follows it too
         return image
     if rows is None:
         rows = np.empty((height, width, 3), dtype=np.uint8)
