@@ -51,9 +51,9 @@ class Renderer:
     multi-draw a pass where the context offers it, else a draw call a part, as on macOS's
     OpenGL 4.1), ``"packed"`` or ``"per-draw"``; the frames are the same.
 
-    The context is the renderer's own: GL calls made in it between frames (with it
-    current after a :meth:`render`) are not kept: every frame leaves it in the state it
-    had at the first.
+    The context is the renderer's own: make no GL calls in it (it is current after a
+    :meth:`render`). A frame drawn anew leaves it in the state it had at the first; a
+    replayed frame puts back what it changes and takes the rest as the last one left it.
     """
 
     def __init__(self, size: Sequence[int] | str = (512, 512), debug: bool = False, *,

@@ -370,10 +370,10 @@ class _IndexCache:
 
     def object_arrays(self, objects: tuple) -> ObjectArrays:
         self._forget(objects, ())
-        bounds = tuple(self.object_bounds(item) for item in objects)
+        bounds = tuple([self.object_bounds(item) for item in objects])
         models = (np.concatenate([b.models for b in bounds]) if bounds
                   else np.zeros((0, 4, 4)))
-        return ObjectArrays(objects, bounds, tuple(b.looks for b in bounds),
+        return ObjectArrays(objects, bounds, tuple([b.looks for b in bounds]),
                             read_only(models))
 
     def reflector_arrays(self, reflectors: tuple) -> ReflectorArrays:

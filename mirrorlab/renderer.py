@@ -139,7 +139,9 @@ class SceneRenderer:
     A frame leaves GL as it found it: it reads the GL state it changes first and puts it
     back after. ``own_context`` True says nothing but this renderer makes GL calls in its
     context (:class:`mirrorlab.Renderer`'s headless one): the state is then read once, at
-    the first frame, and every frame puts that back, so none reads it again."""
+    the first frame, and every frame drawn anew puts that back, so none reads it again;
+    a replayed frame leaves out the calls that set state to the value the recorded frame
+    found it at, so it counts on the last frame's state."""
 
     def __init__(self, registry: ResourceRegistry, draw_path: DrawPath = "auto",
                  own_context: bool = False) -> None:

@@ -166,16 +166,16 @@ _SIMPLE = (ctypes.c_uint, ctypes.c_int, ctypes.c_ubyte, ctypes.c_float, ctypes.c
 
 @functools.lru_cache(maxsize=512)
 def unchecked(function: Callable[..., Any]) -> Callable[..., Any]:
-    """PyOpenGL's entry point ``function`` (or the one a wrapper of it calls) as a plain
-    ctypes function of the same arguments, without the check for an error after each
-    call; ``function`` itself where its arguments are not all plain ctypes types or it is
-    not such an entry point."""
+    """PyOpenGL's entry point ``function`` (or the one a wrapper of it calls, where its
+    arguments are plain ctypes types, which the wrapper passes on as they are) as a
+    ctypes function of the same arguments, converted the same way, without the check
+    for an error after each call; ``function`` itself where it is neither."""
     from OpenGL import platform
     from OpenGL.platform.baseplatform import _NullFunctionPointer
 
     entry = getattr(function, "wrappedOperation", function)
-    if not isinstance(entry, _NullFunctionPointer) or not all(
-            t in _SIMPLE for t in entry.argtypes):
+    if not isinstance(entry, _NullFunctionPointer) or (entry is not function and not all(
+            t in _SIMPLE for t in entry.argtypes)):
         return function
     try:
         return platform.PLATFORM.constructFunction(

@@ -81,11 +81,14 @@ def replay(calls: Sequence[Call]) -> None:
 
 def for_replay(calls: Sequence[Call], known: dict[tuple, tuple] | None = None) -> list[Call]:
     """``calls`` made cheaper to make again from a state ``known`` describes, to the same
-    effect: :func:`without_repeats`, and each entry point whose arguments are plain
-    numbers (or None, or a pointer) called without PyOpenGL's check for an error after
-    every call (an error still shows at the next check, as after :func:`replay`)."""
-    return [(unchecked(function) if not kwargs and all(
-        a is None or isinstance(a, (int, float, ctypes.c_void_p)) for a in args)
+    effect: :func:`without_repeats`, and each entry point
+    called without PyOpenGL's check for an error after every call (an error still shows
+    at the next check, as after :func:`replay`); a PyOpenGL wrapper's entry point only
+    where its arguments are plain numbers (or None, or a pointer), which the wrapper
+    would pass on as they are (:func:`~mirrorlab.gl.context.unchecked`)."""
+    return [(unchecked(function) if not kwargs and (
+        not hasattr(function, "wrappedOperation") or all(
+            a is None or isinstance(a, (int, float, ctypes.c_void_p)) for a in args))
         else function, args, kwargs)
         for function, args, kwargs in without_repeats(calls, known)]
 
@@ -152,7 +155,9 @@ def without_repeats(calls: Sequence[Call],
     framebuffers, active texture unit and each unit's textures, buffer bindings and
     pixel storage. Making the rest, from that state, leaves GL as making them all
     would. A call that could change what is followed in another way (a deletion, say)
-    makes everything unknown again."""
+    makes everything unknown again. (So the calls are to be made again from that state:
+    a state changed in the meantime may stay changed where the calls left a setting
+    out.)"""
     state: dict[tuple, tuple] = dict(known or {})
     kept = []
     for call in calls:

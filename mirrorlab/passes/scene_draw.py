@@ -582,13 +582,16 @@ def _still_drawn(before: ObjectArrays, after: ObjectArrays,
     moved: list[int] = []
     start = 0
     for old, new, look in zip(before.objects, after.objects, after.looks, strict=True):
-        count = len(look)
+        count = len(look.names)
         if old is not new:
             moved += range(start, start + count)
             if len(moved) > FEW_PARTS:
                 return False
         start += count
-    return all(recorded.drawn.issuperset(moved) for recorded in views)
+    for recorded in views:
+        if not recorded.drawn.issuperset(moved):
+            return False
+    return True
 
 
 def _view_key(index: SceneIndex, view: View, scissor: Rectangle | None) -> tuple:

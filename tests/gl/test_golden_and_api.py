@@ -156,8 +156,8 @@ def test_two_renderers_in_turn_each_draw_in_their_own_context():
 
 def test_the_renderer_reads_its_own_contexts_gl_state_once(monkeypatch):
     """A Renderer's context is its own: the GL state is read at the first frame only,
-    and every frame, replayed or not, leaves that state (a caller's change made in it
-    between frames is not kept); the frames are those of a fresh renderer."""
+    and every frame leaves that state (a frame drawn anew puts back even a caller's
+    change made in it before the frame); the frames are those of a fresh renderer."""
     import mirrorlab.renderer
     from mirrorlab.gl.opengl import GL
     from mirrorlab.passes.base import gl_state

@@ -1,7 +1,8 @@
 """Every shipped scene's frames are what they were, pixel for pixel: each sequence of
 :mod:`tests.gl.golden_frames` (every scene file as a still, turning and moving sequence,
 every frame of the animated one, and every technique on the scenes made for them) is
-drawn by a fresh renderer and compared with its golden PNG exactly (tolerance 0). On a
+drawn by a fresh renderer and compared with its golden PNG exactly (tolerance 0), and
+drawn again into one target, so that its frames are replayed, to the same PNG. On a
 failure the actual, expected and difference (x4) images are written to tests/_failures/
 and the message names the frames and the pixels that differ."""
 
@@ -11,6 +12,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
+from mirrorlab.gl.resources import Framebuffer
 from mirrorlab.passes import scene_draw
 from mirrorlab.renderer import SceneRenderer
 from mirrorlab.testing import difference_image
@@ -56,6 +58,31 @@ def test_heavy_parts_drawn_alone_amid_the_packed_ones_give_the_same_frames(
         assert_golden(frames, sequence, "heavy_")
     finally:
         renderer.release()
+
+
+@pytest.mark.parametrize("sequence", SEQUENCES, ids=[s.name for s in SEQUENCES])
+def test_frames_drawn_again_into_one_target_are_replayed_as_the_golden_frames(
+        scene_renderer, registry, sequence):
+    """Into one target, as a program drawing a scene would: each frame of a still
+    sequence drawn four times over (the fourth time the third's calls are made again),
+    and an animated scene's frames one after another (from the fourth frame planned as
+    the one before, its calls made again with the robot's new pose sent first). The
+    frames are the golden frames, and frames were replayed."""
+    replays = []
+    replay = scene_renderer._replay
+    scene_renderer._replay = lambda *args: replays.append(replay(*args)) or replays[-1]
+    target = Framebuffer(registry, *SIZE)
+    try:
+        animated = sequence.frames[0][0].animation is not None
+        frames = []
+        for scene, frame in sequence.frames:
+            for _ in range(1 if animated else 4):
+                scene_renderer.render(scene.at_frame(frame), target)
+            frames.append(target.read())
+        assert_golden(np.concatenate(frames, axis=1), sequence, "replayed_")
+        assert any(replays)
+    finally:
+        target.release()
 
 
 def test_a_context_with_multi_draw_gets_the_packed_path(scene_renderer):
