@@ -334,8 +334,10 @@ class _IndexCache:
                 objects = index.objects_part
             elif index.reflectors is scene.reflectors:
                 reflectors = index.reflectors_part
-        index = SceneIndex(objects or self.object_arrays(scene.objects),
-                           reflectors or self.reflector_arrays(scene.reflectors))
+        # (``is None``: the arrays of no objects are empty, so false)
+        index = SceneIndex(
+            objects if objects is not None else self.object_arrays(scene.objects),
+            reflectors if reflectors is not None else self.reflector_arrays(scene.reflectors))
         self.indexes = [index, *self.indexes[:self.KEPT - 1]]
         return index
 

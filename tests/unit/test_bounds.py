@@ -67,3 +67,14 @@ def test_a_room_closes_its_middle_in_and_an_open_sky_does_not():
     sky = load_scene("chrome_sphere")
     assert not bounds.encloses(sky, sky.reflector("sphere").center(), "sphere")
     assert not bounds.encloses(Scene(name="empty"), np.zeros(3))
+
+
+def test_a_scene_without_objects_keeps_its_objects_arrays_when_its_mirrors_change():
+    """The arrays of a scene's objects are made once for its objects tuple, also when the
+    tuple is empty (empty arrays, as false as an empty list, are still the ones kept)."""
+    scene = replace(load_scene("lab20"), objects=())
+    first = bounds.scene_index(scene).objects_part
+    assert len(first) == 0
+    moved = replace(scene, reflectors=tuple(replace(r, name=r.name + "2")
+                                            for r in scene.reflectors))
+    assert bounds.scene_index(moved).objects_part is first
