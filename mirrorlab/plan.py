@@ -261,12 +261,16 @@ def _plan_fields(scene: Scene) -> tuple:
             scene.max_bounces)
 
 
+def _shows_content(key: tuple) -> bool:
+    """Whether a texture's ``key`` is a capture's that ends with the content it shows."""
+    return len(key) == 4 and isinstance(key[3], ContentKey)
+
+
 def _held_as_seen(state: TextureState, content: ContentKey) -> tuple:
     """What ``state`` holds as a planner sees it for a scene of ``content``: the keys
     of the textures, a capture's content given only as whether it is ``content``
     (the planner compares what it shows with that alone)."""
-    return tuple((slot, (*key[:3], key[3] == content)
-                  if len(key) == 4 and isinstance(key[3], ContentKey) else key)
+    return tuple((slot, (*key[:3], key[3] == content) if _shows_content(key) else key)
                  for slot, key in state.held.items())
 
 
@@ -341,7 +345,7 @@ def _with_content(plan: FramePlan, old: ContentKey, new: ContentKey) -> FramePla
     """``plan`` with the content ``new`` in place of ``old`` in its capture keys."""
     return FramePlan(tuple(
         step.with_key((*step.key[:3], new))
-        if len(step.key) == 4 and isinstance(step.key[3], ContentKey) and step.key[3] == old
+        if _shows_content(step.key) and step.key[3] == old
         else step for step in plan.passes), plan.top)
 
 

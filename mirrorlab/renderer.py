@@ -284,10 +284,11 @@ class SceneRenderer:
         """Draw ``recorded``'s frame again for ``scene``, whose ``plan`` is the one it was
         drawn with but for what its captures show: False (nothing drawn) when the objects
         moved and its views see other parts of them, or its calls cannot follow them."""
-        objects = scene_index(scene).objects_part
+        index = scene_index(scene)
+        objects = index.objects_part
         if objects is not recorded.objects:
             if not recorded.follows_pose or not self.drawer.repose(
-                    recorded.objects, scene_index(scene), recorded.views, recorded.cull):
+                    recorded.objects, index, recorded.views, recorded.cull):
                 return False
             recorded.objects = objects
         try:

@@ -582,7 +582,7 @@ def _still_drawn(before: ObjectArrays, after: ObjectArrays,
     moved: list[int] = []
     start = 0
     for old, new, look in zip(before.objects, after.objects, after.looks, strict=True):
-        count = len(look.names)
+        count = len(look)
         if old is not new:
             moved += range(start, start + count)
             if len(moved) > FEW_PARTS:
