@@ -290,17 +290,15 @@ def gl_extensions() -> frozenset[str]:
 
 
 MULTI_DRAW_VERSION = (4, 3)
-"""OpenGL that has glMultiDrawElementsIndirect and shader storage buffers (with
-``GL_ARB_shader_draw_parameters``, or 4.6, for ``gl_DrawID``)."""
+"""OpenGL that has glMultiDrawElementsIndirect, base instances for instanced attributes
+and separate vertex buffer bindings."""
 
 
 def has_multi_draw() -> bool:
     """Whether the current context can draw a pass as one multi-draw whose draws each read
-    their own data: OpenGL 4.6, or 4.3 with ``GL_ARB_shader_draw_parameters`` (macOS's
-    4.1 cannot)."""
-    version = gl_version()
-    return version >= (4, 6) or (version >= MULTI_DRAW_VERSION
-                                 and "GL_ARB_shader_draw_parameters" in gl_extensions())
+    their own data (per-instance attributes from a buffer, offset by each draw's base
+    instance): OpenGL 4.3 (macOS's 4.1 cannot)."""
+    return gl_version() >= MULTI_DRAW_VERSION
 
 
 def require_gl_version(needed: tuple[int, int], what: str) -> None:

@@ -100,7 +100,7 @@ _SETTERS = ("glFrontFace", "glCullFace", "glDepthFunc", "glDepthMask", "glStenci
 """Calls that set one piece of GL state, whole, to their arguments."""
 _HARMLESS = ("glDraw", "glMultiDraw", "glUniform", "glCopyTex", "glBufferSubData",
              "glBufferData", "glReadPixels", "glGenerateMipmap", "glTexParameter",
-             "glTexImage", "glTexSubImage", "glBlitFramebuffer")
+             "glTexImage", "glTexSubImage", "glBlitFramebuffer", "glBindVertexBuffer")
 """Calls that change none of the state :func:`without_repeats` follows."""
 
 

@@ -582,7 +582,33 @@ class PackedMeshes(_Resource):
         self.vertex_count = 0
         self.index_count = 0
         self.vao = self.vbo = self.ebo = 0
+        self.carries_parts = False
+        """Whether the vertex array reads per-part data (:meth:`carry_parts`)."""
         super().__init__(registry)
+
+    def carry_parts(self) -> None:
+        """Give the vertex array the attributes of a parts buffer (OpenGL 4.3): each
+        part's two matrices, :data:`PART_BYTES` by column, at locations 3 to 6 and 7 to
+        10, one part an instance, read from the buffer :meth:`bind_parts` binds. Bind
+        one before every draw: an enabled array has no buffer until then."""
+        self.carries_parts = True
+        if self.vao:
+            self._add_part_attributes()
+
+    def _add_part_attributes(self) -> None:
+        GL.glBindVertexArray(self.vao)
+        for column in range(8):
+            location = PART_LOCATION + column
+            GL.glEnableVertexAttribArray(location)
+            GL.glVertexAttribFormat(location, 4, GL.GL_FLOAT, GL.GL_FALSE, 16 * column)
+            GL.glVertexAttribBinding(location, PART_BINDING)
+        GL.glVertexBindingDivisor(PART_BINDING, 1)
+        GL.glBindVertexArray(0)
+
+    def bind_parts(self, buffer: int) -> None:
+        """Read the parts' data from ``buffer`` (the vertex array bound first): instance
+        ``i`` of a draw whose base instance is ``b`` reads part ``b + i``."""
+        GL.glBindVertexBuffer(PART_BINDING, buffer, 0, PART_BYTES)
 
     def add(self, vertices: np.ndarray, indices: np.ndarray) -> tuple[int, int, int]:
         """Add a mesh of ``vertices`` ``(n, 8)`` and flat ``indices``; returns its
@@ -599,6 +625,8 @@ class PackedMeshes(_Resource):
         self._free()
         self.vao, self.vbo, self.ebo = upload_mesh(np.concatenate(self._vertices),
                                                    np.concatenate(self._indices))
+        if self.carries_parts:
+            self._add_part_attributes()
         return placed
 
     def bind(self) -> None:
@@ -626,6 +654,13 @@ class PackedMeshes(_Resource):
 
 INDIRECT_COMMAND_BYTES = 20
 """Bytes of one ``DrawElementsIndirectCommand``: five uint32."""
+PART_LOCATION = 3
+"""The first of the eight attribute locations of a part's data
+(:meth:`PackedMeshes.carry_parts`)."""
+PART_BINDING = 3
+"""The vertex buffer binding of a parts buffer (0 to 2 are the mesh attributes')."""
+PART_BYTES = 128
+"""Bytes of one part's data: two 4x4 float32 matrices."""
 
 
 class TextureCube(_Resource):

@@ -9,11 +9,12 @@ The meshes are packed into one vertex and one index buffer
 (:class:`~mirrorlab.gl.resources.PackedMeshes`). What is left is drawn one of two ways,
 chosen when the drawer is made, from what the context offers:
 
-- ``packed`` (OpenGL 4.6, or 4.3 with ``GL_ARB_shader_draw_parameters``): each visible
-  part's matrices in a shader storage buffer, its range of the packed meshes in an
-  indirect command (consecutive parts of one mesh as the instances of one command), and
+- ``packed`` (OpenGL 4.3): each visible part's matrices in a parts buffer, its range
+  of the packed meshes in an indirect command (consecutive parts of one mesh as the
+  instances of one command, the first one's place in the buffer its base instance), and
   the pass one ``glMultiDrawElementsIndirect`` for each run of parts that share a
-  texture (``scene_packed.vert`` reads part ``gl_BaseInstance + gl_InstanceID``). A
+  texture (``scene_packed.vert`` reads each part's matrices as per-instance attributes:
+  :meth:`~mirrorlab.gl.resources.PackedMeshes.carry_parts`). A
   view's commands and buffer are recorded once and kept while the scene's objects and
   the view stay as they were (a still frame re-sends nothing but the calls that draw),
   and a new pose of the same parts is sent into the same buffer (:meth:`SceneDrawer.repose`),
@@ -36,7 +37,7 @@ import numpy as np
 
 from mirrorlab import culling, math3d
 from mirrorlab.bounds import ObjectArrays, SceneIndex, scene_index
-from mirrorlab.gl.context import has_multi_draw
+from mirrorlab.gl.context import gl_version, has_multi_draw
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Buffer, Program
 from mirrorlab.options import DRAW_PATHS, DrawPath
@@ -55,12 +56,6 @@ SPARE_BUFFERS = 4
 one view a pass)."""
 RECORDED_VIEWS = 64
 """Views whose visible parts the per-draw path keeps (most recently used; numpy only)."""
-HEAVY_INDICES = 6144
-"""A part of this many indices (2,048 triangles) or more is drawn by a call of its own,
-its matrices as uniforms (scene.vert), on the packed path too: llvmpipe reads a part's
-matrices from the storage buffer at every vertex, which cost such a part more than the
-call (102,400 triangles in seven parts drew in 16.4 ms packed against 13.4 ms a call a
-part, 256x256)."""
 
 
 def surface_matrix(normal: np.ndarray, color, textured: bool) -> np.ndarray:
@@ -76,9 +71,9 @@ def surface_matrix(normal: np.ndarray, color, textured: bool) -> np.ndarray:
 
 Run = tuple[TextureSource | None, int, int]
 """Consecutive commands that share a texture: (texture or None, first command, count)."""
-Layout = tuple[tuple[Run | int, ...], np.ndarray]
-"""How a view's visible parts are drawn (:func:`draw_layout`): its steps and its indirect
-commands ``(c, 5)`` uint32."""
+Layout = tuple[tuple[Run, ...], np.ndarray]
+"""How a view's visible parts are drawn (:func:`draw_layout`): its runs of commands and
+its indirect commands ``(c, 5)`` uint32."""
 LAYOUTS_KEPT = 8
 """Layouts a part table keeps (a frame draws a view or two a pass)."""
 
@@ -118,19 +113,16 @@ class PartTable:
 @dataclass(eq=False)
 class RecordedView:
     """One view's packed draw, recorded: the visible parts' matrices (``parts``) and
-    indirect commands (``commands``) in GL buffers, and its ``steps`` in order: a
-    :data:`Run` of commands, or an ``int``: a heavy part (:data:`HEAVY_INDICES`) drawn by
-    a call of its own, its place among the visible parts (``visible``, and ``models``
-    ``(k, 4, 4)`` float32, each relative to the view's origin)."""
+    indirect commands (``commands``) in GL buffers, its :data:`Run` s of commands in
+    order (``runs``), and which parts it draws (``visible``, positions ``(k,)``)."""
 
     parts: Buffer
     commands: Buffer
     commands_held: np.ndarray
     """The layout's commands the ``commands`` buffer holds (read-only: a buffer given to
     another view of the same layout is not filled again)."""
-    steps: tuple[Run | int, ...]
+    runs: tuple[Run, ...]
     visible: np.ndarray
-    models: np.ndarray
 
     @cached_property
     def drawn(self) -> frozenset[int]:
@@ -193,10 +185,12 @@ class SceneDrawer:
         if draw_path == "auto":
             draw_path = "packed" if has_multi_draw() else "per-draw"
         elif draw_path == "packed" and not has_multi_draw():
-            raise ValueError("draw_path 'packed' needs OpenGL 4.6, or 4.3 with "
-                             "GL_ARB_shader_draw_parameters; this context has neither")
+            raise ValueError("draw_path 'packed' needs OpenGL 4.3; this context has "
+                             f"{'.'.join(map(str, gl_version()))}")
         self.draw_path: DrawPath = draw_path
         self.shared = shared
+        if draw_path == "packed":
+            shared.packed.carry_parts()
         self._programs: dict[int, tuple[Program, Program | None]] = {}  # by light count
         self._tables: OrderedDict[ObjectArrays, PartTable] = OrderedDict()
         self._looks: OrderedDict[tuple[PartLooks, ...], PartTable] = OrderedDict()
@@ -372,34 +366,19 @@ class SceneDrawer:
                      scissor: Rectangle | None, cull: bool) -> int:
         recorded = self._record(index, view, table, scissor, cull)
         self.parts_drawn += len(recorded.visible)
-        if not recorded.steps:
+        if not recorded.runs:
             return 0
-        per_draw, packed_program = self.programs(scene)
         packed = self.shared.packed
         packed.bind()
         GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, recorded.commands.name)
-        GL.glBindBufferBase(GL.GL_SHADER_STORAGE_BUFFER, 0, recorded.parts.name)
-        program = None
-        for step in recorded.steps:
-            if isinstance(step, int):  # a heavy part, drawn as the per-draw path does
-                if program is not per_draw:
-                    program = self.begin(scene, view)
-                part = int(recorded.visible[step])
-                program.set_mat4("model", np.ascontiguousarray(recorded.models[step]))
-                program.set_mat4("part", table.surfaces[part])
-                texture = table.textures[part]
-                if texture is not None:
-                    self.shared.texture(texture).bind(0)
-                packed.draw(*table.ranges[part])
-                continue
-            if program is not packed_program:
-                program = self.begin(scene, view, packed=True)
-            texture, first, count = step
+        packed.bind_parts(recorded.parts.name)
+        self.begin(scene, view, packed=True)
+        for texture, first, count in recorded.runs:
             if texture is not None:
                 self.shared.texture(texture).bind(0)
             packed.multi_draw(first, count)
         GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
-        return len(recorded.steps)
+        return len(recorded.runs)
 
     def prepare(self, scene: Scene, views: Iterable[tuple[View, Rectangle | None]],
                 cull: bool = True) -> None:
@@ -427,11 +406,10 @@ class SceneDrawer:
         visible = (self.visible(index, view, scissor) if cull
                    else np.arange(len(index.objects_part)))
         data = self.relative_columns(table, visible, view)
-        steps, commands = draw_layout(table, visible)
+        runs, commands = draw_layout(table, visible)
         parts, commands_buffer, held = self._spare_for(commands)
-        recorded = RecordedView(parts, commands_buffer, commands, steps, visible,
-                                data[:, 0].transpose(0, 2, 1))
-        recorded.parts.upload(GL.GL_SHADER_STORAGE_BUFFER, data)
+        recorded = RecordedView(parts, commands_buffer, commands, runs, visible)
+        recorded.parts.upload(GL.GL_ARRAY_BUFFER, data)
         if held is not commands:
             recorded.commands.upload(GL.GL_DRAW_INDIRECT_BUFFER, commands)
             GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
@@ -443,15 +421,10 @@ class SceneDrawer:
         """Whether the calls that drew ``objects`` in ``views`` (each with its scissor, as
         recorded by :meth:`prepare`) draw another pose of the same parts as well once
         :meth:`repose` has sent its data: on the packed path, where every part's matrices
-        are in the recorded views' buffers, unless a view draws a heavy part by a call of
-        its own (its matrices are in the call)."""
-        if self.draw_path != "packed":
-            return False
-        for view, scissor in views:
-            recorded = self._recorded.get((objects, view.draw_key, scissor, cull))
-            if recorded is None or any(isinstance(step, int) for step in recorded.steps):
-                return False
-        return True
+        are in the recorded views' buffers."""
+        return self.draw_path == "packed" and all(
+            (objects, view.draw_key, scissor, cull) in self._recorded
+            for view, scissor in views)
 
     def repose(self, objects: ObjectArrays, index: SceneIndex,
                views: Sequence[tuple[View, Rectangle | None]], cull: bool) -> bool:
@@ -488,8 +461,7 @@ class SceneDrawer:
         for position, (key, recorded) in enumerate(zip(keys, recorded_views, strict=True)):
             drawn = (data[position] if len(recorded.visible) == len(columns)
                      else data[position][recorded.visible])
-            recorded.parts.upload(GL.GL_SHADER_STORAGE_BUFFER, drawn)
-            recorded.models = drawn[:, 0].transpose(0, 2, 1)
+            recorded.parts.upload(GL.GL_ARRAY_BUFFER, drawn)
             del self._recorded[key]
             new_key = (posed, *key[1:])
             earlier = self._recorded.get(new_key)
@@ -601,33 +573,18 @@ def _view_key(index: SceneIndex, view: View, scissor: Rectangle | None) -> tuple
 
 
 def draw_layout(table: PartTable, visible: np.ndarray) -> Layout:
-    """How the ``visible`` parts ``(k,)`` of ``table`` are drawn, in order: the steps (a
-    :data:`Run` of indirect commands, or a heavy part's place among them) and the indirect
-    commands ``(c, 5)`` uint32, the parts' data being that of the whole view. Kept by the
-    table for the last few sets of parts (read-only): a moving part makes a new pose
-    every frame, with its layout unchanged."""
+    """How the ``visible`` parts ``(k,)`` of ``table`` are drawn, in order: the
+    :data:`Run` s of indirect commands and the commands ``(c, 5)`` uint32
+    (:func:`indirect_commands`). Kept by the table for the last few sets of parts
+    (read-only): a moving part makes a new pose every frame, with its layout
+    unchanged."""
     key = visible.tobytes()
     held = table.layouts.get(key)
     if held is not None:
         table.layouts.move_to_end(key)
         return held
-    heavy = table.ranges[visible, 1] >= HEAVY_INDICES
-    edges = (np.flatnonzero(heavy[1:] != heavy[:-1]) + 1).tolist()
-    steps: list[Run | int] = []
-    blocks = [np.zeros((0, 5), dtype=np.uint32)]
-    done = 0  # commands so far
-    for a, b in zip([0, *edges], [*edges, len(visible)], strict=True):
-        if a == b:  # nothing visible
-            continue
-        if heavy[a]:
-            steps += range(a, b)
-            continue
-        block, runs = indirect_commands(table, visible[a:b])
-        block[:, 4] += a  # the parts' data of the whole view
-        steps += [(texture, done + first, count) for texture, first, count in runs]
-        blocks.append(block)
-        done += len(block)
-    layout = table.layouts[key] = (tuple(steps), math3d.read_only(np.concatenate(blocks)))
+    commands, runs = indirect_commands(table, visible)
+    layout = table.layouts[key] = (runs, math3d.read_only(commands))
     while len(table.layouts) > LAYOUTS_KEPT:
         table.layouts.popitem(last=False)
     return layout

@@ -13,7 +13,6 @@ import pytest
 from PIL import Image
 
 from mirrorlab.gl.resources import Framebuffer
-from mirrorlab.passes import scene_draw
 from mirrorlab.renderer import SceneRenderer
 from mirrorlab.testing import difference_image
 from tests.gl.golden_frames import SIZE, draw_sequence, sequences
@@ -36,26 +35,6 @@ def test_the_per_draw_path_draws_the_same_frames(registry, sequence):
     try:
         assert renderer.drawer.draw_path == "per-draw"
         assert_golden(draw_sequence(renderer, sequence), sequence, "per_draw_")
-    finally:
-        renderer.release()
-
-
-@pytest.mark.parametrize("sequence", SEQUENCES, ids=[s.name for s in SEQUENCES])
-def test_heavy_parts_drawn_alone_amid_the_packed_ones_give_the_same_frames(
-        registry, sequence, monkeypatch):
-    """With the threshold lowered so that the robot's base, arms and the mirror's frame
-    (240 to 576 indices) are heavy and the joints (36) are not, each view alternates
-    between single draws and multi-draws, in the scene's order: the same frames."""
-    monkeypatch.setattr(scene_draw, "HEAVY_INDICES", 200)
-    renderer = SceneRenderer(registry)
-    try:
-        assert renderer.drawer.draw_path == "packed"
-        frames = draw_sequence(renderer, sequence)
-        kinds = {type(step) for recorded in renderer.drawer._recorded.values()
-                 for step in recorded.steps}
-        if sequence.name.split("__")[0] in ("lab20", "robot_wave", "two_mirrors"):
-            assert kinds == {int, tuple}, kinds  # the robot's scenes: both kinds in a view
-        assert_golden(frames, sequence, "heavy_")
     finally:
         renderer.release()
 
@@ -86,7 +65,7 @@ def test_frames_drawn_again_into_one_target_are_replayed_as_the_golden_frames(
 
 
 def test_a_context_with_multi_draw_gets_the_packed_path(scene_renderer):
-    """llvmpipe's OpenGL 4.5 has GL_ARB_shader_draw_parameters: the packed path is chosen."""
+    """llvmpipe's OpenGL 4.5 has multi-draw (4.3): the packed path is chosen."""
     assert scene_renderer.drawer.draw_path == "packed"
 
 
