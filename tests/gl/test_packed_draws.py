@@ -7,6 +7,9 @@ frames (its goldens: tests/gl/test_shipped_goldens.py)."""
 from __future__ import annotations
 
 import itertools
+import os
+import subprocess
+import sys
 from dataclasses import replace
 
 import numpy as np
@@ -352,3 +355,41 @@ def test_a_reflected_capture_copies_its_glass_and_leaves_the_texture_as_a_whole_
     partial = [r for r in regions if r is not None]
     assert len(partial) >= 5, regions
     assert all(w * h < SIZE[0] * SIZE[1] for _, _, w, h in partial), partial
+
+
+_DRAW_IN_A_CHILD = """
+import hashlib, sys
+import mirrorlab
+path = sys.argv[1]
+try:
+    with mirrorlab.Renderer((48, 48), draw_path=path) as renderer:
+        frame = renderer.render("lab20", method="reflected")
+        print(renderer._renderer.drawer.draw_path, hashlib.sha256(frame.tobytes()).hexdigest())
+except ValueError as exc:
+    print("ValueError", exc)
+"""
+
+
+def draw_in_a_child(path: str, version: str | None) -> str:
+    """What a fresh process prints drawing the lab scene by ``path`` in a context whose
+    OpenGL Mesa reports as ``version`` (its own when None): the path taken and the
+    frame's digest, or the ValueError."""
+    env = {k: v for k, v in os.environ.items() if k != "MESA_GL_VERSION_OVERRIDE"}
+    if version is not None:
+        env["MESA_GL_VERSION_OVERRIDE"] = version
+    result = subprocess.run([sys.executable, "-c", _DRAW_IN_A_CHILD, path],
+                            capture_output=True, text=True, timeout=120, env=env)
+    assert result.returncode == 0, result.stderr
+    return result.stdout.strip()
+
+
+def test_a_context_under_opengl_4_3_draws_the_same_frame_a_part_at_a_time():
+    """OpenGL 4.2 has base instances but not multi-draw indirect: ``auto`` takes the
+    per-draw path there, and its frame is the packed path's; ``packed`` forced there
+    says what it needs and what the context has."""
+    packed = draw_in_a_child("auto", None)
+    older = draw_in_a_child("auto", "4.2")
+    assert packed.split()[0] == "packed" and older.split()[0] == "per-draw"
+    assert packed.split()[1] == older.split()[1]
+    assert draw_in_a_child("packed", "4.2") == (
+        "ValueError draw_path 'packed' needs OpenGL 4.3; this context has 4.2")
