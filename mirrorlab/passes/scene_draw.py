@@ -71,9 +71,9 @@ def surface_matrix(normal: np.ndarray, color, textured: bool) -> np.ndarray:
 
 Run = tuple[TextureSource | None, int, int]
 """Consecutive commands that share a texture: (texture or None, first command, count)."""
-Layout = tuple[tuple[Run, ...], np.ndarray]
-"""How a view's visible parts are drawn (:func:`draw_layout`): its runs of commands and
-its indirect commands ``(c, 5)`` uint32."""
+Layout = tuple[np.ndarray, tuple[Run, ...]]
+"""How a view's visible parts are drawn (:func:`draw_layout`): its indirect commands
+``(c, 5)`` uint32 and its runs of them."""
 LAYOUTS_KEPT = 8
 """Layouts a part table keeps (a frame draws a view or two a pass)."""
 
@@ -406,7 +406,7 @@ class SceneDrawer:
         visible = (self.visible(index, view, scissor) if cull
                    else np.arange(len(index.objects_part)))
         data = self.relative_columns(table, visible, view)
-        runs, commands = draw_layout(table, visible)
+        commands, runs = draw_layout(table, visible)
         parts, commands_buffer, held = self._spare_for(commands)
         recorded = RecordedView(parts, commands_buffer, commands, runs, visible)
         recorded.parts.upload(GL.GL_ARRAY_BUFFER, data)
@@ -573,18 +573,17 @@ def _view_key(index: SceneIndex, view: View, scissor: Rectangle | None) -> tuple
 
 
 def draw_layout(table: PartTable, visible: np.ndarray) -> Layout:
-    """How the ``visible`` parts ``(k,)`` of ``table`` are drawn, in order: the
-    :data:`Run` s of indirect commands and the commands ``(c, 5)`` uint32
-    (:func:`indirect_commands`). Kept by the table for the last few sets of parts
-    (read-only): a moving part makes a new pose every frame, with its layout
-    unchanged."""
+    """How the ``visible`` parts ``(k,)`` of ``table`` are drawn, in order: the indirect
+    commands ``(c, 5)`` uint32 and their :data:`Run` s (:func:`indirect_commands`). Kept
+    by the table for the last few sets of parts (read-only): a moving part makes a new
+    pose every frame, with its layout unchanged."""
     key = visible.tobytes()
     held = table.layouts.get(key)
     if held is not None:
         table.layouts.move_to_end(key)
         return held
     commands, runs = indirect_commands(table, visible)
-    layout = table.layouts[key] = (runs, math3d.read_only(commands))
+    layout = table.layouts[key] = (math3d.read_only(commands), runs)
     while len(table.layouts) > LAYOUTS_KEPT:
         table.layouts.popitem(last=False)
     return layout
