@@ -6,6 +6,7 @@ mesh file is read once (:func:`mirrorlab.scene.mesh.load_mesh`) and its bounds k
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from pathlib import Path
@@ -316,30 +317,55 @@ class _IndexCache:
     (a frame whose scene differs only in its camera finds its index at once; one whose
     objects alone changed keeps its reflectors' arrays, and the other way round), and
     each object's bounds by the object's identity (a frame in which one object moved
-    works out only that one's)."""
+    works out only that one's).
 
-    KEPT = 4
+    The last :attr:`KEPT` indexes used are kept, and the arrays of the last :attr:`KEPT`
+    objects and reflectors tuples, each found in one dictionary lookup: a program drawing
+    several scenes in turn (a renderer each, or one renderer for all) finds each one's
+    again, however many objects it holds, and an animation, which makes new objects
+    every frame, holds no more than that."""
+
+    KEPT = 32
 
     def __init__(self) -> None:
-        self.indexes: list[SceneIndex] = []
+        self.indexes: OrderedDict[tuple[int, int], SceneIndex] = OrderedDict()
+        # each by its tuple's identity: (the tuple, its arrays)
+        self.object_parts: OrderedDict[int, tuple[tuple, ObjectArrays]] = OrderedDict()
+        self.reflector_parts: OrderedDict[int, tuple[tuple, ReflectorArrays]] = OrderedDict()
         self.objects: dict[int, tuple[object, ObjectBounds]] = {}
         self.hashes: dict[int, tuple[object, int]] = {}
+        self.kept_items = 0
+        """How many objects and reflectors the kept arrays hold."""
 
     def index(self, scene: Scene) -> SceneIndex:
-        objects = reflectors = None
-        for index in self.indexes:
-            if index.objects is scene.objects:
-                if index.reflectors is scene.reflectors:
-                    return index
-                objects = index.objects_part
-            elif index.reflectors is scene.reflectors:
-                reflectors = index.reflectors_part
-        # (``is None``: the arrays of no objects are empty, so false)
-        index = SceneIndex(
-            objects if objects is not None else self.object_arrays(scene.objects),
-            reflectors if reflectors is not None else self.reflector_arrays(scene.reflectors))
-        self.indexes = [index, *self.indexes[:self.KEPT - 1]]
+        key = (id(scene.objects), id(scene.reflectors))
+        index = self.indexes.get(key)
+        if (index is not None and index.objects is scene.objects
+                and index.reflectors is scene.reflectors):
+            self.indexes.move_to_end(key)
+            return index
+        index = SceneIndex(self._part(self.object_parts, scene.objects, self.object_arrays),
+                           self._part(self.reflector_parts, scene.reflectors,
+                                      self.reflector_arrays))
+        self.indexes[key] = index
+        if len(self.indexes) > self.KEPT:
+            self.indexes.popitem(last=False)
         return index
+
+    def _part(self, kept: OrderedDict, items: tuple, make):
+        """The arrays of ``items`` (an objects or reflectors tuple) from ``kept``, or made
+        by ``make`` and kept."""
+        held = kept.get(id(items))
+        if held is not None and held[0] is items:
+            kept.move_to_end(id(items))
+            return held[1]
+        part = make(items)
+        kept[id(items)] = (items, part)
+        self.kept_items += len(items)
+        if len(kept) > self.KEPT:
+            _, (dropped, _) = kept.popitem(last=False)
+            self.kept_items -= len(dropped)
+        return part
 
     def hash_of(self, item) -> int:
         """``hash(item)``, worked out once while the item lives in a kept scene."""
@@ -361,11 +387,13 @@ class _IndexCache:
         return made
 
     def _forget(self, objects: tuple, reflectors: tuple) -> None:
-        """Drop what no kept scene holds, once much more is held than a scene has."""
-        if len(self.objects) + len(self.hashes) <= 4 * (len(objects) + len(reflectors)) + 512:
+        """Drop what no kept arrays hold, once more than twice what they hold is held:
+        the work of a drop is paid for by as many items worked out before it."""
+        if len(self.objects) + len(self.hashes) <= 2 * (
+                self.kept_items + len(objects) + len(reflectors)) + 512:
             return
-        keep = {id(item) for index in self.indexes
-                for item in (*index.objects, *index.reflectors)}
+        keep = {id(item) for kept in (self.object_parts, self.reflector_parts)
+                for items, _ in kept.values() for item in items}
         keep |= {id(item) for item in (*objects, *reflectors)}
         self.objects = {key: held for key, held in self.objects.items() if key in keep}
         self.hashes = {key: held for key, held in self.hashes.items() if key in keep}

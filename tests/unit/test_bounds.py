@@ -14,7 +14,7 @@ from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.mesh import load_mesh
 from mirrorlab.scene.model import CurvedReflector, Scene
 from mirrorlab.scene.robot import scene_parts
-from tests.scenekit import ball, transformed
+from tests.scenekit import ball, block, transformed
 
 
 def every_point(scene: Scene, leave_out: str = "") -> np.ndarray:
@@ -78,3 +78,36 @@ def test_a_scene_without_objects_keeps_its_objects_arrays_when_its_mirrors_chang
     moved = replace(scene, reflectors=tuple(replace(r, name=r.name + "2")
                                             for r in scene.reflectors))
     assert bounds.scene_index(moved).objects_part is first
+
+
+def test_scenes_drawn_in_turn_each_keep_their_index():
+    """A program drawing a dozen scenes in turn finds each one's index again (none is
+    worked out twice), however the turns are ordered."""
+    cache = bounds._IndexCache()
+    base = load_scene("lab20")
+    scenes = [replace(base, objects=(*base.objects,
+                                     block(f"b{i}", (i, 0.0, -5.0), 0.5, (1, 0, 0))))
+              for i in range(12)]
+    first = [cache.index(scene) for scene in scenes]
+    turns = list(zip(scenes, first, strict=True))
+    for scene, index in [*turns, *reversed(turns)]:
+        assert cache.index(scene) is index
+
+
+def test_an_animation_holds_no_more_than_its_last_frames():
+    """An animation makes new objects every frame: what the cache holds stays bounded by
+    the frames it keeps, not by how many frames were drawn (200 frames of 51 objects
+    would be 10 200 objects' bounds)."""
+    cache = bounds._IndexCache()
+    lab = load_scene("lab20")
+    base = replace(lab, objects=(*lab.objects, *(
+        block(f"b{i}", (0.1 * i, 0.0, -5.0), 0.05, (1, 0, 0)) for i in range(50))))
+    per_frame = len(base.objects) + len(base.reflectors)
+    held = []
+    for frame in range(200):
+        cache.index(transformed(base, offset=(0.01 * frame, 0.0, 0.0)))
+        held.append(len(cache.objects))
+    assert len(cache.indexes) == cache.KEPT
+    # between two clear-outs: twice what the kept arrays and the new frame hold, + 512
+    assert max(held) <= 2 * (cache.KEPT + 1) * per_frame + 512 + per_frame
+    assert held[-1] >= len(base.objects)
