@@ -175,7 +175,13 @@ def moved_camera(scene, step: int):
 class Variant:
     name: str
     frames: Callable[[int], list[float]]
-    samples: list[float] = field(default_factory=list)
+    blocks: list[list[float]] = field(default_factory=list)
+    """The ms of the timed frames, one list a round of :func:`interleave`."""
+
+    @property
+    def samples(self) -> list[float]:
+        """Every timed frame's ms."""
+        return [ms for block in self.blocks for ms in block]
 
 
 def timed_frames(renderer, scene_of_turn: Callable[[int], Scene],
@@ -211,12 +217,21 @@ def interleave(variants: list[Variant], frames: int, warmup: int, block: int) ->
     while min(len(v.samples) for v in variants) < frames:
         shift = turn % len(variants)
         for variant in variants[shift:] + variants[:shift]:
-            variant.samples += variant.frames(block)
+            variant.blocks.append(variant.frames(block))
         turn += 1
 
 
-def medians(variants: list[Variant]) -> dict[str, float]:
-    return {v.name: statistics.median(v.samples) for v in variants}
+def paired_ratio(variant: Variant, base: Variant) -> float:
+    """How many times ``base``'s frame ``variant``'s takes: the median over the rounds of
+    :func:`interleave` of the ratio of their medians in that round.
+
+    The two variants' blocks of a round run within milliseconds of each other; the
+    machine's speed changes by as much as twice within a run (a shared virtual machine),
+    and a burst of other work can slow one block. Pairing by round leaves both out, where
+    the ratio of the whole runs' medians keeps them: nine renderers drawing the same frame
+    came out 0.81x to 1.72x of one another by their medians, 0.93x to 1.09x paired."""
+    return statistics.median(statistics.median(ours) / statistics.median(theirs)
+                             for ours, theirs in zip(variant.blocks, base.blocks, strict=True))
 
 
 MOVING_SEEN_MIRRORS = 100

@@ -56,6 +56,7 @@ from mirrorlab.benchmarks.scale import (
     Variant,
     interleave,
     mirrorlab_variants,
+    paired_ratio,
     scale_scenes,
     timed_frames,
 )
@@ -294,10 +295,12 @@ def scale_rows(worker: PyrenderWorker | None, lab: MeshSet, size: int, object_co
             variants.append(Variant(f"pyrender flat, {name}",
                                     pyrender_variant(worker, "flat", name)))
         interleave(variants, frames, warmup, block)
+    bases = {_scale_parts(v.name)[0]: v for v in variants if v.name.endswith(", base")}
     return [{"variant": v.name, "size": size,
              "median_ms": round(statistics.median(v.samples), 3),
              "p10_ms": round(float(np.percentile(v.samples, 10)), 3),
              "p90_ms": round(float(np.percentile(v.samples, 90)), 3),
+             "to_base": round(paired_ratio(v, bases[_scale_parts(v.name)[0]]), 3),
              "frames": len(v.samples)} for v in variants]
 
 
@@ -312,8 +315,10 @@ def _scale_parts(variant: str) -> tuple[str, int, str]:
 
 def scale_table(rows: list[dict]) -> str:
     """Every scale scene: each renderer's median and its ratio to that renderer's base
-    frame, and mirrorlab's still frame against pyrender's flat one."""
+    frame (paired round by round, :func:`mirrorlab.benchmarks.scale.paired_ratio`), and
+    mirrorlab's still frame against pyrender's flat one (the ratio of the medians)."""
     by = {_scale_parts(r["variant"]): r["median_ms"] for r in rows}
+    to_base = {_scale_parts(r["variant"]): r["to_base"] for r in rows}
     kinds = list(dict.fromkeys(_scale_parts(r["variant"])[0] for r in rows))
     scenes = list(dict.fromkeys(_scale_parts(r["variant"])[1:] for r in rows))
     header = "| scene | " + " | ".join(f"{kind} ms | {kind} / its base" for kind in kinds)
@@ -326,9 +331,9 @@ def scale_table(rows: list[dict]) -> str:
     for count, family in scenes:
         cells = []
         for kind in kinds:
-            ms, base = by.get((kind, count, family)), by.get((kind, 0, "base"))
+            ms = by.get((kind, count, family))
             cells += ["" if ms is None else f"{ms:.2f}",
-                      "" if ms is None or not base else f"{ms / base:.2f}x"]
+                      "" if ms is None else f"{to_base[kind, count, family]:.2f}x"]
         if has_pyrender:
             flat = by.get(("pyrender flat", count, family))
             for kind in compare:
@@ -487,7 +492,8 @@ def report(rows: list[dict], scale: list[dict], out_dir: Path, how: str) -> str:
             f"Scenes at scale, {scale[0]['size']}x{scale[0]['size']}: the lab scene with a "
             f"reflected mirror, and objects or mirrors added "
             f"(mirrorlab.benchmarks.scale); "
-            f"{how}",
+            f"{how}; each ratio to its base is the median of the ratios of the two "
+            f"variants' medians in each round",
             scale_table(scale),
             "Growth with the number of items (k in time ~ count^k, fewest to most):",
             scale_growth_table(scale)]
@@ -524,7 +530,8 @@ def rows_from_csv(path: Path, required: bool = True) -> list[dict]:
             for key in ("triangles", "size", "frames"):
                 if key in row:
                     row[key] = int(row[key])
-            for key in ("median_ms", "p10_ms", "p90_ms"):
+            for key in ("median_ms", "p10_ms", "p90_ms", *(("to_base",) if path.name
+                                                            == "scale.csv" else ())):
                 row[key] = float(row[key])
             if not isinstance(row.get("variant"), str):
                 raise KeyError("variant")

@@ -51,6 +51,8 @@ def check_report(folder, stdout: str, variants: set[str], pyrender: bool) -> Non
     for row in scale:
         assert int(row["frames"]) >= 3 and int(row["size"]) == 64
         assert 0 < float(row["p10_ms"]) <= float(row["median_ms"]) <= float(row["p90_ms"])
+        assert float(row["to_base"]) == 1.0 if row["variant"].endswith(", base") else (
+            float(row["to_base"]) > 0)
     report = (folder / "speed.md").read_text()
     assert ("two passes / flat" in report) == pyrender
     assert ("pyrender was not timed" in report) == (not pyrender)
