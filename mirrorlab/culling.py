@@ -165,6 +165,14 @@ def boxes_cover_pixels(centers: np.ndarray, halves: np.ndarray, view_projection:
     return ~ahead | ((first_x <= last_x) & (first_y <= last_y))
 
 
+_TERMS_OF_SIDES = np.array([[1.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+                            [0.0, 0.0, 1.0, 1.0, 0.0, 0.0],
+                            [0.0, 0.0, 0.0, 0.0, 1.0, 1.0],
+                            [1.0, 1.0, 1.0, 1.0, 1.0, 1.0]])
+"""From the absolute clip coordinates ``(|x|, |y|, |z|, |w|)`` to the terms each side of
+the view compares, summed: |x| + |w| for the left and right, |y| + |w|, |z| + |w|."""
+
+
 def quads_outside(corners: np.ndarray, view_projection: np.ndarray,
                   clip_plane: np.ndarray | None, orthographic: bool,
                   sides: tuple[float, float, float, float] = (-1.0, 1.0, -1.0, 1.0)
@@ -178,29 +186,56 @@ def quads_outside(corners: np.ndarray, view_projection: np.ndarray,
     it); behind the eye, at or behind its plane. ``sides`` narrows the left, right,
     bottom and top sides from -1, 1, -1, 1 of normalised device coordinates (to what a
     scissor keeps, :func:`scissor_bounds`)."""
+    return rows_outside(quad_rows(corners), view_projection, clip_plane, orthographic, sides)
+
+
+def quad_rows(corners: np.ndarray) -> np.ndarray:
+    """``(4, p, 4)``: the homogeneous world corners of the quads ``corners`` ``(p, 4, 3)``,
+    first corners first (what :func:`rows_outside` takes)."""
     corners = np.asarray(corners, dtype=np.float64)
-    codes = np.zeros(len(corners), dtype=np.int8)
-    if not len(corners):
-        return codes
-    homogeneous = np.concatenate([corners, np.ones((*corners.shape[:-1], 1))], axis=-1)
+    rows = np.ones((4, len(corners), 4))
+    rows[..., :3] = corners.transpose(1, 0, 2)
+    return rows
+
+
+def rows_outside(rows: np.ndarray, view_projection: np.ndarray,
+                 clip_plane: np.ndarray | None, orthographic: bool,
+                 sides: tuple[float, float, float, float] = (-1.0, 1.0, -1.0, 1.0)
+                 ) -> np.ndarray:
+    """:func:`quads_outside` of the quads whose :func:`quad_rows` are ``rows``
+    ``(4, p, 4)``: a few products over all the corners at once."""
+    count = rows.shape[1]
+    if not count:
+        return np.zeros(0, dtype=np.int8)
+    points = rows.reshape(-1, 4)
+    # each side's clip coordinate against w as one product: leads (4p, 6), and the terms
+    # each compares (|x| + |w| for the left and right sides, and so on)
+    left, right, bottom, top = sides
+    sides_of_clip = np.array([[1.0, -1.0, 0.0, 0.0, 0.0, 0.0],
+                              [0.0, 0.0, 1.0, -1.0, 0.0, 0.0],
+                              [0.0, 0.0, 0.0, 0.0, 1.0, -1.0],
+                              [-left, right, -bottom, top, 1.0, 1.0]])
+    clip = points @ np.asarray(view_projection, dtype=np.float64).T  # (4p, 4)
+    beyond = _all_corners((clip @ sides_of_clip
+                           < (-CULL_SLACK) * (np.abs(clip) @ _TERMS_OF_SIDES)), count)
+    first_code = 3
+    if not orthographic:
+        behind = _all_corners(clip[:, 3] <= 0.0, count)
+        beyond = np.concatenate([behind[:, None], beyond], axis=1)
+        first_code = 2
+    codes = np.where(beyond.any(axis=1), np.argmax(beyond, axis=1) + first_code, 0)
     if clip_plane is not None:
         plane = np.asarray(clip_plane, dtype=np.float64)
-        side = homogeneous @ plane
-        size = np.abs(homogeneous) @ np.abs(plane)
-        codes[np.all(side < -CULL_SLACK * size, axis=1)] = 1
-    clip = homogeneous @ np.asarray(view_projection, dtype=np.float64).T  # (p, 4, 4)
-    x, y, z, w = clip[..., 0], clip[..., 1], clip[..., 2], clip[..., 3]
-    # each side's clip coordinate against w, all six at once: (6, p, 4)
-    left, right, bottom, top = sides
-    leads = np.stack([x - left * w, right * w - x, y - bottom * w, top * w - y, z + w,
-                      w - z])
-    slack = CULL_SLACK * (np.abs(w) + np.abs(np.stack([x, x, y, y, z, z])))
-    beyond = np.all(leads < -slack, axis=2)  # (6, p)
-    if not orthographic:
-        beyond = np.concatenate([np.all(w <= 0.0, axis=1)[None], beyond])
-    first = np.argmax(beyond, axis=0)
-    side = np.where(beyond.any(axis=0), first + (2 if not orthographic else 3), 0)
-    return np.where(codes > 0, codes, side).astype(np.int8)
+        codes[_all_corners(points @ plane < (-CULL_SLACK) * (np.abs(points) @ np.abs(plane)),
+                           count)] = 1
+    return codes.astype(np.int8)
+
+
+def _all_corners(each: np.ndarray, count: int) -> np.ndarray:
+    """``(p, ...)`` bool: true where it is for all four corners in ``each`` ``(4p, ...)``
+    (first corners first, as :func:`quad_rows` lays them out)."""
+    first, second, third, fourth = each.reshape(4, count, *each.shape[1:])
+    return first & second & third & fourth
 
 
 def facing(centers: np.ndarray, normals: np.ndarray, eye: np.ndarray | None,

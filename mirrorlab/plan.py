@@ -644,8 +644,8 @@ def _visibility(index: bounds.SceneIndex, view: View, excluded: str | None,
     sides = (-1.0, 1.0, -1.0, 1.0) if scissor is None else culling.scissor_bounds(
         view.size, scissor)
     if len(index.planar):
-        outside = culling.quads_outside(index.corners, view.view_projection,
-                                        view.clip_plane, orthographic, sides)
+        outside = culling.rows_outside(index.corner_rows, view.view_projection,
+                                       view.clip_plane, orthographic, sides)
         front = culling.facing(index.centers, index.normals, view.eye, view.forward)
         codes[index.planar] = np.where(outside > 0, outside + EXCLUDED,
                                        np.where(front, SHOWN, BACK))
