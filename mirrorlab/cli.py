@@ -184,6 +184,10 @@ def build_parser() -> argparse.ArgumentParser:
                        "hair every frame), or both (default %(default)s)")
     speed.add_argument("--frames", metavar="N", default="30",
                        help="timed frames a variant (default %(default)s)")
+    speed.add_argument("--scale-frames", metavar="N", default="100",
+                       help="timed frames a variant of the scale scenes (default "
+                       "%(default)s: their frames are short, and a ratio to the base frame "
+                       "is the median of one a round)")
     speed.add_argument("--warmup", metavar="N", default="5",
                        help="frames a variant before timing (default %(default)s)")
     speed.add_argument("--block", metavar="N", default="5",
@@ -468,6 +472,7 @@ def run_speed(args: argparse.Namespace) -> int:
         mirror_counts=parse_counts("--scale-mirrors", args.scale_mirrors, 1, 10_000),
         modes=parse_choices("--scale-modes", args.scale_modes, ("still", "moving")),
         frames=parse_count("--frames", args.frames, 1, 100_000),
+        scale_frames=parse_count("--scale-frames", args.scale_frames, 1, 100_000),
         warmup=parse_count("--warmup", args.warmup, 1, 100_000),
         block=parse_count("--block", args.block, 1, 100_000))
     if args.quick:

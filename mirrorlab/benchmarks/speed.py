@@ -29,9 +29,11 @@ mirrors, seen and unseen), and pyrender's flat frame of those without mirrors.
 
 The variants take turns in blocks of ``--block`` frames, the order rotating every round,
 so that a shared machine's load falls on all of them alike. The report (``speed.md``,
-``speed.csv``, ``scale.csv``, ``speed.png``) gives the median of ``--frames`` frames after
-``--warmup`` per variant, the ratios to pyrender's frames, and how frame time grows with
-pixels and triangles (the exponent ``k`` of ``time ~ amount ** k`` between the smallest
+``speed.csv``, ``scale.csv``, ``speed.png``) gives the median of ``--frames`` frames
+(``--scale-frames`` for the scale scenes) after ``--warmup`` per variant, the ratios to
+pyrender's frames and of each scale scene to its base frame (paired round by round,
+:func:`mirrorlab.benchmarks.scale.paired_ratio`), and how frame time grows with pixels,
+triangles and items (the exponent ``k`` of ``time ~ amount ** k`` between the smallest
 and largest amount: 1 is linear).
 """
 
@@ -471,9 +473,10 @@ def plot(rows: list[dict]) -> bytes | None:
     return buffer.getvalue()
 
 
-def report(rows: list[dict], scale: list[dict], out_dir: Path, how: str) -> str:
+def report(rows: list[dict], scale: list[dict], out_dir: Path, how: str,
+           scale_how: str) -> str:
     """Write the report of ``rows`` (the sweep) and ``scale`` into ``out_dir`` and return
-    its text; ``how`` says how the figures were timed."""
+    its text; ``how`` and ``scale_how`` say how each one's figures were timed."""
     from mirrorlab.files import Outputs
 
     parts = []
@@ -492,7 +495,7 @@ def report(rows: list[dict], scale: list[dict], out_dir: Path, how: str) -> str:
             f"Scenes at scale, {scale[0]['size']}x{scale[0]['size']}: the lab scene with a "
             f"reflected mirror, and objects or mirrors added "
             f"(mirrorlab.benchmarks.scale); "
-            f"{how}; each ratio to its base is the median of the ratios of the two "
+            f"{scale_how}; each ratio to its base is the median of the ratios of the two "
             f"variants' medians in each round",
             scale_table(scale),
             "Growth with the number of items (k in time ~ count^k, fewest to most):",
@@ -553,6 +556,7 @@ class SpeedSettings:
     mirror_counts: tuple[int, ...] = (10, 100, 400)
     modes: tuple[str, ...] = ("still", "moving")
     frames: int = 30
+    scale_frames: int = 100
     warmup: int = 5
     block: int = 5
 
@@ -562,7 +566,7 @@ class SpeedSettings:
         32x32 and 64x64, the lab meshes and their first subdivision, scale scenes of 3 and
         12 items at 64x64."""
         return cls(sizes=(32, 64), levels=(0, 1), scale_size=64, object_counts=(3, 12),
-                   mirror_counts=(3, 12), frames=3, warmup=1, block=3)
+                   mirror_counts=(3, 12), frames=3, scale_frames=3, warmup=1, block=3)
 
 
 def run_command(settings: SpeedSettings, out_dir: Path, pyrender: Path | None = None,
@@ -572,7 +576,7 @@ def run_command(settings: SpeedSettings, out_dir: Path, pyrender: Path | None = 
     if from_csv is not None:
         rows = rows_from_csv(from_csv)
         scale_results = rows_from_csv(from_csv.with_name("scale.csv"), required=False)
-        how = f"the figures of {from_csv} and the scale.csv beside it"
+        how = scale_how = f"the figures of {from_csv} and the scale.csv beside it"
     else:
         worker = PyrenderWorker(pyrender) if pyrender is not None else None
         try:
@@ -581,12 +585,13 @@ def run_command(settings: SpeedSettings, out_dir: Path, pyrender: Path | None = 
                        settings.warmup, settings.block) if "sweep" in settings.parts else []
             scale_results = scale_rows(
                 worker, mesh_sets[0], settings.scale_size, list(settings.object_counts),
-                list(settings.mirror_counts), settings.modes, settings.frames,
+                list(settings.mirror_counts), settings.modes, settings.scale_frames,
                 settings.warmup, settings.block) if "scale" in settings.parts else []
         finally:
             if worker is not None:
                 worker.close()
-        how = (f"{settings.frames} timed frames a variant after {settings.warmup} warm-up, "
-               f"in turns of {settings.block}")
-    sys.stdout.write(report(rows, scale_results, out_dir, how))
+        how, scale_how = (f"{frames} timed frames a variant after {settings.warmup} "
+                          f"warm-up, in turns of {settings.block}"
+                          for frames in (settings.frames, settings.scale_frames))
+    sys.stdout.write(report(rows, scale_results, out_dir, how, scale_how))
     return 0

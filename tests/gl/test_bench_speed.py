@@ -100,6 +100,7 @@ def test_quick_speed_benchmark_without_pyrender_and_its_report_again(tmp_path, c
     (["--scale-modes", ","], "--scale-modes"),
     (["--scale-objects", "0"], "--scale-objects"),
     (["--frames", "none"], "--frames"),
+    (["--scale-frames", "0"], "--scale-frames"),
     (["--from-csv", "no/such.csv"], "--from-csv: 'no/such.csv' is not a file"),
     (["--from-csv", "{garbage}"], "--from-csv"),
 ])
