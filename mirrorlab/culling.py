@@ -143,25 +143,28 @@ def boxes_cover_pixels(centers: np.ndarray, halves: np.ndarray, view_projection:
     """
     if not len(centers):
         return np.zeros(0, dtype=bool)
-    corners = centers[:, None, :] + halves[:, None, :] * _CORNER_SIGNS  # (n, 8, 3)
+    # corner by corner (8, n): a reduction over the leading axis is a few elementwise
+    # passes, where one over eight values a box costs numpy a loop a box
+    corners = centers + halves * _CORNER_SIGNS[:, None, :]  # (8, n, 3)
     rows = np.asarray(view_projection, dtype=np.float64)[[0, 1, 3]]  # x, y and w
-    clip = corners @ rows[:, :3].T + rows[:, 3]  # (n, 8, 3)
-    w = clip[..., 2]
-    ahead = np.all(w > 0.0, axis=1)
-    safe = np.where(w > 0.0, w, 1.0)
+    clip = corners.reshape(-1, 3) @ rows[:, :3].T + rows[:, 3]  # (8n, 3)
+    w = clip[:, 2]
+    in_front = w > 0.0
+    ahead = in_front.reshape(8, -1).all(axis=0)
+    safe = np.where(in_front, w, 1.0)
     width, height = size
-    x = (clip[..., 0] / safe + 1.0) * (0.5 * width)
-    y = (clip[..., 1] / safe + 1.0) * (0.5 * height)
+    x = ((clip[:, 0] / safe + 1.0) * (0.5 * width)).reshape(8, -1)
+    y = ((clip[:, 1] / safe + 1.0) * (0.5 * height)).reshape(8, -1)
     x0, y0, x1, y1 = 0, 0, width - 1, height - 1
     if rectangle is not None:
         x0, y0 = rectangle[0], rectangle[1]
         x1, y1 = rectangle[0] + rectangle[2] - 1, rectangle[1] + rectangle[3] - 1
     # pixel i's centre is i + 0.5: some centre lies in [low, high] when
     # ceil(low - 0.5) <= floor(high - 0.5)
-    first_x = np.maximum(np.ceil(x.min(axis=1) - PIXEL_MARGIN - 0.5), x0)
-    last_x = np.minimum(np.floor(x.max(axis=1) + PIXEL_MARGIN - 0.5), x1)
-    first_y = np.maximum(np.ceil(y.min(axis=1) - PIXEL_MARGIN - 0.5), y0)
-    last_y = np.minimum(np.floor(y.max(axis=1) + PIXEL_MARGIN - 0.5), y1)
+    first_x = np.maximum(np.ceil(x.min(axis=0) - PIXEL_MARGIN - 0.5), x0)
+    last_x = np.minimum(np.floor(x.max(axis=0) + PIXEL_MARGIN - 0.5), x1)
+    first_y = np.maximum(np.ceil(y.min(axis=0) - PIXEL_MARGIN - 0.5), y0)
+    last_y = np.minimum(np.floor(y.max(axis=0) + PIXEL_MARGIN - 0.5), y1)
     return ~ahead | ((first_x <= last_x) & (first_y <= last_y))
 
 
