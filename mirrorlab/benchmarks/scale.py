@@ -221,9 +221,10 @@ def interleave(variants: list[Variant], frames: int, warmup: int, block: int) ->
         turn += 1
 
 
-def paired_ratio(variant: Variant, base: Variant) -> float:
-    """How many times ``base``'s frame ``variant``'s takes: the median over the rounds of
-    :func:`interleave` of the ratio of their medians in that round.
+def paired_ratio(blocks: list[list[float]], base_blocks: list[list[float]]) -> float:
+    """How many times a base frame another takes, from their frame times in ms, one list a
+    round of blocks taken in turn (:attr:`Variant.blocks` after :func:`interleave`): the
+    median over the rounds of the ratio of their medians in that round.
 
     The two variants' blocks of a round run within milliseconds of each other; the
     machine's speed changes by as much as twice within a run (a shared virtual machine),
@@ -231,7 +232,7 @@ def paired_ratio(variant: Variant, base: Variant) -> float:
     the ratio of the whole runs' medians keeps them: nine renderers drawing the same frame
     came out 0.81x to 1.72x of one another by their medians, 0.93x to 1.09x paired."""
     return statistics.median(statistics.median(ours) / statistics.median(theirs)
-                             for ours, theirs in zip(variant.blocks, base.blocks, strict=True))
+                             for ours, theirs in zip(blocks, base_blocks, strict=True))
 
 
 MOVING_SEEN_MIRRORS = 100

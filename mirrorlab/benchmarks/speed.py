@@ -302,7 +302,8 @@ def scale_rows(worker: PyrenderWorker | None, lab: MeshSet, size: int, object_co
              "median_ms": round(statistics.median(v.samples), 3),
              "p10_ms": round(float(np.percentile(v.samples, 10)), 3),
              "p90_ms": round(float(np.percentile(v.samples, 90)), 3),
-             "to_base": round(paired_ratio(v, bases[_scale_parts(v.name)[0]]), 3),
+             "to_base": round(paired_ratio(v.blocks, bases[_scale_parts(v.name)[0]].blocks),
+                              3),
              "frames": len(v.samples)} for v in variants]
 
 
