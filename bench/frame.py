@@ -350,14 +350,19 @@ class Variant:
     last_frame: Callable[[], tuple[int, int]]  # checks the last frame: (draw calls, triangles)
     draw_calls: int = 0
     triangles: int = 0
-    total_ms: list[float] = field(default_factory=list)
+    blocks: list[list[float]] = field(default_factory=list)  # frame ms, one list a round
     draw_ms: list[float] = field(default_factory=list)
     read_ms: list[float] = field(default_factory=list)
-    blocks: list[list[float]] = field(default_factory=list)  # total_ms, one list a round
     image: np.ndarray | None = None
 
+    @property
+    def total_ms(self) -> list[float]:
+        """Every timed frame's wall time in ms."""
+        return [ms for block in self.blocks for ms in block]
+
     def frame(self, record: bool) -> float:
-        """Run one frame; returns its wall time in ms and records it when ``record``."""
+        """Run one frame; returns its wall time in ms (:func:`run_blocks` keeps it in
+        :attr:`blocks`) and records its issue and readback times when ``record``."""
         start = time.perf_counter()
         self.draw()
         drawn = time.perf_counter()
@@ -365,7 +370,6 @@ class Variant:
         end = time.perf_counter()
         total = (end - start) * 1e3
         if record:
-            self.total_ms.append(total)
             self.draw_ms.append((drawn - start) * 1e3)
             self.read_ms.append((end - drawn) * 1e3)
         return total

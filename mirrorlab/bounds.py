@@ -184,8 +184,8 @@ class ObjectArrays:
 class ReflectorArrays:
     """The bounds of a scene's ``reflectors``: ``names`` (name to position), boxes
     ``reflector_low``, ``reflector_high`` ``(m, 3)``; the planar ones at positions
-    ``planar`` ``(p,)`` with ``corners`` ``(p, 4, 3)`` (and as ``corner_rows`` ``(4, p, 4)``,
-    :func:`mirrorlab.culling.quad_rows`), unit ``normals`` and ``centers`` ``(p, 3)``; the
+    ``planar`` ``(p,)`` with their corners as ``corner_rows`` ``(4, p, 4)``
+    (:func:`mirrorlab.culling.quad_rows`), unit ``normals`` and ``centers`` ``(p, 3)``; the
     curved ones at ``curved`` ``(c,)`` with bounding spheres
     ``sphere_centers`` ``(c, 3)`` and ``sphere_radii`` ``(c,)``. Read-only; made once for
     a ``reflectors`` tuple (and hashed by identity: a key for what depends on them
@@ -196,7 +196,6 @@ class ReflectorArrays:
     reflector_low: np.ndarray
     reflector_high: np.ndarray
     planar: np.ndarray
-    corners: np.ndarray
     corner_rows: np.ndarray
     normals: np.ndarray
     centers: np.ndarray
@@ -262,10 +261,6 @@ class SceneIndex:
     @property
     def planar(self) -> np.ndarray:
         return self.reflectors_part.planar
-
-    @property
-    def corners(self) -> np.ndarray:
-        return self.reflectors_part.corners
 
     @property
     def corner_rows(self) -> np.ndarray:
@@ -418,15 +413,14 @@ class _IndexCache:
         planar = [i for i, r in enumerate(reflectors) if isinstance(r, PlanarReflector)]
         curved = [i for i, r in enumerate(reflectors) if not isinstance(r, PlanarReflector)]
         spheres = [bounding_sphere(reflectors[i]) for i in curved]
-        corners = np.array([reflectors[i].corner_array for i in planar],
-                           dtype=np.float64).reshape(-1, 4, 3)
         return ReflectorArrays(
             reflectors=reflectors, names={r.name: i for i, r in enumerate(reflectors)},
             reflector_low=read_only(np.array([b[0] for b in reflector_boxes]).reshape(-1, 3)),
             reflector_high=read_only(np.array([b[1] for b in reflector_boxes]).reshape(-1, 3)),
             planar=read_only(np.array(planar, dtype=np.intp)),
-            corners=read_only(corners),
-            corner_rows=read_only(culling.quad_rows(corners)),
+            corner_rows=read_only(culling.quad_rows(
+                np.array([reflectors[i].corner_array for i in planar],
+                         dtype=np.float64).reshape(-1, 4, 3))),
             normals=read_only(np.array([reflectors[i].normal for i in planar],
                                      dtype=np.float64).reshape(-1, 3)),
             centers=read_only(np.array([reflectors[i].center for i in planar],
