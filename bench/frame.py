@@ -57,7 +57,7 @@ import OpenGL
 from PIL import Image
 
 from mirrorlab.benchmarks.scale import paired_ratio
-from mirrorlab.gl.context import HeadlessContext, check_gl_errors
+from mirrorlab.gl.context import check_gl_errors, offscreen_context
 from mirrorlab.gl.opengl import GL  # after mirrorlab.gl.context chose the platform
 from mirrorlab.gl.resources import Framebuffer
 from mirrorlab.renderer import SceneRenderer
@@ -503,7 +503,7 @@ def main(argv: list[str] | None = None) -> int:
     scene = load_scene("lab20")
     camera = scene.camera
 
-    with HeadlessContext() as context:
+    with offscreen_context() as context:
         info = context.info()
         framebuffer = Framebuffer(context.resources, width, height)
         renderer = SceneRenderer(context.resources)

@@ -435,13 +435,13 @@ def _value(outcome: Outcome, what: str):
 @contextmanager
 def sweep_gl(size: tuple[int, int],
              ) -> Iterator[tuple[SceneRenderer, Framebuffer, TimerQuery]]:
-    """A headless context for a sweep: a renderer, a ``size`` (width, height) frame target
-    and a GL timer query; all released on leaving."""
-    from mirrorlab.gl.context import HeadlessContext
+    """An offscreen context for a sweep: a renderer, a ``size`` (width, height) frame
+    target and a GL timer query; all released on leaving."""
+    from mirrorlab.gl.context import offscreen_context
     from mirrorlab.gl.resources import Framebuffer, TimerQuery
     from mirrorlab.renderer import SceneRenderer
 
-    with HeadlessContext() as context:
+    with offscreen_context() as context:
         renderer = SceneRenderer(context.resources)
         framebuffer = Framebuffer(context.resources, *size)
         timer = TimerQuery(context.resources)

@@ -23,7 +23,7 @@ from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import Scene
 
 if TYPE_CHECKING:
-    from mirrorlab.gl.context import HeadlessContext, gl_pass
+    from mirrorlab.gl.context import Context, gl_pass
     from mirrorlab.gl.resources import Framebuffer
     from mirrorlab.plan import FramePlan
     from mirrorlab.renderer import FrameStats, SceneRenderer
@@ -64,7 +64,7 @@ class Renderer:
             raise ValueError(f"draw_path: expected one of {', '.join(DRAW_PATHS)}, got "
                              f"{draw_path!r}")
         self.draw_path = draw_path
-        self._context: HeadlessContext | None = None
+        self._context: Context | None = None
         self._renderer: SceneRenderer | None = None
         self._target: Framebuffer | None = None
         self._reading: gl_pass | None = None
@@ -81,10 +81,10 @@ class Renderer:
         """Make the context (done by ``with`` or the first :meth:`render`)."""
         if self._context is not None:
             return
-        from mirrorlab.gl.context import HeadlessContext, gl_pass
+        from mirrorlab.gl.context import gl_pass, offscreen_context
 
         self._reading = gl_pass("reading the frame back")
-        self._context = HeadlessContext(debug=self.debug)
+        self._context = offscreen_context(debug=self.debug)
         try:
             from mirrorlab.renderer import SceneRenderer
 

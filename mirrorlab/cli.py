@@ -490,9 +490,9 @@ def run_demo(args: argparse.Namespace) -> int:
         raise UsageError(f"--shot-dir: {args.shot_dir!r} is not a folder")
     scene = scene_from_args(args)
 
-    from mirrorlab.gl.context import use_platform
+    from mirrorlab.gl.context import prepare
 
-    use_platform("glx")  # before anything imports OpenGL in this process
+    prepare("window")  # before anything imports OpenGL in this process
     from mirrorlab.app.demo import run
 
     return run(scene, size, max_frames=max_frames, screenshot=screenshot, debug=args.debug,

@@ -42,13 +42,13 @@ def main() -> None:
             write_png_atomic(path, renderer.render(scene, size=size))
             print(f"wrote {path}")
 
-    from mirrorlab.gl.context import HeadlessContext
+    from mirrorlab.gl.context import offscreen_context
     from mirrorlab.renderer import SceneRenderer
     from tests.gl.golden_frames import FOLDER, draw_sequence, sequences
 
     shipped = args.out / FOLDER.relative_to(GOLDEN)
     shipped.mkdir(parents=True, exist_ok=True)
-    with HeadlessContext() as context:
+    with offscreen_context() as context:
         for sequence in sequences():
             renderer = SceneRenderer(context.resources)
             try:

@@ -19,7 +19,7 @@ import numpy as np
 
 from mirrorlab.app.controls import CONTROLS
 from mirrorlab.app.picking import framebuffer_pixel, pick_reflector
-from mirrorlab.gl.context import WindowContext, gl_pass
+from mirrorlab.gl.context import WindowContext, gl_pass, window_context
 from mirrorlab.options import with_technique
 from mirrorlab.scene.model import Camera, CurvedReflector, Scene
 from mirrorlab.techniques import technique, technique_names
@@ -445,7 +445,7 @@ def run(scene: Scene, size: tuple[int, int], max_frames: int = 0,
 
     from mirrorlab.files import write_png_atomic
 
-    context = WindowContext(size[0], size[1], f"mirrorlab demo - {scene.name}", debug=debug)
+    context = window_context(size[0], size[1], f"mirrorlab demo - {scene.name}", debug=debug)
     app = None
     try:
         app = DemoApp(context, scene, shot_dir)

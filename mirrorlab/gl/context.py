@@ -1,16 +1,35 @@
-"""OpenGL contexts: headless (EGL, surfaceless Mesa) and windowed (glfw).
+"""OpenGL contexts, and the one chooser that decides how they are made.
 
-PyOpenGL binds to one platform (EGL or GLX) the first time ``OpenGL`` is
-imported, for the whole process. This module is the only place that chooses
-it: importing it makes EGL the default, and :func:`use_platform` switches to
-GLX for a window, as long as OpenGL has not been imported yet. Every other
-module in mirrorlab that calls GL takes the ``GL`` namespace from
-:mod:`mirrorlab.gl.opengl`, which imports this module first.
+Three backends:
 
-A program that imports OpenGL itself can do so after ``import mirrorlab.gl`` (which
-chooses EGL), or with ``PYOPENGL_PLATFORM=egl`` set; when OpenGL was imported first and
-PyOpenGL bound the process to another platform, making a headless context says so in
-one line, with what to do.
+- ``egl``: an EGL context on Mesa's surfaceless platform (Linux, no display needed);
+- ``hidden-window``: a hidden glfw window, whose context renders into framebuffer
+  objects as EGL's does (macOS, Windows, or Linux with a display but no EGL);
+- ``window``: a visible glfw window (the demo, ``lab run``).
+
+:func:`offscreen_context` and :func:`window_context` make every context mirrorlab uses;
+what they pick is :func:`choose_backend`, a pure function of the operating system
+(``sys.platform``), what the machine offers (a loadable ``libEGL.so.1``, a display) and
+two environment variables:
+
+- ``MIRRORLAB_GL_BACKEND`` = ``auto`` (the default) | ``egl`` | ``hidden-window``: how
+  offscreen contexts are made (render, the Python API, the accuracy sweep, the labs'
+  checker). The demo and ``lab run`` always open a visible window.
+- ``MIRRORLAB_GL_CORE`` = ``1`` | ``0`` (the default): ask for an OpenGL 4.1 core,
+  forward-compatible context, as macOS gives. On macOS every context asks for it always
+  (without it macOS gives a 2.1 legacy context).
+
+PyOpenGL binds to one platform (``egl``, ``glx``, ``nt`` or ``darwin``) the first time
+``OpenGL`` is imported, for the whole process. This module is the only place that chooses
+it: importing it sets the platform of the offscreen backend the chooser picks, and
+:func:`use_platform` switches to the window's platform for a window, as long as OpenGL
+has not been imported yet. Every other module in mirrorlab that calls GL takes the ``GL``
+namespace from :mod:`mirrorlab.gl.opengl`, which imports this module first.
+
+A program that imports OpenGL itself can do so after ``import mirrorlab.gl``, or with
+``PYOPENGL_PLATFORM`` set; when OpenGL was imported first and PyOpenGL bound the process
+to a platform no backend here can use, making a context says so in one line, with what to
+do.
 
 The renderer never creates a context: a caller makes one of these, makes it
 current, and hands the renderer a framebuffer to draw into.
@@ -23,8 +42,9 @@ import functools
 import os
 import re
 import sys
-from collections.abc import Callable
-from typing import Any, Literal, Protocol, Self
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any, Literal, Protocol, Self, cast
 
 from mirrorlab.errors import (
     DEBIAN_GL_PACKAGES,
@@ -33,27 +53,159 @@ from mirrorlab.errors import (
     pass_error,
 )
 
-Platform = Literal["egl", "glx"]
+Platform = Literal["egl", "glx", "nt", "darwin"]
+PLATFORMS: tuple[Platform, ...] = ("egl", "glx", "nt", "darwin")
+Backend = Literal["egl", "hidden-window", "window"]
+Purpose = Literal["offscreen", "window"]
 
-LIBRARIES = {
-    # (file, Debian package) that PyOpenGL loads for each platform
+BACKEND_VARIABLE = "MIRRORLAB_GL_BACKEND"
+BACKEND_VALUES = ("auto", "egl", "hidden-window")
+"""What :data:`BACKEND_VARIABLE` may say (unset or empty is ``auto``)."""
+CORE_VARIABLE = "MIRRORLAB_GL_CORE"
+CORE_VALUES = ("0", "1")
+CORE_VERSION = (4, 1)
+"""The core context asked for with :data:`CORE_VARIABLE` (and always on macOS)."""
+
+LIBRARIES: dict[Platform, tuple[tuple[str, str], ...]] = {
+    # (file, what provides it) that PyOpenGL (or glfw) loads for each platform
     "egl": (("libEGL.so.1", "libegl1"), ("libGL.so.1", "libgl1")),
     "glx": (("libGL.so.1", "libgl1"), ("libGLX.so.0", "libglx0")),
+    "nt": (("opengl32", "Windows' OpenGL"),),
+    "darwin": (("/System/Library/Frameworks/OpenGL.framework/OpenGL", "macOS's OpenGL"),),
 }
 DRIVER_PACKAGES = {"egl": DEBIAN_GL_PACKAGES, "glx": "libglx-mesa0 libgl1-mesa-dri"}
+INSTALL_HINT = {"nt": "update the graphics driver", "darwin": "it is part of macOS"}
 
 
 def check_libraries(platform: Platform) -> None:
-    """GLContextError naming the Debian packages when a library PyOpenGL needs for
+    """GLContextError saying what to install when a library PyOpenGL needs for
     ``platform`` cannot be loaded (checked before PyOpenGL tries, which would fail
-    later with an AttributeError deep inside it)."""
+    later with an AttributeError deep inside it): Debian packages for ``egl`` and
+    ``glx``, the system's own OpenGL for ``nt`` and ``darwin``."""
     for filename, package in LIBRARIES[platform]:
         try:
             ctypes.CDLL(filename)
         except OSError as exc:
+            if platform in DRIVER_PACKAGES:
+                advice = (f"install the Debian packages {package} "
+                          f"{DRIVER_PACKAGES[platform]}")
+            else:
+                advice = f"{package}: {INSTALL_HINT[platform]}"
             raise GLContextError(
-                f"cannot load the OpenGL library {filename} ({exc}); install the Debian "
-                f"packages {package} {DRIVER_PACKAGES[platform]}") from None
+                f"cannot load the OpenGL library {filename} ({exc}); {advice}") from None
+
+
+def system_platform(system: str) -> Literal["linux", "nt", "darwin"]:
+    """The kind of OpenGL system ``system`` (a ``sys.platform`` value) has: ``'nt'``
+    (Windows: WGL), ``'darwin'`` (macOS: CGL) or ``'linux'`` (Linux and the other Unixes:
+    EGL, or GLX on X11)."""
+    if system in ("win32", "cygwin"):
+        return "nt"
+    if system == "darwin":
+        return "darwin"
+    return "linux"
+
+
+@dataclass(frozen=True)
+class Choice:
+    """How a context will be made: its ``backend``, PyOpenGL's ``platform`` for it, and
+    whether it asks for an OpenGL 4.1 core, forward-compatible context (``core``)."""
+
+    backend: Backend
+    platform: Platform
+    core: bool
+
+
+def choose_backend(purpose: Purpose, system: str, *, egl: bool, display: bool,
+                   environ: Mapping[str, str], bound: str | None = None,
+                   backend: str | None = None, core: bool | None = None) -> Choice:
+    """Pick how to make a context; a pure function (no GL, nothing loaded).
+
+    ``purpose`` is ``'offscreen'`` (frames read back) or ``'window'`` (a visible window);
+    ``system`` a ``sys.platform`` value; ``egl`` whether ``libEGL.so.1`` loads; ``display``
+    whether there is a display for a window (on Linux: ``DISPLAY`` is set; macOS and
+    Windows always have one); ``environ`` holds :data:`BACKEND_VARIABLE` and
+    :data:`CORE_VARIABLE`; ``bound`` the platform PyOpenGL is bound to already (None: not
+    yet). ``backend`` and ``core``, when given, override the variables.
+
+    Offscreen, on Linux: EGL when it loads, else a hidden window when there is a display
+    (also when OpenGL is bound to GLX already); on macOS and Windows a hidden window.
+    Raises GLContextError, one line, for a value the variables do not allow, a forced
+    backend the machine cannot have, or no way at all (no EGL and no display: it names
+    both ways out).
+    """
+    kind = system_platform(system)
+    window_platform: Platform = "glx" if kind == "linux" else kind
+    source = "backend" if backend is not None else BACKEND_VARIABLE
+    wanted = backend if backend is not None else environ.get(BACKEND_VARIABLE, "")
+    wanted = wanted.strip().lower() or "auto"
+    if wanted not in BACKEND_VALUES:
+        raise GLContextError(
+            f"{source}={wanted!r} is not a backend; expected one of "
+            f"{', '.join(BACKEND_VALUES)}")
+    if core is None:
+        flag = environ.get(CORE_VARIABLE, "").strip() or "0"
+        if flag not in CORE_VALUES:
+            raise GLContextError(
+                f"{CORE_VARIABLE}={flag!r} is not allowed; expected 1 (ask for an OpenGL "
+                f"4.1 core context) or 0")
+        core = flag == "1"
+    core = core or kind == "darwin"  # macOS gives 2.1 legacy unless asked for 4.1 core
+    if purpose == "window":
+        if kind == "linux" and not display:
+            raise GLContextError(
+                "no display for a window (DISPLAY is not set); run it on a desktop or "
+                "under 'xvfb-run -a', or use 'mirrorlab render', which needs no display")
+        return Choice("window", window_platform, core)
+    hidden = Choice("hidden-window", window_platform, core)
+    if wanted == "egl":
+        if kind != "linux":
+            raise GLContextError(
+                f"{BACKEND_VARIABLE}=egl: EGL is used on Linux only, not on {system}; "
+                f"unset it or set it to hidden-window")
+        return Choice("egl", "egl", core)
+    if wanted == "hidden-window":
+        if kind == "linux" and not display:
+            raise GLContextError(
+                f"{BACKEND_VARIABLE}=hidden-window needs a display (DISPLAY is not set); "
+                f"run under 'xvfb-run -a', or unset it to render with EGL")
+        return hidden
+    if kind != "linux":
+        return hidden
+    if display and bound is not None and bound != "egl":
+        return hidden  # OpenGL was imported first, bound to GLX: a hidden window can use it
+    if egl:
+        return Choice("egl", "egl", core)
+    if display:
+        return hidden
+    raise GLContextError(
+        f"no OpenGL for offscreen rendering: libEGL.so.1 cannot be loaded and there is "
+        f"no display (DISPLAY is not set); install the Debian packages libegl1 "
+        f"{DEBIAN_GL_PACKAGES} for EGL, or run under a display (a desktop, or "
+        f"'xvfb-run -a') to render in a hidden window")
+
+
+def _egl_loads() -> bool:
+    try:
+        ctypes.CDLL("libEGL.so.1")
+    except OSError:
+        return False
+    return True
+
+
+def _has_display(system: str) -> bool:
+    return system_platform(system) != "linux" or bool(os.environ.get("DISPLAY"))
+
+
+def choose(purpose: Purpose, *, backend: str | None = None,
+           core: bool | None = None) -> Choice:
+    """:func:`choose_backend` for this machine and process: ``sys.platform``, whether
+    ``libEGL.so.1`` loads (tried on Linux only), ``DISPLAY``, the environment."""
+    system = sys.platform
+    linux = system_platform(system) == "linux"
+    return choose_backend(purpose, system, egl=linux and _egl_loads(),
+                          display=_has_display(system), environ=os.environ,
+                          bound=loaded_platform(), backend=backend, core=core)
 
 
 def _opengl_imported() -> bool:
@@ -62,7 +214,8 @@ def _opengl_imported() -> bool:
 
 _chosen: list[str] = []
 """The platform mirrorlab set before OpenGL was imported (empty: none yet)."""
-PURPOSE = {"egl": "headless rendering", "glx": "a window"}
+PURPOSE = {"egl": "headless rendering", "glx": "a window", "nt": "a window",
+           "darwin": "a window"}
 
 
 def loaded_platform() -> str | None:
@@ -72,7 +225,9 @@ def loaded_platform() -> str | None:
     platform = getattr(module, "PLATFORM", None) if module is not None else None
     if platform is None:
         return None
-    return type(platform).__name__.lower().removesuffix("platform") or None
+    name = type(platform).__name__.lower().removesuffix("platform")
+    # PyOpenGL's classes: EGLPlatform, GLXPlatform, Win32Platform, DarwinPlatform
+    return {"win32": "nt"}.get(name, name) or None
 
 
 def current_platform() -> str | None:
@@ -85,10 +240,10 @@ def use_platform(name: Platform) -> None:
     OpenGL is imported already, check that it is bound to ``name``.
 
     Raises GLContextError, one line saying what to do, when OpenGL is bound to another
-    platform: a process holds headless (EGL) or windowed (GLX) contexts, not both.
+    platform: a process holds EGL contexts or window-system ones, not both.
     """
-    if name not in ("egl", "glx"):
-        raise ValueError(f"GL platform must be 'egl' or 'glx', got {name!r}")
+    if name not in PLATFORMS:
+        raise ValueError(f"GL platform must be one of {', '.join(PLATFORMS)}, got {name!r}")
     if _opengl_imported():
         loaded = loaded_platform()
         if loaded != name and not _chosen:
@@ -110,10 +265,32 @@ def use_platform(name: Platform) -> None:
         os.environ.setdefault("EGL_PLATFORM", "surfaceless")
 
 
-if not _opengl_imported() and "PYOPENGL_PLATFORM" not in os.environ:
-    use_platform("egl")
-elif not _opengl_imported():
-    _chosen[:] = [os.environ["PYOPENGL_PLATFORM"]]  # the user's choice, before OpenGL
+def prepare(purpose: Purpose) -> Choice:
+    """Choose the backend for ``purpose`` and set PyOpenGL's platform for it (call before
+    anything imports OpenGL in this process, as a command that opens a window does)."""
+    choice = choose(purpose)
+    use_platform(choice.platform)
+    return choice
+
+
+def _default_platform() -> None:
+    """At import: PyOpenGL's platform for the offscreen backend the chooser picks (EGL
+    where nothing else is known), unless the user set ``PYOPENGL_PLATFORM``. A bad
+    variable is reported when a context is made, not here."""
+    if _opengl_imported():
+        return
+    if "PYOPENGL_PLATFORM" in os.environ:
+        _chosen[:] = [os.environ["PYOPENGL_PLATFORM"]]  # the user's choice, before OpenGL
+        return
+    try:
+        platform = choose("offscreen").platform
+    except GLContextError:
+        platform = "egl" if system_platform(sys.platform) == "linux" else cast(
+            Platform, system_platform(sys.platform))
+    use_platform(platform)
+
+
+_default_platform()
 
 
 class Releasable(Protocol):
@@ -314,11 +491,16 @@ def require_gl_version(needed: tuple[int, int], what: str) -> None:
                              f"has OpenGL {text} ({renderer})")
 
 
-class _Context:
-    """What both contexts share: a resource registry, and a release that frees the
-    registered GL objects (with this context current) before the context itself."""
+class Context:
+    """What every context shares: a resource registry, and a release that frees the
+    registered GL objects (with this context current) before the context itself.
+
+    ``backend`` names how it was made (``'egl'``, ``'hidden-window'``, ``'window'``) and
+    ``core`` whether it was asked for as OpenGL 4.1 core, forward-compatible."""
 
     resources: ResourceRegistry
+    backend: Backend
+    core: bool
 
     def __init__(self) -> None:
         self.resources = ResourceRegistry()
@@ -355,16 +537,28 @@ class _Context:
 # eglTerminate + eglInitialize cycle cost Mesa about 13 KB that it never gave back (1,000
 # one-shot renders grew the process by 17 MB; see docs/reliability.md).
 
+# EGL 1.5 / EGL_KHR_create_context attributes (PyOpenGL's EGL module may lack some names)
+_EGL_CONTEXT_MAJOR_VERSION = 0x3098
+_EGL_CONTEXT_MINOR_VERSION = 0x30FB
+_EGL_CONTEXT_OPENGL_PROFILE_MASK = 0x30FD
+_EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT = 0x1
+_EGL_CONTEXT_OPENGL_FORWARD_COMPATIBLE = 0x31B1
+_EGL_CONTEXT_OPENGL_DEBUG = 0x31B0
 
-class HeadlessContext(_Context):
-    """An OpenGL compatibility context with no window, on EGL's surfaceless platform.
+
+class HeadlessContext(Context):
+    """An OpenGL context with no window, on EGL's surfaceless platform (the ``egl``
+    backend; make it through :func:`offscreen_context`): the compatibility profile, or
+    with ``core`` OpenGL 4.1 core, forward-compatible.
 
     It has no default framebuffer: render into a
     :class:`mirrorlab.gl.resources.Framebuffer`. Use as a context manager, or
     call :meth:`release`.
     """
 
-    def __init__(self, debug: bool = False) -> None:
+    backend: Backend = "egl"
+
+    def __init__(self, debug: bool = False, core: bool = False) -> None:
         use_platform("egl")
         check_libraries("egl")
         try:
@@ -375,6 +569,7 @@ class HeadlessContext(_Context):
                 f"libegl1 {DEBIAN_GL_PACKAGES}"
             ) from exc
         self._egl = EGL
+        self.core = core
         self.display = EGL.eglGetDisplay(EGL.EGL_DEFAULT_DISPLAY)
         major, minor = EGL.EGLint(), EGL.EGLint()
         if not self.display or not EGL.eglInitialize(
@@ -394,11 +589,20 @@ class HeadlessContext(_Context):
         ) or count.value < 1:
             raise GLContextError("EGL has no config for desktop OpenGL (is Mesa installed?)")
         EGL.eglBindAPI(EGL.EGL_OPENGL_API)
-        flags = (EGL.EGLint * 3)(EGL.EGL_CONTEXT_OPENGL_DEBUG, EGL.EGL_TRUE, EGL.EGL_NONE)
-        self.context = EGL.eglCreateContext(self.display, config, EGL.EGL_NO_CONTEXT,
-                                            flags if debug else None)
+        asked: list[int] = []
+        if core:
+            asked += [_EGL_CONTEXT_MAJOR_VERSION, CORE_VERSION[0],
+                      _EGL_CONTEXT_MINOR_VERSION, CORE_VERSION[1],
+                      _EGL_CONTEXT_OPENGL_PROFILE_MASK, _EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                      _EGL_CONTEXT_OPENGL_FORWARD_COMPATIBLE, EGL.EGL_TRUE]
+        if debug:
+            asked += [_EGL_CONTEXT_OPENGL_DEBUG, EGL.EGL_TRUE]
+        flags = (EGL.EGLint * (len(asked) + 1))(*asked, EGL.EGL_NONE) if asked else None
+        self.context = EGL.eglCreateContext(self.display, config, EGL.EGL_NO_CONTEXT, flags)
         if not self.context:
-            raise GLContextError("eglCreateContext failed for desktop OpenGL")
+            what = (f"an OpenGL {CORE_VERSION[0]}.{CORE_VERSION[1]} core context"
+                    if core else "desktop OpenGL")
+            raise GLContextError(f"eglCreateContext failed for {what}")
         self._address = ctypes.cast(self.context, ctypes.c_void_p).value
         # The current context's address, as a number: PyOpenGL's entry point returns an
         # opaque pointer that costs a cast to compare, and a frame asks every time.
@@ -427,43 +631,70 @@ class HeadlessContext(_Context):
         egl.eglDestroyContext(self.display, self.context)
 
 
+_glfw_windows: list[object] = []
+"""The glfw windows open in this process: glfw is initialised with the first and ended
+(``glfw.terminate``, which closes every window) only after the last is released."""
 
-class WindowContext(_Context):
-    """A glfw window with an OpenGL compatibility context (GLX on X11).
 
-    Needs a display (``DISPLAY``; under Xvfb use ``xvfb-run -a``). Call
+class WindowContext(Context):
+    """A glfw window with an OpenGL context (GLX on X11, WGL on Windows, CGL on macOS):
+    visible (the ``window`` backend, :func:`window_context`) or hidden (the
+    ``hidden-window`` backend, :func:`offscreen_context`, which renders into framebuffer
+    objects as EGL's context does). The compatibility profile, or with ``core`` (always on
+    macOS) OpenGL 4.1 core, forward-compatible.
+
+    On Linux it needs a display (``DISPLAY``; under Xvfb use ``xvfb-run -a``). Call
     :meth:`release` (or use as a context manager) to close the window.
     """
 
     def __init__(self, width: int, height: int, title: str, visible: bool = True,
-                 debug: bool = False) -> None:
-        use_platform("glx")
-        if not os.environ.get("DISPLAY"):
+                 debug: bool = False, core: bool = False) -> None:
+        kind = system_platform(sys.platform)
+        platform: Platform = "glx" if kind == "linux" else kind
+        use_platform(platform)
+        display = os.environ.get("DISPLAY", "")
+        if kind == "linux" and not display:
             raise GLContextError(
                 "no display for a window (DISPLAY is not set); run it on a desktop or "
                 "under 'xvfb-run -a', or use 'mirrorlab render', which needs no display")
-        check_libraries("glx")
+        check_libraries(platform)
         import glfw
 
         self._glfw = glfw
-        glfw.ERROR_REPORTING = "ignore"
-        if not glfw.init():
-            raise GLContextError(
-                f"cannot open the display {os.environ['DISPLAY']!r} for a window (is the X "
-                f"server running?); or use 'mirrorlab render', which needs no display")
+        self.core = core = core or kind == "darwin"
+        self.backend = "window" if visible else "hidden-window"
+        where = f"display {display!r}" if kind == "linux" else "this desktop"
+        if not _glfw_windows:
+            glfw.ERROR_REPORTING = "ignore"
+            if kind == "linux":  # X11 (GLX, as PyOpenGL is bound), also on a Wayland desktop
+                glfw.init_hint(glfw.PLATFORM, glfw.PLATFORM_X11)
+            if not glfw.init():
+                raise GLContextError(
+                    f"cannot open {where} for a window (is the X server running?); or "
+                    f"use 'mirrorlab render', which needs no display")
+        glfw.default_window_hints()
         glfw.window_hint(glfw.VISIBLE, glfw.TRUE if visible else glfw.FALSE)
         glfw.window_hint(glfw.DEPTH_BITS, 24)
         glfw.window_hint(glfw.STENCIL_BITS, 8)
         glfw.window_hint(glfw.OPENGL_DEBUG_CONTEXT, glfw.TRUE if debug else glfw.FALSE)
+        if core:
+            glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, CORE_VERSION[0])
+            glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, CORE_VERSION[1])
+            glfw.window_hint(glfw.OPENGL_PROFILE, glfw.OPENGL_CORE_PROFILE)
+            glfw.window_hint(glfw.OPENGL_FORWARD_COMPAT, glfw.TRUE)
         self.window = glfw.create_window(width, height, title, None, None)
         if not self.window:
-            glfw.terminate()
-            raise GLContextError(
-                f"cannot create an OpenGL window on display {os.environ['DISPLAY']!r}; "
-                f"install the Debian packages libgl1 {DRIVER_PACKAGES['glx']}")
+            if not _glfw_windows:
+                glfw.terminate()
+            what = (f"an OpenGL {CORE_VERSION[0]}.{CORE_VERSION[1]} core context"
+                    if core else "an OpenGL context")
+            advice = (f"install the Debian packages libgl1 {DRIVER_PACKAGES['glx']}"
+                      if kind == "linux" else "update the graphics driver")
+            raise GLContextError(f"cannot create a window with {what} on {where}; {advice}")
+        _glfw_windows.append(self.window)
         super().__init__()
         self.make_current()
-        glfw.swap_interval(1)
+        glfw.swap_interval(1 if visible else 0)
         if debug:
             enable_debug_output()
 
@@ -481,8 +712,45 @@ class WindowContext(_Context):
         self._glfw.swap_buffers(self.window)
 
     def _destroy(self) -> None:
+        from OpenGL import contextdata
+
+        contextdata.cleanupContext()  # PyOpenGL's own per-context records (this one is current)
         self._glfw.destroy_window(self.window)
-        self._glfw.terminate()
+        _glfw_windows.remove(self.window)
+        if not _glfw_windows:
+            self._glfw.terminate()
+
+
+HIDDEN_WINDOW_SIZE = (16, 16)
+"""The hidden window's own size: its frames go to framebuffer objects of any size."""
+
+
+def offscreen_context(debug: bool = False, *, backend: str | None = None,
+                      core: bool | None = None) -> HeadlessContext | WindowContext:
+    """A context for rendering into framebuffer objects and reading frames back, made the
+    way :func:`choose` picks for this machine: EGL (Linux), else a hidden glfw window
+    (macOS, Windows, Linux with a display but no EGL). ``backend`` (``'auto'``, ``'egl'``,
+    ``'hidden-window'``) and ``core`` override :data:`BACKEND_VARIABLE` and
+    :data:`CORE_VARIABLE`. ``debug`` makes a debug context whose messages are checked.
+
+    Raises GLContextError, one line naming what is missing and what to do.
+    """
+    choice = choose("offscreen", backend=backend, core=core)
+    if choice.backend == "egl":
+        return HeadlessContext(debug=debug, core=choice.core)
+    return WindowContext(*HIDDEN_WINDOW_SIZE, "mirrorlab", visible=False, debug=debug,
+                         core=choice.core)
+
+
+def window_context(width: int, height: int, title: str, debug: bool = False, *,
+                   core: bool | None = None) -> WindowContext:
+    """A visible glfw window of ``width`` x ``height`` screen units titled ``title`` (the
+    demo's, ``lab run``'s); ``core`` overrides :data:`CORE_VARIABLE` (macOS: always core).
+
+    Raises GLContextError, one line naming what is missing and what to do.
+    """
+    choice = choose("window", core=core)
+    return WindowContext(width, height, title, visible=True, debug=debug, core=choice.core)
 
 
 def gl_info() -> dict[str, str]:

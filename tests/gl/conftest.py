@@ -1,11 +1,11 @@
-"""Headless GL fixtures: one EGL context per test session, GL errors checked and state
-reset around every test."""
+"""Headless GL fixtures: one offscreen context per test session (EGL, or the backend
+MIRRORLAB_GL_BACKEND names), GL errors checked and state reset around every test."""
 
 from __future__ import annotations
 
 import pytest
 
-from mirrorlab.gl.context import HeadlessContext
+from mirrorlab.gl.context import offscreen_context
 from mirrorlab.gl.opengl import GL
 
 
@@ -14,7 +14,7 @@ def gl_context():
     """A debug context: its KHR_debug messages are checked after every pass the renderer
     runs (and PyOpenGL checks glGetError after every call), so a GL error fails the test
     where it happens, naming the pass."""
-    with HeadlessContext(debug=True) as context:
+    with offscreen_context(debug=True) as context:
         yield context
 
 

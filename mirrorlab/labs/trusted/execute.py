@@ -46,9 +46,7 @@ def peak_kib() -> int:
 
 def execute(job: dict[str, Any]) -> Evidence:
     """Run ``job`` in this process (which must not have loaded OpenGL for a window)."""
-    from mirrorlab.gl.context import HeadlessContext, use_platform
-
-    use_platform("egl")
+    from mirrorlab.gl.context import offscreen_context
     from mirrorlab.gl.resources import Framebuffer
     from mirrorlab.labs import find_lab
     from mirrorlab.labs.trusted.kit import open_session
@@ -60,7 +58,7 @@ def execute(job: dict[str, Any]) -> Evidence:
                       job["variant"].get("student", ""))
     limits = Limits(**job["limits"])
     source = Path(job["file"]).read_bytes()
-    context = HeadlessContext()
+    context = offscreen_context()
     try:
         target = Framebuffer(context.resources, *size)
         target.bind()
@@ -122,7 +120,13 @@ def _child_setup() -> None:
 
 
 def _environment() -> dict[str, str]:
-    return {**os.environ, "PYOPENGL_PLATFORM": "egl", "EGL_PLATFORM": "surfaceless"}
+    """The GL process's environment: its offscreen backend pinned to the one chosen here
+    (the process sets its own PyOpenGL platform from it)."""
+    from mirrorlab.gl.context import BACKEND_VARIABLE, choose
+
+    backend = choose("offscreen").backend
+    environ = {k: v for k, v in os.environ.items() if k != "PYOPENGL_PLATFORM"}
+    return {**environ, BACKEND_VARIABLE: backend}
 
 
 class CheckerProcess:

@@ -35,9 +35,9 @@ def format_error(spec: LabSpec, error: dict[str, Any]) -> str:
 def run_window(lab: str, file: str | None, size: tuple[int, int], max_frames: int,
                screenshot: Path | None, solutions: Any = None) -> int:
     """Run the file (default: the lab's starter) in a window; 0 when it ran without error."""
-    from mirrorlab.gl.context import WindowContext, use_platform
+    from mirrorlab.gl.context import prepare, window_context
 
-    use_platform("glx")
+    prepare("window")
     import glfw
 
     from mirrorlab.files import write_png_atomic
@@ -59,7 +59,7 @@ def run_window(lab: str, file: str | None, size: tuple[int, int], max_frames: in
     else:
         variant = default_variant(spec.name)
         source, name = starter(spec, variant).encode(), "starter.py"
-    context = WindowContext(size[0], size[1], f"mirrorlab lab {spec.name} - {name}")
+    context = window_context(size[0], size[1], f"mirrorlab lab {spec.name} - {name}")
     try:
         width, height = context.framebuffer_size()
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
