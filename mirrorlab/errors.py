@@ -26,6 +26,11 @@ class GLVersionError(GLContextError):
     """The context's OpenGL is older than a technique needs."""
 
 
+class GLBackendError(GLContextError, ValueError):
+    """MIRRORLAB_GL_BACKEND or MIRRORLAB_GL_CORE (or the matching keyword) holds a value
+    it does not allow: bad input, as the message names the variable and the values."""
+
+
 class BatchError(RuntimeError):
     """Jobs sent to workers failed where they ran (frames of a batch render, truths of the
     accuracy sweep); the message names the first (and, for frames, how many: the frames

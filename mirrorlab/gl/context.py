@@ -48,6 +48,7 @@ from typing import Any, Literal, Protocol, Self, cast
 
 from mirrorlab.errors import (
     DEBIAN_GL_PACKAGES,
+    GLBackendError,
     GLContextError,
     GLVersionError,
     pass_error,
@@ -130,7 +131,8 @@ def choose_backend(purpose: Purpose, system: str, *, egl: bool, display: bool,
 
     Offscreen, on Linux: EGL when it loads, else a hidden window when there is a display
     (also when OpenGL is bound to GLX already); on macOS and Windows a hidden window.
-    Raises GLContextError, one line, for a value the variables do not allow, a forced
+    Raises GLBackendError (a GLContextError and a ValueError), one line, for a value the
+    variables do not allow; GLContextError, one line, for a forced
     backend the machine cannot have, or no way at all (no EGL and no display: it names
     both ways out).
     """
@@ -140,13 +142,13 @@ def choose_backend(purpose: Purpose, system: str, *, egl: bool, display: bool,
     wanted = backend if backend is not None else environ.get(BACKEND_VARIABLE, "")
     wanted = wanted.strip().lower() or "auto"
     if wanted not in BACKEND_VALUES:
-        raise GLContextError(
+        raise GLBackendError(
             f"{source}={wanted!r} is not a backend; expected one of "
             f"{', '.join(BACKEND_VALUES)}")
     if core is None:
         flag = environ.get(CORE_VARIABLE, "").strip() or "0"
         if flag not in CORE_VALUES:
-            raise GLContextError(
+            raise GLBackendError(
                 f"{CORE_VARIABLE}={flag!r} is not allowed; expected 1 (ask for an OpenGL "
                 f"4.1 core context) or 0")
         core = flag == "1"
