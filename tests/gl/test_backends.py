@@ -31,7 +31,7 @@ with offscreen_context() as context:
 """
 CORE_PROFILE_BIT, COMPATIBILITY_PROFILE_BIT, FORWARD_COMPATIBLE_BIT = 0x1, 0x2, 0x1
 VARIABLES = ("PYOPENGL_PLATFORM", "EGL_PLATFORM", "MIRRORLAB_GL_BACKEND",
-             "MIRRORLAB_GL_CORE", "DISPLAY", "WAYLAND_DISPLAY")
+             "MIRRORLAB_GL_CORE", "DISPLAY", "WAYLAND_DISPLAY", "XDG_SESSION_TYPE")
 
 
 def environment(**env: str) -> dict[str, str]:

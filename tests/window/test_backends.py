@@ -108,3 +108,15 @@ def test_a_visible_window_asked_for_as_core_is_core():
         backend, asked, mask = done.stdout.split()
         assert (backend, asked) == ("window", str(core == "1"))
         assert int(mask) & expected
+
+
+def test_opengl_imported_first_on_x11_renders_in_a_hidden_window():
+    # PyOpenGL binds to GLX on X11 when nothing chose first: the chooser takes a hidden
+    # window on that platform rather than refusing (without a display it still refuses:
+    # tests/gl/test_opengl_first.py)
+    code = ("import OpenGL.GL\nimport mirrorlab\n"
+            "from mirrorlab.gl.context import loaded_platform\n"
+            "print(mirrorlab.render(size=(24, 16)).shape, loaded_platform())")
+    done = python(code, DISPLAY=_display())
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "(16, 24, 3) glx"
