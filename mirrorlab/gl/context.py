@@ -100,7 +100,7 @@ def system_platform(system: str) -> Literal["linux", "nt", "darwin"]:
     """The kind of OpenGL system ``system`` (a ``sys.platform`` value) has: ``'nt'``
     (Windows: WGL), ``'darwin'`` (macOS: CGL) or ``'linux'`` (Linux and the other Unixes:
     EGL, or GLX on X11)."""
-    if system in ("win32", "cygwin"):
+    if system == "win32":
         return "nt"
     if system == "darwin":
         return "darwin"
@@ -668,7 +668,8 @@ class WindowContext(Context):
         where = f"display {display!r}" if kind == "linux" else "this desktop"
         if not _glfw_windows:
             glfw.ERROR_REPORTING = "ignore"
-            if kind == "linux":  # X11 (GLX, as PyOpenGL is bound), also on a Wayland desktop
+            if kind == "linux" and hasattr(glfw, "PLATFORM"):  # GLFW 3.4's init hint
+                # X11 (GLX, as PyOpenGL is bound), also on a Wayland desktop (XWayland)
                 glfw.init_hint(glfw.PLATFORM, glfw.PLATFORM_X11)
             if not glfw.init():
                 raise GLContextError(
