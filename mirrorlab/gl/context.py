@@ -199,15 +199,18 @@ def _has_display(system: str) -> bool:
     return system_platform(system) != "linux" or bool(os.environ.get("DISPLAY"))
 
 
-def choose(purpose: Purpose, *, backend: str | None = None,
-           core: bool | None = None) -> Choice:
+def choose(purpose: Purpose, *, backend: str | None = None, core: bool | None = None,
+           new_process: bool = False) -> Choice:
     """:func:`choose_backend` for this machine and process: ``sys.platform``, whether
-    ``libEGL.so.1`` loads (tried on Linux only), ``DISPLAY``, the environment."""
+    ``libEGL.so.1`` loads (tried on Linux only), ``DISPLAY``, the environment, and the
+    platform PyOpenGL is bound to in this process (not with ``new_process``: the choice
+    for a process started from this one)."""
     system = sys.platform
     linux = system_platform(system) == "linux"
     return choose_backend(purpose, system, egl=linux and _egl_loads(),
                           display=_has_display(system), environ=os.environ,
-                          bound=loaded_platform(), backend=backend, core=core)
+                          bound=None if new_process else loaded_platform(),
+                          backend=backend, core=core)
 
 
 def _opengl_imported() -> bool:

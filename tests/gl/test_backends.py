@@ -155,4 +155,6 @@ def test_the_checker_process_is_pinned_to_the_backend_chosen_here(monkeypatch):
     assert "PYOPENGL_PLATFORM" not in env  # the process chooses it from the backend
     monkeypatch.delenv("MIRRORLAB_GL_BACKEND")
     monkeypatch.delenv("DISPLAY")
-    assert _environment()["MIRRORLAB_GL_BACKEND"] == "egl"
+    monkeypatch.setenv("EGL_PLATFORM", "x11")
+    env = _environment()
+    assert (env["MIRRORLAB_GL_BACKEND"], env["EGL_PLATFORM"]) == ("egl", "surfaceless")

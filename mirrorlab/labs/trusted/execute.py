@@ -124,9 +124,10 @@ def _environment() -> dict[str, str]:
     (the process sets its own PyOpenGL platform from it)."""
     from mirrorlab.gl.context import BACKEND_VARIABLE, choose
 
-    backend = choose("offscreen").backend
+    backend = choose("offscreen", new_process=True).backend
     environ = {k: v for k, v in os.environ.items() if k != "PYOPENGL_PLATFORM"}
-    return {**environ, BACKEND_VARIABLE: backend}
+    surfaceless = {"EGL_PLATFORM": "surfaceless"} if backend == "egl" else {}
+    return {**environ, BACKEND_VARIABLE: backend, **surfaceless}
 
 
 class CheckerProcess:
