@@ -1,8 +1,8 @@
 """The offscreen backends chosen and forced, headless (no display): EGL forced and asked
-for as a 4.1 core context, and the one-line errors of a bad variable, of a hidden window
-forced without a display, and of a machine with neither EGL nor a display (libEGL.so.1
-hidden with bubblewrap). Each case is a fresh process: PyOpenGL binds a process once.
-The hidden-window backend, which needs a display, is tested in tests/window."""
+for as a 4.1 core context, and the one-line errors of a bad variable and of a hidden
+window forced without a display (a machine with neither EGL nor a display:
+test_faults.py). Each case is a fresh process: PyOpenGL binds a process once. The
+hidden-window backend, which needs a display, is tested in tests/window."""
 
 from __future__ import annotations
 
@@ -53,7 +53,7 @@ def mirrorlab(*args: str, prefix: tuple[str, ...] = (), **env: str
 
 def hide_egl() -> tuple[str, ...]:
     """A bwrap prefix that runs a command with libEGL.so.1 replaced by an empty file."""
-    if shutil.which("bwrap") is None:
+    if shutil.which("bwrap") is None and not os.environ.get("CI"):
         pytest.skip("bubblewrap (Debian bwrap) is needed to hide libEGL.so.1")
     listing = subprocess.run(["/sbin/ldconfig", "-p"], capture_output=True, text=True,
                              check=True).stdout
@@ -123,25 +123,6 @@ def test_a_hidden_window_forced_without_a_display_says_what_to_do(tmp_path):
     assert done.stderr == ("mirrorlab render: error: MIRRORLAB_GL_BACKEND=hidden-window "
                            "needs a display (DISPLAY is not set); run under 'xvfb-run -a', "
                            "or unset it to render with EGL\n")
-
-
-def test_no_egl_and_no_display_names_both_ways_out(tmp_path):
-    done = mirrorlab("render", "--size", "32x32", "--out", str(tmp_path / "x.png"),
-                     prefix=hide_egl())
-    assert done.returncode == 1
-    assert done.stderr.count("\n") == 1
-    assert done.stderr == (
-        "mirrorlab render: error: no OpenGL for offscreen rendering: libEGL.so.1 cannot be "
-        "loaded and there is no display (DISPLAY is not set); install the Debian packages "
-        "libegl1 libegl-mesa0 libgl1-mesa-dri for EGL, or run under a display (a desktop, "
-        "or 'xvfb-run -a') to render in a hidden window\n")
-    # EGL forced: the library's own message
-    forced = mirrorlab("render", "--size", "32x32", "--out", str(tmp_path / "x.png"),
-                       prefix=hide_egl(), MIRRORLAB_GL_BACKEND="egl")
-    assert forced.returncode == 1
-    assert forced.stderr.startswith("mirrorlab render: error: cannot load the OpenGL "
-                                    "library libEGL.so.1 (")
-    assert forced.stderr.count("\n") == 1
 
 
 def test_the_checker_process_is_pinned_to_the_backend_chosen_here(monkeypatch):

@@ -156,8 +156,16 @@ def test_unreadable_picture_and_mesh_files(shared_folder):
 @needs_bwrap
 def test_missing_egl_library_names_the_debian_packages(tmp_path):
     out = tmp_path / "x.png"
+    # no display either: both ways out are named
+    command = sandboxed("render", "--size", "24x24", "--out", str(out),
+                        hide=(LIBDIR / "libEGL.so.1",))
+    result = run([*command[:1], "--unsetenv", "DISPLAY", *command[1:]])
+    one_line(result, 1, "libEGL.so.1 cannot be loaded and there is no display",
+             "install the Debian packages libegl1 libegl-mesa0 libgl1-mesa-dri",
+             "'xvfb-run -a') to render in a hidden window")
+    # EGL forced: the library itself is named
     result = run(sandboxed("render", "--size", "24x24", "--out", str(out),
-                           hide=(LIBDIR / "libEGL.so.1",)))
+                           hide=(LIBDIR / "libEGL.so.1",)), env={"MIRRORLAB_GL_BACKEND": "egl"})
     one_line(result, 1, "cannot load the OpenGL library libEGL.so.1",
              "install the Debian packages libegl1 libegl-mesa0 libgl1-mesa-dri")
     assert not out.exists()
