@@ -66,8 +66,8 @@ class Submission:
 class Grade:
     """One student's grade: ``tasks`` as (task id, passed, hint), how the run ended, the
     seconds it took, the picture as PNG bytes, the student's variant, and the student
-    whose variant's numbers the file carries when they are not the student's own (for the
-    teacher's report only)."""
+    (or ``default``) whose variant's numbers the file carries when they are not the
+    student's own (for the teacher's gradebook and report, never the feedback page)."""
 
     student: str
     tasks: list[tuple[str, bool, str]]
