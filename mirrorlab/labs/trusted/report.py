@@ -6,11 +6,11 @@ student | reference | difference picture as a thumbnail (a link to the full pict
 the student's variant. A file that carries another student's numbers or the lab's own is
 flagged beside its score, with whose and the score the policy for copies gives it; the
 names not on the class list (not graded) and the class list's names with no submission
-are listed above the table. Opens from disk with no server (pictures by relative path, the sorting
-script inline). Clicking a column's header sorts by it; ``report.html#sort=COLUMN`` (or
-``#sort=-COLUMN``, descending) opens it sorted. When the page has loaded, ``<body>``
-carries ``data-images-loaded`` and ``data-images-broken``: how many thumbnails the browser
-drew and how many it could not.
+are listed above the table. Opens from disk with no server (pictures by relative path,
+the sorting script inline). Clicking a column's header sorts by it;
+``report.html#sort=COLUMN`` (or ``#sort=-COLUMN``, descending) opens it sorted. When the
+page has loaded, ``<body>`` carries ``data-images-loaded`` and ``data-images-broken``: how
+many thumbnails the browser drew and how many it could not.
 
 ``feedback/STUDENT.html`` (:func:`feedback_html`): one student's own page, to hand back:
 their tasks, hints and picture (inline, so the file stands alone), and nothing of anyone
