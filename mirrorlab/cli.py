@@ -252,8 +252,9 @@ def build_parser() -> argparse.ArgumentParser:
     check.add_argument("lab_name", metavar="LAB", help="lab20, spheremap or cubemap (or the "
                        "lab's folder name)")
     check.add_argument("file", metavar="FILE", nargs="?",
-                       help="the student's file (default: the lab's starter); a variant.json "
-                       "beside it (from lab release) names its variant")
+                       help="the student's file (default: starter.py of the current folder, "
+                       "where lab start puts it); a variant.json beside it (from lab release) "
+                       "names its variant")
     check.add_argument("--out", help="the picture student | reference | difference (default "
                        "out/LAB_check.png)")
     run = lab_commands.add_parser("run", help="run a lab file in a window (the file itself "
@@ -276,7 +277,15 @@ def build_parser() -> argparse.ArgumentParser:
                        help="where grades.csv, report.html and the pictures go (default: "
                        "SUBMISSIONS_DIR-grades beside the submissions)")
     grade.add_argument("--key", metavar="KEYFILE", help="the course key the class was "
-                       "released with: each student is judged against their own variant")
+                       "released with: each student is judged against their own variant "
+                       "(needs --students)")
+    grade.add_argument("--students", metavar="FILE", help="the class list (one name a line, "
+                       "as for lab release): submissions by other names are reported and not "
+                       "graded")
+    grade.add_argument("--copies", metavar="POLICY", default="flag",
+                       help="a file carrying another student's variant or the lab's own, in "
+                       "gradebook.csv: flag (the score as judged, copy_of names whose), zero "
+                       "(score 0) or hold (no score until you decide); default %(default)s")
     release = lab_commands.add_parser("release", parents=[limits, solutions],
                                       help="one folder per student: a handout and starter "
                                       "with the student's own numbers, and their reference")
@@ -545,7 +554,8 @@ def run_lab(args: argparse.Namespace) -> int:
     jobs = parse_count("--jobs", args.jobs, 1, 1024)
     return run_grade(args.lab_name, Path(args.submissions), jobs, args.scheduler, args.engine,
                      Path(args.out_dir) if args.out_dir else None, limits,
-                     Path(args.key) if args.key else None, args.solutions)
+                     Path(args.key) if args.key else None, args.solutions,
+                     Path(args.students) if args.students else None, args.copies)
 
 
 _VECTOR_FLAGS = (*tuple(o.flag for o in OPTIONS if "," in o.metavar), "--fovy", "--size")

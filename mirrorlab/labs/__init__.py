@@ -29,6 +29,12 @@ class Task:
     function: str
     title: str
 
+    @property
+    def name(self) -> str:
+        """The task's one name, in hints, reports, CSVs and HTML alike: its number in the
+        handout and its id, ``task 1 (capture_camera)``."""
+        return f"task {self.number} ({self.id})"
+
 
 @dataclass(frozen=True)
 class LabSpec:
@@ -47,6 +53,11 @@ class LabSpec:
 
     def task(self, task_id: str) -> Task:
         return next(t for t in self.tasks if t.id == task_id)
+
+    def task_name(self, task_id: str) -> str:
+        """The name of the task ``task_id`` (:attr:`Task.name`), for a hint that points to
+        it."""
+        return self.task(task_id).name
 
 
 LABS: dict[str, LabSpec] = {
@@ -99,6 +110,12 @@ LABS: dict[str, LabSpec] = {
 }
 
 ALIASES = {spec.folder: name for name, spec in LABS.items()}
+
+
+def task_name(lab: str, task_id: str) -> str:
+    """The name of ``lab``'s task ``task_id`` (``task 8 (passes)``): how a hint points to
+    another task, so that hints, CSVs and reports name a task one way."""
+    return LABS[lab].task_name(task_id)
 
 
 def find_lab(name: str) -> LabSpec:

@@ -18,13 +18,13 @@ TASKS = [t.id for t in LABS["lab20"].tasks]
 STARTER = {
     "lab20": {"capture_camera": "did not run", "capture_scene": "draws nothing",
               "capture_copy": "never called", "environment_texture": "mipmaps",
-              "base_texture": "base not textured", "mirror_texture": "task 7",
+              "base_texture": "base not textured", "mirror_texture": "task 7 (mirror_quad)",
               "mirror_quad": "not called", "passes": "never calls create_mirror"},
     "spheremap": {"reflection": "differs from u - 2 (n.u) n",
                   "sphere_coordinates": "differs from Hoff",
                   "texgen_setup": "never drawn", "texgen_draw": "never draws the cone",
                   "side_by_side": "cone is not drawn"},
-    "cubemap": {"face_selection": "wrong face", "face_coordinates": "task 1",
+    "cubemap": {"face_selection": "wrong face", "face_coordinates": "task 1 (face_selection)",
                 "capture_cameras": "never called", "capture_copy": "never called",
                 "live_frame": "never calls capture_cube"},
 }
@@ -123,11 +123,14 @@ def make_class(folder: Path, canary_dir: Path, port: int
 
 def compare(rows: list[dict[str, str]], expected: dict[str, dict[str, tuple[bool, str]]]
             ) -> list[str]:
-    """What in ``rows`` (grades.csv as dicts) differs from ``expected``; empty when none."""
+    """What in ``rows`` (grades.csv as dicts, each task by its name: ``task 1
+    (capture_camera)``) differs from ``expected`` (by task id); empty when none."""
     problems = []
+    ids = {task.name: task.id for task in LABS["lab20"].tasks}
     got: dict[str, dict[str, tuple[bool, str]]] = {}
     for row in rows:
-        got.setdefault(row["student"], {})[row["task"]] = (row["passed"] == "yes", row["hint"])
+        task = ids.get(row["task"], f"unknown task {row['task']!r}")
+        got.setdefault(row["student"], {})[task] = (row["passed"] == "yes", row["hint"])
     if sorted(got) != sorted(expected):
         problems.append(f"students {sorted(set(got) ^ set(expected))} differ")
     for student, tasks in expected.items():

@@ -14,7 +14,7 @@ import pytest
 from mirrorlab.labs import LABS
 from mirrorlab.labs.trusted.grading import grade_folder
 from mirrorlab.scene.backgrounds import load_picture
-from tests.labs.classroom import STARTER
+from tests.labs.classroom import STARTER, starter_text
 from tests.labs.conftest import LIMITS, SOLUTIONS, mirrorlab_command
 from tests.labs.mutants import (
     CUBE_EQUIVALENT,
@@ -59,13 +59,18 @@ def test_reference_solution_passes(lab, tmp_path):
 
 @pytest.mark.parametrize("lab", sorted(LABS))
 def test_untouched_starter_fails_every_task_with_its_hint(lab, tmp_path):
-    """The packaged starter (no FILE), judged against the packaged reference evidence:
-    no solutions at hand, as for a student with the wheel."""
+    """The starter ``lab start`` writes, checked with no FILE from its folder (the folder's
+    own file), judged against the packaged reference evidence: no solutions at hand, as
+    for a student with the wheel. The report's first line names the file checked."""
     spec = LABS[lab]
-    done = mirrorlab_command("lab", "check", spec.folder, "--out", str(tmp_path / "c.png"),
-                             "--timeout", str(LIMITS.cpu_seconds),
-                             env={"MIRRORLAB_SOLUTIONS": None})
+    started = mirrorlab_command("lab", "start", lab, str(tmp_path / "mine"))
+    assert started.returncode == 0, started.stderr
+    done = mirrorlab_command("lab", "check", spec.folder, "--timeout", str(LIMITS.cpu_seconds),
+                             cwd=tmp_path / "mine", env={"MIRRORLAB_SOLUTIONS": None})
     assert done.returncode == 1, done.stdout + done.stderr
+    checked = tmp_path / "mine" / "starter.py"
+    assert done.stdout.splitlines()[0] == f"{spec.title}: {checked}"
+    assert (tmp_path / "mine" / "out" / f"{lab}_check.png").is_file()
     found = task_lines(done.stdout)
     assert sorted(found) == [t.number for t in spec.tasks]
     for task in spec.tasks:
@@ -96,9 +101,56 @@ def test_each_mutant_is_caught_with_the_right_hint(lab, mutants, tmp_path):
             assert not typo[task][0] and "GLSL in SPHERE_MAP_GLSL line" in typo[task][1]
 
 
+def test_check_without_a_file_checks_the_folders_own_or_refuses(tmp_path):
+    """``lab check LAB`` with no FILE checks the folder's starter.py (here a finished one:
+    every task passes, never the package's untouched starter) and overwrites the picture;
+    in a folder without one, or with another lab's, it refuses in one line and leaves the
+    picture it made before alone."""
+    folder = tmp_path / "done"
+    folder.mkdir()
+    (folder / "starter.py").write_text((SOLUTIONS / "lab20_mirror.py").read_text())
+    picture = folder / "out" / "lab20_check.png"
+    done = mirrorlab_command("lab", "check", "lab20", "--timeout", str(LIMITS.cpu_seconds),
+                             cwd=folder)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert done.stdout.splitlines()[0] == f"{LABS['lab20'].title}: {folder / 'starter.py'}"
+    assert "8/8 tasks passed" in done.stdout and picture.is_file()
+    made = picture.read_bytes()
+    (folder / "starter.py").rename(folder / "mine.py")
+    (tmp_path / "other").mkdir()
+    (tmp_path / "other" / "starter.py").write_text(starter_text("spheremap"))
+    for where, message in ((folder, "holds no starter.py"),
+                           (tmp_path / "other", "a file of the spheremap lab")):
+        refused = mirrorlab_command("lab", "check", "lab20", "--out", str(picture), cwd=where)
+        assert refused.returncode == 2, refused.stdout + refused.stderr
+        assert message in refused.stderr and refused.stdout == ""
+        assert len(refused.stderr.strip().splitlines()) == 1, refused.stderr
+    assert picture.read_bytes() == made
+
+
+def test_every_hint_names_another_task_by_its_one_name():
+    """Hints point to another task as ``task 8 (passes)`` (:func:`mirrorlab.labs.task_name`),
+    the name the CSVs, reports and check lines use; none writes a bare ``task 8``."""
+    import ast
+    import re
+
+    from mirrorlab.labs import task_name
+    from tests import REPO_DIR
+
+    for module in ("lab20", "spheremap", "cubemap", "judging", "checker", "grading",
+                   "report", "window"):
+        tree = ast.parse((REPO_DIR / "mirrorlab/labs/trusted" / f"{module}.py").read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Constant) and isinstance(node.value, str):
+                assert not re.search(r"\btask \d+(?! \()", node.value, re.I), (module, node.value)
+    assert task_name("lab20", "passes") == "task 8 (passes)"
+    assert [t.name for t in LABS["cubemap"].tasks][:1] == ["task 1 (face_selection)"]
+
+
 def test_bad_command_lines_get_one_line_and_exit_2(tmp_path):
     (tmp_path / "full").mkdir()
     (tmp_path / "full" / "starter.py").write_text("# mine\n")
+    (tmp_path / "full.key").write_text("a course key of more than 16 bytes\n")
     cases = [
         (("lab", "check", "lab99"), "LAB: unknown lab 'lab99'"),
         (("lab", "check", "lab20", str(tmp_path / "nothing.py")), "FILE:"),
@@ -108,6 +160,10 @@ def test_bad_command_lines_get_one_line_and_exit_2(tmp_path):
         (("lab", "grade", "lab20", str(tmp_path), "--jobs", "0"), "--jobs"),
         (("lab", "grade", "lab20", str(tmp_path), "--key", str(tmp_path / "no.key")),
          "--key: cannot read"),
+        (("lab", "grade", "lab20", str(tmp_path), "--key", str(tmp_path / "full.key")),
+         "give --students FILE"),
+        (("lab", "grade", "lab20", str(tmp_path), "--copies", "half"),
+         "--copies: 'half' is not a policy"),
         (("lab", "check", "lab20", "--timeout=0"), "--timeout"),
         (("lab", "start", "lab20", str(tmp_path / "full")), "already holds starter.py"),
         (("lab", "solution", "lab20", "--student", "ada", "--key", str(tmp_path / "no.key")),

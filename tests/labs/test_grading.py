@@ -111,8 +111,11 @@ def test_gradebook_and_feedback_pages(graded, classroom):
     out, _ = graded("pool")
     _, expected = classroom
     rows = read_csv(out / "gradebook.csv")
-    assert list(rows[0]) == ["student", "score", "max_score", "percent", "variant", "feedback"]
+    assert list(rows[0]) == ["student", "score", "max_score", "percent", "variant", "copy_of",
+                             "feedback"]
     assert [r["student"] for r in rows] == sorted(expected)
+    # without a key everyone has the lab's own numbers: no file is another's copy
+    assert {(r["variant"], r["copy_of"]) for r in rows} == {("default", "")}
     tasks = len(LABS["lab20"].tasks)
     for row in rows:
         passing = sum(passed for passed, _ in expected[row["student"]].values())

@@ -126,23 +126,32 @@ def test_release_gives_each_student_their_own_numbers(released):
 
 
 def test_grading_with_the_key_passes_the_honest_and_fails_the_copy(released, tmp_path):
-    _, key, submissions = released
+    base, key, submissions = released
     out = tmp_path / "grades"
     done = mirrorlab_command("lab", "grade", "lab20", str(submissions), "--key", str(key),
+                             "--students", str(base / "class.txt"),
                              "--out-dir", str(out), "--jobs", "2",
                              "--timeout", str(LIMITS.cpu_seconds))
     assert done.returncode == 0, done.stderr
     book = {row["student"]: row for row in read_csv(out / "gradebook.csv")}
     assert book["Ada_Lovelace"]["score"] == book["Ben_Ng"]["score"] == "8"
+    assert book["Ada_Lovelace"]["copy_of"] == book["Ben_Ng"]["copy_of"] == ""
+    # --copies=flag (the default): the score as judged, the copy named in the gradebook
     assert int(book["Cy_Twombly"]["score"]) < 8
+    assert book["Cy_Twombly"]["copy_of"] == "Ada_Lovelace"
     assert book["Cy_Twombly"]["variant"] == derive_variant("lab20", read_key(key),
                                                             "Cy Twombly").id
+    assert "copy: 'Cy_Twombly' carries the numbers of Ada_Lovelace" in done.stdout
     copied = [row for row in read_csv(out / "grades.csv") if row["student"] == "Cy_Twombly"]
     failed = {row["task"]: row["hint"] for row in copied if row["passed"] == "no"}
-    assert "another student's" in failed["capture_camera"]
-    assert "another student's" in failed["mirror_quad"]
+    assert "another student's" in failed["task 1 (capture_camera)"]
+    assert "another student's" in failed["task 7 (mirror_quad)"]
     report = (out / "report.html").read_text()
     assert "numbers of Ada_Lovelace" in report
+    # the flag sits in the score's cell (the second column, on screen at any width)
+    score_cell = re.search(r'<tr data-student="Cy_Twombly"><td[^>]*>[^<]*</td>'
+                           r'(<td class="score".*?</td>)', report).group(1)
+    assert "copy: the numbers of Ada_Lovelace" in score_cell
     page = html.unescape(re.sub(r"data:image/png;base64,[A-Za-z0-9+/=]+", "",
                                 (out / "feedback" / "Cy_Twombly.html").read_text()))
     assert "another student's" in page and "Ada" not in page
@@ -168,6 +177,36 @@ def test_a_student_checks_against_their_own_released_reference(released):
     assert done.returncode == 1 and "your mirror needs glOrtho(" in done.stdout
 
 
+def test_copies_policy_and_names_off_the_class_list(released, tmp_path):
+    """--copies=zero books a copy at 0; a submission by a name not on the class list is
+    reported (one line, and in the report) and not graded; a listed student with no
+    submission is reported too."""
+    base, key, submissions = released
+    folder = tmp_path / "class"
+    folder.mkdir()
+    (folder / "cy_twombly.py").write_text((submissions / "Ada_Lovelace.py").read_text())
+    (folder / "Zed_Stranger.py").write_text((submissions / "Ben_Ng.py").read_text())
+    out = tmp_path / "grades"
+    done = mirrorlab_command("lab", "grade", "lab20", str(folder), "--key", str(key),
+                             "--students", str(base / "class.txt"), "--copies", "zero",
+                             "--out-dir", str(out), "--timeout", str(LIMITS.cpu_seconds))
+    assert done.returncode == 0, done.stderr
+    assert f"not graded: 'Zed_Stranger' (Zed_Stranger.py) is not on the class list " \
+           f"{base / 'class.txt'}" in done.stdout.splitlines()
+    assert "no submission: 'Ada Lovelace' of the class list" in done.stdout
+    assert "graded 1 submissions" in done.stdout
+    book = read_csv(out / "gradebook.csv")
+    assert [row["student"] for row in book] == ["cy_twombly"]
+    assert (book[0]["score"], book[0]["percent"], book[0]["copy_of"]) == ("0", "0.0",
+                                                                          "Ada Lovelace")
+    assert {row["student"] for row in read_csv(out / "grades.csv")} == {"cy_twombly"}
+    assert not (out / "feedback" / "Zed_Stranger.html").exists()
+    report = (out / "report.html").read_text()
+    assert re.search(r'id="unlisted">[^<]*<b>Zed_Stranger</b>', report)
+    assert re.search(r'id="missing">[^<]*Ada Lovelace', report)
+    assert "scored 0 (--copies=zero)" in report
+
+
 @pytest.mark.parametrize("lab", ["spheremap", "cubemap"])
 def test_the_other_labs_variants_fail_a_copied_file(lab, tmp_path):
     """A student's own variant of the sphere- or cube-map solution passes; the lab's own
@@ -187,8 +226,10 @@ def test_the_other_labs_variants_fail_a_copied_file(lab, tmp_path):
     name = student.replace(" ", "_")
     (folder / f"{name}.py").write_text(solution_for(solution(lab), variant))
     (folder / "default_copy.py").write_text(solution(lab))
+    (tmp_path / "class.txt").write_text(f"{student}\ndefault copy\n")
     out = tmp_path / "grades"
     done = mirrorlab_command("lab", "grade", lab, str(folder), "--key", str(tmp_path / "key"),
+                             "--students", str(tmp_path / "class.txt"), "--copies", "hold",
                              "--out-dir", str(out), "--jobs", "2",
                              "--timeout", str(LIMITS.cpu_seconds))
     assert done.returncode == 0, done.stderr
@@ -201,4 +242,9 @@ def test_the_other_labs_variants_fail_a_copied_file(lab, tmp_path):
     own = derive_variant(lab, KEY, "default_copy")
     if not own.same_numbers(default_variant(lab)):
         assert any("the lab" in r["hint"] or "another" in r["hint"] for r in theirs), theirs
+        # --copies=hold: the gradebook flags the default variant's copy and books no score
+        book = {row["student"]: row for row in read_csv(out / "gradebook.csv")}
+        assert (book["default_copy"]["copy_of"], book["default_copy"]["score"],
+                book["default_copy"]["percent"]) == ("default variant", "", "")
+        assert book[name]["copy_of"] == "" and book[name]["score"] == str(len(spec.tasks))
     assert len(spec.tasks) == len(theirs)

@@ -49,8 +49,8 @@ def test_lab_run_names_the_task_and_line_of_an_error(tmp_path):
     assert done.returncode == 1
     lines = [text for text in done.stderr.splitlines() if text.strip()]
     assert len(lines) == 1, done.stderr
-    assert f"in create_mirror() (task 1: the capture's orthographic projection and camera), " \
-           f"line {line}" in lines[0] and "TypeError" in lines[0]
+    assert ("in create_mirror() (task 1 (capture_camera): the capture's orthographic "
+            f"projection and camera), line {line}") in lines[0] and "TypeError" in lines[0]
 
 
 def test_lab_run_keeps_the_file_in_its_sandbox(tmp_path):

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import shutil
 import time
 from dataclasses import dataclass, field
@@ -22,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mirrorlab.labs import LabSpec, find_lab
+from mirrorlab.labs import LABS, LabSpec, find_lab
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.execute import run_job
 from mirrorlab.labs.trusted.judging import Context, TaskResult
@@ -37,6 +38,8 @@ from mirrorlab.labs.trusted.variants import (
 CHECK_SIZE = (256, 256)
 DEFAULT_LIMITS = Limits()
 VARIANT_FILE = "variant.json"
+LAB_FILE = "starter.py"
+"""The file a lab's folder holds for the student to edit (``lab start``, ``lab release``)."""
 REFERENCE_FOLDER = "reference"
 
 
@@ -223,8 +226,8 @@ def report_lines(spec: LabSpec, check: CheckResult) -> list[str]:
     lines = [f"{spec.title}: {check.student}{variant}"]
     for result in check.results:
         mark = "pass" if result.passed else "FAIL"
-        lines.append(f"  [{mark}] task {result.task.number} ({result.task.function}): "
-                     f"{result.task.title}")
+        lines.append(f"  [{mark}] {result.task.name}: {result.task.title}, in "
+                     f"{result.task.function}()")
         if result.hint:
             lines.append(f"         {'note' if result.passed else 'hint'}: {result.hint}")
     lines.append(f"{check.score}/{len(check.results)} tasks passed")
@@ -243,28 +246,45 @@ def file_variant(spec: LabSpec, path: Path) -> Variant:
     return default_variant(spec.name)
 
 
+def folder_file(spec: LabSpec, folder: Path) -> Path:
+    """The lab file of ``folder``: the ``starter.py`` that ``lab start`` and ``lab release``
+    put there; FileNotFoundError (one line) when it has none or it is another lab's."""
+    path = folder / LAB_FILE
+    if not path.is_file():
+        raise FileNotFoundError(
+            f"FILE: {str(folder)!r} holds no {LAB_FILE} (the file lab start puts in a lab's "
+            f"folder): give the file to check, mirrorlab lab check {spec.name} FILE, or run "
+            f"it in your lab's folder")
+    try:
+        text = path.read_text(errors="replace")
+    except OSError as exc:
+        raise FileNotFoundError(f"FILE: cannot read {str(path)!r}: {exc.strerror}") from None
+    labs = set(re.findall(r"\bkit\.(\w+)\(", text)) & set(LABS)
+    if labs and spec.name not in labs:
+        raise FileNotFoundError(f"FILE: {str(path)!r} is a file of the {sorted(labs)[0]} lab "
+                                f"(kit.{sorted(labs)[0]}()), not of {spec.name}")
+    return path
+
+
 def run_check(lab: str, file: str | None, out: Path | None, limits: Limits,
               solutions: str | Path | None = None) -> int:
     """``mirrorlab lab check``: print the verdicts, write the picture; 0 only when every
-    task passed."""
+    task passed. Without ``file``, the lab file of the current folder (:func:`folder_file`)
+    is checked. The report's first line names the file checked."""
     from mirrorlab.files import write_png_atomic
-    from mirrorlab.labs.content import starter
 
     spec = find_lab(lab)
     folder = solutions_dir(solutions)
-    if file:
-        path = Path(file)
-        if not path.is_file():
-            raise FileNotFoundError(f"FILE: {str(path)!r} is not a file")
-        source, name = path.read_bytes(), path.name
-        variant = file_variant(spec, path)
-        released = path.parent / REFERENCE_FOLDER
-    else:
-        variant = default_variant(spec.name)
-        source, name, released = starter(spec, variant).encode(), "starter.py", None
+    path = Path(file) if file else folder_file(spec, Path.cwd())
+    if not path.is_file():
+        raise FileNotFoundError(f"FILE: {str(path)!r} is not a file")
+    source = path.read_bytes()
+    variant = file_variant(spec, path)
+    released = path.parent / REFERENCE_FOLDER
     out = out or Path("out") / f"{spec.name}_check.png"
     reference = reference_evidence(spec, variant, folder, limits, released=released)
-    check = check_submission(spec, source, reference, Context(variant), name, name, limits)
+    check = check_submission(spec, source, reference, Context(variant), str(path), path.name,
+                             limits)
     print("\n".join(report_lines(spec, check)))
     write_png_atomic(out, check.picture)
     print(f"picture (student | reference | difference): {out}")

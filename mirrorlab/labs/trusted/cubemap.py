@@ -12,7 +12,7 @@ import numpy as np
 
 from mirrorlab import math3d
 from mirrorlab.envmap import cube_map
-from mirrorlab.labs import LabSpec
+from mirrorlab.labs import LabSpec, task_name
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.judging import (
     Context,
@@ -49,6 +49,11 @@ NEAREST_OBJECT = 1.0
 is at 1): a near plane beyond it loses what the sphere would reflect."""
 FARTHEST_OBJECT = 9.7
 """The picture behind the scene is this far along -z from any centre of the variants."""
+
+
+def _task(task_id: str) -> str:
+    """How a hint names another task of this lab (``task 8 (passes)``)."""
+    return task_name("cubemap", task_id)
 
 
 def _values(student: Evidence) -> tuple[np.ndarray, np.ndarray] | str:
@@ -104,7 +109,7 @@ def judge_coordinates(student: Evidence) -> tuple[bool, str]:
     face = np.round(values[:, 0]).astype(np.int64)
     ok = face == right_face
     if ok.mean() < 0.5:
-        return False, "judged once task 1 picks the right faces"
+        return False, f"judged once {_task('face_selection')} picks the right faces"
     st = values[ok, 1:]
     s, t, r, faces = s[ok], t[ok], r[ok], right_face[ok]
     if not np.all(np.isfinite(st)):
@@ -148,7 +153,8 @@ def _expected(face: int, center: tuple[float, float, float]) -> np.ndarray:
 def judge_cameras(student: Evidence, center: tuple[float, float, float], face_size: int,
                   context: Context) -> tuple[bool, str]:
     if not student.called("capture_cube"):
-        return False, "capture_cube() was never called in the last frame (see task 5)"
+        return False, ("capture_cube() was never called in the last frame: see "
+                       f"{_task('live_frame')}")
     draws = _face_draws(student)
     if not draws:
         return False, "capture_cube() draws nothing: lab.draw_scene() once for each face"
@@ -239,7 +245,8 @@ def judge_copy(student: Evidence, reference: Evidence, cameras_ok: bool,
     if student.events("draw", who="draw_sphere", within="capture_cube"):
         return False, "the sphere is drawn into its own capture: draw only lab.draw_scene() there"
     if not student.called("capture_cube"):
-        return False, "capture_cube() was never called in the last frame (see task 5)"
+        return False, ("capture_cube() was never called in the last frame: see "
+                       f"{_task('live_frame')}")
     events = student.last_frame
     draws = _face_draws(student)
     cube = student.state.get("cube_texture")
@@ -305,7 +312,7 @@ def judge_copy(student: Evidence, reference: Evidence, cameras_ok: bool,
     if not bad:
         return True, ""
     if not cameras_ok:
-        return False, "judged once the cameras (task 3) are right"
+        return False, f"judged once the cameras, {_task('capture_cameras')}, are right"
     worst = max(bad, key=lambda i: int(differing(faces[i], ref[i]).sum()))
     mask = differing(faces[worst], ref[worst])
     return False, (f"face(s) {', '.join(CUBE_FACE_NAMES[i] for i in bad)} differ from the "

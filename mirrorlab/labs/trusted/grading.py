@@ -7,7 +7,10 @@ A submission is a ``.py`` file (the student is its name) or a folder (the studen
 folder's name; its ``starter.py``, else its only ``.py`` file). With ``--key`` each
 student is judged against their own variant (derived from the key and their name), and
 the numbers of every other variant of the class (and the lab's own) are known to the
-judges, so a file copied from another student fails saying so. Each submission is sent to
+judges, so a file copied from another student fails saying so, and ``gradebook.csv`` names
+whose numbers it carries (``copy_of``) and scores it by the teacher's policy for copies
+(:data:`COPIES`). With a class list (``--students``, needed with ``--key``), a submission
+whose name is not on it is reported and not graded. Each submission is sent to
 a worker as its bytes, with the teacher's solution's text when references are to be made
 from it, so workers on other machines need no shared folder; each worker makes (and
 caches) the references it needs. Results are collected by student: a job run twice (its
@@ -30,10 +33,26 @@ from mirrorlab.files import Outputs, png_bytes
 from mirrorlab.jobs import open_executor
 from mirrorlab.labs import LabSpec, find_lab
 from mirrorlab.labs.trusted.sandbox import Limits
-from mirrorlab.labs.trusted.variants import Variant, default_variant, derive_variant, read_key
+from mirrorlab.labs.trusted.variants import (
+    Variant,
+    default_variant,
+    derive_variant,
+    read_key,
+    student_key,
+)
 
 CSV_COLUMNS = ("student", "task", "passed", "hint", "seconds")
-GRADEBOOK_COLUMNS = ("student", "score", "max_score", "percent", "variant", "feedback")
+GRADEBOOK_COLUMNS = ("student", "score", "max_score", "percent", "variant", "copy_of",
+                     "feedback")
+COPIES = {
+    "flag": "the score as judged (the tasks that carry the other numbers fail), the copy "
+            "named in copy_of",
+    "zero": "a score of 0",
+    "hold": "no score (score and percent left empty, so an import posts nothing) until the "
+            "teacher decides",
+}
+"""The teacher's policies for a submission that carries another student's variant or the
+lab's own (``--copies``), and what ``gradebook.csv`` gives it; ``flag`` is the default."""
 
 
 @dataclass(frozen=True)
@@ -47,8 +66,8 @@ class Submission:
 class Grade:
     """One student's grade: ``tasks`` as (task id, passed, hint), how the run ended, the
     seconds it took, the picture as PNG bytes, the student's variant, and the student
-    whose variant's numbers the file carries when they are not the student's own (for the
-    teacher's report only)."""
+    (or ``default``) whose variant's numbers the file carries when they are not the
+    student's own (for the teacher's gradebook and report, never the feedback page)."""
 
     student: str
     tasks: list[tuple[str, bool, str]]
@@ -62,11 +81,37 @@ class Grade:
     def score(self) -> int:
         return sum(passed for _, passed, _ in self.tasks)
 
+    def booked(self, copies: str = "flag") -> int | None:
+        """The score the gradebook gives under the policy ``copies`` (:data:`COPIES`):
+        None for ``hold`` of a copy."""
+        if not self.copied_from or copies == "flag":
+            return self.score
+        return 0 if copies == "zero" else None
+
+    def copy_of(self) -> str:
+        """Whose numbers the file carries, as the gradebook says it: '' (its own),
+        ``default variant`` (the lab's own numbers) or another student's name."""
+        return "default variant" if self.copied_from == "default" else self.copied_from
+
 
 def safe_name(student: str) -> str:
     """``student`` as a file name: letters, digits, ``-_.`` only, never hidden."""
     name = re.sub(r"[^A-Za-z0-9_.-]+", "_", student).lstrip(".") or "student"
     return name[:80]
+
+
+def match_class(submissions: list[Submission], students: list[str]
+                ) -> tuple[list[Submission], list[Submission], list[str]]:
+    """Split ``submissions`` by the class list ``students`` (names compared as
+    :func:`~.variants.student_key` compares them): those on it, those not on it, and the
+    names on it with no submission."""
+    listed = {student_key(name): name for name in students}
+    on: list[Submission] = []
+    off: list[Submission] = []
+    for submission in submissions:
+        (on if student_key(submission.student) in listed else off).append(submission)
+    handed = {student_key(s.student) for s in on}
+    return on, off, [name for key, name in listed.items() if key not in handed]
 
 
 def find_submissions(folder: Path) -> list[Submission]:
@@ -150,27 +195,31 @@ def unrunnable(spec: LabSpec, submission: Submission, problem: str,
 
 
 def grades_csv(spec: LabSpec, grades: list[Grade]) -> str:
-    """The CSV: one row per student and task, students in name order, tasks in the lab's."""
+    """The CSV: one row per student and task, students in name order, tasks in the lab's,
+    each task by its name (:attr:`~mirrorlab.labs.Task.name`, as the hints name it)."""
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(CSV_COLUMNS)
     for grade in sorted(grades, key=lambda g: g.student):
         for task_id, passed, hint in grade.tasks:
-            writer.writerow((grade.student, task_id, "yes" if passed else "no", hint,
-                             f"{grade.seconds:.2f}"))
+            writer.writerow((grade.student, spec.task_name(task_id), "yes" if passed else "no",
+                             hint, f"{grade.seconds:.2f}"))
     return buffer.getvalue()
 
 
-def gradebook_csv(spec: LabSpec, grades: list[Grade]) -> str:
+def gradebook_csv(spec: LabSpec, grades: list[Grade], copies: str = "flag") -> str:
     """One row per student (name order) with the score, as an LMS gradebook import takes
-    it: ``student,score,max_score,percent,variant,feedback``."""
+    it: ``student,score,max_score,percent,variant,copy_of,feedback``; a copy (``copy_of``
+    names whose numbers it carries) scored by the policy ``copies`` (:data:`COPIES`)."""
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(GRADEBOOK_COLUMNS)
     total = len(spec.tasks)
     for grade in sorted(grades, key=lambda g: g.student):
-        writer.writerow((grade.student, grade.score, total,
-                         f"{100 * grade.score / total:.1f}", grade.variant,
+        score = grade.booked(copies)
+        writer.writerow((grade.student, "" if score is None else score, total,
+                         "" if score is None else f"{100 * score / total:.1f}",
+                         grade.variant, grade.copy_of(),
                          f"feedback/{safe_name(grade.student)}.html"))
     return buffer.getvalue()
 
@@ -185,13 +234,18 @@ def class_variants(spec: LabSpec, students: list[str], key: bytes | None
 
 def grade_folder(spec: LabSpec, folder: Path, jobs: int, scheduler: str | None, engine: str,
                  limits: Limits, progress: bool = True, key: bytes | None = None,
-                 solutions: Path | None = None) -> tuple[list[Grade], str]:
-    """Grade every submission in ``folder``; returns the grades and the engine's name."""
+                 solutions: Path | None = None, submissions: list[Submission] | None = None,
+                 roster: list[str] | None = None) -> tuple[list[Grade], str]:
+    """Grade every submission in ``folder`` (or those given, found in it by
+    :func:`find_submissions`); with a ``key``, the variants of the class list ``roster``
+    (default: the submissions' names) are the others a copy is told by. Returns the grades
+    and the engine's name."""
     from tqdm import tqdm
 
     from mirrorlab.labs.trusted.checker import reference_evidence, solution_source
 
-    submissions = find_submissions(folder)
+    if submissions is None:
+        submissions = find_submissions(folder)
     variants = class_variants(spec, [s.student for s in submissions], key)
     solution = solution_source(spec, solutions) if solutions is not None else None
     if key is not None and solution is None:
@@ -202,6 +256,10 @@ def grade_folder(spec: LabSpec, folder: Path, jobs: int, scheduler: str | None, 
         # once here, so that local workers find it cached (or fail here in one line)
         reference_evidence(spec, default_variant(spec.name), solutions, limits)
     others = {name: v.plain() for name, v in variants.items()}
+    if key is not None and roster is not None:
+        handed = {student_key(s.student) for s in submissions}
+        others.update({name: derive_variant(spec.name, key, name).plain() for name in roster
+                       if student_key(name) not in handed})
     if key is not None:
         others["default"] = default_variant(spec.name).plain()
     grades: dict[str, Grade] = {}
@@ -244,35 +302,67 @@ def grade_folder(spec: LabSpec, folder: Path, jobs: int, scheduler: str | None, 
 
 def run_grade(lab: str, folder: Path, jobs: int, scheduler: str | None, engine: str,
               out_dir: Path | None, limits: Limits, key_file: Path | None = None,
-              solutions: str | Path | None = None) -> int:
+              solutions: str | Path | None = None, students_file: Path | None = None,
+              copies: str = "flag") -> int:
     """The ``grade`` command: grade, then write grades.csv, gradebook.csv, the feedback
-    pages, the pictures and report.html together (all or none)."""
+    pages, the pictures and report.html together (all or none). With a class list
+    (``students_file``), submissions not on it are reported, one line each, and not
+    graded; it is needed with a key (a variant is made from a name on the list)."""
     from mirrorlab.labs.trusted.checker import solutions_dir
+    from mirrorlab.labs.trusted.release import read_students
     from mirrorlab.labs.trusted.report import feedback_html, report_html
 
     spec = find_lab(lab)
+    if copies not in COPIES:
+        raise ValueError(f"--copies: {copies!r} is not a policy; expected one of "
+                         f"{', '.join(COPIES)}")
     folder = folder.resolve()
     key = read_key(key_file) if key_file is not None else None
+    if key is not None and students_file is None:
+        raise ValueError("--key: grading variants needs the class list the lab was released "
+                         "to (a variant is made from a name on it): give --students FILE")
+    students = read_students(students_file) if students_file is not None else None
     found = solutions_dir(solutions)
     out_dir = out_dir or folder.parent / f"{folder.name}-grades"
     if out_dir.exists() and not out_dir.is_dir():
         raise ValueError(f"--out-dir: {str(out_dir)!r} is a file, expected a folder")
+    submissions = find_submissions(folder)
+    unlisted: list[Submission] = []
+    missing: list[str] = []
+    if students is not None:
+        submissions, unlisted, missing = match_class(submissions, students)
+        for submission in unlisted:
+            where = submission.path or folder / submission.student
+            print(f"not graded: {submission.student!r} ({where.name}) is not on the class "
+                  f"list {students_file}")
+        if not submissions:
+            raise ValueError(f"SUBMISSIONS_DIR: none of its {len(unlisted)} submissions is "
+                             f"by a student of the class list {students_file}")
     started = time.perf_counter()
     grades, engine_name = grade_folder(spec, folder, jobs, scheduler, engine, limits,
-                                       key=key, solutions=found)
+                                       key=key, solutions=found, submissions=submissions,
+                                       roster=students)
     seconds = time.perf_counter() - started
     with Outputs() as outputs:
         outputs.add(out_dir / "grades.csv", grades_csv(spec, grades).encode())
-        outputs.add(out_dir / "gradebook.csv", gradebook_csv(spec, grades).encode())
+        outputs.add(out_dir / "gradebook.csv", gradebook_csv(spec, grades, copies).encode())
         for grade in grades:
             name = safe_name(grade.student)
             outputs.add(out_dir / "pictures" / f"{name}.png", grade.picture_png)
             outputs.add(out_dir / "feedback" / f"{name}.html",
                         feedback_html(spec, grade).encode())
-        outputs.add(out_dir / "report.html", report_html(spec, grades, engine_name,
-                                                        seconds).encode())
+        outputs.add(out_dir / "report.html", report_html(
+            spec, grades, engine_name, seconds, copies, [s.student for s in unlisted],
+            missing).encode())
+    for name in missing:
+        print(f"no submission: {name!r} of the class list")
+    for grade in grades:
+        if grade.copied_from:
+            print(f"copy: {grade.student!r} carries the numbers of {grade.copy_of()}; "
+                  f"--copies={copies}: {COPIES[copies]}")
     full = sum(g.score == len(spec.tasks) for g in grades)
     print(f"graded {len(grades)} submissions of {spec.name} in {seconds:.1f} s on "
           f"{engine_name}: {full} passed every task; {out_dir / 'grades.csv'}, "
           f"{out_dir / 'gradebook.csv'}, {out_dir / 'report.html'}")
     return 0
+

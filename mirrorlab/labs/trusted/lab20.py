@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from mirrorlab import math3d
-from mirrorlab.labs import LabSpec
+from mirrorlab.labs import LabSpec, task_name
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.judging import (
     Context,
@@ -64,6 +64,11 @@ TEXCOORD_MISTAKES = (
     (lambda s, t: (1 - t, 1 - s), "texture coordinates rotated (s and t swapped and flipped): "
                                   "s follows z and t follows y"),
 )
+
+
+def _task(task_id: str) -> str:
+    """How a hint names another task of this lab (``task 8 (passes)``)."""
+    return task_name("lab20", task_id)
 
 
 def _point(values: Any) -> str:
@@ -132,7 +137,7 @@ def judge_camera(student: Evidence, geometry: dict[str, Any],
     draw = _capture_draw(student)
     event = draw or _leave(student, "create_mirror")
     if event is None:
-        return False, "create_mirror() did not run in the last frame (see task 8)"
+        return False, f"create_mirror() did not run in the last frame: see {_task('passes')}"
     projection, modelview = matrix(event.get("projection")), matrix(event.get("modelview"))
     if projection is None or modelview is None:
         return False, "the capture's matrices could not be read"
@@ -226,7 +231,8 @@ def judge_capture(student: Evidence, reference: Evidence, camera_ok: bool,
                        "projection and camera are set")
     copy = _first_copy(student)
     if copy is None:
-        return False, "not judged: create_mirror() copies nothing (task 3)"
+        return False, ("not judged: create_mirror() copies nothing, see "
+                       f"{_task('capture_copy')}")
     seen = student.image(copy.get("picture", ""))
     ref_copy = _first_copy(reference)
     ref = reference.image(ref_copy.get("picture", "")) if ref_copy else None
@@ -238,12 +244,13 @@ def judge_capture(student: Evidence, reference: Evidence, camera_ok: bool,
     if same_picture(seen, ref):
         return True, ""
     if not camera_ok:
-        return False, "the capture shows the wrong view: fix its projection and camera (task 1)"
+        return False, ("the capture shows the wrong view: fix its projection and camera, "
+                       f"{_task('capture_camera')}")
     if student.state.get("metal_intact") is False:
         return False, ("the base in the capture wears what the copy wrote over METAL: judged "
-                       "once task 3 passes")
+                       f"once {_task('capture_copy')} passes")
     if not base_ok:
-        return False, "the base in the capture is judged once task 5 passes"
+        return False, f"the base in the capture is judged once {_task('base_texture')} passes"
     frame_events = student.last_frame
     index = frame_events.index(draw)
     clears = [e for e in frame_events[:index] if e.get("kind") == "clear"
@@ -269,7 +276,8 @@ def judge_capture(student: Evidence, reference: Evidence, camera_ok: bool,
 
 def judge_copy(student: Evidence, size: tuple[int, int]) -> tuple[bool, str]:
     if not student.called("create_mirror"):
-        return False, "create_mirror() was never called in the last frame (see task 8)"
+        return False, ("create_mirror() was never called in the last frame: see "
+                       f"{_task('passes')}")
     copy = _first_copy(student)
     environment, metal = student.state.get("environment"), student.state.get("metal")
     bind = ("glActiveTexture(GL_TEXTURE1); glBindTexture(GL_TEXTURE_2D, "
@@ -348,7 +356,7 @@ def judge_base(student: Evidence) -> tuple[bool, str]:
     draw = _viewer_draw(student) or _capture_draw(student)
     if draw is None:
         return False, stopped_hint(student, "build_scene_graph") or \
-            "not judged: the scene was never drawn (task 8)"
+            f"not judged: the scene was never drawn, see {_task('passes')}"
     texture = (draw.get("textures") or {}).get("base")
     if texture is not None and texture == student.state.get("metal"):
         return True, ""
@@ -372,7 +380,8 @@ def judge_mirror_texture(student: Evidence, spec_programs: int, env_ok: bool
         return False, hint
     draws = _mirror_draws(student)
     if not draws:
-        return False, "judged once render_mirror() draws the quad (task 7)"
+        return False, ("judged once render_mirror() draws the quad, see "
+                       f"{_task('mirror_quad')}")
     draw = draws[-1]
     state = draw.get("state") or {}
     environment = student.state.get("environment")
@@ -401,7 +410,7 @@ def judge_mirror_texture(student: Evidence, spec_programs: int, env_ok: bool
         params = student.state.get("environment_parameters") or {}
         if params.get("GL_TEXTURE_MIN_FILTER") in MIPMAP_FILTERS:
             return False, ("the mirror is black: ENVIRONMENT's filter wants mipmaps it does "
-                           "not have (see task 4)")
+                           f"not have: see {_task('environment_texture')}")
     if draw.get("taint"):
         return False, f"the mirror shows pixels this file uploaded ({draw['taint']})"
     return True, ""
@@ -425,7 +434,8 @@ def judge_quad(student: Evidence, geometry: dict[str, Any], context: Context
     if hint := stopped_hint(student, "render_mirror"):
         return False, hint
     if not student.called("render_mirror"):
-        return False, "render_mirror() was not called in the last frame (see task 8)"
+        return False, ("render_mirror() was not called in the last frame: see "
+                       f"{_task('passes')}")
     draws = _mirror_draws(student)
     if not draws:
         return False, ("render_mirror() draws no quad: glBegin(GL_QUADS), a glTexCoord2f "
@@ -617,8 +627,8 @@ def judge(spec: LabSpec, student: Evidence, reference: Evidence, context: Contex
         for key in ("mirror_texture", "mirror_quad"):
             if verdicts[key][0]:
                 continue
-            verdicts[key] = (False, "judged once task 8 passes: this frame is not the camera "
-                                    "pass")
+            verdicts[key] = (False, f"judged once {_task('passes')} passes: this frame is not "
+                                    "the camera pass")
     mirror = mirror_region(size, geometry)
     for draw in _mirror_draws(student):
         mirror = mirror | drawn_region(draw, size)

@@ -1,13 +1,16 @@
 """The pages of a graded class.
 
 ``report.html``: the grades as a teacher looks at them, one row per student, each task's
-result and hint, the student | reference | difference picture as a thumbnail (a link to
-the full picture), the student's variant and, when their file carries another student's
-numbers, whose. Opens from disk with no server (pictures by relative path, the sorting
-script inline). Clicking a column's header sorts by it; ``report.html#sort=COLUMN`` (or
-``#sort=-COLUMN``, descending) opens it sorted. When the page has loaded, ``<body>``
-carries ``data-images-loaded`` and ``data-images-broken``: how many thumbnails the browser
-drew and how many it could not.
+result and hint (tasks named as the hints name them, ``task 1 (capture_camera)``), the
+student | reference | difference picture as a thumbnail (a link to the full picture) and
+the student's variant. A file that carries another student's numbers or the lab's own is
+flagged beside its score, with whose and the score the policy for copies gives it; the
+names not on the class list (not graded) and the class list's names with no submission
+are listed above the table. Opens from disk with no server (pictures by relative path,
+the sorting script inline). Clicking a column's header sorts by it;
+``report.html#sort=COLUMN`` (or ``#sort=-COLUMN``, descending) opens it sorted. When the
+page has loaded, ``<body>`` carries ``data-images-loaded`` and ``data-images-broken``: how
+many thumbnails the browser drew and how many it could not.
 
 ``feedback/STUDENT.html`` (:func:`feedback_html`): one student's own page, to hand back:
 their tasks, hints and picture (inline, so the file stands alone), and nothing of anyone
@@ -29,7 +32,8 @@ th { background: #eee; cursor: pointer; user-select: none; white-space: nowrap; 
 th.sorted-up::after { content: " \\25B2"; } th.sorted-down::after { content: " \\25BC"; }
 td.pass { background: #e3f6e3; } td.fail { background: #fbe4e4; }
 td.task { max-width: 14em; }
-td.copied { color: #a00; }
+td.copied, .copy { color: #a00; }
+.copy { font-size: 11px; display: block; }
 td.task .hint { color: #555; font-size: 11px; }
 img.thumb { width: 270px; display: block; }
 caption { text-align: left; padding-bottom: 0.6em; color: #444; }
@@ -77,22 +81,33 @@ window.addEventListener('load', () => {
 """
 
 
-def report_html(spec: LabSpec, grades: list, engine: str, seconds: float) -> str:
-    """The page for ``grades`` (:class:`mirrorlab.labs.grading.Grade`, in any order)."""
+def report_html(spec: LabSpec, grades: list, engine: str, seconds: float,
+                copies: str = "flag", unlisted: list[str] | None = None,
+                missing: list[str] | None = None) -> str:
+    """The page for ``grades`` (:class:`mirrorlab.labs.grading.Grade`, in any order), copies
+    scored by the policy ``copies``; ``unlisted``: submissions not on the class list (not
+    graded), ``missing``: the class list's names with no submission."""
     from mirrorlab.labs.trusted.grading import safe_name
 
     tasks = spec.tasks
     head = ['<th data-key="student">student</th>', '<th data-key="score">score</th>',
             '<th data-key="picture">student | reference | difference</th>']
-    head += [f'<th data-key="{t.id}" title="{escape(t.title)}">{t.number}. {escape(t.id)}</th>'
+    head += [f'<th data-key="{t.id}" title="{escape(t.title)}">{escape(t.name)}</th>'
              for t in tasks]
     head += ['<th data-key="variant">variant</th>', '<th data-key="seconds">seconds</th>']
     rows = []
     for grade in sorted(grades, key=lambda g: g.student):
         verdicts = {task_id: (passed, hint) for task_id, passed, hint in grade.tasks}
         picture = f"pictures/{safe_name(grade.student)}.png"
+        copy = ""
+        if grade.copied_from:
+            booked = grade.booked(copies)
+            scored = "no score (held)" if booked is None else f"scored {booked}"
+            copy = (f'<span class="copy">copy: the numbers of {escape(grade.copy_of())}; '
+                    f'{scored} (--copies={escape(copies)})</span>')
         cells = [f'<td class="student">{escape(grade.student)}</td>',
-                 f'<td class="score" data-sort="{grade.score}">{grade.score}/{len(tasks)}</td>',
+                 f'<td class="score" data-sort="{grade.score}">{grade.score}/{len(tasks)}'
+                 f'{copy}</td>',
                  f'<td class="picture" data-sort="{grade.score}"><a href="{escape(picture)}">'
                  f'<img class="thumb" src="{escape(picture)}" alt="{escape(grade.student)}">'
                  f'</a></td>']
@@ -112,6 +127,13 @@ def report_html(spec: LabSpec, grades: list, engine: str, seconds: float) -> str
     full = sum(g.score == len(tasks) for g in grades)
     caption = (f"{len(grades)} submissions, {full} passing every task; graded in "
                f"{seconds:.1f} s on {escape(engine)}. Click a column's header to sort.")
+    notes = []
+    if unlisted:
+        notes.append('<p id="unlisted">Not graded, not on the class list: '
+                     f'{", ".join(f"<b>{escape(n)}</b>" for n in unlisted)}</p>')
+    if missing:
+        notes.append('<p id="missing">On the class list, no submission: '
+                     f'{", ".join(escape(n) for n in missing)}</p>')
     return f"""<!DOCTYPE html>
 <html lang="en">
 <head>
@@ -121,6 +143,7 @@ def report_html(spec: LabSpec, grades: list, engine: str, seconds: float) -> str
 </head>
 <body>
 <h1>{escape(spec.title)}: grades</h1>
+{chr(10).join(notes)}
 <table id="grades">
 <caption>{caption}</caption>
 <thead><tr>{"".join(head)}</tr></thead>
@@ -148,7 +171,7 @@ def feedback_html(spec: LabSpec, grade) -> str:
     titles = {t.id: t for t in spec.tasks}
     for task_id, passed, hint in grade.tasks:
         task = titles.get(task_id)
-        title = f"task {task.number} ({task.function}): {task.title}" if task else task_id
+        title = f"{task.name}: {task.title}, in {task.function}()" if task else task_id
         word = "pass" if passed else "FAIL"
         note = f'<div class="hint">{escape(hint)}</div>' if hint else ""
         items.append(f'<li class="{"pass" if passed else "fail"}"><b>{word}</b> '

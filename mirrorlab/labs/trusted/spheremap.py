@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from mirrorlab.envmap import sphere_map
-from mirrorlab.labs import LabSpec
+from mirrorlab.labs import LabSpec, task_name
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.judging import (
     Context,
@@ -31,6 +31,11 @@ GL_SPHERE_MAP = 0x2402
 MODE_NAMES = {0x2400: "GL_EYE_LINEAR", 0x2401: "GL_OBJECT_LINEAR", 0x2402: "GL_SPHERE_MAP",
               0x8511: "GL_NORMAL_MAP", 0x8512: "GL_REFLECTION_MAP"}
 GLSL_FUNCTIONS = ("reflect_eye", "sphere_map_st")
+
+
+def _task(task_id: str) -> str:
+    """How a hint names another task of this lab (``task 8 (passes)``)."""
+    return task_name("spheremap", task_id)
 
 
 def _best(values: np.ndarray, candidates: dict[str, np.ndarray], tolerance: float) -> str:
@@ -139,7 +144,8 @@ def _units(event: dict[str, Any]) -> dict[int, dict[str, Any]]:
 def judge_texgen_setup(student: Evidence, unit: int) -> tuple[bool, str]:
     draw = _texgen_draw(student)
     if draw is None:
-        return False, "not judged: the texgen cone was never drawn (task 4)"
+        return False, ("not judged: the texgen cone was never drawn, see "
+                       f"{_task('texgen_draw')}")
     seen, units = draw.get("seen") or {}, _units(draw)
     hints = []
     for coordinate in ("s", "t"):

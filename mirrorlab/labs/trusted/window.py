@@ -26,7 +26,7 @@ def format_error(spec: LabSpec, error: dict[str, Any]) -> str:
     tasks = [t for t in spec.tasks if t.function == function]
     where = f"in {function}()" if not function.startswith("<") else "while loading the file"
     if tasks:
-        where += f" (task {tasks[0].number}: {tasks[0].title})"
+        where += f" ({tasks[0].name}: {tasks[0].title})"
     line = f", line {error['line']}" if error.get("line") else ""
     code = f": {error['code']}" if error.get("code") else ""
     return f"{where}{line}{code} -> {error.get('message', '')}"
