@@ -846,36 +846,3 @@ class FloatFramebuffer(Framebuffer):
         data = GL.glReadPixels(0, 0, self.width, self.height, GL.GL_RGBA, GL.GL_FLOAT)
         pixels = np.frombuffer(data, dtype=np.float32).reshape(self.height, self.width, 4)
         return pixels[::-1].copy()
-
-
-class FixedFunctionMesh(_Resource):
-    """A second VAO over a :class:`MeshBuffer`'s vertex and index buffers that feeds the
-    fixed-function pipeline (``glVertexPointer``/``glNormalPointer``/``glTexCoordPointer``)
-    instead of generic attributes: for drawing with no shader program, as GL_SPHERE_MAP
-    texgen needs. Compatibility profile only. It shares, and does not own, the buffers:
-    release it no later than the mesh."""
-
-    def __init__(self, registry: ResourceRegistry, mesh: MeshBuffer) -> None:
-        self.mesh = mesh
-        self.index_count = mesh.index_count
-        self.vao = int(GL.glGenVertexArrays(1))
-        GL.glBindVertexArray(self.vao)
-        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, mesh.vbo)
-        GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, mesh.ebo)
-        stride = MeshBuffer.STRIDE
-        GL.glEnableClientState(GL.GL_VERTEX_ARRAY)
-        GL.glVertexPointer(3, GL.GL_FLOAT, stride, GL.GLvoidp(0))
-        GL.glEnableClientState(GL.GL_NORMAL_ARRAY)
-        GL.glNormalPointer(GL.GL_FLOAT, stride, GL.GLvoidp(12))
-        GL.glEnableClientState(GL.GL_TEXTURE_COORD_ARRAY)
-        GL.glTexCoordPointer(2, GL.GL_FLOAT, stride, GL.GLvoidp(24))
-        GL.glBindVertexArray(0)
-        super().__init__(registry)
-
-    def draw(self) -> None:
-        """One ``glDrawElements`` call for the whole mesh (bind no program first)."""
-        GL.glBindVertexArray(self.vao)
-        GL.glDrawElements(GL.GL_TRIANGLES, self.index_count, GL.GL_UNSIGNED_INT, None)
-
-    def _free(self) -> None:
-        GL.glDeleteVertexArrays(1, [self.vao])
