@@ -573,8 +573,9 @@ class Buffer(_Resource):
 class PackedMeshes(_Resource):
     """Many meshes in one VAO: their interleaved vertices (the :class:`MeshBuffer` layout)
     in one vertex buffer and their indices in one index buffer, so that a pass binds one
-    vertex array and draws any of them by its range (``glDrawElementsBaseVertex``, or
-    all of a pass's in one ``glMultiDrawElementsIndirect``). A mesh is added once; adding
+    vertex array and draws any of them by its range, as many instances as parts in a run
+    (``glDrawElementsInstancedBaseVertex``), or all of a pass's in one
+    ``glMultiDrawElementsIndirect``. A mesh is added once; adding
     one re-makes the buffers (meshes are few and added on first use)."""
 
     def __init__(self, registry: ResourceRegistry) -> None:
