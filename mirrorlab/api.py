@@ -48,8 +48,9 @@ class Renderer:
     leaving the ``with`` block (or by :meth:`close`). ``debug`` makes a debug context
     whose KHR_debug messages are checked after every pass (a GL error is raised, naming
     the pass, either way). ``draw_path`` is how objects are drawn: ``"auto"`` (one
-    multi-draw a pass where the context offers it, else a draw call a part, as on macOS's
-    OpenGL 4.1), ``"packed"`` or ``"per-draw"``; the frames are the same.
+    multi-draw a pass where the context offers it, else an instanced draw call for each
+    run of parts of one mesh, as on macOS's OpenGL 4.1), ``"packed"`` or ``"per-draw"``;
+    the frames are the same.
 
     The context is the renderer's own: make no GL calls in it (it is current after a
     :meth:`render`). A frame drawn anew leaves it in the state it had at the first; a

@@ -55,8 +55,7 @@ class Technique:
     program may be shared by several techniques); ``capture_camera`` (see
     :data:`CaptureCamera`) for a capturing technique; ``source`` what a reflector's
     ``source`` key names for it (a ``picture`` used as its map, a folder of six cube
-    ``faces``; None: it takes none); ``fixed_function``: drawn by fixed-function texgen
-    (the compatibility profile) where the view has an eye point; ``view_ray``: its
+    ``faces``; None: it takes none); ``view_ray``: its
     lookup follows the world-space view ray (``eye_world``, ``view_direction``);
     ``map_size_uniform``: its shader is told its map's size; ``parallax``: it takes a
     ``parallax`` table; ``own_camera``: planar, an ``ortho`` table sets its camera;
@@ -75,7 +74,6 @@ class Technique:
     constants: tuple[tuple[str, int], ...] = ()
     capture_camera: CaptureCamera | None = None
     source: Literal["picture", "faces"] | None = None
-    fixed_function: bool = False
     view_ray: bool = False
     map_size_uniform: bool = False
     parallax: bool = False
@@ -177,14 +175,17 @@ for _entry in (
               "a stencil mask", texture="inline",
               pass_class="mirrorlab.passes.stencil:StencilMirror"),
     Technique("sphere", "curved", "sphere map, looked up per fragment", texture="baked",
-              pass_class="mirrorlab.passes.envmap:SphereMapped", constants=(("per_vertex", 0),),
+              pass_class="mirrorlab.passes.envmap:SphereMapped",
+              constants=(("per_vertex", 0), ("texgen", 0)),
               **_SPHERE),  # type: ignore[arg-type]
     Technique("sphere-vertex", "curved", "sphere map, coordinates per vertex in a shader",
               texture="baked", pass_class="mirrorlab.passes.envmap:SphereMapped",
-              constants=(("per_vertex", 1),), **_SPHERE),  # type: ignore[arg-type]
-    Technique("sphere-texgen", "curved", "sphere map by fixed-function GL_SPHERE_MAP texgen, "
-              "per vertex", texture="baked", pass_class="mirrorlab.passes.envmap:SphereMapped",
-              constants=(("per_vertex", 1),), fixed_function=True,
+              constants=(("per_vertex", 1), ("texgen", 0)),
+              **_SPHERE),  # type: ignore[arg-type]
+    Technique("sphere-texgen", "curved", "sphere map by the textbook's GL_SPHERE_MAP texgen, "
+              "its formula per vertex in a shader", texture="baked",
+              pass_class="mirrorlab.passes.envmap:SphereMapped",
+              constants=(("per_vertex", 1), ("texgen", 1)),
               **_SPHERE),  # type: ignore[arg-type]
     Technique("cube", "curved", "static cube map, from six pictures or baked from the "
               "background", texture="static", pass_class="mirrorlab.passes.envmap:CubeMapped",

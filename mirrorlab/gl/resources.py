@@ -13,6 +13,7 @@ flip happens here, nowhere else.
 
 from __future__ import annotations
 
+import ctypes
 import re
 from collections.abc import Callable
 from typing import Protocol
@@ -572,8 +573,9 @@ class Buffer(_Resource):
 class PackedMeshes(_Resource):
     """Many meshes in one VAO: their interleaved vertices (the :class:`MeshBuffer` layout)
     in one vertex buffer and their indices in one index buffer, so that a pass binds one
-    vertex array and draws any of them by its range (``glDrawElementsBaseVertex``, or
-    all of a pass's in one ``glMultiDrawElementsIndirect``). A mesh is added once; adding
+    vertex array and draws any of them by its range, as many instances as parts in a run
+    (``glDrawElementsInstancedBaseVertex``), or all of a pass's in one
+    ``glMultiDrawElementsIndirect``. A mesh is added once; adding
     one re-makes the buffers (meshes are few and added on first use)."""
 
     def __init__(self, registry: ResourceRegistry) -> None:
@@ -587,10 +589,11 @@ class PackedMeshes(_Resource):
         super().__init__(registry)
 
     def carry_parts(self) -> None:
-        """Give the vertex array the attributes of a parts buffer (OpenGL 4.3): each
-        part's two matrices, :data:`PART_BYTES` by column, at locations 3 to 6 and 7 to
-        10, one part an instance, read from the buffer :meth:`bind_parts` binds. Bind
-        one before every draw: an enabled array has no buffer until then."""
+        """Give the vertex array the attributes of a parts buffer: each part's two
+        matrices, :data:`PART_BYTES` by column, at locations 3 to 6 and 7 to 10, one part
+        an instance (divisor 1: core OpenGL 3.3), read from the buffer
+        :meth:`bind_parts` points them at. Point them before every draw: an enabled
+        array has no buffer until then."""
         self.carries_parts = True
         if self.vao:
             self._add_part_attributes()
@@ -598,17 +601,25 @@ class PackedMeshes(_Resource):
     def _add_part_attributes(self) -> None:
         GL.glBindVertexArray(self.vao)
         for column in range(8):
-            location = PART_LOCATION + column
-            GL.glEnableVertexAttribArray(location)
-            GL.glVertexAttribFormat(location, 4, GL.GL_FLOAT, GL.GL_FALSE, 16 * column)
-            GL.glVertexAttribBinding(location, PART_BINDING)
-        GL.glVertexBindingDivisor(PART_BINDING, 1)
+            GL.glEnableVertexAttribArray(PART_LOCATION + column)
+            GL.glVertexAttribDivisor(PART_LOCATION + column, 1)
         GL.glBindVertexArray(0)
 
-    def bind_parts(self, buffer: int) -> None:
-        """Read the parts' data from ``buffer`` (the vertex array bound first): instance
-        ``i`` of a draw whose base instance is ``b`` reads part ``b + i``."""
-        GL.glBindVertexBuffer(PART_BINDING, buffer, 0, PART_BYTES)
+    def bind_parts(self, buffer: int, first_part: int = 0) -> None:
+        """Read the parts' data from ``buffer`` (the vertex array bound first), from part
+        ``first_part`` on: instance ``i`` of a draw whose base instance is ``b`` reads
+        part ``first_part + b + i``. Leaves ``buffer`` bound to ``GL_ARRAY_BUFFER``."""
+        RAW.glBindBuffer(GL.GL_ARRAY_BUFFER, buffer)
+        self.point_parts(first_part)
+
+    def point_parts(self, first_part: int) -> None:
+        """Point the parts' attributes at part ``first_part`` of the buffer bound to
+        ``GL_ARRAY_BUFFER`` (the parts buffer :meth:`bind_parts` bound): where base
+        instances are missing (OpenGL 4.1), a draw's first instance is chosen this way."""
+        start = PART_BYTES * int(first_part)
+        for column in range(8):
+            RAW.glVertexAttribPointer(PART_LOCATION + column, 4, GL.GL_FLOAT, GL.GL_FALSE,
+                                      PART_BYTES, ctypes.c_void_p(start + 16 * column))
 
     def add(self, vertices: np.ndarray, indices: np.ndarray) -> tuple[int, int, int]:
         """Add a mesh of ``vertices`` ``(n, 8)`` and flat ``indices``; returns its
@@ -632,10 +643,13 @@ class PackedMeshes(_Resource):
     def bind(self) -> None:
         GL.glBindVertexArray(self.vao)
 
-    def draw(self, first_index: int, count: int, base_vertex: int) -> None:
-        """One mesh's triangles (bound first)."""
-        GL.glDrawElementsBaseVertex(GL.GL_TRIANGLES, int(count), GL.GL_UNSIGNED_INT,
-                                    GL.GLvoidp(4 * int(first_index)), int(base_vertex))
+    def draw_instanced(self, first_index: int, count: int, base_vertex: int,
+                       instances: int) -> None:
+        """``instances`` instances of one mesh's triangles (bound first, its parts
+        attributes pointed at the first instance's part: :meth:`point_parts`)."""
+        RAW.glDrawElementsInstancedBaseVertex(GL.GL_TRIANGLES, count, GL.GL_UNSIGNED_INT,
+                                              ctypes.c_void_p(4 * first_index), instances,
+                                              base_vertex)
 
     def multi_draw(self, first_command: int, count: int) -> None:
         """``count`` draws from the bound ``GL_DRAW_INDIRECT_BUFFER``'s commands
@@ -657,8 +671,6 @@ INDIRECT_COMMAND_BYTES = 20
 PART_LOCATION = 3
 """The first of the eight attribute locations of a part's data
 (:meth:`PackedMeshes.carry_parts`)."""
-PART_BINDING = 3
-"""The vertex buffer binding of a parts buffer (0 to 2 are the mesh attributes')."""
 PART_BYTES = 128
 """Bytes of one part's data: two 4x4 float32 matrices."""
 
@@ -846,36 +858,3 @@ class FloatFramebuffer(Framebuffer):
         data = GL.glReadPixels(0, 0, self.width, self.height, GL.GL_RGBA, GL.GL_FLOAT)
         pixels = np.frombuffer(data, dtype=np.float32).reshape(self.height, self.width, 4)
         return pixels[::-1].copy()
-
-
-class FixedFunctionMesh(_Resource):
-    """A second VAO over a :class:`MeshBuffer`'s vertex and index buffers that feeds the
-    fixed-function pipeline (``glVertexPointer``/``glNormalPointer``/``glTexCoordPointer``)
-    instead of generic attributes: for drawing with no shader program, as GL_SPHERE_MAP
-    texgen needs. Compatibility profile only. It shares, and does not own, the buffers:
-    release it no later than the mesh."""
-
-    def __init__(self, registry: ResourceRegistry, mesh: MeshBuffer) -> None:
-        self.mesh = mesh
-        self.index_count = mesh.index_count
-        self.vao = int(GL.glGenVertexArrays(1))
-        GL.glBindVertexArray(self.vao)
-        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, mesh.vbo)
-        GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, mesh.ebo)
-        stride = MeshBuffer.STRIDE
-        GL.glEnableClientState(GL.GL_VERTEX_ARRAY)
-        GL.glVertexPointer(3, GL.GL_FLOAT, stride, GL.GLvoidp(0))
-        GL.glEnableClientState(GL.GL_NORMAL_ARRAY)
-        GL.glNormalPointer(GL.GL_FLOAT, stride, GL.GLvoidp(12))
-        GL.glEnableClientState(GL.GL_TEXTURE_COORD_ARRAY)
-        GL.glTexCoordPointer(2, GL.GL_FLOAT, stride, GL.GLvoidp(24))
-        GL.glBindVertexArray(0)
-        super().__init__(registry)
-
-    def draw(self) -> None:
-        """One ``glDrawElements`` call for the whole mesh (bind no program first)."""
-        GL.glBindVertexArray(self.vao)
-        GL.glDrawElements(GL.GL_TRIANGLES, self.index_count, GL.GL_UNSIGNED_INT, None)
-
-    def _free(self) -> None:
-        GL.glDeleteVertexArrays(1, [self.vao])

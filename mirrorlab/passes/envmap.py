@@ -1,6 +1,6 @@
 """Environment-mapped (curved) reflectors with maps that hold only the background: sphere
-maps (per fragment, per vertex, by fixed-function GL_SPHERE_MAP texgen, and the "demo
-style" normal lookup), a static cube map and a latitude-longitude map. :class:`CurvedPass`
+maps (per fragment, per vertex, by GL_SPHERE_MAP texgen's formula in a shader, and the
+"demo style" normal lookup), a static cube map and a latitude-longitude map. :class:`CurvedPass`
 is what every curved technique shares, the live cube map (:mod:`.cube_live`) included.
 """
 
@@ -13,13 +13,7 @@ import numpy as np
 from mirrorlab import math3d
 from mirrorlab.envmap import bake_cube_faces, bake_latlong, bake_sphere_map
 from mirrorlab.gl.opengl import GL
-from mirrorlab.gl.resources import (
-    FixedFunctionMesh,
-    Program,
-    RenderTarget,
-    Texture2D,
-    TextureCube,
-)
+from mirrorlab.gl.resources import Program, RenderTarget, Texture2D, TextureCube
 from mirrorlab.passes.base import SharedResources, ViewDrawer, cube_from_folder, set_clip_plane
 from mirrorlab.plan import PlannedPass, ReflectorDraw
 from mirrorlab.scene.backgrounds import environment_of, load_picture
@@ -49,10 +43,9 @@ def baked_latlong(background: Background, size: int) -> np.ndarray:
 
 
 class CurvedPass:
-    """A curved reflector drawn by its technique's shader program (or, for a
-    fixed-function technique, by texgen wherever the view has an eye point) that samples
-    a map; plain when bounces run out. What it sets besides the view and the map follows
-    the technique's registry entry (:mod:`mirrorlab.techniques`). ``output_mode`` chooses
+    """A curved reflector drawn by its technique's shader program that samples a map;
+    plain when bounces run out. What it sets besides the view and the map follows the
+    technique's registry entry (:mod:`mirrorlab.techniques`). ``output_mode`` chooses
     colour or lookup coordinates (for numerical checks)."""
 
     def __init__(self, shared: SharedResources, reflector: CurvedReflector,
@@ -61,11 +54,6 @@ class CurvedPass:
         self.entry = technique(reflector.technique)
         self.output_mode = OUTPUT_COLOR
         self.mesh = shared.mesh(reflector.mesh)
-        self.fixed_mesh: FixedFunctionMesh | None = None
-        if self.entry.fixed_function:
-            self.fixed_mesh = FixedFunctionMesh(shared.registry, self.mesh)
-        # A fixed-function technique's texgen takes the view ray from the eye to each
-        # vertex; an orthographic view has no eye point, so there its shader runs instead.
         self.program = self.make_program(shared, reflector)
 
     def make_program(self, shared: SharedResources, reflector: CurvedReflector) -> Program:
@@ -76,8 +64,7 @@ class CurvedPass:
         return program
 
     def release(self) -> None:
-        if self.fixed_mesh is not None:
-            self.fixed_mesh.release()
+        """Nothing of its own: the program and the mesh are shared."""
 
     def update(self, step: PlannedPass, reflector: CurvedReflector, renderer: ViewDrawer,
                frame_target: RenderTarget) -> int:
@@ -109,12 +96,6 @@ class CurvedPass:
         GL.glEnable(GL.GL_DEPTH_TEST)
         GL.glEnable(GL.GL_CULL_FACE)
         entry = self.entry
-        if entry.fixed_function:
-            if self.output_mode != OUTPUT_COLOR:
-                raise ValueError(f"{entry.name} is fixed-function: it can only output colour")
-            if not is_orthographic(view.projection):
-                self._draw_texgen(view, model, texture)
-                return 1
         program = self.program
         program.use()
         program.set_int(entry.sampler, 0)  # a program may be shared: set what is ours
@@ -139,43 +120,6 @@ class CurvedPass:
         texture.bind(0)
         self.mesh.draw()
         return 1
-
-    def _draw_texgen(self, view: View, model: np.ndarray, texture) -> None:
-        """The textbook's way: no shader, GL_SPHERE_MAP texgen for s and t, the sphere map
-        replacing the fragment colour. GL_NORMALIZE makes the eye-space normals unit, as
-        the numpy reference assumes. The modelview is composed here in float64 (the
-        fixed-function path's camera-relative rendering), and a clip plane is given in
-        eye space, worked out here, with an identity modelview (glClipPlane takes it
-        through the modelview's inverse)."""
-        assert self.fixed_mesh is not None
-        GL.glUseProgram(0)
-        GL.glMatrixMode(GL.GL_PROJECTION)
-        GL.glLoadMatrixd(np.ascontiguousarray(view.projection.T, dtype=np.float64))
-        GL.glMatrixMode(GL.GL_MODELVIEW)
-        GL.glLoadIdentity()
-        if view.clip_plane is not None:
-            in_eye = np.asarray(view.clip_plane, dtype=np.float64) @ np.linalg.inv(
-                np.asarray(view.view, dtype=np.float64))
-            GL.glClipPlane(GL.GL_CLIP_PLANE0, in_eye)
-        GL.glLoadMatrixd(np.ascontiguousarray((view.view @ model).T, dtype=np.float64))
-        GL.glDisable(GL.GL_LIGHTING)
-        GL.glEnable(GL.GL_NORMALIZE)
-        texture.bind(0)
-        GL.glEnable(GL.GL_TEXTURE_2D)
-        GL.glTexEnvi(GL.GL_TEXTURE_ENV, GL.GL_TEXTURE_ENV_MODE, GL.GL_REPLACE)
-        for coordinate in (GL.GL_S, GL.GL_T):
-            GL.glTexGeni(coordinate, GL.GL_TEXTURE_GEN_MODE, GL.GL_SPHERE_MAP)
-        GL.glEnable(GL.GL_TEXTURE_GEN_S)
-        GL.glEnable(GL.GL_TEXTURE_GEN_T)
-        self.fixed_mesh.draw()
-        GL.glDisable(GL.GL_TEXTURE_GEN_S)
-        GL.glDisable(GL.GL_TEXTURE_GEN_T)
-        GL.glDisable(GL.GL_TEXTURE_2D)
-        GL.glDisable(GL.GL_NORMALIZE)
-        GL.glLoadIdentity()
-        GL.glMatrixMode(GL.GL_PROJECTION)
-        GL.glLoadIdentity()
-        GL.glMatrixMode(GL.GL_MODELVIEW)
 
 
 class SphereMapped(CurvedPass):

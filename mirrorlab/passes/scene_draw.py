@@ -9,21 +9,26 @@ The meshes are packed into one vertex and one index buffer
 (:class:`~mirrorlab.gl.resources.PackedMeshes`). What is left is drawn one of two ways,
 chosen when the drawer is made, from what the context offers:
 
-- ``packed`` (OpenGL 4.3): each visible part's matrices in a parts buffer, its range
-  of the packed meshes in an indirect command (consecutive parts of one mesh as the
-  instances of one command, the first one's place in the buffer its base instance), and
-  the pass one ``glMultiDrawElementsIndirect`` for each run of parts that share a
-  texture (``scene_packed.vert`` reads each part's matrices as per-instance attributes:
-  :meth:`~mirrorlab.gl.resources.PackedMeshes.carry_parts`). A
-  view's commands and buffer are recorded once and kept while the scene's objects and
-  the view stay as they were (a still frame re-sends nothing but the calls that draw),
-  and a new pose of the same parts is sent into the same buffer (:meth:`SceneDrawer.repose`),
-  so that a replayed frame's calls draw it.
-- ``per-draw`` (any OpenGL 3.3, macOS's 4.1 among them): one
-  ``glDrawElementsBaseVertex`` a part, its matrices as uniforms (``scene.vert``).
+Either way each visible part's matrices go into a parts buffer, and its range of the
+packed meshes into an indirect command: consecutive parts of one mesh (and texture) are
+the instances of one command, the first one's place in the buffer its base instance
+(``scene_packed.vert`` reads each part's matrices as per-instance attributes:
+:meth:`~mirrorlab.gl.resources.PackedMeshes.carry_parts`). A view's commands and buffer
+are recorded once and kept while the scene's objects and the view stay as they were (a
+still frame re-sends nothing but the calls that draw), and a new pose of the same parts
+is sent into the same buffer (:meth:`SceneDrawer.repose`), so that a replayed frame's
+calls draw it. Then:
 
-Both draw the parts in the scene's order with the same float32 matrices, so the picture
-is the same, pixel for pixel.
+- ``packed`` (OpenGL 4.3): the pass is one ``glMultiDrawElementsIndirect`` for each run
+  of commands that share a texture, the commands in a GL buffer.
+- ``per-draw`` (any OpenGL 3.3, macOS's 4.1 among them, which has no multi-draw
+  indirect and no base instance): one ``glDrawElementsInstancedBaseVertex`` a command,
+  the parts' attributes pointed at its first part's place in the buffer first
+  (:meth:`~mirrorlab.gl.resources.PackedMeshes.point_parts`). A thousand boxes of one
+  mesh are one draw call; parts of meshes all different are a draw each.
+
+Both draw the parts in the scene's order with the same float32 matrices (instances are
+drawn in order, one after the other), so the picture is the same, pixel for pixel.
 """
 
 from __future__ import annotations
@@ -54,8 +59,6 @@ costs more than the draws it could save (culling never changes a pixel either wa
 SPARE_BUFFERS = 4
 """Pairs of buffers of freed recorded views kept for the next ones (a frame records
 one view a pass)."""
-RECORDED_VIEWS = 64
-"""Views whose visible parts the per-draw path keeps (most recently used; numpy only)."""
 
 
 def surface_matrix(normal: np.ndarray, color, textured: bool) -> np.ndarray:
@@ -112,9 +115,10 @@ class PartTable:
 
 @dataclass(eq=False)
 class RecordedView:
-    """One view's packed draw, recorded: the visible parts' matrices (``parts``) and
-    indirect commands (``commands``) in GL buffers, its :data:`Run` s of commands in
-    order (``runs``), and which parts it draws (``visible``, positions ``(k,)``)."""
+    """One view's draw, recorded: the visible parts' matrices (``parts``) and indirect
+    commands (``commands``; filled on the packed path alone) in GL buffers, its
+    :data:`Run` s of commands in order (``runs``), and which parts it draws (``visible``,
+    positions ``(k,)``)."""
 
     parts: Buffer
     commands: Buffer
@@ -189,12 +193,11 @@ class SceneDrawer:
                              f"{'.'.join(map(str, gl_version()))}")
         self.draw_path: DrawPath = draw_path
         self.shared = shared
-        if draw_path == "packed":
-            shared.packed.carry_parts()
-        self._programs: dict[int, tuple[Program, Program | None]] = {}  # by light count
+        shared.packed.carry_parts()
+        self._programs: dict[int, tuple[Program, Program]] = {}  # by light count
         self._tables: OrderedDict[ObjectArrays, PartTable] = OrderedDict()
         self._looks: OrderedDict[tuple[PartLooks, ...], PartTable] = OrderedDict()
-        # the packed path's recorded views: those drawn in the frame being drawn or the
+        # the recorded views: those drawn in the frame being drawn or the
         # last one (a still frame draws them again; any other is freed by end_frame)
         self._recorded: dict[tuple, RecordedView] = {}
         self._used: set[tuple] = set()
@@ -202,8 +205,6 @@ class SceneDrawer:
         """Buffers of freed recorded views, filled again by the next views recorded (a
         moving viewer records a view or two every frame: no GL buffer is made or deleted
         for them)."""
-        self._each: OrderedDict[tuple, tuple[np.ndarray, np.ndarray]] = OrderedDict()
-        """The per-draw path's record of a view: the visible parts and their models."""
         self.parts_drawn = 0
         """Parts drawn since it was last set to 0 (the renderer does, each frame)."""
         self._lit: dict[Program, tuple] = {}
@@ -290,29 +291,26 @@ class SceneDrawer:
 
     # ------------------------------------------------------------- drawing
 
-    def programs(self, scene: Scene) -> tuple[Program, Program | None]:
+    def programs(self, scene: Scene) -> tuple[Program, Program]:
         """The lit programs for ``scene``'s number of lights (each count has its own,
-        ``LIGHT_COUNT`` defined in lighting.glsl): one drawing a part by uniforms, and
-        on the packed path one drawing the parts of a multi-draw (None otherwise)."""
+        ``LIGHT_COUNT`` defined in lighting.glsl): one drawing a surface by uniforms (a
+        plain reflector), and one drawing parts from a parts buffer (the objects)."""
         count = len(scene.lights)
         held = self._programs.get(count)
         if held is None:
             held = self._programs[count] = (
                 self.shared.program("scene.vert", "scene.frag", LIGHT_COUNT=count),
-                self.shared.program("scene_packed.vert", "scene.frag", LIGHT_COUNT=count)
-                if self.draw_path == "packed" else None)
-            for program in held:
-                if program is not None:  # the texture unit is set once, when made
-                    program.use()
-                    program.set_int("texture_map", 0)
+                self.shared.program("scene_packed.vert", "scene.frag", LIGHT_COUNT=count))
+            for program in held:  # the texture unit is set once, when made
+                program.use()
+                program.set_int("texture_map", 0)
         return held
 
     def begin(self, scene: Scene, view: View, packed: bool = False) -> Program:
-        """Bind the lit program for ``scene`` (the multi-draw one with ``packed``) and
-        set ``view``'s and the lights' uniforms on it."""
-        per_draw, packed_program = self.programs(scene)
-        program = packed_program if packed else per_draw
-        assert program is not None
+        """Bind the lit program for ``scene`` (the one reading a parts buffer with
+        ``packed``) and set ``view``'s and the lights' uniforms on it."""
+        by_uniforms, from_buffer = self.programs(scene)
+        program = from_buffer if packed else by_uniforms
         program.use()
         set_view_uniforms(program, view)
         lights = (scene.lights, scene.ambient)
@@ -329,50 +327,28 @@ class SceneDrawer:
         index = scene_index(scene)
         if not len(index.objects_part):
             return 0
-        table = self._table(index)
-        if self.draw_path == "packed":
-            return self._draw_packed(scene, view, index, table, scissor, cull)
-        return self._draw_each(scene, view, index, table, scissor, cull)
+        return self._draw_recorded(scene, view, index, self._table(index), scissor, cull)
 
-    def _draw_each(self, scene: Scene, view: View, index: SceneIndex, table: PartTable,
-                   scissor: Rectangle | None, cull: bool) -> int:
-        key = (*_view_key(index, view, scissor), cull)
-        held = self._each.get(key)
-        if held is not None:
-            self._each.move_to_end(key)
-            visible, models = held
-        else:
-            visible = (self.visible(index, view, scissor) if cull
-                       else np.arange(len(index.objects_part)))
-            models = np.ascontiguousarray(  # row-major, one a part
-                self.relative_columns(table, visible, view)[:, 0].transpose(0, 2, 1))
-            self._each[key] = (visible, models)
-            while len(self._each) > RECORDED_VIEWS:
-                self._each.popitem(last=False)
-        program = self.begin(scene, view)
-        packed = self.shared.packed
-        packed.bind()
-        for i, model in zip(visible, models, strict=True):
-            program.set_mat4("model", model)
-            program.set_mat4("part", table.surfaces[i])
-            texture = table.textures[i]
-            if texture is not None:
-                self.shared.texture(texture).bind(0)
-            packed.draw(*table.ranges[i])
-        self.parts_drawn += len(visible)
-        return len(visible)
-
-    def _draw_packed(self, scene: Scene, view: View, index: SceneIndex, table: PartTable,
-                     scissor: Rectangle | None, cull: bool) -> int:
+    def _draw_recorded(self, scene: Scene, view: View, index: SceneIndex, table: PartTable,
+                       scissor: Rectangle | None, cull: bool) -> int:
+        """Draw ``view`` 's recorded draw of ``index`` (recorded now when it has none) by
+        the drawer's path; returns the number of draw calls."""
         recorded = self._record(index, view, table, scissor, cull)
         self.parts_drawn += len(recorded.visible)
         if not recorded.runs:
             return 0
         packed = self.shared.packed
         packed.bind()
-        GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, recorded.commands.name)
         packed.bind_parts(recorded.parts.name)
         self.begin(scene, view, packed=True)
+        if self.draw_path == "packed":
+            return self._multi_draw(recorded)
+        return self._draw_instanced(recorded)
+
+    def _multi_draw(self, recorded: RecordedView) -> int:
+        """Each run of ``recorded`` 's commands one multi-draw; returns the runs' count."""
+        packed = self.shared.packed
+        GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, recorded.commands.name)
         for texture, first, count in recorded.runs:
             if texture is not None:
                 self.shared.texture(texture).bind(0)
@@ -380,14 +356,26 @@ class SceneDrawer:
         GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
         return len(recorded.runs)
 
+    def _draw_instanced(self, recorded: RecordedView) -> int:
+        """Each of ``recorded`` 's commands one instanced draw (no base instance: the
+        parts' attributes are pointed at its first part); returns the commands' count."""
+        packed = self.shared.packed
+        commands = recorded.commands_held
+        for texture, first, count in recorded.runs:
+            if texture is not None:
+                self.shared.texture(texture).bind(0)
+            for index_count, instances, first_index, base_vertex, first_part in (
+                    commands[first:first + count].tolist()):
+                packed.point_parts(first_part)
+                packed.draw_instanced(first_index, index_count, base_vertex, instances)
+        return len(commands)
+
     def prepare(self, scene: Scene, views: Iterable[tuple[View, Rectangle | None]],
                 cull: bool = True) -> None:
-        """Record, on the packed path, the draws of the ``views`` (each with its scissor) a
+        """Record the draws of the ``views`` (each with its scissor) a
         frame is about to draw: culling and the parts' data of every view are worked out
         in one stretch, before the frame's first pass makes Python wait for the
         rasteriser (after which its caches are cold). A view recorded already is left."""
-        if self.draw_path != "packed":
-            return
         index = scene_index(scene)
         if not len(index.objects_part):
             return
@@ -410,7 +398,7 @@ class SceneDrawer:
         parts, commands_buffer, held = self._spare_for(commands)
         recorded = RecordedView(parts, commands_buffer, commands, runs, visible)
         recorded.parts.upload(GL.GL_ARRAY_BUFFER, data)
-        if held is not commands:
+        if held is not commands and self.draw_path == "packed":  # per-draw: commands_held
             recorded.commands.upload(GL.GL_DRAW_INDIRECT_BUFFER, commands)
             GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
         self._recorded[key] = recorded
@@ -420,9 +408,9 @@ class SceneDrawer:
                      views: Iterable[tuple[View, Rectangle | None]], cull: bool) -> bool:
         """Whether the calls that drew ``objects`` in ``views`` (each with its scissor, as
         recorded by :meth:`prepare`) draw another pose of the same parts as well once
-        :meth:`repose` has sent its data: on the packed path, where every part's matrices
-        are in the recorded views' buffers."""
-        return self.draw_path == "packed" and all(
+        :meth:`repose` has sent its data: every part's matrices are in the recorded
+        views' buffers."""
+        return all(
             (objects, view.draw_key, scissor, cull) in self._recorded
             for view, scissor in views)
 
@@ -540,7 +528,6 @@ class SceneDrawer:
         self._used.clear()
         self._tables.clear()
         self._looks.clear()
-        self._each.clear()
         self._programs.clear()  # the shared resources own them
         self._lit.clear()
         self._offsets = None

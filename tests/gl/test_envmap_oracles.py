@@ -1,6 +1,7 @@
-"""numpy environment-map references against Mesa's own implementations, which nobody here
-wrote: fixed-function GL_SPHERE_MAP texgen (read back in feedback mode) and the cube-map
-sampler (sampled in a fragment shader into a float framebuffer).
+"""numpy environment-map references, and the renderer's texgen shader, against Mesa's own
+implementations, which nobody here wrote: fixed-function GL_SPHERE_MAP texgen (read back
+in feedback mode) and the cube-map sampler (sampled in a fragment shader into a float
+framebuffer).
 
 Raw GL on purpose: these are oracles, not render paths. Every object made here is
 deleted and every state changed is put back before the test ends.
@@ -8,6 +9,7 @@ deleted and every state changed is put back before the test ends.
 
 from __future__ import annotations
 
+import ctypes
 import math
 
 import numpy as np
@@ -15,7 +17,7 @@ import pytest
 
 from mirrorlab import envmap, math3d
 from mirrorlab.gl.opengl import GL
-from mirrorlab.gl.resources import Framebuffer
+from mirrorlab.gl.resources import Framebuffer, expand_includes
 
 # ---------------------------------------------------------------------------- texgen oracle
 
@@ -199,6 +201,139 @@ def test_sphere_map_texgen_matches_mesa_close_to_the_singular_direction(registry
     compare_texgen(mesa, np.stack([s, t], axis=1), r)
     radius = np.hypot(s - 0.5, t - 0.5)
     assert radius.max() > 0.4999  # the tightest tilt really is near the rim
+
+
+# ------------------------------------------------------------- the renderer's texgen shader
+
+
+def shader_texgen(vertices: np.ndarray, normals: np.ndarray,
+                  modelview: np.ndarray | None = None) -> np.ndarray:
+    """What the renderer's vertex shader for sphere-texgen (``envmap.vert`` with ``texgen``
+    set, the scene's own shader text) gives object-space ``vertices`` and ``normals``
+    ``(n, 3)`` float32 under ``modelview`` ``(4, 4)`` (identity if None) as its
+    per-vertex ``(s, t)`` ``(n, 2)``: captured by transform feedback, nothing drawn."""
+    n = len(vertices)
+    modelview = np.eye(4) if modelview is None else modelview
+    shader = GL.glCreateShader(GL.GL_VERTEX_SHADER)
+    GL.glShaderSource(shader, expand_includes("envmap.vert"))
+    GL.glCompileShader(shader)
+    assert GL.glGetShaderiv(shader, GL.GL_COMPILE_STATUS), GL.glGetShaderInfoLog(shader)
+    program = GL.glCreateProgram()
+    GL.glAttachShader(program, shader)
+    GL.glDeleteShader(shader)
+    names = (ctypes.c_char_p * 1)(b"vertex_sphere_st")
+    GL.glTransformFeedbackVaryings(program, 1, ctypes.cast(names, ctypes.POINTER(
+        ctypes.POINTER(GL.GLchar))), GL.GL_INTERLEAVED_ATTRIBS)
+    GL.glLinkProgram(program)
+    assert GL.glGetProgramiv(program, GL.GL_LINK_STATUS), GL.glGetProgramInfoLog(program)
+    vao = int(GL.glGenVertexArrays(1))
+    vbo, captured = (int(b) for b in GL.glGenBuffers(2))
+    try:
+        GL.glUseProgram(program)
+        for name, matrix in (("model", modelview), ("view", np.eye(4)),
+                             ("projection", np.eye(4))):
+            GL.glUniformMatrix4fv(GL.glGetUniformLocation(program, name), 1, GL.GL_TRUE,
+                                  np.asarray(matrix, np.float32))
+        GL.glUniformMatrix3fv(GL.glGetUniformLocation(program, "normal_matrix"), 1,
+                              GL.GL_TRUE, math3d.normal_matrix(modelview).astype(np.float32))
+        GL.glUniform1i(GL.glGetUniformLocation(program, "texgen"), 1)
+        GL.glUniform1i(GL.glGetUniformLocation(program, "orthographic"), 0)
+        GL.glUniform4f(GL.glGetUniformLocation(program, "clip_plane"), 0.0, 0.0, 0.0, 1.0)
+        data = np.ascontiguousarray(np.concatenate([vertices, normals], axis=1), np.float32)
+        GL.glBindVertexArray(vao)
+        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, vbo)
+        GL.glBufferData(GL.GL_ARRAY_BUFFER, data.nbytes, data, GL.GL_STATIC_DRAW)
+        for location in (0, 1):
+            GL.glEnableVertexAttribArray(location)
+            GL.glVertexAttribPointer(location, 3, GL.GL_FLOAT, GL.GL_FALSE, 24,
+                                     GL.GLvoidp(12 * location))
+        GL.glBindBuffer(GL.GL_TRANSFORM_FEEDBACK_BUFFER, captured)
+        GL.glBufferData(GL.GL_TRANSFORM_FEEDBACK_BUFFER, 8 * n, None, GL.GL_STATIC_READ)
+        GL.glBindBufferBase(GL.GL_TRANSFORM_FEEDBACK_BUFFER, 0, captured)
+        GL.glEnable(GL.GL_RASTERIZER_DISCARD)
+        GL.glBeginTransformFeedback(GL.GL_POINTS)
+        GL.glDrawArrays(GL.GL_POINTS, 0, n)
+        GL.glEndTransformFeedback()
+        GL.glDisable(GL.GL_RASTERIZER_DISCARD)
+        st = np.empty((n, 2), np.float32)
+        GL.glGetBufferSubData(GL.GL_TRANSFORM_FEEDBACK_BUFFER, 0, st.nbytes,
+                              st.ctypes.data_as(ctypes.c_void_p))
+    finally:
+        GL.glBindBufferBase(GL.GL_TRANSFORM_FEEDBACK_BUFFER, 0, 0)
+        GL.glBindBuffer(GL.GL_TRANSFORM_FEEDBACK_BUFFER, 0)
+        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, 0)
+        GL.glBindVertexArray(0)
+        GL.glUseProgram(0)
+        GL.glDeleteVertexArrays(1, [vao])
+        GL.glDeleteBuffers(2, [vbo, captured])
+        GL.glDeleteProgram(program)
+    return st.astype(np.float64)
+
+
+def compare_with_mesa(mesa: np.ndarray, shader: np.ndarray, r_eye: np.ndarray) -> None:
+    """The shader's formula is GL's, in float32 as Mesa's: the two agree to 1e-6 where
+    the map is not steep (1 + rz >= 1e-2), to 2e-7 / sqrt(1 + rz) closer to the singular
+    direction, where a float32 rounding of r moves (s, t) further (measured: most agree
+    exactly, the worst of 3,580 by 1.2e-6 at 1 + rz ~ 1e-3)."""
+    gap = 1 + r_eye[:, 2] / np.linalg.norm(r_eye, axis=1)
+    tolerance = np.where(gap >= 1e-2, 1e-6, 2e-7 / np.sqrt(gap))
+    error = np.abs(mesa - shader).max(axis=1)
+    worst = int(np.argmax(error / tolerance))
+    assert np.all(error <= tolerance), (
+        f"{int((error > tolerance).sum())} of {len(error)} differ; worst "
+        f"{error[worst]:.3g} at 1 + rz = {gap[worst]:.3g}: Mesa {mesa[worst]}, shader "
+        f"{shader[worst]}")
+
+
+def test_texgen_shader_matches_mesa_texgen_over_many_directions(registry):
+    rng = np.random.default_rng(38)
+    vertices, normals = texgen_cases(rng)
+    # Besides the structured cases, 3,000 random view rays against random normals.
+    u = random_directions(rng, 3000)
+    vertices = np.concatenate([vertices, u * rng.uniform(0.5, 60, (3000, 1))])
+    normals = np.concatenate([normals, random_directions(rng, 3000)]).astype(np.float32)
+    vertices = vertices.astype(np.float32)
+    v64, n64 = vertices.astype(np.float64), normals.astype(np.float64)
+    r = envmap.reflect(v64 / np.linalg.norm(v64, axis=1, keepdims=True), n64)
+    regular = 1 + r[:, 2] >= 1e-6  # Mesa's NaN at r = (0, 0, -1) is tested apart, below
+    assert regular.sum() >= 3000
+    mesa = mesa_texgen(registry, vertices[regular], normals[regular], normalize=True)
+    shader = shader_texgen(vertices[regular], normals[regular])
+    compare_with_mesa(mesa, shader, r[regular])
+
+
+def test_texgen_shader_matches_mesa_texgen_under_a_modelview(registry):
+    rng = np.random.default_rng(39)
+    vertices, normals = texgen_cases(rng)
+    normals = (normals * rng.uniform(0.2, 5, (len(normals), 1))).astype(np.float32)
+    modelview = (math3d.translate((0.5, -1.0, -6.0)) @ math3d.rotate(35, (1, 2, 0.5))
+                 @ math3d.scale((1.0, 2.0, 0.5)))
+    vertices = (vertices / 4).astype(np.float32)
+    v_eye = math3d.transform_points(modelview, vertices.astype(np.float64))[:, :3]
+    n_eye = normals.astype(np.float64) @ math3d.normal_matrix(modelview).T
+    r = envmap.reflect(v_eye / np.linalg.norm(v_eye, axis=1, keepdims=True), n_eye)
+    regular = (1 + r[:, 2] / np.linalg.norm(r, axis=1) >= 1e-6) & (
+        np.linalg.norm(v_eye, axis=1) > 1e-6)
+    assert regular.sum() >= 400
+    mesa = mesa_texgen(registry, vertices[regular], normals[regular], modelview,
+                       normalize=True)
+    shader = shader_texgen(vertices[regular], normals[regular], modelview)
+    compare_with_mesa(mesa, shader, r[regular])
+
+
+def test_texgen_shader_stays_finite_where_mesa_texgen_gives_nan(registry):
+    # r = (0, 0, -1): a vertex straight ahead, its normal edge-on; a vertex at the eye;
+    # a zero normal. Mesa gives NaN for the first two (DESIGN.md); the shader gives
+    # numpy's documented values.
+    vertices = np.array([[0.0, 0.0, -3.0], [0.0, 0.0, 0.0], [0.5, -0.25, -2.0]], np.float32)
+    normals = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, 0.0]], np.float32)
+    mesa = mesa_texgen(registry, vertices[:2], normals[:2])
+    assert np.isnan(mesa).any(axis=1).all(), f"Mesa's texgen is finite here now: {mesa}"
+    shader = shader_texgen(vertices, normals)
+    assert np.isfinite(shader).all()
+    s, t = envmap.sphere_map_texgen(vertices.astype(np.float64), normals.astype(np.float64))
+    assert np.allclose(shader, np.stack([s, t], axis=1), atol=1e-6), shader
+    assert np.allclose(shader[:2], [[1.0, 0.5], [0.5, 0.5]])
 
 
 # ---------------------------------------------------------------------------- cube sampler

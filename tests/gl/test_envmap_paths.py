@@ -119,8 +119,6 @@ def test_each_path_draws_finite_colours_and_in_range_lookups(scene_renderer, met
     assert np.isfinite(colour).all() and colour.min() >= 0.0 and colour.max() <= 1.0
     _, mask = traced("sphere", None, SMALL)
     assert mask.sum() > 300
-    if method == "sphere-texgen":
-        return  # fixed function: there are no shader coordinates to read back
     coords, _ = render(scene_renderer, scene, SMALL, float_target=True,
                        output=OUTPUT_COORDINATES)
     inside = coords[mask]
@@ -162,8 +160,6 @@ def test_singular_sphere_map_direction_in_view_stays_finite(scene_renderer, meth
     colour, _ = render(scene_renderer, scene, SMALL, float_target=True)
     assert np.isfinite(colour).all(), f"{method}: NaN/Inf pixels near r = (0, 0, -1)"
     assert colour.min() >= 0.0 and colour.max() <= 1.0
-    if method == "sphere-texgen":
-        return
     coords, _ = render(scene_renderer, scene, SMALL, float_target=True,
                        output=OUTPUT_COORDINATES)
     assert np.isfinite(coords).all(), f"{method}: NaN/Inf lookup coordinates"

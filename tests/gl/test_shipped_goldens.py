@@ -29,8 +29,8 @@ def test_shipped_scene_frames_equal_their_golden_frames(scene_renderer, sequence
 
 @pytest.mark.parametrize("sequence", SEQUENCES, ids=[s.name for s in SEQUENCES])
 def test_the_per_draw_path_draws_the_same_frames(registry, sequence):
-    """The draw path a context without multi-draw gets (macOS's OpenGL 4.1), forced: a
-    draw call a part, the same frames."""
+    """The draw path a context without multi-draw gets (macOS's OpenGL 4.1), forced: an
+    instanced draw call for each run of parts of one mesh, the same frames."""
     renderer = SceneRenderer(registry, draw_path="per-draw")
     try:
         assert renderer.drawer.draw_path == "per-draw"
