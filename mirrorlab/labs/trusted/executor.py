@@ -98,6 +98,7 @@ class Executor:
         self.pictures: dict[str, np.ndarray] = {}
         self.alignment = {int(GL.GL_UNPACK_ALIGNMENT): 4, int(GL.GL_PACK_ALIGNMENT): 4}
         self.kit_calls: dict[str, Callable[[list[Any]], Any]] = self._kit_calls()
+        self.gl_specs = C.lab_specs(session.name)
         tracker = self.tracker
         tracker.clear_color.value = tuple(float(v) for v in GL.glGetFloatv(
             GL.GL_COLOR_CLEAR_VALUE))
@@ -221,11 +222,12 @@ class Executor:
 
     # ------------------------------------------------------------------ GL and GLU
     def gl_call(self, op: Any, name: str, args: Any, arrays: list[np.ndarray]) -> Any:
-        specs = C.GL_SPECS if op == "gl" else C.GLU_SPECS if op == "glu" else {}
+        specs = self.gl_specs if op == "gl" else C.GLU_SPECS if op == "glu" else {}
         spec = specs.get(name)
         if spec is None:
-            raise CallError("NotImplementedError",
-                            f"{name} is not one of the OpenGL calls the labs offer")
+            raise CallError("NotImplementedError", C.refused_text(self.session.name, name))
+        if name in C.SETUP_DRAWS:
+            self._not_in_setup(name)
         if self.tracker.primitive is not None and not spec.in_begin:
             raise gl_error(C.GL_INVALID_OPERATION, f"{name} between glBegin and glEnd")
         checked = C.check_arguments(name, spec, args)
@@ -234,6 +236,14 @@ class Executor:
         getattr(GL, name)(*checked)
         self.ok()
         return None
+
+    def _not_in_setup(self, name: str) -> None:
+        """LabSetupError when ``name`` draws or captures before the first frame."""
+        if not self.tracker.frames:
+            where = f"{self.tracker.function}()" if self.tracker.function else \
+                "the file's top level"
+            raise CallError("LabSetupError", f"{name} in {where}: the lab draws only in "
+                            f"display(); set-up makes textures and state, and draws nothing")
 
     def _function(self, name: str) -> Callable[..., Any]:
         return getattr(GLU if name.startswith("glu") else GL, name)
@@ -288,8 +298,39 @@ class Executor:
         scissor = tracker.is_enabled(int(GL.GL_SCISSOR_TEST))
         tracker.event("clear", mask=args[0], color=tracker.clear_color.plain(),
                       scissor=scissor, viewport=tracker.viewport.plain())
-        if args[0] & GL.GL_COLOR_BUFFER_BIT and not scissor:
-            tracker.framebuffer_taint = ""
+        if args[0] & GL.GL_COLOR_BUFFER_BIT and all(self._colour_mask()[:3]):
+            box = self._scissor_box() if self._scissor_on() else \
+                (0, 0, self.session.width, self.session.height)
+            tracker.untaint(box)
+
+    @staticmethod
+    def _colour_mask() -> list[bool]:
+        return [bool(v) for v in np.asarray(GL.glGetBooleanv(GL.GL_COLOR_WRITEMASK))
+                .reshape(-1)[:4]]
+
+    @staticmethod
+    def _scissor_on() -> bool:
+        return bool(GL.glIsEnabled(GL.GL_SCISSOR_TEST))
+
+    @staticmethod
+    def _scissor_box() -> tuple[int, int, int, int]:
+        x, y, w, h = (int(v) for v in np.asarray(GL.glGetIntegerv(GL.GL_SCISSOR_BOX))
+                      .reshape(-1)[:4])
+        return x, y, w, h
+
+    def _draw_box(self) -> tuple[int, int, int, int] | None:
+        """The pixels a draw now may write (the viewport within the scissor box), None
+        when the colour mask writes no colour."""
+        if not any(self._colour_mask()[:3]):
+            return None
+        x, y, w, h = (int(v) for v in np.asarray(GL.glGetIntegerv(GL.GL_VIEWPORT))
+                      .reshape(-1)[:4])
+        if self._scissor_on():
+            sx, sy, sw, sh = self._scissor_box()
+            x0, y0 = max(x, sx), max(y, sy)
+            x1, y1 = min(x + w, sx + sw), min(y + h, sy + sh)
+            x, y, w, h = x0, y0, max(x1 - x0, 0), max(y1 - y0, 0)
+        return x, y, w, h
 
     def clear_color(self, name: str, args: list[Any], arrays: Any) -> None:
         GL.glClearColor(*args)
@@ -535,7 +576,7 @@ class Executor:
             self.pictures[picture] = self.session_frame()
         getattr(GL, name)(*args)
         self.ok()
-        taint = self.tracker.framebuffer_taint
+        taint = self.tracker.taint_in((x, y, width, height))
         key = (_face(target), level)
         if name == "glCopyTexImage2D":
             self._write(texture, key, Image(width, height, internalformat, "copy",
@@ -710,23 +751,6 @@ class Executor:
         self.ok()
         return int(value[0])
 
-    def read_pixels(self, name: str, args: list[Any], arrays: Any) -> Any:
-        x, y, width, height, fmt, kind = args
-        if width > self.session.width or height > self.session.height:
-            raise gl_error(C.GL_INVALID_VALUE, f"{name}: {width} x {height} pixels; the frame "
-                           f"is {self.session.width} x {self.session.height}")
-        channels = {int(GL.GL_RGB): 3, int(GL.GL_RGBA): 4}.get(fmt, 1)
-        dtype = np.uint8 if kind == GL.GL_UNSIGNED_BYTE else np.float32
-        rows = np.zeros((height, width, channels), dtype=dtype)
-        GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
-        RAW.glReadPixels(x, y, width, height, fmt, kind, rows)
-        GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, self.alignment[int(GL.GL_PACK_ALIGNMENT)])
-        self.ok()
-        if dtype is np.uint8:
-            return rows.tobytes()
-        return rows.reshape(width, height, channels) if channels > 1 else \
-            rows.reshape(width, height)
-
     # ------------------------------------------------------------------ the lab's calls
     def _kit_calls(self) -> dict[str, Callable[[list[Any]], Any]]:
         lab = self.session.name
@@ -749,6 +773,8 @@ class Executor:
             raise CallError("LabSetupError", f"lab.{name} is not one of this lab's calls")
         if self.tracker.primitive is not None:
             raise gl_error(C.GL_INVALID_OPERATION, f"lab.{name} between glBegin and glEnd")
+        if name.startswith("draw_"):
+            self._not_in_setup(f"lab.{name}")
         return handler(args)
 
     def _owned(self, value: Any, what: str, target: int) -> int:
@@ -779,9 +805,10 @@ class Executor:
         tracker.event("draw", who=who, projection=projection.tolist(),
                       modelview=modelview.tolist(), viewport=viewport,
                       state=tracker.snapshot(), taint=taint, **extra)
+        box = self._draw_box() if taint else None
         result = draw() if draw is not None else None
-        if taint:
-            tracker.framebuffer_taint = taint
+        if taint and box is not None:
+            tracker.taint(taint, box, (self.session.width, self.session.height))
         return result
 
     def kit_load_picture(self, args: list[Any]) -> None:

@@ -21,6 +21,14 @@ does not)."""
 ALLOWED_SHARE = 0.0005
 """A picture passes with at most this share of its pixels differing (32 of 256 x 256)."""
 ALLOWED_MIN = 16
+FAINT = 6
+"""The whole frame: a pixel is offset when one of its channels is at least this many levels
+brighter than every reference pixel in its 3 x 3 neighbourhood (or darker than every one),
+and it is part of a patch when at least :data:`PATCH_NEIGHBOURS` of its 8 neighbours are
+offset the same way. Patches count as differing pixels, so an overlay blended faintly
+enough to stay under :data:`TOLERANCE` still shows; noise of a few levels, and an edge
+drawn half a pixel over, do not."""
+PATCH_NEIGHBOURS = 4
 
 
 @dataclass(frozen=True)
@@ -133,6 +141,41 @@ def differing(student: np.ndarray, reference: np.ndarray,
                                                          tolerance)
 
 
+def _spread(image: np.ndarray, pick: Any) -> np.ndarray:
+    """Per channel, ``pick`` (np.maximum or np.minimum) of each pixel's 3 x 3
+    neighbourhood of ``image`` (``(h, w, c)`` int16)."""
+    height, width = image.shape[:2]
+    padded = np.pad(image, ((1, 1), (1, 1), (0, 0)), mode="edge")
+    out = image.copy()
+    for dy in range(3):
+        for dx in range(3):
+            out = pick(out, padded[dy:dy + height, dx:dx + width])
+    return out
+
+
+def _neighbours(mask: np.ndarray) -> np.ndarray:
+    """How many of each pixel's 8 neighbours are set in ``mask``, ``(h, w)`` int."""
+    height, width = mask.shape
+    padded = np.pad(mask, 1).astype(np.int8)
+    count = np.zeros((height, width), dtype=np.int8)
+    for dy in range(3):
+        for dx in range(3):
+            if dy != 1 or dx != 1:
+                count += padded[dy:dy + height, dx:dx + width]
+    return count
+
+
+def faint_patches(student: np.ndarray, reference: np.ndarray,
+                  faint: int = FAINT) -> np.ndarray:
+    """The pixels of ``student`` offset from ``reference`` (``(h, w, 3)`` uint8) in patches
+    of one sign (see :data:`FAINT`), ``(h, w)`` bool."""
+    a, b = student.astype(np.int16), reference.astype(np.int16)
+    brighter = (a - _spread(b, np.maximum) >= faint).any(-1)
+    darker = (_spread(b, np.minimum) - a >= faint).any(-1)
+    return (brighter & (_neighbours(brighter) >= PATCH_NEIGHBOURS)) | \
+        (darker & (_neighbours(darker) >= PATCH_NEIGHBOURS))
+
+
 def allowed_pixels(shape: tuple[int, ...]) -> int:
     return max(ALLOWED_MIN, int(ALLOWED_SHARE * shape[0] * shape[1]))
 
@@ -192,7 +235,8 @@ def judge_frame(verdicts: Verdicts, student: Evidence, reference: Evidence,
                 regions: dict[str, np.ndarray | None], frame_task: str,
                 owner: dict[str, tuple[str, str]]) -> Verdicts:
     """The final frame compared with the reference frame as a whole, after the per-task
-    verdicts. A frame that differs in more pixels than allowed must be explained by a
+    verdicts: pixels that differ beyond :data:`TOLERANCE` and pixels offset faintly in
+    patches (:func:`faint_patches`) both count. A frame that differs in more pixels than allowed must be explained by a
     failed task whose region (``regions[task]``, a mask; None for the whole frame) holds
     the differing pixels; otherwise the task that owns them (``owner``: a region's name
     -> (task id, what it is)) fails saying where, or ``frame_task`` fails with the count."""
@@ -205,7 +249,8 @@ def judge_frame(verdicts: Verdicts, student: Evidence, reference: Evidence,
         verdicts[frame_task] = (False, f"the frame shows pixels this file uploaded ({taint}): "
                                        f"a lab's pictures must be drawn by its calls")
         return verdicts
-    mask = differing(frame, ref)
+    patches = faint_patches(frame, ref)
+    mask = differing(frame, ref) | patches
     limit = allowed_pixels(frame.shape)
     if int(mask.sum()) <= limit:
         return verdicts
@@ -229,8 +274,11 @@ def judge_frame(verdicts: Verdicts, student: Evidence, reference: Evidence,
                                      f"{where(left & region)} (see the picture)")
             return verdicts
     passed, hint = verdicts.get(frame_task, (True, ""))
-    message = (f"the frame differs from the reference in {count} pixels (see the picture), "
-               f"{where(left)}")
+    faint = int((left & patches).sum())
+    what = f" ({faint} of them by a faint offset in patches: an overlay?)" \
+        if faint * 2 >= count else ""
+    message = (f"the frame differs from the reference in {count} pixels{what} (see the "
+               f"picture), {where(left)}")
     verdicts[frame_task] = (False, f"{hint}; {message}" if not passed and hint else message)
     return verdicts
 
@@ -238,11 +286,12 @@ def judge_frame(verdicts: Verdicts, student: Evidence, reference: Evidence,
 def difference_picture(student: np.ndarray, reference: np.ndarray,
                        marked: bool = False) -> np.ndarray:
     """``|student - reference|`` amplified four times, ``(h, w, 3)`` uint8; with ``marked``
-    the pixels that differ as a whole-picture comparison counts them are red."""
+    the pixels that differ as a whole-picture comparison counts them (beyond the tolerance,
+    or in faint patches) are red."""
     diff = np.abs(student.astype(np.int16) - reference.astype(np.int16)) * 4
     out = np.clip(diff, 0, 255).astype(np.uint8)
     if marked:
-        out[differing(student, reference)] = (255, 0, 0)
+        out[differing(student, reference) | faint_patches(student, reference)] = (255, 0, 0)
     return out
 
 
