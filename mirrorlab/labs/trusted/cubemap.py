@@ -127,6 +127,18 @@ def judge_coordinates(student: Evidence) -> tuple[bool, str]:
     for name, predicted in candidates.items():
         if np.mean(np.abs(st - predicted).max(-1) <= 2e-3) >= 0.98:
             return (True, "") if name == "right" else (False, hints[name])
+    wrong = []
+    for face in sorted(set(faces.tolist())):
+        on = faces == face
+        if np.mean(np.abs(st[on] - right[on]).max(-1) <= 2e-3) >= 0.98:
+            continue
+        named = next((name for name, predicted in candidates.items() if name != "right" and
+                      np.mean(np.abs(st[on] - predicted[on]).max(-1) <= 2e-3) >= 0.98), "")
+        wrong.append((face, named))
+    if wrong and all(named for _, named in wrong) and len(wrong) < len(set(faces.tolist())):
+        names = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
+        return False, "; ".join(f"on the {names[face]} face (face {face}): {hints[named]}"
+                                for face, named in wrong)
     return False, "cube_face_st differs from the OpenGL table's (sc/|ma| + 1) / 2 on the sphere"
 
 

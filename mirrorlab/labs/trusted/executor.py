@@ -683,13 +683,30 @@ class Executor:
         self.ok()
         return location
 
+    def _uniform_preconditions(self, name: str, args: list[Any]) -> None:
+        """The precondition a uniform call broke, named (GL says only 'invalid operation'
+        or 'invalid value')."""
+        if not self.tracker.program.value:
+            raise gl_error(C.GL_INVALID_OPERATION, f"{name} with no program in use: call "
+                           f"glUseProgram(program) before setting its uniforms")
+        first = int(GL.GL_TEXTURE0)
+        if name == "glUniform1i" and args[0] >= 0 and \
+                args[0] == getattr(self.session, "texSampler", -2) and \
+                first <= args[1] < first + 32:
+            unit = args[1] - first
+            raise gl_error(C.GL_INVALID_VALUE, f"glUniform1i: {args[1]} is the enum "
+                           f"GL_TEXTURE{unit}; a sampler takes the unit's number: "
+                           f"glUniform1i(location, {unit})")
+
     def uniform(self, name: str, args: list[Any], arrays: Any) -> None:
+        self._uniform_preconditions(name, args)
         getattr(GL, name)(*args)
         self.ok()
         tracker = self.tracker
         tracker.uniforms[(tracker.program.value, args[0])] = tracker.setting(list(args[1:]))
 
     def uniform_vector(self, name: str, args: list[Any], arrays: Any) -> None:
+        self._uniform_preconditions(name, args)
         location, count, values = args
         size = int(name[len("glUniform")])
         if len(values) != count * size:
@@ -700,6 +717,7 @@ class Executor:
         self.ok()
 
     def uniform_matrix(self, name: str, args: list[Any], arrays: Any) -> None:
+        self._uniform_preconditions(name, args)
         location, count, transpose, values = args
         size = int(name[len("glUniformMatrix")])
         if len(values) != count * size * size:

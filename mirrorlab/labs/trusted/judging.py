@@ -4,6 +4,7 @@ it reads :class:`~.evidence.Evidence`, which only the trusted process made."""
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -60,12 +61,33 @@ class Context:
 Verdicts = dict[str, tuple[bool, str]]
 
 
+GL_ERROR_NAMES = {1280: "GL_INVALID_ENUM", 1281: "GL_INVALID_VALUE",
+                  1282: "GL_INVALID_OPERATION", 1283: "GL_STACK_OVERFLOW",
+                  1284: "GL_STACK_UNDERFLOW", 1285: "GL_OUT_OF_MEMORY"}
+GL_ERROR = re.compile(r"GLError: GLError\(err = (\d+), description = (['\"])(.*?)\2"
+                      r"(?:, baseOperation = (\w*))?")
+
+
+def plain_message(message: str) -> str:
+    """A student's error as a person reads it: PyOpenGL's ``GLError(err = 1282, ...)``
+    becomes the call and what it broke (the checker names the precondition where it can),
+    with GL's name for the error."""
+    found = GL_ERROR.search(message)
+    if not found:
+        return message
+    code, description, call = int(found.group(1)), found.group(3), found.group(4)
+    detail = re.fullmatch(r"[a-z ]+ \((.*)\)", description)
+    text = detail.group(1) if detail else f"{call or 'a call'}: {description}"
+    return f"{text} ({GL_ERROR_NAMES.get(code, f'GL error {code}')})"
+
+
 def error_line(error: dict[str, Any]) -> str:
     """An error as the student should read it: where in their file, then what."""
     line = f"line {error['line']}" if error.get("line") else ""
     code = str(error.get("code") or "")
     where = f"{line}: {code}" if line and code else line
-    return f"{where} -> {error.get('message', '')}" if where else str(error.get("message", ""))
+    message = plain_message(str(error.get("message", "")))
+    return f"{where} -> {message}" if where else message
 
 
 def errors_for(evidence: Evidence, task: Task, glsl_functions: tuple[str, ...] = ()) -> str:
@@ -95,17 +117,30 @@ def results(spec: LabSpec, student: Evidence, verdicts: Verdicts,
             glsl_functions: tuple[str, ...] = ()) -> list[TaskResult]:
     """Task results from ``verdicts`` (task id -> (passed, hint)): a run that did not end
     well fails every task with its one line; an error of a task's function takes over its
-    verdict."""
+    verdict; a failed task whose function never finished in a frame that an error stopped
+    elsewhere is "not judged" (its evidence is missing, so any other hint would guess)."""
     if student.status != "ok":
         return [TaskResult(task, False, student.detail) for task in spec.tasks]
     found = []
+    stopped = student.raised_in()
     for task in spec.tasks:
         passed, hint = verdicts.get(task.id, (False, "not checked"))
         error = errors_for(student, task, glsl_functions)
         if error:
             passed, hint = False, error
+        elif not passed and stopped and stopped != task.function and \
+                task.function in spec.functions and task.function not in spec.setup and \
+                not finished(student, task.function):
+            hint = (f"not judged: the frame stopped at {stopped}() before {task.function}() "
+                    f"finished; fix that error first")
         found.append(TaskResult(task, passed, hint))
     return found
+
+
+def finished(student: Evidence, function: str) -> bool:
+    """Whether ``function`` ran to its end in the last frame."""
+    return any(e.get("kind") == "leave" and e.get("function") == function and
+               not e.get("raised") for e in student.last_frame)
 
 
 # ------------------------------------------------------------------------ pictures
@@ -170,8 +205,8 @@ def faint_patches(student: np.ndarray, reference: np.ndarray,
     """The pixels of ``student`` offset from ``reference`` (``(h, w, 3)`` uint8) in patches
     of one sign (see :data:`FAINT`), ``(h, w)`` bool."""
     a, b = student.astype(np.int16), reference.astype(np.int16)
-    brighter = (a - _spread(b, np.maximum) >= faint).any(-1)
-    darker = (_spread(b, np.minimum) - a >= faint).any(-1)
+    brighter = np.asarray((a - _spread(b, np.maximum) >= faint).any(-1))
+    darker = np.asarray((_spread(b, np.minimum) - a >= faint).any(-1))
     return (brighter & (_neighbours(brighter) >= PATCH_NEIGHBOURS)) | \
         (darker & (_neighbours(darker) >= PATCH_NEIGHBOURS))
 
@@ -236,10 +271,11 @@ def judge_frame(verdicts: Verdicts, student: Evidence, reference: Evidence,
                 owner: dict[str, tuple[str, str]]) -> Verdicts:
     """The final frame compared with the reference frame as a whole, after the per-task
     verdicts: pixels that differ beyond :data:`TOLERANCE` and pixels offset faintly in
-    patches (:func:`faint_patches`) both count. A frame that differs in more pixels than allowed must be explained by a
-    failed task whose region (``regions[task]``, a mask; None for the whole frame) holds
-    the differing pixels; otherwise the task that owns them (``owner``: a region's name
-    -> (task id, what it is)) fails saying where, or ``frame_task`` fails with the count."""
+    patches (:func:`faint_patches`) both count. A frame that differs in more pixels than
+    allowed must be explained by a failed task whose region (``regions[task]``, a mask;
+    None for the whole frame) holds the differing pixels; otherwise the task that owns
+    them (``owner``: a region's name -> (task id, what it is)) fails saying where, or
+    ``frame_task`` fails with the count."""
     frame, ref = student.image("frame"), reference.image("frame")
     if frame is None or ref is None or frame.shape != ref.shape:
         return verdicts

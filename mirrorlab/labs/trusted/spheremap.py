@@ -5,6 +5,7 @@ active), and the frame against the reference's, half by half and as a whole. Num
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import numpy as np
@@ -87,9 +88,18 @@ def judge_reflection(student: Evidence) -> tuple[bool, str]:
     }
     if found in ("right", "normalised_sum"):
         return True, ""
+    if found == "unreflected" and CLAMPED_DOT.search(student.source):
+        return False, ("dot(n, u) is clamped (clamp or max): on the cone u points at the "
+                       "surface, so n.u is negative, the clamp makes it 0 and r = u; use "
+                       "dot(n, u) as it is: r = u - 2 (n.u) n")
     if found in hints:
         return False, hints[found]
     return False, "reflect_eye's r differs from u - 2 (n.u) n on the cone"
+
+
+CLAMPED_DOT = re.compile(r"\b(clamp|max)\s*\(\s*dot\s*\(")
+INTEGER_HALF = re.compile(r"(?<![\w.])1\s*/\s*2(?![\w.])")
+PLUS_ONE = re.compile(r"\bz\s*\+\s*1\b|\b1(\.0*)?\s*\+\s*\w+\.z\b")
 
 
 def judge_coordinates(student: Evidence) -> tuple[bool, str]:
@@ -121,6 +131,12 @@ def judge_coordinates(student: Evidence) -> tuple[bool, str]:
     }
     if found == "right":
         return True, ""
+    if found == "no_half" and INTEGER_HALF.search(student.source):
+        return False, ("1/2 in GLSL is integer division, 0, so the + 1/2 adds nothing: write "
+                       "0.5 (s = r.x / m + 0.5, t = r.y / m + 0.5)")
+    if found == "no_plus_one" and PLUS_ONE.search(student.source):
+        return False, ("the halfway vector (r.x, r.y, r.z + 1) is not normalised: s and t are "
+                       "its x and y over its length, m = 2 sqrt(r.x^2 + r.y^2 + (r.z + 1)^2)")
     if found in hints:
         return False, hints[found]
     return False, "sphere_map_st differs from Hoff's s = r.x/m + 1/2, t = r.y/m + 1/2 on the cone"
