@@ -80,6 +80,35 @@ def _unit_name(unit: int) -> str:
 
 Reply = tuple[dict[str, Any], list[tuple[str, list[int], bytes]]]
 
+PRECONDITIONS: dict[tuple[str, int], str] = {
+    ("glBindTexture", C.GL_INVALID_OPERATION): "the texture was first bound to another "
+    "target: a 2D texture cannot become a cube map, nor the other way round",
+    ("glTexImage2D", C.GL_INVALID_VALUE): "a cube map's faces must be square, and sizes "
+    "and the level within GL's limits",
+    ("glCopyTexImage2D", C.GL_INVALID_VALUE): "a cube map's faces must be square, and the "
+    "size within the framebuffer and GL's limits",
+    ("glCopyTexSubImage2D", C.GL_INVALID_VALUE): "the part copied must fit inside the "
+    "texture's level (make it with glTexImage2D or glCopyTexImage2D first)",
+    ("glTexSubImage2D", C.GL_INVALID_VALUE): "the part written must fit inside the "
+    "texture's level (make it with glTexImage2D first)",
+    ("glGenerateMipmap", C.GL_INVALID_OPERATION): "every face of a cube map must have the "
+    "same size and format first (copy all six before glGenerateMipmap)",
+    ("glUniform", C.GL_INVALID_OPERATION): "the call does not match the uniform's type (a "
+    "sampler takes glUniform1i), or the location is not the program's in use",
+    ("glPopMatrix", 0x0504): "more glPopMatrix than glPushMatrix on this matrix",
+    ("glPushMatrix", 0x0503): "glPushMatrix without glPopMatrix: the stack is full",
+}
+"""What a call broke, by its GL error, where GL's own word ('invalid operation') says
+nothing of it."""
+
+
+def broken_precondition(name: str, err: int) -> str:
+    """``name``: what it broke, for GL error ``err`` (the call's name alone when unknown)."""
+    for (call, code), text in PRECONDITIONS.items():
+        if code == err and name.startswith(call):
+            return f"{name}: {text}"
+    return name
+
 
 class Executor:
     """Runs the calls of one student's file against ``session`` (a lab session in the
@@ -178,6 +207,8 @@ class Executor:
         return self.reply(value)
 
     def error(self, exc: CallError, name: str) -> Reply:
+        if exc.kind == "GLError" and "(" not in exc.message:
+            exc = gl_error(exc.err, broken_precondition(name, exc.err))
         if len(self.call_errors) < 200:
             self.call_errors.append({"fn": name, "line": self.tracker.line,
                                      "function": self.tracker.function, "kind": exc.kind,
