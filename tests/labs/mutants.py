@@ -210,7 +210,7 @@ SPHEREMAP = (
            {"reflection": "factor 2", "side_by_side": "tasks 1 and 2"}),
     Mutant("spheremap", "st_no_plus_one",
            (("(r.z + 1.0) * (r.z + 1.0)", "r.z * r.z"),),
-           {"sphere_coordinates": "r.z + 1", "side_by_side": "tasks 1 and 2"}),
+           {"sphere_coordinates": "m must use (r.z + 1)", "side_by_side": "tasks 1 and 2"}),
     Mutant("spheremap", "st_swapped",
            (("vec2(r.x / m + 0.5, r.y / m + 0.5)", "vec2(r.y / m + 0.5, r.x / m + 0.5)"),),
            {"sphere_coordinates": "swapped", "side_by_side": "tasks 1 and 2"}),
@@ -245,6 +245,12 @@ ROUND_TWO_SPHEREMAP = (
              "    return vec2(r.x / m + 0.5, r.y / m + 0.5);",
              "    vec3 h = vec3(r.x, r.y, r.z + 1.0);\n"
              "    return vec2(h.x / 2.0 + 0.5, h.y / 2.0 + 0.5);"),),
+           {"sphere_coordinates": "is not normalised", "side_by_side": "tasks 1 and 2"}),
+    Mutant("spheremap", "st_halfway_vector_unnormalised",
+           (("    float m = 2.0 * sqrt(r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0));\n"
+             "    return vec2(r.x / m + 0.5, r.y / m + 0.5);",
+             "    vec3 h = r + vec3(0.0, 0.0, 1.0);\n"
+             "    return h.xy / 2.0 + 0.5;"),),
            {"sphere_coordinates": "is not normalised", "side_by_side": "tasks 1 and 2"}),
     Mutant("spheremap", "st_integer_half",
            (("vec2(r.x / m + 0.5, r.y / m + 0.5)", "vec2(r.x / m + 1/2, r.y / m + 1/2)"),),
@@ -325,6 +331,10 @@ ROUND_TWO_CUBEMAP = (
            (("else if (face == 2) { sc = r.x; tc = r.z; ma = abs(r.y); }",
              "else if (face == 2) { sc = r.z; tc = r.x; ma = abs(r.y); }"),),
            {"face_coordinates": "on the +Y face (face 2): s and t swapped"}),
+    Mutant("cubemap", "st_integer_half",
+           (("return vec2((sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0);",
+             "return vec2(1/2 * (sc / ma + 1.0), 1/2 * (tc / ma + 1.0));"),),
+           {"face_coordinates": "integer division"}),
 )
 
 CUBE_EQUIVALENT = (

@@ -15,11 +15,13 @@ from mirrorlab.envmap import cube_map
 from mirrorlab.labs import LabSpec
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.judging import (
+    INTEGER_HALF,
     Context,
     TaskResult,
     Verdicts,
     differing,
     fmt,
+    glsl_body,
     judge_frame,
     matrix,
     misplaced_calls,
@@ -127,6 +129,10 @@ def judge_coordinates(student: Evidence) -> tuple[bool, str]:
     for name, predicted in candidates.items():
         if np.mean(np.abs(st - predicted).max(-1) <= 2e-3) >= 0.98:
             return (True, "") if name == "right" else (False, hints[name])
+    if np.mean(np.abs(st).max(-1) <= 2e-3) >= 0.98 and \
+            INTEGER_HALF.search(glsl_body(student.source, "cube_face_st")):
+        return False, ("s and t are 0 everywhere: 1/2 in GLSL is integer division, 0; write "
+                       "0.5, or divide by 2.0: s = (sc/|ma| + 1) / 2.0")
     wrong = []
     for face in sorted(set(faces.tolist())):
         on = faces == face

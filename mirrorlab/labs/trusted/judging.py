@@ -90,6 +90,25 @@ def error_line(error: dict[str, Any]) -> str:
     return f"{where} -> {message}" if where else message
 
 
+INTEGER_HALF = re.compile(r"(?<![\w.])1\s*/\s*2(?![\w.])")
+"""``1/2`` in GLSL: integer division, 0."""
+
+
+def glsl_body(source: str, function: str) -> str:
+    """The body of GLSL ``function`` as the student's file spells it (the first definition
+    found, its comments left out), '' when there is none: for naming a slip whose numbers
+    another slip gives too."""
+    found = re.search(r"\b\w+\s+" + re.escape(function) + r"\s*\([^)]*\)\s*\{", source)
+    if not found:
+        return ""
+    depth, start = 1, found.end()
+    for i in range(start, min(len(source), start + 8000)):
+        depth += {"{": 1, "}": -1}.get(source[i], 0)
+        if depth == 0:
+            return re.sub(r"//[^\n]*|/\*.*?\*/", " ", source[start:i], flags=re.S)
+    return ""
+
+
 def errors_for(evidence: Evidence, task: Task, glsl_functions: tuple[str, ...] = ()) -> str:
     """The error that makes ``task`` fail, if any: its own function's error, a GLSL error
     for a shader task, or an error that stopped the whole file."""
