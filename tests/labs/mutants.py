@@ -264,7 +264,7 @@ ROUND_TWO_SPHEREMAP = (
             "sphere_coordinates": "GLSL in SPHERE_MAP_GLSL line",
             "texgen_setup": "not judged",
             "texgen_draw": "not judged: the frame stopped at display()",
-            "side_by_side": ""}),
+            "side_by_side": "not judged: display() stopped at line"}),
 )
 
 FACE_LOOP = ("                         FACE_SIZE, 0)\n        glActiveTexture(GL_TEXTURE0)\n")

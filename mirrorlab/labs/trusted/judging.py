@@ -152,6 +152,10 @@ def results(spec: LabSpec, student: Evidence, verdicts: Verdicts,
                 not finished(student, task.function):
             hint = (f"not judged: the frame stopped at {stopped}() before {task.function}() "
                     f"finished; fix that error first")
+        elif not passed and stopped and stopped == task.function:
+            own = next((e for e in student.errors if e.get("function") == stopped), None)
+            if own is not None:
+                hint = f"not judged: {stopped}() stopped at {error_line(own)}"
         found.append(TaskResult(task, passed, hint))
     return found
 
