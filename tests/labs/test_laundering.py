@@ -96,3 +96,19 @@ def test_taint_follows_pixels():
     assert tracker.taint_in((30, 0, 8, 8)) and tracker.taint_in((-5, -5, 1000, 1000))
     tracker.untaint((32, 0, 32, 64))
     assert tracker.framebuffer_taint == "" and tracker.taint_in((0, 0, 64, 64)) == ""
+
+
+def test_one_file_for_every_variant_gets_a_refusal_for_each_student(tmp_path):
+    """The issue's file, shared by students of different variants: before, each got 8/8;
+    now each is refused at the first call that draws in set-up."""
+    source, phrase = launderings()["lab20"]["measure_variant_at_setup"]
+    folder = tmp_path / "class"
+    folder.mkdir()
+    for student in ("Ada_Lovelace", "Ben_Ng"):
+        (folder / f"{student}.py").write_text(source)
+    grades, _ = grade_folder(LABS["lab20"], folder, 2, None, "pool", LIMITS, progress=False,
+                             key=b"a course key of the test, 32 bytes", solutions=SOLUTIONS)
+    assert len({g.variant for g in grades}) == 2
+    for grade in grades:
+        hints = [hint for _, passed, hint in grade.tasks if not passed]
+        assert hints and any(phrase in hint for hint in hints), (grade.student, hints)
