@@ -244,9 +244,10 @@ while True:
     glClearColor(0.1, 0.2, 0.3, 1.0)
 """, "stopped after 20000 calls"),
         "forge_vertex_flood": (HEADER + """
-glBegin(GL_POINTS)
-while True:
-    glVertex3f(0, 0, 0)
+def display():  # a frame: set-up and the top level draw nothing
+    glBegin(GL_POINTS)
+    while True:
+        glVertex3f(0, 0, 0)
 """, "more than 1024 vertices"),
         "forge_garbage_on_the_pipe": (HEADER + """
 import gc, os

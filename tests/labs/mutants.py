@@ -28,6 +28,14 @@ class Mutant:
     edits: tuple[tuple[str, str], ...]
     fails: dict[str, str] = field(default_factory=dict)
     """task id -> a phrase its hint must contain; every other task must pass."""
+    cause: str = ""
+    """A phrase naming the mistake, which the hint of the first failing task (in the
+    handout's order) must contain; '' when that task's phrase in ``fails`` names it."""
+
+    def expected_cause(self) -> tuple[str, str]:
+        """(the first task expected to fail, the phrase naming the cause in its hint)."""
+        first = next(t.id for t in LABS[self.lab].tasks if t.id in self.fails)
+        return first, self.cause or self.fails[first]
 
     def source(self) -> str:
         text = solution(self.lab)
@@ -160,6 +168,23 @@ LAB20_MORE = (
            {"capture_camera": "up is (0, -1, 0)", "capture_scene": "fix its projection"}),
 )
 
+ROUND_TWO_LAB20 = (
+    # issue 39's slips: GL errors named by the precondition broken, then "not judged"
+    Mutant("lab20", "uniform_before_program",
+           (("    glUseProgram(lab.textureShader)\n    glUniform1i(lab.texSampler, 1)\n",
+             "    glUniform1i(lab.texSampler, 1)\n    glUseProgram(lab.textureShader)\n"),),
+           {"mirror_texture": "call glUseProgram(program) before setting its uniforms",
+            "mirror_quad": "call glUseProgram(program) before setting its uniforms",
+            "passes": "not judged: the frame stopped at render_mirror()"},
+           cause="glUseProgram(program) before setting its uniforms"),
+    Mutant("lab20", "sampler_enum",
+           (("glUniform1i(lab.texSampler, 1)", "glUniform1i(lab.texSampler, GL_TEXTURE1)"),),
+           {"mirror_texture": "the enum GL_TEXTURE1; a sampler takes the unit's number",
+            "mirror_quad": "the enum GL_TEXTURE1",
+            "passes": "not judged: the frame stopped at render_mirror()"},
+           cause="a sampler takes the unit's number"),
+)
+
 EQUIVALENT = (
     # the lab text's own calls: GL_CLAMP works in the compatibility profile
     Mutant("lab20", "legacy_gl_clamp", (("GL_CLAMP_TO_EDGE", "GL_CLAMP"),)),
@@ -186,7 +211,7 @@ SPHEREMAP = (
            {"reflection": "factor 2", "side_by_side": "tasks 1 and 2"}),
     Mutant("spheremap", "st_no_plus_one",
            (("(r.z + 1.0) * (r.z + 1.0)", "r.z * r.z"),),
-           {"sphere_coordinates": "r.z + 1", "side_by_side": "tasks 1 and 2"}),
+           {"sphere_coordinates": "m must use (r.z + 1)", "side_by_side": "tasks 1 and 2"}),
     Mutant("spheremap", "st_swapped",
            (("vec2(r.x / m + 0.5, r.y / m + 0.5)", "vec2(r.y / m + 0.5, r.x / m + 0.5)"),),
            {"sphere_coordinates": "swapped", "side_by_side": "tasks 1 and 2"}),
@@ -213,6 +238,34 @@ SPHEREMAP = (
              "texgen on for it alone.\"\"\"\n    glActiveTexture(GL_TEXTURE1)"),),
            {"texgen_draw": "texgen for s and t is switched on for unit 1",
             "side_by_side": "tasks 3 and 4"}),
+)
+
+ROUND_TWO_SPHEREMAP = (
+    Mutant("spheremap", "st_halfway_unnormalised",
+           (("    float m = 2.0 * sqrt(r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0));\n"
+             "    return vec2(r.x / m + 0.5, r.y / m + 0.5);",
+             "    vec3 h = vec3(r.x, r.y, r.z + 1.0);\n"
+             "    return vec2(h.x / 2.0 + 0.5, h.y / 2.0 + 0.5);"),),
+           {"sphere_coordinates": "is not normalised", "side_by_side": "tasks 1 and 2"}),
+    Mutant("spheremap", "st_halfway_vector_unnormalised",
+           (("    float m = 2.0 * sqrt(r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0));\n"
+             "    return vec2(r.x / m + 0.5, r.y / m + 0.5);",
+             "    vec3 h = r + vec3(0.0, 0.0, 1.0);\n"
+             "    return h.xy / 2.0 + 0.5;"),),
+           {"sphere_coordinates": "is not normalised", "side_by_side": "tasks 1 and 2"}),
+    Mutant("spheremap", "st_integer_half",
+           (("vec2(r.x / m + 0.5, r.y / m + 0.5)", "vec2(r.x / m + 1/2, r.y / m + 1/2)"),),
+           {"sphere_coordinates": "integer division", "side_by_side": "tasks 1 and 2"}),
+    Mutant("spheremap", "reflect_clamped_dot",
+           (("return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * max(dot(n, u), 0.0) * n;"),),
+           {"reflection": "dot(n, u) is clamped", "side_by_side": "tasks 1 and 2"}),
+    Mutant("spheremap", "glsl_syntax_error",
+           (("return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * dot(n, u) * n"),),
+           {"reflection": "GLSL in SPHERE_MAP_GLSL line",
+            "sphere_coordinates": "GLSL in SPHERE_MAP_GLSL line",
+            "texgen_setup": "not judged",
+            "texgen_draw": "not judged: the frame stopped at display()",
+            "side_by_side": "not judged: display() stopped at line"}),
 )
 
 FACE_LOOP = ("                         FACE_SIZE, 0)\n        glActiveTexture(GL_TEXTURE0)\n")
@@ -274,6 +327,17 @@ CUBEMAP = (
            {"live_frame": "mipmaps made before the faces were copied"}),
 )
 
+ROUND_TWO_CUBEMAP = (
+    Mutant("cubemap", "st_swapped_on_one_face",
+           (("else if (face == 2) { sc = r.x; tc = r.z; ma = abs(r.y); }",
+             "else if (face == 2) { sc = r.z; tc = r.x; ma = abs(r.y); }"),),
+           {"face_coordinates": "on the +Y face (face 2): s and t swapped"}),
+    Mutant("cubemap", "st_integer_half",
+           (("return vec2((sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0);",
+             "return vec2(1/2 * (sc / ma + 1.0), 1/2 * (tc / ma + 1.0));"),),
+           {"face_coordinates": "integer division"}),
+)
+
 CUBE_EQUIVALENT = (
     Mutant("cubemap", "mipmaps_after_faces",
            (("    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR)\n",
@@ -289,6 +353,9 @@ CUBE_EQUIVALENT = (
 )
 
 MUTANTS = (*LAB20, *SPHEREMAP, *CUBEMAP)
+ROUND_TWO = (*ROUND_TWO_LAB20, *ROUND_TWO_SPHEREMAP, *ROUND_TWO_CUBEMAP)
+EVERY_MUTANT = (*MUTANTS, *LAB20_MORE, *ROUND_TWO)
+"""Every mistake of the suite; each one's first failing task names its cause."""
 
 
 def write_mutants(folder: Path, mutants=MUTANTS) -> dict[str, Mutant]:

@@ -33,16 +33,18 @@ def _offered(remote: Remote, op: str, name: str, kinds: list[str]):
     return call
 
 
-def _unavailable(name: str):
+def _unavailable(name: str, why: str = ""):
     def call(*args: Any) -> Any:
-        raise NotImplementedError(f"{name} is not one of the OpenGL calls the labs offer")
+        raise NotImplementedError(why or f"{name} is not one of the OpenGL calls the labs "
+                                  f"offer")
 
     call.__name__ = call.__qualname__ = name
     return call
 
 
 def _module(name: str, constants: dict[str, int], functions: list[str],
-            offered: dict[str, list[str]], remote: Remote, op: str) -> ModuleType:
+            offered: dict[str, list[str]], remote: Remote, op: str,
+            refused: dict[str, str] | None = None) -> ModuleType:
     module = ModuleType(name)
     names = []
     for constant, value in constants.items():
@@ -51,7 +53,7 @@ def _module(name: str, constants: dict[str, int], functions: list[str],
     for function in functions:
         kinds = offered.get(function)
         setattr(module, function, _offered(remote, op, function, kinds) if kinds is not None
-                else _unavailable(function))
+                else _unavailable(function, (refused or {}).get(function, "")))
         names.append(function)
     module.__dict__["__all__"] = names
     return module
@@ -60,7 +62,7 @@ def _module(name: str, constants: dict[str, int], functions: list[str],
 def build_modules(remote: Remote, description: dict) -> dict[str, ModuleType]:
     """The modules to put in ``sys.modules`` for the student's file."""
     gl = _module("OpenGL.GL", description["gl_constants"], description["gl_functions"],
-                 description["gl_offered"], remote, "gl")
+                 description["gl_offered"], remote, "gl", description.get("gl_refused"))
     for type_name, ctype in CTYPES.items():
         setattr(gl, type_name, ctype)
         gl.__dict__["__all__"].append(type_name)

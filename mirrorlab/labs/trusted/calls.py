@@ -204,8 +204,6 @@ HINT_MODES = enums("GL_FASTEST", "GL_NICEST", "GL_DONT_CARE")
 STORE_PARAMS = enums("GL_UNPACK_ALIGNMENT", "GL_PACK_ALIGNMENT")
 STRINGS = enums("GL_VENDOR", "GL_RENDERER", "GL_VERSION", "GL_SHADING_LANGUAGE_VERSION")
 LEVEL_PARAMS = enums("GL_TEXTURE_WIDTH", "GL_TEXTURE_HEIGHT", "GL_TEXTURE_INTERNAL_FORMAT")
-READ_FORMATS = enums("GL_RGB", "GL_RGBA", "GL_RED", "GL_DEPTH_COMPONENT")
-READ_TYPES = enums("GL_UNSIGNED_BYTE", "GL_FLOAT")
 
 QUERY_SIZES = {int(getattr(GL, name)): size for name, size in (
     ("GL_VIEWPORT", 4), ("GL_SCISSOR_BOX", 4), ("GL_COLOR_CLEAR_VALUE", 4),
@@ -368,8 +366,6 @@ GL_SPECS: dict[str, Spec] = {
                                      one_of(LEVEL_PARAMS), handler="get_level_parameter"),
     "glGetTexGeniv": spec("i i", one_of(TEXGEN_COORDS), one_of(enums("GL_TEXTURE_GEN_MODE")),
                           handler="get_texgen"),
-    "glReadPixels": spec("i i i i i i", SIDE_INT, SIDE_INT, SIZE_INT, SIZE_INT,
-                         one_of(READ_FORMATS), one_of(READ_TYPES), handler="read_pixels"),
 }
 
 GLU_SPECS: dict[str, Spec] = {
@@ -378,6 +374,65 @@ GLU_SPECS: dict[str, Spec] = {
                            handler="matrix_op"),
     "gluOrtho2D": spec("f f f f", *[NUMBER] * 4, handler="matrix_op"),
 }
+
+# ------------------------------------------------------------ what each lab leaves out
+_READS = "the labs never read back what was drawn (the checker looks at the frame itself)"
+REFUSED: dict[str, str] = {
+    **{name: _READS for name in ("glReadPixels", "glReadnPixels", "glReadBuffer",
+                                 "glCopyPixels", "glDrawPixels", "glBlitFramebuffer")},
+    **{name: "no lab reads a texture back" for name in (
+        "glGetTexImage", "glGetnTexImage", "glGetTextureImage", "glGetTextureSubImage",
+        "glGetCompressedTexImage")},
+    **{name: "no lab uses feedback or selection mode" for name in (
+        "glRenderMode", "glFeedbackBuffer", "glSelectBuffer", "glPassThrough",
+        "glInitNames", "glPushName", "glLoadName")},
+    **{name: "no lab queries what was drawn" for name in (
+        "glBeginQuery", "glEndQuery", "glGenQueries", "glGetQueryObjectiv",
+        "glGetQueryObjectuiv", "glGetQueryObjecti64v", "glGetQueryObjectui64v",
+        "glGetQueryiv", "glBeginConditionalRender")},
+}
+"""Calls no lab offers, with why, for the refusal the student reads: every way to learn
+what the trusted side drew (pixels, textures, feedback, selection, queries)."""
+
+_UNIFORMS = ("glGetUniformLocation", *(f"glUniform{n}{t}{v}" for n in (1, 2, 3, 4)
+                                       for t in "if" for v in ("", "v")),
+             *(f"glUniformMatrix{n}fv" for n in (2, 3, 4)))
+_COPIES = ("glCopyTexImage2D", "glCopyTexSubImage2D")
+_TEXGEN = ("glTexGeni", "glTexGenf", "glTexGenfv", "glGetTexGeniv")
+LEFT_OUT: dict[str, dict[str, str]] = {
+    "lab20": {name: "lab 20 makes no texture coordinates by texgen" for name in _TEXGEN},
+    "spheremap": {**{name: "the sphere-map lab captures nothing" for name in _COPIES},
+                  **{name: "the sphere-map lab gives no program with uniforms to set"
+                     for name in _UNIFORMS}},
+    "cubemap": {**{name: "the cube-map lab gives no program with uniforms to set"
+                   for name in _UNIFORMS},
+                **{name: "the cube-map lab's shader makes the lookup; no texgen"
+                   for name in _TEXGEN}},
+}
+"""Calls of :data:`GL_SPECS` a lab's handout does not need, by lab, with why."""
+
+SETUP_DRAWS = frozenset({"glBegin", "glCopyTexImage2D", "glCopyTexSubImage2D"})
+"""Calls that draw or capture: refused before the first frame (the file's top level and
+the set-up functions), like the kit's drawing calls; a lab draws only in its frame."""
+
+
+def lab_specs(lab: str) -> dict[str, Spec]:
+    """The calls ``lab`` offers: :data:`GL_SPECS` without :data:`LEFT_OUT` ``[lab]``."""
+    left_out = LEFT_OUT.get(lab, {})
+    return {name: s for name, s in GL_SPECS.items() if name not in left_out}
+
+
+def refusal(lab: str, name: str) -> str:
+    """Why ``lab`` does not offer ``name`` (one line), '' when no reason is on file."""
+    return LEFT_OUT.get(lab, {}).get(name) or REFUSED.get(name, "")
+
+
+def refused_text(lab: str, name: str) -> str:
+    """The one line a student reads when calling ``name``, which ``lab`` does not offer."""
+    why = refusal(lab, name)
+    return f"{name} is not one of the OpenGL calls this lab offers" + (f": {why}" if why
+                                                                      else "")
+
 
 MATRIX_REPLACES = {"glLoadIdentity", "glLoadMatrixf", "glLoadMatrixd", "glLoadTransposeMatrixf",
                    "glLoadTransposeMatrixd"}

@@ -15,11 +15,13 @@ from mirrorlab.envmap import cube_map
 from mirrorlab.labs import LabSpec, task_name
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.judging import (
+    INTEGER_HALF,
     Context,
     TaskResult,
     Verdicts,
     differing,
     fmt,
+    glsl_body,
     judge_frame,
     matrix,
     misplaced_calls,
@@ -132,6 +134,22 @@ def judge_coordinates(student: Evidence) -> tuple[bool, str]:
     for name, predicted in candidates.items():
         if np.mean(np.abs(st - predicted).max(-1) <= 2e-3) >= 0.98:
             return (True, "") if name == "right" else (False, hints[name])
+    if np.mean(np.abs(st).max(-1) <= 2e-3) >= 0.98 and \
+            INTEGER_HALF.search(glsl_body(student.source, "cube_face_st")):
+        return False, ("s and t are 0 everywhere: 1/2 in GLSL is integer division, 0; write "
+                       "0.5, or divide by 2.0: s = (sc/|ma| + 1) / 2.0")
+    wrong = []
+    for face in sorted(set(faces.tolist())):
+        on = faces == face
+        if np.mean(np.abs(st[on] - right[on]).max(-1) <= 2e-3) >= 0.98:
+            continue
+        named = next((name for name, predicted in candidates.items() if name != "right" and
+                      np.mean(np.abs(st[on] - predicted[on]).max(-1) <= 2e-3) >= 0.98), "")
+        wrong.append((face, named))
+    if wrong and all(named for _, named in wrong) and len(wrong) < len(set(faces.tolist())):
+        names = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
+        return False, "; ".join(f"on the {names[face]} face (face {face}): {hints[named]}"
+                                for face, named in wrong)
     return False, "cube_face_st differs from the OpenGL table's (sc/|ma| + 1) / 2 on the sphere"
 
 

@@ -80,6 +80,35 @@ def _unit_name(unit: int) -> str:
 
 Reply = tuple[dict[str, Any], list[tuple[str, list[int], bytes]]]
 
+PRECONDITIONS: dict[tuple[str, int], str] = {
+    ("glBindTexture", C.GL_INVALID_OPERATION): "the texture was first bound to another "
+    "target: a 2D texture cannot become a cube map, nor the other way round",
+    ("glTexImage2D", C.GL_INVALID_VALUE): "a cube map's faces must be square, and sizes "
+    "and the level within GL's limits",
+    ("glCopyTexImage2D", C.GL_INVALID_VALUE): "a cube map's faces must be square, and the "
+    "size within the framebuffer and GL's limits",
+    ("glCopyTexSubImage2D", C.GL_INVALID_VALUE): "the part copied must fit inside the "
+    "texture's level (make it with glTexImage2D or glCopyTexImage2D first)",
+    ("glTexSubImage2D", C.GL_INVALID_VALUE): "the part written must fit inside the "
+    "texture's level (make it with glTexImage2D first)",
+    ("glGenerateMipmap", C.GL_INVALID_OPERATION): "every face of a cube map must have the "
+    "same size and format first (copy all six before glGenerateMipmap)",
+    ("glUniform", C.GL_INVALID_OPERATION): "the call does not match the uniform's type (a "
+    "sampler takes glUniform1i), or the location is not the program's in use",
+    ("glPopMatrix", 0x0504): "more glPopMatrix than glPushMatrix on this matrix",
+    ("glPushMatrix", 0x0503): "glPushMatrix without glPopMatrix: the stack is full",
+}
+"""What a call broke, by its GL error, where GL's own word ('invalid operation') says
+nothing of it."""
+
+
+def broken_precondition(name: str, err: int) -> str:
+    """``name``: what it broke, for GL error ``err`` (the call's name alone when unknown)."""
+    for (call, code), text in PRECONDITIONS.items():
+        if code == err and name.startswith(call):
+            return f"{name}: {text}"
+    return name
+
 
 class Executor:
     """Runs the calls of one student's file against ``session`` (a lab session in the
@@ -98,6 +127,7 @@ class Executor:
         self.pictures: dict[str, np.ndarray] = {}
         self.alignment = {int(GL.GL_UNPACK_ALIGNMENT): 4, int(GL.GL_PACK_ALIGNMENT): 4}
         self.kit_calls: dict[str, Callable[[list[Any]], Any]] = self._kit_calls()
+        self.gl_specs = C.lab_specs(session.name)
         tracker = self.tracker
         tracker.clear_color.value = tuple(float(v) for v in GL.glGetFloatv(
             GL.GL_COLOR_CLEAR_VALUE))
@@ -177,6 +207,8 @@ class Executor:
         return self.reply(value)
 
     def error(self, exc: CallError, name: str) -> Reply:
+        if exc.kind == "GLError" and "(" not in exc.message:
+            exc = gl_error(exc.err, broken_precondition(name, exc.err))
         if len(self.call_errors) < 200:
             self.call_errors.append({"fn": name, "line": self.tracker.line,
                                      "function": self.tracker.function, "kind": exc.kind,
@@ -221,11 +253,12 @@ class Executor:
 
     # ------------------------------------------------------------------ GL and GLU
     def gl_call(self, op: Any, name: str, args: Any, arrays: list[np.ndarray]) -> Any:
-        specs = C.GL_SPECS if op == "gl" else C.GLU_SPECS if op == "glu" else {}
+        specs = self.gl_specs if op == "gl" else C.GLU_SPECS if op == "glu" else {}
         spec = specs.get(name)
         if spec is None:
-            raise CallError("NotImplementedError",
-                            f"{name} is not one of the OpenGL calls the labs offer")
+            raise CallError("NotImplementedError", C.refused_text(self.session.name, name))
+        if name in C.SETUP_DRAWS:
+            self._not_in_setup(name)
         if self.tracker.primitive is not None and not spec.in_begin:
             raise gl_error(C.GL_INVALID_OPERATION, f"{name} between glBegin and glEnd")
         checked = C.check_arguments(name, spec, args)
@@ -234,6 +267,14 @@ class Executor:
         getattr(GL, name)(*checked)
         self.ok()
         return None
+
+    def _not_in_setup(self, name: str) -> None:
+        """LabSetupError when ``name`` draws or captures before the first frame."""
+        if not self.tracker.frames:
+            where = f"{self.tracker.function}()" if self.tracker.function else \
+                "the file's top level"
+            raise CallError("LabSetupError", f"{name} in {where}: the lab draws only in "
+                            f"display(); set-up makes textures and state, and draws nothing")
 
     def _function(self, name: str) -> Callable[..., Any]:
         return getattr(GLU if name.startswith("glu") else GL, name)
@@ -288,8 +329,39 @@ class Executor:
         scissor = tracker.is_enabled(int(GL.GL_SCISSOR_TEST))
         tracker.event("clear", mask=args[0], color=tracker.clear_color.plain(),
                       scissor=scissor, viewport=tracker.viewport.plain())
-        if args[0] & GL.GL_COLOR_BUFFER_BIT and not scissor:
-            tracker.framebuffer_taint = ""
+        if args[0] & GL.GL_COLOR_BUFFER_BIT and all(self._colour_mask()[:3]):
+            box = self._scissor_box() if self._scissor_on() else \
+                (0, 0, self.session.width, self.session.height)
+            tracker.untaint(box)
+
+    @staticmethod
+    def _colour_mask() -> list[bool]:
+        return [bool(v) for v in np.asarray(GL.glGetBooleanv(GL.GL_COLOR_WRITEMASK))
+                .reshape(-1)[:4]]
+
+    @staticmethod
+    def _scissor_on() -> bool:
+        return bool(GL.glIsEnabled(GL.GL_SCISSOR_TEST))
+
+    @staticmethod
+    def _scissor_box() -> tuple[int, int, int, int]:
+        x, y, w, h = (int(v) for v in np.asarray(GL.glGetIntegerv(GL.GL_SCISSOR_BOX))
+                      .reshape(-1)[:4])
+        return x, y, w, h
+
+    def _draw_box(self) -> tuple[int, int, int, int] | None:
+        """The pixels a draw now may write (the viewport within the scissor box), None
+        when the colour mask writes no colour."""
+        if not any(self._colour_mask()[:3]):
+            return None
+        x, y, w, h = (int(v) for v in np.asarray(GL.glGetIntegerv(GL.GL_VIEWPORT))
+                      .reshape(-1)[:4])
+        if self._scissor_on():
+            sx, sy, sw, sh = self._scissor_box()
+            x0, y0 = max(x, sx), max(y, sy)
+            x1, y1 = min(x + w, sx + sw), min(y + h, sy + sh)
+            x, y, w, h = x0, y0, max(x1 - x0, 0), max(y1 - y0, 0)
+        return x, y, w, h
 
     def clear_color(self, name: str, args: list[Any], arrays: Any) -> None:
         GL.glClearColor(*args)
@@ -535,7 +607,7 @@ class Executor:
             self.pictures[picture] = self.session_frame()
         getattr(GL, name)(*args)
         self.ok()
-        taint = self.tracker.framebuffer_taint
+        taint = self.tracker.taint_in((x, y, width, height))
         key = (_face(target), level)
         if name == "glCopyTexImage2D":
             self._write(texture, key, Image(width, height, internalformat, "copy",
@@ -642,13 +714,30 @@ class Executor:
         self.ok()
         return location
 
+    def _uniform_preconditions(self, name: str, args: list[Any]) -> None:
+        """The precondition a uniform call broke, named (GL says only 'invalid operation'
+        or 'invalid value')."""
+        if not self.tracker.program.value:
+            raise gl_error(C.GL_INVALID_OPERATION, f"{name} with no program in use: call "
+                           f"glUseProgram(program) before setting its uniforms")
+        first = int(GL.GL_TEXTURE0)
+        if name == "glUniform1i" and args[0] >= 0 and \
+                args[0] == getattr(self.session, "texSampler", -2) and \
+                first <= args[1] < first + 32:
+            unit = args[1] - first
+            raise gl_error(C.GL_INVALID_VALUE, f"glUniform1i: {args[1]} is the enum "
+                           f"GL_TEXTURE{unit}; a sampler takes the unit's number: "
+                           f"glUniform1i(location, {unit})")
+
     def uniform(self, name: str, args: list[Any], arrays: Any) -> None:
+        self._uniform_preconditions(name, args)
         getattr(GL, name)(*args)
         self.ok()
         tracker = self.tracker
         tracker.uniforms[(tracker.program.value, args[0])] = tracker.setting(list(args[1:]))
 
     def uniform_vector(self, name: str, args: list[Any], arrays: Any) -> None:
+        self._uniform_preconditions(name, args)
         location, count, values = args
         size = int(name[len("glUniform")])
         if len(values) != count * size:
@@ -659,6 +748,7 @@ class Executor:
         self.ok()
 
     def uniform_matrix(self, name: str, args: list[Any], arrays: Any) -> None:
+        self._uniform_preconditions(name, args)
         location, count, transpose, values = args
         size = int(name[len("glUniformMatrix")])
         if len(values) != count * size * size:
@@ -710,23 +800,6 @@ class Executor:
         self.ok()
         return int(value[0])
 
-    def read_pixels(self, name: str, args: list[Any], arrays: Any) -> Any:
-        x, y, width, height, fmt, kind = args
-        if width > self.session.width or height > self.session.height:
-            raise gl_error(C.GL_INVALID_VALUE, f"{name}: {width} x {height} pixels; the frame "
-                           f"is {self.session.width} x {self.session.height}")
-        channels = {int(GL.GL_RGB): 3, int(GL.GL_RGBA): 4}.get(fmt, 1)
-        dtype = np.uint8 if kind == GL.GL_UNSIGNED_BYTE else np.float32
-        rows = np.zeros((height, width, channels), dtype=dtype)
-        GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
-        RAW.glReadPixels(x, y, width, height, fmt, kind, rows)
-        GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, self.alignment[int(GL.GL_PACK_ALIGNMENT)])
-        self.ok()
-        if dtype is np.uint8:
-            return rows.tobytes()
-        return rows.reshape(width, height, channels) if channels > 1 else \
-            rows.reshape(width, height)
-
     # ------------------------------------------------------------------ the lab's calls
     def _kit_calls(self) -> dict[str, Callable[[list[Any]], Any]]:
         lab = self.session.name
@@ -749,6 +822,8 @@ class Executor:
             raise CallError("LabSetupError", f"lab.{name} is not one of this lab's calls")
         if self.tracker.primitive is not None:
             raise gl_error(C.GL_INVALID_OPERATION, f"lab.{name} between glBegin and glEnd")
+        if name.startswith("draw_"):
+            self._not_in_setup(f"lab.{name}")
         return handler(args)
 
     def _owned(self, value: Any, what: str, target: int) -> int:
@@ -779,9 +854,10 @@ class Executor:
         tracker.event("draw", who=who, projection=projection.tolist(),
                       modelview=modelview.tolist(), viewport=viewport,
                       state=tracker.snapshot(), taint=taint, **extra)
+        box = self._draw_box() if taint else None
         result = draw() if draw is not None else None
-        if taint:
-            tracker.framebuffer_taint = taint
+        if taint and box is not None:
+            tracker.taint(taint, box, (self.session.width, self.session.height))
         return result
 
     def kit_load_picture(self, args: list[Any]) -> None:

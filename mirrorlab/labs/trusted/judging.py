@@ -4,6 +4,7 @@ it reads :class:`~.evidence.Evidence`, which only the trusted process made."""
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -21,6 +22,14 @@ does not)."""
 ALLOWED_SHARE = 0.0005
 """A picture passes with at most this share of its pixels differing (32 of 256 x 256)."""
 ALLOWED_MIN = 16
+FAINT = 6
+"""The whole frame: a pixel is offset when one of its channels is at least this many levels
+brighter than every reference pixel in its 3 x 3 neighbourhood (or darker than every one),
+and it is part of a patch when at least :data:`PATCH_NEIGHBOURS` of its 8 neighbours are
+offset the same way. Patches count as differing pixels, so an overlay blended faintly
+enough to stay under :data:`TOLERANCE` still shows; noise of a few levels, and an edge
+drawn half a pixel over, do not."""
+PATCH_NEIGHBOURS = 4
 
 
 @dataclass(frozen=True)
@@ -52,12 +61,52 @@ class Context:
 Verdicts = dict[str, tuple[bool, str]]
 
 
+GL_ERROR_NAMES = {1280: "GL_INVALID_ENUM", 1281: "GL_INVALID_VALUE",
+                  1282: "GL_INVALID_OPERATION", 1283: "GL_STACK_OVERFLOW",
+                  1284: "GL_STACK_UNDERFLOW", 1285: "GL_OUT_OF_MEMORY"}
+GL_ERROR = re.compile(r"GLError: GLError\(err = (\d+), description = (['\"])(.*?)\2"
+                      r"(?:, baseOperation = (\w*))?")
+
+
+def plain_message(message: str) -> str:
+    """A student's error as a person reads it: PyOpenGL's ``GLError(err = 1282, ...)``
+    becomes the call and what it broke (the checker names the precondition where it can),
+    with GL's name for the error."""
+    found = GL_ERROR.search(message)
+    if not found:
+        return message
+    code, description, call = int(found.group(1)), found.group(3), found.group(4)
+    detail = re.fullmatch(r"[a-z ]+ \((.*)\)", description)
+    text = detail.group(1) if detail else f"{call or 'a call'}: {description}"
+    return f"{text} ({GL_ERROR_NAMES.get(code, f'GL error {code}')})"
+
+
 def error_line(error: dict[str, Any]) -> str:
     """An error as the student should read it: where in their file, then what."""
     line = f"line {error['line']}" if error.get("line") else ""
     code = str(error.get("code") or "")
     where = f"{line}: {code}" if line and code else line
-    return f"{where} -> {error.get('message', '')}" if where else str(error.get("message", ""))
+    message = plain_message(str(error.get("message", "")))
+    return f"{where} -> {message}" if where else message
+
+
+INTEGER_HALF = re.compile(r"(?<![\w.])1\s*/\s*2(?![\w.])")
+"""``1/2`` in GLSL: integer division, 0."""
+
+
+def glsl_body(source: str, function: str) -> str:
+    """The body of GLSL ``function`` as the student's file spells it (the first definition
+    found, its comments left out), '' when there is none: for naming a slip whose numbers
+    another slip gives too."""
+    found = re.search(r"\b\w+\s+" + re.escape(function) + r"\s*\([^)]*\)\s*\{", source)
+    if not found:
+        return ""
+    depth, start = 1, found.end()
+    for i in range(start, min(len(source), start + 8000)):
+        depth += {"{": 1, "}": -1}.get(source[i], 0)
+        if depth == 0:
+            return re.sub(r"//[^\n]*|/\*.*?\*/", " ", source[start:i], flags=re.S)
+    return ""
 
 
 def errors_for(evidence: Evidence, task: Task, glsl_functions: tuple[str, ...] = ()) -> str:
@@ -87,17 +136,34 @@ def results(spec: LabSpec, student: Evidence, verdicts: Verdicts,
             glsl_functions: tuple[str, ...] = ()) -> list[TaskResult]:
     """Task results from ``verdicts`` (task id -> (passed, hint)): a run that did not end
     well fails every task with its one line; an error of a task's function takes over its
-    verdict."""
+    verdict; a failed task whose function never finished in a frame that an error stopped
+    elsewhere is "not judged" (its evidence is missing, so any other hint would guess)."""
     if student.status != "ok":
         return [TaskResult(task, False, student.detail) for task in spec.tasks]
     found = []
+    stopped = student.raised_in()
     for task in spec.tasks:
         passed, hint = verdicts.get(task.id, (False, "not checked"))
         error = errors_for(student, task, glsl_functions)
         if error:
             passed, hint = False, error
+        elif not passed and stopped and stopped != task.function and \
+                task.function in spec.functions and task.function not in spec.setup and \
+                not finished(student, task.function):
+            hint = (f"not judged: the frame stopped at {stopped}() before {task.function}() "
+                    f"finished; fix that error first")
+        elif not passed and stopped and stopped == task.function:
+            own = next((e for e in student.errors if e.get("function") == stopped), None)
+            if own is not None:
+                hint = f"not judged: {stopped}() stopped at {error_line(own)}"
         found.append(TaskResult(task, passed, hint))
     return found
+
+
+def finished(student: Evidence, function: str) -> bool:
+    """Whether ``function`` ran to its end in the last frame."""
+    return any(e.get("kind") == "leave" and e.get("function") == function and
+               not e.get("raised") for e in student.last_frame)
 
 
 # ------------------------------------------------------------------------ pictures
@@ -131,6 +197,41 @@ def differing(student: np.ndarray, reference: np.ndarray,
     differ (see :data:`TOLERANCE`), ``(h, w)`` bool."""
     return (_nearest(student, reference) > tolerance) | (_nearest(reference, student) >
                                                          tolerance)
+
+
+def _spread(image: np.ndarray, pick: Any) -> np.ndarray:
+    """Per channel, ``pick`` (np.maximum or np.minimum) of each pixel's 3 x 3
+    neighbourhood of ``image`` (``(h, w, c)`` int16)."""
+    height, width = image.shape[:2]
+    padded = np.pad(image, ((1, 1), (1, 1), (0, 0)), mode="edge")
+    out = image.copy()
+    for dy in range(3):
+        for dx in range(3):
+            out = pick(out, padded[dy:dy + height, dx:dx + width])
+    return out
+
+
+def _neighbours(mask: np.ndarray) -> np.ndarray:
+    """How many of each pixel's 8 neighbours are set in ``mask``, ``(h, w)`` int."""
+    height, width = mask.shape
+    padded = np.pad(mask, 1).astype(np.int8)
+    count = np.zeros((height, width), dtype=np.int8)
+    for dy in range(3):
+        for dx in range(3):
+            if dy != 1 or dx != 1:
+                count += padded[dy:dy + height, dx:dx + width]
+    return count
+
+
+def faint_patches(student: np.ndarray, reference: np.ndarray,
+                  faint: int = FAINT) -> np.ndarray:
+    """The pixels of ``student`` offset from ``reference`` (``(h, w, 3)`` uint8) in patches
+    of one sign (see :data:`FAINT`), ``(h, w)`` bool."""
+    a, b = student.astype(np.int16), reference.astype(np.int16)
+    brighter = np.asarray((a - _spread(b, np.maximum) >= faint).any(-1))
+    darker = np.asarray((_spread(b, np.minimum) - a >= faint).any(-1))
+    return (brighter & (_neighbours(brighter) >= PATCH_NEIGHBOURS)) | \
+        (darker & (_neighbours(darker) >= PATCH_NEIGHBOURS))
 
 
 def allowed_pixels(shape: tuple[int, ...]) -> int:
@@ -192,10 +293,12 @@ def judge_frame(verdicts: Verdicts, student: Evidence, reference: Evidence,
                 regions: dict[str, np.ndarray | None], frame_task: str,
                 owner: dict[str, tuple[str, str]]) -> Verdicts:
     """The final frame compared with the reference frame as a whole, after the per-task
-    verdicts. A frame that differs in more pixels than allowed must be explained by a
-    failed task whose region (``regions[task]``, a mask; None for the whole frame) holds
-    the differing pixels; otherwise the task that owns them (``owner``: a region's name
-    -> (task id, what it is)) fails saying where, or ``frame_task`` fails with the count."""
+    verdicts: pixels that differ beyond :data:`TOLERANCE` and pixels offset faintly in
+    patches (:func:`faint_patches`) both count. A frame that differs in more pixels than
+    allowed must be explained by a failed task whose region (``regions[task]``, a mask;
+    None for the whole frame) holds the differing pixels; otherwise the task that owns
+    them (``owner``: a region's name -> (task id, what it is)) fails saying where, or
+    ``frame_task`` fails with the count."""
     frame, ref = student.image("frame"), reference.image("frame")
     if frame is None or ref is None or frame.shape != ref.shape:
         return verdicts
@@ -205,7 +308,8 @@ def judge_frame(verdicts: Verdicts, student: Evidence, reference: Evidence,
         verdicts[frame_task] = (False, f"the frame shows pixels this file uploaded ({taint}): "
                                        f"a lab's pictures must be drawn by its calls")
         return verdicts
-    mask = differing(frame, ref)
+    patches = faint_patches(frame, ref)
+    mask = differing(frame, ref) | patches
     limit = allowed_pixels(frame.shape)
     if int(mask.sum()) <= limit:
         return verdicts
@@ -229,8 +333,11 @@ def judge_frame(verdicts: Verdicts, student: Evidence, reference: Evidence,
                                      f"{where(left & region)} (see the picture)")
             return verdicts
     passed, hint = verdicts.get(frame_task, (True, ""))
-    message = (f"the frame differs from the reference in {count} pixels (see the picture), "
-               f"{where(left)}")
+    faint = int((left & patches).sum())
+    what = f" ({faint} of them by a faint offset in patches: an overlay?)" \
+        if faint * 2 >= count else ""
+    message = (f"the frame differs from the reference in {count} pixels{what} (see the "
+               f"picture), {where(left)}")
     verdicts[frame_task] = (False, f"{hint}; {message}" if not passed and hint else message)
     return verdicts
 
@@ -238,11 +345,12 @@ def judge_frame(verdicts: Verdicts, student: Evidence, reference: Evidence,
 def difference_picture(student: np.ndarray, reference: np.ndarray,
                        marked: bool = False) -> np.ndarray:
     """``|student - reference|`` amplified four times, ``(h, w, 3)`` uint8; with ``marked``
-    the pixels that differ as a whole-picture comparison counts them are red."""
+    the pixels that differ as a whole-picture comparison counts them (beyond the tolerance,
+    or in faint patches) are red."""
     diff = np.abs(student.astype(np.int16) - reference.astype(np.int16)) * 4
     out = np.clip(diff, 0, 255).astype(np.uint8)
     if marked:
-        out[differing(student, reference)] = (255, 0, 0)
+        out[differing(student, reference) | faint_patches(student, reference)] = (255, 0, 0)
     return out
 
 

@@ -74,9 +74,10 @@ BOOT = ("import sys; sys.path[:0] = [{packages!r}]; sys.path.append({site!r}); "
         "from labstudent.runner import main; sys.exit(main(sys.argv[1:]))")
 
 
-@lru_cache(maxsize=1)
-def gl_names() -> dict[str, Any]:
-    """PyOpenGL's GL and GLU names: constants with their values, and functions."""
+@lru_cache(maxsize=4)
+def gl_names(lab: str) -> dict[str, Any]:
+    """PyOpenGL's GL and GLU names: constants with their values, and functions; which of
+    them ``lab`` offers, and the line a student reads for the ones it refuses."""
     from OpenGL import GLU
 
     names: dict[str, Any] = {}
@@ -89,7 +90,10 @@ def gl_names() -> dict[str, Any]:
             elif name.startswith(prefix.lower()[:-1]) and callable(value):
                 functions.append(name)
         names[f"{key}_constants"], names[f"{key}_functions"] = constants, functions
-    names["gl_offered"] = C.offered(C.GL_SPECS)
+    offered = C.lab_specs(lab)
+    names["gl_offered"] = C.offered(offered)
+    names["gl_refused"] = {name: C.refused_text(lab, name) for name in names["gl_functions"]
+                           if name not in offered and C.refusal(lab, name)}
     names["glu_offered"] = C.offered(C.GLU_SPECS)
     names["pixel_types"] = {str(k): code for k, (_, code) in C.PIXEL_TYPES.items()}
     return names
@@ -178,7 +182,7 @@ class LabRun:
         description = {"op": "session", "lab": self.spec.name, "file": path,
                        "functions": list(self.spec.functions),
                        "declared": list(DECLARED[self.spec.name]),
-                       "kit": self.session.student_values(), **gl_names()}
+                       "kit": self.session.student_values(), **gl_names(self.spec.name)}
         try:
             self.channel.send(description)
             header, _ = self.channel.receive(self.deadline)

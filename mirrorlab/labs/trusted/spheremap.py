@@ -5,6 +5,7 @@ active), and the frame against the reference's, half by half and as a whole. Num
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import numpy as np
@@ -13,10 +14,12 @@ from mirrorlab.envmap import sphere_map
 from mirrorlab.labs import LabSpec, task_name
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.judging import (
+    INTEGER_HALF,
     Context,
     TaskResult,
     Verdicts,
     differing,
+    glsl_body,
     judge_frame,
     picture,
     results,
@@ -92,9 +95,21 @@ def judge_reflection(student: Evidence) -> tuple[bool, str]:
     }
     if found in ("right", "normalised_sum"):
         return True, ""
+    if found == "unreflected" and CLAMPED_DOT.search(glsl_body(student.source,
+                                                               "reflect_eye")):
+        return False, ("dot(n, u) is clamped (clamp or max): on the cone u points at the "
+                       "surface, so n.u is negative, the clamp makes it 0 and r = u; use "
+                       "dot(n, u) as it is: r = u - 2 (n.u) n")
     if found in hints:
         return False, hints[found]
     return False, "reflect_eye's r differs from u - 2 (n.u) n on the cone"
+
+
+CLAMPED_DOT = re.compile(r"\b(clamp|max)\s*\(\s*dot\s*\(")
+PLUS_ONE = re.compile(r"\bz\s*\+\s*1\b|\b1(\.0*)?\s*\+\s*\w+\.z\b|"
+                      r"vec3\(\s*0(\.0*)?\s*,\s*0(\.0*)?\s*,\s*1(\.0*)?\s*\)")
+"""The + 1 on r.z (or r + (0, 0, 1), the viewer's direction), written: with it, s = r.x/2
++ 1/2 on the cone is the halfway vector left unnormalised, not the + 1 forgotten."""
 
 
 def judge_coordinates(student: Evidence) -> tuple[bool, str]:
@@ -126,6 +141,13 @@ def judge_coordinates(student: Evidence) -> tuple[bool, str]:
     }
     if found == "right":
         return True, ""
+    body = glsl_body(student.source, "sphere_map_st")
+    if found == "no_half" and INTEGER_HALF.search(body):
+        return False, ("1/2 in GLSL is integer division, 0, so the + 1/2 adds nothing: write "
+                       "0.5 (s = r.x / m + 0.5, t = r.y / m + 0.5)")
+    if found == "no_plus_one" and PLUS_ONE.search(body):
+        return False, ("the halfway vector (r.x, r.y, r.z + 1) is not normalised: s and t are "
+                       "its x and y over its length, m = 2 sqrt(r.x^2 + r.y^2 + (r.z + 1)^2)")
     if found in hints:
         return False, hints[found]
     return False, "sphere_map_st differs from Hoff's s = r.x/m + 1/2, t = r.y/m + 1/2 on the cone"

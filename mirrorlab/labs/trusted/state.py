@@ -6,14 +6,19 @@ the textures bound on each unit, the enabled switches and the texgen modes per u
 current program; for each of them the student's line that set it and the lab function
 that was running. Each texture keeps where its pictures came from (:class:`Texture`):
 blank, a lab picture, a copy of the framebuffer, or pixels the student uploaded, which
-taint it; drawing with a tainted texture taints the framebuffer, and copying a tainted
-framebuffer taints the copy. Nothing here is read from the sandbox but the calls.
+taint it. Taint follows pixels: drawing with a tainted texture taints the pixels the draw
+may write (the viewport, within the scissor box, unless the colour mask writes nothing), a
+clear untaints only the pixels it writes (the scissor box, every colour channel written),
+and copying a tainted part of the framebuffer taints the copy. Nothing here is read from
+the sandbox but the calls.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import Any
+
+import numpy as np
 
 GL_MODELVIEW, GL_PROJECTION, GL_TEXTURE = 0x1700, 0x1701, 0x1702
 GL_TEXTURE_2D, GL_TEXTURE_CUBE_MAP = 0x0DE1, 0x8513
@@ -127,8 +132,10 @@ class Tracker:
         self.program = Setting(0)
         self.uniforms: dict[tuple[int, int], Setting] = {}
         self.textures: dict[int, Texture] = {}
-        self.framebuffer_taint: str = ""
-        """Why the framebuffer holds uploaded pixels ('' when it does not)."""
+        self.taint_mask: np.ndarray | None = None
+        """The framebuffer's pixels that may show uploaded pixels, ``(h, w)`` bool, row 0
+        at the bottom (GL's window coordinates); None until a tainted draw."""
+        self.taint_why = ""
         self.texcoords = [[0.0, 0.0, 0.0, 1.0] for _ in range(4)]
         self.color = [1.0, 1.0, 1.0, 1.0]
         self.primitive: Primitive | None = None
@@ -158,6 +165,43 @@ class Tracker:
 
     def begin_frame(self) -> None:
         self.frames.append({"events": []})
+
+    # ---------------------------------------------------------------- taint by pixel
+    @property
+    def framebuffer_taint(self) -> str:
+        """Why the framebuffer holds uploaded pixels ('' when no pixel does)."""
+        return self.taint_why if self.taint_mask is not None and self.taint_mask.any() \
+            else ""
+
+    @staticmethod
+    def _rows(box: tuple[int, int, int, int], shape: tuple[int, ...]
+              ) -> tuple[slice, slice]:
+        x, y, width, height = box
+        return (slice(max(y, 0), max(min(y + height, shape[0]), 0)),
+                slice(max(x, 0), max(min(x + width, shape[1]), 0)))
+
+    def taint(self, why: str, box: tuple[int, int, int, int], size: tuple[int, int]) -> None:
+        """The pixels of ``box`` (x, y, width, height in window coordinates) of a ``size``
+        (w, h) framebuffer may now show uploaded pixels, because of ``why``."""
+        if self.taint_mask is None:
+            self.taint_mask = np.zeros((size[1], size[0]), dtype=bool)
+        rows, columns = self._rows(box, self.taint_mask.shape)
+        self.taint_mask[rows, columns] = True
+        if self.taint_mask.any():
+            self.taint_why = why
+
+    def untaint(self, box: tuple[int, int, int, int]) -> None:
+        """The pixels of ``box`` were overwritten by the checker's own values (a clear)."""
+        if self.taint_mask is not None:
+            rows, columns = self._rows(box, self.taint_mask.shape)
+            self.taint_mask[rows, columns] = False
+
+    def taint_in(self, box: tuple[int, int, int, int]) -> str:
+        """Why the pixels of ``box`` may show uploaded pixels ('' when none may)."""
+        if self.taint_mask is None:
+            return ""
+        rows, columns = self._rows(box, self.taint_mask.shape)
+        return self.taint_why if self.taint_mask[rows, columns].any() else ""
 
     # ---------------------------------------------------------------- state changes
     def bound(self, target: int, unit: int | None = None) -> int:
