@@ -15,6 +15,7 @@ from __future__ import annotations
 import hashlib
 import os
 import shutil
+import sys
 import time
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -26,7 +27,7 @@ from mirrorlab.labs import LabSpec, find_lab
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.execute import run_job
 from mirrorlab.labs.trusted.judging import Context, TaskResult
-from mirrorlab.labs.trusted.sandbox import Limits
+from mirrorlab.labs.trusted.sandbox import Limits, sandboxed, unsandboxed_note
 from mirrorlab.labs.trusted.variants import (
     Variant,
     VariantError,
@@ -263,6 +264,8 @@ def run_check(lab: str, file: str | None, out: Path | None, limits: Limits,
         variant = default_variant(spec.name)
         source, name, released = starter(spec, variant).encode(), "starter.py", None
     out = out or Path("out") / f"{spec.name}_check.png"
+    if not sandboxed():
+        print(f"mirrorlab lab check: {unsandboxed_note()}", file=sys.stderr)
     reference = reference_evidence(spec, variant, folder, limits, released=released)
     check = check_submission(spec, source, reference, Context(variant), name, name, limits)
     print("\n".join(report_lines(spec, check)))

@@ -102,6 +102,21 @@ def _signal_name(number: int) -> str:
         return f"signal {number}"
 
 
+def _offer_numpy(folder: Path) -> str:
+    """A folder that offers numpy alone (links to its folders), as the sandbox does; where
+    links cannot be made (Windows without the right), numpy's own site folder."""
+    from mirrorlab.labs.trusted.sandbox import numpy_folders
+
+    found = numpy_folders()
+    folder.mkdir()
+    try:
+        for source in found:
+            (folder / source.name).symlink_to(source, target_is_directory=True)
+    except OSError:
+        return str(found[0].parent) if found else ""
+    return str(folder)
+
+
 class LabRun:
     """One run of the student's ``source`` (named ``file_name``) through ``spec``'s lab in
     ``session``; use as a context manager, then :meth:`check` (or drive it yourself with
@@ -160,6 +175,8 @@ class LabRun:
             path = f"{SANDBOX_BOX}/{BOX_FILE}"
         else:
             python, packages, site = user_interpreter(), str(self.box / "pkg"), ""
+            if mode == "none":
+                python, site = interpreter(), _offer_numpy(self.box / "site")
             shutil.copytree(STUDENT_PACKAGE, self.box / "pkg" / "labstudent",
                             ignore=shutil.ignore_patterns("__pycache__"))
             path = str(student)
