@@ -13,7 +13,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
-import select
 import signal
 import subprocess
 import sys
@@ -22,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from mirrorlab.labs.trusted.evidence import Evidence
+from mirrorlab.labs.trusted.pipe import wait_readable
 from mirrorlab.labs.trusted.sandbox import Limits, SandboxError
 from mirrorlab.labs.trusted.variants import Variant
 
@@ -97,9 +97,12 @@ def run_one(job_file: Path) -> int:
     return 0
 
 
-def serve(reply_fd: int) -> int:
+def serve() -> int:
     """Run the jobs whose files come one a line on stdin, one after another, each in a
-    context of its own; after each, its exit status on ``reply_fd``."""
+    context of its own; after each, its exit status on stdout (whatever else would be
+    written there, by Python or a library, goes to stderr)."""
+    reply_fd = os.dup(1)
+    os.dup2(2, 1)
     for line in sys.stdin:
         try:
             code = run_one(Path(line.strip()))
@@ -113,7 +116,7 @@ def serve(reply_fd: int) -> int:
 
 def main(argv: list[str]) -> int:
     if argv[0] == "--serve":
-        return serve(int(argv[1]))
+        return serve()
     return run_one(Path(argv[0]))
 
 
@@ -154,13 +157,12 @@ class CheckerProcess:
     a new one, as does every :data:`JOBS_PER_PROCESS`-th."""
 
     def __init__(self) -> None:
-        reply_read, reply_write = os.pipe()
-        self.reply_read = reply_read
         self.process = subprocess.Popen(
-            [sys.executable, "-m", "mirrorlab.labs.trusted.execute", "--serve",
-             str(reply_write)], stdin=subprocess.PIPE, text=True, env=_environment(),
-            pass_fds=(reply_write,), **_child_options())
-        os.close(reply_write)
+            [sys.executable, "-m", "mirrorlab.labs.trusted.execute", "--serve"],
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=_environment(),
+            **_child_options())
+        assert self.process.stdout is not None
+        self.reply_read = self.process.stdout.fileno()
         self.jobs = 0
 
     def alive(self) -> bool:
@@ -172,12 +174,12 @@ class CheckerProcess:
         self.jobs += 1
         try:
             assert self.process.stdin is not None
-            self.process.stdin.write(f"{job_file}\n")
+            self.process.stdin.write(f"{job_file}\n".encode())
             self.process.stdin.flush()
         except (BrokenPipeError, OSError):
             self.close()
             return None
-        ready, _, _ = select.select([self.reply_read], [], [], timeout)
+        ready = wait_readable(self.reply_read, timeout)
         line = os.read(self.reply_read, 64) if ready else b""
         if not line:
             self.close()
@@ -188,10 +190,12 @@ class CheckerProcess:
         if self.process.poll() is None:
             self.process.kill()
         self.process.wait()
-        try:
-            os.close(self.reply_read)
-        except OSError:
-            pass
+        for stream in (self.process.stdin, self.process.stdout):
+            if stream is not None:
+                try:
+                    stream.close()
+                except OSError:
+                    pass
 
 
 JOBS_PER_PROCESS = 64

@@ -180,17 +180,15 @@ class LabRun:
             shutil.copytree(STUDENT_PACKAGE, self.box / "pkg" / "labstudent",
                             ignore=shutil.ignore_patterns("__pycache__"))
             path = str(student)
-        child_read, parent_write = os.pipe()
-        parent_read, child_write = os.pipe()
-        argv = [str(python), "-I", "-S", "-B", "-c",
-                BOOT.format(packages=packages, site=site), str(child_read), str(child_write)]
-        try:
-            self.sandbox = Sandboxed(argv, self.box, self.limits,
-                                     pass_fds=(child_read, child_write), owner=self.owner)
-        finally:
-            os.close(child_read)
-            os.close(child_write)
-        self.channel = TrustedChannel(parent_read, parent_write, self.budget)
+        argv = [str(python), "-I", "-S", "-B", "-c", BOOT.format(packages=packages, site=site)]
+        self.sandbox = Sandboxed(argv, self.box, self.limits, pipe=True, owner=self.owner)
+        # the pipe: the runner's stdin and stdout, as file descriptors of the channel's own
+        process = self.sandbox.process
+        assert process.stdin is not None and process.stdout is not None
+        read_fd, write_fd = os.dup(process.stdout.fileno()), os.dup(process.stdin.fileno())
+        process.stdout.close()
+        process.stdin.close()
+        self.channel = TrustedChannel(read_fd, write_fd, self.budget)
         self.deadline = time.monotonic() + self.limits.seconds
         description = {"op": "session", "lab": self.spec.name, "file": path,
                        "functions": list(self.spec.functions),

@@ -291,14 +291,20 @@ def _limit(limits: Limits, drop_to: int | None, processes: bool = True
            ) -> Callable[[], None] | None:
     """What the child runs before the program on POSIX: the limits of ``resource`` that
     this system has (RLIMIT_NPROC only with ``processes``: it counts every process of the
-    user), then the drop to user ``drop_to``. Without a drop, a limit the system refuses
+    user), then the drop to user ``drop_to``, then on Linux its death with this process
+    (PR_SET_PDEATHSIG). Without a drop, a limit the system refuses
     is left out (macOS refuses some RLIMIT_AS values). None where there is no
     ``resource`` (Windows): the wall-clock limit alone applies there."""
     try:
         import resource
     except ImportError:
         resource = None  # type: ignore[assignment]
-    if resource is None and drop_to is None:
+    prctl = None
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        prctl = ctypes.CDLL(None, use_errno=True).prctl
+    if resource is None and drop_to is None and prctl is None:
         return None
     memory, files = limits.memory_mb << 20, limits.file_mb << 20
     wanted = [("RLIMIT_CPU", limits.cpu_seconds, limits.cpu_seconds + 1),
@@ -321,6 +327,8 @@ def _limit(limits: Limits, drop_to: int | None, processes: bool = True
             os.setgroups([])
             os.setgid(drop_to)
             os.setuid(drop_to)
+        if prctl is not None:  # killed with this process (after the drop, which resets it)
+            prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
 
     return apply
 
@@ -374,12 +382,14 @@ def user_interpreter() -> Path:
 
 class Sandboxed:
     """``argv`` running in the sandbox with ``box`` as its only writable place (started at
-    once); ``pass_fds`` stay open in it. Output goes to ``box/stdout.txt`` and
-    ``box/stderr.txt``. A watchdog thread kills the run at the wall-clock limit or when it
-    starts too many processes; :meth:`wait` ends it and says why."""
+    once). With ``pipe``, its stdin and stdout are pipes to this process (``process.stdin``
+    and ``process.stdout``); else its stdin is empty and its output goes to
+    ``box/stdout.txt``. Its errors go to ``box/stderr.txt``. A watchdog thread kills the
+    run at the wall-clock limit or when it starts too many processes; :meth:`wait` ends it
+    and says why."""
 
-    def __init__(self, argv: list[str], box: Path, limits: Limits,
-                 pass_fds: tuple[int, ...] = (), owner: int | None = None) -> None:
+    def __init__(self, argv: list[str], box: Path, limits: Limits, pipe: bool = False,
+                 owner: int | None = None) -> None:
         mode = sandbox_mode()
         if mode != "bwrap" and not limits.unsandboxed:
             raise SandboxError(missing_sandbox())
@@ -425,12 +435,13 @@ class Sandboxed:
         if sys.platform == "win32":
             group = {"creationflags": subprocess.CREATE_NEW_PROCESS_GROUP}
         else:
-            group = {"start_new_session": True, "preexec_fn": preexec, "pass_fds": pass_fds}
-        with open(self.box / "stdout.txt", "wb") as out, \
-                open(self.box / "stderr.txt", "wb") as err:
+            group = {"start_new_session": True, "preexec_fn": preexec}
+        with open(self.box / "stderr.txt", "wb") as err, \
+                open(os.devnull if pipe else self.box / "stdout.txt", "wb") as out:
             self.process = subprocess.Popen(
-                command, stdin=subprocess.DEVNULL, stdout=out, stderr=err, cwd=self.box,
-                env=env, **group)
+                command, stdin=subprocess.PIPE if pipe else subprocess.DEVNULL,
+                stdout=subprocess.PIPE if pipe else out, stderr=err, cwd=self.box, env=env,
+                **group)
         self._watchdog = threading.Thread(target=self._watch, daemon=True)
         self._watchdog.start()
 
