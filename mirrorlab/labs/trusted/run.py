@@ -234,7 +234,8 @@ class LabRun:
 
             return "processes", (f"stopped when it started more than {MAX_PROCESSES} "
                                  f"processes (a fork bomb?)")
-        if code in (-signal.SIGXCPU, 128 + signal.SIGXCPU):
+        cpu = getattr(signal, "SIGXCPU", None)  # POSIX: the CPU-time limit's signal
+        if cpu is not None and code in (-cpu, 128 + cpu):
             return "timeout", (f"stopped at the CPU-time limit of {limits.cpu_seconds} s "
                                f"(an endless loop?)")
         assert self.box is not None

@@ -12,12 +12,13 @@ How, in order of preference (:func:`sandbox_mode` says which applies):
   ``/tmp``. No checkout, no venv, no other package, no solution, no reference, no other
   submission, no home. Network, process ids, IPC and the host name are unshared. Run as
   root, the process then drops to a user id of its own (``setpriv``).
-- ``user`` (root, no working bubblewrap): the same limits, the process under a user id of
-  its own, which may write only in its box (and world-writable places). The file system
-  stays visible to it (readable files only): a warning says so.
-- ``none`` (no bubblewrap, not root; every macOS and Windows machine): the file runs in a
-  process of its own, as the user, over the same pipe, with what limits the system has.
-  Nothing keeps it from reading or writing what the user may.
+- ``user`` (root on Linux, no working bubblewrap): the same limits, the process under a
+  user id of its own, which may write only in its box (and world-writable places). The
+  file system stays visible to it (readable files only): the note of
+  :func:`unsandboxed_note` says so.
+- ``none`` (no bubblewrap, not root on Linux; every macOS and Windows machine): the file
+  runs in a process of its own, as the user, over the same pipe, with what limits the
+  system has. Nothing keeps it from reading or writing what the user may.
 
 Only ``bwrap`` is a sandbox. The other two run only when the run's :class:`Limits` say
 ``unsandboxed`` (a student's own file in ``lab check`` and ``lab run``, the teacher's
@@ -118,7 +119,7 @@ def sandbox_mode() -> str:
         return "none"
     if _bwrap_works():
         return "bwrap"
-    return "user" if root else "none"
+    return "user" if root and sys.platform.startswith("linux") else "none"
 
 
 def sandboxed() -> bool:
@@ -512,15 +513,32 @@ def _stale(folder: Path, prefix: str) -> bool:
         pid = int(folder.name[len(prefix):].split("-")[0])
     except ValueError:
         return False
-    if pid == os.getpid():
-        return False
+    return pid != os.getpid() and not _alive(pid)
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` exists (one we may not see counts as alive). On Windows,
+    os.kill(pid, 0) would end it: the process is asked for its exit code instead."""
+    if sys.platform == "win32":
+        import _winapi
+
+        try:
+            handle = _winapi.OpenProcess(0x1000, False, pid)  # QUERY_LIMITED_INFORMATION
+        except PermissionError:
+            return True
+        except OSError:
+            return False
+        try:
+            return _winapi.GetExitCodeProcess(handle) == 259  # STILL_ACTIVE
+        finally:
+            _winapi.CloseHandle(handle)
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
-        return True
-    except PermissionError:
         return False
-    return False
+    except PermissionError:
+        return True
+    return True
 
 
 def sweep_stale(parent: Path) -> None:
