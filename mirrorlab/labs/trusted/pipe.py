@@ -40,7 +40,7 @@ def wait_readable(fd: int, timeout: float) -> bool:
     end = time.monotonic() + timeout
     while True:
         try:
-            available, _ = _winapi.PeekNamedPipe(handle, 0)
+            available = _winapi.PeekNamedPipe(handle)[0]  # bytes waiting
         except OSError:  # the other end is gone: a read says so at once
             return True
         if available:
