@@ -7,6 +7,7 @@ still runs to its verdicts."""
 
 from __future__ import annotations
 
+import ast
 import os
 import shutil
 import subprocess
@@ -94,7 +95,15 @@ def check_note(done: subprocess.CompletedProcess, how: str, picture: Path) -> No
 
 def test_a_check_runs_where_resource_and_fcntl_cannot_be_imported(tmp_path):
     """As on Windows: no ``resource``, no ``fcntl``, no bubblewrap, not root. The reference
-    solution passes and the starter fails with hints, in every process of the check."""
+    solution passes and the starter fails with hints. The modules are hidden in the
+    command and in the checker's GL process; the student's runner starts isolated (``-I``,
+    no PYTHONPATH), and its package imports neither."""
+    for module in (REPO_DIR / "mirrorlab" / "labs" / "student").glob("*.py"):
+        imported = {alias.name for node in ast.walk(ast.parse(module.read_text()))
+                    if isinstance(node, ast.Import) for alias in node.names}
+        imported |= {node.module for node in ast.walk(ast.parse(module.read_text()))
+                     if isinstance(node, ast.ImportFrom) and node.module}
+        assert not imported & {"resource", "fcntl"}, module
     site = tmp_path / "site"
     site.mkdir()
     (site / "sitecustomize.py").write_text(HIDE_MODULES)
