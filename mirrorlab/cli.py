@@ -286,6 +286,10 @@ def build_parser() -> argparse.ArgumentParser:
                        help="a file carrying another student's variant or the lab's own, in "
                        "gradebook.csv: flag (the score as judged, copy_of names whose), zero "
                        "(score 0) or hold (no score until you decide); default %(default)s")
+    grade.add_argument("--unsandboxed", action="store_true",
+                       help="grade even where there is no sandbox (bubblewrap, Linux only): "
+                       "each submission then runs as you, able to read and write what you "
+                       "can; without it, grading there stops (exit 2)")
     release = lab_commands.add_parser("release", parents=[limits, solutions],
                                       help="one folder per student: a handout and starter "
                                       "with the student's own numbers, and their reference")
@@ -537,7 +541,9 @@ def run_lab(args: argparse.Namespace) -> int:
 
     cpu = parse_count("--timeout", args.timeout, 1, 3600)
     limits = Limits(cpu_seconds=cpu, seconds=3.0 * cpu + 30,
-                    memory_mb=parse_count("--memory", args.memory, 256, 1 << 20))
+                    memory_mb=parse_count("--memory", args.memory, 256, 1 << 20),
+                    # without a sandbox: one's own file or solutions, or a grade told so
+                    unsandboxed=action != "grade" or args.unsandboxed)
     if action == "check":
         from mirrorlab.labs.trusted.checker import run_check
 

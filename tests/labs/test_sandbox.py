@@ -37,7 +37,8 @@ def user_mode(monkeypatch):
     monkeypatch.setattr(sandbox, "sandbox_mode", lambda: "user")
 
 
-SHORT = Limits(cpu_seconds=3, seconds=60)
+SHORT = Limits(cpu_seconds=3, seconds=60, unsandboxed=True)
+"""The fallback is no sandbox: a run there must say it may go without one."""
 
 
 def test_a_clone_and_its_venv_two_folders_deep_check_a_lab(tmp_path):
@@ -207,7 +208,8 @@ def test_user_fallback_stops_a_fork_bomb_and_leaves_no_process(user_mode, tmp_pa
 
 def test_user_fallback_limits_memory_and_cpu(user_mode, tmp_path):
     code, _, _, stderr = run_python("x = bytearray(8 << 30)", tmp_path,
-                                    Limits(cpu_seconds=3, seconds=60, memory_mb=512))
+                                    Limits(cpu_seconds=3, seconds=60, memory_mb=512,
+                                           unsandboxed=True))
     assert code == 1 and "MemoryError" in stderr
     code, _, stopped, _ = run_python("while True: pass", tmp_path)
     assert code == -24 and stopped == ""  # SIGXCPU at the CPU-time limit

@@ -1,7 +1,8 @@
 """Runs one student's lab file in the sandbox, as the trusted checker directs.
 
-``python -I -S runner.py READ_FD WRITE_FD`` (the checker starts it so, in the sandbox,
-with this package's folder on the path). The checker first sends the session (the
+``python -I -S runner.py`` (the checker starts it so, in the sandbox, with this package's
+folder on the path), the pipe to the checker on its stdin and stdout: what the student's
+file prints goes to stderr. The checker first sends the session (the
 lab, the file, the names and values of OpenGL, the lab object's values), then commands:
 ``load`` (execute the file), ``call`` (one of the lab's functions), ``exit``; the runner
 says ``ready`` before the student's code runs. Each command
@@ -117,7 +118,12 @@ def install(modules: dict[str, ModuleType]) -> None:
 
 
 def main(argv: list[str]) -> int:
-    channel = Channel(int(argv[0]), int(argv[1]))
+    # the pipe keeps stdin and stdout; the names 0 and 1 become an empty input and stderr
+    channel = Channel(os.dup(0), os.dup(1))
+    empty = os.open(os.devnull, os.O_RDONLY)
+    os.dup2(empty, 0)
+    os.close(empty)
+    os.dup2(2, 1)
     description, _ = channel.receive()
     path = description["file"]
     remote = Remote(channel, path, {int(k): v for k, v in description["pixel_types"].items()})

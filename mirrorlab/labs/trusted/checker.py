@@ -16,6 +16,7 @@ import hashlib
 import os
 import re
 import shutil
+import sys
 import time
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -27,7 +28,7 @@ from mirrorlab.labs import LABS, LabSpec, find_lab
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.execute import run_job
 from mirrorlab.labs.trusted.judging import Context, TaskResult
-from mirrorlab.labs.trusted.sandbox import Limits
+from mirrorlab.labs.trusted.sandbox import Limits, sandboxed, unsandboxed_note
 from mirrorlab.labs.trusted.variants import (
     Variant,
     VariantError,
@@ -282,6 +283,8 @@ def run_check(lab: str, file: str | None, out: Path | None, limits: Limits,
     variant = file_variant(spec, path)
     released = path.parent / REFERENCE_FOLDER
     out = out or Path("out") / f"{spec.name}_check.png"
+    if not sandboxed():
+        print(f"mirrorlab lab check: {unsandboxed_note()}", file=sys.stderr)
     reference = reference_evidence(spec, variant, folder, limits, released=released)
     check = check_submission(spec, source, reference, Context(variant), str(path), path.name,
                              limits)

@@ -10,10 +10,9 @@ asked can stop it at a deadline whatever the student's GLSL does to the driver
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
-import resource
-import select
 import signal
 import subprocess
 import sys
@@ -22,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from mirrorlab.labs.trusted.evidence import Evidence
+from mirrorlab.labs.trusted.pipe import wait_readable
 from mirrorlab.labs.trusted.sandbox import Limits, SandboxError
 from mirrorlab.labs.trusted.variants import Variant
 
@@ -36,12 +36,21 @@ class CheckerError(RuntimeError):
 
 
 def peak_kib() -> int:
-    """This process's peak resident memory (VmHWM), KiB."""
+    """This process's peak resident memory, KiB: Linux's VmHWM (ru_maxrss there would count
+    what the parent held before the exec), else ru_maxrss (bytes on macOS); 0 where the
+    system does not say (Windows)."""
+    status = Path("/proc/self/status")
+    if status.is_file():
+        try:
+            return int(status.read_text().split("VmHWM:")[1].split()[0])
+        except (OSError, IndexError, ValueError):
+            return 0
     try:
-        status = Path("/proc/self/status").read_text()
-        return int(status.split("VmHWM:")[1].split()[0])
-    except (OSError, IndexError, ValueError):
+        import resource
+    except ImportError:
         return 0
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return peak // 1024 if sys.platform == "darwin" else peak
 
 
 def execute(job: dict[str, Any]) -> Evidence:
@@ -86,9 +95,12 @@ def run_one(job_file: Path) -> int:
     return 0
 
 
-def serve(reply_fd: int) -> int:
+def serve() -> int:
     """Run the jobs whose files come one a line on stdin, one after another, each in a
-    context of its own; after each, its exit status on ``reply_fd``."""
+    context of its own; after each, its exit status on stdout (whatever else would be
+    written there, by Python or a library, goes to stderr)."""
+    reply_fd = os.dup(1)
+    os.dup2(2, 1)
     for line in sys.stdin:
         try:
             code = run_one(Path(line.strip()))
@@ -102,21 +114,34 @@ def serve(reply_fd: int) -> int:
 
 def main(argv: list[str]) -> int:
     if argv[0] == "--serve":
-        return serve(int(argv[1]))
+        return serve()
     return run_one(Path(argv[0]))
 
 
 def _child_setup() -> None:
-    """The GL process's own memory limit, and its end when the process that asked for it
-    dies (a killed grading worker leaves no checker running)."""
-    memory = MEMORY_MB << 20
-    resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
+    """The GL process's own memory limit where the system has one, and on Linux its end
+    when the process that asked for it dies (a killed grading worker leaves no checker
+    running). Run in the child before it starts (POSIX only: :func:`_child_options`)."""
     try:
-        import ctypes
+        import resource
 
-        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
+        memory = MEMORY_MB << 20
+        resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
+    except (ImportError, ValueError, OSError):  # no resource, or macOS refusing RLIMIT_AS
         pass
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+        except (OSError, AttributeError):
+            pass
+
+
+def _child_options() -> dict[str, Any]:
+    """Popen's arguments that set the GL process up (:func:`_child_setup`): POSIX only,
+    where a child can run code before it starts."""
+    return {"preexec_fn": _child_setup} if os.name == "posix" else {}
 
 
 def _environment() -> dict[str, str]:
@@ -137,13 +162,12 @@ class CheckerProcess:
     a new one, as does every :data:`JOBS_PER_PROCESS`-th."""
 
     def __init__(self) -> None:
-        reply_read, reply_write = os.pipe()
-        self.reply_read = reply_read
         self.process = subprocess.Popen(
-            [sys.executable, "-m", "mirrorlab.labs.trusted.execute", "--serve",
-             str(reply_write)], stdin=subprocess.PIPE, text=True, env=_environment(),
-            pass_fds=(reply_write,), preexec_fn=_child_setup)
-        os.close(reply_write)
+            [sys.executable, "-m", "mirrorlab.labs.trusted.execute", "--serve"],
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=_environment(),
+            **_child_options())
+        assert self.process.stdout is not None
+        self.reply_read = self.process.stdout.fileno()
         self.jobs = 0
 
     def alive(self) -> bool:
@@ -155,12 +179,12 @@ class CheckerProcess:
         self.jobs += 1
         try:
             assert self.process.stdin is not None
-            self.process.stdin.write(f"{job_file}\n")
+            self.process.stdin.write(f"{job_file}\n".encode())
             self.process.stdin.flush()
         except (BrokenPipeError, OSError):
             self.close()
             return None
-        ready, _, _ = select.select([self.reply_read], [], [], timeout)
+        ready = wait_readable(self.reply_read, timeout)
         line = os.read(self.reply_read, 64) if ready else b""
         if not line:
             self.close()
@@ -171,10 +195,12 @@ class CheckerProcess:
         if self.process.poll() is None:
             self.process.kill()
         self.process.wait()
-        try:
-            os.close(self.reply_read)
-        except OSError:
-            pass
+        for stream in (self.process.stdin, self.process.stdout):
+            if stream is not None:
+                try:
+                    stream.close()
+                except OSError:
+                    pass
 
 
 JOBS_PER_PROCESS = 64
@@ -208,10 +234,7 @@ def run_job(lab: str, source: bytes, file_name: str, variant: Variant, limits: L
         out.mkdir()
         job = {"lab": lab, "file": str(base / "source.py"), "name": file_name,
                "variant": variant.plain(), "size": list(size), "out": str(out),
-               "owner": os.getpid(),
-               "limits": {"cpu_seconds": limits.cpu_seconds, "seconds": limits.seconds,
-                          "memory_mb": limits.memory_mb, "processes": limits.processes,
-                          "file_mb": limits.file_mb}}
+               "owner": os.getpid(), "limits": dataclasses.asdict(limits)}
         job_file = base / "job.json"
         job_file.write_text(json.dumps(job))
         deadline = limits.seconds + 60
@@ -223,7 +246,7 @@ def run_job(lab: str, source: bytes, file_name: str, variant: Variant, limits: L
                 done = subprocess.run(
                     [sys.executable, "-m", "mirrorlab.labs.trusted.execute", str(job_file)],
                     capture_output=True, text=True, env=_environment(), timeout=deadline,
-                    preexec_fn=_child_setup)
+                    **_child_options())
                 code, stderr = done.returncode, done.stderr
             except subprocess.TimeoutExpired:
                 code = None

@@ -300,6 +300,22 @@ def grade_folder(spec: LabSpec, folder: Path, jobs: int, scheduler: str | None, 
     return [grades[s.student] for s in submissions], engine_name
 
 
+def _sandbox_or_risk(limits: Limits) -> str:
+    """Nothing when grading here is sandboxed; SandboxError (one line: how to get
+    bubblewrap, or the flag) when it is not and ``limits`` do not take the risk; else
+    what the report says of it (and a warning line on stderr)."""
+    from mirrorlab.labs.trusted import sandbox
+
+    if sandbox.sandboxed():
+        return ""
+    if not limits.unsandboxed:
+        raise sandbox.SandboxError(sandbox.missing_sandbox())
+    how = sandbox.unsandboxed_how()
+    print(f"mirrorlab lab grade: warning: not sandboxed ({sandbox.UNSANDBOXED_FLAG}): every "
+          f"submission runs {how}", file=sys.stderr)
+    return f", NOT sandboxed ({sandbox.UNSANDBOXED_FLAG}: each submission ran {how})"
+
+
 def run_grade(lab: str, folder: Path, jobs: int, scheduler: str | None, engine: str,
               out_dir: Path | None, limits: Limits, key_file: Path | None = None,
               solutions: str | Path | None = None, students_file: Path | None = None,
@@ -326,6 +342,7 @@ def run_grade(lab: str, folder: Path, jobs: int, scheduler: str | None, engine: 
     out_dir = out_dir or folder.parent / f"{folder.name}-grades"
     if out_dir.exists() and not out_dir.is_dir():
         raise ValueError(f"--out-dir: {str(out_dir)!r} is a file, expected a folder")
+    unsandboxed = _sandbox_or_risk(limits)
     submissions = find_submissions(folder)
     unlisted: list[Submission] = []
     missing: list[str] = []
@@ -342,6 +359,7 @@ def run_grade(lab: str, folder: Path, jobs: int, scheduler: str | None, engine: 
     grades, engine_name = grade_folder(spec, folder, jobs, scheduler, engine, limits,
                                        key=key, solutions=found, submissions=submissions,
                                        roster=students)
+    engine_name += unsandboxed
     seconds = time.perf_counter() - started
     with Outputs() as outputs:
         outputs.add(out_dir / "grades.csv", grades_csv(spec, grades).encode())

@@ -13,6 +13,7 @@ import json
 import math
 import os
 import select
+import sys
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -23,6 +24,31 @@ from mirrorlab.labs.student.wire import DTYPES, LENGTH, encode
 
 MAX_HEADER = 64 << 10
 """The largest JSON header the sandbox may send (a call's name and scalar arguments)."""
+
+
+def wait_readable(fd: int, timeout: float) -> bool:
+    """Whether the pipe ``fd`` (its reading end) has bytes, or has been closed at the other
+    end, within ``timeout`` seconds: ``select`` on POSIX; on Windows, where ``select``
+    takes only sockets, the pipe is peeked at until then."""
+    if sys.platform != "win32":
+        ready, _, _ = select.select([fd], [], [], max(timeout, 0.0))
+        return bool(ready)
+    import _winapi
+    import msvcrt
+
+    handle = msvcrt.get_osfhandle(fd)
+    end = time.monotonic() + timeout
+    while True:
+        try:
+            available = _winapi.PeekNamedPipe(handle)[0]  # bytes waiting
+        except OSError:  # the other end is gone: a read says so at once
+            return True
+        if available:
+            return True
+        left = end - time.monotonic()
+        if left <= 0:
+            return False
+        time.sleep(min(left, 0.001))
 
 
 class PipeClosed(EOFError):
@@ -95,8 +121,7 @@ class TrustedChannel:
             left = deadline - time.monotonic()
             if left <= 0:
                 raise PipeTimeout("the sandbox sent nothing in time")
-            ready, _, _ = select.select([self.read_fd], [], [], left)
-            if not ready:
+            if not wait_readable(self.read_fd, left):
                 continue
             chunk = os.read(self.read_fd, min(len(view), 1 << 20))
             if not chunk:
@@ -110,8 +135,7 @@ class TrustedChannel:
             left = deadline - time.monotonic()
             if left <= 0:
                 raise PipeTimeout("the sandbox sent nothing in time")
-            ready, _, _ = select.select([self.read_fd], [], [], left)
-            if ready:
+            if wait_readable(self.read_fd, left):
                 break
         chunk = os.read(self.read_fd, 1 << 16)
         if not chunk:

@@ -106,6 +106,21 @@ def _signal_name(number: int) -> str:
         return f"signal {number}"
 
 
+def _offer_numpy(folder: Path) -> str:
+    """A folder that offers numpy alone (links to its folders), as the sandbox does; where
+    links cannot be made (Windows without the right), numpy's own site folder."""
+    from mirrorlab.labs.trusted.sandbox import numpy_folders
+
+    found = numpy_folders()
+    folder.mkdir()
+    try:
+        for source in found:
+            (folder / source.name).symlink_to(source, target_is_directory=True)
+    except OSError:
+        return str(found[0].parent) if found else ""
+    return str(folder)
+
+
 class LabRun:
     """One run of the student's ``source`` (named ``file_name``) through ``spec``'s lab in
     ``session``; use as a context manager, then :meth:`check` (or drive it yourself with
@@ -164,20 +179,20 @@ class LabRun:
             path = f"{SANDBOX_BOX}/{BOX_FILE}"
         else:
             python, packages, site = user_interpreter(), str(self.box / "pkg"), ""
+            if mode == "none":
+                python, site = interpreter(), _offer_numpy(self.box / "site")
             shutil.copytree(STUDENT_PACKAGE, self.box / "pkg" / "labstudent",
                             ignore=shutil.ignore_patterns("__pycache__"))
             path = str(student)
-        child_read, parent_write = os.pipe()
-        parent_read, child_write = os.pipe()
-        argv = [str(python), "-I", "-S", "-B", "-c",
-                BOOT.format(packages=packages, site=site), str(child_read), str(child_write)]
-        try:
-            self.sandbox = Sandboxed(argv, self.box, self.limits,
-                                     pass_fds=(child_read, child_write), owner=self.owner)
-        finally:
-            os.close(child_read)
-            os.close(child_write)
-        self.channel = TrustedChannel(parent_read, parent_write, self.budget)
+        argv = [str(python), "-I", "-S", "-B", "-c", BOOT.format(packages=packages, site=site)]
+        self.sandbox = Sandboxed(argv, self.box, self.limits, pipe=True, owner=self.owner)
+        # the pipe: the runner's stdin and stdout, as file descriptors of the channel's own
+        process = self.sandbox.process
+        assert process.stdin is not None and process.stdout is not None
+        read_fd, write_fd = os.dup(process.stdout.fileno()), os.dup(process.stdin.fileno())
+        process.stdout.close()
+        process.stdin.close()
+        self.channel = TrustedChannel(read_fd, write_fd, self.budget)
         self.deadline = time.monotonic() + self.limits.seconds
         description = {"op": "session", "lab": self.spec.name, "file": path,
                        "functions": list(self.spec.functions),
@@ -223,7 +238,8 @@ class LabRun:
 
             return "processes", (f"stopped when it started more than {MAX_PROCESSES} "
                                  f"processes (a fork bomb?)")
-        if code in (-signal.SIGXCPU, 128 + signal.SIGXCPU):
+        cpu = getattr(signal, "SIGXCPU", None)  # POSIX: the CPU-time limit's signal
+        if cpu is not None and code in (-cpu, 128 + cpu):
             return "timeout", (f"stopped at the CPU-time limit of {limits.cpu_seconds} s "
                                f"(an endless loop?)")
         assert self.box is not None

@@ -12,22 +12,32 @@ How, in order of preference (:func:`sandbox_mode` says which applies):
   ``/tmp``. No checkout, no venv, no other package, no solution, no reference, no other
   submission, no home. Network, process ids, IPC and the host name are unshared. Run as
   root, the process then drops to a user id of its own (``setpriv``).
-- ``user`` (root, no working bubblewrap): the same limits, the process under a user id of
-  its own, which may write only in its box (and world-writable places). The file system
-  stays visible to it (readable files only): a warning says so.
-- Without bubblewrap and without root there is no way to keep the code from writing where
-  the user may, and :func:`start` refuses (:class:`SandboxError`).
+- ``user`` (root on Linux, no working bubblewrap): the same limits, the process under a
+  user id of its own, which may write only in its box (and world-writable places). The
+  file system stays visible to it (readable files only): the note of
+  :func:`unsandboxed_note` says so.
+- ``none`` (no bubblewrap, not root on Linux; every macOS and Windows machine): the file
+  runs in a process of its own, as the user, over the same pipe, with what limits the
+  system has. Nothing keeps it from reading or writing what the user may.
 
-Limits (:class:`Limits`): CPU seconds (RLIMIT_CPU), wall-clock seconds (the process tree
-is killed then), address space (RLIMIT_AS), threads and processes (RLIMIT_NPROC), file
-size and open files. Run as root, a run that starts more than :data:`MAX_PROCESSES`
-processes (a fork bomb) is stopped at once.
+Only ``bwrap`` is a sandbox. The other two run only when the run's :class:`Limits` say
+``unsandboxed`` (a student's own file in ``lab check`` and ``lab run``, the teacher's
+solutions, ``lab grade --unsandboxed``); otherwise :class:`Sandboxed` refuses with
+:class:`SandboxError`, one line saying how to get bubblewrap (:func:`missing_sandbox`).
+The checker's verdicts never depend on the sandbox: the evidence is what the trusted
+process executed and observed.
+
+Limits (:class:`Limits`): wall-clock seconds (a watchdog thread ends the process tree
+then), everywhere. Where the system has them (POSIX ``resource``): CPU seconds
+(RLIMIT_CPU), address space (RLIMIT_AS, not on macOS, which ignores it), threads and
+processes (RLIMIT_NPROC), file size and open files. Run as root, a run that starts more
+than :data:`MAX_PROCESSES` processes (a fork bomb) is stopped at once. The process starts
+in a session of its own (a new process group on Windows) and is ended with its group.
 """
 
 from __future__ import annotations
 
 import os
-import resource
 import shutil
 import signal
 import subprocess
@@ -36,9 +46,11 @@ import sysconfig
 import tempfile
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 UID_BASE = 200_000
 """Sandboxed processes run as UID_BASE + the id of the process that asked for the run (the
@@ -66,13 +78,15 @@ class SandboxError(RuntimeError):
 class Limits:
     """What one submission may use: ``cpu_seconds`` of CPU time, ``seconds`` of wall-clock
     time, ``memory_mb`` of address space, ``processes`` (RLIMIT_NPROC: threads count too),
-    ``file_mb`` per file written."""
+    ``file_mb`` per file written; ``unsandboxed``: whether the run may go ahead without a
+    sandbox (see the module's text) where this machine has none."""
 
     cpu_seconds: int = 20
     seconds: float = 120.0
     memory_mb: int = 1536
     processes: int = 64
     file_mb: int = 64
+    unsandboxed: bool = False
 
 
 def _bwrap_works() -> bool:
@@ -88,17 +102,68 @@ def _bwrap_works() -> bool:
     return done.returncode == 0
 
 
+def _is_root() -> bool:
+    return hasattr(os, "geteuid") and os.geteuid() == 0
+
+
 @lru_cache(maxsize=1)
 def sandbox_mode() -> str:
-    """``bwrap``, ``user`` or ``none`` (see the module's text); MIRRORLAB_SANDBOX may ask
-    for ``user`` (to test it) but never for less than this machine can do."""
-    root = os.geteuid() == 0
+    """``bwrap``, ``user`` or ``none`` (see the module's text). MIRRORLAB_SANDBOX may ask
+    for ``user`` (as root) or ``none`` instead of bubblewrap, to test them; neither is a
+    sandbox, so a run still needs ``Limits.unsandboxed`` to use them."""
+    root = _is_root()
     wanted = os.environ.get("MIRRORLAB_SANDBOX", "")
     if wanted == "user" and root:
         return "user"
+    if wanted == "none":
+        return "none"
     if _bwrap_works():
         return "bwrap"
-    return "user" if root else "none"
+    return "user" if root and sys.platform.startswith("linux") else "none"
+
+
+def sandboxed() -> bool:
+    """Whether a run here is sandboxed (bubblewrap works)."""
+    return sandbox_mode() == "bwrap"
+
+
+UNSANDBOXED_FLAG = "--unsandboxed"
+"""The ``lab grade`` option that runs submissions without a sandbox, knowingly."""
+
+
+def _missing() -> tuple[str, str]:
+    """Why there is no sandbox here, and how to get one."""
+    wanted = os.environ.get("MIRRORLAB_SANDBOX", "")
+    if wanted in ("user", "none") and sandbox_mode() == wanted:
+        return f"MIRRORLAB_SANDBOX={wanted} turns the sandbox off", "unset it"
+    if not sys.platform.startswith("linux"):
+        return (f"bubblewrap, the sandbox, exists only on Linux (this is {sys.platform})",
+                "grade on a Linux machine with bubblewrap (apt-get install bubblewrap)")
+    if shutil.which("bwrap"):
+        return ("bubblewrap cannot make a sandbox here (are user namespaces disabled?)",
+                "allow unprivileged user namespaces (sysctl kernel.unprivileged_userns_clone=1)")
+    return ("no sandbox: bubblewrap is not installed",
+            "install it (Debian/Ubuntu: apt-get install bubblewrap; Fedora: dnf install "
+            "bubblewrap)")
+
+
+def missing_sandbox() -> str:
+    """One line: why there is no sandbox here and how to get one (or take the risk)."""
+    why, get = _missing()
+    return (f"{why}; {get}, or give {UNSANDBOXED_FLAG} to run every submission as a "
+            f"process of yours, able to read and write what you can")
+
+
+def unsandboxed_how() -> str:
+    """How a file runs here without a sandbox (the ``user`` or ``none`` mode)."""
+    return {"user": "as a user id of its own, the file system in its view",
+            "none": "as you, in a process of its own"}.get(sandbox_mode(), "sandboxed")
+
+
+def unsandboxed_note() -> str:
+    """One line for a student's own check run without a sandbox."""
+    return (f"note: not sandboxed ({_missing()[0]}): the file runs {unsandboxed_how()}; "
+            f"fine for your own file")
 
 
 def sandbox_uid(owner: int | None = None) -> int:
@@ -223,26 +288,57 @@ def _environment(home: str) -> dict[str, str]:
             "PYTHONHASHSEED": "0"}
 
 
-def _limit(limits: Limits, drop_to: int | None):
+def _limit(limits: Limits, drop_to: int | None, processes: bool = True
+           ) -> Callable[[], None] | None:
+    """What the child runs before the program on POSIX: the limits of ``resource`` that
+    this system has (RLIMIT_NPROC only with ``processes``: it counts every process of the
+    user), then the drop to user ``drop_to``, then on Linux its death with this process
+    (PR_SET_PDEATHSIG). Without a drop, a limit the system refuses
+    is left out (macOS refuses some RLIMIT_AS values). None where there is no
+    ``resource`` (Windows): the wall-clock limit alone applies there."""
+    try:
+        import resource
+    except ImportError:
+        resource = None  # type: ignore[assignment]
+    prctl = None
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        prctl = ctypes.CDLL(None, use_errno=True).prctl
+    if resource is None and drop_to is None and prctl is None:
+        return None
+    memory, files = limits.memory_mb << 20, limits.file_mb << 20
+    wanted = [("RLIMIT_CPU", limits.cpu_seconds, limits.cpu_seconds + 1),
+              ("RLIMIT_AS", memory, memory), ("RLIMIT_FSIZE", files, files),
+              ("RLIMIT_NOFILE", 256, 256), ("RLIMIT_CORE", 0, 0)]
+    if processes:
+        wanted.append(("RLIMIT_NPROC", limits.processes, limits.processes))
+
     def apply() -> None:
-        memory = limits.memory_mb << 20
-        resource.setrlimit(resource.RLIMIT_CPU, (limits.cpu_seconds, limits.cpu_seconds + 1))
-        for kind, value in ((resource.RLIMIT_AS, memory),
-                            (resource.RLIMIT_NPROC, limits.processes),
-                            (resource.RLIMIT_FSIZE, limits.file_mb << 20),
-                            (resource.RLIMIT_NOFILE, 256), (resource.RLIMIT_CORE, 0)):
-            resource.setrlimit(kind, (value, value))
+        for name, soft, hard in wanted if resource is not None else []:
+            kind = getattr(resource, name, None)
+            if kind is None:
+                continue
+            try:
+                resource.setrlimit(kind, (soft, hard))
+            except (ValueError, OSError):
+                if drop_to is not None:
+                    raise
         if drop_to is not None:
             os.setgroups([])
             os.setgid(drop_to)
             os.setuid(drop_to)
+        if prctl is not None:  # killed with this process (after the drop, which resets it)
+            prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
 
     return apply
 
 
 def uid_processes(uid: int) -> list[int]:
-    """The ids of the processes running as ``uid`` now."""
-    found = []
+    """The ids of the processes running as ``uid`` now (Linux's /proc; none elsewhere)."""
+    found: list[int] = []
+    if not Path("/proc/self").is_dir():
+        return found
     for entry in Path("/proc").iterdir():
         if entry.name.isdigit():
             try:
@@ -287,20 +383,20 @@ def user_interpreter() -> Path:
 
 class Sandboxed:
     """``argv`` running in the sandbox with ``box`` as its only writable place (started at
-    once); ``pass_fds`` stay open in it. Output goes to ``box/stdout.txt`` and
-    ``box/stderr.txt``. A watchdog thread kills the run at the wall-clock limit or when it
-    starts too many processes; :meth:`wait` ends it and says why."""
+    once). With ``pipe``, its stdin and stdout are pipes to this process (``process.stdin``
+    and ``process.stdout``); else its stdin is empty and its output goes to
+    ``box/stdout.txt``. Its errors go to ``box/stderr.txt``. A watchdog thread kills the
+    run at the wall-clock limit or when it starts too many processes; :meth:`wait` ends it
+    and says why."""
 
-    def __init__(self, argv: list[str], box: Path, limits: Limits,
-                 pass_fds: tuple[int, ...] = (), owner: int | None = None) -> None:
+    def __init__(self, argv: list[str], box: Path, limits: Limits, pipe: bool = False,
+                 owner: int | None = None) -> None:
         mode = sandbox_mode()
-        if mode == "none":
-            raise SandboxError(
-                "cannot run untrusted code safely here: install bubblewrap (Debian package "
-                "'bubblewrap'; ./dev setup does) or run the checker as root")
+        if mode != "bwrap" and not limits.unsandboxed:
+            raise SandboxError(missing_sandbox())
         self.mode, self.limits, self.box = mode, limits, box.resolve()
-        root = os.geteuid() == 0
-        self.uid = sandbox_uid(owner) if root else os.getuid()
+        root = mode != "none" and _is_root()
+        self.uid = sandbox_uid(owner) if root else -1
         self.root = root
         if root:
             for path in [self.box, *self.box.rglob("*")]:
@@ -320,18 +416,33 @@ class Sandboxed:
                 command += ["--unshare-user", "--"]
             command += argv
             preexec = _limit(limits, None)
-        else:
+        elif mode == "user":
             env = _environment(str(self.box))
             command = argv
             preexec = _limit(limits, self.uid)
+        else:
+            env = _environment(str(self.box))
+            if sys.platform == "win32":  # what Python and Windows need to start at all
+                env = {**env, "PATH": os.environ.get("PATH", ""),
+                       **{k: os.environ[k] for k in ("SYSTEMROOT", "TEMP", "TMP")
+                          if k in os.environ}}
+            command = argv
+            preexec = _limit(limits, None, processes=False)
         self.started = time.perf_counter()
         self.stopped = ""
         self._done = threading.Event()
-        with open(self.box / "stdout.txt", "wb") as out, \
-                open(self.box / "stderr.txt", "wb") as err:
+        # its own session (POSIX) or process group (Windows), to be ended as one
+        group: dict[str, Any]
+        if sys.platform == "win32":
+            group = {"creationflags": subprocess.CREATE_NEW_PROCESS_GROUP}
+        else:
+            group = {"start_new_session": True, "preexec_fn": preexec}
+        with open(self.box / "stderr.txt", "wb") as err, \
+                open(os.devnull if pipe else self.box / "stdout.txt", "wb") as out:
             self.process = subprocess.Popen(
-                command, stdin=subprocess.DEVNULL, stdout=out, stderr=err, cwd=self.box,
-                env=env, preexec_fn=preexec, start_new_session=True, pass_fds=pass_fds)
+                command, stdin=subprocess.PIPE if pipe else subprocess.DEVNULL,
+                stdout=subprocess.PIPE if pipe else out, stderr=err, cwd=self.box, env=env,
+                **group)
         self._watchdog = threading.Thread(target=self._watch, daemon=True)
         self._watchdog.start()
 
@@ -348,9 +459,16 @@ class Sandboxed:
         """Stop the run now (``why`` is kept for :meth:`wait`)."""
         if not self.stopped:
             self.stopped = why
+        if self.process.poll() is not None and not hasattr(os, "killpg"):
+            return
         try:
-            os.killpg(self.process.pid, signal.SIGKILL)
-        except (ProcessLookupError, PermissionError):
+            if hasattr(os, "killpg"):
+                os.killpg(self.process.pid, signal.SIGKILL)
+            else:  # Windows: the process and what it started
+                subprocess.run(["taskkill", "/F", "/T", "/PID", str(self.process.pid)],
+                               capture_output=True, timeout=30)
+                self.process.kill()
+        except (OSError, subprocess.TimeoutExpired):
             pass
 
     def wait(self, timeout: float | None = None) -> tuple[int | None, float, str]:
@@ -395,15 +513,32 @@ def _stale(folder: Path, prefix: str) -> bool:
         pid = int(folder.name[len(prefix):].split("-")[0])
     except ValueError:
         return False
-    if pid == os.getpid():
-        return False
+    return pid != os.getpid() and not _alive(pid)
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` exists (one we may not see counts as alive). On Windows,
+    os.kill(pid, 0) would end it: the process is asked for its exit code instead."""
+    if sys.platform == "win32":
+        import _winapi
+
+        try:
+            handle = _winapi.OpenProcess(0x1000, False, pid)  # QUERY_LIMITED_INFORMATION
+        except PermissionError:
+            return True
+        except OSError:
+            return False
+        try:
+            return _winapi.GetExitCodeProcess(handle) == 259  # STILL_ACTIVE
+        finally:
+            _winapi.CloseHandle(handle)
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
-        return True
-    except PermissionError:
         return False
-    return False
+    except PermissionError:
+        return True
+    return True
 
 
 def sweep_stale(parent: Path) -> None:
