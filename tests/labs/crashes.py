@@ -89,6 +89,11 @@ def send(header):
         glBegin(GL_TRIANGLES)
         glEnd()
 """),), "MiB of evidence"),
+    # a GLSL preprocessor bomb: 28 macros, each twice the one before
+    Crash("cubemap", "glsl_preprocessor_bomb", (
+        ('CUBE_MAP_GLSL = """\n', 'CUBE_MAP_GLSL = """\n#define A0 1.0\n' + "".join(
+            f"#define A{i} (A{i - 1} + A{i - 1})\n" for i in range(1, 29))
+         + "float bomb() { return A28; }\n"),), "could not be compiled within the limits"),
     # a frame left inside glBegin
     Crash("lab20", "display_ends_inside_glbegin", (
         ("    render_mirror()\n", "    render_mirror()\n    glBegin(GL_POINTS)\n"),),

@@ -38,7 +38,7 @@ class StudentShaderError(LabSetupError):
     the line inside it (1-based, or 0 when unknown)."""
 
     def __init__(self, variable: str, line: int, message: str) -> None:
-        self.variable, self.line = variable, line
+        self.variable, self.line, self.detail = variable, line, message
         where = f"{variable} line {line}" if line else variable
         super().__init__(f"GLSL in {where} did not compile: {message}")
 
@@ -367,6 +367,9 @@ class LabBase:
             if len(self._programs) >= limit:
                 raise LabSetupError(f"more than {limit} different {variable} strings in one "
                                     f"run")
+            from mirrorlab.labs.trusted.glslcheck import precompile
+
+            precompile(vertex, fragment, glsl, variable)  # where a bomb costs the file only
             self._programs[glsl] = compile_program(vertex, fragment, glsl, variable)
         return self._programs[glsl]
 
