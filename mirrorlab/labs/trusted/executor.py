@@ -155,8 +155,9 @@ class Executor:
                        f"few hundred): a loop that never ends?")
         if self.frame_calls > self.limits.frame_calls and self.tracker.frames:
             raise Stop(f"stopped: more than {self.limits.frame_calls} calls in one frame")
-        if not isinstance(name, str):
-            return self.error(CallError("TypeError", "a call without a name"), "?")
+        if not isinstance(name, str) or not name.isidentifier() or len(name) > 64:
+            return self.error(CallError("TypeError", "a call without a name the labs know"),
+                              "?")
         started = time.perf_counter()
         try:
             if op == "kit":
@@ -791,8 +792,8 @@ class Executor:
 
     def _owned(self, value: Any, what: str, target: int) -> int:
         if type(value) is not int or (value and value not in self.owned):
-            raise LabSetupError(f"{what}: {value!r} is not a texture this file made with "
-                                f"glGenTextures")
+            raise LabSetupError(f"{what}: {C.shown(value)} is not a texture this file made "
+                                f"with glGenTextures")
         texture = self.tracker.textures.get(value)
         if texture is not None and texture.target and texture.target != target:
             kind = "a cube map" if texture.target == GL_TEXTURE_CUBE_MAP else "a 2D texture"
