@@ -80,3 +80,16 @@ def test_a_compile_error_names_the_students_line_and_a_missing_function_its_name
     assert caught.value.line == text.count("\n") + 2  # "oops", counted from 1
     with pytest.raises(StudentShaderError, match=r"unresolved|undefined"):
         values(registry, lab, "float unrelated(float x) { return x; }\n")
+
+
+def test_gl_built_in_state_is_not_a_uniform_of_the_kit(registry):
+    """Compatibility GLSL may read GL's own state (the same for the kit's every draw)."""
+    from mirrorlab.labs.trusted.kit import compile_program
+
+    text = ("vec3 reflect_eye(vec3 u, vec3 n) {\n"
+            "    return (gl_ModelViewMatrix * vec4(u - 2.0 * dot(n, u) * n, 0.0)).xyz;\n}\n"
+            "vec2 sphere_map_st(vec3 r) { return r.xy; }\n")
+    open_session("spheremap", SIZE, default_variant("spheremap"))
+    program = compile_program("kit_sphere.vert", "kit_sphere.frag", text, "SPHERE_MAP_GLSL")
+    assert program > 0
+    GL.glDeleteProgram(program)

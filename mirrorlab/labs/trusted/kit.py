@@ -139,7 +139,8 @@ STUB_RESULTS = {"float": "{}", "int": "float({})", "vec2": "dot({}, vec2(1.0))",
 
 def _only_arguments(kit_source: str, student_shaders: list[int], variable: str) -> None:
     """StudentShaderError when the student's functions read a uniform (the kit's own,
-    such as its check mode or samplers, or one of theirs that nothing sets): they are
+    such as its check mode or samplers, or one of theirs that nothing sets; GL's built-in
+    state such as ``gl_ModelViewMatrix`` is allowed): they are
     linked to a main of their own that calls each through the kit's prototypes and
     declares no uniform, so every uniform active there is theirs."""
     GL = _gl()
@@ -166,7 +167,9 @@ def _only_arguments(kit_source: str, student_shaders: list[int], variable: str) 
                                      f"({(log.splitlines() or ['link failed'])[0]})")
         names = []
         for index in range(int(GL.glGetProgramiv(program, GL.GL_ACTIVE_UNIFORMS))):
-            names.append(_text(GL.glGetActiveUniform(program, index)[0]))
+            name = _text(GL.glGetActiveUniform(program, index)[0])
+            if not name.startswith("gl_"):  # GL's own state (gl_ModelViewMatrix) is not
+                names.append(name)           # the kit's: the same for every draw
         if names or GL.glGetProgramiv(program, GL.GL_ACTIVE_UNIFORM_BLOCKS):
             shown = ", ".join(names) or "a uniform block"
             raise StudentShaderError(variable, 0, f"it reads uniforms ({shown[:80]}); the "
