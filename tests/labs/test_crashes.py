@@ -42,3 +42,28 @@ def test_each_crash_file_is_judged(checked, crash):
         assert int(score.group(1)) == tasks and done.returncode == 0, done.stdout
     else:
         assert crash.phrase in done.stdout, (crash.phrase, done.stdout)
+
+
+def test_lab_grade_judges_every_crash_file(tmp_path, lab_environment):
+    """In ``lab grade`` too: no crash file's grade is "grading failed"; the honest ones get
+    every task."""
+    from tests.labs.conftest import read_csv
+
+    folder = tmp_path / "submissions"
+    folder.mkdir()
+    crashes = {c.name: c for c in CRASHES if c.lab == "lab20"}
+    for name, crash in crashes.items():
+        (folder / f"{name}.py").write_text(crash.source())
+    out = tmp_path / "grades"
+    done = mirrorlab_command("lab", "grade", "lab20", str(folder), "--out-dir", str(out),
+                             "--jobs", "2", "--timeout", TIMEOUT)
+    assert done.returncode == 0, done.stderr[-3000:]
+    rows = read_csv(out / "grades.csv")
+    assert {row["student"] for row in rows} == set(crashes)
+    for row in rows:
+        assert "grading failed" not in row["hint"] and "Traceback" not in row["hint"], row
+    book = {row["student"]: row for row in read_csv(out / "gradebook.csv")}
+    tasks = len(LABS["lab20"].tasks)
+    for name, crash in crashes.items():
+        if crash.phrase is None:
+            assert int(book[name]["score"]) == tasks, (name, book[name])
