@@ -24,6 +24,7 @@ from mirrorlab.labs.trusted.executor import Executor, Stop
 from mirrorlab.labs.trusted.kit import open_session
 from mirrorlab.labs.trusted.pipe import PipeBudget, PipeClosed, PipeError, TrustedChannel
 from mirrorlab.labs.trusted.variants import default_variant
+from tests.labs.mutants import solution
 
 SIZE = (32, 32)
 
@@ -217,39 +218,52 @@ ROBOT = st.builds(lambda nodes: {"textures": nodes}, st.dictionaries(
     st.sampled_from(["base", "hand", "upper_arm", "x" * 300]),
     st.one_of(NUMBERS, st.none(), st.fixed_dictionaries({"other": NUMBERS})), max_size=3))
 """lab.draw_scene's robot, its nodes' textures fuzzed."""
+GLSL = [re.search(r'_GLSL = """(.*?)"""', solution(lab), re.S).group(1)
+        for lab in ("spheremap", "cubemap")]
+"""The labs' honest GLSL (each compiled once a process), for the kit's shader calls."""
 JSON = st.recursive(st.one_of(st.none(), st.booleans(), NUMBERS, st.text(max_size=20),
-                              ROBOT, st.sampled_from(["metal", "launch", "texSampler"])),
+                              ROBOT, st.sampled_from(["metal", "launch", "texSampler",
+                                                      *GLSL, GLSL[0] + "oops"])),
                     lambda inner: st.one_of(st.lists(inner, max_size=18),
                                             st.dictionaries(st.text(max_size=4), inner,
                                                             max_size=3)),
                     max_leaves=40)
 NAMES = [*sorted({**C.GL_SPECS, **C.GLU_SPECS}), "glDrawPixels", "draw_scene", "set_viewer",
-         "load_picture_texture", "", "glEnd", "x" * 5000, "gl Clear"]
+         "load_picture_texture", "draw_backdrop", "draw_cone_shader",
+         "draw_cone_fixed_function", "draw_sphere", "", "glEnd", "x" * 5000, "gl Clear"]
 
 
 @pytest.fixture(scope="module")
 def fuzz_target(gl_context):
-    """One session and target for the whole fuzz (a new executor for each example)."""
+    """One session of each lab and a target for the whole fuzz (a new executor for each
+    example)."""
     framebuffer = Framebuffer(gl_context.resources, *SIZE)
     framebuffer.bind()
-    session = open_session("lab20", SIZE, default_variant("lab20"))
+    sessions = {lab: open_session(lab, SIZE, default_variant(lab))
+                for lab in ("lab20", "spheremap", "cubemap")}
     GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
-    yield framebuffer, session
+    yield framebuffer, sessions
     framebuffer.release()
 
 
 @settings(max_examples=100, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(calls=st.lists(st.tuples(st.sampled_from(["gl", "glu", "kit", "other"]),
-                                st.sampled_from(NAMES), st.lists(JSON, max_size=10)),
-                      min_size=1, max_size=6))
-def test_fuzzed_calls_get_a_reply_or_one_line(fuzz_target, calls):
+@given(lab=st.sampled_from(["lab20", "spheremap", "cubemap"]),
+       calls=st.lists(st.one_of(
+           st.tuples(st.sampled_from(["gl", "glu", "kit", "other"]), st.sampled_from(NAMES),
+                     st.lists(JSON, max_size=10)),
+           st.tuples(st.just("kit"), st.sampled_from(["draw_backdrop", "draw_cone_shader",
+                                                        "draw_cone_fixed_function",
+                                                        "draw_sphere", "set_viewer"]),
+                     st.lists(st.one_of(st.sampled_from(GLSL), st.integers(-1, 4), NUMBERS),
+                              max_size=3))), min_size=1, max_size=6))
+def test_fuzzed_calls_get_a_reply_or_one_line(fuzz_target, lab, calls):
     from mirrorlab.labs.trusted.run import reset_state
 
-    framebuffer, session = fuzz_target
+    framebuffer, sessions = fuzz_target
     framebuffer.bind()
     try:
-        ex = Executor(session)
+        ex = Executor(sessions[lab])
         ex.begin_frame()
         for op, name, args in calls:
             try:
