@@ -1,6 +1,6 @@
 #version 330 compatibility
 // The cube-map lab's sphere: the world-space reflection of the eye ray goes through the
-// student's cube_face and cube_face_st (inserted below); the kit turns that face and
+// student's cube_face and cube_face_st (declared below); the kit turns that face and
 // (s, t) back into a direction by the OpenGL table and samples the cube map there, so a
 // wrong face or wrong coordinates show as a wrong reflection.
 in vec3 world_position;
@@ -12,7 +12,9 @@ uniform int mode;  // 0 colour; 1 (face, s, t) of the student's functions; 2 r
 
 out vec4 frag_color;
 
-// STUDENT CODE
+// STUDENT CODE: the student's functions, compiled alone and linked to this main
+int cube_face(vec3 r);
+vec2 cube_face_st(vec3 r, int face);
 
 vec3 face_direction(int face, vec2 st) {
     float sc = 2.0 * st.x - 1.0;

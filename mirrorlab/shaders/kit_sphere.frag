@@ -1,6 +1,6 @@
 #version 330 compatibility
 // The sphere-map lab's cone, per fragment: the student's reflect_eye and sphere_map_st
-// (inserted below) pick the texel of the sphere map.
+// (declared below) pick the texel of the sphere map.
 in vec3 eye_position;
 in vec3 eye_normal;
 
@@ -9,7 +9,9 @@ uniform int mode;  // 0 colour; 1 the student's r; 2 u; 3 n; 4 the student's (s,
 
 out vec4 frag_color;
 
-// STUDENT CODE
+// STUDENT CODE: the student's functions, compiled alone and linked to this main
+vec3 reflect_eye(vec3 u, vec3 n);
+vec2 sphere_map_st(vec3 r);
 
 void main() {
     vec3 u = normalize(eye_position);

@@ -19,6 +19,7 @@ from mirrorlab.labs.trusted.sandbox import Limits
 from mirrorlab.labs.trusted.variants import default_variant
 from tests.labs.conftest import mirrorlab_command, read_csv
 from tests.labs.forgeries import forgeries
+from tests.labs.glsl_forgeries import GLSL_FORGERIES
 
 TIMEOUT = "20"
 """CPU seconds a forgery may spend: enough that each meets the limit it is about (calls,
@@ -110,3 +111,18 @@ def test_the_command_stays_small_while_a_file_sends_1_gib(forged):
     assert "1024 MiB" in done.stdout
     peak_kib = int(done.stdout.split("peak ")[1].split()[0])
     assert peak_kib < 400 * 1024, f"the command peaked at {peak_kib} KiB"
+
+
+@pytest.mark.parametrize("lab", sorted(GLSL_FORGERIES))
+def test_glsl_macro_forgeries_do_not_get_every_task(lab, tmp_path, lab_environment):
+    """The student's GLSL is compiled alone: macros that would rewrite the kit's probe
+    shader reach nothing, and functions that return constants fail the GLSL tasks."""
+    path = tmp_path / f"forge_{lab}.py"
+    path.write_text(GLSL_FORGERIES[lab])
+    done = mirrorlab_command("lab", "check", lab, str(path), "--out",
+                             str(tmp_path / "check.png"), "--timeout", TIMEOUT)
+    tasks = len(LABS[lab].tasks)
+    assert done.returncode == 1 and done.stderr == "", done.stdout + done.stderr
+    score = re.search(rf"(\d+)/{tasks} tasks passed", done.stdout)
+    assert score and int(score.group(1)) < tasks, done.stdout
+    assert "[FAIL] task 1" in done.stdout, done.stdout

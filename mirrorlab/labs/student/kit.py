@@ -8,7 +8,7 @@ from __future__ import annotations
 from types import ModuleType
 from typing import Any
 
-from .remote import LabSetupError, Remote, StudentShaderError
+from .remote import LabSetupError, Remote, StudentShaderError, _number
 
 
 class Node:
@@ -105,7 +105,8 @@ class SphereMapLab(_Lab):
 
     def set_viewer(self, aspect: float | None = None) -> None:
         """The viewer's projection (for ``aspect``, default the frame's) and camera."""
-        self._call("set_viewer", ["j"], None if aspect is None else float(aspect))
+        self._call("set_viewer", ["j"], None if aspect is None else
+                   _number(aspect, "f", "lab.set_viewer(aspect)"))
 
     def draw_backdrop(self) -> None:
         """The launch picture on its board behind the cone."""

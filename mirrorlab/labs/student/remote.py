@@ -100,7 +100,9 @@ def _number(value: Any, kind: str, what: str) -> int | float:
             return int(bool(value))
         return int(value.__index__() if hasattr(value, "__index__") else value) \
             if not isinstance(value, float) else _integral(value, what)
-    except (TypeError, ValueError, OverflowError):
+    except OverflowError:
+        raise ValueError(f"{what}: {_short(value)} is out of range for a GL number") from None
+    except (TypeError, ValueError):
         expected = "a number" if kind == "f" else "an integer"
         raise TypeError(f"{what}: expected {expected}, got {type(value).__name__} "
                         f"{_short(value)}") from None

@@ -12,6 +12,7 @@ reports it, ``TypeError`` for a wrong argument).
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -46,12 +47,22 @@ def enums(*names: str) -> frozenset[int]:
 Check = Callable[[Any, str], Any]
 
 
+def shown(value: Any) -> str:
+    """``value`` for a one-line message: a long number by its first digits and length."""
+    text = repr(value)
+    if len(text) <= 24:
+        return text
+    if type(value) is int:
+        return f"{text[:8]}... (an integer of {len(text.lstrip('-'))} digits)"
+    return text[:21] + "..."
+
+
 def integer(lo: int = -(1 << 31), hi: int = (1 << 32) - 1) -> Check:
     def check(value: Any, what: str) -> int:
         if type(value) is not int:
             raise CallError("TypeError", f"{what}: expected an integer")
         if not lo <= value <= hi:
-            raise gl_error(GL_INVALID_VALUE, f"{what} = {value} is outside {lo}..{hi}")
+            raise gl_error(GL_INVALID_VALUE, f"{what} = {shown(value)} is outside {lo}..{hi}")
         return value
 
     return check
@@ -61,6 +72,9 @@ def real(lo: float = -1e9, hi: float = 1e9) -> Check:
     def check(value: Any, what: str) -> float:
         if type(value) not in (int, float):
             raise CallError("TypeError", f"{what}: expected a number")
+        if type(value) is int and not -(1 << 64) < value < 1 << 64:
+            raise CallError("ValueError", f"{what} = {shown(value)} is out of range: the "
+                            f"labs take numbers from {lo:g} to {hi:g}")
         value = float(value)
         if not math.isfinite(value):
             raise CallError("ValueError", f"{what} is {value}: the labs take finite numbers")
@@ -76,7 +90,8 @@ def one_of(allowed: frozenset[int]) -> Check:
         if type(value) is not int:
             raise CallError("TypeError", f"{what}: expected a GL enum (an integer)")
         if value not in allowed:
-            raise gl_error(GL_INVALID_ENUM, f"{what} = {value:#x} is not one the labs' "
+            number = f"{value:#x}" if -(1 << 64) < value < 1 << 64 else shown(value)
+            raise gl_error(GL_INVALID_ENUM, f"{what} = {number} is not one the labs' "
                            f"OpenGL takes here")
         return value
 
@@ -88,15 +103,17 @@ def bits(allowed: int) -> Check:
         if type(value) is not int:
             raise CallError("TypeError", f"{what}: expected GL bits (an integer)")
         if value & ~allowed or value < 0:
-            raise gl_error(GL_INVALID_VALUE, f"{what} = {value:#x} has bits the labs do not "
-                           f"take")
+            raise gl_error(GL_INVALID_VALUE, f"{what} = {shown(value)} has bits the labs do "
+                           f"not take")
         return value
 
     return check
 
 
-def vector(lengths: tuple[int, ...], lo: float = -1e9, hi: float = 1e9) -> Check:
-    number = real(lo, hi)
+def vector(lengths: tuple[int, ...], lo: float = -1e9, hi: float = 1e9,
+           integral: bool = False) -> Check:
+    """A list of ``lengths`` numbers from ``lo`` to ``hi`` (integers with ``integral``)."""
+    number = integer(int(lo), int(hi)) if integral else real(lo, hi)
 
     def check(value: Any, what: str) -> list[float]:
         if not isinstance(value, list) or len(value) not in lengths:
@@ -240,6 +257,45 @@ def spec(kinds: str, *checks: Check, handler: str = "", in_begin: bool = False) 
     return Spec(tuple(kinds.split()) if kinds else (), checks, handler, in_begin)
 
 
+TYPE_RANGES = {"b": (-(1 << 7), (1 << 7) - 1), "s": (-(1 << 15), (1 << 15) - 1),
+               "i": (-(1 << 31), (1 << 31) - 1), "ub": (0, (1 << 8) - 1),
+               "us": (0, (1 << 16) - 1), "ui": (0, (1 << 32) - 1)}
+"""The integer types of GL's call forms (the suffix of ``glVertex3s``, ``glColor3ub``)
+and the values each holds."""
+FORM = re.compile(r"(?P<n>[1-4])?(?P<type>ub|us|ui|b|s|i|f|d)(?P<v>v?)$")
+
+
+def form_type(name: str) -> str:
+    """The type suffix of call form ``name`` (``"s"`` for glVertex3sv, ``"ub"`` for
+    glColor4ub), '' when it has none."""
+    match = FORM.search(name)
+    return match.group("type") if match else ""
+
+
+def immediate(base: str, sizes: tuple[int, ...], types: Any, handler: str,
+              lo: float = -1e9, hi: float = 1e9, unit: bool = False) -> dict[str, Spec]:
+    """Every form of an immediate-mode call: ``base`` + size + type (+ ``v``), each
+    argument checked by its type (integers in the type's range, finite numbers in
+    ``lo``..``hi``); ``unit``: a texture unit first (glMultiTexCoord)."""
+    found: dict[str, Spec] = {}
+    for size in sizes:
+        count = "" if base.endswith("3") else str(size)
+        for kind in types:
+            integral = kind in TYPE_RANGES
+            low, high = TYPE_RANGES[kind] if integral else (lo, hi)
+            check = integer(int(low), int(high)) if integral else real(low, high)
+            code = "i" if integral else "f"
+            first, first_check = ("i ", (one_of(UNITS),)) if unit else ("", ())
+            found[f"{base}{count}{kind}"] = spec(
+                first + " ".join(code * size), *first_check, *[check] * size,
+                handler=handler, in_begin=True)
+            found[f"{base}{count}{kind}v"] = spec(
+                first + ("n" if integral else "v"), *first_check,
+                vector((size,), low, high, integral),
+                handler=handler or "vector_call", in_begin=True)
+    return found
+
+
 ANY_INT, SIDE_INT = integer(), integer(-SIDE * 16, SIDE * 16)
 SIZE_INT, LEVEL = integer(0, SIDE), integer(0, 10)
 NUMBER, UNIT_RANGE = real(), real(-1e6, 1e6)
@@ -262,8 +318,9 @@ GL_SPECS: dict[str, Spec] = {
     "glScissor": spec("i i i i", SIDE_INT, SIDE_INT, SIZE_INT, SIZE_INT),
     "glClear": spec("i", bits(CLEAR_BITS), handler="clear"),
     "glClearColor": spec("f f f f", *[UNIT_RANGE] * 4, handler="clear_color"),
-    "glClearDepth": spec("f", UNIT_RANGE),
+    "glClearDepth": spec("f", UNIT_RANGE), "glClearDepthf": spec("f", UNIT_RANGE),
     "glDepthRange": spec("f f", UNIT_RANGE, UNIT_RANGE),
+    "glDepthRangef": spec("f f", UNIT_RANGE, UNIT_RANGE),
     "glFlush": spec(""), "glFinish": spec(""),
     "glEnable": spec("i", one_of(CAPS), handler="enable"),
     "glDisable": spec("i", one_of(CAPS), handler="enable"),
@@ -280,29 +337,16 @@ GL_SPECS: dict[str, Spec] = {
     "glPointSize": spec("f", real(0.0, 16.0)),
     "glPolygonOffset": spec("f f", UNIT_RANGE, UNIT_RANGE),
     "glPixelStorei": spec("i i", one_of(STORE_PARAMS), integer(1, 8), handler="pixel_store"),
+    "glPixelStoref": spec("i f", one_of(STORE_PARAMS), real(1, 8), handler="pixel_store"),
     # immediate mode
     "glBegin": spec("i", one_of(BEGIN_MODES), handler="begin"),
     "glEnd": spec("", handler="end", in_begin=True),
-    **{f"glVertex{n}{t}": spec(" ".join("f" * n), *[NUMBER] * n, handler="vertex",
-                               in_begin=True) for n in (2, 3, 4) for t in "fdis"},
-    **{f"glVertex{n}{t}v": spec("v", vector((n,)), handler="vertex", in_begin=True)
-       for n in (2, 3, 4) for t in "fdis"},
-    **{f"glTexCoord{n}{t}": spec(" ".join("f" * n), *[NUMBER] * n, handler="texcoord",
-                                 in_begin=True) for n in (1, 2, 3, 4) for t in "fd"},
-    **{f"glTexCoord{n}{t}v": spec("v", vector((n,)), handler="texcoord", in_begin=True)
-       for n in (1, 2, 3, 4) for t in "fd"},
-    **{f"glMultiTexCoord{n}{t}": spec("i " + " ".join("f" * n), one_of(UNITS),
-                                      *[NUMBER] * n, handler="texcoord", in_begin=True)
-       for n in (1, 2, 3, 4) for t in "fd"},
-    **{f"glColor{n}{t}": spec(" ".join("f" * n), *[real(-1e3, 1e3)] * n, handler="color",
-                              in_begin=True) for n in (3, 4) for t in ("f", "d")},
-    **{f"glColor{n}ub": spec(" ".join("i" * n), *[integer(0, 255)] * n, handler="color",
-                             in_begin=True) for n in (3, 4)},
-    **{f"glColor{n}{t}v": spec("v", vector((n,), -1e3, 1e3), handler="color", in_begin=True)
-       for n in (3, 4) for t in "fd"},
-    **{f"glNormal3{t}": spec("f f f", *[NUMBER] * 3, in_begin=True) for t in "fd"},
-    **{f"glNormal3{t}v": spec("v", vector((3,)), handler="vector_call", in_begin=True)
-       for t in "fd"},
+    **immediate("glVertex", (2, 3, 4), "sifd", "vertex"),
+    **immediate("glTexCoord", (1, 2, 3, 4), "sifd", "texcoord"),
+    **immediate("glMultiTexCoord", (1, 2, 3, 4), "sifd", "texcoord", unit=True),
+    **immediate("glColor", (3, 4), ("b", "s", "i", "f", "d", "ub", "us", "ui"), "color",
+                lo=-1e3, hi=1e3),
+    **immediate("glNormal3", (3,), "bsifd", ""),
     # textures
     "glGenTextures": spec("i", integer(0, 64), handler="gen_textures"),
     "glDeleteTextures": spec("n n?", names(), names(), handler="delete_textures"),
@@ -328,27 +372,46 @@ GL_SPECS: dict[str, Spec] = {
                             real(-1000, 1 << 16), handler="tex_parameter"),
     "glTexParameterfv": spec("i i v", one_of(BIND_TARGETS), one_of(TEX_PARAM_VECTORS),
                              vector((4,)), handler="tex_parameter"),
+    "glTexParameteriv": spec("i i n", one_of(BIND_TARGETS), one_of(TEX_PARAM_VECTORS),
+                             vector((4,), *TYPE_RANGES["i"], integral=True),
+                             handler="tex_parameter"),
     "glGenerateMipmap": spec("i", one_of(BIND_TARGETS), handler="generate_mipmap"),
     "glTexEnvi": spec("i i i", one_of(enums("GL_TEXTURE_ENV")),
                       one_of(enums("GL_TEXTURE_ENV_MODE")), one_of(TEXENV_MODES)),
     "glTexEnvf": spec("i i f", one_of(enums("GL_TEXTURE_ENV")),
                       one_of(enums("GL_TEXTURE_ENV_MODE")), real(0, 1 << 16),
                       handler="texenv_f"),
+    "glTexEnviv": spec("i i n", one_of(enums("GL_TEXTURE_ENV")),
+                       one_of(enums("GL_TEXTURE_ENV_MODE")), vector((1,), 0, 1 << 16, True),
+                       handler="texenv_f"),
+    "glTexEnvfv": spec("i i v", one_of(enums("GL_TEXTURE_ENV")),
+                       one_of(enums("GL_TEXTURE_ENV_MODE")), vector((1,), 0, 1 << 16),
+                       handler="texenv_f"),
     "glTexGeni": spec("i i i", one_of(TEXGEN_COORDS), one_of(enums("GL_TEXTURE_GEN_MODE")),
                       one_of(TEXGEN_MODES), handler="texgen"),
-    "glTexGenf": spec("i i f", one_of(TEXGEN_COORDS), one_of(enums("GL_TEXTURE_GEN_MODE")),
-                      real(0, 1 << 16), handler="texgen"),
-    "glTexGenfv": spec("i i v", one_of(TEXGEN_COORDS), one_of(TEXGEN_PLANES), vector((4,)),
-                       handler="vector_call"),
+    **{f"glTexGen{t}": spec("i i f", one_of(TEXGEN_COORDS),
+                            one_of(enums("GL_TEXTURE_GEN_MODE")), real(0, 1 << 16),
+                            handler="texgen") for t in "fd"},
+    **{f"glTexGen{t}v": spec("i i v", one_of(TEXGEN_COORDS), one_of(TEXGEN_PLANES),
+                             vector((4,)), handler="vector_call") for t in "fd"},
+    "glTexGeniv": spec("i i n", one_of(TEXGEN_COORDS), one_of(TEXGEN_PLANES),
+                       vector((4,), *TYPE_RANGES["i"], integral=True), handler="vector_call"),
     # programs: only the lab's
     "glUseProgram": spec("i", ANY_INT, handler="use_program"),
     "glGetUniformLocation": spec("i s", ANY_INT, text(128), handler="uniform_location"),
     **{f"glUniform{n}{t}": spec("i " + " ".join(t * n), integer(-1, 1 << 16),
                                 *[integer() if t == "i" else NUMBER] * n, handler="uniform")
        for n in (1, 2, 3, 4) for t in "if"},
-    **{f"glUniform{n}{t}v": spec("i i v", integer(-1, 1 << 16), integer(0, 64),
-                                 vector(tuple(range(0, 64 * n + 1))), handler="uniform_vector")
-       for n in (1, 2, 3, 4) for t in "if"},
+    **{f"glUniform{n}ui": spec("i " + " ".join("i" * n), integer(-1, 1 << 16),
+                               *[integer(*TYPE_RANGES["ui"])] * n, handler="uniform")
+       for n in (1, 2, 3, 4)},
+    **{f"glUniform{n}{t}v": spec("i i " + ("v" if t == "f" else "n"), integer(-1, 1 << 16),
+                                 integer(0, 64),
+                                 vector(tuple(range(0, 64 * n + 1)),
+                                        TYPE_RANGES.get(t, (-1e9, 1e9))[0],
+                                        TYPE_RANGES.get(t, (-1e9, 1e9))[1],
+                                        integral=t != "f"), handler="uniform_vector")
+       for n in (1, 2, 3, 4) for t in ("i", "f", "ui")},
     **{f"glUniformMatrix{n}fv": spec("i i b v", integer(-1, 1 << 16), integer(0, 16),
                                      integer(0, 1), vector(tuple(range(0, 16 * n * n + 1))),
                                      handler="uniform_matrix") for n in (2, 3, 4)},
@@ -362,10 +425,12 @@ GL_SPECS: dict[str, Spec] = {
                                 handler="get_tex_parameter"),
     "glGetTexParameterfv": spec("i i", one_of(BIND_TARGETS), one_of(TEX_PARAMS),
                                 handler="get_tex_parameter"),
-    "glGetTexLevelParameteriv": spec("i i i", one_of(IMAGE_TARGETS), LEVEL,
-                                     one_of(LEVEL_PARAMS), handler="get_level_parameter"),
-    "glGetTexGeniv": spec("i i", one_of(TEXGEN_COORDS), one_of(enums("GL_TEXTURE_GEN_MODE")),
-                          handler="get_texgen"),
+    **{f"glGetTexLevelParameter{t}v": spec("i i i", one_of(IMAGE_TARGETS), LEVEL,
+                                           one_of(LEVEL_PARAMS), handler="get_level_parameter")
+       for t in "if"},
+    **{f"glGetTexGen{t}v": spec("i i", one_of(TEXGEN_COORDS),
+                                one_of(enums("GL_TEXTURE_GEN_MODE")), handler="get_texgen")
+       for t in "ifd"},
 }
 
 GLU_SPECS: dict[str, Spec] = {

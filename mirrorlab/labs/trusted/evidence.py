@@ -122,9 +122,31 @@ class Evidence:
         it is read back at once)."""
         folder.mkdir(parents=True, exist_ok=True)
         plain = {key: getattr(self, key) for key in (
-            "lab", "status", "detail", "errors", "call_errors", "frames", "setup",
-            "textures", "state", "variant", "source")}
-        (folder / "evidence.json").write_text(json.dumps(plain, default=_plain))
+            "lab", "status", "detail", "errors", "call_errors", "textures", "state",
+            "variant", "source")}
+        # events that share a state snapshot (the state did not change between them)
+        # refer to one copy of it in "states"
+        states: list[dict[str, Any]] = []
+        index: dict[int, int] = {}
+
+        def packed(events: list[dict[str, Any]]) -> list[dict[str, Any]]:
+            out = []
+            for event in events:
+                state = event.get("state")
+                if isinstance(state, dict):
+                    if id(state) not in index:
+                        index[id(state)] = len(states)
+                        states.append(state)
+                    event = {**event, "state": {"$state": index[id(state)]}}
+                out.append(event)
+            return out
+
+        plain["setup"] = packed(self.setup)
+        plain["frames"] = [{**frame, "events": packed(frame.get("events", []))}
+                           for frame in self.frames]
+        plain["states"] = states
+        with open(folder / "evidence.json", "w") as stream:  # streamed, never whole
+            json.dump(plain, stream, default=_plain)
         if compress:
             np.savez_compressed(folder / "arrays.npz", **self.arrays)  # type: ignore[arg-type]
         else:
@@ -156,6 +178,16 @@ class Evidence:
                     "textures", "state", "variant", "source"):
             if key in plain and isinstance(plain[key], type(getattr(evidence, key))):
                 setattr(evidence, key, plain[key])
+        states = plain.get("states")
+        states = states if isinstance(states, list) else []
+        for events in [evidence.setup, *(f.get("events") for f in evidence.frames
+                                         if isinstance(f, dict))]:
+            for event in events if isinstance(events, list) else []:
+                ref = event.get("state") if isinstance(event, dict) else None
+                if isinstance(ref, dict) and set(ref) == {"$state"}:
+                    i = ref["$state"]
+                    event["state"] = states[i] if type(i) is int and 0 <= i < len(states) \
+                        else {}
         return evidence
 
 

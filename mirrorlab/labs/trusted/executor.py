@@ -22,6 +22,7 @@ import numpy as np
 from OpenGL import GLU
 from OpenGL.error import GLError
 from OpenGL.raw.GL.VERSION import GL_1_0 as RAW
+from OpenGL.raw.GL.VERSION import GL_1_1 as RAW_1_1
 
 from mirrorlab.gl.opengl import GL
 from mirrorlab.labs.trusted import calls as C
@@ -64,6 +65,8 @@ class RunLimits:
     gl_seconds: float = 30.0
     frame_pictures: int = 16
     """Framebuffer pictures kept per frame (one at each copy into a texture)."""
+    frame_evidence: int = 2 << 20
+    """Bytes of evidence (as JSON, about) one frame, or the set-up, may make."""
 
 
 def _bind_target(target: int) -> int:
@@ -169,6 +172,7 @@ class Executor:
         elif steps and steps[-1] == function:
             self.tracker.event("leave", raised=bool(header.get("raised")), **seen)
             steps.pop()
+        self.bounded()
 
     def call(self, header: dict[str, Any], arrays: list[np.ndarray]) -> Reply:
         op, name = header.get("op"), header.get("fn")
@@ -181,8 +185,9 @@ class Executor:
                        f"few hundred): a loop that never ends?")
         if self.frame_calls > self.limits.frame_calls and self.tracker.frames:
             raise Stop(f"stopped: more than {self.limits.frame_calls} calls in one frame")
-        if not isinstance(name, str):
-            return self.error(CallError("TypeError", "a call without a name"), "?")
+        if not isinstance(name, str) or not name.isidentifier() or len(name) > 64:
+            return self.error(CallError("TypeError", "a call without a name the labs know"),
+                              "?")
         started = time.perf_counter()
         try:
             if op == "kit":
@@ -204,7 +209,17 @@ class Executor:
             if self.gl_seconds > self.limits.gl_seconds:
                 raise Stop(f"stopped: the calls took more than {self.limits.gl_seconds:g} s "
                            f"of the checker's time")
+            self.bounded()
         return self.reply(value)
+
+    def bounded(self) -> None:
+        """Stop when this frame's evidence (or the set-up's) passed its cap."""
+        tracker, cap = self.tracker, self.limits.frame_evidence
+        if tracker.frame_bytes > cap:
+            where = f"frame {len(tracker.frames)}" if tracker.frames else "the set-up"
+            raise Stop(f"stopped: {where} made more than {cap >> 20} MiB of evidence "
+                       f"({len(tracker.events)} draws, matrices and other steps; the labs "
+                       f"make a few dozen a frame)")
 
     def error(self, exc: CallError, name: str) -> Reply:
         if exc.kind == "GLError" and "(" not in exc.message:
@@ -281,9 +296,10 @@ class Executor:
 
     @staticmethod
     def _array(name: str, values: list[float]) -> np.ndarray:
-        kind = name.rstrip("v")[-1]
-        dtype = {"f": np.float32, "d": np.float64, "i": np.int32, "s": np.int16}.get(
-            kind, np.float32)
+        """``values`` (checked against the form's range) as the array the form takes."""
+        dtype = {"f": np.float32, "d": np.float64, "b": np.int8, "s": np.int16,
+                 "i": np.int32, "ub": np.uint8, "us": np.uint16, "ui": np.uint32}.get(
+            C.form_type(name), np.float32)
         return np.asarray(values, dtype=dtype)
 
     def matrix_mode(self, name: str, args: list[Any], arrays: Any) -> None:
@@ -376,9 +392,9 @@ class Executor:
     def pixel_store(self, name: str, args: list[Any], arrays: Any) -> None:
         if args[1] not in (1, 2, 4, 8):
             raise gl_error(C.GL_INVALID_VALUE, "alignment must be 1, 2, 4 or 8")
-        GL.glPixelStorei(*args)
+        GL.glPixelStorei(args[0], int(args[1]))
         self.ok()
-        self.alignment[args[0]] = args[1]
+        self.alignment[args[0]] = int(args[1])
 
     # ------------------------------------------------------------------ immediate mode
     def begin(self, name: str, args: list[Any], arrays: Any) -> None:
@@ -401,6 +417,21 @@ class Executor:
             setting = self.tracker.uniforms.get((program, location))
             extra["sampler_set"] = setting.plain() if setting else None
         self.record_draw("primitive", None, self.tracker.sampled_taint(), **extra)
+
+    def end_open_primitive(self) -> dict[str, Any] | None:
+        """After a lab function returned (or raised) inside glBegin: the primitive ended
+        here (GL then draws what it was given, as the next glEnd would) and the student's
+        error that says so, or None when no glBegin was open."""
+        primitive = self.tracker.primitive
+        if primitive is None:
+            return None
+        GL.glEnd()
+        self.tracker.primitive = None
+        self._drain()
+        function = primitive.function or self.tracker.function or "<file>"
+        return {"function": function, "kind": "GLError", "line": primitive.line,
+                "message": f"{function}() returned inside glBegin (line "
+                           f"{primitive.line}): call glEnd() before it returns"}
 
     def _sampler(self, program: int) -> int:
         location = getattr(self.session, "texSampler", -1)
@@ -433,7 +464,11 @@ class Executor:
         values = args
         if name.startswith("glMultiTexCoord"):
             unit, values = args[0] - int(GL.GL_TEXTURE0), args[1:]
-            getattr(GL, name)(*args)
+            if name.endswith("v"):
+                values = args[1]
+                getattr(GL, name)(args[0], self._array(name, values))
+            else:
+                getattr(GL, name)(*args)
         elif name.endswith("v"):
             values = args[0]
             getattr(GL, name)(self._array(name, values))
@@ -448,8 +483,9 @@ class Executor:
             getattr(GL, name)(self._array(name, values))
         else:
             getattr(GL, name)(*values)
-        scale = 255.0 if "ub" in name else 1.0
-        self.tracker.color = [v / scale for v in values] + [1.0] * (4 - len(values))
+        high = C.TYPE_RANGES.get(C.form_type(name), (0, 1))[1]
+        # GL's conversion of integer colours: the type's largest value is 1.0
+        self.tracker.color = [max(v / high, -1.0) for v in values] + [1.0] * (4 - len(values))
 
     def vector_call(self, name: str, args: list[Any], arrays: Any) -> None:
         converted = [self._array(name, a) if isinstance(a, list) else a for a in args]
@@ -568,7 +604,7 @@ class Executor:
         if data is None:
             raise CallError("ValueError", f"{name}: no pixel data")
         pixels = self._pixel_data(name, data, arrays, width, height, fmt, kind)
-        RAW.glTexSubImage2D(target, level, x, y, width, height, fmt, kind, pixels)
+        RAW_1_1.glTexSubImage2D(target, level, x, y, width, height, fmt, kind, pixels)
         self.ok()
         image = texture.images.get((_face(target), level))
         tainted = pixels is not None and bool(pixels.any())
@@ -632,7 +668,10 @@ class Executor:
         """The target's colour now, ``(h, w, 3)`` uint8, row 0 at the top."""
         from mirrorlab.gl.resources import read_pixels
 
-        return read_pixels(self.session.width, self.session.height)
+        self.end_open_primitive()  # a read inside glBegin would leave the array unwritten
+        # into zeros, so that a read GL refused never shows uninitialised memory
+        rows = np.zeros((self.session.height, self.session.width, 3), dtype=np.uint8)
+        return read_pixels(self.session.width, self.session.height, rows)
 
     def tex_parameter(self, name: str, args: list[Any], arrays: Any) -> None:
         target, pname, value = args
@@ -646,7 +685,7 @@ class Executor:
                                f"wrap mode")
             GL.glTexParameteri(target, pname, int(value))
         elif isinstance(value, list):
-            GL.glTexParameterfv(target, pname, np.asarray(value, dtype=np.float32))
+            getattr(GL, name)(target, pname, self._array(name, value))
         elif name == "glTexParameteri" or pname in (int(GL.GL_TEXTURE_BASE_LEVEL),
                                                     int(GL.GL_TEXTURE_MAX_LEVEL),
                                                     int(GL.GL_GENERATE_MIPMAP)):
@@ -678,8 +717,9 @@ class Executor:
                            unit=self.tracker.active_unit.value)
 
     def texenv_f(self, name: str, args: list[Any], arrays: Any) -> None:
-        mode = int(args[2])
-        if mode != args[2] or mode not in C.TEXENV_MODES:
+        value = args[2][0] if isinstance(args[2], list) else args[2]  # glTexEnv{if}v
+        mode = int(value)
+        if mode != value or mode not in C.TEXENV_MODES:
             raise gl_error(C.GL_INVALID_ENUM, f"{name}: {args[2]!r} is not a texture mode")
         GL.glTexEnvi(args[0], args[1], mode)
         self.ok()
@@ -743,8 +783,7 @@ class Executor:
         if len(values) != count * size:
             raise gl_error(C.GL_INVALID_VALUE, f"{name}: {count} values need {count * size} "
                            f"numbers, got {len(values)}")
-        dtype = np.int32 if name[-2] == "i" else np.float32
-        getattr(GL, name)(location, count, np.asarray(values, dtype=dtype))
+        getattr(GL, name)(location, count, self._array(name, values))
         self.ok()
 
     def uniform_matrix(self, name: str, args: list[Any], arrays: Any) -> None:
@@ -828,8 +867,8 @@ class Executor:
 
     def _owned(self, value: Any, what: str, target: int) -> int:
         if type(value) is not int or (value and value not in self.owned):
-            raise LabSetupError(f"{what}: {value!r} is not a texture this file made with "
-                                f"glGenTextures")
+            raise LabSetupError(f"{what}: {C.shown(value)} is not a texture this file made "
+                                f"with glGenTextures")
         texture = self.tracker.textures.get(value)
         if texture is not None and texture.target and texture.target != target:
             kind = "a cube map" if texture.target == GL_TEXTURE_CUBE_MAP else "a 2D texture"

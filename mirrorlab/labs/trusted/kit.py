@@ -38,7 +38,7 @@ class StudentShaderError(LabSetupError):
     the line inside it (1-based, or 0 when unknown)."""
 
     def __init__(self, variable: str, line: int, message: str) -> None:
-        self.variable, self.line = variable, line
+        self.variable, self.line, self.detail = variable, line, message
         where = f"{variable} line {line}" if line else variable
         super().__init__(f"GLSL in {where} did not compile: {message}")
 
@@ -51,41 +51,132 @@ def _gl():
 
 def compile_program(vertex: str, fragment: str, student: str | None = None,
                     variable: str = "") -> int:
-    """A linked program from package shader files (``#include`` expanded); ``student`` GLSL
-    replaces the :data:`STUDENT_MARK` line of either file. Returns the GL program name."""
+    """A linked program from package shader files (``#include`` expanded). ``student``
+    GLSL is compiled alone, as a shader object of its own (its own preprocessor: no macro
+    of it reaches the kit's code), of the stage whose file has the :data:`STUDENT_MARK`
+    line, and linked to that file's ``main``, which calls it through the prototypes after
+    the mark; it may declare no uniform of its own (the kit's inputs reach it as
+    arguments). Returns the GL program name; StudentShaderError for the student's GLSL,
+    LabSetupError for the kit's."""
     from mirrorlab.gl.resources import expand_includes
 
     GL = _gl()
-    shaders = []
-    for name, kind in ((vertex, GL.GL_VERTEX_SHADER), (fragment, GL.GL_FRAGMENT_SHADER)):
-        source = expand_includes(name)
-        if student is not None and STUDENT_MARK in source:
-            offset = source.split(STUDENT_MARK)[0].count("\n")
-            source = source.replace(STUDENT_MARK, f"#line 1 1\n{student}\n#line "
-                                    f"{offset + 2} 0\n")
-        shader = GL.glCreateShader(kind)
-        GL.glShaderSource(shader, source)
-        GL.glCompileShader(shader)
-        if not GL.glGetShaderiv(shader, GL.GL_COMPILE_STATUS):
-            log = GL.glGetShaderInfoLog(shader).decode(errors="replace").strip()
+    shaders, student_shaders = [], []
+    try:
+        for name, kind in ((vertex, GL.GL_VERTEX_SHADER), (fragment, GL.GL_FRAGMENT_SHADER)):
+            source = expand_includes(name)
+            shaders.append(_compiled(kind, source, f"kit shader {name}", variable))
+            if student is not None and STUDENT_MARK in source:
+                student_shaders.append(_compiled(kind, _student_source(source, student),
+                                                 "", variable))
+        program = _linked([*shaders, *student_shaders], f"{vertex}+{fragment}",
+                          variable if student is not None else "")
+        if student_shaders:
+            try:
+                _only_arguments(expand_includes(fragment), student_shaders, variable)
+            except StudentShaderError:
+                GL.glDeleteProgram(program)
+                raise
+        return program
+    finally:
+        for shader in [*shaders, *student_shaders]:
             GL.glDeleteShader(shader)
-            if student is not None:
-                raise StudentShaderError(variable, *_student_log_line(log))
-            raise LabSetupError(f"kit shader {name} did not compile: {log}")
-        shaders.append(shader)
+
+
+def _student_source(kit_source: str, student: str) -> str:
+    """The student's GLSL as a shader of its own: the kit file's ``#version`` line, then
+    the student's text as source string 1 (its lines counted from 1)."""
+    version = next((line for line in kit_source.splitlines()
+                    if line.strip().startswith("#version")), "")
+    return f"{version}\n#line 1 1\n{student}\n"
+
+
+def _text(log: bytes | str) -> str:
+    return (log.decode(errors="replace") if isinstance(log, bytes) else str(log)).strip()
+
+
+def _compiled(kind: int, source: str, what: str, variable: str) -> int:
+    """A compiled shader object; ``what`` '' for the student's GLSL."""
+    GL = _gl()
+    shader = GL.glCreateShader(kind)
+    GL.glShaderSource(shader, source)
+    GL.glCompileShader(shader)
+    if not GL.glGetShaderiv(shader, GL.GL_COMPILE_STATUS):
+        log = _text(GL.glGetShaderInfoLog(shader))
+        GL.glDeleteShader(shader)
+        if not what:
+            raise StudentShaderError(variable, *_student_log_line(log))
+        raise LabSetupError(f"{what} did not compile: {log}")
+    return int(shader)
+
+
+def _linked(shaders: list[int], what: str, variable: str) -> int:
+    GL = _gl()
     program = GL.glCreateProgram()
     for shader in shaders:
         GL.glAttachShader(program, shader)
     GL.glLinkProgram(program)
     for shader in shaders:
-        GL.glDeleteShader(shader)
+        GL.glDetachShader(program, shader)
     if not GL.glGetProgramiv(program, GL.GL_LINK_STATUS):
-        log = GL.glGetProgramInfoLog(program).decode(errors="replace").strip()
+        log = _text(GL.glGetProgramInfoLog(program))
         GL.glDeleteProgram(program)
-        if student is not None:
-            raise StudentShaderError(variable, 0, log.splitlines()[0] if log else "link failed")
-        raise LabSetupError(f"kit program {vertex}+{fragment} did not link: {log}")
+        if variable:
+            first = log.splitlines()[0] if log else "link failed"
+            raise StudentShaderError(variable, 0, f"it does not link to the lab's shader "
+                                     f"({first})")
+        raise LabSetupError(f"kit program {what} did not link: {log}")
     return int(program)
+
+
+PROTOTYPE = re.compile(r"^\s*(\w+)\s+(\w+)\s*\(([^)]*)\)\s*;", re.MULTILINE)
+STUB_ARGUMENTS = {"float": "gl_FragCoord.x", "int": "int(gl_FragCoord.x)",
+                  "vec2": "gl_FragCoord.xy", "vec3": "gl_FragCoord.xyz",
+                  "vec4": "gl_FragCoord"}
+STUB_RESULTS = {"float": "{}", "int": "float({})", "vec2": "dot({}, vec2(1.0))",
+                "vec3": "dot({}, vec3(1.0))", "vec4": "dot({}, vec4(1.0))"}
+
+
+def _only_arguments(kit_source: str, student_shaders: list[int], variable: str) -> None:
+    """StudentShaderError when the student's functions read a uniform (the kit's own,
+    such as its check mode or samplers, or one of theirs that nothing sets; GL's built-in
+    state such as ``gl_ModelViewMatrix`` is allowed): they are
+    linked to a main of their own that calls each through the kit's prototypes and
+    declares no uniform, so every uniform active there is theirs."""
+    GL = _gl()
+    version, _, after = kit_source.partition(STUDENT_MARK)
+    version_line = next((line for line in version.splitlines()
+                         if line.strip().startswith("#version")), "")
+    prototypes = PROTOTYPE.findall(after.split("\n\n")[0])
+    calls = []
+    for result, name, params in prototypes:
+        args = [STUB_ARGUMENTS[p.split()[-2]] for p in params.split(",") if p.strip()]
+        calls.append(STUB_RESULTS[result].format(f"{name}({', '.join(args)})"))
+    declared = "".join(f"{r} {n}({p});\n" for r, n, p in prototypes)
+    stub = (f"{version_line}\n{declared}out vec4 mirrorlab_stub_out;\nvoid main() {{\n"
+            f"    mirrorlab_stub_out = vec4({' + '.join(calls) or '0.0'});\n}}\n")
+    main = _compiled(GL.GL_FRAGMENT_SHADER, stub, "the kit's stub", variable)
+    program = GL.glCreateProgram()
+    try:
+        for shader in [main, *student_shaders]:
+            GL.glAttachShader(program, shader)
+        GL.glLinkProgram(program)
+        if not GL.glGetProgramiv(program, GL.GL_LINK_STATUS):
+            log = _text(GL.glGetProgramInfoLog(program))
+            raise StudentShaderError(variable, 0, f"it does not link on its own "
+                                     f"({(log.splitlines() or ['link failed'])[0]})")
+        names = []
+        for index in range(int(GL.glGetProgramiv(program, GL.GL_ACTIVE_UNIFORMS))):
+            name = _text(GL.glGetActiveUniform(program, index)[0])
+            if not name.startswith("gl_"):  # GL's own state (gl_ModelViewMatrix) is not
+                names.append(name)           # the kit's: the same for every draw
+        if names or GL.glGetProgramiv(program, GL.GL_ACTIVE_UNIFORM_BLOCKS):
+            shown = ", ".join(names) or "a uniform block"
+            raise StudentShaderError(variable, 0, f"it reads uniforms ({shown[:80]}); the "
+                                     f"lab's functions take what they need as arguments")
+    finally:
+        GL.glDeleteProgram(program)
+        GL.glDeleteShader(main)
 
 
 def _student_log_line(log: str) -> tuple[int, str]:
@@ -279,6 +370,9 @@ class LabBase:
             if len(self._programs) >= limit:
                 raise LabSetupError(f"more than {limit} different {variable} strings in one "
                                     f"run")
+            from mirrorlab.labs.trusted.glslcheck import precompile
+
+            precompile(vertex, fragment, glsl, variable)  # where a bomb costs the file only
             self._programs[glsl] = compile_program(vertex, fragment, glsl, variable)
         return self._programs[glsl]
 

@@ -174,7 +174,8 @@ class TrustedChannel:
             raise PipeError(f"a message with a malformed list of arrays{where}")
         checked, total = [], 0
         for entry in declared:
-            if not (isinstance(entry, list) and len(entry) == 3 and entry[0] in DTYPES
+            if not (isinstance(entry, list) and len(entry) == 3
+                    and isinstance(entry[0], str) and entry[0] in DTYPES
                     and isinstance(entry[1], list) and len(entry[1]) <= 4
                     and all(type(d) is int and 0 <= d < 1 << 31 for d in entry[1])
                     and type(entry[2]) is int):

@@ -299,7 +299,11 @@ class LabRun:
 
     def _done(self, header: dict[str, Any]) -> dict[str, Any]:
         errors = header.get("errors")
-        for error in errors if isinstance(errors, list) else []:
+        errors = list(errors) if isinstance(errors, list) else []
+        unended = self.executor.end_open_primitive()
+        if unended is not None:  # the student's error, as if their function had raised it
+            errors.insert(0, unended)
+        for error in errors:
             if not isinstance(error, dict) or len(self.evidence.errors) >= 20:
                 continue
             line = error.get("line")

@@ -15,6 +15,7 @@ the sandbox but the calls.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -29,8 +30,6 @@ UNIT_CAPS = {0x0DE1: "GL_TEXTURE_2D", 0x8513: "GL_TEXTURE_CUBE_MAP", 0x0C60: "GL
 """Switches that belong to the active texture unit."""
 TEXGEN_COORDS = {0x2000: "s", 0x2001: "t", 0x2002: "r", 0x2003: "q"}
 UNITS = 8
-MAX_EVENTS = 4000
-"""Events kept per frame; a frame that makes more keeps the first ones."""
 
 
 @dataclass
@@ -143,6 +142,12 @@ class Tracker:
         self.frames: list[dict[str, Any]] = []
         self.setup_events: list[dict[str, Any]] = []
         self.line = 0
+        self.frame_bytes = 0
+        """What the events of this frame (or of the set-up) take as JSON, about: the
+        executor caps it (:class:`~.executor.RunLimits`)."""
+        self._snapshot: dict[str, Any] | None = None
+        """The last state snapshot: events share it while the state does not change."""
+        self._counted: dict[str, Any] | None = None
 
     # ---------------------------------------------------------------- who and where
     @property
@@ -159,12 +164,18 @@ class Tracker:
     def event(self, kind: str, **values: Any) -> dict[str, Any]:
         record = {"kind": kind, "line": self.line, "function": self.function,
                   "steps": list(self.steps), **values}
-        if len(self.events) < MAX_EVENTS:
-            self.events.append(record)
+        state = values.get("state")
+        shared = state is not None and state is self._counted
+        plain = {k: v for k, v in record.items() if k != "state" or not shared}
+        self.frame_bytes += len(json.dumps(plain, default=str))
+        if isinstance(state, dict):
+            self._counted = state  # saved once however many events share it
+        self.events.append(record)
         return record
 
     def begin_frame(self) -> None:
         self.frames.append({"events": []})
+        self.frame_bytes, self._counted = 0, None
 
     # ---------------------------------------------------------------- taint by pixel
     @property
@@ -259,8 +270,11 @@ class Tracker:
             if entry:
                 units[str(unit)] = entry
         enabled = {str(cap): s.plain() for (cap, unit), s in self.enabled.items() if unit == -1}
-        return {"matrix_mode": self.matrix_mode.plain(), "viewport": self.viewport.plain(),
-                "clear_color": self.clear_color.plain(),
-                "active_unit": self.active_unit.plain(), "program": self.program.plain(),
-                "units": units, "enabled": enabled,
-                "matrix_ops": {str(k): list(v) for k, v in self.matrix_ops.items()}}
+        snapshot = {"matrix_mode": self.matrix_mode.plain(), "viewport": self.viewport.plain(),
+                    "clear_color": self.clear_color.plain(),
+                    "active_unit": self.active_unit.plain(), "program": self.program.plain(),
+                    "units": units, "enabled": enabled,
+                    "matrix_ops": {str(k): list(v) for k, v in self.matrix_ops.items()}}
+        if snapshot != self._snapshot:
+            self._snapshot = snapshot
+        return self._snapshot  # the same object while the state is the same: shared

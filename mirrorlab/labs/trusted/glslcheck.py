@@ -1,0 +1,117 @@
+"""Student GLSL compiled first in a short-lived process of its own, with bounded time and
+memory, before the trusted checker compiles it.
+
+A driver's GLSL compiler runs inside the process that asks it: a preprocessor bomb (a few
+dozen macros, each twice the one before) takes gigabytes and crashes the process. So
+:func:`precompile` hands the text to ``python -m mirrorlab.labs.trusted.glslcheck`` in a
+context of its own, which compiles and links it exactly as the lab will
+(:func:`~.kit.compile_program`) and answers in one JSON line. When that process dies, is
+killed at its memory limit or does not answer in time, the file gets the student's error
+"could not be compiled within the limits" and the checker's own process never compiled
+it; when it answers with a compile error, that is the error, and the checker does not
+compile the text either. A text that compiled is remembered for the process's life.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import subprocess
+import sys
+from typing import Any
+
+SECONDS = 30.0
+"""Wall-clock seconds the compiling process may take (it starts Python and a context)."""
+CPU_SECONDS = 15
+MEMORY_MB = 1024
+"""Its address-space limit where the system has one (``resource``): a context takes a few
+hundred MB of it, the honest labs' GLSL little more."""
+
+_answers: dict[str, tuple[int, str] | None] = {}
+"""By digest of the texts: None for a text that compiled, else the error's line and
+message (a file draws with the same text every frame)."""
+
+
+def _limits() -> None:  # pragma: no cover - runs in the child before it starts
+    try:
+        import resource
+    except ImportError:  # no such limits on this system: the wall clock still holds
+        return
+    memory = MEMORY_MB << 20
+    resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
+    resource.setrlimit(resource.RLIMIT_CPU, (CPU_SECONDS, CPU_SECONDS))
+    resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+
+
+def precompile(vertex: str, fragment: str, student: str, variable: str) -> None:
+    """Compile ``student`` (the GLSL of ``variable``) with the kit's ``vertex`` and
+    ``fragment`` files in a process of its own; StudentShaderError when it does not compile
+    or not within the limits."""
+    from mirrorlab.labs.trusted.kit import StudentShaderError
+
+    key = hashlib.sha256(json.dumps([vertex, fragment, student]).encode()).hexdigest()
+    if key not in _answers:
+        _answers[key] = _compile_alone(vertex, fragment, student, variable)
+    failed = _answers[key]
+    if failed is not None:
+        raise StudentShaderError(variable, *failed)
+
+
+def _compile_alone(vertex: str, fragment: str, student: str, variable: str
+                   ) -> tuple[int, str] | None:
+    """None when the texts compile and link in a process of their own, within the
+    limits; else the error's line (0: none) and message."""
+    job = json.dumps({"vertex": vertex, "fragment": fragment, "student": student,
+                      "variable": variable})
+    environment = {**os.environ, "PYOPENGL_PLATFORM": "egl", "EGL_PLATFORM": "surfaceless",
+                   "LP_NUM_THREADS": "1"}  # compiling needs no rasteriser threads
+    limits = (f"your shader could not be compiled within the limits ({SECONDS:g} s, "
+              f"{MEMORY_MB} MB)")
+    preexec = _limits if os.name == "posix" else None
+    try:
+        done = subprocess.run([sys.executable, "-m", "mirrorlab.labs.trusted.glslcheck"],
+                              input=job, capture_output=True, text=True, timeout=SECONDS,
+                              env=environment, preexec_fn=preexec)
+    except subprocess.TimeoutExpired:
+        return 0, limits
+    answer = _answer(done.stdout)
+    if answer is None:
+        return 0, limits
+    if not answer.get("ok"):
+        line = answer.get("line")
+        return (line if type(line) is int else 0), str(answer.get("message", ""))[:300]
+    return None
+
+
+def _answer(stdout: str) -> dict[str, Any] | None:
+    lines = [line for line in stdout.splitlines() if line.startswith("{")]
+    try:
+        answer = json.loads(lines[-1]) if lines else None
+    except ValueError:
+        return None
+    return answer if isinstance(answer, dict) else None
+
+
+def main() -> int:
+    """The compiling process: a job on stdin, one JSON line on stdout."""
+    job = json.loads(sys.stdin.read())
+    from mirrorlab.gl.context import HeadlessContext
+
+    context = HeadlessContext()
+    try:
+        from mirrorlab.labs.trusted.kit import StudentShaderError, compile_program
+
+        try:
+            compile_program(job["vertex"], job["fragment"], job["student"], job["variable"])
+            answer: dict[str, Any] = {"ok": True}
+        except StudentShaderError as exc:
+            answer = {"ok": False, "line": exc.line, "message": exc.detail}
+    finally:
+        context.release()
+    print(json.dumps(answer), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
