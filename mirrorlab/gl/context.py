@@ -428,7 +428,14 @@ class gl_pass:
 
 _debug_errors: list[tuple[int, str]] = []
 """(GL error code, driver message) of errors the debug callback saw since the last check."""
-_debug_callbacks: list = []  # kept alive: GL holds only the C pointer
+_debug_callbacks: list = []
+
+
+def discard_debug_errors() -> None:
+    """Forget the errors the debug callback saw since the last check: for a caller that
+    judged a GL error itself (the labs' executor, whose student made it)."""
+    _debug_errors.clear()
+  # kept alive: GL holds only the C pointer
 _DEBUG_CODES = {"out of memory": 0x0505, "invalid enum": 0x0500, "invalid value": 0x0501,
                 "invalid operation": 0x0502, "invalid framebuffer": 0x0506}
 

@@ -10,7 +10,7 @@ import re
 import numpy as np
 import pytest
 
-from mirrorlab.gl.context import HeadlessContext
+from mirrorlab.gl.context import offscreen_context
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import FloatFramebuffer
 from mirrorlab.labs.trusted.kit import StudentShaderError, open_session
@@ -24,7 +24,7 @@ SIZE = (48, 48)
 def gl_context():
     """A context of this module's own (it replaces the session's): the student's calls
     here leave GL state, and GL errors in the debug log, that no other test may see."""
-    with HeadlessContext() as context:
+    with offscreen_context() as context:
         yield context
 LABS = {"cubemap": ("CUBE_MAP_GLSL", "draw_sphere", 2, "int cube_face(vec3 r) {"),
         "spheremap": ("SPHERE_MAP_GLSL", "draw_cone_shader", 2,

@@ -459,11 +459,12 @@ REFUSED: dict[str, str] = {
 """Calls no lab offers, with why, for the refusal the student reads: every way to learn
 what the trusted side drew (pixels, textures, feedback, selection, queries)."""
 
-_UNIFORMS = ("glGetUniformLocation", *(f"glUniform{n}{t}{v}" for n in (1, 2, 3, 4)
-                                       for t in "if" for v in ("", "v")),
-             *(f"glUniformMatrix{n}fv" for n in (2, 3, 4)))
+# Each family whole, every form the allow-list has (glTexGend, glUniform1ui...), so that
+# a form added to GL_SPECS is left out with its family.
+_UNIFORMS = tuple(name for name in GL_SPECS
+                  if name.startswith(("glUniform", "glGetUniformLocation")))
 _COPIES = ("glCopyTexImage2D", "glCopyTexSubImage2D")
-_TEXGEN = ("glTexGeni", "glTexGenf", "glTexGenfv", "glGetTexGeniv")
+_TEXGEN = tuple(name for name in GL_SPECS if name.startswith(("glTexGen", "glGetTexGen")))
 LEFT_OUT: dict[str, dict[str, str]] = {
     "lab20": {name: "lab 20 makes no texture coordinates by texgen" for name in _TEXGEN},
     "spheremap": {**{name: "the sphere-map lab captures nothing" for name in _COPIES},

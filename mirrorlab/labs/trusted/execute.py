@@ -144,7 +144,7 @@ def _child_options() -> dict[str, Any]:
     return {"preexec_fn": _child_setup} if os.name == "posix" else {}
 
 
-def _environment() -> dict[str, str]:
+def gl_process_environment() -> dict[str, str]:
     """The GL process's environment: its offscreen backend pinned to the one chosen here
     (the process sets its own PyOpenGL platform from it)."""
     from mirrorlab.gl.context import BACKEND_VARIABLE, choose
@@ -164,7 +164,7 @@ class CheckerProcess:
     def __init__(self) -> None:
         self.process = subprocess.Popen(
             [sys.executable, "-m", "mirrorlab.labs.trusted.execute", "--serve"],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=_environment(),
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=gl_process_environment(),
             **_child_options())
         assert self.process.stdout is not None
         self.reply_read = self.process.stdout.fileno()
@@ -245,7 +245,7 @@ def run_job(lab: str, source: bytes, file_name: str, variant: Variant, limits: L
             try:
                 done = subprocess.run(
                     [sys.executable, "-m", "mirrorlab.labs.trusted.execute", str(job_file)],
-                    capture_output=True, text=True, env=_environment(), timeout=deadline,
+                    capture_output=True, text=True, env=gl_process_environment(), timeout=deadline,
                     **_child_options())
                 code, stderr = done.returncode, done.stderr
             except subprocess.TimeoutExpired:

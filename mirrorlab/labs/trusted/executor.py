@@ -24,6 +24,7 @@ from OpenGL.error import GLError
 from OpenGL.raw.GL.VERSION import GL_1_0 as RAW
 from OpenGL.raw.GL.VERSION import GL_1_1 as RAW_1_1
 
+from mirrorlab.gl.context import discard_debug_errors
 from mirrorlab.gl.opengl import GL
 from mirrorlab.labs.trusted import calls as C
 from mirrorlab.labs.trusted.calls import CallError, gl_error
@@ -251,6 +252,10 @@ class Executor:
         return {"ok": True, "value": encode(value)}, payloads
 
     def _drain(self) -> int:
+        """The first GL error the student's call left (0: none), every one taken from the
+        queue, and the debug log's copies of them dropped (they are the student's, judged
+        here, not the next pass's)."""
+        discard_debug_errors()
         first = 0
         for _ in range(16):
             code = int(GL.glGetError())

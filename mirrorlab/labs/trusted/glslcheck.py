@@ -64,8 +64,10 @@ def _compile_alone(vertex: str, fragment: str, student: str, variable: str
     limits; else the error's line (0: none) and message."""
     job = json.dumps({"vertex": vertex, "fragment": fragment, "student": student,
                       "variable": variable})
-    environment = {**os.environ, "PYOPENGL_PLATFORM": "egl", "EGL_PLATFORM": "surfaceless",
-                   "LP_NUM_THREADS": "1"}  # compiling needs no rasteriser threads
+    from mirrorlab.labs.trusted.execute import gl_process_environment
+
+    # the checker's own GL backend; compiling needs no rasteriser threads
+    environment = {**gl_process_environment(), "LP_NUM_THREADS": "1"}
     limits = (f"your shader could not be compiled within the limits ({SECONDS:g} s, "
               f"{MEMORY_MB} MB)")
     preexec = _limits if os.name == "posix" else None
@@ -96,9 +98,9 @@ def _answer(stdout: str) -> dict[str, Any] | None:
 def main() -> int:
     """The compiling process: a job on stdin, one JSON line on stdout."""
     job = json.loads(sys.stdin.read())
-    from mirrorlab.gl.context import HeadlessContext
+    from mirrorlab.gl.context import offscreen_context
 
-    context = HeadlessContext()
+    context = offscreen_context()
     try:
         from mirrorlab.labs.trusted.kit import StudentShaderError, compile_program
 
