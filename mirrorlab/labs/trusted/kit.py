@@ -19,6 +19,8 @@ import numpy as np
 
 from mirrorlab import math3d
 from mirrorlab.data import model_file, texture_file
+from mirrorlab.labs.trusted import legacy
+from mirrorlab.labs.trusted.compat_glsl import translate_compat_glsl
 from mirrorlab.labs.trusted.variants import Variant, cube_center, lab20_geometry
 from mirrorlab.scene.graph import SceneGraph
 from mirrorlab.scene.robot import build_robot
@@ -52,16 +54,23 @@ def _gl():
 def compile_program(vertex: str, fragment: str, student: str | None = None,
                     variable: str = "") -> int:
     """A linked program from package shader files (``#include`` expanded); ``student`` GLSL
-    replaces the :data:`STUDENT_MARK` line of either file. Returns the GL program name."""
+    replaces the :data:`STUDENT_MARK` line of either file. Returns the GL program name.
+    The student's GLSL has its compatibility built-ins translated (:mod:`.compat_glsl`);
+    so has a kit file written for immediate mode when the context has no compatibility
+    profile (:mod:`.legacy`)."""
     from mirrorlab.gl.resources import expand_includes
 
     GL = _gl()
     shaders = []
     for name, kind in ((vertex, GL.GL_VERTEX_SHADER), (fragment, GL.GL_FRAGMENT_SHADER)):
+        stage = "vertex" if kind == GL.GL_VERTEX_SHADER else "fragment"
         source = expand_includes(name)
+        if legacy.emulated() is not None:
+            source = translate_compat_glsl(source, stage)
         if student is not None and STUDENT_MARK in source:
             offset = source.split(STUDENT_MARK)[0].count("\n")
-            source = source.replace(STUDENT_MARK, f"#line 1 1\n{student}\n#line "
+            source = source.replace(STUDENT_MARK, f"#line 1 1\n"
+                                    f"{translate_compat_glsl(student, stage)}\n#line "
                                     f"{offset + 2} 0\n")
         shader = GL.glCreateShader(kind)
         GL.glShaderSource(shader, source)
@@ -103,17 +112,15 @@ def uniform(program: int, name: str) -> int:
 
 
 def load_matrix(mode: int, matrix: np.ndarray) -> None:
-    GL = _gl()
-    GL.glMatrixMode(mode)
-    GL.glLoadMatrixd(np.ascontiguousarray(np.asarray(matrix, dtype=np.float64).T))
+    FF = legacy.gl()
+    FF.glMatrixMode(mode)
+    FF.glLoadMatrixd(np.ascontiguousarray(np.asarray(matrix, dtype=np.float64).T))
 
 
 def current_matrices() -> tuple[np.ndarray, np.ndarray]:
-    """The fixed-function (projection, modelview) matrices now, ``(4, 4)`` each, row-major."""
-    GL = _gl()
-    projection = np.asarray(GL.glGetDoublev(GL.GL_PROJECTION_MATRIX), dtype=np.float64)
-    modelview = np.asarray(GL.glGetDoublev(GL.GL_MODELVIEW_MATRIX), dtype=np.float64)
-    return projection.reshape(4, 4).T.copy(), modelview.reshape(4, 4).T.copy()
+    """The fixed-function (projection, modelview) matrices now, ``(4, 4)`` each, row-major
+    (the emulated ones on a core context: :mod:`.legacy`)."""
+    return legacy.current_matrices()
 
 
 class _Mesh:
@@ -244,6 +251,7 @@ class LabBase:
 
     def __init__(self, size: tuple[int, int], variant: Variant) -> None:
         GL = _gl()
+        legacy.start()
         self.width, self.height = int(size[0]), int(size[1])
         self.variant = variant
         self._meshes: dict[str, _Mesh] = {}
@@ -303,11 +311,13 @@ class LabBase:
         GL.glUniform1f(uniform(program, "diffuse"), 0.7)
         GL.glEnable(GL.GL_DEPTH_TEST)
         GL.glActiveTexture(GL.GL_TEXTURE0)
-        GL.glMatrixMode(GL.GL_MODELVIEW)
+        FF = legacy.gl()
+        FF.glMatrixMode(GL.GL_MODELVIEW)
         bound = []
         for mesh, model, color, texture in parts:
-            GL.glPushMatrix()
-            GL.glMultMatrixd(np.ascontiguousarray(np.asarray(model, dtype=np.float64).T))
+            FF.glPushMatrix()
+            FF.glMultMatrixd(np.ascontiguousarray(np.asarray(model, dtype=np.float64).T))
+            legacy.load_matrix_uniforms(program)
             GL.glUniform3f(uniform(program, "color"), *(float(c) for c in color))
             textured = texture is not None and int(texture) > 0
             GL.glUniform1i(uniform(program, "use_texture"), int(textured))
@@ -315,7 +325,7 @@ class LabBase:
                 GL.glBindTexture(GL.GL_TEXTURE_2D, int(texture))
                 bound.append(int(texture))
             self.mesh(mesh).draw()
-            GL.glPopMatrix()
+            FF.glPopMatrix()
         GL.glUseProgram(previous_program)
         return bound
 
@@ -426,11 +436,13 @@ class SphereMapLab(LabBase):
         GL.glActiveTexture(GL.GL_TEXTURE0 + ENV_UNIT)
         GL.glBindTexture(GL.GL_TEXTURE_2D, int(texture))
         GL.glActiveTexture(GL.GL_TEXTURE0)
-        GL.glMatrixMode(GL.GL_MODELVIEW)
-        GL.glPushMatrix()
-        GL.glMultMatrixd(np.ascontiguousarray(self.cone_model.T))
+        FF = legacy.gl()
+        FF.glMatrixMode(GL.GL_MODELVIEW)
+        FF.glPushMatrix()
+        FF.glMultMatrixd(np.ascontiguousarray(self.cone_model.T))
+        legacy.load_matrix_uniforms(program)
         self.mesh("cone").draw()
-        GL.glPopMatrix()
+        FF.glPopMatrix()
         GL.glUseProgram(previous)
 
     def draw_cone_fixed_function(self) -> None:
@@ -441,22 +453,41 @@ class SphereMapLab(LabBase):
         previous = int(GL.glGetIntegerv(GL.GL_CURRENT_PROGRAM))
         active = int(GL.glGetIntegerv(GL.GL_ACTIVE_TEXTURE))
         GL.glUseProgram(0)
-        GL.glDisable(GL.GL_LIGHTING)
-        GL.glEnable(GL.GL_NORMALIZE)
+        FF = legacy.gl()
+        FF.glDisable(GL.GL_LIGHTING)
+        FF.glEnable(GL.GL_NORMALIZE)
         enabled = []
         for unit in range(4):
             GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
             for cap in (GL.GL_TEXTURE_2D, GL.GL_TEXTURE_CUBE_MAP):
-                if GL.glIsEnabled(cap):
+                if FF.glIsEnabled(cap):
                     enabled.append((unit, cap))
-                    GL.glDisable(cap)
+                    FF.glDisable(cap)
         GL.glActiveTexture(GL.GL_TEXTURE0 + self.texgen_unit)
-        GL.glEnable(GL.GL_TEXTURE_2D)
-        GL.glTexEnvi(GL.GL_TEXTURE_ENV, GL.GL_TEXTURE_ENV_MODE, GL.GL_REPLACE)
-        GL.glMatrixMode(GL.GL_MODELVIEW)
-        GL.glPushMatrix()
-        GL.glMultMatrixd(np.ascontiguousarray(self.cone_model.T))
+        FF.glEnable(GL.GL_TEXTURE_2D)
+        FF.glTexEnvi(GL.GL_TEXTURE_ENV, GL.GL_TEXTURE_ENV_MODE, GL.GL_REPLACE)
+        FF.glMatrixMode(GL.GL_MODELVIEW)
+        FF.glPushMatrix()
+        FF.glMultMatrixd(np.ascontiguousarray(self.cone_model.T))
         mesh = self.mesh("cone")
+        emulation = legacy.emulated()
+        if emulation is not None:
+            emulation.draw_elements(mesh.vao, mesh.count)
+        else:
+            self._draw_client_arrays(mesh)
+        FF.glPopMatrix()
+        FF.glDisable(GL.GL_TEXTURE_2D)
+        for unit, cap in enabled:
+            GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
+            FF.glEnable(cap)
+        GL.glActiveTexture(active)
+        FF.glDisable(GL.GL_NORMALIZE)
+        GL.glUseProgram(previous)
+
+    @staticmethod
+    def _draw_client_arrays(mesh: _Mesh) -> None:
+        """The cone from client-state arrays (the compatibility profile's own pipeline)."""
+        GL = _gl()
         GL.glBindVertexArray(0)
         GL.glBindBuffer(GL.GL_ARRAY_BUFFER, mesh.vbo)
         GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, mesh.ebo)
@@ -473,14 +504,6 @@ class SphereMapLab(LabBase):
         GL.glDisableClientState(GL.GL_NORMAL_ARRAY)
         GL.glBindBuffer(GL.GL_ARRAY_BUFFER, 0)
         GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, 0)
-        GL.glPopMatrix()
-        GL.glDisable(GL.GL_TEXTURE_2D)
-        for unit, cap in enabled:
-            GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
-            GL.glEnable(cap)
-        GL.glActiveTexture(active)
-        GL.glDisable(GL.GL_NORMALIZE)
-        GL.glUseProgram(previous)
 
 
 class CubeMapLab(LabBase):
@@ -549,6 +572,7 @@ class CubeMapLab(LabBase):
         GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, int(cube_texture))
         GL.glActiveTexture(GL.GL_TEXTURE0)
         GL.glEnable(GL.GL_TEXTURE_CUBE_MAP_SEAMLESS)
+        legacy.load_matrix_uniforms(program)
         self.mesh("env_sphere").draw()
         GL.glUseProgram(previous)
 

@@ -1,0 +1,950 @@
+"""The labs' legacy OpenGL, carried out by the trusted side on a context without the
+compatibility profile (macOS's 4.1 core context).
+
+The labs' students write the fixed-function style: matrix modes and stacks, ``gluLookAt``,
+``glBegin``/``glEnd``, texgen, texture environment. A compatibility context runs those
+calls itself (Mesa's own pipeline is the oracle); a core context has none of them. When
+:func:`start` finds no compatibility profile, :func:`gl` gives a :class:`FixedFunction`:
+an object with PyOpenGL's names for the legacy calls the labs allow, which carries them
+out (matrix stacks in numpy, GLU's matrices from its man pages, immediate-mode vertices
+gathered into a buffer and drawn with :data:`FIXED_VERTEX`/:data:`FIXED_FRAGMENT`, a
+shader that does what the fixed pipeline did: default ``GL_LIGHT0`` lighting, texgen by
+the OpenGL specification's formulas, the texture environment of each unit), and hands
+every other call to GL. On a compatibility context :func:`gl` is PyOpenGL's GL itself.
+
+What the fixed pipeline's shader leaves out (the labs give no call that would change it):
+lights and materials other than their defaults, fog other than its default, alpha test
+other than ``GL_ALWAYS``, texture units above 7, lines wider than 1 pixel (a core context
+draws them 1 pixel wide), ``glPolygonMode`` of one face only.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from mirrorlab.labs.trusted.calls import CallError, gl_error
+
+GL_MODELVIEW, GL_PROJECTION, GL_TEXTURE = 0x1700, 0x1701, 0x1702
+GL_STACK_OVERFLOW, GL_STACK_UNDERFLOW = 0x0503, 0x0504
+GL_INVALID_ENUM, GL_INVALID_VALUE, GL_INVALID_OPERATION = 0x0500, 0x0501, 0x0502
+GL_TEXTURE_2D, GL_TEXTURE_CUBE_MAP = 0x0DE1, 0x8513
+GL_TEXTURE_GEN = (0x0C60, 0x0C61, 0x0C62, 0x0C63)  # S, T, R, Q
+GL_S = 0x2000
+GL_TEXTURE_GEN_MODE, GL_OBJECT_PLANE, GL_EYE_PLANE = 0x2500, 0x2501, 0x2502
+GL_EYE_LINEAR, GL_OBJECT_LINEAR, GL_SPHERE_MAP = 0x2400, 0x2401, 0x2402
+GL_NORMAL_MAP, GL_REFLECTION_MAP = 0x8511, 0x8512
+GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE = 0x2300, 0x2200
+GL_MODULATE, GL_DECAL, GL_BLEND, GL_REPLACE, GL_ADD = 0x2100, 0x2101, 0x0BE2, 0x1E01, 0x0104
+GL_NORMALIZE, GL_RESCALE_NORMAL = 0x0BA1, 0x803A
+GL_LIGHTING, GL_LIGHT0, GL_LIGHT1, GL_COLOR_MATERIAL = 0x0B50, 0x4000, 0x4001, 0x0B57
+GL_ALPHA_TEST, GL_FOG, GL_POINT_SMOOTH = 0x0BC0, 0x0B60, 0x0B10
+GL_FLAT, GL_SMOOTH = 0x1D00, 0x1D01
+GL_TEXTURE0 = 0x84C0
+GL_ACCUM_BUFFER_BIT = 0x0200
+GL_GENERATE_MIPMAP = 0x8191
+GL_CLAMP, GL_CLAMP_TO_BORDER = 0x2900, 0x812D
+UNIT_CAPS = (GL_TEXTURE_2D, GL_TEXTURE_CUBE_MAP, *GL_TEXTURE_GEN)
+"""Legacy switches that belong to the active texture unit."""
+GLOBAL_CAPS = (GL_NORMALIZE, GL_RESCALE_NORMAL, GL_LIGHTING, GL_LIGHT0, GL_LIGHT1,
+               GL_COLOR_MATERIAL, GL_ALPHA_TEST, GL_FOG, GL_POINT_SMOOTH)
+STACK_DEPTHS = {GL_MODELVIEW: 32, GL_PROJECTION: 32, GL_TEXTURE: 10}
+"""Mesa's own limits (GL_MAX_*_STACK_DEPTH), so overflow errors come where they did."""
+UNITS = 8
+"""Texture units the fixed pipeline has (GL_MAX_TEXTURE_UNITS)."""
+ENV_MODES = {GL_MODULATE: 0, GL_REPLACE: 1, GL_DECAL: 2, GL_BLEND: 3, GL_ADD: 4}
+GEN_MODES = {GL_EYE_LINEAR: 1, GL_OBJECT_LINEAR: 2, GL_SPHERE_MAP: 3, GL_NORMAL_MAP: 4,
+             GL_REFLECTION_MAP: 5}
+SPARE_UNIT = 8
+"""Unit 8 + i takes the fixed shader's sampler of unit i that is not used (a program may
+not point two kinds of sampler at one unit)."""
+
+# attribute locations, as compat_glsl.ATTRIBUTES
+POSITION, NORMAL, COLOR, TEXCOORD0 = 0, 1, 3, 4
+FLOATS = 4 + 3 + 4 + 4 * UNITS
+"""Floats per immediate-mode vertex: position, normal, colour, 8 texture coordinates."""
+
+FIXED_VERTEX = """#version 330 core
+// The fixed pipeline's vertex stage as the labs use it: transform, default GL_LIGHT0
+// lighting, texgen (OpenGL 2.1 section 2.12.4), texture matrices.
+layout(location = 0) in vec4 position;
+layout(location = 1) in vec3 normal;
+layout(location = 3) in vec4 color;
+layout(location = 4) in vec4 texcoord[8];
+
+uniform mat4 modelview;
+uniform mat4 projection;
+uniform mat3 normal_matrix;
+uniform mat4 texture_matrix[8];
+uniform ivec4 gen_mode[8];   // per unit (s, t, r, q): 0 off, 1 eye, 2 object, 3 sphere,
+                             // 4 normal map, 5 reflection map
+uniform vec4 object_plane[32];
+uniform vec4 eye_plane[32];
+uniform bool normalize_normals;
+uniform bool lighting;
+uniform bool light0;
+uniform bool color_material;
+uniform int units;           // units with texturing on (the highest + 1)
+
+smooth out vec4 smooth_color;
+flat out vec4 flat_color;
+out vec4 coord[8];
+out float eye_depth;
+
+vec4 generated(int unit, vec4 given, vec4 object, vec4 eye, vec3 n, vec3 r, vec2 sphere) {
+    vec4 result = given;
+    for (int c = 0; c < 4; ++c) {
+        int mode = gen_mode[unit][c];
+        float value = given[c];
+        if (mode == 1) {
+            value = dot(eye_plane[unit * 4 + c], eye);
+        } else if (mode == 2) {
+            value = dot(object_plane[unit * 4 + c], object);
+        } else if (mode == 3) {
+            value = c < 2 ? sphere[c] : value;
+        } else if (mode == 4) {
+            value = c < 3 ? n[c] : value;
+        } else if (mode == 5) {
+            value = c < 3 ? r[c] : value;
+        }
+        result[c] = value;
+    }
+    return result;
+}
+
+void main() {
+    vec4 eye = modelview * position;
+    vec3 n = normal_matrix * normal;
+    if (normalize_normals) {
+        n = normalize(n);
+    }
+    vec3 u = normalize(eye.xyz);
+    vec3 r = u - 2.0 * n * dot(n, u);
+    float m = 2.0 * sqrt(r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0));
+    vec2 sphere = vec2(r.x / m + 0.5, r.y / m + 0.5);
+    vec4 c = clamp(color, 0.0, 1.0);
+    if (lighting) {
+        vec4 ambient = color_material ? c : vec4(0.2, 0.2, 0.2, 1.0);
+        vec4 diffuse = color_material ? c : vec4(0.8, 0.8, 0.8, 1.0);
+        vec3 lit = 0.2 * ambient.rgb;
+        if (light0) {
+            lit += max(dot(n, vec3(0.0, 0.0, 1.0)), 0.0) * diffuse.rgb;
+        }
+        c = vec4(clamp(lit, 0.0, 1.0), diffuse.a);
+    }
+    smooth_color = c;
+    flat_color = c;
+    for (int unit = 0; unit < 8; ++unit) {
+        coord[unit] = unit < units ? texture_matrix[unit] *
+            generated(unit, texcoord[unit], position, eye, n, r, sphere) : vec4(0.0);
+    }
+    eye_depth = abs(eye.z / eye.w);
+    gl_Position = projection * eye;
+}
+"""
+
+FIXED_FRAGMENT = """#version 330 core
+// The fixed pipeline's fragment stage: each unit's texture (a cube map before a 2D one)
+// combined with the colour so far by that unit's texture environment; default fog.
+smooth in vec4 smooth_color;
+flat in vec4 flat_color;
+in vec4 coord[8];
+in float eye_depth;
+
+uniform sampler2D texture_2d[8];
+uniform samplerCube texture_cube[8];
+uniform ivec2 unit_mode[8];   // (0 off, 1 2D, 2 cube; environment: 0 modulate,
+                              // 1 replace, 2 decal, 3 blend, 4 add)
+uniform bool unit_alpha[8];   // whether the unit's texture has an alpha channel
+uniform int units;
+uniform bool flat_shading;
+uniform bool fog;
+
+out vec4 frag_color;
+
+vec4 environment(vec4 color, vec4 s, int env, bool alpha) {
+    if (env == 0) {
+        return vec4(color.rgb * s.rgb, alpha ? color.a * s.a : color.a);
+    } else if (env == 1) {
+        return vec4(s.rgb, alpha ? s.a : color.a);
+    } else if (env == 2) {
+        return vec4(alpha ? mix(color.rgb, s.rgb, s.a) : s.rgb, color.a);
+    } else if (env == 3) {
+        return vec4(color.rgb * (1.0 - s.rgb), alpha ? color.a * s.a : color.a);
+    }
+    return vec4(min(color.rgb + s.rgb, 1.0), alpha ? color.a * s.a : color.a);
+}
+
+void main() {
+    vec4 color = flat_shading ? flat_color : smooth_color;
+    vec4 s;
+UNITS
+    if (fog) {
+        float f = clamp(exp(-eye_depth), 0.0, 1.0);
+        color = vec4(f * color.rgb, color.a);
+    }
+    frag_color = color;
+}
+""".replace("UNITS", "".join(f"""    if ({unit} < units && unit_mode[{unit}].x != 0) {{
+        s = unit_mode[{unit}].x == 2 ? texture(texture_cube[{unit}], coord[{unit}].xyz)
+                                     : textureProj(texture_2d[{unit}], coord[{unit}]);
+        color = environment(color, s, unit_mode[{unit}].y, unit_alpha[{unit}]);
+    }}
+""" for unit in range(8)))
+"""Sampler arrays take constant indices only: one block per unit."""
+
+
+def _gl() -> Any:
+    from mirrorlab.gl.opengl import GL
+
+    return GL
+
+
+_active: FixedFunction | None = None
+
+
+def start() -> None:
+    """Look at the current context once (a lab session's): without the compatibility
+    profile, a fresh :class:`FixedFunction` carries out the legacy calls from now on."""
+    global _active
+    # like the session's meshes, the emulation's shader and buffers live as long as the
+    # session's context: nothing to free here (the old ones may be another context's)
+    _active = None if has_compatibility() else FixedFunction()
+
+
+def has_compatibility() -> bool:
+    """Whether the current context runs the fixed-function calls itself: a version below
+    3.1, a 3.1 with ``GL_ARB_compatibility``, or a profile mask with the compatibility bit."""
+    GL = _gl()
+    text = GL.glGetString(GL.GL_VERSION) or b""
+    parts = text.decode(errors="replace").split(" ")[0].split(".")
+    version = (int(parts[0]), int(parts[1])) if len(parts) > 1 and parts[0].isdigit() \
+        and parts[1].isdigit() else (0, 0)
+    if version < (3, 1):
+        return True
+    if version == (3, 1):
+        count = int(GL.glGetIntegerv(GL.GL_NUM_EXTENSIONS))
+        return any(GL.glGetStringi(GL.GL_EXTENSIONS, i) == b"GL_ARB_compatibility"
+                   for i in range(count))
+    mask = int(np.asarray(GL.glGetIntegerv(GL.GL_CONTEXT_PROFILE_MASK)).reshape(-1)[0])
+    return bool(mask & GL.GL_CONTEXT_COMPATIBILITY_PROFILE_BIT)
+
+
+def emulated() -> FixedFunction | None:
+    """The emulation in use, or None when the context does the legacy calls itself."""
+    return _active
+
+
+def gl() -> Any:
+    """What the legacy calls go to: the emulation on a core context, else PyOpenGL's GL."""
+    return _active if _active is not None else _gl()
+
+
+def current_matrices() -> tuple[np.ndarray, np.ndarray]:
+    """The (projection, modelview) matrices now, ``(4, 4)`` float64 each, row-major: the
+    emulated stacks' tops, or the context's own."""
+    if _active is not None:
+        return _active.top(GL_PROJECTION).copy(), _active.top(GL_MODELVIEW).copy()
+    GL = _gl()
+    projection = np.asarray(GL.glGetDoublev(GL.GL_PROJECTION_MATRIX), dtype=np.float64)
+    modelview = np.asarray(GL.glGetDoublev(GL.GL_MODELVIEW_MATRIX), dtype=np.float64)
+    return projection.reshape(4, 4).T.copy(), modelview.reshape(4, 4).T.copy()
+
+
+def _inverse(matrix: np.ndarray) -> np.ndarray:
+    try:
+        return np.linalg.inv(matrix)
+    except np.linalg.LinAlgError:
+        return np.zeros_like(matrix)
+
+
+def normal_matrix(modelview: np.ndarray) -> np.ndarray:
+    """The inverse transpose of ``modelview``'s upper 3 x 3, ``(3, 3)``."""
+    return _inverse(modelview[:3, :3]).T
+
+
+def load_matrix_uniforms(program: int) -> None:
+    """Set the ``ml_`` matrix uniforms (:mod:`.compat_glsl`) that ``program`` (in use)
+    declares, from :func:`current_matrices` and the texture matrices."""
+    GL = _gl()
+    projection, modelview = current_matrices()
+    combined = projection @ modelview
+    values = {"ml_ModelViewMatrix": modelview, "ml_ProjectionMatrix": projection,
+              "ml_ModelViewProjectionMatrix": combined}
+    for name, matrix in list(values.items()):
+        inverse = _inverse(matrix)
+        values[name + "Inverse"] = inverse
+        values[name + "Transpose"] = matrix.T
+        values[name + "InverseTranspose"] = inverse.T
+    for name, matrix in values.items():
+        location = int(GL.glGetUniformLocation(program, name))
+        if location >= 0:
+            GL.glUniformMatrix4fv(location, 1, GL.GL_TRUE, matrix.astype(np.float32))
+    location = int(GL.glGetUniformLocation(program, "ml_NormalMatrix"))
+    if location >= 0:
+        GL.glUniformMatrix3fv(location, 1, GL.GL_TRUE,
+                              normal_matrix(modelview).astype(np.float32))
+    location = int(GL.glGetUniformLocation(program, "ml_TextureMatrix"))
+    if location >= 0:
+        textures = np.stack([texture_matrix(unit) for unit in range(UNITS)])
+        GL.glUniformMatrix4fv(location, UNITS, GL.GL_TRUE, textures.astype(np.float32))
+
+
+def texture_matrix(unit: int) -> np.ndarray:
+    """The texture matrix of ``unit`` now, ``(4, 4)`` row-major."""
+    if _active is not None:
+        return _active.top(GL_TEXTURE, unit).copy()
+    GL = _gl()
+    active = int(GL.glGetIntegerv(GL.GL_ACTIVE_TEXTURE))
+    GL.glActiveTexture(GL_TEXTURE0 + unit)
+    matrix = np.asarray(GL.glGetDoublev(GL.GL_TEXTURE_MATRIX), dtype=np.float64)
+    GL.glActiveTexture(active)
+    return matrix.reshape(4, 4).T.copy()
+
+
+# ---------------------------------------------------------------------- the matrices
+def translation(x: float, y: float, z: float) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, 3] = (x, y, z)
+    return m
+
+
+def rotation(angle: float, x: float, y: float, z: float) -> np.ndarray:
+    """glRotate's matrix: ``angle`` degrees about (x, y, z), normalised (none for 0)."""
+    length = math.sqrt(x * x + y * y + z * z)
+    m = np.eye(4)
+    if length == 0.0:
+        return m
+    x, y, z = x / length, y / length, z / length
+    c, s = math.cos(math.radians(angle)), math.sin(math.radians(angle))
+    m[:3, :3] = [[x * x * (1 - c) + c, x * y * (1 - c) - z * s, x * z * (1 - c) + y * s],
+                 [y * x * (1 - c) + z * s, y * y * (1 - c) + c, y * z * (1 - c) - x * s],
+                 [x * z * (1 - c) - y * s, y * z * (1 - c) + x * s, z * z * (1 - c) + c]]
+    return m
+
+
+def ortho(left: float, right: float, bottom: float, top: float, near: float,
+          far: float) -> np.ndarray | None:
+    """glOrtho's matrix (None where GL gives GL_INVALID_VALUE)."""
+    if left == right or bottom == top or near == far:
+        return None
+    m = np.eye(4)
+    m[0, 0], m[1, 1], m[2, 2] = 2 / (right - left), 2 / (top - bottom), -2 / (far - near)
+    m[:3, 3] = (-(right + left) / (right - left), -(top + bottom) / (top - bottom),
+                -(far + near) / (far - near))
+    return m
+
+
+def frustum(left: float, right: float, bottom: float, top: float, near: float,
+            far: float) -> np.ndarray | None:
+    """glFrustum's matrix (None where GL gives GL_INVALID_VALUE)."""
+    if near <= 0 or far <= 0 or left == right or bottom == top or near == far:
+        return None
+    m = np.zeros((4, 4))
+    m[0, 0], m[1, 1] = 2 * near / (right - left), 2 * near / (top - bottom)
+    m[0, 2], m[1, 2] = (right + left) / (right - left), (top + bottom) / (top - bottom)
+    m[2, 2], m[2, 3] = -(far + near) / (far - near), -2 * far * near / (far - near)
+    m[3, 2] = -1.0
+    return m
+
+
+def perspective(fovy: float, aspect: float, near: float, far: float) -> np.ndarray | None:
+    """gluPerspective's matrix, by its man page (None where GLU multiplies nothing)."""
+    radians = math.radians(fovy / 2)
+    sine = math.sin(radians)
+    if far == near or sine == 0 or aspect == 0:
+        return None
+    f = math.cos(radians) / sine
+    m = np.zeros((4, 4))
+    m[0, 0], m[1, 1] = f / aspect, f
+    m[2, 2], m[2, 3] = (far + near) / (near - far), 2 * far * near / (near - far)
+    m[3, 2] = -1.0
+    return m
+
+
+def look_at(eye: tuple[float, float, float], center: tuple[float, float, float],
+            up: tuple[float, float, float]) -> np.ndarray:
+    """gluLookAt's matrix, by its man page (GLU leaves a zero vector unnormalised)."""
+    def unit(v: np.ndarray) -> np.ndarray:
+        length = float(np.linalg.norm(v))
+        return v / length if length != 0.0 else v
+
+    f = unit(np.asarray(center, dtype=np.float64) - np.asarray(eye, dtype=np.float64))
+    s = unit(np.cross(f, np.asarray(up, dtype=np.float64)))
+    u = np.cross(s, f)
+    m = np.eye(4)
+    m[0, :3], m[1, :3], m[2, :3] = s, u, -f
+    return m @ translation(-eye[0], -eye[1], -eye[2])
+
+
+QUADS, QUAD_STRIP, POLYGON = 0x0007, 0x0008, 0x0009
+GL_TRIANGLES, GL_TRIANGLE_STRIP = 0x0004, 0x0005
+GL_LINE_LOOP = 0x0002
+
+
+def core_primitive(mode: int, count: int) -> tuple[int, np.ndarray | None]:
+    """A legacy primitive's (core mode, vertex order or None for as given): quads split
+    into triangles and polygons into a fan, each triangle ending on the vertex the fixed
+    pipeline's flat shading takes its colour from, with the winding kept."""
+    if mode == QUADS:
+        order = []
+        for q in range(count // 4):
+            a, b, c, d = 4 * q, 4 * q + 1, 4 * q + 2, 4 * q + 3
+            order += [a, b, d, b, c, d]
+        return GL_TRIANGLES, np.asarray(order, dtype=np.int64)
+    if mode == QUAD_STRIP:
+        order = []
+        for q in range(max(count // 2 - 1, 0)):  # the quad (a, b, c, d), flat colour of c
+            a, b, c, d = 2 * q, 2 * q + 1, 2 * q + 3, 2 * q + 2
+            order += [a, b, c, d, a, c]
+        return GL_TRIANGLES, np.asarray(order, dtype=np.int64)
+    if mode == POLYGON:
+        order = []
+        for i in range(1, count - 1):
+            order += [i, i + 1, 0]
+        return GL_TRIANGLES, np.asarray(order, dtype=np.int64)
+    return mode, None
+
+
+class FixedFunction:
+    """The fixed-function state of one lab session on a core context, and the legacy calls
+    that change or use it (PyOpenGL's names and arguments); any other name is GL's own."""
+
+    def __init__(self) -> None:
+        GL = _gl()
+        self.mode = GL_MODELVIEW
+        self.stacks: dict[tuple[int, int], list[np.ndarray]] = {}
+        self.caps: dict[tuple[int, int], bool] = {}
+        self.gen_modes: dict[tuple[int, int], int] = {}
+        self.planes: dict[tuple[int, int, int], np.ndarray] = {}
+        self.env: dict[int, int] = {}
+        self.shade = GL_SMOOTH
+        self.color = np.array([1.0, 1.0, 1.0, 1.0])
+        self.normal = np.array([0.0, 0.0, 1.0])
+        self.texcoords = np.tile(np.array([0.0, 0.0, 0.0, 1.0]), (UNITS, 1))
+        self.begun: int | None = None
+        self.vertices: list[np.ndarray] = []
+        self.tex_values: dict[tuple[int, int], Any] = {}
+        """Texture parameters a core context takes otherwise (GL_CLAMP, GL_GENERATE_MIPMAP),
+        by (texture, pname): what the file set."""
+        self.line_width = 1.0
+        self.program = _compile(FIXED_VERTEX, FIXED_FRAGMENT)
+        self.locations: dict[str, int] = {}
+        self.vao = int(GL.glGenVertexArrays(1))
+        self.vbo = int(GL.glGenBuffers(1))
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(_gl(), name)
+
+    # ---------------------------------------------------------------- state
+    @staticmethod
+    def unit() -> int:
+        GL = _gl()
+        return int(np.asarray(GL.glGetIntegerv(GL.GL_ACTIVE_TEXTURE)).reshape(-1)[0]) - \
+            GL_TEXTURE0
+
+    def _stack(self, mode: int, unit: int | None = None) -> list[np.ndarray]:
+        key = (mode, (self.unit() if unit is None else unit) if mode == GL_TEXTURE else 0)
+        stack = self.stacks.get(key)
+        if stack is None:
+            stack = self.stacks[key] = [np.eye(4)]
+        return stack
+
+    def top(self, mode: int, unit: int | None = None) -> np.ndarray:
+        return self._stack(mode, unit)[-1]
+
+    def _outside(self, name: str) -> None:
+        if self.begun is not None:
+            raise gl_error(GL_INVALID_OPERATION, f"{name} between glBegin and glEnd")
+
+    # ---------------------------------------------------------------- matrices
+    def glMatrixMode(self, mode: int) -> None:
+        self._outside("glMatrixMode")
+        if mode not in STACK_DEPTHS:
+            raise gl_error(GL_INVALID_ENUM)
+        self.mode = int(mode)
+
+    def _apply(self, matrix: np.ndarray | None, replace: bool = False) -> None:
+        if matrix is None:
+            raise gl_error(GL_INVALID_VALUE)
+        stack = self._stack(self.mode)
+        stack[-1] = np.array(matrix, dtype=np.float64) if replace else stack[-1] @ matrix
+
+    def glLoadIdentity(self) -> None:
+        self._apply(np.eye(4), replace=True)
+
+    def glPushMatrix(self) -> None:
+        stack = self._stack(self.mode)
+        if len(stack) >= STACK_DEPTHS[self.mode]:
+            raise gl_error(GL_STACK_OVERFLOW)
+        stack.append(stack[-1].copy())
+
+    def glPopMatrix(self) -> None:
+        stack = self._stack(self.mode)
+        if len(stack) <= 1:
+            raise gl_error(GL_STACK_UNDERFLOW)
+        stack.pop()
+
+    @staticmethod
+    def _matrix(values: Any, transpose: bool) -> np.ndarray:
+        m = np.asarray(values, dtype=np.float64).reshape(4, 4)
+        return m if transpose else m.T  # GL's arrays are column-major
+
+    def glLoadMatrixf(self, values: Any) -> None:
+        self._apply(self._matrix(values, False), replace=True)
+
+    glLoadMatrixd = glLoadMatrixf
+
+    def glMultMatrixf(self, values: Any) -> None:
+        self._apply(self._matrix(values, False))
+
+    glMultMatrixd = glMultMatrixf
+
+    def glLoadTransposeMatrixf(self, values: Any) -> None:
+        self._apply(self._matrix(values, True), replace=True)
+
+    glLoadTransposeMatrixd = glLoadTransposeMatrixf
+
+    def glMultTransposeMatrixf(self, values: Any) -> None:
+        self._apply(self._matrix(values, True))
+
+    glMultTransposeMatrixd = glMultTransposeMatrixf
+
+    def glOrtho(self, *args: float) -> None:
+        self._apply(ortho(*args))
+
+    def glFrustum(self, *args: float) -> None:
+        self._apply(frustum(*args))
+
+    def glTranslatef(self, x: float, y: float, z: float) -> None:
+        self._apply(translation(x, y, z))
+
+    glTranslated = glTranslatef
+
+    def glScalef(self, x: float, y: float, z: float) -> None:
+        self._apply(np.diag([x, y, z, 1.0]))
+
+    glScaled = glScalef
+
+    def glRotatef(self, angle: float, x: float, y: float, z: float) -> None:
+        self._apply(rotation(angle, x, y, z))
+
+    glRotated = glRotatef
+
+    def gluLookAt(self, ex: float, ey: float, ez: float, cx: float, cy: float, cz: float,
+                  ux: float, uy: float, uz: float) -> None:
+        self._apply(look_at((ex, ey, ez), (cx, cy, cz), (ux, uy, uz)))
+
+    def gluPerspective(self, fovy: float, aspect: float, near: float, far: float) -> None:
+        matrix = perspective(fovy, aspect, near, far)
+        if matrix is not None:  # GLU returns without a word
+            self._apply(matrix)
+
+    def gluOrtho2D(self, left: float, right: float, bottom: float, top: float) -> None:
+        self._apply(ortho(left, right, bottom, top, -1.0, 1.0))
+
+    # ---------------------------------------------------------------- switches
+    def _cap_key(self, cap: int) -> tuple[int, int] | None:
+        if cap in UNIT_CAPS:
+            return cap, self.unit()
+        if cap in GLOBAL_CAPS:
+            return cap, -1
+        return None
+
+    def glEnable(self, cap: int) -> None:
+        key = self._cap_key(cap)
+        if key is None:
+            _gl().glEnable(cap)
+        else:
+            self.caps[key] = True
+
+    def glDisable(self, cap: int) -> None:
+        key = self._cap_key(cap)
+        if key is None:
+            _gl().glDisable(cap)
+        else:
+            self.caps[key] = False
+
+    def glIsEnabled(self, cap: int) -> bool:
+        key = self._cap_key(cap)
+        if key is None:
+            return bool(_gl().glIsEnabled(cap))
+        return self.caps.get(key, False)
+
+    def enabled(self, cap: int, unit: int = -1) -> bool:
+        return self.caps.get((cap, unit), False)
+
+    def glShadeModel(self, mode: int) -> None:
+        self.shade = int(mode)
+
+    def glHint(self, target: int, mode: int) -> None:
+        GL = _gl()
+        if target in (GL.GL_LINE_SMOOTH_HINT, GL.GL_POLYGON_SMOOTH_HINT):
+            GL.glHint(target, mode)
+
+    def glLineWidth(self, width: float) -> None:
+        if width <= 0:
+            raise gl_error(GL_INVALID_VALUE)
+        self.line_width = float(width)
+
+    def glPolygonMode(self, face: int, mode: int) -> None:
+        _gl().glPolygonMode(_gl().GL_FRONT_AND_BACK, mode)
+
+    def glClear(self, mask: int) -> None:
+        _gl().glClear(mask & ~GL_ACCUM_BUFFER_BIT)
+
+    # ---------------------------------------------------------------- texturing
+    def glTexEnvi(self, target: int, pname: int, mode: int) -> None:
+        if target != GL_TEXTURE_ENV or pname != GL_TEXTURE_ENV_MODE:
+            raise gl_error(GL_INVALID_ENUM)
+        if mode not in ENV_MODES:
+            raise gl_error(GL_INVALID_ENUM)
+        self.env[self.unit()] = int(mode)
+
+    glTexEnvf = glTexEnvi
+
+    def glTexGeni(self, coord: int, pname: int, mode: int) -> None:
+        index = coord - GL_S
+        if not 0 <= index < 4 or pname != GL_TEXTURE_GEN_MODE or mode not in GEN_MODES:
+            raise gl_error(GL_INVALID_ENUM)
+        if (mode == GL_SPHERE_MAP and index > 1) or (mode in (GL_NORMAL_MAP,
+                                                               GL_REFLECTION_MAP)
+                                                      and index > 2):
+            raise gl_error(GL_INVALID_ENUM)
+        self.gen_modes[(self.unit(), index)] = int(mode)
+
+    glTexGenf = glTexGeni
+
+    def glTexGenfv(self, coord: int, pname: int, values: Any) -> None:
+        index = coord - GL_S
+        if not 0 <= index < 4 or pname not in (GL_OBJECT_PLANE, GL_EYE_PLANE):
+            raise gl_error(GL_INVALID_ENUM)
+        plane = np.asarray(values, dtype=np.float64).reshape(4)
+        if pname == GL_EYE_PLANE:  # kept in eye space: p times the inverse modelview
+            plane = plane @ _inverse(self.top(GL_MODELVIEW))
+        self.planes[(self.unit(), index, pname)] = plane
+
+    def glGetTexGeniv(self, coord: int, pname: int) -> np.ndarray:
+        index = coord - GL_S
+        if not 0 <= index < 4 or pname != GL_TEXTURE_GEN_MODE:
+            raise gl_error(GL_INVALID_ENUM)
+        return np.array([self.gen_modes.get((self.unit(), index), GL_EYE_LINEAR)],
+                        dtype=np.int32)
+
+    def plane(self, unit: int, index: int, pname: int) -> np.ndarray:
+        found = self.planes.get((unit, index, pname))
+        if found is not None:
+            return found
+        default = np.zeros(4)
+        if index < 2:
+            default[index] = 1.0
+        return default
+
+    def _bound(self, target: int) -> int:
+        GL = _gl()
+        binding = GL.GL_TEXTURE_BINDING_2D if target == GL_TEXTURE_2D else \
+            GL.GL_TEXTURE_BINDING_CUBE_MAP
+        return int(np.asarray(GL.glGetIntegerv(binding)).reshape(-1)[0])
+
+    def glTexParameteri(self, target: int, pname: int, value: Any) -> None:
+        GL = _gl()
+        texture = self._bound(target)
+        if pname == GL_GENERATE_MIPMAP:
+            self.tex_values[(texture, pname)] = value
+            return
+        if value == GL_CLAMP:
+            self.tex_values[(texture, pname)] = value
+            value = GL_CLAMP_TO_BORDER
+        else:
+            self.tex_values.pop((texture, pname), None)
+        GL.glTexParameteri(target, pname, int(value))
+
+    def glTexParameterf(self, target: int, pname: int, value: Any) -> None:
+        if pname == GL_GENERATE_MIPMAP or value == GL_CLAMP:
+            self.glTexParameteri(target, pname, int(value))
+        else:
+            _gl().glTexParameterf(target, pname, value)
+
+    def tex_parameter(self, target: int, pname: int) -> Any:
+        """What the file set for a parameter a core context takes otherwise, or None."""
+        return self.tex_values.get((self._bound(target), pname))
+
+    def regenerate_mipmaps(self, target: int) -> None:
+        """GL_GENERATE_MIPMAP's work after a write to level 0 of the bound texture."""
+        if self.tex_values.get((self._bound(target), GL_GENERATE_MIPMAP)):
+            _gl().glGenerateMipmap(target)
+
+    # ---------------------------------------------------------------- queries
+    def answers(self, pname: int) -> bool:
+        GL = _gl()
+        return pname in (GL.GL_MODELVIEW_MATRIX, GL.GL_PROJECTION_MATRIX,
+                         GL.GL_TEXTURE_MATRIX, GL.GL_MATRIX_MODE, GL.GL_CURRENT_COLOR,
+                         GL.GL_CURRENT_TEXTURE_COORDS, GL.GL_MODELVIEW_STACK_DEPTH,
+                         GL.GL_PROJECTION_STACK_DEPTH, GL.GL_SHADE_MODEL,
+                         GL.GL_MAX_TEXTURE_UNITS, GL.GL_LINE_WIDTH) \
+            or pname in UNIT_CAPS or pname in GLOBAL_CAPS
+
+    def get(self, pname: int) -> np.ndarray:
+        """The value of a legacy query ``pname`` (:meth:`answers`), as floats."""
+        GL = _gl()
+        matrices = {GL.GL_MODELVIEW_MATRIX: GL_MODELVIEW, GL.GL_PROJECTION_MATRIX:
+                    GL_PROJECTION, GL.GL_TEXTURE_MATRIX: GL_TEXTURE}
+        if pname in matrices:
+            return self.top(matrices[pname]).T.reshape(-1).copy()
+        values: Any = {
+            GL.GL_MATRIX_MODE: [self.mode], GL.GL_CURRENT_COLOR: self.color,
+            GL.GL_CURRENT_TEXTURE_COORDS: self.texcoords[self.unit()] if self.unit() < UNITS
+            else [0.0, 0.0, 0.0, 1.0],
+            GL.GL_MODELVIEW_STACK_DEPTH: [len(self._stack(GL_MODELVIEW))],
+            GL.GL_PROJECTION_STACK_DEPTH: [len(self._stack(GL_PROJECTION))],
+            GL.GL_SHADE_MODEL: [self.shade], GL.GL_MAX_TEXTURE_UNITS: [UNITS],
+            GL.GL_LINE_WIDTH: [self.line_width],
+        }.get(pname)
+        if values is None:
+            values = [float(self.glIsEnabled(pname))]
+        return np.asarray(values, dtype=np.float64)
+
+    # ---------------------------------------------------------------- immediate mode
+    def glBegin(self, mode: int) -> None:
+        if self.begun is not None:
+            raise gl_error(GL_INVALID_OPERATION, "glBegin inside glBegin")
+        self.begun = int(mode)
+        self.vertices = []
+
+    def _vertex(self, values: Any) -> None:
+        values = [float(v) for v in np.asarray(values, dtype=np.float64).reshape(-1)]
+        position = (values + [0.0, 0.0, 1.0][len(values) - 1:])[:4] if len(values) < 4 \
+            else values[:4]
+        if self.begun is None:
+            return  # outside glBegin/glEnd a vertex does nothing
+        self.vertices.append(np.concatenate([position, self.normal, self.color,
+                                             self.texcoords.reshape(-1)]))
+
+    def texcoord(self, unit: int, values: Any) -> None:
+        values = [float(v) for v in np.asarray(values, dtype=np.float64).reshape(-1)]
+        if 0 <= unit < UNITS:
+            self.texcoords[unit] = (values + [0.0, 0.0, 1.0][len(values) - 1:])[:4]
+
+    def glNormal3f(self, x: float, y: float, z: float) -> None:
+        self.normal = np.array([x, y, z], dtype=np.float64)
+
+    glNormal3d = glNormal3f
+
+    def glNormal3fv(self, values: Any) -> None:
+        self.normal = np.asarray(values, dtype=np.float64).reshape(3).copy()
+
+    glNormal3dv = glNormal3fv
+
+    def glEnd(self) -> None:
+        if self.begun is None:
+            raise gl_error(GL_INVALID_OPERATION, "glEnd without glBegin")
+        mode, self.begun = self.begun, None
+        vertices, self.vertices = self.vertices, []
+        if vertices:
+            self.draw_vertices(mode, np.asarray(vertices, dtype=np.float32))
+
+    # ---------------------------------------------------------------- drawing
+    def draw_vertices(self, mode: int, data: np.ndarray) -> None:
+        """Draw ``data`` ((n, FLOATS) float32: position, normal, colour, texture
+        coordinates) as the legacy primitive ``mode``, with the program in use (a lab's
+        program, its built-ins translated) or else the fixed pipeline's shader."""
+        GL = _gl()
+        mode, order = core_primitive(mode, len(data))
+        if order is not None:
+            data = data[order] if order.size else data[:0]
+        if not len(data):
+            return
+        previous_vao = int(np.asarray(GL.glGetIntegerv(GL.GL_VERTEX_ARRAY_BINDING))
+                           .reshape(-1)[0])
+        GL.glBindVertexArray(self.vao)
+        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, self.vbo)
+        GL.glBufferData(GL.GL_ARRAY_BUFFER, data.nbytes, np.ascontiguousarray(data),
+                        GL.GL_STREAM_DRAW)
+        stride = FLOATS * 4
+        layout = [(POSITION, 4, 0), (NORMAL, 3, 4), (COLOR, 4, 7)] + \
+            [(TEXCOORD0 + i, 4, 11 + 4 * i) for i in range(UNITS)]
+        for location, size, offset in layout:
+            GL.glEnableVertexAttribArray(location)
+            GL.glVertexAttribPointer(location, size, GL.GL_FLOAT, GL.GL_FALSE, stride,
+                                     GL.GLvoidp(offset * 4))
+        self._with_program(lambda: GL.glDrawArrays(mode, 0, len(data)))
+        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, 0)
+        GL.glBindVertexArray(previous_vao)
+
+    def draw_elements(self, vao: int, count: int) -> None:
+        """Draw a kit mesh (its vertex array: position at 0, normal at 1; indexed
+        triangles) in the fixed pipeline, the current colour and texture coordinates for
+        every vertex."""
+        GL = _gl()
+        previous_vao = int(np.asarray(GL.glGetIntegerv(GL.GL_VERTEX_ARRAY_BINDING))
+                           .reshape(-1)[0])
+        GL.glBindVertexArray(vao)
+        for location in [COLOR] + [TEXCOORD0 + i for i in range(UNITS)]:
+            GL.glDisableVertexAttribArray(location)
+        GL.glVertexAttrib4f(COLOR, *(float(v) for v in self.color))
+        for i in range(UNITS):
+            GL.glVertexAttrib4f(TEXCOORD0 + i, *(float(v) for v in self.texcoords[i]))
+        self._with_program(lambda: GL.glDrawElements(GL.GL_TRIANGLES, count,
+                                                     GL.GL_UNSIGNED_INT, None))
+        GL.glBindVertexArray(previous_vao)
+
+    def _with_program(self, draw: Any) -> None:
+        GL = _gl()
+        current = int(np.asarray(GL.glGetIntegerv(GL.GL_CURRENT_PROGRAM)).reshape(-1)[0])
+        if current:
+            load_matrix_uniforms(current)
+            draw()
+            return
+        GL.glUseProgram(self.program)
+        try:
+            self._fixed_uniforms()
+            draw()
+        finally:
+            GL.glUseProgram(0)
+
+    def _uniform(self, name: str) -> int:
+        location = self.locations.get(name)
+        if location is None:
+            location = self.locations[name] = int(_gl().glGetUniformLocation(self.program,
+                                                                            name))
+        return location
+
+    def _fixed_uniforms(self) -> None:
+        GL = _gl()
+        u = self._uniform
+        modelview = self.top(GL_MODELVIEW)
+        GL.glUniformMatrix4fv(u("modelview"), 1, GL.GL_TRUE, modelview.astype(np.float32))
+        GL.glUniformMatrix4fv(u("projection"), 1, GL.GL_TRUE,
+                              self.top(GL_PROJECTION).astype(np.float32))
+        GL.glUniformMatrix3fv(u("normal_matrix"), 1, GL.GL_TRUE,
+                              normal_matrix(modelview).astype(np.float32))
+        GL.glUniform1i(u("normalize_normals"), int(self.enabled(GL_NORMALIZE)
+                                                   or self.enabled(GL_RESCALE_NORMAL)))
+        GL.glUniform1i(u("lighting"), int(self.enabled(GL_LIGHTING)))
+        GL.glUniform1i(u("light0"), int(self.enabled(GL_LIGHT0)))
+        GL.glUniform1i(u("color_material"), int(self.enabled(GL_COLOR_MATERIAL)))
+        GL.glUniform1i(u("flat_shading"), int(self.shade == GL_FLAT))
+        GL.glUniform1i(u("fog"), int(self.enabled(GL_FOG)))
+        matrices = np.stack([self.top(GL_TEXTURE, unit) for unit in range(UNITS)])
+        GL.glUniformMatrix4fv(u("texture_matrix"), UNITS, GL.GL_TRUE,
+                              matrices.astype(np.float32))
+        modes = np.zeros((UNITS, 4), dtype=np.int32)
+        unit_modes = np.zeros((UNITS, 2), dtype=np.int32)
+        alpha = np.zeros(UNITS, dtype=np.int32)
+        objects = np.zeros((UNITS * 4, 4), dtype=np.float32)
+        eyes = np.zeros((UNITS * 4, 4), dtype=np.float32)
+        units = 0
+        active = self.unit()
+        for unit in range(UNITS):
+            for index in range(4):
+                if self.enabled(GL_TEXTURE_GEN[index], unit):
+                    modes[unit, index] = GEN_MODES[self.gen_modes.get((unit, index),
+                                                                      GL_EYE_LINEAR)]
+                objects[unit * 4 + index] = self.plane(unit, index, GL_OBJECT_PLANE)
+                eyes[unit * 4 + index] = self.plane(unit, index, GL_EYE_PLANE)
+            cube = self.enabled(GL_TEXTURE_CUBE_MAP, unit)
+            kind = 2 if cube else 1 if self.enabled(GL_TEXTURE_2D, unit) else 0
+            unit_modes[unit] = (kind, ENV_MODES[self.env.get(unit, GL_MODULATE)])
+            if kind:
+                units = unit + 1
+                GL.glActiveTexture(GL_TEXTURE0 + unit)
+                alpha[unit] = int(_has_alpha(GL_TEXTURE_CUBE_MAP_POSITIVE_X if cube
+                                             else GL_TEXTURE_2D))
+            # a 2D and a cube sampler may not share a unit: the unused one takes a spare
+            GL.glUniform1i(u(f"texture_2d[{unit}]"), SPARE_UNIT + unit if cube else unit)
+            GL.glUniform1i(u(f"texture_cube[{unit}]"), unit if cube else SPARE_UNIT + unit)
+        GL.glActiveTexture(GL_TEXTURE0 + active)
+        GL.glUniform1i(u("units"), units)
+        GL.glUniform4iv(u("gen_mode"), UNITS, modes)
+        GL.glUniform2iv(u("unit_mode"), UNITS, unit_modes)
+        GL.glUniform1iv(u("unit_alpha"), UNITS, alpha)
+        GL.glUniform4fv(u("object_plane"), UNITS * 4, objects)
+        GL.glUniform4fv(u("eye_plane"), UNITS * 4, eyes)
+
+
+GL_TEXTURE_CUBE_MAP_POSITIVE_X = 0x8515
+
+
+def _vertex_call(name: str) -> Any:
+    vector = name.endswith("v")
+
+    def call(self: FixedFunction, *args: Any) -> None:
+        self._vertex(args[0] if vector else args)
+
+    return call
+
+
+def _texcoord_call(name: str) -> Any:
+    vector = name.endswith("v")
+    multi = name.startswith("glMultiTexCoord")
+
+    def call(self: FixedFunction, *args: Any) -> None:
+        if multi:
+            self.texcoord(int(args[0]) - GL_TEXTURE0, args[1:])
+        else:
+            self.texcoord(0, args[0] if vector else args)
+
+    return call
+
+
+def _color_call(name: str) -> Any:
+    vector = name.endswith("v")
+    scale = 255.0 if "ub" in name else 1.0
+
+    def call(self: FixedFunction, *args: Any) -> None:
+        values = np.asarray(args[0] if vector else args, dtype=np.float64).reshape(-1)
+        self.color = np.concatenate([values / scale, [1.0] * (4 - values.size)])[:4]
+
+    return call
+
+
+for _size in (1, 2, 3, 4):
+    for _kind in ("f", "d", "i", "s"):
+        for _tail in ("", "v"):
+            _name = f"glVertex{_size}{_kind}{_tail}"
+            if _size > 1:
+                setattr(FixedFunction, _name, _vertex_call(_name))
+            if _kind in "fd":
+                for _base in ("glTexCoord", "glMultiTexCoord"):
+                    _name = f"{_base}{_size}{_kind}{_tail}"
+                    setattr(FixedFunction, _name, _texcoord_call(_name))
+            if _size > 2:
+                _name = f"glColor{_size}{_kind}{_tail}"
+                setattr(FixedFunction, _name, _color_call(_name))
+    if _size > 2:
+        setattr(FixedFunction, f"glColor{_size}ub", _color_call(f"glColor{_size}ub"))
+
+
+def _has_alpha(target: int) -> bool:
+    GL = _gl()
+    size = np.zeros(1, dtype=np.int32)
+    GL.glGetTexLevelParameteriv(target, 0, GL.GL_TEXTURE_ALPHA_SIZE, size)
+    return bool(size[0])
+
+
+def _compile(vertex: str, fragment: str) -> int:
+    GL = _gl()
+    program = GL.glCreateProgram()
+    shaders = []
+    for source, kind in ((vertex, GL.GL_VERTEX_SHADER), (fragment, GL.GL_FRAGMENT_SHADER)):
+        shader = GL.glCreateShader(kind)
+        GL.glShaderSource(shader, source)
+        GL.glCompileShader(shader)
+        if not GL.glGetShaderiv(shader, GL.GL_COMPILE_STATUS):
+            log = GL.glGetShaderInfoLog(shader).decode(errors="replace").strip()
+            raise RuntimeError(f"the fixed pipeline's shader did not compile: {log}")
+        GL.glAttachShader(program, shader)
+        shaders.append(shader)
+    GL.glLinkProgram(program)
+    for shader in shaders:
+        GL.glDeleteShader(shader)
+    if not GL.glGetProgramiv(program, GL.GL_LINK_STATUS):
+        log = GL.glGetProgramInfoLog(program).decode(errors="replace").strip()
+        raise RuntimeError(f"the fixed pipeline's shader did not link: {log}")
+    return int(program)
+
+
+__all__ = ["CallError", "FixedFunction", "current_matrices", "emulated", "gl",
+           "load_matrix_uniforms", "start"]
