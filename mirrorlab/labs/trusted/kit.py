@@ -226,8 +226,7 @@ def texture_parameters(texture_id: int, target: int | None = None) -> dict[str, 
     image_target = target if target == GL.GL_TEXTURE_2D else GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X
     previous = int(GL.glGetIntegerv(binding))
     GL.glBindTexture(target, int(texture_id))
-    values = {key: int(np.asarray(GL.glGetTexParameteriv(target, getattr(GL, key)))
-                       .reshape(-1)[0])
+    values = {key: legacy.tex_parameter(target, getattr(GL, key))
               for key in ("GL_TEXTURE_MIN_FILTER", "GL_TEXTURE_MAG_FILTER",
                           "GL_TEXTURE_WRAP_S", "GL_TEXTURE_WRAP_T", "GL_TEXTURE_MAX_LEVEL",
                           "GL_TEXTURE_BASE_LEVEL")}

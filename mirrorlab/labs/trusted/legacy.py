@@ -253,6 +253,15 @@ def current_matrices() -> tuple[np.ndarray, np.ndarray]:
     return projection.reshape(4, 4).T.copy(), modelview.reshape(4, 4).T.copy()
 
 
+def tex_parameter(target: int, pname: int) -> int:
+    """An integer parameter of the texture bound to ``target``, as the file set it (a core
+    context holds GL_CLAMP as GL_CLAMP_TO_BORDER, and no GL_GENERATE_MIPMAP)."""
+    kept = _active.tex_parameter(target, pname) if _active is not None else None
+    if kept is not None:
+        return int(kept)
+    return int(np.asarray(_gl().glGetTexParameteriv(target, pname)).reshape(-1)[0])
+
+
 def _inverse(matrix: np.ndarray) -> np.ndarray:
     try:
         return np.linalg.inv(matrix)
