@@ -479,8 +479,8 @@ class Executor:
         pixels = self._pixel_data(name, data, arrays, width, height, fmt, kind)
         key = (_face(target), level)
         self._room(texture, key, width * height * 4)
-        RAW.glTexImage2D(target, level, internalformat, width, height, border, fmt, kind,
-                         pixels)
+        (legacy.emulated() or RAW).glTexImage2D(target, level, internalformat, width, height,
+                                                border, fmt, kind, pixels)
         self.ok()
         tainted = pixels is not None and bool(pixels.any())
         self._write(texture, key, Image(width, height, internalformat,
@@ -537,7 +537,7 @@ class Executor:
         if frame >= 0 and kept < self.limits.frame_pictures:
             picture = f"copy_{frame}_{kept}"
             self.pictures[picture] = self.session_frame()
-        getattr(GL, name)(*args)
+        getattr(legacy.gl(), name)(*args)
         self.ok()
         taint = self.tracker.framebuffer_taint
         key = (_face(target), level)

@@ -75,7 +75,7 @@ layout(location = 3) in vec4 color;
 layout(location = 4) in vec4 texcoord[8];
 
 uniform mat4 modelview;
-uniform mat4 projection;
+uniform mat4 modelview_projection;
 uniform mat3 normal_matrix;
 uniform mat4 texture_matrix[8];
 uniform ivec4 gen_mode[8];   // per unit (s, t, r, q): 0 off, 1 eye, 2 object, 3 sphere,
@@ -141,7 +141,7 @@ void main() {
             generated(unit, texcoord[unit], position, eye, n, r, sphere) : vec4(0.0);
     }
     eye_depth = abs(eye.z / eye.w);
-    gl_Position = projection * eye;
+    gl_Position = modelview_projection * position;
 }
 """
 
@@ -246,7 +246,8 @@ def current_matrices() -> tuple[np.ndarray, np.ndarray]:
     """The (projection, modelview) matrices now, ``(4, 4)`` float64 each, row-major: the
     emulated stacks' tops, or the context's own."""
     if _active is not None:
-        return _active.top(GL_PROJECTION).copy(), _active.top(GL_MODELVIEW).copy()
+        return (_active.top(GL_PROJECTION).astype(np.float64),
+                _active.top(GL_MODELVIEW).astype(np.float64))
     GL = _gl()
     projection = np.asarray(GL.glGetDoublev(GL.GL_PROJECTION_MATRIX), dtype=np.float64)
     modelview = np.asarray(GL.glGetDoublev(GL.GL_MODELVIEW_MATRIX), dtype=np.float64)
@@ -279,7 +280,7 @@ def load_matrix_uniforms(program: int) -> None:
     declares, from :func:`current_matrices` and the texture matrices."""
     GL = _gl()
     projection, modelview = current_matrices()
-    combined = projection @ modelview
+    combined = multiply(projection.astype(F), modelview.astype(F)).astype(np.float64)
     values = {"ml_ModelViewMatrix": modelview, "ml_ProjectionMatrix": projection,
               "ml_ModelViewProjectionMatrix": combined}
     for name, matrix in list(values.items()):
@@ -304,7 +305,7 @@ def load_matrix_uniforms(program: int) -> None:
 def texture_matrix(unit: int) -> np.ndarray:
     """The texture matrix of ``unit`` now, ``(4, 4)`` row-major."""
     if _active is not None:
-        return _active.top(GL_TEXTURE, unit).copy()
+        return _active.top(GL_TEXTURE, unit).astype(np.float64)
     GL = _gl()
     active = int(GL.glGetIntegerv(GL.GL_ACTIVE_TEXTURE))
     GL.glActiveTexture(GL_TEXTURE0 + unit)
@@ -314,23 +315,53 @@ def texture_matrix(unit: int) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------- the matrices
+# In float32, each entry computed and each product summed in the order Mesa's own matrix
+# code does (src/mesa/math/m_matrix.c) and GLU's: a vertex exactly on a clip plane (lab
+# 20's mirror quad, on its own capture's near plane) then lands where it lands there.
+F = np.float32
+
+
+def multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a @ b`` of two float32 ``(4, 4)`` matrices, each entry summed left to right."""
+    a, b = a.astype(F), b.astype(F)
+    return (((a[:, 0:1] * b[0:1, :] + a[:, 1:2] * b[1:2, :]) + a[:, 2:3] * b[2:3, :])
+            + a[:, 3:4] * b[3:4, :]).astype(F)
+
+
 def translation(x: float, y: float, z: float) -> np.ndarray:
-    m = np.eye(4)
-    m[:3, 3] = (x, y, z)
+    m = np.eye(4, dtype=F)
+    m[:3, 3] = (F(x), F(y), F(z))
     return m
 
 
-def rotation(angle: float, x: float, y: float, z: float) -> np.ndarray:
-    """glRotate's matrix: ``angle`` degrees about (x, y, z), normalised (none for 0)."""
-    length = math.sqrt(x * x + y * y + z * z)
-    m = np.eye(4)
-    if length == 0.0:
+def rotation(angle: float, ax: float, ay: float, az: float) -> np.ndarray | None:
+    """glRotate's matrix: ``angle`` degrees about (x, y, z), normalised; None where Mesa
+    leaves the matrix alone (an axis shorter than 1e-4)."""
+    x, y, z = F(ax), F(ay), F(az)
+    radians = float(F(angle)) * math.pi / 180.0
+    s, c = F(math.sin(radians)), F(math.cos(radians))
+    m = np.eye(4, dtype=F)
+    if x == 0 and y == 0 and z != 0:
+        m[0, 0] = m[1, 1] = c
+        m[0, 1], m[1, 0] = (s, -s) if z < 0 else (-s, s)
         return m
-    x, y, z = x / length, y / length, z / length
-    c, s = math.cos(math.radians(angle)), math.sin(math.radians(angle))
-    m[:3, :3] = [[x * x * (1 - c) + c, x * y * (1 - c) - z * s, x * z * (1 - c) + y * s],
-                 [y * x * (1 - c) + z * s, y * y * (1 - c) + c, y * z * (1 - c) - x * s],
-                 [x * z * (1 - c) - y * s, y * z * (1 - c) + x * s, z * z * (1 - c) + c]]
+    if x == 0 and z == 0 and y != 0:
+        m[0, 0] = m[2, 2] = c
+        m[0, 2], m[2, 0] = (-s, s) if y < 0 else (s, -s)
+        return m
+    if y == 0 and z == 0 and x != 0:
+        m[1, 1] = m[2, 2] = c
+        m[1, 2], m[2, 1] = (s, -s) if x < 0 else (-s, s)
+        return m
+    magnitude = F(math.sqrt(float(x * x + y * y + z * z)))
+    if magnitude <= F(1.0e-4):
+        return None
+    x, y, z = x / magnitude, y / magnitude, z / magnitude
+    one_c = F(1) - c
+    xs, ys, zs = x * s, y * s, z * s
+    m[:3, :3] = [[one_c * x * x + c, one_c * (x * y) - zs, one_c * (z * x) + ys],
+                 [one_c * (x * y) + zs, one_c * y * y + c, one_c * (y * z) - xs],
+                 [one_c * (z * x) - ys, one_c * (y * z) + xs, one_c * z * z + c]]
     return m
 
 
@@ -339,10 +370,11 @@ def ortho(left: float, right: float, bottom: float, top: float, near: float,
     """glOrtho's matrix (None where GL gives GL_INVALID_VALUE)."""
     if left == right or bottom == top or near == far:
         return None
-    m = np.eye(4)
-    m[0, 0], m[1, 1], m[2, 2] = 2 / (right - left), 2 / (top - bottom), -2 / (far - near)
-    m[:3, 3] = (-(right + left) / (right - left), -(top + bottom) / (top - bottom),
-                -(far + near) / (far - near))
+    lo, r, b, t, n, f = (F(v) for v in (left, right, bottom, top, near, far))
+    m = np.eye(4, dtype=F)
+    m[0, 0], m[0, 3] = F(2) / (r - lo), -(r + lo) / (r - lo)
+    m[1, 1], m[1, 3] = F(2) / (t - b), -(t + b) / (t - b)
+    m[2, 2], m[2, 3] = F(-2) / (f - n), -(f + n) / (f - n)
     return m
 
 
@@ -351,41 +383,49 @@ def frustum(left: float, right: float, bottom: float, top: float, near: float,
     """glFrustum's matrix (None where GL gives GL_INVALID_VALUE)."""
     if near <= 0 or far <= 0 or left == right or bottom == top or near == far:
         return None
-    m = np.zeros((4, 4))
-    m[0, 0], m[1, 1] = 2 * near / (right - left), 2 * near / (top - bottom)
-    m[0, 2], m[1, 2] = (right + left) / (right - left), (top + bottom) / (top - bottom)
-    m[2, 2], m[2, 3] = -(far + near) / (far - near), -2 * far * near / (far - near)
+    lo, r, b, t, n, f = (F(v) for v in (left, right, bottom, top, near, far))
+    m = np.zeros((4, 4), dtype=F)
+    m[0, 0], m[1, 1] = (F(2) * n) / (r - lo), (F(2) * n) / (t - b)
+    m[0, 2], m[1, 2] = (r + lo) / (r - lo), (t + b) / (t - b)
+    m[2, 2], m[2, 3] = -(f + n) / (f - n), -(F(2) * f * n) / (f - n)
     m[3, 2] = -1.0
     return m
 
 
 def perspective(fovy: float, aspect: float, near: float, far: float) -> np.ndarray | None:
-    """gluPerspective's matrix, by its man page (None where GLU multiplies nothing)."""
-    radians = math.radians(fovy / 2)
+    """gluPerspective's matrix, by its man page, in double as GLU makes it (None where
+    GLU multiplies nothing)."""
+    radians = fovy / 2 * math.pi / 180
     sine = math.sin(radians)
-    if far == near or sine == 0 or aspect == 0:
+    depth = far - near
+    if depth == 0 or sine == 0 or aspect == 0:
         return None
-    f = math.cos(radians) / sine
+    cotangent = math.cos(radians) / sine
     m = np.zeros((4, 4))
-    m[0, 0], m[1, 1] = f / aspect, f
-    m[2, 2], m[2, 3] = (far + near) / (near - far), 2 * far * near / (near - far)
+    m[0, 0], m[1, 1] = cotangent / aspect, cotangent
+    m[2, 2], m[2, 3] = -(far + near) / depth, -2 * near * far / depth
     m[3, 2] = -1.0
-    return m
+    return m.astype(F)
 
 
 def look_at(eye: tuple[float, float, float], center: tuple[float, float, float],
             up: tuple[float, float, float]) -> np.ndarray:
-    """gluLookAt's matrix, by its man page (GLU leaves a zero vector unnormalised)."""
+    """gluLookAt's matrix, by its man page, in float as GLU makes it (GLU leaves a zero
+    vector unnormalised), times the translation by -eye."""
     def unit(v: np.ndarray) -> np.ndarray:
-        length = float(np.linalg.norm(v))
-        return v / length if length != 0.0 else v
+        length = F(math.sqrt(float(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])))
+        return v / length if length != 0 else v
 
-    f = unit(np.asarray(center, dtype=np.float64) - np.asarray(eye, dtype=np.float64))
-    s = unit(np.cross(f, np.asarray(up, dtype=np.float64)))
-    u = np.cross(s, f)
-    m = np.eye(4)
-    m[0, :3], m[1, :3], m[2, :3] = s, u, -f
-    return m @ translation(-eye[0], -eye[1], -eye[2])
+    def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                         a[0] * b[1] - a[1] * b[0]], dtype=F)
+
+    forward = unit(np.array([center[i] - eye[i] for i in range(3)], dtype=F))
+    side = unit(cross(forward, np.array(up, dtype=F)))
+    upward = cross(side, forward)
+    m = np.eye(4, dtype=F)
+    m[0, :3], m[1, :3], m[2, :3] = side, upward, -forward
+    return multiply(m, translation(-eye[0], -eye[1], -eye[2]))
 
 
 QUADS, QUAD_STRIP, POLYGON = 0x0007, 0x0008, 0x0009
@@ -458,7 +498,7 @@ class FixedFunction:
         key = (mode, (self.unit() if unit is None else unit) if mode == GL_TEXTURE else 0)
         stack = self.stacks.get(key)
         if stack is None:
-            stack = self.stacks[key] = [np.eye(4)]
+            stack = self.stacks[key] = [np.eye(4, dtype=F)]
         return stack
 
     def top(self, mode: int, unit: int | None = None) -> np.ndarray:
@@ -479,10 +519,10 @@ class FixedFunction:
         if matrix is None:
             raise gl_error(GL_INVALID_VALUE)
         stack = self._stack(self.mode)
-        stack[-1] = np.array(matrix, dtype=np.float64) if replace else stack[-1] @ matrix
+        stack[-1] = np.array(matrix, dtype=F) if replace else multiply(stack[-1], matrix)
 
     def glLoadIdentity(self) -> None:
-        self._apply(np.eye(4), replace=True)
+        self._apply(np.eye(4, dtype=F), replace=True)
 
     def glPushMatrix(self) -> None:
         stack = self._stack(self.mode)
@@ -498,7 +538,7 @@ class FixedFunction:
 
     @staticmethod
     def _matrix(values: Any, transpose: bool) -> np.ndarray:
-        m = np.asarray(values, dtype=np.float64).reshape(4, 4)
+        m = np.asarray(values, dtype=np.float64).reshape(4, 4).astype(F)
         return m if transpose else m.T  # GL's arrays are column-major
 
     def glLoadMatrixf(self, values: Any) -> None:
@@ -533,12 +573,14 @@ class FixedFunction:
     glTranslated = glTranslatef
 
     def glScalef(self, x: float, y: float, z: float) -> None:
-        self._apply(np.diag([x, y, z, 1.0]))
+        self._apply(np.diag([x, y, z, 1.0]).astype(F))
 
     glScaled = glScalef
 
     def glRotatef(self, angle: float, x: float, y: float, z: float) -> None:
-        self._apply(rotation(angle, x, y, z))
+        matrix = rotation(angle, x, y, z)
+        if matrix is not None:
+            self._apply(matrix)
 
     glRotated = glRotatef
 
@@ -632,7 +674,7 @@ class FixedFunction:
             raise gl_error(GL_INVALID_ENUM)
         plane = np.asarray(values, dtype=np.float64).reshape(4)
         if pname == GL_EYE_PLANE:  # kept in eye space: p times the inverse modelview
-            plane = plane @ _inverse(self.top(GL_MODELVIEW))
+            plane = plane @ _inverse(self.top(GL_MODELVIEW).astype(np.float64))
         self.planes[(self.unit(), index, pname)] = plane
 
     def glGetTexGeniv(self, coord: int, pname: int) -> np.ndarray:
@@ -675,6 +717,28 @@ class FixedFunction:
             self.glTexParameteri(target, pname, int(value))
         else:
             _gl().glTexParameterf(target, pname, value)
+
+    def glTexImage2D(self, target: int, level: int, internalformat: int, width: int,
+                     height: int, border: int, fmt: int, kind: int, pixels: Any) -> None:
+        from OpenGL.raw.GL.VERSION import GL_1_0 as RAW
+
+        internal, swizzle = CORE_FORMATS.get(internalformat, (internalformat, None))
+        RAW.glTexImage2D(target, level, internal, width, height, border,
+                         PIXEL_FORMATS.get(fmt, fmt), kind, pixels)
+        self._swizzle(target, swizzle)
+
+    def glCopyTexImage2D(self, target: int, level: int, internalformat: int, x: int, y: int,
+                         width: int, height: int, border: int) -> None:
+        internal, swizzle = CORE_FORMATS.get(internalformat, (internalformat, None))
+        _gl().glCopyTexImage2D(target, level, internal, x, y, width, height, border)
+        self._swizzle(target, swizzle)
+
+    @staticmethod
+    def _swizzle(target: int, swizzle: tuple[int, int, int, int] | None) -> None:
+        GL = _gl()
+        bind = GL_TEXTURE_CUBE_MAP if target != GL_TEXTURE_2D else GL_TEXTURE_2D
+        values = swizzle or (GL.GL_RED, GL.GL_GREEN, GL.GL_BLUE, GL.GL_ALPHA)
+        GL.glTexParameteriv(bind, GL.GL_TEXTURE_SWIZZLE_RGBA, np.asarray(values, np.int32))
 
     def tex_parameter(self, target: int, pname: int) -> Any:
         """What the file set for a parameter a core context takes otherwise, or None."""
@@ -825,10 +889,10 @@ class FixedFunction:
         u = self._uniform
         modelview = self.top(GL_MODELVIEW)
         GL.glUniformMatrix4fv(u("modelview"), 1, GL.GL_TRUE, modelview.astype(np.float32))
-        GL.glUniformMatrix4fv(u("projection"), 1, GL.GL_TRUE,
-                              self.top(GL_PROJECTION).astype(np.float32))
+        GL.glUniformMatrix4fv(u("modelview_projection"), 1, GL.GL_TRUE,
+                              multiply(self.top(GL_PROJECTION), modelview))
         GL.glUniformMatrix3fv(u("normal_matrix"), 1, GL.GL_TRUE,
-                              normal_matrix(modelview).astype(np.float32))
+                              normal_matrix(modelview.astype(np.float64)).astype(np.float32))
         GL.glUniform1i(u("normalize_normals"), int(self.enabled(GL_NORMALIZE)
                                                    or self.enabled(GL_RESCALE_NORMAL)))
         GL.glUniform1i(u("lighting"), int(self.enabled(GL_LIGHTING)))
@@ -874,6 +938,18 @@ class FixedFunction:
 
 
 GL_TEXTURE_CUBE_MAP_POSITIVE_X = 0x8515
+_R, _G, _ZERO, _ONE = 0x1903, 0x1904, 0, 1
+CORE_FORMATS: dict[int, tuple[int, tuple[int, int, int, int] | None]] = {
+    1: (0x8229, (_R, _R, _R, _ONE)), 2: (0x822B, (_R, _R, _R, _G)), 3: (0x1907, None),
+    4: (0x1908, None), 0x1909: (0x8229, (_R, _R, _R, _ONE)),
+    0x8040: (0x8229, (_R, _R, _R, _ONE)), 0x190A: (0x822B, (_R, _R, _R, _G)),
+    0x1906: (0x8229, (_ZERO, _ZERO, _ZERO, _R)),
+}
+"""Legacy internal formats (1-4, GL_LUMINANCE, GL_LUMINANCE8, GL_LUMINANCE_ALPHA,
+GL_ALPHA) as a core context's (GL_R8, GL_RG8, GL_RGB, GL_RGBA) and the swizzle that reads
+them as the legacy ones were read."""
+PIXEL_FORMATS = {0x1909: 0x1903, 0x190A: 0x8227, 0x1906: 0x1903}
+"""Legacy pixel formats (GL_LUMINANCE, GL_LUMINANCE_ALPHA, GL_ALPHA) as GL_RED, GL_RG."""
 
 
 def _vertex_call(name: str) -> Any:
