@@ -338,7 +338,7 @@ def rotation(angle: float, ax: float, ay: float, az: float) -> np.ndarray | None
     """glRotate's matrix: ``angle`` degrees about (x, y, z), normalised; None where Mesa
     leaves the matrix alone (an axis shorter than 1e-4)."""
     x, y, z = F(ax), F(ay), F(az)
-    radians = float(F(angle)) * math.pi / 180.0
+    radians = float(F(float(F(angle)) * math.pi / 180.0))  # sinf of a float, as Mesa's
     s, c = F(math.sin(radians)), F(math.cos(radians))
     m = np.eye(4, dtype=F)
     if x == 0 and y == 0 and z != 0:
@@ -359,9 +359,9 @@ def rotation(angle: float, ax: float, ay: float, az: float) -> np.ndarray | None
     x, y, z = x / magnitude, y / magnitude, z / magnitude
     one_c = F(1) - c
     xs, ys, zs = x * s, y * s, z * s
-    m[:3, :3] = [[one_c * x * x + c, one_c * (x * y) - zs, one_c * (z * x) + ys],
-                 [one_c * (x * y) + zs, one_c * y * y + c, one_c * (y * z) - xs],
-                 [one_c * (z * x) - ys, one_c * (y * z) + xs, one_c * z * z + c]]
+    m[:3, :3] = [[one_c * (x * x) + c, one_c * (x * y) - zs, one_c * (z * x) + ys],
+                 [one_c * (x * y) + zs, one_c * (y * y) + c, one_c * (y * z) - xs],
+                 [one_c * (z * x) - ys, one_c * (y * z) + xs, one_c * (z * z) + c]]
     return m
 
 
@@ -410,8 +410,9 @@ def perspective(fovy: float, aspect: float, near: float, far: float) -> np.ndarr
 
 def look_at(eye: tuple[float, float, float], center: tuple[float, float, float],
             up: tuple[float, float, float]) -> np.ndarray:
-    """gluLookAt's matrix, by its man page, in float as GLU makes it (GLU leaves a zero
-    vector unnormalised), times the translation by -eye."""
+    """gluLookAt's rotation, by its man page, in float as GLU makes it (GLU leaves a zero
+    vector unnormalised); GLU then multiplies by the translation by -eye, a product of its
+    own (float products do not associate)."""
     def unit(v: np.ndarray) -> np.ndarray:
         length = F(math.sqrt(float(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])))
         return v / length if length != 0 else v
@@ -425,7 +426,7 @@ def look_at(eye: tuple[float, float, float], center: tuple[float, float, float],
     upward = cross(side, forward)
     m = np.eye(4, dtype=F)
     m[0, :3], m[1, :3], m[2, :3] = side, upward, -forward
-    return multiply(m, translation(-eye[0], -eye[1], -eye[2]))
+    return m
 
 
 QUADS, QUAD_STRIP, POLYGON = 0x0007, 0x0008, 0x0009
@@ -433,15 +434,17 @@ GL_TRIANGLES, GL_TRIANGLE_STRIP = 0x0004, 0x0005
 GL_LINE_LOOP = 0x0002
 
 
-def core_primitive(mode: int, count: int) -> tuple[int, np.ndarray | None]:
-    """A legacy primitive's (core mode, vertex order or None for as given): quads split
-    into triangles and polygons into a fan, each triangle ending on the vertex the fixed
-    pipeline's flat shading takes its colour from, with the winding kept."""
+def core_primitive(mode: int, count: int, flat: bool = False) -> tuple[int, np.ndarray | None]:
+    """A legacy primitive's (core mode, vertex order or None for as given), the winding
+    kept: quads split into triangles along the diagonal Mesa splits them on (v0-v2), or,
+    with ``flat`` shading, each triangle ending on the quad's last vertex, whose colour
+    the fixed pipeline gives it; quad strips likewise; polygons into a fan, each triangle
+    ending on the polygon's first vertex."""
     if mode == QUADS:
         order = []
         for q in range(count // 4):
             a, b, c, d = 4 * q, 4 * q + 1, 4 * q + 2, 4 * q + 3
-            order += [a, b, d, b, c, d]
+            order += [a, b, d, b, c, d] if flat else [a, b, c, a, c, d]
         return GL_TRIANGLES, np.asarray(order, dtype=np.int64)
     if mode == QUAD_STRIP:
         order = []
@@ -587,6 +590,7 @@ class FixedFunction:
     def gluLookAt(self, ex: float, ey: float, ez: float, cx: float, cy: float, cz: float,
                   ux: float, uy: float, uz: float) -> None:
         self._apply(look_at((ex, ey, ez), (cx, cy, cz), (ux, uy, uz)))
+        self._apply(translation(-ex, -ey, -ez))
 
     def gluPerspective(self, fovy: float, aspect: float, near: float, far: float) -> None:
         matrix = perspective(fovy, aspect, near, far)
@@ -824,7 +828,7 @@ class FixedFunction:
         coordinates) as the legacy primitive ``mode``, with the program in use (a lab's
         program, its built-ins translated) or else the fixed pipeline's shader."""
         GL = _gl()
-        mode, order = core_primitive(mode, len(data))
+        mode, order = core_primitive(mode, len(data), self.shade == GL_FLAT)
         if order is not None:
             data = data[order] if order.size else data[:0]
         if not len(data):
