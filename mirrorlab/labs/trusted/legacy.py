@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from mirrorlab.labs.trusted.calls import CallError, gl_error
+from mirrorlab.labs.trusted.calls import gl_error
 
 GL_MODELVIEW, GL_PROJECTION, GL_TEXTURE = 0x1700, 0x1701, 0x1702
 GL_STACK_OVERFLOW, GL_STACK_UNDERFLOW = 0x0503, 0x0504
@@ -120,10 +120,13 @@ void main() {
     if (normalize_normals) {
         n = normalize(n);
     }
-    vec3 u = normalize(eye.xyz);
+    // finite where Mesa's texgen gives NaN (as mirrorlab.envmap.sphere_map): a vertex at
+    // the eye has u = 0, so r = 0 and (0.5, 0.5); r = (0, 0, -1) gives the rim's (1, 0.5)
+    float distance = length(eye.xyz);
+    vec3 u = distance > 0.0 ? eye.xyz / distance : vec3(0.0);
     vec3 r = u - 2.0 * n * dot(n, u);
     float m = 2.0 * sqrt(r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0));
-    vec2 sphere = vec2(r.x / m + 0.5, r.y / m + 0.5);
+    vec2 sphere = m > 0.0 ? vec2(r.x / m + 0.5, r.y / m + 0.5) : vec2(1.0, 0.5);
     vec4 c = clamp(color, 0.0, 1.0);
     if (lighting) {
         vec4 ambient = color_material ? c : vec4(0.2, 0.2, 0.2, 1.0);
@@ -1034,6 +1037,3 @@ def _compile(vertex: str, fragment: str) -> int:
         raise RuntimeError(f"the fixed pipeline's shader did not link: {log}")
     return int(program)
 
-
-__all__ = ["CallError", "FixedFunction", "current_matrices", "emulated", "gl",
-           "load_matrix_uniforms", "start"]
