@@ -65,6 +65,129 @@ EVERY = {"lab20": (*LAB20, *EQUIVALENT, *LAB20_MORE), "spheremap": SPHEREMAP,
          "cubemap": (*CUBEMAP, *CUBE_EQUIVALENT)}
 
 
+FIXED_FUNCTION = '''FAN = [(0.8 + 0.15 * c, 0.8 + 0.15 * s, c, s) for c, s in (
+    (1.0, 0.0), (0.8776, 0.4794), (0.5403, 0.8415), (0.0707, 0.9975), (-0.4161, 0.9093),
+    (-0.8011, 0.5985), (-0.99, 0.1411))]
+
+
+def fixed_function():
+    """Drawing in the fixed pipeline's ways the labs allow (an oracle's test only)."""
+    glUseProgram(0)
+    glMatrixMode(GL_PROJECTION)
+    glPushMatrix()
+    glLoadIdentity()
+    glOrtho(-1, 1, -1, 1, -1, 1)
+    glMatrixMode(GL_MODELVIEW)
+    glPushMatrix()
+    glLoadIdentity()
+    glDisable(GL_DEPTH_TEST)
+    glEnable(GL_LIGHTING)
+    glEnable(GL_LIGHT0)
+    glEnable(GL_COLOR_MATERIAL)
+    glEnable(GL_NORMALIZE)
+    glBegin(GL_TRIANGLES)
+    glColor3f(1, 0, 0)
+    glNormal3f(0, 0, 2)
+    glVertex2f(-1, -1)
+    glColor3f(0, 1, 0)
+    glNormal3f(1, 0, 1)
+    glVertex2f(-0.5, -1)
+    glColor3f(0, 0, 1)
+    glNormal3f(0, 1, 1)
+    glVertex2f(-0.75, -0.5)
+    glEnd()
+    glDisable(GL_COLOR_MATERIAL)
+    glBegin(GL_QUADS)
+    glNormal3f(0.3, 0.2, 1)
+    glVertex2f(-1, 0.1)
+    glVertex2f(-0.7, 0.1)
+    glNormal3f(-0.5, 0.2, 1)
+    glVertex2f(-0.7, 0.4)
+    glVertex2f(-1, 0.4)
+    glEnd()
+    glDisable(GL_LIGHTING)
+    glShadeModel(GL_FLAT)
+    glBegin(GL_QUAD_STRIP)
+    for i in range(4):
+        glColor3f(i / 3, 0.5, 1 - i / 3)
+        glVertex2f(-0.4 + 0.2 * i, -1)
+        glVertex2f(-0.4 + 0.2 * i, -0.6)
+    glEnd()
+    glShadeModel(GL_SMOOTH)
+    glActiveTexture(GL_TEXTURE0)
+    glBindTexture(GL_TEXTURE_2D, tex_ids[METAL])
+    glEnable(GL_TEXTURE_2D)
+    glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_MODULATE)
+    glMatrixMode(GL_TEXTURE)
+    glLoadIdentity()
+    glScalef(2, 2, 1)
+    glMatrixMode(GL_MODELVIEW)
+    glColor3f(1, 0.8, 0.6)
+    glBegin(GL_POLYGON)
+    for x, y, s, t in ((0.3, -1, 0, 0), (0.7, -1, 1, 0), (0.8, -0.7, 1, 0.6), (0.5, -0.5, 0.5, 1),
+                       (0.3, -0.7, 0, 0.6)):
+        glTexCoord2f(s, t)
+        glVertex2f(x, y)
+    glEnd()
+    glMatrixMode(GL_TEXTURE)
+    glLoadIdentity()
+    glMatrixMode(GL_MODELVIEW)
+    glTexGeni(GL_S, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)
+    glTexGeni(GL_T, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)
+    glEnable(GL_TEXTURE_GEN_S)
+    glEnable(GL_TEXTURE_GEN_T)
+    glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_REPLACE)
+    glBegin(GL_TRIANGLE_FAN)
+    glNormal3f(0, 0, 1)
+    glVertex3f(0.8, 0.8, 0.5)
+    for x, y, c, s in FAN:
+        glNormal3f(c, s, 1)
+        glVertex3f(x, y, 0.5)
+    glEnd()
+    glTexGeni(GL_S, GL_TEXTURE_GEN_MODE, GL_OBJECT_LINEAR)
+    glTexGeni(GL_T, GL_TEXTURE_GEN_MODE, GL_EYE_LINEAR)
+    glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_DECAL)
+    glBegin(GL_TRIANGLE_STRIP)
+    glVertex2f(0.2, 0.2)
+    glVertex2f(0.5, 0.2)
+    glVertex2f(0.2, 0.5)
+    glVertex2f(0.5, 0.5)
+    glEnd()
+    glDisable(GL_TEXTURE_GEN_S)
+    glDisable(GL_TEXTURE_GEN_T)
+    glDisable(GL_TEXTURE_2D)
+    glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_MODULATE)
+    glColor3f(1, 1, 0)
+    glBegin(GL_LINE_LOOP)
+    glVertex2f(-0.9, 0.5)
+    glVertex2f(-0.5, 0.9)
+    glVertex2f(-0.1, 0.5)
+    glEnd()
+    glPointSize(3)
+    glBegin(GL_POINTS)
+    glVertex2f(0, 0)
+    glEnd()
+    glColor3f(1, 1, 1)
+    glMatrixMode(GL_PROJECTION)
+    glPopMatrix()
+    glMatrixMode(GL_MODELVIEW)
+    glPopMatrix()
+    glEnable(GL_DEPTH_TEST)
+
+
+_display = display
+
+
+def display():
+    _display()
+    fixed_function()
+'''
+"""Appended to lab 20's solution: drawing in the fixed pipeline's ways the labs allow and no
+mutant uses (default lighting, the material GL_COLOR_MATERIAL leaves, flat shading,
+quads, quad strips, polygons, fans, texture matrices, texgen's sphere map, object and eye
+planes, the texture environments, lines, points), framed by push and pop."""
+
+
 def mutants_of(lab: str) -> tuple:
     if os.environ.get("MIRRORLAB_ORACLE_ALL") == "1":
         return EVERY[lab]
@@ -123,6 +246,9 @@ def test_core_and_compatibility_grade_alike(lab, tmp_path, monkeypatch):
     written = write_mutants(folder, mutants_of(lab))
     (folder / "solution.py").write_text((SOLUTIONS / f"{spec.folder}.py").read_text())
     (folder / "starter.py").write_text(starter_text(lab))
+    if lab == "lab20":
+        (folder / "fixed_function.py").write_text(
+            (SOLUTIONS / f"{spec.folder}.py").read_text() + "\n\n" + FIXED_FUNCTION)
     if lab == "spheremap":  # GLSL naming compatibility built-ins: translated both ways
         (folder / "builtins.py").write_text((SOLUTIONS / f"{spec.folder}.py").read_text()
                                             .replace("return u - 2.0 * dot(n, u) * n;",
@@ -130,7 +256,7 @@ def test_core_and_compatibility_grade_alike(lab, tmp_path, monkeypatch):
                                                      "(gl_ModelViewMatrix * vec4(u, 0.0)).xyz;"))
     native = _grade(lab, folder, monkeypatch, tmp_path / "cache-native", core=False)
     core = _grade(lab, folder, monkeypatch, tmp_path / "cache-core", core=True)
-    extra = ["builtins"] if lab == "spheremap" else []
+    extra = {"spheremap": ["builtins"], "lab20": ["fixed_function"]}.get(lab, [])
     assert sorted(native) == sorted(core) == sorted([*written, "solution", "starter", *extra])
     for student, expected in native.items():
         got = core[student]
@@ -142,7 +268,7 @@ def test_core_and_compatibility_grade_alike(lab, tmp_path, monkeypatch):
         stray = float((difference > PIXEL_TOLERANCE).mean())
         assert stray <= STRAY_PIXELS, (student, stray, int(difference.max()))
     # the done-when lines of the issue, in the core context
-    for student in ("solution", *extra):
+    for student in ("solution", "builtins") if lab == "spheremap" else ("solution",):
         assert all(passed for _, passed, _ in core[student].tasks), core[student].tasks
     for task, passed, hint in core["starter"].tasks:
         assert not passed and STARTER[lab][task] in hint, (task, hint)

@@ -86,6 +86,8 @@ uniform bool normalize_normals;
 uniform bool lighting;
 uniform bool light0;
 uniform bool color_material;
+uniform vec4 material_ambient;   // the material without GL_COLOR_MATERIAL: the defaults,
+uniform vec4 material_diffuse;   // or the colour it last took while that was on
 uniform int units;           // units with texturing on (the highest + 1)
 
 smooth out vec4 smooth_color;
@@ -129,8 +131,8 @@ void main() {
     vec2 sphere = m > 0.0 ? vec2(r.x / m + 0.5, r.y / m + 0.5) : vec2(1.0, 0.5);
     vec4 c = clamp(color, 0.0, 1.0);
     if (lighting) {
-        vec4 ambient = color_material ? c : vec4(0.2, 0.2, 0.2, 1.0);
-        vec4 diffuse = color_material ? c : vec4(0.8, 0.8, 0.8, 1.0);
+        vec4 ambient = color_material ? c : material_ambient;
+        vec4 diffuse = color_material ? c : material_diffuse;
         vec3 lit = 0.2 * ambient.rgb;
         if (light0) {
             lit += max(dot(n, vec3(0.0, 0.0, 1.0)), 0.0) * diffuse.rgb;
@@ -477,6 +479,8 @@ class FixedFunction:
         self.env: dict[int, int] = {}
         self.shade = GL_SMOOTH
         self.color = np.array([1.0, 1.0, 1.0, 1.0])
+        self.material = (np.array([0.2, 0.2, 0.2, 1.0]), np.array([0.8, 0.8, 0.8, 1.0]))
+        """Ambient and diffuse; GL_COLOR_MATERIAL writes the current colour into both."""
         self.normal = np.array([0.0, 0.0, 1.0])
         self.texcoords = np.tile(np.array([0.0, 0.0, 0.0, 1.0]), (UNITS, 1))
         self.begun: int | None = None
@@ -617,6 +621,14 @@ class FixedFunction:
             _gl().glEnable(cap)
         else:
             self.caps[key] = True
+        if cap == GL_COLOR_MATERIAL:
+            self.set_color(self.color)
+
+    def set_color(self, color: np.ndarray) -> None:
+        """The current colour (and the material's, while GL_COLOR_MATERIAL is on)."""
+        self.color = np.asarray(color, dtype=np.float64)
+        if self.enabled(GL_COLOR_MATERIAL):
+            self.material = (self.color.copy(), self.color.copy())
 
     def glDisable(self, cap: int) -> None:
         key = self._cap_key(cap)
@@ -905,6 +917,8 @@ class FixedFunction:
         GL.glUniform1i(u("lighting"), int(self.enabled(GL_LIGHTING)))
         GL.glUniform1i(u("light0"), int(self.enabled(GL_LIGHT0)))
         GL.glUniform1i(u("color_material"), int(self.enabled(GL_COLOR_MATERIAL)))
+        GL.glUniform4f(u("material_ambient"), *(float(v) for v in self.material[0]))
+        GL.glUniform4f(u("material_diffuse"), *(float(v) for v in self.material[1]))
         GL.glUniform1i(u("flat_shading"), int(self.shade == GL_FLAT))
         GL.glUniform1i(u("fog"), int(self.enabled(GL_FOG)))
         matrices = np.stack([self.top(GL_TEXTURE, unit) for unit in range(UNITS)])
@@ -987,7 +1001,7 @@ def _color_call(name: str) -> Any:
 
     def call(self: FixedFunction, *args: Any) -> None:
         values = np.asarray(args[0] if vector else args, dtype=np.float64).reshape(-1)
-        self.color = np.concatenate([values / scale, [1.0] * (4 - values.size)])[:4]
+        self.set_color(np.concatenate([values / scale, [1.0] * (4 - values.size)])[:4])
 
     return call
 
