@@ -72,6 +72,9 @@ FIXED_FUNCTION = '''FAN = [(0.8 + 0.15 * c, 0.8 + 0.15 * s, c, s) for c, s in (
     (-0.8011, 0.5985), (-0.99, 0.1411))]
 
 
+blank = 0
+
+
 def fixed_function():
     """Drawing in the fixed pipeline's ways the labs allow (an oracle's test only)."""
     glUseProgram(0)
@@ -169,6 +172,19 @@ def fixed_function():
     glBegin(GL_POINTS)
     glVertex2f(0, 0)
     glEnd()
+    global blank
+    if not blank:
+        blank = int(glGenTextures(1))
+    glBindTexture(GL_TEXTURE_2D, blank)
+    glEnable(GL_TEXTURE_2D)
+    glColor3f(0.2, 0.9, 0.4)
+    glBegin(GL_QUADS)
+    glVertex2f(0.55, 0.0)
+    glVertex2f(0.75, 0.0)
+    glVertex2f(0.75, 0.2)
+    glVertex2f(0.55, 0.2)
+    glEnd()
+    glDisable(GL_TEXTURE_2D)
     glColor3f(1, 1, 1)
     glMatrixMode(GL_PROJECTION)
     glPopMatrix()
@@ -187,7 +203,8 @@ def display():
 """Appended to lab 20's solution: drawing in the fixed pipeline's ways the labs allow and no
 mutant uses (default lighting, the material GL_COLOR_MATERIAL leaves, flat shading,
 quads, quad strips, polygons, fans, texture matrices, texgen's sphere map, object and eye
-planes, the texture environments, lines, points), framed by push and pop."""
+planes, the texture environments, lines, points, a texture without an image, which leaves
+its unit untextured), framed by push and pop."""
 
 
 def mutants_of(lab: str) -> tuple:

@@ -940,10 +940,13 @@ class FixedFunction:
                 eyes[unit * 4 + index] = self.plane(unit, index, GL_EYE_PLANE)
             cube = self.enabled(GL_TEXTURE_CUBE_MAP, unit)
             kind = 2 if cube else 1 if self.enabled(GL_TEXTURE_2D, unit) else 0
+            if kind:
+                GL.glActiveTexture(GL_TEXTURE0 + unit)
+                # the fixed pipeline leaves a unit whose texture is incomplete untextured
+                kind = kind if _complete(GL_TEXTURE_CUBE_MAP if cube else GL_TEXTURE_2D) else 0
             unit_modes[unit] = (kind, ENV_MODES[self.env.get(unit, GL_MODULATE)])
             if kind:
                 units = unit + 1
-                GL.glActiveTexture(GL_TEXTURE0 + unit)
                 alpha[unit] = int(_has_alpha(GL_TEXTURE_CUBE_MAP_POSITIVE_X if cube
                                              else GL_TEXTURE_2D))
             # a 2D and a cube sampler may not share a unit: the unused one takes a spare
@@ -1021,6 +1024,35 @@ for _size in (1, 2, 3, 4):
                 setattr(FixedFunction, _name, _color_call(_name))
     if _size > 2:
         setattr(FixedFunction, f"glColor{_size}ub", _color_call(f"glColor{_size}ub"))
+
+
+MIPMAP_FILTERS = (0x2700, 0x2701, 0x2702, 0x2703)
+
+
+def _complete(target: int) -> bool:
+    """Whether the texture bound to ``target`` on the active unit can be sampled: a level 0
+    (of each face), and every level down to 1 x 1 (or GL_TEXTURE_MAX_LEVEL) when its
+    minifying filter wants mipmaps."""
+    GL = _gl()
+    faces = [GL_TEXTURE_2D] if target == GL_TEXTURE_2D else \
+        [GL_TEXTURE_CUBE_MAP_POSITIVE_X + i for i in range(6)]
+
+    def size(face: int, level: int) -> tuple[int, int]:
+        value = np.zeros(1, dtype=np.int32)
+        GL.glGetTexLevelParameteriv(face, level, GL.GL_TEXTURE_WIDTH, value)
+        width = int(value[0])
+        GL.glGetTexLevelParameteriv(face, level, GL.GL_TEXTURE_HEIGHT, value)
+        return width, int(value[0])
+
+    width, height = size(faces[0], 0)
+    if width == 0 or height == 0 or any(size(face, 0) != (width, height)
+                                        for face in faces[1:]):
+        return False
+    if tex_parameter(target, GL.GL_TEXTURE_MIN_FILTER) not in MIPMAP_FILTERS:
+        return True
+    top = max(width, height).bit_length() - 1
+    last = min(top, tex_parameter(target, GL.GL_TEXTURE_MAX_LEVEL))
+    return all(size(face, last)[0] > 0 for face in faces)
 
 
 def _has_alpha(target: int) -> bool:
