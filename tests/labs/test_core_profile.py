@@ -67,12 +67,14 @@ EVERY = {"lab20": (*LAB20, *EQUIVALENT, *LAB20_MORE), "spheremap": SPHEREMAP,
          "cubemap": (*CUBEMAP, *CUBE_EQUIVALENT)}
 
 
-FIXED_FUNCTION = '''FAN = [(0.8 + 0.15 * c, 0.8 + 0.15 * s, c, s) for c, s in (
+FIXED_FUNCTION = '''import numpy as np
+
+FAN = [(0.8 + 0.15 * c, 0.8 + 0.15 * s, c, s) for c, s in (
     (1.0, 0.0), (0.8776, 0.4794), (0.5403, 0.8415), (0.0707, 0.9975), (-0.4161, 0.9093),
     (-0.8011, 0.5985), (-0.99, 0.1411))]
 
 
-blank = 0
+blank = luminance = old_style = 0
 
 
 def fixed_function():
@@ -184,6 +186,35 @@ def fixed_function():
     glVertex2f(0.75, 0.2)
     glVertex2f(0.55, 0.2)
     glEnd()
+    global luminance, old_style
+    if not luminance:  # legacy formats: a 2 x 2 luminance texture, GL_CLAMP, format 3
+        luminance, old_style = (int(t) for t in glGenTextures(2))
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 1)
+        glBindTexture(GL_TEXTURE_2D, luminance)
+        glTexImage2D(GL_TEXTURE_2D, 0, GL_LUMINANCE, 2, 2, 0, GL_LUMINANCE, GL_UNSIGNED_BYTE,
+                     np.array([[0, 255], [128, 64]], dtype=np.uint8))
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST)
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR)
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP)
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP)
+        glBindTexture(GL_TEXTURE_2D, old_style)
+        glTexImage2D(GL_TEXTURE_2D, 0, 3, 2, 1, 0, GL_RGB, GL_UNSIGNED_BYTE,
+                     np.array([255, 0, 0, 0, 0, 255], dtype=np.uint8))
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR)
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 4)
+    glBindTexture(GL_TEXTURE_2D, luminance)
+    glColor3f(1, 0.5, 1)
+    glBegin(GL_QUADS)
+    for s, t in ((-0.2, -0.2), (1.2, -0.2), (1.2, 1.2), (-0.2, 1.2)):
+        glTexCoord2f(s, t)
+        glVertex2f(0.8 + 0.2 * s, 0.2 + 0.2 * t)
+    glEnd()
+    glBindTexture(GL_TEXTURE_2D, old_style)
+    glBegin(GL_QUADS)
+    for s, t in ((0, 0), (1, 0), (1, 1), (0, 1)):
+        glTexCoord2f(s, t)
+        glVertex2f(0.8 + 0.2 * s, -0.2 + 0.2 * t)
+    glEnd()
     glDisable(GL_TEXTURE_2D)
     glColor3f(1, 1, 1)
     glMatrixMode(GL_PROJECTION)
@@ -204,7 +235,7 @@ def display():
 mutant uses (default lighting, the material GL_COLOR_MATERIAL leaves, flat shading,
 quads, quad strips, polygons, fans, texture matrices, texgen's sphere map, object and eye
 planes, the texture environments, lines, points, a texture without an image, which leaves
-its unit untextured), framed by push and pop."""
+its unit untextured, legacy texture formats and GL_CLAMP), framed by push and pop."""
 
 
 def mutants_of(lab: str) -> tuple:

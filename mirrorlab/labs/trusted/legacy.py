@@ -163,6 +163,8 @@ uniform samplerCube texture_cube[8];
 uniform ivec2 unit_mode[8];   // (0 off, 1 2D, 2 cube; environment: 0 modulate,
                               // 1 replace, 2 decal, 3 blend, 4 add)
 uniform bool unit_alpha[8];   // whether the unit's texture has an alpha channel
+uniform bvec2 unit_clamp[8];  // GL_CLAMP for s, t: coordinates clamped to [0, 1], then
+                              // sampled with GL_CLAMP_TO_BORDER (GL_CLAMP's own way)
 uniform int units;
 uniform bool flat_shading;
 uniform bool fog;
@@ -185,6 +187,7 @@ vec4 environment(vec4 color, vec4 s, int env, bool alpha) {
 void main() {
     vec4 color = flat_shading ? flat_color : smooth_color;
     vec4 s;
+    vec2 st;
 UNITS
     if (fog) {
         float f = clamp(exp(-eye_depth), 0.0, 1.0);
@@ -193,8 +196,11 @@ UNITS
     frag_color = color;
 }
 """.replace("UNITS", "".join(f"""    if ({unit} < units && unit_mode[{unit}].x != 0) {{
+        st = coord[{unit}].xy / coord[{unit}].w;
+        st = vec2(unit_clamp[{unit}].x ? clamp(st.x, 0.0, 1.0) : st.x,
+                  unit_clamp[{unit}].y ? clamp(st.y, 0.0, 1.0) : st.y);
         s = unit_mode[{unit}].x == 2 ? texture(texture_cube[{unit}], coord[{unit}].xyz)
-                                     : textureProj(texture_2d[{unit}], coord[{unit}]);
+                                     : texture(texture_2d[{unit}], st);
         color = environment(color, s, unit_mode[{unit}].y, unit_alpha[{unit}]);
     }}
 """ for unit in range(8)))
@@ -927,6 +933,7 @@ class FixedFunction:
         modes = np.zeros((UNITS, 4), dtype=np.int32)
         unit_modes = np.zeros((UNITS, 2), dtype=np.int32)
         alpha = np.zeros(UNITS, dtype=np.int32)
+        clamps = np.zeros((UNITS, 2), dtype=np.int32)
         objects = np.zeros((UNITS * 4, 4), dtype=np.float32)
         eyes = np.zeros((UNITS * 4, 4), dtype=np.float32)
         units = 0
@@ -949,6 +956,9 @@ class FixedFunction:
                 units = unit + 1
                 alpha[unit] = int(_has_alpha(GL_TEXTURE_CUBE_MAP_POSITIVE_X if cube
                                              else GL_TEXTURE_2D))
+                if not cube:
+                    clamps[unit] = [tex_parameter(GL_TEXTURE_2D, wrap) == GL_CLAMP
+                                    for wrap in (GL.GL_TEXTURE_WRAP_S, GL.GL_TEXTURE_WRAP_T)]
             # a 2D and a cube sampler may not share a unit: the unused one takes a spare
             GL.glUniform1i(u(f"texture_2d[{unit}]"), SPARE_UNIT + unit if cube else unit)
             GL.glUniform1i(u(f"texture_cube[{unit}]"), unit if cube else SPARE_UNIT + unit)
@@ -957,6 +967,7 @@ class FixedFunction:
         GL.glUniform4iv(u("gen_mode"), UNITS, modes)
         GL.glUniform2iv(u("unit_mode"), UNITS, unit_modes)
         GL.glUniform1iv(u("unit_alpha"), UNITS, alpha)
+        GL.glUniform2iv(u("unit_clamp"), UNITS, clamps)
         GL.glUniform4fv(u("object_plane"), UNITS * 4, objects)
         GL.glUniform4fv(u("eye_plane"), UNITS * 4, eyes)
 
