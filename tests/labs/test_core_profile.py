@@ -238,6 +238,44 @@ planes, the texture environments, lines, points, a texture without an image, whi
 its unit untextured, legacy texture formats and GL_CLAMP), framed by push and pop."""
 
 
+CUBE_FIXED_FUNCTION = '''def cube_fixed_function():
+    """The live cube map through texgen in the fixed pipeline (an oracle's test only)."""
+    glUseProgram(0)
+    glActiveTexture(GL_TEXTURE1)
+    glBindTexture(GL_TEXTURE_CUBE_MAP, cube_texture)
+    glEnable(GL_TEXTURE_CUBE_MAP)
+    glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_REPLACE)
+    for mode, x in ((GL_REFLECTION_MAP, -2.6), (GL_NORMAL_MAP, -1.2)):
+        for coord in (GL_S, GL_T, GL_R):
+            glTexGeni(coord, GL_TEXTURE_GEN_MODE, mode)
+        for cap in (GL_TEXTURE_GEN_S, GL_TEXTURE_GEN_T, GL_TEXTURE_GEN_R):
+            glEnable(cap)
+        glBegin(GL_TRIANGLE_FAN)
+        glNormal3f(0, 0, 1)
+        glVertex3f(x, 1.6, 1.5)
+        for i in range(13):
+            c, s = (1, 0.866, 0.5, 0, -0.5, -0.866, -1, -0.866, -0.5, 0, 0.5, 0.866, 1)[i], \
+                (0, 0.5, 0.866, 1, 0.866, 0.5, 0, -0.5, -0.866, -1, -0.866, -0.5, 0)[i]
+            glNormal3f(c, s, 0.4)
+            glVertex3f(x + 0.6 * c, 1.6 + 0.6 * s, 1.5)
+        glEnd()
+    for cap in (GL_TEXTURE_GEN_S, GL_TEXTURE_GEN_T, GL_TEXTURE_GEN_R, GL_TEXTURE_CUBE_MAP):
+        glDisable(cap)
+    glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_MODULATE)
+    glActiveTexture(GL_TEXTURE0)
+
+
+_display = display
+
+
+def display():
+    _display()
+    cube_fixed_function()
+'''
+"""Appended to the cube-map solution: its live cube map on two discs, through
+GL_REFLECTION_MAP and GL_NORMAL_MAP texgen and a cube map enabled on unit 1."""
+
+
 def mutants_of(lab: str) -> tuple:
     if os.environ.get("MIRRORLAB_ORACLE_ALL") == "1":
         return EVERY[lab]
@@ -299,6 +337,9 @@ def test_core_and_compatibility_grade_alike(lab, tmp_path, monkeypatch):
     if lab == "lab20":
         (folder / "fixed_function.py").write_text(
             (SOLUTIONS / f"{spec.folder}.py").read_text() + "\n\n" + FIXED_FUNCTION)
+    if lab == "cubemap":
+        (folder / "cube_fixed_function.py").write_text(
+            (SOLUTIONS / f"{spec.folder}.py").read_text() + "\n\n" + CUBE_FIXED_FUNCTION)
     if lab == "spheremap":  # GLSL naming compatibility built-ins: translated both ways
         (folder / "builtins.py").write_text((SOLUTIONS / f"{spec.folder}.py").read_text()
                                             .replace("return u - 2.0 * dot(n, u) * n;",
@@ -306,7 +347,8 @@ def test_core_and_compatibility_grade_alike(lab, tmp_path, monkeypatch):
                                                      "(gl_ModelViewMatrix * vec4(u, 0.0)).xyz;"))
     native = _grade(lab, folder, monkeypatch, tmp_path / "cache-native", core=False)
     core = _grade(lab, folder, monkeypatch, tmp_path / "cache-core", core=True)
-    extra = {"spheremap": ["builtins"], "lab20": ["fixed_function"]}.get(lab, [])
+    extra = {"spheremap": ["builtins"], "lab20": ["fixed_function"],
+             "cubemap": ["cube_fixed_function"]}[lab]
     assert sorted(native) == sorted(core) == sorted([*written, "solution", "starter", *extra])
     for student, expected in native.items():
         got = core[student]
