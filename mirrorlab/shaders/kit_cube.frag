@@ -1,4 +1,4 @@
-#version 330 compatibility
+#version 330 core
 // The cube-map lab's sphere: the world-space reflection of the eye ray goes through the
 // student's cube_face and cube_face_st (declared below); the kit turns that face and
 // (s, t) back into a direction by the OpenGL table and samples the cube map there, so a

@@ -1,4 +1,4 @@
-#version 330 compatibility
+#version 330 core
 // The cube-map lab's sphere: world-space position and normal (a unit sphere moved to
 // `center`).
 layout(location = 0) in vec3 position;

@@ -1,4 +1,4 @@
-#version 330 compatibility
+#version 330 core
 // Lambert lighting from one directional light given in eye space, plus ambient.
 in vec3 eye_normal;
 in vec2 surface_uv;

@@ -1,4 +1,4 @@
-#version 330 compatibility
+#version 330 core
 // The sphere-map lab's cone, per fragment: the student's reflect_eye and sphere_map_st
 // (declared below) pick the texel of the sphere map.
 in vec3 eye_position;

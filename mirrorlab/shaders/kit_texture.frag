@@ -1,4 +1,4 @@
-#version 330 compatibility
+#version 330 core
 // Unlit: the texture's colour as it is (a captured image is already lit).
 in vec2 texture_coordinate;
 

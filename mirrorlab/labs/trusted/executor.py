@@ -27,6 +27,7 @@ from OpenGL.raw.GL.VERSION import GL_1_1 as RAW_1_1
 from mirrorlab.gl.context import discard_debug_errors
 from mirrorlab.gl.opengl import GL
 from mirrorlab.labs.trusted import calls as C
+from mirrorlab.labs.trusted import legacy
 from mirrorlab.labs.trusted.calls import CallError, gl_error
 from mirrorlab.labs.trusted.kit import (
     PICTURES,
@@ -284,7 +285,7 @@ class Executor:
         checked = C.check_arguments(name, spec, args)
         if spec.handler:
             return getattr(self, spec.handler)(name, checked, arrays)
-        getattr(GL, name)(*checked)
+        getattr(legacy.gl(), name)(*checked)
         self.ok()
         return None
 
@@ -297,7 +298,7 @@ class Executor:
                             f"display(); set-up makes textures and state, and draws nothing")
 
     def _function(self, name: str) -> Callable[..., Any]:
-        return getattr(GLU if name.startswith("glu") else GL, name)
+        return getattr(legacy.emulated() or (GLU if name.startswith("glu") else GL), name)
 
     @staticmethod
     def _array(name: str, values: list[float]) -> np.ndarray:
@@ -308,7 +309,7 @@ class Executor:
         return np.asarray(values, dtype=dtype)
 
     def matrix_mode(self, name: str, args: list[Any], arrays: Any) -> None:
-        GL.glMatrixMode(args[0])
+        legacy.gl().glMatrixMode(args[0])
         self.ok()
         self.tracker.matrix_mode = self.tracker.setting(args[0])
 
@@ -324,14 +325,14 @@ class Executor:
                            mode_line=self.tracker.matrix_mode.line, args=args)
 
     def push_matrix(self, name: str, args: list[Any], arrays: Any) -> None:
-        GL.glPushMatrix()
+        legacy.gl().glPushMatrix()
         self.ok()
         mode = self.tracker.matrix_mode.value
         stack = self.tracker.matrix_stacks.setdefault(mode, [])
         stack.append(list(self.tracker.matrix_ops.get(mode, [])))
 
     def pop_matrix(self, name: str, args: list[Any], arrays: Any) -> None:
-        GL.glPopMatrix()
+        legacy.gl().glPopMatrix()
         self.ok()
         mode = self.tracker.matrix_mode.value
         stack = self.tracker.matrix_stacks.setdefault(mode, [])
@@ -344,7 +345,7 @@ class Executor:
         self.tracker.viewport = self.tracker.setting(list(args))
 
     def clear(self, name: str, args: list[Any], arrays: Any) -> None:
-        GL.glClear(args[0])
+        legacy.gl().glClear(args[0])
         self.ok()
         tracker = self.tracker
         scissor = tracker.is_enabled(int(GL.GL_SCISSOR_TEST))
@@ -390,7 +391,7 @@ class Executor:
         self.tracker.clear_color = self.tracker.setting(tuple(args))
 
     def enable(self, name: str, args: list[Any], arrays: Any) -> None:
-        getattr(GL, name)(args[0])
+        getattr(legacy.gl(), name)(args[0])
         self.ok()
         self.tracker.set_enabled(args[0], name == "glEnable")
 
@@ -403,14 +404,14 @@ class Executor:
 
     # ------------------------------------------------------------------ immediate mode
     def begin(self, name: str, args: list[Any], arrays: Any) -> None:
-        GL.glBegin(args[0])
+        legacy.gl().glBegin(args[0])
         self.tracker.primitive = Primitive(args[0], self.tracker.line, self.tracker.function)
 
     def end(self, name: str, args: list[Any], arrays: Any) -> None:
         primitive = self.tracker.primitive
         if primitive is None:
             raise gl_error(C.GL_INVALID_OPERATION, "glEnd without glBegin")
-        GL.glEnd()
+        legacy.gl().glEnd()
         self.tracker.primitive = None
         self.ok()
         extra: dict[str, Any] = {"mode": primitive.mode, "begin_line": primitive.line,
@@ -454,9 +455,9 @@ class Executor:
             raise Stop(f"stopped: more than {self.limits.frame_vertices} vertices {where} "
                        f"(the labs draw a handful with glVertex)")
         if name.endswith("v"):
-            getattr(GL, name)(self._array(name, values))
+            getattr(legacy.gl(), name)(self._array(name, values))
         else:
-            getattr(GL, name)(*values)
+            getattr(legacy.gl(), name)(*values)
         primitive = self.tracker.primitive
         if primitive is not None:
             position = [*values, *(0.0, 1.0)[len(values) - 2:]][:4] if len(values) < 4 \
@@ -471,30 +472,30 @@ class Executor:
             unit, values = args[0] - int(GL.GL_TEXTURE0), args[1:]
             if name.endswith("v"):
                 values = args[1]
-                getattr(GL, name)(args[0], self._array(name, values))
+                getattr(legacy.gl(), name)(args[0], self._array(name, values))
             else:
-                getattr(GL, name)(*args)
+                getattr(legacy.gl(), name)(*args)
         elif name.endswith("v"):
             values = args[0]
-            getattr(GL, name)(self._array(name, values))
+            getattr(legacy.gl(), name)(self._array(name, values))
         else:
-            getattr(GL, name)(*args)
+            getattr(legacy.gl(), name)(*args)
         if unit < 4:
             self.tracker.texcoords[unit] = [*values, *(0.0, 0.0, 1.0)[len(values) - 1:]][:4]
 
     def color(self, name: str, args: list[Any], arrays: Any) -> None:
         values = args[0] if name.endswith("v") else args
         if name.endswith("v"):
-            getattr(GL, name)(self._array(name, values))
+            getattr(legacy.gl(), name)(self._array(name, values))
         else:
-            getattr(GL, name)(*values)
+            getattr(legacy.gl(), name)(*values)
         high = C.TYPE_RANGES.get(C.form_type(name), (0, 1))[1]
         # GL's conversion of integer colours: the type's largest value is 1.0
         self.tracker.color = [max(v / high, -1.0) for v in values] + [1.0] * (4 - len(values))
 
     def vector_call(self, name: str, args: list[Any], arrays: Any) -> None:
         converted = [self._array(name, a) if isinstance(a, list) else a for a in args]
-        getattr(GL, name)(*converted)
+        getattr(legacy.gl(), name)(*converted)
         self.ok()
 
     # ------------------------------------------------------------------ textures
@@ -591,8 +592,8 @@ class Executor:
         pixels = self._pixel_data(name, data, arrays, width, height, fmt, kind)
         key = (_face(target), level)
         self._room(texture, key, width * height * 4)
-        RAW.glTexImage2D(target, level, internalformat, width, height, border, fmt, kind,
-                         pixels)
+        (legacy.emulated() or RAW).glTexImage2D(target, level, internalformat, width, height,
+                                                border, fmt, kind, pixels)
         self.ok()
         tainted = pixels is not None and bool(pixels.any())
         self._write(texture, key, Image(width, height, internalformat,
@@ -630,6 +631,9 @@ class Executor:
         if level == 0:
             auto = texture.params.get(int(GL.GL_GENERATE_MIPMAP))
             texture.mipmaps_fresh = bool(auto and auto.value)
+            emulation = legacy.emulated()
+            if emulation is not None and texture.mipmaps_fresh:
+                emulation.regenerate_mipmaps(texture.target)
 
     def copy_tex_image(self, name: str, args: list[Any], arrays: Any) -> None:
         texture = self._texture(args[0], name)
@@ -646,7 +650,7 @@ class Executor:
         if frame >= 0 and kept < self.limits.frame_pictures:
             picture = f"copy_{frame}_{kept}"
             self.pictures[picture] = self.session_frame()
-        getattr(GL, name)(*args)
+        getattr(legacy.gl(), name)(*args)
         self.ok()
         taint = self.tracker.taint_in((x, y, width, height))
         key = (_face(target), level)
@@ -688,15 +692,15 @@ class Executor:
             if value not in C.TEX_PARAM_VALUES:
                 raise gl_error(C.GL_INVALID_ENUM, f"{name}: {value!r} is not a filter or a "
                                f"wrap mode")
-            GL.glTexParameteri(target, pname, int(value))
+            legacy.gl().glTexParameteri(target, pname, int(value))
         elif isinstance(value, list):
             getattr(GL, name)(target, pname, self._array(name, value))
         elif name == "glTexParameteri" or pname in (int(GL.GL_TEXTURE_BASE_LEVEL),
                                                     int(GL.GL_TEXTURE_MAX_LEVEL),
                                                     int(GL.GL_GENERATE_MIPMAP)):
-            GL.glTexParameteri(target, pname, int(value))
+            legacy.gl().glTexParameteri(target, pname, int(value))
         else:
-            GL.glTexParameterf(target, pname, float(value))
+            legacy.gl().glTexParameterf(target, pname, float(value))
         self.ok()
         texture.params[pname] = self.tracker.setting(value)
 
@@ -726,14 +730,14 @@ class Executor:
         mode = int(value)
         if mode != value or mode not in C.TEXENV_MODES:
             raise gl_error(C.GL_INVALID_ENUM, f"{name}: {args[2]!r} is not a texture mode")
-        GL.glTexEnvi(args[0], args[1], mode)
+        legacy.gl().glTexEnvi(args[0], args[1], mode)
         self.ok()
 
     def texgen(self, name: str, args: list[Any], arrays: Any) -> None:
         coord, pname, mode = args
         if int(mode) != mode or int(mode) not in C.TEXGEN_MODES:
             raise gl_error(C.GL_INVALID_ENUM, f"{name}: {mode!r} is not a texgen mode")
-        GL.glTexGeni(coord, pname, int(mode))
+        legacy.gl().glTexGeni(coord, pname, int(mode))
         self.ok()
         tracker = self.tracker
         tracker.texgen[(tracker.active_unit.value, coord)] = tracker.setting(int(mode))
@@ -812,7 +816,12 @@ class Executor:
         dtype = {"Integer": np.int32, "Float": np.float32, "Double": np.float64,
                  "Boolean": np.uint8}[kind]
         buffer = np.zeros(16, dtype=dtype)
-        getattr(RAW, name)(pname, buffer)
+        emulation = legacy.emulated()
+        if emulation is not None and emulation.answers(pname):
+            found = emulation.get(pname)
+            buffer[:found.size] = found.astype(dtype)
+        else:
+            getattr(RAW, name)(pname, buffer)
         self.ok()
         values = buffer[:size]
         if size == 1:
@@ -822,13 +831,17 @@ class Executor:
         return values.copy()
 
     def is_enabled(self, name: str, args: list[Any], arrays: Any) -> int:
-        return int(bool(GL.glIsEnabled(args[0])))
+        return int(bool(legacy.gl().glIsEnabled(args[0])))
 
     def get_string(self, name: str, args: list[Any], arrays: Any) -> bytes:
         return bytes(GL.glGetString(args[0]) or b"")[:200]
 
     def get_tex_parameter(self, name: str, args: list[Any], arrays: Any) -> Any:
         self._texture(args[0], name)
+        emulation = legacy.emulated()
+        kept = emulation.tex_parameter(args[0], args[1]) if emulation is not None else None
+        if kept is not None:
+            return kept
         value = np.asarray(getattr(GL, name)(args[0], args[1])).reshape(-1)
         self.ok()
         return value[0].item()
@@ -840,7 +853,7 @@ class Executor:
         return value
 
     def get_texgen(self, name: str, args: list[Any], arrays: Any) -> int:
-        value = np.asarray(GL.glGetTexGeniv(args[0], args[1])).reshape(-1)
+        value = np.asarray(legacy.gl().glGetTexGeniv(args[0], args[1])).reshape(-1)
         self.ok()
         return int(value[0])
 
@@ -1009,13 +1022,14 @@ class Executor:
         unit = int(getattr(session, "texgen_unit", 0))
         previous = int(GL.glGetIntegerv(GL.GL_ACTIVE_TEXTURE))
         GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
+        FF = legacy.gl()
         seen = {
             "unit": unit,
-            "gen_s": bool(GL.glIsEnabled(GL.GL_TEXTURE_GEN_S)),
-            "gen_t": bool(GL.glIsEnabled(GL.GL_TEXTURE_GEN_T)),
-            "mode_s": int(np.asarray(GL.glGetTexGeniv(GL.GL_S, GL.GL_TEXTURE_GEN_MODE))
+            "gen_s": bool(FF.glIsEnabled(GL.GL_TEXTURE_GEN_S)),
+            "gen_t": bool(FF.glIsEnabled(GL.GL_TEXTURE_GEN_T)),
+            "mode_s": int(np.asarray(FF.glGetTexGeniv(GL.GL_S, GL.GL_TEXTURE_GEN_MODE))
                           .reshape(-1)[0]),
-            "mode_t": int(np.asarray(GL.glGetTexGeniv(GL.GL_T, GL.GL_TEXTURE_GEN_MODE))
+            "mode_t": int(np.asarray(FF.glGetTexGeniv(GL.GL_T, GL.GL_TEXTURE_GEN_MODE))
                           .reshape(-1)[0]),
             "texture": int(GL.glGetIntegerv(GL.GL_TEXTURE_BINDING_2D)),
         }

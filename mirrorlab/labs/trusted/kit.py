@@ -19,6 +19,8 @@ import numpy as np
 
 from mirrorlab import math3d
 from mirrorlab.data import model_file, texture_file
+from mirrorlab.labs.trusted import legacy
+from mirrorlab.labs.trusted.compat_glsl import TRANSLATED_STATE, translate_compat_glsl
 from mirrorlab.labs.trusted.variants import Variant, cube_center, lab20_geometry
 from mirrorlab.scene.graph import SceneGraph
 from mirrorlab.scene.robot import build_robot
@@ -56,19 +58,24 @@ def compile_program(vertex: str, fragment: str, student: str | None = None,
     of it reaches the kit's code), of the stage whose file has the :data:`STUDENT_MARK`
     line, and linked to that file's ``main``, which calls it through the prototypes after
     the mark; it may declare no uniform of its own (the kit's inputs reach it as
-    arguments). Returns the GL program name; StudentShaderError for the student's GLSL,
-    LabSetupError for the kit's."""
+    arguments). The student's GLSL has its compatibility built-ins translated
+    (:mod:`.compat_glsl`); so has a kit file written for immediate mode when the context
+    has no compatibility profile (:mod:`.legacy`). Returns the GL program name;
+    StudentShaderError for the student's GLSL, LabSetupError for the kit's."""
     from mirrorlab.gl.resources import expand_includes
 
     GL = _gl()
     shaders, student_shaders = [], []
     try:
         for name, kind in ((vertex, GL.GL_VERTEX_SHADER), (fragment, GL.GL_FRAGMENT_SHADER)):
+            stage = "vertex" if kind == GL.GL_VERTEX_SHADER else "fragment"
             source = expand_includes(name)
+            if legacy.emulated() is not None:
+                source = translate_compat_glsl(source, stage)
             shaders.append(_compiled(kind, source, f"kit shader {name}", variable))
             if student is not None and STUDENT_MARK in source:
-                student_shaders.append(_compiled(kind, _student_source(source, student),
-                                                 "", variable))
+                own = _student_source(source, translate_compat_glsl(student, stage))
+                student_shaders.append(_compiled(kind, own, "", variable))
         program = _linked([*shaders, *student_shaders], f"{vertex}+{fragment}",
                           variable if student is not None else "")
         if student_shaders:
@@ -168,8 +175,10 @@ def _only_arguments(kit_source: str, student_shaders: list[int], variable: str) 
         names = []
         for index in range(int(GL.glGetProgramiv(program, GL.GL_ACTIVE_UNIFORMS))):
             name = _text(GL.glGetActiveUniform(program, index)[0])
-            if not name.startswith("gl_"):  # GL's own state (gl_ModelViewMatrix) is not
-                names.append(name)           # the kit's: the same for every draw
+            # GL's own state (gl_ModelViewMatrix, or its translation for a core context)
+            # is not the kit's: the same for every draw
+            if not name.startswith("gl_") and name.split("[")[0] not in TRANSLATED_STATE:
+                names.append(name)
         if names or GL.glGetProgramiv(program, GL.GL_ACTIVE_UNIFORM_BLOCKS):
             shown = ", ".join(names) or "a uniform block"
             raise StudentShaderError(variable, 0, f"it reads uniforms ({shown[:80]}); the "
@@ -194,17 +203,15 @@ def uniform(program: int, name: str) -> int:
 
 
 def load_matrix(mode: int, matrix: np.ndarray) -> None:
-    GL = _gl()
-    GL.glMatrixMode(mode)
-    GL.glLoadMatrixd(np.ascontiguousarray(np.asarray(matrix, dtype=np.float64).T))
+    FF = legacy.gl()
+    FF.glMatrixMode(mode)
+    FF.glLoadMatrixd(np.ascontiguousarray(np.asarray(matrix, dtype=np.float64).T))
 
 
 def current_matrices() -> tuple[np.ndarray, np.ndarray]:
-    """The fixed-function (projection, modelview) matrices now, ``(4, 4)`` each, row-major."""
-    GL = _gl()
-    projection = np.asarray(GL.glGetDoublev(GL.GL_PROJECTION_MATRIX), dtype=np.float64)
-    modelview = np.asarray(GL.glGetDoublev(GL.GL_MODELVIEW_MATRIX), dtype=np.float64)
-    return projection.reshape(4, 4).T.copy(), modelview.reshape(4, 4).T.copy()
+    """The fixed-function (projection, modelview) matrices now, ``(4, 4)`` each, row-major
+    (the emulated ones on a core context: :mod:`.legacy`)."""
+    return legacy.current_matrices()
 
 
 class _Mesh:
@@ -310,8 +317,7 @@ def texture_parameters(texture_id: int, target: int | None = None) -> dict[str, 
     image_target = target if target == GL.GL_TEXTURE_2D else GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X
     previous = int(GL.glGetIntegerv(binding))
     GL.glBindTexture(target, int(texture_id))
-    values = {key: int(np.asarray(GL.glGetTexParameteriv(target, getattr(GL, key)))
-                       .reshape(-1)[0])
+    values = {key: legacy.tex_parameter(target, getattr(GL, key))
               for key in ("GL_TEXTURE_MIN_FILTER", "GL_TEXTURE_MAG_FILTER",
                           "GL_TEXTURE_WRAP_S", "GL_TEXTURE_WRAP_T", "GL_TEXTURE_MAX_LEVEL",
                           "GL_TEXTURE_BASE_LEVEL")}
@@ -335,6 +341,7 @@ class LabBase:
 
     def __init__(self, size: tuple[int, int], variant: Variant) -> None:
         GL = _gl()
+        legacy.start()
         self.width, self.height = int(size[0]), int(size[1])
         self.variant = variant
         self._meshes: dict[str, _Mesh] = {}
@@ -397,11 +404,13 @@ class LabBase:
         GL.glUniform1f(uniform(program, "diffuse"), 0.7)
         GL.glEnable(GL.GL_DEPTH_TEST)
         GL.glActiveTexture(GL.GL_TEXTURE0)
-        GL.glMatrixMode(GL.GL_MODELVIEW)
+        FF = legacy.gl()
+        FF.glMatrixMode(GL.GL_MODELVIEW)
         bound = []
         for mesh, model, color, texture in parts:
-            GL.glPushMatrix()
-            GL.glMultMatrixd(np.ascontiguousarray(np.asarray(model, dtype=np.float64).T))
+            FF.glPushMatrix()
+            FF.glMultMatrixd(np.ascontiguousarray(np.asarray(model, dtype=np.float64).T))
+            legacy.load_matrix_uniforms(program)
             GL.glUniform3f(uniform(program, "color"), *(float(c) for c in color))
             textured = texture is not None and int(texture) > 0
             GL.glUniform1i(uniform(program, "use_texture"), int(textured))
@@ -409,7 +418,7 @@ class LabBase:
                 GL.glBindTexture(GL.GL_TEXTURE_2D, int(texture))
                 bound.append(int(texture))
             self.mesh(mesh).draw()
-            GL.glPopMatrix()
+            FF.glPopMatrix()
         GL.glUseProgram(previous_program)
         return bound
 
@@ -520,11 +529,13 @@ class SphereMapLab(LabBase):
         GL.glActiveTexture(GL.GL_TEXTURE0 + ENV_UNIT)
         GL.glBindTexture(GL.GL_TEXTURE_2D, int(texture))
         GL.glActiveTexture(GL.GL_TEXTURE0)
-        GL.glMatrixMode(GL.GL_MODELVIEW)
-        GL.glPushMatrix()
-        GL.glMultMatrixd(np.ascontiguousarray(self.cone_model.T))
+        FF = legacy.gl()
+        FF.glMatrixMode(GL.GL_MODELVIEW)
+        FF.glPushMatrix()
+        FF.glMultMatrixd(np.ascontiguousarray(self.cone_model.T))
+        legacy.load_matrix_uniforms(program)
         self.mesh("cone").draw()
-        GL.glPopMatrix()
+        FF.glPopMatrix()
         GL.glUseProgram(previous)
 
     def draw_cone_fixed_function(self) -> None:
@@ -535,22 +546,41 @@ class SphereMapLab(LabBase):
         previous = int(GL.glGetIntegerv(GL.GL_CURRENT_PROGRAM))
         active = int(GL.glGetIntegerv(GL.GL_ACTIVE_TEXTURE))
         GL.glUseProgram(0)
-        GL.glDisable(GL.GL_LIGHTING)
-        GL.glEnable(GL.GL_NORMALIZE)
+        FF = legacy.gl()
+        FF.glDisable(GL.GL_LIGHTING)
+        FF.glEnable(GL.GL_NORMALIZE)
         enabled = []
         for unit in range(4):
             GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
             for cap in (GL.GL_TEXTURE_2D, GL.GL_TEXTURE_CUBE_MAP):
-                if GL.glIsEnabled(cap):
+                if FF.glIsEnabled(cap):
                     enabled.append((unit, cap))
-                    GL.glDisable(cap)
+                    FF.glDisable(cap)
         GL.glActiveTexture(GL.GL_TEXTURE0 + self.texgen_unit)
-        GL.glEnable(GL.GL_TEXTURE_2D)
-        GL.glTexEnvi(GL.GL_TEXTURE_ENV, GL.GL_TEXTURE_ENV_MODE, GL.GL_REPLACE)
-        GL.glMatrixMode(GL.GL_MODELVIEW)
-        GL.glPushMatrix()
-        GL.glMultMatrixd(np.ascontiguousarray(self.cone_model.T))
+        FF.glEnable(GL.GL_TEXTURE_2D)
+        FF.glTexEnvi(GL.GL_TEXTURE_ENV, GL.GL_TEXTURE_ENV_MODE, GL.GL_REPLACE)
+        FF.glMatrixMode(GL.GL_MODELVIEW)
+        FF.glPushMatrix()
+        FF.glMultMatrixd(np.ascontiguousarray(self.cone_model.T))
         mesh = self.mesh("cone")
+        emulation = legacy.emulated()
+        if emulation is not None:
+            emulation.draw_elements(mesh.vao, mesh.count)
+        else:
+            self._draw_client_arrays(mesh)
+        FF.glPopMatrix()
+        FF.glDisable(GL.GL_TEXTURE_2D)
+        for unit, cap in enabled:
+            GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
+            FF.glEnable(cap)
+        GL.glActiveTexture(active)
+        FF.glDisable(GL.GL_NORMALIZE)
+        GL.glUseProgram(previous)
+
+    @staticmethod
+    def _draw_client_arrays(mesh: _Mesh) -> None:
+        """The cone from client-state arrays (the compatibility profile's own pipeline)."""
+        GL = _gl()
         GL.glBindVertexArray(0)
         GL.glBindBuffer(GL.GL_ARRAY_BUFFER, mesh.vbo)
         GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, mesh.ebo)
@@ -567,14 +597,6 @@ class SphereMapLab(LabBase):
         GL.glDisableClientState(GL.GL_NORMAL_ARRAY)
         GL.glBindBuffer(GL.GL_ARRAY_BUFFER, 0)
         GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, 0)
-        GL.glPopMatrix()
-        GL.glDisable(GL.GL_TEXTURE_2D)
-        for unit, cap in enabled:
-            GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
-            GL.glEnable(cap)
-        GL.glActiveTexture(active)
-        GL.glDisable(GL.GL_NORMALIZE)
-        GL.glUseProgram(previous)
 
 
 class CubeMapLab(LabBase):
@@ -643,6 +665,7 @@ class CubeMapLab(LabBase):
         GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, int(cube_texture))
         GL.glActiveTexture(GL.GL_TEXTURE0)
         GL.glEnable(GL.GL_TEXTURE_CUBE_MAP_SEAMLESS)
+        legacy.load_matrix_uniforms(program)
         self.mesh("env_sphere").draw()
         GL.glUseProgram(previous)
 

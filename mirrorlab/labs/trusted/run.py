@@ -26,6 +26,7 @@ import numpy as np
 from mirrorlab.gl.opengl import GL
 from mirrorlab.labs import LabSpec
 from mirrorlab.labs.trusted import calls as C
+from mirrorlab.labs.trusted import legacy
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.executor import Executor, RunLimits, Stop
 from mirrorlab.labs.trusted.kit import (
@@ -486,9 +487,10 @@ def reset_state() -> None:
     """State a student's calls may have left that would change the checker's own drawing
     and reading."""
     GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, GL.glGetIntegerv(GL.GL_FRAMEBUFFER_BINDING))
+    FF = legacy.gl()  # the legacy switches are the emulation's on a core context
     for cap in (GL.GL_SCISSOR_TEST, GL.GL_BLEND, GL.GL_CULL_FACE, GL.GL_STENCIL_TEST,
                 GL.GL_ALPHA_TEST, GL.GL_LIGHTING, GL.GL_FOG, GL.GL_POLYGON_OFFSET_FILL):
-        GL.glDisable(cap)
+        FF.glDisable(cap)
     GL.glColorMask(1, 1, 1, 1)
     GL.glDepthMask(1)
     GL.glDepthFunc(GL.GL_LESS)
@@ -499,7 +501,7 @@ def reset_state() -> None:
         GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
         for cap in (GL.GL_TEXTURE_2D, GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_GEN_S,
                     GL.GL_TEXTURE_GEN_T, GL.GL_TEXTURE_GEN_R, GL.GL_TEXTURE_GEN_Q):
-            GL.glDisable(cap)
+            FF.glDisable(cap)
     GL.glActiveTexture(GL.GL_TEXTURE0)
     GL.glUseProgram(0)
     while GL.glGetError() != GL.GL_NO_ERROR:
