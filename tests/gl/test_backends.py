@@ -126,16 +126,16 @@ def test_a_hidden_window_forced_without_a_display_says_what_to_do(tmp_path):
 
 
 def test_the_checker_process_is_pinned_to_the_backend_chosen_here(monkeypatch):
-    from mirrorlab.labs.trusted.execute import _environment
+    from mirrorlab.labs.trusted.execute import gl_process_environment
 
     monkeypatch.setenv("PYOPENGL_PLATFORM", "glx")
     monkeypatch.setenv("DISPLAY", ":99")
     monkeypatch.setenv("MIRRORLAB_GL_BACKEND", "hidden-window")
-    env = _environment()
+    env = gl_process_environment()
     assert env["MIRRORLAB_GL_BACKEND"] == "hidden-window"
     assert "PYOPENGL_PLATFORM" not in env  # the process chooses it from the backend
     monkeypatch.delenv("MIRRORLAB_GL_BACKEND")
     monkeypatch.delenv("DISPLAY")
     monkeypatch.setenv("EGL_PLATFORM", "x11")
-    env = _environment()
+    env = gl_process_environment()
     assert (env["MIRRORLAB_GL_BACKEND"], env["EGL_PLATFORM"]) == ("egl", "surfaceless")
