@@ -64,9 +64,13 @@ def test_frames_drawn_again_into_one_target_are_replayed_as_the_golden_frames(
         target.release()
 
 
-def test_a_context_with_multi_draw_gets_the_packed_path(scene_renderer):
-    """llvmpipe's OpenGL 4.5 has multi-draw (4.3): the packed path is chosen."""
-    assert scene_renderer.drawer.draw_path == "packed"
+def test_the_draw_path_follows_the_contexts_multi_draw(scene_renderer):
+    """llvmpipe's OpenGL 4.5 has multi-draw (4.3): the packed path is chosen; a 4.1 context
+    (the simulated macOS run) gets the per-draw path."""
+    from mirrorlab.gl.context import has_multi_draw
+
+    expected = "packed" if has_multi_draw() else "per-draw"
+    assert scene_renderer.drawer.draw_path == expected
 
 
 def assert_golden(actual: np.ndarray, sequence, prefix: str = "") -> None:

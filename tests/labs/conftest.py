@@ -21,8 +21,11 @@ import pytest
 from mirrorlab.labs.trusted.sandbox import Limits
 from tests import REPO_DIR
 
-LIMITS = Limits(cpu_seconds=3, seconds=90.0)
-"""An endless loop ends after 3 s of CPU; honest runs use under one."""
+LIMITS = Limits(cpu_seconds=3, seconds=90.0,
+                unsandboxed=os.environ.get("MIRRORLAB_SANDBOX") == "none")
+"""An endless loop ends after 3 s of CPU; honest runs use under one. Where the run has no
+sandbox on purpose (MIRRORLAB_SANDBOX=none: the simulated macOS run), the tests grade
+as a teacher who gave ``--unsandboxed``."""
 SOLUTIONS = REPO_DIR / "labs" / "solutions"
 LEFTOVER_PREFIXES = ("mirrorlab-box-", "mirrorlab-submission-", "mirrorlab-home-",
                      "mirrorlab-check-", "mirrorlab-solution-", "mirrorlab-release-")

@@ -342,19 +342,20 @@ def run_grade(lab: str, folder: Path, jobs: int, scheduler: str | None, engine: 
     out_dir = out_dir or folder.parent / f"{folder.name}-grades"
     if out_dir.exists() and not out_dir.is_dir():
         raise ValueError(f"--out-dir: {str(out_dir)!r} is a file, expected a folder")
-    unsandboxed = _sandbox_or_risk(limits)
     submissions = find_submissions(folder)
     unlisted: list[Submission] = []
     missing: list[str] = []
     if students is not None:
         submissions, unlisted, missing = match_class(submissions, students)
-        for submission in unlisted:
-            where = submission.path or folder / submission.student
-            print(f"not graded: {submission.student!r} ({where.name}) is not on the class "
-                  f"list {students_file}")
         if not submissions:
             raise ValueError(f"SUBMISSIONS_DIR: none of its {len(unlisted)} submissions is "
                              f"by a student of the class list {students_file}")
+    # after the command line's own errors, before anything is run or said of the class
+    unsandboxed = _sandbox_or_risk(limits)
+    for submission in unlisted:
+        where = submission.path or folder / submission.student
+        print(f"not graded: {submission.student!r} ({where.name}) is not on the class "
+              f"list {students_file}")
     started = time.perf_counter()
     grades, engine_name = grade_folder(spec, folder, jobs, scheduler, engine, limits,
                                        key=key, solutions=found, submissions=submissions,
