@@ -43,6 +43,8 @@ def test_solutions_give_the_numpy_references(registry):
     assert probe.slip("reflect_eye", sphere["reflect_eye"]) == "right"
     assert probe.slip("sphere_map_st", sphere["sphere_map_st"]) == "right"
     assert probe.slip("cube_face_st", cube["cube_face_st"]) == "right"
+    assert np.array_equal(cube["cube_face"][:, 0], probe.CUBE_FACE)
+    assert probe.slip("cube_face", cube["cube_face"]) == "right"
     assert probe.slip_per_face(cube["cube_face_st"]) == {}
 
 
@@ -129,4 +131,21 @@ def test_the_probe_runs_on_a_core_context():
     lines = done.stdout.splitlines()
     assert lines[0] == "profile 1"  # GL_CONTEXT_CORE_PROFILE_BIT
     assert lines[1:] == ["spheremap right right right", "spheremap clamped clamped right",
-                         "cubemap right right", "cubemap swap swap"]
+                         "cubemap right right right", "cubemap swap right swap"]
+
+
+@pytest.mark.parametrize("old,new,name", [
+    ("    vec3 a = abs(r);", "    vec3 a = r;", "signed"),
+    ("return r.x >= 0.0 ? 0 : 1;", "return r.x >= 0.0 ? 1 : 0;", ""),
+])
+def test_face_slips_are_named_by_value(registry, old, new, name):
+    text = glsl("cubemap")
+    assert old in text
+    values = run(registry, "cubemap", text.replace(old, new))["cube_face"]
+    assert probe.slip("cube_face", values) == name
+    for right, wrong in ((" ? 0 : 1;", " ? 1 : 0;"), (" ? 2 : 3;", " ? 3 : 2;"),
+                         (" ? 4 : 5;", " ? 5 : 4;")):
+        assert right in text
+        text = text.replace(right, wrong)
+    values = run(registry, "cubemap", text)["cube_face"]
+    assert probe.slip("cube_face", values) == "opposite"

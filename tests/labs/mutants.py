@@ -361,6 +361,12 @@ PROBED_SLIPS = (
              "    return 0.5 * h.xy + vec2(0.5);"),),
            {"sphere_coordinates": "is not normalised", "side_by_side": "tasks 1 and 2"},
            cause="halfway vector (r.x, r.y, r.z + 1) is not normalised"),
+    Mutant("cubemap", "face_opposite_sign",
+           (("return r.x >= 0.0 ? 0 : 1;", "return r.x >= 0.0 ? 1 : 0;"),
+            ("return r.y >= 0.0 ? 2 : 3;", "return r.y >= 0.0 ? 3 : 2;"),
+            ("return r.z >= 0.0 ? 4 : 5;", "return r.z >= 0.0 ? 5 : 4;")),
+           {"face_selection": "the opposite sign", "face_coordinates": "task 1"},
+           cause="the right axis but the opposite sign"),
     Mutant("cubemap", "st_signed_major",
            (("    if (face == 0) { sc = -r.z; tc = -r.y; ma = abs(r.x); }\n"
              "    else if (face == 1) { sc = r.z; tc = -r.y; ma = abs(r.x); }\n"

@@ -88,12 +88,13 @@ def judge_face(student: Evidence) -> tuple[bool, str]:
     right, _, _ = cube_map(r)
     if np.mean(face == right) >= 0.98:
         return True, ""
-    axis = np.argmax(r, axis=-1)
-    signed = 2 * axis + (np.take_along_axis(r, axis[:, None], -1)[:, 0] < 0)
-    if np.mean(face == signed) >= 0.98:
+    # the slip is named by the probe's values: directions on every face, of several
+    # lengths, the major component negative on half of them
+    found = slip("cube_face", student.floats("probe_cube_face", (CUBE_INPUTS, 4)))
+    if found == "signed":
         return False, ("the face is picked by the largest signed component; the major axis is "
                        "the one of largest magnitude: compare abs(r.x), abs(r.y), abs(r.z)")
-    if np.mean(face == (right ^ 1)) >= 0.98:
+    if found == "opposite":
         return False, ("the right axis but the opposite sign: a positive component picks the "
                        "POSITIVE face (0, 2, 4)")
     if np.mean(face // 2 == right // 2) >= 0.98:

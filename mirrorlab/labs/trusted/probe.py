@@ -96,6 +96,7 @@ CUBE_R, CUBE_FACE = _cube_inputs()
 INPUTS: dict[str, tuple[np.ndarray, np.ndarray]] = {
     "reflect_eye": (REFLECT_U, REFLECT_N),
     "sphere_map_st": (SPHERE_R, np.zeros_like(SPHERE_R)),
+    "cube_face": (CUBE_R, np.zeros_like(CUBE_R)),
     "cube_face_st": (CUBE_R, np.stack([CUBE_FACE, CUBE_FACE, CUBE_FACE], -1).astype(float)),
 }
 """Per function, its two inputs ``(n, 3)`` (a and b of the probe's main)."""
@@ -103,12 +104,13 @@ INPUTS: dict[str, tuple[np.ndarray, np.ndarray]] = {
 CALLS = {
     "reflect_eye": "vec4(reflect_eye(a.xyz, b.xyz), 1.0)",
     "sphere_map_st": "vec4(sphere_map_st(a.xyz), 0.0, 1.0)",
+    "cube_face": "vec4(float(cube_face(a.xyz)), 0.0, 0.0, 1.0)",
     "cube_face_st": "vec4(cube_face_st(a.xyz, int(b.x + 0.5)), 0.0, 1.0)",
 }
 """How the probe's main calls each function (a, b: the inputs as vec4)."""
 
 LAB_FUNCTIONS = {"spheremap": ("reflect_eye", "sphere_map_st"),
-                 "cubemap": ("cube_face_st",)}
+                 "cubemap": ("cube_face", "cube_face_st")}
 """The functions the probe evaluates, per lab."""
 
 
@@ -170,7 +172,18 @@ def cube_formulas(r: np.ndarray, face: np.ndarray) -> dict[str, np.ndarray]:
     }
 
 
+def face_formulas(r: np.ndarray) -> dict[str, np.ndarray]:
+    """The face ``(n, 1)`` of ``r`` ``(n, 3)``: the axis of largest magnitude and its sign
+    (``right``), and each slip of it."""
+    right = cube_map(r)[0].astype(np.float64)
+    axis = np.argmax(r, axis=-1)
+    signed = 2 * axis + (np.take_along_axis(r, axis[:, None], -1)[:, 0] < 0)
+    return {"right": right[:, None], "signed": signed[:, None].astype(np.float64),
+            "opposite": (right.astype(np.int64) ^ 1)[:, None].astype(np.float64)}
+
+
 FORMULAS: dict[str, Callable[[], dict[str, np.ndarray]]] = {
+    "cube_face": lambda: face_formulas(CUBE_R),
     "reflect_eye": lambda: reflect_formulas(REFLECT_U, REFLECT_N),
     "sphere_map_st": lambda: sphere_formulas(SPHERE_R),
     "cube_face_st": lambda: cube_formulas(CUBE_R, CUBE_FACE),
@@ -178,7 +191,7 @@ FORMULAS: dict[str, Callable[[], dict[str, np.ndarray]]] = {
 """Per function, its right formula and its known slips on the probe's inputs."""
 
 RIGHT = {"reflect_eye": ("right",), "sphere_map_st": ("right", "normalised"),
-         "cube_face_st": ("right",)}
+         "cube_face": ("right",), "cube_face_st": ("right",)}
 """The formulas that are the function, not a slip of it."""
 
 
