@@ -338,6 +338,62 @@ ROUND_TWO_CUBEMAP = (
            {"face_coordinates": "integer division"}),
 )
 
+PROBED_SLIPS = (
+    # slips the value probe names (mirrorlab/labs/trusted/probe.py): each gives, on the
+    # cone's or the sphere's own inputs, the numbers of another slip or of none listed
+    Mutant("spheremap", "reflect_abs_dot",
+           (("return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * abs(dot(n, u)) * n;"),),
+           {"reflection": "abs(dot(n, u))", "side_by_side": "tasks 1 and 2"},
+           cause="abs(dot(n, u))"),
+    Mutant("spheremap", "reflect_clamped_dot_clamp",
+           (("return u - 2.0 * dot(n, u) * n;",
+             "return u - 2.0 * clamp(dot(n, u), 0.0, 1.0) * n;"),),
+           {"reflection": "dot(n, u) is clamped", "side_by_side": "tasks 1 and 2"},
+           cause="is clamped (clamp or max)"),
+    Mutant("spheremap", "st_minus_one",
+           (("(r.z + 1.0) * (r.z + 1.0)", "(r.z - 1.0) * (r.z - 1.0)"),),
+           {"sphere_coordinates": "the sign of the 1 in m", "side_by_side": "tasks 1 and 2"},
+           cause="the sign of the 1 in m"),
+    Mutant("spheremap", "st_halfway_unnormalised_named_h",
+           (("    float m = 2.0 * sqrt(r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0));\n"
+             "    return vec2(r.x / m + 0.5, r.y / m + 0.5);",
+             "    vec3 h = r;\n    h.z += 1.0;\n"
+             "    return 0.5 * h.xy + vec2(0.5);"),),
+           {"sphere_coordinates": "is not normalised", "side_by_side": "tasks 1 and 2"},
+           cause="halfway vector (r.x, r.y, r.z + 1) is not normalised"),
+    Mutant("cubemap", "face_opposite_sign",
+           (("return r.x >= 0.0 ? 0 : 1;", "return r.x >= 0.0 ? 1 : 0;"),
+            ("return r.y >= 0.0 ? 2 : 3;", "return r.y >= 0.0 ? 3 : 2;"),
+            ("return r.z >= 0.0 ? 4 : 5;", "return r.z >= 0.0 ? 5 : 4;")),
+           {"face_selection": "the opposite sign", "face_coordinates": "task 1"},
+           cause="the right axis but the opposite sign"),
+    Mutant("cubemap", "st_signed_major",
+           (("    if (face == 0) { sc = -r.z; tc = -r.y; ma = abs(r.x); }\n"
+             "    else if (face == 1) { sc = r.z; tc = -r.y; ma = abs(r.x); }\n"
+             "    else if (face == 2) { sc = r.x; tc = r.z; ma = abs(r.y); }\n"
+             "    else if (face == 3) { sc = r.x; tc = -r.z; ma = abs(r.y); }\n"
+             "    else if (face == 4) { sc = r.x; tc = -r.y; ma = abs(r.z); }\n"
+             "    else { sc = -r.x; tc = -r.y; ma = abs(r.z); }",
+             "    if (face == 0) { sc = -r.z; tc = -r.y; ma = r.x; }\n"
+             "    else if (face == 1) { sc = r.z; tc = -r.y; ma = r.x; }\n"
+             "    else if (face == 2) { sc = r.x; tc = r.z; ma = r.y; }\n"
+             "    else if (face == 3) { sc = r.x; tc = -r.z; ma = r.y; }\n"
+             "    else if (face == 4) { sc = r.x; tc = -r.y; ma = r.z; }\n"
+             "    else { sc = -r.x; tc = -r.y; ma = r.z; }"),),
+           {"face_coordinates": "mirrored on the negative faces"},
+           cause="with its sign, s and t are mirrored"),
+    Mutant("cubemap", "st_signed_major_on_one_face",
+           (("else if (face == 1) { sc = r.z; tc = -r.y; ma = abs(r.x); }",
+             "else if (face == 1) { sc = r.z; tc = -r.y; ma = r.x; }"),),
+           {"face_coordinates": "on the -X face (face 1): ma is the major axis's size"},
+           cause="on the -X face (face 1): ma is the major axis's size"),
+    Mutant("cubemap", "st_divided_by_length",
+           (("return vec2((sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0);",
+             "return vec2((sc / length(r) + 1.0) / 2.0, (tc / length(r) + 1.0) / 2.0);"),),
+           {"face_coordinates": "divided by the length of r"},
+           cause="divided by the length of r"),
+)
+
 CUBE_EQUIVALENT = (
     Mutant("cubemap", "mipmaps_after_faces",
            (("    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR)\n",
@@ -354,7 +410,7 @@ CUBE_EQUIVALENT = (
 
 MUTANTS = (*LAB20, *SPHEREMAP, *CUBEMAP)
 ROUND_TWO = (*ROUND_TWO_LAB20, *ROUND_TWO_SPHEREMAP, *ROUND_TWO_CUBEMAP)
-EVERY_MUTANT = (*MUTANTS, *LAB20_MORE, *ROUND_TWO)
+EVERY_MUTANT = (*MUTANTS, *LAB20_MORE, *ROUND_TWO, *PROBED_SLIPS)
 """Every mistake of the suite; each one's first failing task names its cause."""
 
 

@@ -34,10 +34,12 @@ from mirrorlab.labs.trusted.judging import (
     wrong_clear_colour,
 )
 from mirrorlab.labs.trusted.kit import CubeMapLab
+from mirrorlab.labs.trusted.probe import INPUTS, slip, slip_per_face
 from mirrorlab.labs.trusted.variants import cube_center
 from mirrorlab.views import CUBE_FACE_NAMES, CUBE_FACES
 
 GLSL_FUNCTIONS = ("cube_face", "cube_face_st")
+CUBE_INPUTS = INPUTS["cube_face_st"][0].shape[0]
 FACE_TARGETS = tuple(f"GL_TEXTURE_CUBE_MAP_{'POSITIVE' if n[0] == '+' else 'NEGATIVE'}_{n[1]}"
                      for n in CUBE_FACE_NAMES)
 GL_TEXTURE_CUBE_MAP_POSITIVE_X = 0x8515
@@ -86,12 +88,13 @@ def judge_face(student: Evidence) -> tuple[bool, str]:
     right, _, _ = cube_map(r)
     if np.mean(face == right) >= 0.98:
         return True, ""
-    axis = np.argmax(r, axis=-1)
-    signed = 2 * axis + (np.take_along_axis(r, axis[:, None], -1)[:, 0] < 0)
-    if np.mean(face == signed) >= 0.98:
+    # the slip is named by the probe's values: directions on every face, of several
+    # lengths, the major component negative on half of them
+    found = slip("cube_face", student.floats("probe_cube_face", (CUBE_INPUTS, 4)))
+    if found == "signed":
         return False, ("the face is picked by the largest signed component; the major axis is "
                        "the one of largest magnitude: compare abs(r.x), abs(r.y), abs(r.z)")
-    if np.mean(face == (right ^ 1)) >= 0.98:
+    if found == "opposite":
         return False, ("the right axis but the opposite sign: a positive component picks the "
                        "POSITIVE face (0, 2, 4)")
     if np.mean(face // 2 == right // 2) >= 0.98:
@@ -113,43 +116,40 @@ def judge_coordinates(student: Evidence) -> tuple[bool, str]:
     if ok.mean() < 0.5:
         return False, f"judged once {_task('face_selection')} picks the right faces"
     st = values[ok, 1:]
-    s, t, r, faces = s[ok], t[ok], r[ok], right_face[ok]
+    s, t = s[ok], t[ok]
     if not np.all(np.isfinite(st)):
         return False, "cube_face_st gives NaN or infinity on the sphere"
-    right = np.stack([s, t], -1)
-    major = np.abs(np.take_along_axis(r, (faces // 2)[:, None], -1))
-    undivided = (2 * right - 1) * major
-    candidates = {
-        "right": right, "swap": right[:, ::-1], "flip_s": np.stack([1 - s, t], -1),
-        "flip_t": np.stack([s, 1 - t], -1), "undivided": (undivided + 1) / 2,
-        "no_shift": 2 * right - 1, "no_scale": (2 * right - 1) + 1}
+    if np.mean(np.abs(st - np.stack([s, t], -1)).max(-1) <= 2e-3) >= 0.98:
+        return True, ""
+    # the slip is named by the probe's values: directions on every face, of several
+    # lengths, each with its right face whatever cube_face picks
     hints = {
         "swap": "s and t swapped: the table gives sc and tc per face, s from sc",
         "flip_s": "s mirrored on the faces: check the sign of sc in the table",
         "flip_t": "t upside down on the faces: check the sign of tc in the table",
         "undivided": "sc and tc must be divided by |major axis| before (x + 1) / 2",
+        "length": "sc and tc are divided by the length of r; the table divides by |ma|, the "
+                  "major axis's size: s = (sc/|ma| + 1) / 2",
         "no_shift": "s and t must be (sc/|ma| + 1) / 2: they lie in [-1, 1] now",
         "no_scale": "s and t must be (sc/|ma| + 1) / 2: the / 2 is missing",
+        "signed_major": "ma is the major axis's size, abs(...): with its sign, s and t are "
+                        "mirrored on the negative faces",
+        "zero": "s and t are 0 everywhere: s = (sc/|ma| + 1) / 2",
     }
-    for name, predicted in candidates.items():
-        if np.mean(np.abs(st - predicted).max(-1) <= 2e-3) >= 0.98:
-            return (True, "") if name == "right" else (False, hints[name])
-    if np.mean(np.abs(st).max(-1) <= 2e-3) >= 0.98 and \
-            INTEGER_HALF.search(glsl_body(student.source, "cube_face_st")):
+    probed = student.floats("probe_cube_face_st", (CUBE_INPUTS, 4))
+    found = slip("cube_face_st", probed)
+    # 1/2 in GLSL is integer division, 0: the same values as a factor 0 written out, so
+    # only the source tells which it is
+    if found == "zero" and INTEGER_HALF.search(glsl_body(student.source, "cube_face_st")):
         return False, ("s and t are 0 everywhere: 1/2 in GLSL is integer division, 0; write "
                        "0.5, or divide by 2.0: s = (sc/|ma| + 1) / 2.0")
-    wrong = []
-    for face in sorted(set(faces.tolist())):
-        on = faces == face
-        if np.mean(np.abs(st[on] - right[on]).max(-1) <= 2e-3) >= 0.98:
-            continue
-        named = next((name for name, predicted in candidates.items() if name != "right" and
-                      np.mean(np.abs(st[on] - predicted[on]).max(-1) <= 2e-3) >= 0.98), "")
-        wrong.append((face, named))
-    if wrong and all(named for _, named in wrong) and len(wrong) < len(set(faces.tolist())):
+    if found in hints:
+        return False, hints[found]
+    wrong = slip_per_face(probed)
+    if wrong and all(wrong.values()):
         names = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
         return False, "; ".join(f"on the {names[face]} face (face {face}): {hints[named]}"
-                                for face, named in wrong)
+                                for face, named in sorted(wrong.items()))
     return False, "cube_face_st differs from the OpenGL table's (sc/|ma| + 1) / 2 on the sphere"
 
 

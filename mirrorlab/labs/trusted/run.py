@@ -414,6 +414,7 @@ class LabRun:
             self._values(lambda mode: session.draw_cone_shader(
                 glsl, session.backdrop_texture, mode, limit=64),
                 {"r": 1, "u": 2, "n": 3, "st": 4}, "reflect_eye")
+            self._probe("kit_sphere.frag", glsl, "spheremap")
 
     def _observe_cubemap(self) -> None:
         session = self.session
@@ -432,6 +433,23 @@ class LabRun:
         if glsl is not None:
             self._values(lambda mode: session.draw_sphere(glsl, cube, mode, limit=64),
                          {"face_st": 1, "r": 2}, "cube_face")
+            self._probe("kit_cube.frag", glsl, "cubemap")
+
+    def _probe(self, kit_fragment: str, glsl: str, lab: str) -> None:
+        """The lab's GLSL functions on the value probe's chosen inputs (:mod:`.probe`):
+        ``probe_<function>`` ``(n, 4)`` float32 each; nothing when the GLSL did not make
+        the kit's program (the check values say why)."""
+        from mirrorlab.labs.trusted.probe import LAB_FUNCTIONS, run_probe
+
+        if "values_error" in self.evidence.state:
+            return
+        reset_state()
+        try:
+            found = run_probe(kit_fragment, glsl, LAB_FUNCTIONS[lab], self.registry)
+        except LabSetupError:
+            return
+        for function, values in found.items():
+            self.evidence.arrays[f"probe_{function}"] = values
 
     def _values(self, draw: Callable[[int], None], modes: dict[str, int], function: str
                 ) -> None:

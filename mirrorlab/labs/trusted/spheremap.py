@@ -29,6 +29,7 @@ from mirrorlab.labs.trusted.judging import (
     where,
 )
 from mirrorlab.labs.trusted.kit import SphereMapLab
+from mirrorlab.labs.trusted.probe import INPUTS, slip
 
 GL_SPHERE_MAP = 0x2402
 MODE_NAMES = {0x2400: "GL_EYE_LINEAR", 0x2401: "GL_OBJECT_LINEAR", 0x2402: "GL_SPHERE_MAP",
@@ -74,17 +75,24 @@ def _cone_values(student: Evidence, key: str, function: str,
     return values, u, n
 
 
+def _probed(student: Evidence, function: str) -> str:
+    """The slip the value probe finds in the student's ``function`` (:func:`.probe.slip`):
+    'right', a slip's name, or '' (none known, or no probe values)."""
+    return slip(function, student.floats(f"probe_{function}",
+                                         (INPUTS[function][0].shape[0], 4)))
+
+
 def judge_reflection(student: Evidence) -> tuple[bool, str]:
     cone = _cone_values(student, "r", "reflect_eye")
     if isinstance(cone, str):
         return False, cone
     r, u, n = cone
-    un = (u * n).sum(-1, keepdims=True)
-    right = u - 2 * un * n
-    found = _best(r, {
-        "right": right, "sign": -right, "no_two": u - un * n, "plus": u + 2 * un * n,
-        "unreflected": u, "normal": n, "normalised_sum": right / np.maximum(
-            np.linalg.norm(right, axis=-1, keepdims=True), 1e-9)}, 2e-3)
+    right = u - 2 * (u * n).sum(-1, keepdims=True) * n
+    if _best(r, {"right": right, "normalised": right / np.maximum(
+            np.linalg.norm(right, axis=-1, keepdims=True), 1e-9)}, 2e-3):
+        return True, ""
+    # the slip is named by the probe's values, on inputs with n.u of both signs: a
+    # clamped dot product is r = u on the cone only, as is r = u itself
     hints = {
         "sign": "r points the wrong way (it is -r): the reflection is u - 2 (n.u) n, with u "
                 "the direction from the eye to the point",
@@ -92,24 +100,21 @@ def judge_reflection(student: Evidence) -> tuple[bool, str]:
         "plus": "the sign of the 2 (n.u) n term: r = u - 2 (n.u) n",
         "unreflected": "reflect_eye returns u unchanged: reflect it about n, u - 2 (n.u) n",
         "normal": "reflect_eye returns the normal: r = u - 2 (n.u) n",
+        "clamped": "dot(n, u) is clamped (clamp or max): on the cone u points at the "
+                   "surface, so n.u is negative, the clamp makes it 0 and r = u; use "
+                   "dot(n, u) as it is: r = u - 2 (n.u) n",
+        "abs_dot": "abs(dot(n, u)): on the cone n.u is negative and its sign matters; use "
+                   "dot(n, u) as it is: r = u - 2 (n.u) n",
     }
-    if found in ("right", "normalised_sum"):
-        return True, ""
-    if found == "unreflected" and CLAMPED_DOT.search(glsl_body(student.source,
-                                                               "reflect_eye")):
-        return False, ("dot(n, u) is clamped (clamp or max): on the cone u points at the "
-                       "surface, so n.u is negative, the clamp makes it 0 and r = u; use "
-                       "dot(n, u) as it is: r = u - 2 (n.u) n")
+    found = _probed(student, "reflect_eye")
     if found in hints:
         return False, hints[found]
     return False, "reflect_eye's r differs from u - 2 (n.u) n on the cone"
 
 
-CLAMPED_DOT = re.compile(r"\b(clamp|max)\s*\(\s*dot\s*\(")
 PLUS_ONE = re.compile(r"\bz\s*\+\s*1\b|\b1(\.0*)?\s*\+\s*\w+\.z\b|"
                       r"vec3\(\s*0(\.0*)?\s*,\s*0(\.0*)?\s*,\s*1(\.0*)?\s*\)")
-"""The + 1 on r.z (or r + (0, 0, 1), the viewer's direction), written: with it, s = r.x/2
-+ 1/2 on the cone is the halfway vector left unnormalised, not the + 1 forgotten."""
+"""The + 1 on r.z (or r + (0, 0, 1), the viewer's direction), written."""
 
 
 def judge_coordinates(student: Evidence) -> tuple[bool, str]:
@@ -118,36 +123,37 @@ def judge_coordinates(student: Evidence) -> tuple[bool, str]:
         return False, cone
     st, u, n = cone
     r = u - 2 * (u * n).sum(-1, keepdims=True) * n
-    s, t = sphere_map(r)
-    right = np.stack([s, t], -1)
-    rx, ry, rz = r[:, 0], r[:, 1], r[:, 2]
-    length = np.linalg.norm(r, axis=-1)
-    no_plus = np.stack([rx / (2 * length) + 0.5, ry / (2 * length) + 0.5], -1)
-    m_half = np.sqrt(rx**2 + ry**2 + (rz + 1) ** 2)
-    no_two = np.stack([rx / m_half + 0.5, ry / m_half + 0.5], -1)
-    found = _best(st, {
-        "right": right, "swap": right[:, ::-1], "flip_t": np.stack([s, 1 - t], -1),
-        "flip_s": np.stack([1 - s, t], -1), "no_plus_one": no_plus, "no_two": no_two,
-        "no_half": right - 0.5}, 2e-3)
+    if _best(st, {"right": np.stack(sphere_map(r), -1)}, 2e-3):
+        return True, ""
     hints = {
         "swap": "s and t swapped: s comes from r.x and t from r.y",
         "flip_t": "t upside down: t = r.y / m + 1/2",
         "flip_s": "s mirrored: s = r.x / m + 1/2",
         "no_plus_one": "m must use (r.z + 1): m = 2 sqrt(r.x^2 + r.y^2 + (r.z + 1)^2), the "
                        "normal of the mirror ball halfway between r and the viewer",
+        "unnormalised": "the halfway vector (r.x, r.y, r.z + 1) is not normalised: s and t "
+                        "are its x and y over its length, m = 2 sqrt(r.x^2 + r.y^2 + "
+                        "(r.z + 1)^2)",
+        "minus_one": "the sign of the 1 in m: m = 2 sqrt(r.x^2 + r.y^2 + (r.z + 1)^2), the "
+                     "halfway vector between r and the viewer at +z",
         "no_two": "the factor 2 in m is missing: m = 2 sqrt(r.x^2 + r.y^2 + (r.z + 1)^2), or "
                   "s and t leave [0, 1]",
         "no_half": "the + 1/2 is missing: s and t must lie in [0, 1], centre (1/2, 1/2)",
     }
-    if found == "right":
-        return True, ""
+    # the slip is named by the probe's values, on reflection vectors of several lengths:
+    # on the cone's unit vectors a halfway vector left unnormalised and a missing + 1 give
+    # the same (s, t)
+    found = _probed(student, "sphere_map_st")
     body = glsl_body(student.source, "sphere_map_st")
+    # Read from the source only where values cannot tell two forms apart:
+    # - 1/2 in GLSL is 0, so "+ 1/2" gives exactly the numbers of a missing + 1/2;
+    # - r normalised first, then its halfway vector left unnormalised, is the very function
+    #   of r that m without the + 1 is (rx / 2|r| + 1/2 for any r).
     if found == "no_half" and INTEGER_HALF.search(body):
         return False, ("1/2 in GLSL is integer division, 0, so the + 1/2 adds nothing: write "
                        "0.5 (s = r.x / m + 0.5, t = r.y / m + 0.5)")
     if found == "no_plus_one" and PLUS_ONE.search(body):
-        return False, ("the halfway vector (r.x, r.y, r.z + 1) is not normalised: s and t are "
-                       "its x and y over its length, m = 2 sqrt(r.x^2 + r.y^2 + (r.z + 1)^2)")
+        found = "unnormalised"
     if found in hints:
         return False, hints[found]
     return False, "sphere_map_st differs from Hoff's s = r.x/m + 1/2, t = r.y/m + 1/2 on the cone"
