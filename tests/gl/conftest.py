@@ -52,3 +52,12 @@ def scene_renderer(registry):
     yield renderer
     renderer.release()
 
+
+
+def module_context():
+    """A context of a test module's own, to replace the session's there (a module uses it
+    as ``gl_context = pytest.fixture(scope="module")(module_context)``): for tests whose
+    student calls leave GL state, and GL errors in the debug log, that no other test may
+    see."""
+    with offscreen_context() as context:
+        yield context

@@ -1,5 +1,5 @@
 """Run as ``python -m tests.gl.core_frames OUT.npz`` in a process whose environment makes
-Mesa simulate macOS's OpenGL (:data:`MACOS_ENV`): compiles every shader the renderer
+Mesa simulate macOS's OpenGL (:data:`MACOS_CONTEXT`): compiles every shader the renderer
 ships on its own, draws the first two frames of every golden sequence
 (:mod:`tests.gl.golden_frames`: every shipped scene, every technique) with a renderer of
 the context's own draw path, and saves them to OUT.npz with what the context is (its
@@ -11,16 +11,7 @@ from __future__ import annotations
 import os
 import sys
 
-MACOS_ENV = {
-    "MESA_GL_VERSION_OVERRIDE": "4.1FC",
-    "MESA_GLSL_VERSION_OVERRIDE": "410",
-    "MESA_EXTENSION_OVERRIDE": " ".join(f"-GL_{name}" for name in (
-        "ARB_shader_draw_parameters", "ARB_multi_draw_indirect", "ARB_base_instance",
-        "ARB_shading_language_420pack", "ARB_shader_storage_buffer_object",
-        "ARB_compute_shader", "ARB_buffer_storage", "ARB_clear_texture", "ARB_copy_image",
-        "ARB_texture_view", "MESA_pack_invert")),
-}
-"""DESIGN.md's simulation of macOS's forward-compatible OpenGL 4.1 core context."""
+from tests import MACOS_CONTEXT
 
 FRAMES = 2
 """Frames of each sequence drawn (the second reuses the first's captures)."""
@@ -96,6 +87,6 @@ def main(out: str) -> None:
 
 
 if __name__ == "__main__":
-    if any(os.environ.get(key) != value for key, value in MACOS_ENV.items()):
-        sys.exit("run with tests.gl.core_frames.MACOS_ENV in the environment")
+    if any(os.environ.get(key) != value for key, value in MACOS_CONTEXT.items()):
+        sys.exit("run with tests.gl.core_frames.MACOS_CONTEXT in the environment")
     main(sys.argv[1])

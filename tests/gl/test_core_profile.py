@@ -19,7 +19,8 @@ import pytest
 
 from mirrorlab.data import scenes_dir
 from mirrorlab.testing import difference_image
-from tests.gl.core_frames import FRAMES, MACOS_ENV
+from tests import MACOS_CONTEXT
+from tests.gl.core_frames import FRAMES
 from tests.gl.golden_frames import draw_sequence, sequences
 from tests.imagecheck import save_failure
 
@@ -30,7 +31,7 @@ REPO = Path(__file__).resolve().parents[2]
 def core_frames(tmp_path_factory):
     """What the child drawing in the simulated macOS context saved: ``(info, frames)``."""
     out = tmp_path_factory.mktemp("core") / "frames.npz"
-    env = {**os.environ, **MACOS_ENV}
+    env = {**os.environ, **MACOS_CONTEXT}
     result = subprocess.run([sys.executable, "-m", "tests.gl.core_frames", str(out)],
                             cwd=REPO, env=env, capture_output=True, text=True, timeout=600)
     assert result.returncode == 0, result.stderr[-3000:]

@@ -17,7 +17,6 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
-from mirrorlab.gl.context import offscreen_context
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Framebuffer
 from mirrorlab.labs.trusted import calls as C
@@ -25,17 +24,13 @@ from mirrorlab.labs.trusted.executor import Executor, Stop
 from mirrorlab.labs.trusted.kit import open_session
 from mirrorlab.labs.trusted.pipe import PipeBudget, PipeClosed, PipeError, TrustedChannel
 from mirrorlab.labs.trusted.variants import default_variant
+from tests.gl.conftest import module_context
 from tests.labs.mutants import solution
 
 SIZE = (32, 32)
 
 
-@pytest.fixture(scope="module")
-def gl_context():
-    """A context of this module's own (it replaces the session's): the student's calls
-    here leave GL state, and GL errors in the debug log, that no other test may see."""
-    with offscreen_context() as context:
-        yield context
+gl_context = pytest.fixture(scope="module", name="gl_context")(module_context)
 
 FORMS = {
     # family: the forms of the OpenGL 4.6 compatibility specification (sizes x types [v])

@@ -10,22 +10,17 @@ import re
 import numpy as np
 import pytest
 
-from mirrorlab.gl.context import offscreen_context
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import FloatFramebuffer
 from mirrorlab.labs.trusted.kit import StudentShaderError, open_session
 from mirrorlab.labs.trusted.variants import default_variant
+from tests.gl.conftest import module_context
 from tests.labs.mutants import solution
 
 SIZE = (48, 48)
 
 
-@pytest.fixture(scope="module")
-def gl_context():
-    """A context of this module's own (it replaces the session's): the student's calls
-    here leave GL state, and GL errors in the debug log, that no other test may see."""
-    with offscreen_context() as context:
-        yield context
+gl_context = pytest.fixture(scope="module", name="gl_context")(module_context)
 LABS = {"cubemap": ("CUBE_MAP_GLSL", "draw_sphere", 2, "int cube_face(vec3 r) {"),
         "spheremap": ("SPHERE_MAP_GLSL", "draw_cone_shader", 2,
                       "vec3 reflect_eye(vec3 u, vec3 n) {")}

@@ -102,7 +102,7 @@ def test_the_probe_runs_on_a_core_context():
     import subprocess
     import sys
 
-    from tests.labs.test_core_profile import CORE
+    from tests import MACOS_CONTEXT
 
     script = (
         "import re, sys\n"
@@ -126,7 +126,7 @@ def test_the_probe_runs_on_a_core_context():
         "                                     probe.LAB_FUNCTIONS[lab], context.resources)\n"
         "            print(lab, name, *(probe.slip(f, v) for f, v in values.items()))\n")
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                          env={**os.environ, **CORE}, timeout=300)
+                          env={**os.environ, **MACOS_CONTEXT}, timeout=300)
     assert done.returncode == 0, done.stderr[-2000:]
     lines = done.stdout.splitlines()
     assert lines[0] == "profile 1"  # GL_CONTEXT_CORE_PROFILE_BIT

@@ -20,6 +20,7 @@ from PIL import Image
 
 from mirrorlab.labs import LABS
 from mirrorlab.labs.trusted.grading import grade_folder
+from tests import MACOS_CONTEXT
 from tests.labs.classroom import STARTER, starter_text
 from tests.labs.conftest import LIMITS, SOLUTIONS
 from tests.labs.mutants import (
@@ -33,15 +34,6 @@ from tests.labs.mutants import (
     write_mutants,
 )
 
-CORE = {
-    "MESA_GL_VERSION_OVERRIDE": "4.1FC", "MESA_GLSL_VERSION_OVERRIDE": "410",
-    "MESA_EXTENSION_OVERRIDE": " ".join(f"-GL_{name}" for name in (
-        "ARB_shader_draw_parameters", "ARB_multi_draw_indirect", "ARB_base_instance",
-        "ARB_shading_language_420pack", "ARB_shader_storage_buffer_object",
-        "ARB_compute_shader", "ARB_buffer_storage", "ARB_clear_texture", "ARB_copy_image",
-        "ARB_texture_view", "MESA_pack_invert")),
-}
-"""macOS's context as DESIGN.md simulates it: with 4.1FC every Mesa context is 4.1 core."""
 PIXEL_TOLERANCE = 2
 """The most a channel of the student's picture may differ (of 255) between the two ways,
 but on :data:`STRAY_PIXELS` of the pixels. Measured on every solution, starter and mutant
@@ -303,7 +295,7 @@ def test_the_simulated_context_is_core():
               "    print('glMatrixMode raised', type(exc).__name__)\n"
               "context.release()\n")
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                          env={**os.environ, **CORE})
+                          env={**os.environ, **MACOS_CONTEXT})
     assert done.returncode == 0, done.stderr
     assert "compatibility False" in done.stdout and "glMatrixMode raised" in done.stdout
     native = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
@@ -320,7 +312,7 @@ def _student_picture(png: bytes) -> np.ndarray:
 def _grade(lab, folder, monkeypatch, cache, core: bool):
     with monkeypatch.context() as patch:
         patch.setenv("MIRRORLAB_CACHE", str(cache))
-        for key, value in CORE.items():
+        for key, value in MACOS_CONTEXT.items():
             if core:
                 patch.setenv(key, value)
             else:
