@@ -161,11 +161,15 @@ def test_sphere_map_texgen_matches_mesa_with_identity_modelview(registry):
     compare_texgen(mesa, np.stack([s, t], axis=1), r[regular])
 
 
-def test_sphere_map_texgen_matches_mesa_under_a_modelview_with_gl_normalize(registry):
-    rng = np.random.default_rng(21)
+def modelview_case(seed: int) -> tuple[np.ndarray, ...]:
+    """Texgen inputs under a modelview with a non-uniform scale: object-space vertices
+    ``(n, 3)`` and normals of random length ``(n, 3)`` (float32; GL_NORMALIZE makes GL
+    normalise them after the inverse-transpose transform, as numpy's reflect does), the
+    modelview ``(4, 4)``, eye-space vertices, normals and reflection vectors ``(n, 3)``
+    (float64), and the mask of the regular ones (no Mesa NaN: r = (0, 0, -1) or a vertex
+    at the eye), at least 400 of them."""
+    rng = np.random.default_rng(seed)
     vertices, normals = texgen_cases(rng)
-    # Object-space normals of random length; GL_NORMALIZE makes GL normalise them after
-    # the inverse-transpose transform, as numpy's reflect does.
     normals = (normals * rng.uniform(0.2, 5, (len(normals), 1))).astype(np.float32)
     modelview = (math3d.translate((0.5, -1.0, -6.0)) @ math3d.rotate(35, (1, 2, 0.5))
                  @ math3d.scale((1.0, 2.0, 0.5)))
@@ -177,6 +181,11 @@ def test_sphere_map_texgen_matches_mesa_under_a_modelview_with_gl_normalize(regi
     regular = (1 + r[:, 2] / np.linalg.norm(r, axis=1) >= 1e-6) & (
         np.linalg.norm(v_eye, axis=1) > 1e-6)
     assert regular.sum() >= 400
+    return vertices, normals, modelview, v_eye, n_eye, r, regular
+
+
+def test_sphere_map_texgen_matches_mesa_under_a_modelview_with_gl_normalize(registry):
+    vertices, normals, modelview, v_eye, n_eye, r, regular = modelview_case(21)
     mesa = mesa_texgen(registry, vertices[regular], normals[regular], modelview,
                        normalize=True)
     s, t = envmap.sphere_map_texgen(v_eye[regular], n_eye[regular])
@@ -303,18 +312,7 @@ def test_texgen_shader_matches_mesa_texgen_over_many_directions(registry):
 
 
 def test_texgen_shader_matches_mesa_texgen_under_a_modelview(registry):
-    rng = np.random.default_rng(39)
-    vertices, normals = texgen_cases(rng)
-    normals = (normals * rng.uniform(0.2, 5, (len(normals), 1))).astype(np.float32)
-    modelview = (math3d.translate((0.5, -1.0, -6.0)) @ math3d.rotate(35, (1, 2, 0.5))
-                 @ math3d.scale((1.0, 2.0, 0.5)))
-    vertices = (vertices / 4).astype(np.float32)
-    v_eye = math3d.transform_points(modelview, vertices.astype(np.float64))[:, :3]
-    n_eye = normals.astype(np.float64) @ math3d.normal_matrix(modelview).T
-    r = envmap.reflect(v_eye / np.linalg.norm(v_eye, axis=1, keepdims=True), n_eye)
-    regular = (1 + r[:, 2] / np.linalg.norm(r, axis=1) >= 1e-6) & (
-        np.linalg.norm(v_eye, axis=1) > 1e-6)
-    assert regular.sum() >= 400
+    vertices, normals, modelview, _, _, r, regular = modelview_case(39)
     mesa = mesa_texgen(registry, vertices[regular], normals[regular], modelview,
                        normalize=True)
     shader = shader_texgen(vertices[regular], normals[regular], modelview)
