@@ -44,7 +44,7 @@ import re
 import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any, Literal, Protocol, Self, cast
+from typing import Any, Literal, Protocol, Self
 
 from mirrorlab.errors import (
     DEBIAN_GL_PACKAGES,
@@ -107,6 +107,13 @@ def system_platform(system: str) -> Literal["linux", "nt", "darwin"]:
     return "linux"
 
 
+def window_platform(system: str) -> Platform:
+    """PyOpenGL's platform for a glfw window on ``system`` (a ``sys.platform`` value):
+    ``'glx'`` on Linux (X11), ``'nt'`` on Windows, ``'darwin'`` on macOS."""
+    kind = system_platform(system)
+    return "glx" if kind == "linux" else kind
+
+
 @dataclass(frozen=True)
 class Choice:
     """How a context will be made: its ``backend``, PyOpenGL's ``platform`` for it, and
@@ -137,7 +144,7 @@ def choose_backend(purpose: Purpose, system: str, *, egl: bool, display: bool,
     both ways out).
     """
     kind = system_platform(system)
-    window_platform: Platform = "glx" if kind == "linux" else kind
+    window = window_platform(system)
     source = "backend" if backend is not None else BACKEND_VARIABLE
     wanted = backend if backend is not None else environ.get(BACKEND_VARIABLE, "")
     wanted = wanted.strip().lower() or "auto"
@@ -158,8 +165,8 @@ def choose_backend(purpose: Purpose, system: str, *, egl: bool, display: bool,
             raise GLContextError(
                 "no display for a window (DISPLAY is not set); run it on a desktop or "
                 "under 'xvfb-run -a', or use 'mirrorlab render', which needs no display")
-        return Choice("window", window_platform, core)
-    hidden = Choice("hidden-window", window_platform, core)
+        return Choice("window", window, core)
+    hidden = Choice("hidden-window", window, core)
     if wanted == "egl":
         if kind != "linux":
             raise GLContextError(
@@ -290,8 +297,8 @@ def _default_platform() -> None:
     try:
         platform = choose("offscreen").platform
     except GLContextError:
-        platform = "egl" if system_platform(sys.platform) == "linux" else cast(
-            Platform, system_platform(sys.platform))
+        linux = system_platform(sys.platform) == "linux"
+        platform = "egl" if linux else window_platform(sys.platform)
     use_platform(platform)
 
 
@@ -428,14 +435,14 @@ class gl_pass:
 
 _debug_errors: list[tuple[int, str]] = []
 """(GL error code, driver message) of errors the debug callback saw since the last check."""
-_debug_callbacks: list = []
+_debug_callbacks: list = []  # kept alive: GL holds only the C pointer
 
 
 def discard_debug_errors() -> None:
     """Forget the errors the debug callback saw since the last check: for a caller that
     judged a GL error itself (the labs' executor, whose student made it)."""
     _debug_errors.clear()
-  # kept alive: GL holds only the C pointer
+
 _DEBUG_CODES = {"out of memory": 0x0505, "invalid enum": 0x0500, "invalid value": 0x0501,
                 "invalid operation": 0x0502, "invalid framebuffer": 0x0506}
 
@@ -662,7 +669,7 @@ class WindowContext(Context):
     def __init__(self, width: int, height: int, title: str, visible: bool = True,
                  debug: bool = False, core: bool = False) -> None:
         kind = system_platform(sys.platform)
-        platform: Platform = "glx" if kind == "linux" else kind
+        platform = window_platform(sys.platform)
         use_platform(platform)
         display = os.environ.get("DISPLAY", "")
         if kind == "linux" and not display:
