@@ -352,7 +352,7 @@ class Executor:
         tracker.event("clear", mask=args[0], color=tracker.clear_color.plain(),
                       scissor=scissor, viewport=tracker.viewport.plain())
         if args[0] & GL.GL_COLOR_BUFFER_BIT and all(self._colour_mask()[:3]):
-            box = self._scissor_box() if self._scissor_on() else \
+            box = self._scissor_box() if scissor else \
                 (0, 0, self.session.width, self.session.height)
             tracker.untaint(box)
 
