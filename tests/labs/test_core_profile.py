@@ -23,6 +23,7 @@ from mirrorlab.labs.trusted.grading import grade_folder
 from tests import MACOS_CONTEXT
 from tests.labs.classroom import STARTER, starter_text
 from tests.labs.conftest import LIMITS, SOLUTIONS
+from tests.labs.crashes import CRASHES
 from tests.labs.mutants import (
     CUBE_EQUIVALENT,
     CUBEMAP,
@@ -271,6 +272,19 @@ def display():
 GL_REFLECTION_MAP and GL_NORMAL_MAP texgen and a cube map enabled on unit 1."""
 
 
+SLOW_CRASHES = {"four_thousand_legal_calls", "twenty_thousand_legal_calls",
+                "glsl_preprocessor_bomb"}
+"""Crash files left out of the comparison: they test size and time limits, not what the
+context does, and take seconds each."""
+
+
+def crashes_of(lab: str) -> dict[str, str]:
+    """The lab's crash files (:mod:`tests.labs.crashes`), by student name: legal files
+    that once broke the checker, which the core context must judge as the native one."""
+    return {f"crash_{c.name}": c.source() for c in CRASHES
+            if c.lab == lab and c.name not in SLOW_CRASHES}
+
+
 def mutants_of(lab: str) -> tuple:
     if os.environ.get("MIRRORLAB_ORACLE_ALL") == "1":
         return EVERY[lab]
@@ -329,6 +343,9 @@ def test_core_and_compatibility_grade_alike(lab, tmp_path, monkeypatch):
     written = write_mutants(folder, mutants_of(lab))
     (folder / "solution.py").write_text((SOLUTIONS / f"{spec.folder}.py").read_text())
     (folder / "starter.py").write_text(starter_text(lab))
+    crashes = crashes_of(lab)
+    for student, source in crashes.items():
+        (folder / f"{student}.py").write_text(source)
     if lab == "lab20":
         (folder / "fixed_function.py").write_text(
             (SOLUTIONS / f"{spec.folder}.py").read_text() + "\n\n" + FIXED_FUNCTION)
@@ -344,7 +361,8 @@ def test_core_and_compatibility_grade_alike(lab, tmp_path, monkeypatch):
     core = _grade(lab, folder, monkeypatch, tmp_path / "cache-core", core=True)
     extra = {"spheremap": ["builtins"], "lab20": ["fixed_function"],
              "cubemap": ["cube_fixed_function"]}[lab]
-    assert sorted(native) == sorted(core) == sorted([*written, "solution", "starter", *extra])
+    assert sorted(native) == sorted(core) == sorted([*written, "solution", "starter", *extra,
+                                                     *crashes])
     for student, expected in native.items():
         got = core[student]
         assert got.status == expected.status, (student, got.status, expected.status)

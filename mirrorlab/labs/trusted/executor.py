@@ -431,7 +431,7 @@ class Executor:
         primitive = self.tracker.primitive
         if primitive is None:
             return None
-        GL.glEnd()
+        legacy.gl().glEnd()
         self.tracker.primitive = None
         self._drain()
         function = primitive.function or self.tracker.function or "<file>"
