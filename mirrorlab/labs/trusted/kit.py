@@ -74,8 +74,7 @@ def compile_program(vertex: str, fragment: str, student: str | None = None,
                 source = translate_compat_glsl(source, stage)
             shaders.append(_compiled(kind, source, f"kit shader {name}", variable))
             if student is not None and STUDENT_MARK in source:
-                own = _student_source(source, translate_compat_glsl(student, stage))
-                student_shaders.append(_compiled(kind, own, "", variable))
+                student_shaders.append(student_shader(kind, source, student, variable))
         program = _linked([*shaders, *student_shaders], f"{vertex}+{fragment}",
                           variable if student is not None else "")
         if student_shaders:
@@ -90,12 +89,25 @@ def compile_program(vertex: str, fragment: str, student: str | None = None,
             GL.glDeleteShader(shader)
 
 
-def _student_source(kit_source: str, student: str) -> str:
-    """The student's GLSL as a shader of its own: the kit file's ``#version`` line, then
-    the student's text as source string 1 (its lines counted from 1)."""
-    version = next((line for line in kit_source.splitlines()
+def student_interface(kit_source: str) -> tuple[str, list[tuple[str, str, str]]]:
+    """What a kit shader file offers the student's GLSL: its ``#version`` line ('' when it
+    has none) and the prototypes after its :data:`STUDENT_MARK` line, ``(result type,
+    name, parameters)`` each, the interface the student's functions are linked through."""
+    before, _, after = kit_source.partition(STUDENT_MARK)
+    version = next((line for line in before.splitlines()
                     if line.strip().startswith("#version")), "")
-    return f"{version}\n#line 1 1\n{student}\n"
+    return version, PROTOTYPE.findall(after.split("\n\n")[0])
+
+
+def student_shader(kind: int, kit_source: str, glsl: str, variable: str) -> int:
+    """The student's GLSL ``glsl`` (of ``variable``) compiled as a shader object of its own,
+    of stage ``kind``: the kit file's ``#version`` line, then the text with its
+    compatibility built-ins translated, as source string 1 (its lines counted from 1).
+    StudentShaderError when it does not compile."""
+    stage = "vertex" if kind == _gl().GL_VERTEX_SHADER else "fragment"
+    version, _ = student_interface(kit_source)
+    source = f"{version}\n#line 1 1\n{translate_compat_glsl(glsl, stage)}\n"
+    return _compiled(kind, source, "", variable)
 
 
 def _text(log: bytes | str) -> str:
@@ -151,10 +163,7 @@ def _only_arguments(kit_source: str, student_shaders: list[int], variable: str) 
     linked to a main of their own that calls each through the kit's prototypes and
     declares no uniform, so every uniform active there is theirs."""
     GL = _gl()
-    version, _, after = kit_source.partition(STUDENT_MARK)
-    version_line = next((line for line in version.splitlines()
-                         if line.strip().startswith("#version")), "")
-    prototypes = PROTOTYPE.findall(after.split("\n\n")[0])
+    version_line, prototypes = student_interface(kit_source)
     calls = []
     for result, name, params in prototypes:
         args = [STUB_ARGUMENTS[p.split()[-2]] for p in params.split(",") if p.strip()]

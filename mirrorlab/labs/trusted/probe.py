@@ -262,17 +262,12 @@ def run_probe(kit_fragment: str, glsl: str, functions: tuple[str, ...], registry
     from mirrorlab.gl.opengl import GL
     from mirrorlab.gl.resources import FloatFramebuffer, expand_includes
     from mirrorlab.labs.trusted import kit, legacy
-    from mirrorlab.labs.trusted.compat_glsl import translate_compat_glsl
 
     kit_source = expand_includes(kit_fragment)
-    before, _, after = kit_source.partition(kit.STUDENT_MARK)
-    version = next((line for line in before.splitlines()
-                    if line.strip().startswith("#version")), "#version 330 core")
-    prototypes = "".join(f"{r} {n}({p});\n"
-                         for r, n, p in kit.PROTOTYPE.findall(after.split("\n\n")[0]))
-    student = kit._compiled(GL.GL_FRAGMENT_SHADER, kit._student_source(
-        kit_source, translate_compat_glsl(glsl, "fragment")), "", "probe")
-    shaders = [student]
+    version, interface = kit.student_interface(kit_source)
+    version = version or "#version 330 core"
+    prototypes = "".join(f"{r} {n}({p});\n" for r, n, p in interface)
+    shaders = [kit.student_shader(GL.GL_FRAGMENT_SHADER, kit_source, glsl, "probe")]
     framebuffer = int(GL.glGetIntegerv(GL.GL_FRAMEBUFFER_BINDING))
     viewport = [int(v) for v in GL.glGetIntegerv(GL.GL_VIEWPORT)]
     textures: list[int] = []
