@@ -118,30 +118,44 @@ def main(argv: list[str]) -> int:
     return run_one(Path(argv[0]))
 
 
-def _child_setup() -> None:
-    """The GL process's own memory limit where the system has one, and on Linux its end
-    when the process that asked for it dies (a killed grading worker leaves no checker
-    running). Run in the child before it starts (POSIX only: :func:`_child_options`)."""
-    try:
-        import resource
+def child_options(memory_mb: int, cpu_seconds: int | None = None, cores: bool = True,
+                  die_with_parent: bool = False) -> dict[str, Any]:
+    """Popen's arguments that limit a trusted helper process (the checker's GL process, the
+    GLSL check's): where the system has ``resource``, its address space (``memory_mb``), its
+    CPU seconds (``cpu_seconds``, None: no limit) and, without ``cores``, no core file; with
+    ``die_with_parent``, on Linux, its end when the process that started it dies (a killed
+    grading worker leaves no checker running). A limit the system refuses (macOS refuses
+    some RLIMIT_AS values) is left out. Empty where a child can run no code before it
+    starts (Windows): its caller's wall-clock limit alone applies there."""
+    if os.name != "posix":
+        return {}
 
-        memory = MEMORY_MB << 20
-        resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
-    except (ImportError, ValueError, OSError):  # no resource, or macOS refusing RLIMIT_AS
-        pass
-    if sys.platform.startswith("linux"):
+    def setup() -> None:  # pragma: no cover - runs in the child before it starts
         try:
-            import ctypes
+            import resource
+        except ImportError:
+            resource = None  # type: ignore[assignment]
+        if resource is not None:
+            memory = memory_mb << 20
+            wanted = [(resource.RLIMIT_AS, memory, memory)]
+            if cpu_seconds is not None:
+                wanted.append((resource.RLIMIT_CPU, cpu_seconds, cpu_seconds))
+            if not cores:
+                wanted.append((resource.RLIMIT_CORE, 0, 0))
+            for kind, soft, hard in wanted:
+                try:
+                    resource.setrlimit(kind, (soft, hard))
+                except (ValueError, OSError):
+                    pass
+        if die_with_parent and sys.platform.startswith("linux"):
+            try:
+                import ctypes
 
-            ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-        except (OSError, AttributeError):
-            pass
+                ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+            except (OSError, AttributeError):
+                pass
 
-
-def _child_options() -> dict[str, Any]:
-    """Popen's arguments that set the GL process up (:func:`_child_setup`): POSIX only,
-    where a child can run code before it starts."""
-    return {"preexec_fn": _child_setup} if os.name == "posix" else {}
+    return {"preexec_fn": setup}
 
 
 def gl_process_environment() -> dict[str, str]:
@@ -165,7 +179,7 @@ class CheckerProcess:
         self.process = subprocess.Popen(
             [sys.executable, "-m", "mirrorlab.labs.trusted.execute", "--serve"],
             stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=gl_process_environment(),
-            **_child_options())
+            **child_options(MEMORY_MB, die_with_parent=True))
         assert self.process.stdout is not None
         self.reply_read = self.process.stdout.fileno()
         self.jobs = 0
@@ -246,7 +260,7 @@ def run_job(lab: str, source: bytes, file_name: str, variant: Variant, limits: L
                 done = subprocess.run(
                     [sys.executable, "-m", "mirrorlab.labs.trusted.execute", str(job_file)],
                     capture_output=True, text=True, env=gl_process_environment(), timeout=deadline,
-                    **_child_options())
+                    **child_options(MEMORY_MB, die_with_parent=True))
                 code, stderr = done.returncode, done.stderr
             except subprocess.TimeoutExpired:
                 code = None

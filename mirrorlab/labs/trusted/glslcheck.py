@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 import subprocess
 import sys
 from typing import Any
@@ -31,17 +30,6 @@ hundred MB of it, the honest labs' GLSL little more."""
 _answers: dict[str, tuple[int, str] | None] = {}
 """By digest of the texts: None for a text that compiled, else the error's line and
 message (a file draws with the same text every frame)."""
-
-
-def _limits() -> None:  # pragma: no cover - runs in the child before it starts
-    try:
-        import resource
-    except ImportError:  # no such limits on this system: the wall clock still holds
-        return
-    memory = MEMORY_MB << 20
-    resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
-    resource.setrlimit(resource.RLIMIT_CPU, (CPU_SECONDS, CPU_SECONDS))
-    resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
 
 
 def precompile(vertex: str, fragment: str, student: str, variable: str) -> None:
@@ -64,17 +52,17 @@ def _compile_alone(vertex: str, fragment: str, student: str, variable: str
     limits; else the error's line (0: none) and message."""
     job = json.dumps({"vertex": vertex, "fragment": fragment, "student": student,
                       "variable": variable})
-    from mirrorlab.labs.trusted.execute import gl_process_environment
+    from mirrorlab.labs.trusted.execute import child_options, gl_process_environment
 
     # the checker's own GL backend; compiling needs no rasteriser threads
     environment = {**gl_process_environment(), "LP_NUM_THREADS": "1"}
     limits = (f"your shader could not be compiled within the limits ({SECONDS:g} s, "
               f"{MEMORY_MB} MB)")
-    preexec = _limits if os.name == "posix" else None
     try:
         done = subprocess.run([sys.executable, "-m", "mirrorlab.labs.trusted.glslcheck"],
                               input=job, capture_output=True, text=True, timeout=SECONDS,
-                              env=environment, preexec_fn=preexec)
+                              env=environment,
+                              **child_options(MEMORY_MB, CPU_SECONDS, cores=False))
     except subprocess.TimeoutExpired:
         return 0, limits
     answer = _answer(done.stdout)
