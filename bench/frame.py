@@ -164,8 +164,7 @@ def upload_mesh(vertices: np.ndarray, indices: np.ndarray) -> tuple[int, list[in
     GL.glBufferData(GL.GL_ELEMENT_ARRAY_BUFFER, indices.nbytes, indices, GL.GL_STATIC_DRAW)
     for location, (size, offset) in enumerate(((3, 0), (3, 12), (2, 24))):
         GL.glEnableVertexAttribArray(location)
-        GL.glVertexAttribPointer(location, size, GL.GL_FLOAT, GL.GL_FALSE, 32,
-                                 GL.GLvoidp(offset))
+        GL.glVertexAttribPointer(location, size, GL.GL_FLOAT, GL.GL_FALSE, 32, GL.GLvoidp(offset))
     GL.glBindVertexArray(0)
     return vao, buffers
 
@@ -176,8 +175,9 @@ def make_texture(width: int, height: int, pixels: np.ndarray | None) -> int:
     texture = int(GL.glGenTextures(1))
     GL.glBindTexture(GL.GL_TEXTURE_2D, texture)
     GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
-    GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB8, width, height, 0, GL.GL_RGB,
-                    GL.GL_UNSIGNED_BYTE, pixels)
+    GL.glTexImage2D(
+        GL.GL_TEXTURE_2D, 0, GL.GL_RGB8, width, height, 0, GL.GL_RGB, GL.GL_UNSIGNED_BYTE, pixels
+    )
     wrap = GL.GL_CLAMP_TO_EDGE if pixels is None else GL.GL_REPEAT
     GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_S, wrap)
     GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, wrap)
@@ -187,16 +187,25 @@ def make_texture(width: int, height: int, pixels: np.ndarray | None) -> int:
         GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAX_LEVEL, 0)
     else:
         GL.glGenerateMipmap(GL.GL_TEXTURE_2D)
-        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER,
-                           GL.GL_LINEAR_MIPMAP_LINEAR)
+        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_LINEAR_MIPMAP_LINEAR)
     return texture
 
 
 class MinimalRenderer:
     """The lab's two passes in plain PyOpenGL, drawing the same triangles as mirrorlab."""
 
-    UNIFORMS = ("model", "view_projection", "normal_matrix", "mode", "image", "color",
-                "light_direction", "ambient", "diffuse", "backing_color")
+    UNIFORMS = (
+        "model",
+        "view_projection",
+        "normal_matrix",
+        "mode",
+        "image",
+        "color",
+        "light_direction",
+        "ambient",
+        "diffuse",
+        "backing_color",
+    )
 
     def __init__(self, scene: Scene, width: int, height: int) -> None:
         self.scene = scene
@@ -206,8 +215,9 @@ class MinimalRenderer:
         self.triangles = 0  # triangles submitted in the last frame
 
         self.program = compile_program(VERTEX_SHADER, FRAGMENT_SHADER)
-        self.loc = {name: int(GL.glGetUniformLocation(self.program, name))
-                    for name in self.UNIFORMS}
+        self.loc = {
+            name: int(GL.glGetUniformLocation(self.program, name)) for name in self.UNIFORMS
+        }
         missing = [name for name, loc in self.loc.items() if loc < 0]
         if missing:
             raise RuntimeError(f"minimal program lacks uniforms {missing}")
@@ -239,12 +249,14 @@ class MinimalRenderer:
             if part.texture and part.texture not in self.textures:
                 pixels = load_picture(part.texture)
                 self.textures[part.texture] = make_texture(
-                    pixels.shape[1], pixels.shape[0], np.ascontiguousarray(pixels[::-1]))
+                    pixels.shape[1], pixels.shape[0], np.ascontiguousarray(pixels[::-1])
+                )
         self.environment = make_texture(width, height, None)
 
         mirror = self.mirror
-        quad = np.hstack([mirror.corner_array, np.broadcast_to(mirror.normal, (4, 3)),
-                          mirror.texcoords()])
+        quad = np.hstack(
+            [mirror.corner_array, np.broadcast_to(mirror.normal, (4, 3)), mirror.texcoords()]
+        )
         self.quad_vao, buffers = upload_mesh(quad, np.array([0, 1, 2, 0, 2, 3]))
         self.buffers += buffers
 
@@ -254,15 +266,22 @@ class MinimalRenderer:
         self.parts: list[Part] = []
         for part in scene_parts(scene):
             vao, count = self.meshes[part.mesh]
-            self.parts.append(Part(
-                vao, count, part.model.astype(np.float32),
-                np.linalg.inv(part.model[:3, :3]).T.astype(np.float32), part.color,
-                self.textures[part.texture] if part.texture else 0))
+            self.parts.append(
+                Part(
+                    vao,
+                    count,
+                    part.model.astype(np.float32),
+                    np.linalg.inv(part.model[:3, :3]).T.astype(np.float32),
+                    part.color,
+                    self.textures[part.texture] if part.texture else 0,
+                )
+            )
 
     def _draw_parts(self, view_projection: np.ndarray) -> None:
         loc = self.loc
-        GL.glUniformMatrix4fv(loc["view_projection"], 1, GL.GL_TRUE,
-                              view_projection.astype(np.float32))
+        GL.glUniformMatrix4fv(
+            loc["view_projection"], 1, GL.GL_TRUE, view_projection.astype(np.float32)
+        )
         for part in self.parts:
             GL.glUniformMatrix4fv(loc["model"], 1, GL.GL_TRUE, part.model)
             GL.glUniformMatrix3fv(loc["normal_matrix"], 1, GL.GL_TRUE, part.normal_matrix)
@@ -303,8 +322,9 @@ class MinimalRenderer:
         # it hides is then not shaded, as mirrorlab draws it), then the parts.
         GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT)
         view_projection = camera.projection(self.width / self.height) @ camera.view()
-        GL.glUniformMatrix4fv(loc["view_projection"], 1, GL.GL_TRUE,
-                              view_projection.astype(np.float32))
+        GL.glUniformMatrix4fv(
+            loc["view_projection"], 1, GL.GL_TRUE, view_projection.astype(np.float32)
+        )
         GL.glDisable(GL.GL_CULL_FACE)  # the mirror's back face shows its backing
         GL.glUniformMatrix4fv(loc["model"], 1, GL.GL_TRUE, IDENTITY)
         GL.glUniform1i(loc["mode"], MODE_MIRROR)
@@ -326,8 +346,9 @@ class MinimalRenderer:
 
     def release(self) -> None:
         GL.glDeleteProgram(self.program)
-        GL.glDeleteVertexArrays(len(self.meshes) + 1,
-                                [vao for vao, _ in self.meshes.values()] + [self.quad_vao])
+        GL.glDeleteVertexArrays(
+            len(self.meshes) + 1, [vao for vao, _ in self.meshes.values()] + [self.quad_vao]
+        )
         GL.glDeleteBuffers(len(self.buffers), self.buffers)
         GL.glDeleteTextures([*self.textures.values(), self.environment])
         GL.glDeleteRenderbuffers(2, self.renderbuffers)
@@ -416,19 +437,37 @@ def non_negative_int(text: str) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        description="Time mirrorlab's two-pass frame against a minimal PyOpenGL version.")
-    parser.add_argument("--size", type=parse_size, default=(512, 512),
-                        help="frame WIDTHxHEIGHT (default 512x512)")
-    parser.add_argument("--frames", type=positive_int, default=50,
-                        help="timed frames per variant (default %(default)s)")
-    parser.add_argument("--warmup", type=non_negative_int, default=10,
-                        help="untimed frames per variant first (default %(default)s)")
-    parser.add_argument("--block", type=positive_int, default=5,
-                        help="frames per variant before switching (default %(default)s)")
+        description="Time mirrorlab's two-pass frame against a minimal PyOpenGL version."
+    )
+    parser.add_argument(
+        "--size", type=parse_size, default=(512, 512), help="frame WIDTHxHEIGHT (default 512x512)"
+    )
+    parser.add_argument(
+        "--frames",
+        type=positive_int,
+        default=50,
+        help="timed frames per variant (default %(default)s)",
+    )
+    parser.add_argument(
+        "--warmup",
+        type=non_negative_int,
+        default=10,
+        help="untimed frames per variant first (default %(default)s)",
+    )
+    parser.add_argument(
+        "--block",
+        type=positive_int,
+        default=5,
+        help="frames per variant before switching (default %(default)s)",
+    )
     parser.add_argument("--json", type=Path, metavar="PATH", help="also write results as JSON")
-    parser.add_argument("--save-images", type=Path, metavar="DIR",
-                        help="write the last mirrorlab and minimal frames (and their "
-                        "difference, x8) as PNGs into DIR")
+    parser.add_argument(
+        "--save-images",
+        type=Path,
+        metavar="DIR",
+        help="write the last mirrorlab and minimal frames (and their "
+        "difference, x8) as PNGs into DIR",
+    )
     return parser
 
 
@@ -455,8 +494,10 @@ def run_blocks(variants: list[Variant], frames: int, block: int) -> None:
             variant.draw_calls, variant.triangles = variant.last_frame()
             check_gl_errors(f"a block of {variant.key}")
             parts.append(f"{variant.key} {np.median(times):6.2f}")
-        log(f"round {round_index + 1:>2}/{rounds}: {count} frames each, block median ms: "
-            + ", ".join(parts))
+        log(
+            f"round {round_index + 1:>2}/{rounds}: {count} frames each, block median ms: "
+            + ", ".join(parts)
+        )
 
 
 def write_json_atomic(path: Path, payload: dict[str, Any]) -> None:
@@ -485,15 +526,18 @@ def save_images(directory: Path, mine: np.ndarray, minimal: np.ndarray) -> list[
 
 
 def markdown_table(rows: list[dict[str, Any]]) -> str:
-    header = ("| variant | median ms | p10 ms | p90 ms | until readback ms | readback ms "
-              "| triangles | draw calls |")
+    header = (
+        "| variant | median ms | p10 ms | p90 ms | until readback ms | readback ms "
+        "| triangles | draw calls |"
+    )
     lines = [header, "|---|---:|---:|---:|---:|---:|---:|---:|"]
     for row in rows:
         lines.append(
             f"| {row['label']} | {row['median_ms']:.2f} | {row['p10_ms']:.2f} "
             f"| {row['p90_ms']:.2f} | {row['until_readback_median_ms']:.2f} "
             f"| {row['readback_median_ms']:.2f} | {row['triangles_per_frame']} "
-            f"| {row['draw_calls_per_frame']} |")
+            f"| {row['draw_calls_per_frame']} |"
+        )
     return "\n".join(lines)
 
 
@@ -509,45 +553,64 @@ def main(argv: list[str] | None = None) -> int:
         renderer = SceneRenderer(context.resources)
         minimal = MinimalRenderer(scene, width, height)
         check_gl_errors("setting up both renderers")
-        part_triangles = sum(int(minimal.meshes[part.mesh][1]) // 3
-                             for part in scene_parts(scene))
+        part_triangles = sum(int(minimal.meshes[part.mesh][1]) // 3 for part in scene_parts(scene))
 
         def mirrorlab_frame(expected: list[str]) -> Callable[[], tuple[int, int]]:
             """Checks that mirrorlab's last frame ran ``expected`` passes; the camera pass
             draws the mirror quad too."""
+
             def last_frame() -> tuple[int, int]:
                 stats = renderer.last_frame
                 if stats is None or stats.ran != expected:
-                    raise RuntimeError(f"mirrorlab ran passes {stats and stats.ran}, "
-                                       f"expected {expected}")
+                    raise RuntimeError(
+                        f"mirrorlab ran passes {stats and stats.ran}, expected {expected}"
+                    )
                 return stats.draw_calls, part_triangles * len(expected) + 2
+
             return last_frame
 
         def forced() -> None:
             renderer.state.clear()  # the capture's texture counts as stale: capture again
             renderer.render(scene, framebuffer)
 
-        full = Variant("mirrorlab", "mirrorlab (capture + camera)", forced,
-                       framebuffer.read, mirrorlab_frame(["capture:mirror", "camera"]))
-        small = Variant("minimal", "minimal PyOpenGL (capture + camera)",
-                        lambda: minimal.draw(camera), minimal.read,
-                        lambda: (minimal.draw_calls, minimal.triangles))
-        skipped = Variant("skipped", "mirrorlab, capture skipped (camera only)",
-                          lambda: renderer.render(scene, framebuffer),
-                          framebuffer.read, mirrorlab_frame(["camera"]))
+        full = Variant(
+            "mirrorlab",
+            "mirrorlab (capture + camera)",
+            forced,
+            framebuffer.read,
+            mirrorlab_frame(["capture:mirror", "camera"]),
+        )
+        small = Variant(
+            "minimal",
+            "minimal PyOpenGL (capture + camera)",
+            lambda: minimal.draw(camera),
+            minimal.read,
+            lambda: (minimal.draw_calls, minimal.triangles),
+        )
+        skipped = Variant(
+            "skipped",
+            "mirrorlab, capture skipped (camera only)",
+            lambda: renderer.render(scene, framebuffer),
+            framebuffer.read,
+            mirrorlab_frame(["camera"]),
+        )
         variants = [full, small, skipped]
 
-        log(f"{info['renderer']}; {width}x{height}; warm-up {args.warmup} frames each, then "
-            f"{args.frames} timed frames each in blocks of {args.block}")
+        log(
+            f"{info['renderer']}; {width}x{height}; warm-up {args.warmup} frames each, then "
+            f"{args.frames} timed frames each in blocks of {args.block}"
+        )
         for variant in variants:
             for _ in range(args.warmup):
                 variant.frame(record=False)
         check_gl_errors("the warm-up")
         run_blocks(variants, args.frames, args.block)
 
-        expect(full.triangles == small.triangles,
-               f"unfair comparison: mirrorlab draws {full.triangles} triangles a frame, "
-               f"minimal {small.triangles}")
+        expect(
+            full.triangles == small.triangles,
+            f"unfair comparison: mirrorlab draws {full.triangles} triangles a frame, "
+            f"minimal {small.triangles}",
+        )
         assert full.image is not None and small.image is not None and skipped.image is not None
         diff = np.abs(full.image.astype(np.int16) - small.image.astype(np.int16))
         skipped_same = bool(np.array_equal(full.image, skipped.image))
@@ -569,47 +632,64 @@ def main(argv: list[str] | None = None) -> int:
 
     print(f"## mirrorlab frame benchmark, {width}x{height}\n")
     print(f"- GL: {info['renderer']} ({info['version']})")
-    print(f"- CPUs: {cpus} ({usable} usable by this process); "
-          f"LP_NUM_THREADS={os.environ.get('LP_NUM_THREADS', 'unset')}")
-    print(f"- Python {platform.python_version()}, PyOpenGL {OpenGL.__version__} "
-          f"(ERROR_CHECKING={OpenGL.ERROR_CHECKING}, OpenGL_accelerate "
-          f"{'installed' if accelerate else 'not installed'}), numpy {np.__version__}")
-    print(f"- {args.frames} timed frames per variant after {args.warmup} warm-up frames, "
-          f"interleaved in blocks of {args.block}; every frame includes readback to numpy\n")
+    print(
+        f"- CPUs: {cpus} ({usable} usable by this process); "
+        f"LP_NUM_THREADS={os.environ.get('LP_NUM_THREADS', 'unset')}"
+    )
+    print(
+        f"- Python {platform.python_version()}, PyOpenGL {OpenGL.__version__} "
+        f"(ERROR_CHECKING={OpenGL.ERROR_CHECKING}, OpenGL_accelerate "
+        f"{'installed' if accelerate else 'not installed'}), numpy {np.__version__}"
+    )
+    print(
+        f"- {args.frames} timed frames per variant after {args.warmup} warm-up frames, "
+        f"interleaved in blocks of {args.block}; every frame includes readback to numpy\n"
+    )
     print(markdown_table(rows))
-    print("\n'until readback' is the time spent issuing the frame (render() or the minimal "
-          "draw), 'readback' the\nread to numpy, which also waits for any rasterisation "
-          "still pending.\n")
-    print(f"- mirrorlab / minimal (the median of the rounds' ratios of block medians): "
-          f"**{ratio:.2f}x**")
-    print(f"- skipping the unchanged capture saves {saving:.2f} ms "
-          f"({saving / rows[0]['median_ms']:.0%}) of mirrorlab's frame")
-    print(f"- image check, mirrorlab vs minimal: mean |diff| = {image_check['mean_abs_diff']:.4f}"
-          f" per channel, max {image_check['max_abs_diff']}, "
-          f"{image_check['pixels_differing']} of {image_check['pixels']} pixels differ; "
-          f"capture-skipped frame identical to full frame: {'yes' if skipped_same else 'NO'}")
+    print(
+        "\n'until readback' is the time spent issuing the frame (render() or the minimal "
+        "draw), 'readback' the\nread to numpy, which also waits for any rasterisation "
+        "still pending.\n"
+    )
+    print(
+        f"- mirrorlab / minimal (the median of the rounds' ratios of block medians): "
+        f"**{ratio:.2f}x**"
+    )
+    print(
+        f"- skipping the unchanged capture saves {saving:.2f} ms "
+        f"({saving / rows[0]['median_ms']:.0%}) of mirrorlab's frame"
+    )
+    print(
+        f"- image check, mirrorlab vs minimal: mean |diff| = {image_check['mean_abs_diff']:.4f}"
+        f" per channel, max {image_check['max_abs_diff']}, "
+        f"{image_check['pixels_differing']} of {image_check['pixels']} pixels differ; "
+        f"capture-skipped frame identical to full frame: {'yes' if skipped_same else 'NO'}"
+    )
     for path in saved:
         print(f"- wrote {path}")
 
     if args.json:
-        write_json_atomic(args.json, {
-            "size": [width, height],
-            "frames": args.frames,
-            "warmup": args.warmup,
-            "block": args.block,
-            "gl_renderer": info["renderer"],
-            "gl_version": info["version"],
-            "cpu_count": cpus,
-            "cpus_usable": usable,
-            "python": platform.python_version(),
-            "pyopengl": OpenGL.__version__,
-            "pyopengl_error_checking": bool(OpenGL.ERROR_CHECKING),
-            "opengl_accelerate": accelerate,
-            "variants": {variant.key: row for variant, row in zip(variants, rows, strict=True)},
-            "ratio_mirrorlab_over_minimal": ratio,
-            "capture_skip_saving_ms": saving,
-            "image_check": image_check,
-        })
+        write_json_atomic(
+            args.json,
+            {
+                "size": [width, height],
+                "frames": args.frames,
+                "warmup": args.warmup,
+                "block": args.block,
+                "gl_renderer": info["renderer"],
+                "gl_version": info["version"],
+                "cpu_count": cpus,
+                "cpus_usable": usable,
+                "python": platform.python_version(),
+                "pyopengl": OpenGL.__version__,
+                "pyopengl_error_checking": bool(OpenGL.ERROR_CHECKING),
+                "opengl_accelerate": accelerate,
+                "variants": {variant.key: row for variant, row in zip(variants, rows, strict=True)},
+                "ratio_mirrorlab_over_minimal": ratio,
+                "capture_skip_saving_ms": saving,
+                "image_check": image_check,
+            },
+        )
         print(f"- wrote {args.json}")
     return 0
 

@@ -62,8 +62,10 @@ from collections import Counter, defaultdict
 from pathlib import Path
 
 VARIANTS = ("two passes", "two passes, a new pose every frame", "capture reused")
-DRIVER = re.compile(r"swrast_dri|libgallium|libGL|libEGL|libOpenGL|libglapi|libLLVM|\[JIT\]"
-                    r"|^perf-\d+\.map$")  # llvmpipe's compiled shaders, as perf script names them
+DRIVER = re.compile(
+    r"swrast_dri|libgallium|libGL|libEGL|libOpenGL|libglapi|libLLVM|\[JIT\]"
+    r"|^perf-\d+\.map$"
+)  # llvmpipe's compiled shaders, as perf script names them
 PYTHON = re.compile(r"libpython|^python|\.cpython-|libffi|openblas|_umath")
 RATE = 999
 CHAIN_RATE = 499
@@ -83,8 +85,7 @@ def scenes(variant: str) -> list:
     base, shoulder, elbow = lab.robot.angles
     if variant == "two passes, a new pose every frame":
         # a hundredth of a degree a frame: nothing drawn before is drawn again
-        return [lab.with_angles((base, shoulder, elbow + 0.01 * step))
-                for step in range(20000)]
+        return [lab.with_angles((base, shoulder, elbow + 0.01 * step)) for step in range(20000)]
     return [lab.with_angles((base, shoulder, elbow + step)) for step in (0.0, 0.5)]
 
 
@@ -109,8 +110,10 @@ def child(variant: str, size: int, seconds: float) -> None:
 def perf() -> str:
     found = shutil.which("perf")
     if found is None:
-        raise SystemExit("frame_profile.py: perf is not installed (Debian: apt-get install "
-                         "linux-perf; or ./dev bench profile)")
+        raise SystemExit(
+            "frame_profile.py: perf is not installed (Debian: apt-get install "
+            "linux-perf; or ./dev bench profile)"
+        )
     return found
 
 
@@ -123,11 +126,13 @@ def classify(thread: str, library: str) -> str:
 
 def record(pid: int, data: Path, seconds: float, options: list[str]) -> None:
     """``perf record`` of every thread of ``pid`` for ``seconds`` into ``data``."""
-    sampled = subprocess.run([perf(), "record", *options, "-p", str(pid), "-o", str(data),
-                              "--", "sleep", str(seconds)], capture_output=True, text=True)
+    sampled = subprocess.run(
+        [perf(), "record", *options, "-p", str(pid), "-o", str(data), "--", "sleep", str(seconds)],
+        capture_output=True,
+        text=True,
+    )
     if sampled.returncode != 0 or not data.exists():
-        raise SystemExit(f"frame_profile.py: perf record failed: "
-                         f"{sampled.stderr.strip()[-500:]}")
+        raise SystemExit(f"frame_profile.py: perf record failed: {sampled.stderr.strip()[-500:]}")
 
 
 def either_callers(script: str) -> Counter:
@@ -141,8 +146,11 @@ def either_callers(script: str) -> Counter:
         if not lines:
             continue
         thread = lines[0].split()[0]
-        libraries = [Path(line[line.rfind("(") + 1:-1]).name for line in lines[1:]
-                     if line.rstrip().endswith(")")]
+        libraries = [
+            Path(line[line.rfind("(") + 1 : -1]).name
+            for line in lines[1:]
+            if line.rstrip().endswith(")")
+        ]
         if not libraries or classify(thread, libraries[0]) != "either":
             continue
         owners = (classify(thread, library) for library in libraries[1:])
@@ -154,28 +162,63 @@ def python_share(variant: str, size: int, seconds: float, chain_seconds: float) 
     """Sample ``variant``'s process with perf and split its CPU time."""
     with tempfile.TemporaryDirectory() as folder:
         data, chains = Path(folder) / "perf.data", Path(folder) / "chains.data"
-        process = subprocess.Popen([sys.executable, __file__, "--child", variant, "--size",
-                                    str(size), "--seconds", str(seconds + chain_seconds + 3)],
-                                   stdout=subprocess.PIPE, text=True)
+        process = subprocess.Popen(
+            [
+                sys.executable,
+                __file__,
+                "--child",
+                variant,
+                "--size",
+                str(size),
+                "--seconds",
+                str(seconds + chain_seconds + 3),
+            ],
+            stdout=subprocess.PIPE,
+            text=True,
+        )
         assert process.stdout is not None
         try:
             if process.stdout.readline().strip() != "ready":
                 raise SystemExit(f"frame_profile.py: the {variant} process did not start")
             record(process.pid, data, seconds, ["-F", str(RATE)])
             if chain_seconds > 0:
-                record(process.pid, chains, chain_seconds,
-                       ["-F", str(CHAIN_RATE), "--call-graph", "dwarf,8192"])
+                record(
+                    process.pid,
+                    chains,
+                    chain_seconds,
+                    ["-F", str(CHAIN_RATE), "--call-graph", "dwarf,8192"],
+                )
             frames = json.loads(process.stdout.readline())["frames"]
         finally:
             process.wait()
         callers: Counter = Counter()
         if chain_seconds > 0:
-            callers = either_callers(subprocess.run(
-                [perf(), "script", "--no-inline", "-i", str(chains), "-F", "comm,ip,dso"],
-                capture_output=True, text=True, check=True).stdout)
-        table = subprocess.run([perf(), "report", "-i", str(data), "--stdio", "--sort",
-                                "comm,dso", "-F", "sample,comm,dso", "--percent-limit", "0"],
-                               capture_output=True, text=True, check=True).stdout
+            callers = either_callers(
+                subprocess.run(
+                    [perf(), "script", "--no-inline", "-i", str(chains), "-F", "comm,ip,dso"],
+                    capture_output=True,
+                    text=True,
+                    check=True,
+                ).stdout
+            )
+        table = subprocess.run(
+            [
+                perf(),
+                "report",
+                "-i",
+                str(data),
+                "--stdio",
+                "--sort",
+                "comm,dso",
+                "-F",
+                "sample,comm,dso",
+                "--percent-limit",
+                "0",
+            ],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
     samples: Counter = Counter()
     libraries: Counter = Counter()
     for line in table.splitlines():
@@ -190,15 +233,20 @@ def python_share(variant: str, size: int, seconds: float, chain_seconds: float) 
     total = sum(samples.values())
     split = sum(callers.values())
     either_to_python = (callers["python"] + callers["either"]) / split if split else 1.0
-    return {"variant": variant, "size": size, "frames_while_sampled": frames,
-            "samples": dict(samples),
-            "python_share_low": round(samples["python"] / total, 4),
-            "python_share_high": round((samples["python"] + samples["either"]) / total, 4),
-            "either_callers": dict(callers),
-            "python_share_attributed": round(
-                (samples["python"] + samples["either"] * either_to_python) / total, 4),
-            "driver_share": round(samples["driver"] / total, 4),
-            "main_thread_libraries": libraries.most_common(8)}
+    return {
+        "variant": variant,
+        "size": size,
+        "frames_while_sampled": frames,
+        "samples": dict(samples),
+        "python_share_low": round(samples["python"] / total, 4),
+        "python_share_high": round((samples["python"] + samples["either"]) / total, 4),
+        "either_callers": dict(callers),
+        "python_share_attributed": round(
+            (samples["python"] + samples["either"] * either_to_python) / total, 4
+        ),
+        "driver_share": round(samples["driver"] / total, 4),
+        "main_thread_libraries": libraries.most_common(8),
+    }
 
 
 def pass_times(variant: str, size: int, frames: int) -> dict[str, float]:
@@ -241,11 +289,13 @@ def pass_times(variant: str, size: int, frames: int) -> dict[str, float]:
                 timings["readback"].append((read - drawn) * 1e3)
                 timings["whole frame"].append((read - start) * 1e3)
                 timings["planning and Python between passes"].append(
-                    (drawn - start) * 1e3 - sum(current.values()))
+                    (drawn - start) * 1e3 - sum(current.values())
+                )
     finally:
         mirrorlab.renderer.gl_pass = original
-    assert stats.ran == (["capture:mirror", "camera"] if variant.startswith("two passes")
-                         else ["camera"]), stats.ran
+    assert stats.ran == (
+        ["capture:mirror", "camera"] if variant.startswith("two passes") else ["camera"]
+    ), stats.ran
     return {name: round(statistics.median(values), 3) for name, values in timings.items()}
 
 
@@ -253,9 +303,13 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--size", type=int, default=512)
     parser.add_argument("--seconds", type=float, default=6.0)
-    parser.add_argument("--chain-seconds", type=float, default=3.0,
-                        help="seconds sampled with call chains, to split the C library's "
-                             "and the kernel's samples by caller (0: not done)")
+    parser.add_argument(
+        "--chain-seconds",
+        type=float,
+        default=3.0,
+        help="seconds sampled with call chains, to split the C library's "
+        "and the kernel's samples by caller (0: not done)",
+    )
     parser.add_argument("--frames", type=int, default=100)
     parser.add_argument("--json", metavar="PATH")
     parser.add_argument("--child", choices=VARIANTS, help=argparse.SUPPRESS)
@@ -263,32 +317,44 @@ def main(argv: list[str] | None = None) -> int:
     if args.child:
         child(args.child, args.size, args.seconds)
         return 0
-    if (not 16 <= args.size <= 4096 or args.seconds <= 0 or args.chain_seconds < 0
-            or args.frames < 1):
-        parser.error("--size 16 to 4096, --seconds above 0, --chain-seconds 0 or more, "
-                     "--frames at least 1")
+    if (
+        not 16 <= args.size <= 4096
+        or args.seconds <= 0
+        or args.chain_seconds < 0
+        or args.frames < 1
+    ):
+        parser.error(
+            "--size 16 to 4096, --seconds above 0, --chain-seconds 0 or more, --frames at least 1"
+        )
     report = {"shares": [], "passes": {}}
     for variant in VARIANTS:
-        log(f"{variant}: {args.seconds:g} s under perf, {args.chain_seconds:g} s with call "
-            f"chains")
+        log(f"{variant}: {args.seconds:g} s under perf, {args.chain_seconds:g} s with call chains")
         share = python_share(variant, args.size, args.seconds, args.chain_seconds)
         report["shares"].append(share)
-        print(f"{variant}, {args.size}x{args.size}: Python's share {share['python_share_low']:.1%}"
-              f" to {share['python_share_high']:.1%} of the CPU time (the GL driver "
-              f"{share['driver_share']:.1%}; {sum(share['samples'].values())} samples)")
+        print(
+            f"{variant}, {args.size}x{args.size}: Python's share {share['python_share_low']:.1%}"
+            f" to {share['python_share_high']:.1%} of the CPU time (the GL driver "
+            f"{share['driver_share']:.1%}; {sum(share['samples'].values())} samples)"
+        )
         if args.chain_seconds > 0:
             callers = share["either_callers"]
-            print(f"  the C library's and the kernel's samples by caller: "
-                  f"{callers.get('python', 0)} Python's, {callers.get('driver', 0)} the "
-                  f"driver's, {callers.get('either', 0)} no one's; so Python's share is "
-                  f"{share['python_share_attributed']:.1%}")
-        print("  main thread: " + ", ".join(f"{name} {count}" for name, count in
-                                            share["main_thread_libraries"]))
+            print(
+                f"  the C library's and the kernel's samples by caller: "
+                f"{callers.get('python', 0)} Python's, {callers.get('driver', 0)} the "
+                f"driver's, {callers.get('either', 0)} no one's; so Python's share is "
+                f"{share['python_share_attributed']:.1%}"
+            )
+        print(
+            "  main thread: "
+            + ", ".join(f"{name} {count}" for name, count in share["main_thread_libraries"])
+        )
     for variant in VARIANTS:
         times = pass_times(variant, args.size, args.frames)
         report["passes"][variant] = times
-        print(f"{variant}, per pass (median ms, each ended by glFinish): " + ", ".join(
-            f"{name} {ms:.2f}" for name, ms in times.items()))
+        print(
+            f"{variant}, per pass (median ms, each ended by glFinish): "
+            + ", ".join(f"{name} {ms:.2f}" for name, ms in times.items())
+        )
     if args.json:
         from mirrorlab.files import Outputs
 

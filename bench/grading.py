@@ -46,13 +46,19 @@ from mirrorlab.labs.trusted.variants import default_variant  # noqa: E402
 from tests.labs.classroom import starter_text  # noqa: E402
 from tests.labs.mutants import EQUIVALENT, LAB20, solution  # noqa: E402
 
-ENGINES = {"--jobs 1": (1, "pool"), "--jobs 2 (pool)": (2, "pool"),
-           "--jobs 2 --engine dask (2 workers)": (2, "dask")}
+ENGINES = {
+    "--jobs 1": (1, "pool"),
+    "--jobs 2 (pool)": (2, "pool"),
+    "--jobs 2 --engine dask (2 workers)": (2, "dask"),
+}
 
 
 def make_class(folder: Path, students: int) -> None:
-    sources = [solution("lab20"), starter_text("lab20"),
-               *(m.source() for m in (*LAB20, *EQUIVALENT))]
+    sources = [
+        solution("lab20"),
+        starter_text("lab20"),
+        *(m.source() for m in (*LAB20, *EQUIVALENT)),
+    ]
     for i in range(students):
         (folder / f"student{i:03d}.py").write_text(sources[i % len(sources)])
 
@@ -63,14 +69,16 @@ def command(python: str, *args: str, cache: Path) -> float:
     env = {**os.environ, "MIRRORLAB_CACHE": str(cache)}
     env.pop("MIRRORLAB_SOLUTIONS", None)
     started = time.perf_counter()
-    done = subprocess.run([python, "-m", "mirrorlab.cli", *args], cwd=cache, env=env,
-                          capture_output=True, text=True)
+    done = subprocess.run(
+        [python, "-m", "mirrorlab.cli", *args], cwd=cache, env=env, capture_output=True, text=True
+    )
     seconds = time.perf_counter() - started
     if done.returncode not in (0, 1) or (done.returncode == 1 and args[1] == "grade"):
         raise SystemExit(f"{' '.join(args)} failed: {done.stderr.strip()[-500:]}")
     if args[1] == "check" and "tasks passed" not in done.stdout:
-        raise SystemExit(f"{' '.join(args)} judged nothing: {done.stdout[-300:]} "
-                         f"{done.stderr.strip()[-500:]}")
+        raise SystemExit(
+            f"{' '.join(args)} judged nothing: {done.stdout[-300:]} {done.stderr.strip()[-500:]}"
+        )
     return seconds
 
 
@@ -80,8 +88,9 @@ def compare(before: str, folder: Path, checks: int, rounds: int, students: int) 
     venv = Path(tempfile.mkdtemp(prefix="mirrorlab-bench-venv-"))
     cache = Path(tempfile.mkdtemp(prefix="mirrorlab-bench-cache-"))
     try:
-        archive = subprocess.run(["git", "-C", str(REPO), "archive", before],
-                                 capture_output=True, check=True)
+        archive = subprocess.run(
+            ["git", "-C", str(REPO), "archive", before], capture_output=True, check=True
+        )
         subprocess.run(["tar", "-x", "-C", str(old)], input=archive.stdout, check=True)
         for made in (old, venv, cache):  # an earlier sandbox's dropped user must enter them
             made.chmod(0o755)
@@ -92,30 +101,56 @@ def compare(before: str, folder: Path, checks: int, rounds: int, students: int) 
 
         (site / "before.pth").write_text(f"{old}\n{Path(numpy.__file__).parent.parent}\n")
         solution_file = folder / "student000.py"
-        designs = {f"before ({before})": str(venv / "bin" / "python"),
-                   "after (this checkout)": sys.executable}
+        designs = {
+            f"before ({before})": str(venv / "bin" / "python"),
+            "after (this checkout)": sys.executable,
+        }
         out = cache / "check.png"
         for design in designs.values():  # warm: each design makes or finds its reference
-            command(design, "lab", "check", "lab20", str(solution_file), "--out", str(out),
-                    cache=cache)
-        timings: dict[str, dict[str, list[float]]] = {n: {"check": [], "grade": []}
-                                                      for n in designs}
+            command(
+                design, "lab", "check", "lab20", str(solution_file), "--out", str(out), cache=cache
+            )
+        timings: dict[str, dict[str, list[float]]] = {
+            n: {"check": [], "grade": []} for n in designs
+        }
         names = list(designs)
         for i in range(checks):
-            for name in names[i % 2:] + names[:i % 2]:
-                timings[name]["check"].append(command(
-                    designs[name], "lab", "check", "lab20", str(solution_file), "--out",
-                    str(out), cache=cache))
+            for name in names[i % 2 :] + names[: i % 2]:
+                timings[name]["check"].append(
+                    command(
+                        designs[name],
+                        "lab",
+                        "check",
+                        "lab20",
+                        str(solution_file),
+                        "--out",
+                        str(out),
+                        cache=cache,
+                    )
+                )
         for i in range(rounds):
-            for name in names[i % 2:] + names[:i % 2]:
-                timings[name]["grade"].append(command(
-                    designs[name], "lab", "grade", "lab20", str(folder), "--jobs", "2",
-                    "--out-dir", str(cache / "grades"), cache=cache))
+            for name in names[i % 2 :] + names[: i % 2]:
+                timings[name]["grade"].append(
+                    command(
+                        designs[name],
+                        "lab",
+                        "grade",
+                        "lab20",
+                        str(folder),
+                        "--jobs",
+                        "2",
+                        "--out-dir",
+                        str(cache / "grades"),
+                        cache=cache,
+                    )
+                )
     finally:
         for made in (old, venv, cache):
             shutil.rmtree(made, ignore_errors=True)
-    print(f"\nthe pipe's cost: {checks} checks of the solution and {rounds} gradings of "
-          f"{students} submissions (--jobs 2) each, alternating; medians:")
+    print(
+        f"\nthe pipe's cost: {checks} checks of the solution and {rounds} gradings of "
+        f"{students} submissions (--jobs 2) each, alternating; medians:"
+    )
     print("| checker | one lab check (s) | lab grade --jobs 2 (s) | submissions per minute |")
     print("|---|---:|---:|---:|")
     rows = {}
@@ -133,12 +168,17 @@ def main() -> int:
     parser.add_argument("--students", type=int, default=40)
     parser.add_argument("--rounds", type=int, default=2)
     parser.add_argument("--json", help="write the figures here as JSON")
-    parser.add_argument("--before", metavar="REV",
-                        help="also measure the checker of git revision REV beside this one")
-    parser.add_argument("--checks", type=int, default=8,
-                        help="with --before: lab checks timed per checker")
-    parser.add_argument("--skip-engines", action="store_true",
-                        help="measure only what --before asks")
+    parser.add_argument(
+        "--before",
+        metavar="REV",
+        help="also measure the checker of git revision REV beside this one",
+    )
+    parser.add_argument(
+        "--checks", type=int, default=8, help="with --before: lab checks timed per checker"
+    )
+    parser.add_argument(
+        "--skip-engines", action="store_true", help="measure only what --before asks"
+    )
     args = parser.parse_args()
     spec, limits = LABS["lab20"], Limits()
     folder = Path(tempfile.mkdtemp(prefix="mirrorlab-bench-class-"))
@@ -146,19 +186,19 @@ def main() -> int:
     try:
         make_class(folder, args.students)
         if args.before:
-            figures["before_after"] = compare(args.before, folder, args.checks, args.rounds,
-                                              args.students)
+            figures["before_after"] = compare(
+                args.before, folder, args.checks, args.rounds, args.students
+            )
         if args.skip_engines:
             return _write(args, figures)
         reference_evidence(spec, default_variant(spec.name), None, limits)
         seconds: dict[str, list[float]] = {name: [] for name in ENGINES}
         names = list(ENGINES)
         for round_ in range(args.rounds):
-            for name in names[round_ % len(names):] + names[:round_ % len(names)]:
+            for name in names[round_ % len(names) :] + names[: round_ % len(names)]:
                 jobs, engine = ENGINES[name]
                 started = time.perf_counter()
-                grades, _ = grade_folder(spec, folder, jobs, None, engine, limits,
-                                         progress=False)
+                grades, _ = grade_folder(spec, folder, jobs, None, engine, limits, progress=False)
                 seconds[name].append(time.perf_counter() - started)
                 assert len(grades) == args.students
         from distributed import LocalCluster
@@ -166,8 +206,9 @@ def main() -> int:
         starts = []
         for _ in range(args.rounds):
             started = time.perf_counter()
-            with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                              dashboard_address=":0"):
+            with LocalCluster(
+                n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
+            ):
                 starts.append(time.perf_counter() - started)
     finally:
         shutil.rmtree(folder, ignore_errors=True)

@@ -36,11 +36,14 @@ def variants(scene, map_size: int) -> dict[str, object]:
     """The scene configured with each correction, by label."""
     corrections = [("cube-live", "none")]
     corrections += [(f"cube-live {label}", text) for label, text in proxies_for(scene)]
-    corrections += [(f"cube-live distance {steps}", f"distance:{steps}")
-                    for steps in ("2+0", "4+1", "8+2", "16+2", "32+4")]
-    return {label: apply_options(scene, {"method": "cube-live", "map_size": map_size,
-                                         "parallax": text})
-            for label, text in corrections}
+    corrections += [
+        (f"cube-live distance {steps}", f"distance:{steps}")
+        for steps in ("2+0", "4+1", "8+2", "16+2", "32+4")
+    ]
+    return {
+        label: apply_options(scene, {"method": "cube-live", "map_size": map_size, "parallax": text})
+        for label, text in corrections
+    }
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -60,6 +63,7 @@ def main(argv: list[str] | None = None) -> int:
     times: dict[str, list[float]] = {label: [] for label in configured}
     errors = {}
     with sweep_gl(size) as (renderer, framebuffer, _):
+
         def frame(label: str) -> float:
             held = renderer.state.held
             for key in [k for k, v in held.items() if v[0] not in ("bake", "picture")]:
@@ -83,18 +87,30 @@ def main(argv: list[str] | None = None) -> int:
             round_number += 1
     plain = float(np.median(times["cube-live"]))
     report = []
-    print(f"{args.scene}, {args.size}x{args.size} frames, map {args.map_size}, "
-          f"{args.frames}+ frames each in blocks of {args.block}:")
-    print(f"{'variant':<26} {'median ms':>9} {'p10':>7} {'p90':>7} {'x plain':>7} "
-          f"{'MAE':>6} {'off >10':>7}")
+    print(
+        f"{args.scene}, {args.size}x{args.size} frames, map {args.map_size}, "
+        f"{args.frames}+ frames each in blocks of {args.block}:"
+    )
+    print(
+        f"{'variant':<26} {'median ms':>9} {'p10':>7} {'p90':>7} {'x plain':>7} "
+        f"{'MAE':>6} {'off >10':>7}"
+    )
     for label, samples in times.items():
         median = float(np.median(samples))
         p10, p90 = (float(v) for v in np.percentile(samples, [10, 90]))
-        row = {"variant": label, "median_ms": median, "p10_ms": p10, "p90_ms": p90,
-               "ratio": median / plain, **errors[label]}
+        row = {
+            "variant": label,
+            "median_ms": median,
+            "p10_ms": p10,
+            "p90_ms": p90,
+            "ratio": median / plain,
+            **errors[label],
+        }
         report.append(row)
-        print(f"{label:<26} {median:9.2f} {p10:7.2f} {p90:7.2f} {median / plain:7.2f} "
-              f"{errors[label]['mae']:6.2f} {errors[label]['share_off']:7.1%}")
+        print(
+            f"{label:<26} {median:9.2f} {p10:7.2f} {p90:7.2f} {median / plain:7.2f} "
+            f"{errors[label]['mae']:6.2f} {errors[label]['share_off']:7.1%}"
+        )
     if args.json is not None:
         args.json.write_text(json.dumps(report, indent=2))
     return 0

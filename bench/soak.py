@@ -92,8 +92,11 @@ def posed(scene: Scene, frame: int) -> Scene:
     ex, ey, ez = camera.eye
     tx, _, tz = camera.target
     dx, dz = ex - tx, ez - tz
-    eye = (tx + dx * math.cos(angle) - dz * math.sin(angle), ey,
-           tz + dx * math.sin(angle) + dz * math.cos(angle))
+    eye = (
+        tx + dx * math.cos(angle) - dz * math.sin(angle),
+        ey,
+        tz + dx * math.sin(angle) + dz * math.cos(angle),
+    )
     scene = replace(scene, camera=replace(camera, eye=eye))
     if scene.robot is not None:
         base, lower, upper = scene.robot.angles
@@ -102,8 +105,9 @@ def posed(scene: Scene, frame: int) -> Scene:
     return scene
 
 
-def frame_soak(frames: int, switch_every: int, size: tuple[int, int], sample_every: int,
-               progress: bool = False) -> tuple[list[Sample], list[str]]:
+def frame_soak(
+    frames: int, switch_every: int, size: tuple[int, int], sample_every: int, progress: bool = False
+) -> tuple[list[Sample], list[str]]:
     """Draw ``frames`` frames in one Renderer as the module says; returns the samples and
     the (scene, technique) of each block."""
     from tqdm import tqdm
@@ -112,8 +116,9 @@ def frame_soak(frames: int, switch_every: int, size: tuple[int, int], sample_eve
     samples: list[Sample] = []
     blocks: list[str] = []
     with mirrorlab.Renderer(size) as renderer:
-        for frame in tqdm(range(frames), desc="frames", disable=not progress, file=sys.stderr,
-                          mininterval=1.0):
+        for frame in tqdm(
+            range(frames), desc="frames", disable=not progress, file=sys.stderr, mininterval=1.0
+        ):
             block = frame // switch_every
             scene, technique = pairs[block % len(pairs)]
             if frame % switch_every == 0:
@@ -122,20 +127,21 @@ def frame_soak(frames: int, switch_every: int, size: tuple[int, int], sample_eve
             # finds the renderer exactly as the one before left it.
             renderer.render(posed(scene, frame % (len(pairs) * switch_every)))
             if (frame + 1) % sample_every == 0:
-                samples.append(Sample(frame + 1, resident_mb(), renderer.gl_objects,
-                                      open_fds()))
+                samples.append(Sample(frame + 1, resident_mb(), renderer.gl_objects, open_fds()))
     return samples, blocks
 
 
-def one_shot_soak(calls: int, size: tuple[int, int], sample_every: int,
-                  progress: bool = False) -> list[Sample]:
+def one_shot_soak(
+    calls: int, size: tuple[int, int], sample_every: int, progress: bool = False
+) -> list[Sample]:
     """``calls`` calls of mirrorlab.render(), cycling through the shipped scenes."""
     from tqdm import tqdm
 
     names = scene_names()
     samples = []
-    for call in tqdm(range(calls), desc="one-shot", disable=not progress, file=sys.stderr,
-                     mininterval=1.0):
+    for call in tqdm(
+        range(calls), desc="one-shot", disable=not progress, file=sys.stderr, mininterval=1.0
+    ):
         mirrorlab.render(names[call % len(names)], size=size)
         if (call + 1) % sample_every == 0:
             samples.append(Sample(call + 1, resident_mb(), -1, open_fds()))
@@ -148,10 +154,12 @@ def summary(samples: list[Sample], warm: int) -> str:
     first, last = after[0], after[-1]
     peak = max(s.rss_mb for s in after)
     gl = {s.gl_objects for s in after}
-    return (f"after {first.step}: {first.rss_mb:.0f} MB, {first.gl_objects} GL objects, "
-            f"{first.fds} fds; at {last.step}: {last.rss_mb:.0f} MB, {last.gl_objects} GL "
-            f"objects, {last.fds} fds; peak {peak:.0f} MB; GL objects seen "
-            f"{min(gl)}-{max(gl)}")
+    return (
+        f"after {first.step}: {first.rss_mb:.0f} MB, {first.gl_objects} GL objects, "
+        f"{first.fds} fds; at {last.step}: {last.rss_mb:.0f} MB, {last.gl_objects} GL "
+        f"objects, {last.fds} fds; peak {peak:.0f} MB; GL objects seen "
+        f"{min(gl)}-{max(gl)}"
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -164,37 +172,51 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--one-shot-size", default="64x64")
     parser.add_argument("--json", metavar="PATH")
     args = parser.parse_args(argv)
-    size, one_size = parse_size("--size", args.size), parse_size("--one-shot-size",
-                                                                  args.one_shot_size)
+    size, one_size = (
+        parse_size("--size", args.size),
+        parse_size("--one-shot-size", args.one_shot_size),
+    )
     report: dict = {"renderer": "", "started": time.strftime("%Y-%m-%d %H:%M:%S")}
     start = time.perf_counter()
-    samples, blocks = frame_soak(args.frames, args.switch_every, size, args.sample_every,
-                                 progress=True)
+    samples, blocks = frame_soak(
+        args.frames, args.switch_every, size, args.sample_every, progress=True
+    )
     took = time.perf_counter() - start
     pairs = len(schedule())
     warm = min(pairs * args.switch_every, args.frames)  # every pair made once
-    print(f"{args.frames} frames at {size[0]}x{size[1]}, (scene, technique) switched every "
-          f"{args.switch_every} frames over {pairs} pairs, {took:.0f} s")
+    print(
+        f"{args.frames} frames at {size[0]}x{size[1]}, (scene, technique) switched every "
+        f"{args.switch_every} frames over {pairs} pairs, {took:.0f} s"
+    )
     print("  frame  RSS MB  GL objects  fds")
     for sample in samples:
-        print(f"  {sample.step:5d}  {sample.rss_mb:6.1f}  {sample.gl_objects:10d}  "
-              f"{sample.fds:3d}")
+        print(f"  {sample.step:5d}  {sample.rss_mb:6.1f}  {sample.gl_objects:10d}  {sample.fds:3d}")
     print(f"frames: {summary(samples, warm)}")
-    report["frames"] = {"count": args.frames, "size": list(size),
-                        "switch_every": args.switch_every, "seconds": took,
-                        "blocks": blocks, "samples": [asdict(s) for s in samples]}
+    report["frames"] = {
+        "count": args.frames,
+        "size": list(size),
+        "switch_every": args.switch_every,
+        "seconds": took,
+        "blocks": blocks,
+        "samples": [asdict(s) for s in samples],
+    }
     if args.one_shot:
         start = time.perf_counter()
-        shots = one_shot_soak(args.one_shot, one_size, max(1, args.one_shot // 20),
-                              progress=True)
+        shots = one_shot_soak(args.one_shot, one_size, max(1, args.one_shot // 20), progress=True)
         took = time.perf_counter() - start
-        print(f"{args.one_shot} one-shot mirrorlab.render() calls at {one_size[0]}x"
-              f"{one_size[1]}, {took:.0f} s")
+        print(
+            f"{args.one_shot} one-shot mirrorlab.render() calls at {one_size[0]}x"
+            f"{one_size[1]}, {took:.0f} s"
+        )
         for sample in shots:
             print(f"  call {sample.step:5d}  {sample.rss_mb:6.1f} MB  {sample.fds:3d} fds")
         print(f"one-shot: {summary(shots, shots[0].step if shots else 0)}")
-        report["one_shot"] = {"count": args.one_shot, "size": list(one_size),
-                              "seconds": took, "samples": [asdict(s) for s in shots]}
+        report["one_shot"] = {
+            "count": args.one_shot,
+            "size": list(one_size),
+            "seconds": took,
+            "samples": [asdict(s) for s in shots],
+        }
     with mirrorlab.Renderer((8, 8)) as renderer:
         report["renderer"] = renderer.gl_renderer
     if args.json:

@@ -28,17 +28,30 @@ def pyrender_python() -> Path:
     stamp = PYRENDER_VENV / ".installed"
     wanted = " ".join(PYRENDER_PACKAGES)
     if not stamp.exists() or stamp.read_text() != wanted:
-        print(f"[speed] making pyrender's environment in {PYRENDER_VENV} "
-              f"({', '.join(PYRENDER_PACKAGES)})", file=sys.stderr, flush=True)
-        steps = {"python -m venv": [sys.executable, "-m", "venv", "--clear",
-                                    str(PYRENDER_VENV)],
-                 "pip install " + wanted: [str(python), "-m", "pip", "install", "-q",
-                                           "--disable-pip-version-check",
-                                           *PYRENDER_PACKAGES]}
+        print(
+            f"[speed] making pyrender's environment in {PYRENDER_VENV} "
+            f"({', '.join(PYRENDER_PACKAGES)})",
+            file=sys.stderr,
+            flush=True,
+        )
+        steps = {
+            "python -m venv": [sys.executable, "-m", "venv", "--clear", str(PYRENDER_VENV)],
+            "pip install " + wanted: [
+                str(python),
+                "-m",
+                "pip",
+                "install",
+                "-q",
+                "--disable-pip-version-check",
+                *PYRENDER_PACKAGES,
+            ],
+        }
         for name, command in steps.items():
             if subprocess.run(command).returncode != 0:
-                raise SystemExit(f"speed.py: error: could not make pyrender's environment "
-                                 f"in {PYRENDER_VENV}: {name} failed")
+                raise SystemExit(
+                    f"speed.py: error: could not make pyrender's environment "
+                    f"in {PYRENDER_VENV}: {name} failed"
+                )
         stamp.write_text(wanted)
     return python
 

@@ -14,8 +14,7 @@ from mirrorlab.frame import Frame, show
 from mirrorlab.scene.loader import SceneError, load_scene
 from mirrorlab.scene.model import Camera, Scene
 
-__all__ = ["Camera", "Frame", "Renderer", "Scene", "SceneError", "load_scene", "render",
-           "show"]
+__all__ = ["Camera", "Frame", "Renderer", "Scene", "SceneError", "load_scene", "render", "show"]
 try:
     __version__ = version("mirrorlab")
     """The installed version, as the package metadata (pyproject.toml) gives it."""

@@ -56,8 +56,7 @@ def lab_viewpoints() -> dict[str, Camera]:
     """
     center = np.array([-7.0, 1.0, -2.0])
 
-    def around(distance: float, degrees: float,
-               height: float = 0.0) -> tuple[float, float, float]:
+    def around(distance: float, degrees: float, height: float = 0.0) -> tuple[float, float, float]:
         angle = math.radians(degrees)
         x, y, z = center + np.array([math.cos(angle), height, math.sin(angle)]) * distance
         return float(x), float(y), float(z)
@@ -106,10 +105,15 @@ def image_error(image: np.ndarray, truth: np.ndarray, mask: np.ndarray) -> Image
         return ImageError(math.nan, math.nan, math.nan, math.nan, 0)
     diff = np.abs(image.astype(np.float64) - truth.astype(np.float64))[mask]
     worst = diff.max(axis=1)
-    mse = float(np.mean(diff ** 2))
-    psnr = math.inf if mse == 0.0 else 10.0 * math.log10(255.0 ** 2 / mse)
-    return ImageError(float(diff.mean()), float(np.percentile(worst, 95)), psnr,
-                      float(np.mean(worst > OFF_BY)), count)
+    mse = float(np.mean(diff**2))
+    psnr = math.inf if mse == 0.0 else 10.0 * math.log10(255.0**2 / mse)
+    return ImageError(
+        float(diff.mean()),
+        float(np.percentile(worst, 95)),
+        psnr,
+        float(np.mean(worst > OFF_BY)),
+        count,
+    )
 
 
 @dataclass(frozen=True)
@@ -157,8 +161,14 @@ class SweepSettings:
     def quick(cls) -> SweepSettings:
         """A small sweep for tests: 128-pixel frames, two sizes, two viewpoints, the
         distance search with its default steps only."""
-        return cls(frame=128, sizes=QUICK_SIZES, frames=3, warmup=1,
-                   viewpoints=("head-on far", "60 deg"), steps=())
+        return cls(
+            frame=128,
+            sizes=QUICK_SIZES,
+            frames=3,
+            warmup=1,
+            viewpoints=("head-on far", "60 deg"),
+            steps=(),
+        )
 
 
 def lab_techniques(sizes: Sequence[int]) -> list[tuple[str, dict]]:
@@ -170,12 +180,20 @@ def lab_techniques(sizes: Sequence[int]) -> list[tuple[str, dict]]:
     planar = techniques("planar")
     for entry in (t for t in planar if not t.draws_inline):
         for capture in CAPTURE_MODES:
-            rows += [(f"{entry.name}-{capture}", {"method": entry.name, "capture": capture,
-                                                   "env_size": size}) for size in sizes]
+            rows += [
+                (
+                    f"{entry.name}-{capture}",
+                    {"method": entry.name, "capture": capture, "env_size": size},
+                )
+                for size in sizes
+            ]
             if entry.own_camera:
-                rows.append((f"{entry.name}-{capture} {FOOTPRINT_TEXTURE}",
-                             {"method": entry.name, "capture": capture,
-                              "env_size": FOOTPRINT_TEXTURE}))
+                rows.append(
+                    (
+                        f"{entry.name}-{capture} {FOOTPRINT_TEXTURE}",
+                        {"method": entry.name, "capture": capture, "env_size": FOOTPRINT_TEXTURE},
+                    )
+                )
     rows += [(entry.name, {"method": entry.name}) for entry in planar if entry.draws_inline]
     return rows
 
@@ -187,8 +205,11 @@ def search_map_size(sizes: Sequence[int]) -> int:
     return max(below) if below else min(sizes)
 
 
-def curved_techniques(sizes: Sequence[int], proxies: Sequence[tuple[str, str]] = (),
-                      steps: Sequence[str] = DISTANCE_STEPS) -> list[tuple[str, dict]]:
+def curved_techniques(
+    sizes: Sequence[int],
+    proxies: Sequence[tuple[str, str]] = (),
+    steps: Sequence[str] = DISTANCE_STEPS,
+) -> list[tuple[str, dict]]:
     """``(label, options)`` for every curved technique at each map size, and the live cube
     map with each parallax correction: the ``proxies`` (``(label, --parallax text)``), and
     the distance search at every size and with each other of ``steps`` (linear+secant)
@@ -197,24 +218,32 @@ def curved_techniques(sizes: Sequence[int], proxies: Sequence[tuple[str, str]] =
     rows = []
     for entry in techniques("curved"):
         plain = {"parallax": "none"} if entry.parallax else {}
-        rows += [(entry.name, {"method": entry.name, "map_size": size, **plain})
-                 for size in sizes]
+        rows += [(entry.name, {"method": entry.name, "map_size": size, **plain}) for size in sizes]
     searched = search_map_size(sizes)
     for name in (entry.name for entry in techniques("curved") if entry.parallax):
         corrections = [(f"{name} {label}", text) for label, text in proxies]
         corrections.append((f"{name} distance", "distance"))
         for label, text in corrections:
-            rows += [(label, {"method": name, "map_size": size, "parallax": text})
-                     for size in sizes]
-        rows += [(f"{name} distance {other}", {"method": name, "map_size": searched,
-                                               "parallax": f"distance:{other}"})
-                 for other in steps if other != DEFAULT_STEPS]
+            rows += [
+                (label, {"method": name, "map_size": size, "parallax": text}) for size in sizes
+            ]
+        rows += [
+            (
+                f"{name} distance {other}",
+                {"method": name, "map_size": searched, "parallax": f"distance:{other}"},
+            )
+            for other in steps
+            if other != DEFAULT_STEPS
+        ]
     return rows
 
 
-def scene_techniques(scene: Scene, sizes: Sequence[int],
-                     proxies: Sequence[tuple[str, str]] = (),
-                     steps: Sequence[str] = DISTANCE_STEPS) -> list[tuple[str, dict]]:
+def scene_techniques(
+    scene: Scene,
+    sizes: Sequence[int],
+    proxies: Sequence[tuple[str, str]] = (),
+    steps: Sequence[str] = DISTANCE_STEPS,
+) -> list[tuple[str, dict]]:
     """The configurations a scene's reflectors can take: the planar ones when it has a
     planar mirror, the curved ones (see :func:`curved_techniques`) when it has a curved
     reflector."""
@@ -230,8 +259,12 @@ def surroundings_box(scene: Scene) -> tuple[np.ndarray, np.ndarray] | None:
     from mirrorlab.scene.mesh import load_mesh
     from mirrorlab.scene.robot import scene_parts
 
-    points = [math3d.transform_points(part.model, load_mesh(part.mesh).positions.astype(
-        np.float64))[:, :3] for part in scene_parts(scene)]
+    points = [
+        math3d.transform_points(part.model, load_mesh(part.mesh).positions.astype(np.float64))[
+            :, :3
+        ]
+        for part in scene_parts(scene)
+    ]
     if not points:
         return None
     every = np.vstack(points)
@@ -295,17 +328,25 @@ def sphere_panels(settings: SweepSettings) -> list[Panel]:
         sky_views = {"default": default}
     proxies = proxies_for(scene)
     room = load_scene("sphere_room")
-    return [Panel("sphere-sky", replace(scene, objects=()), sky_views, 4, 1, proxies),
-            Panel("sphere-objects", scene, {"default": default}, 4, 1, proxies),
-            Panel("sphere-room", room, {"default": room.camera}, 4, 1, proxies_for(room))]
+    return [
+        Panel("sphere-sky", replace(scene, objects=()), sky_views, 4, 1, proxies),
+        Panel("sphere-objects", scene, {"default": default}, 4, 1, proxies),
+        Panel("sphere-room", room, {"default": room.camera}, 4, 1, proxies_for(room)),
+    ]
 
 
 def file_panel(scene: Scene) -> Panel:
     """Any scene file: its own camera, traced 4 x 4 when it has a curved reflector, whose
     live cube map is measured with the proxies of :func:`proxies_for`."""
     curved = any(r.kind == "curved" for r in scene.reflectors)
-    return Panel(scene.name, scene, {"camera": scene.camera}, 4 if curved else 1,
-                 1 if curved else 0, proxies_for(scene) if curved else ())
+    return Panel(
+        scene.name,
+        scene,
+        {"camera": scene.camera},
+        4 if curved else 1,
+        1 if curved else 0,
+        proxies_for(scene) if curved else (),
+    )
 
 
 @dataclass(frozen=True)
@@ -319,8 +360,9 @@ class Truth:
     milliseconds: float
 
 
-def trace_truth(scene: Scene, size: tuple[int, int], supersample: int, inset: int,
-                repeats: int) -> Truth:
+def trace_truth(
+    scene: Scene, size: tuple[int, int], supersample: int, inset: int, repeats: int
+) -> Truth:
     """Trace ``scene`` ``repeats`` times (to time the ray tracer) at ``size`` with
     ``supersample`` x ``supersample`` rays a pixel: a job of the sweep's first phase."""
     from mirrorlab.raytrace import trace_scene
@@ -339,8 +381,12 @@ def score_frames(truth: Truth, images: Sequence[np.ndarray]) -> list[ImageError]
     return [image_error(image, truth.image, truth.mask) for image in images]
 
 
-def run_panels(panels: Sequence[Panel], settings: SweepSettings, progress: bool = True,
-               executor: Executor | None = None) -> list[SweepRow]:
+def run_panels(
+    panels: Sequence[Panel],
+    settings: SweepSettings,
+    progress: bool = True,
+    executor: Executor | None = None,
+) -> list[SweepRow]:
     """Measure every technique of every panel at every viewpoint: one row per
     configuration and viewpoint, the ray tracer's own rows included (zero error, its
     time).
@@ -363,13 +409,25 @@ def run_panels(panels: Sequence[Panel], settings: SweepSettings, progress: bool 
 
     executor = executor or Executor()
     size = (settings.frame, settings.frame)
-    views = [(panel, name, replace(panel.scene, camera=camera)) for panel in panels
-             for name, camera in panel.viewpoints.items()]
-    configurations = [scene_techniques(scene, settings.sizes, panel.proxies, settings.steps)
-                      for panel, _, scene in views]
+    views = [
+        (panel, name, replace(panel.scene, camera=camera))
+        for panel in panels
+        for name, camera in panel.viewpoints.items()
+    ]
+    configurations = [
+        scene_techniques(scene, settings.sizes, panel.proxies, settings.steps)
+        for panel, _, scene in views
+    ]
     total = 2 * len(views) + sum(len(c) for c in configurations)
-    bar = tqdm(total=total, desc="accuracy", unit="step", disable=not progress,
-               file=sys.stderr, dynamic_ncols=True, mininterval=0.5)
+    bar = tqdm(
+        total=total,
+        desc="accuracy",
+        unit="step",
+        disable=not progress,
+        file=sys.stderr,
+        dynamic_ncols=True,
+        mininterval=0.5,
+    )
     truths: dict[int, Truth] = {}
     frames: dict[int, list[np.ndarray]] = {}
     timings: dict[int, list[tuple[str, int, float, float]]] = {}
@@ -377,8 +435,16 @@ def run_panels(panels: Sequence[Panel], settings: SweepSettings, progress: bool 
     with bar:
         bar.set_postfix_str("ray tracing the truths", refresh=False)
         order = sorted(range(len(views)), key=lambda i: -views[i][0].supersample)
-        work = {f"truth-{i}": (views[i][2], size, views[i][0].supersample, views[i][0].inset,
-                               _truth_repeats(views[i][0], settings)) for i in order}
+        work = {
+            f"truth-{i}": (
+                views[i][2],
+                size,
+                views[i][0].supersample,
+                views[i][0].inset,
+                _truth_repeats(views[i][0], settings),
+            )
+            for i in order
+        }
         for outcome in executor.run(trace_truth, work):
             truths[int(outcome.key.split("-")[1])] = _value(outcome, "ray tracing")
             bar.update()
@@ -389,10 +455,12 @@ def run_panels(panels: Sequence[Panel], settings: SweepSettings, progress: bool 
                     configured = apply_options(scene, options)
                     size_option = options.get("env_size", options.get("map_size", 0))
                     map_size = size_option if isinstance(size_option, int) else 0
-                    bar.set_postfix_str(f"{technique_label} {map_size or ''} {panel.name} "
-                                        f"{name}", refresh=False)
-                    image, wall, gpu = measure_frames(renderer, configured, framebuffer, timer,
-                                                      settings)
+                    bar.set_postfix_str(
+                        f"{technique_label} {map_size or ''} {panel.name} {name}", refresh=False
+                    )
+                    image, wall, gpu = measure_frames(
+                        renderer, configured, framebuffer, timer, settings
+                    )
                     frames[index].append(image)
                     timings[index].append((technique_label, map_size, wall, gpu))
                     bar.update()
@@ -405,18 +473,46 @@ def run_panels(panels: Sequence[Panel], settings: SweepSettings, progress: bool 
             bar.update()
     rows: list[SweepRow] = []
     for index, (panel, name, _) in enumerate(views):
-        label = "raytrace" if panel.supersample == 1 else (
-            f"raytrace {panel.supersample}x{panel.supersample}")
+        label = (
+            "raytrace"
+            if panel.supersample == 1
+            else (f"raytrace {panel.supersample}x{panel.supersample}")
+        )
         scored = int(np.count_nonzero(truths[index].mask))
         none = math.nan if scored == 0 else 0.0  # the truth itself: no error, if any pixels
-        rows.append(SweepRow(panel.name, label, 0, name, none, none,
-                             math.nan if scored == 0 else math.inf, none,
-                             truths[index].milliseconds, math.nan, scored))
-        for (technique_label, map_size, wall, gpu), error in zip(timings[index],
-                                                                 errors[index], strict=True):
-            rows.append(SweepRow(panel.name, technique_label, map_size, name, error.mae,
-                                 error.p95, error.psnr, error.share_off, wall, gpu,
-                                 error.pixels))
+        rows.append(
+            SweepRow(
+                panel.name,
+                label,
+                0,
+                name,
+                none,
+                none,
+                math.nan if scored == 0 else math.inf,
+                none,
+                truths[index].milliseconds,
+                math.nan,
+                scored,
+            )
+        )
+        for (technique_label, map_size, wall, gpu), error in zip(
+            timings[index], errors[index], strict=True
+        ):
+            rows.append(
+                SweepRow(
+                    panel.name,
+                    technique_label,
+                    map_size,
+                    name,
+                    error.mae,
+                    error.p95,
+                    error.psnr,
+                    error.share_off,
+                    wall,
+                    gpu,
+                    error.pixels,
+                )
+            )
     return rows
 
 
@@ -433,8 +529,9 @@ def _value(outcome: Outcome, what: str):
 
 
 @contextmanager
-def sweep_gl(size: tuple[int, int],
-             ) -> Iterator[tuple[SceneRenderer, Framebuffer, TimerQuery]]:
+def sweep_gl(
+    size: tuple[int, int],
+) -> Iterator[tuple[SceneRenderer, Framebuffer, TimerQuery]]:
     """An offscreen context for a sweep: a renderer, a ``size`` (width, height) frame
     target and a GL timer query; all released on leaving."""
     from mirrorlab.gl.context import offscreen_context
@@ -453,8 +550,11 @@ def sweep_gl(size: tuple[int, int],
             renderer.release()
 
 
-def time_frames(render_frame: Callable[[], object], timer, settings: SweepSettings,
-                ) -> tuple[float, float]:
+def time_frames(
+    render_frame: Callable[[], object],
+    timer,
+    settings: SweepSettings,
+) -> tuple[float, float]:
     """Median wall and GL-timer milliseconds of ``settings.frames`` calls of
     ``render_frame`` after ``settings.warmup`` untimed ones."""
     from mirrorlab.gl.opengl import GL
@@ -476,8 +576,9 @@ def time_frames(render_frame: Callable[[], object], timer, settings: SweepSettin
     return float(np.median(walls)), float(np.median(gpus))
 
 
-def measure_frames(renderer: SceneRenderer, scene: Scene, framebuffer, timer,
-                   settings: SweepSettings) -> tuple[np.ndarray, float, float]:
+def measure_frames(
+    renderer: SceneRenderer, scene: Scene, framebuffer, timer, settings: SweepSettings
+) -> tuple[np.ndarray, float, float]:
     """Time frames of ``scene`` (see :func:`time_frames`), each capturing its reflectors
     afresh as a moving scene would (maps baked from the background are kept). Returns
     the last frame ``(h, w, 3)`` uint8 and the median wall and GL milliseconds."""
@@ -504,8 +605,13 @@ def erode(mask: np.ndarray, pixels: int) -> np.ndarray:
     out = np.asarray(mask, dtype=bool).copy()
     for _ in range(int(pixels)):
         padded = np.pad(out, 1, constant_values=False)
-        out = (padded[1:-1, 1:-1] & padded[:-2, 1:-1] & padded[2:, 1:-1]
-               & padded[1:-1, :-2] & padded[1:-1, 2:])
+        out = (
+            padded[1:-1, 1:-1]
+            & padded[:-2, 1:-1]
+            & padded[2:, 1:-1]
+            & padded[1:-1, :-2]
+            & padded[1:-1, 2:]
+        )
     return out
 
 
@@ -540,15 +646,19 @@ def summarise(rows: Sequence[SweepRow]) -> list[SummaryRow]:
         def mean(values: list[float]) -> float:
             return float(np.mean(values)) if values else math.nan
 
-        summary.append(SummaryRow(
-            scene, technique, map_size,
-            mean([r.mae for r in scored]),
-            mean([r.p95 for r in scored]),
-            mean([r.share_off for r in scored]),
-            float(np.median([r.wall_ms for r in group])),
-            float(np.median(gpu)) if gpu else math.nan,
-            worst.viewpoint if worst is not None else NO_REFLECTOR_PIXELS,
-        ))
+        summary.append(
+            SummaryRow(
+                scene,
+                technique,
+                map_size,
+                mean([r.mae for r in scored]),
+                mean([r.p95 for r in scored]),
+                mean([r.share_off for r in scored]),
+                float(np.median([r.wall_ms for r in group])),
+                float(np.median(gpu)) if gpu else math.nan,
+                worst.viewpoint if worst is not None else NO_REFLECTOR_PIXELS,
+            )
+        )
     return summary
 
 
@@ -572,11 +682,21 @@ def rows_from_csv(text: str) -> list[SweepRow]:
     for line, record in enumerate(reader, start=2):
         try:
             number = {n: float(record[n]) if record[n] else math.nan for n in names[4:-1]}
-            rows.append(SweepRow(
-                record["scene"], record["technique"], int(record["map_size"]),
-                record["viewpoint"], number["mae"], number["p95"], number["psnr"],
-                number["share_off"], number["wall_ms"], number["gpu_ms"],
-                int(record.get("pixels") or -1)))
+            rows.append(
+                SweepRow(
+                    record["scene"],
+                    record["technique"],
+                    int(record["map_size"]),
+                    record["viewpoint"],
+                    number["mae"],
+                    number["p95"],
+                    number["psnr"],
+                    number["share_off"],
+                    number["wall_ms"],
+                    number["gpu_ms"],
+                    int(record.get("pixels") or -1),
+                )
+            )
         except ValueError as exc:
             raise ValueError(f"line {line}: {exc}") from None
     return rows
@@ -590,41 +710,50 @@ def _plain(value) -> str:
 
 def summary_table(summary: Sequence[SummaryRow]) -> list[list[str]]:
     """Header plus one row of text cells per summary row."""
-    table = [["technique", "map", "MAE /255", "p95 /255", "off >10", "wall ms", "GL ms",
-              "worst view"]]
+    table = [
+        ["technique", "map", "MAE /255", "p95 /255", "off >10", "wall ms", "GL ms", "worst view"]
+    ]
     for row in summary:
         if math.isnan(row.mae):  # nothing to score: said so, never a zero error
             errors = [NO_REFLECTOR_PIXELS, "-", "-"]
         else:
             errors = [f"{row.mae:.2f}", f"{row.p95:.1f}", f"{row.share_off:.1%}"]
-        table.append([
-            row.technique, str(row.map_size) if row.map_size else "-", *errors,
-            f"{row.wall_ms:.2f}", "-" if math.isnan(row.gpu_ms) else f"{row.gpu_ms:.2f}",
-            row.worst_viewpoint,
-        ])
+        table.append(
+            [
+                row.technique,
+                str(row.map_size) if row.map_size else "-",
+                *errors,
+                f"{row.wall_ms:.2f}",
+                "-" if math.isnan(row.gpu_ms) else f"{row.gpu_ms:.2f}",
+                row.worst_viewpoint,
+            ]
+        )
     return table
 
 
 def format_text(table: Sequence[Sequence[str]]) -> str:
     """Aligned plain-text columns for the terminal."""
     widths = [max(len(row[i]) for row in table) for i in range(len(table[0]))]
-    lines = ["  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip()
-             for row in table]
+    lines = [
+        "  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip()
+        for row in table
+    ]
     lines.insert(1, "  ".join("-" * w for w in widths))
     return "\n".join(lines)
 
 
 def format_markdown(table: Sequence[Sequence[str]]) -> str:
-    lines = ["| " + " | ".join(table[0]) + " |",
-             "|" + "|".join("---" for _ in table[0]) + "|"]
+    lines = ["| " + " | ".join(table[0]) + " |", "|" + "|".join("---" for _ in table[0]) + "|"]
     lines += ["| " + " | ".join(row) + " |" for row in table[1:]]
     return "\n".join(lines)
 
 
-SCENE_TITLES = {"lab": "lab mirror (robot)",
-                "sphere-sky": "environment maps: sphere in the sky",
-                "sphere-objects": "environment maps: sphere among objects",
-                "sphere-room": "environment maps: sphere in a room"}
+SCENE_TITLES = {
+    "lab": "lab mirror (robot)",
+    "sphere-sky": "environment maps: sphere in the sky",
+    "sphere-objects": "environment maps: sphere among objects",
+    "sphere-room": "environment maps: sphere in a room",
+}
 
 
 _STEPS_LABEL = re.compile(r"^(?P<series>.+ distance) (?P<steps>\d+\+\d+)$")
@@ -640,8 +769,9 @@ def _series(summary: Sequence[SummaryRow]) -> dict[str, list[tuple[SummaryRow, s
     for row in summary:
         match = _STEPS_LABEL.match(row.technique)
         if match:
-            series.setdefault(f"{match.group('series')} by steps (map {row.map_size})",
-                              []).append((row, match.group("steps")))
+            series.setdefault(f"{match.group('series')} by steps (map {row.map_size})", []).append(
+                (row, match.group("steps"))
+            )
             continue
         series.setdefault(row.technique, []).append((row, str(row.map_size or "")))
         single = stepped.get(row.technique)
@@ -678,17 +808,22 @@ def plot_png(summary: Sequence[SummaryRow], title: str) -> bytes | None:
     scenes = list(dict.fromkeys(r.scene for r in summary))
     columns = min(2, len(scenes))
     rows_of_panels = math.ceil(len(scenes) / columns)
-    figure, panels = plt.subplots(rows_of_panels, columns,
-                                  figsize=(8.0 * columns, 6.0 * rows_of_panels), dpi=100,
-                                  squeeze=False)
-    for axes in panels.flat[len(scenes):]:
+    figure, panels = plt.subplots(
+        rows_of_panels,
+        columns,
+        figsize=(8.0 * columns, 6.0 * rows_of_panels),
+        dpi=100,
+        squeeze=False,
+    )
+    for axes in panels.flat[len(scenes) :]:
         axes.set_visible(False)
     for axes, scene in zip(panels.flat, scenes, strict=False):
         # The ray tracer has no error by definition and is far slower: named in the
         # panel's title rather than drawn, so that the techniques keep the axes.
         traced = [r for r in summary if r.scene == scene and r.technique.startswith("raytrace")]
-        rows = [r for r in summary if r.scene == scene and r not in traced
-                and not math.isnan(r.mae)]
+        rows = [
+            r for r in summary if r.scene == scene and r not in traced and not math.isnan(r.mae)
+        ]
         palette = plt.get_cmap("tab20")
         for index, (name, points) in enumerate(_series(rows).items()):
             times = [row.wall_ms for row, _ in points]
@@ -696,13 +831,19 @@ def plot_png(summary: Sequence[SummaryRow], title: str) -> bytes | None:
             dashed = " by steps " in name
             # a colour of its own each (tab20's dark shades), the steps of a search black
             colour = "black" if dashed else palette((2 * index) % 20 + (2 * index) // 20 % 2)
-            axes.plot(times, errors, marker=markers[index % len(markers)], color=colour,
-                      linestyle=("--" if dashed else "-") if len(points) > 1 else "",
-                      label=name)
+            axes.plot(
+                times,
+                errors,
+                marker=markers[index % len(markers)],
+                color=colour,
+                linestyle=("--" if dashed else "-") if len(points) > 1 else "",
+                label=name,
+            )
             for (_, note), x, y in zip(points, times, errors, strict=True):
                 if note:
-                    axes.annotate(note, (x, y), fontsize=7, textcoords="offset points",
-                                  xytext=(4, 3))
+                    axes.annotate(
+                        note, (x, y), fontsize=7, textcoords="offset points", xytext=(4, 3)
+                    )
         axes.set_xscale("log")
         axes.set_yscale("log")
         axes.set_xlabel("median wall time per frame (ms, log)")
@@ -716,8 +857,9 @@ def plot_png(summary: Sequence[SummaryRow], title: str) -> bytes | None:
         if rows:
             axes.legend(fontsize=7, ncol=2)
         else:
-            axes.text(0.5, 0.5, NO_REFLECTOR_PIXELS, transform=axes.transAxes,
-                      ha="center", va="center")
+            axes.text(
+                0.5, 0.5, NO_REFLECTOR_PIXELS, transform=axes.transAxes, ha="center", va="center"
+            )
     figure.suptitle(title)
     figure.tight_layout()
     with io.BytesIO() as buffer:
@@ -727,9 +869,16 @@ def plot_png(summary: Sequence[SummaryRow], title: str) -> bytes | None:
     return data
 
 
-def run_command(settings: SweepSettings, scenes: str | Scene, out_dir: Path,
-                from_csv: Path | None = None, say: Callable[[str], None] = print,
-                jobs: int = 1, scheduler: str | None = None, engine: str = "pool") -> int:
+def run_command(
+    settings: SweepSettings,
+    scenes: str | Scene,
+    out_dir: Path,
+    from_csv: Path | None = None,
+    say: Callable[[str], None] = print,
+    jobs: int = 1,
+    scheduler: str | None = None,
+    engine: str = "pool",
+) -> int:
     """``mirrorlab bench accuracy``: measure (or read ``from_csv``), print the tables, and
     write accuracy.csv, accuracy.md and accuracy.png into ``out_dir``. The truths and the
     scoring run on ``jobs`` processes (or the Dask ``scheduler``'s workers; see
@@ -747,16 +896,21 @@ def run_command(settings: SweepSettings, scenes: str | Scene, out_dir: Path,
             panels = [file_panel(scenes)]
         else:
             panels = ([lab_panel(settings)] if scenes in ("lab", "all") else []) + (
-                sphere_panels(settings) if scenes in ("sphere", "all") else [])
+                sphere_panels(settings) if scenes in ("sphere", "all") else []
+            )
         started = time.perf_counter()
         with open_executor(jobs, scheduler, engine) as executor:
             rows = run_panels(panels, settings, executor=executor)
             workers = f"{executor.engine} ({executor.workers} worker"
             workers += "s)" if executor.workers != 1 else ")"
-        say(f"measured {len(rows)} rows in {time.perf_counter() - started:.1f} s; truths "
-            f"and scoring on {workers}, timed frames in this process")
-        title = (f"accuracy vs time, {settings.frame}x{settings.frame} frames, llvmpipe; "
-                 f"medians of {settings.frames} frames")
+        say(
+            f"measured {len(rows)} rows in {time.perf_counter() - started:.1f} s; truths "
+            f"and scoring on {workers}, timed frames in this process"
+        )
+        title = (
+            f"accuracy vs time, {settings.frame}x{settings.frame} frames, llvmpipe; "
+            f"medians of {settings.frames} frames"
+        )
     summary = summarise(rows)
     markdown = [title, ""]
     for scene in dict.fromkeys(r.scene for r in summary):

@@ -57,13 +57,19 @@ class Renderer:
     replayed frame puts back what it changes and takes the rest as the last one left it.
     """
 
-    def __init__(self, size: Sequence[int] | str = (512, 512), debug: bool = False, *,
-                 draw_path: DrawPath = "auto") -> None:
+    def __init__(
+        self,
+        size: Sequence[int] | str = (512, 512),
+        debug: bool = False,
+        *,
+        draw_path: DrawPath = "auto",
+    ) -> None:
         self.size = check_size(size)
         self.debug = debug
         if draw_path not in DRAW_PATHS:
-            raise ValueError(f"draw_path: expected one of {', '.join(DRAW_PATHS)}, got "
-                             f"{draw_path!r}")
+            raise ValueError(
+                f"draw_path: expected one of {', '.join(DRAW_PATHS)}, got {draw_path!r}"
+            )
         self.draw_path = draw_path
         self._context: Context | None = None
         self._renderer: SceneRenderer | None = None
@@ -89,8 +95,9 @@ class Renderer:
         try:
             from mirrorlab.renderer import SceneRenderer
 
-            self._renderer = SceneRenderer(self._context.resources, self.draw_path,
-                                           own_context=True)
+            self._renderer = SceneRenderer(
+                self._context.resources, self.draw_path, own_context=True
+            )
         except BaseException:
             self.close()
             raise
@@ -145,9 +152,16 @@ class Renderer:
                 self._target = Framebuffer(self._context.resources, *size)
         return self._target
 
-    def render(self, scene: SceneLike, *, frame: int = 0,
-               size: Sequence[int] | str | None = None, use_plan: bool = True,
-               tiny_pixels: float = TINY_PIXELS, **options: Any) -> Frame:
+    def render(
+        self,
+        scene: SceneLike,
+        *,
+        frame: int = 0,
+        size: Sequence[int] | str | None = None,
+        use_plan: bool = True,
+        tiny_pixels: float = TINY_PIXELS,
+        **options: Any,
+    ) -> Frame:
         """Draw ``scene`` (a Scene, a file or a shipped name) posed at animation ``frame``,
         ``size`` (width, height) or this renderer's size, with ``options`` applied
         (``camera=(x, y, z)``, ``method="stencil"``, ...: see :mod:`mirrorlab.options`).
@@ -164,28 +178,42 @@ class Renderer:
         with self._reading:
             return Frame(target.read())
 
-    def frames(self, scene: SceneLike, *, frames: Sequence[int] | None = None,
-               size: Sequence[int] | str | None = None, use_plan: bool = True,
-               tiny_pixels: float = TINY_PIXELS,
-               **options: Any) -> Iterator[tuple[int, Frame, FrameStats]]:
+    def frames(
+        self,
+        scene: SceneLike,
+        *,
+        frames: Sequence[int] | None = None,
+        size: Sequence[int] | str | None = None,
+        use_plan: bool = True,
+        tiny_pixels: float = TINY_PIXELS,
+        **options: Any,
+    ) -> Iterator[tuple[int, Frame, FrameStats]]:
         """``(frame, image, stats)`` for each frame of the animation (or ``frames``)."""
         loaded = resolve_scene(scene, **options)
         for frame in frames if frames is not None else range(loaded.frame_count):
-            image = self.render(loaded, frame=frame, size=size, use_plan=use_plan,
-                                tiny_pixels=tiny_pixels)
+            image = self.render(
+                loaded, frame=frame, size=size, use_plan=use_plan, tiny_pixels=tiny_pixels
+            )
             assert self.last_stats is not None
             yield frame, image, self.last_stats
 
-    def plan(self, scene: SceneLike, *, frame: int = 0,
-             size: Sequence[int] | str | None = None, use_plan: bool = True,
-             **options: Any) -> FramePlan:
+    def plan(
+        self,
+        scene: SceneLike,
+        *,
+        frame: int = 0,
+        size: Sequence[int] | str | None = None,
+        use_plan: bool = True,
+        **options: Any,
+    ) -> FramePlan:
         """The plan the next :meth:`render` of this frame would run (nothing is drawn)."""
         from mirrorlab.plan import plan_frame
 
         posed = resolve_scene(scene, **options).at_frame(frame)
         state = self._renderer.state if self._renderer is not None else None
-        return plan_frame(posed, check_size(size) if size is not None else self.size, state,
-                          use_plan)
+        return plan_frame(
+            posed, check_size(size) if size is not None else self.size, state, use_plan
+        )
 
     def read_texture(self, reflector: str, *, slot: int = 0) -> Frame:
         """A planar reflector's capture texture from the last frame, ``(h, w, 3)`` uint8
@@ -198,8 +226,9 @@ class Renderer:
         return Frame(textures.textures[slot].read())
 
 
-def raytrace(scene: SceneLike, *, frame: int = 0, size: Sequence[int] | str = (512, 512),
-             **options: Any) -> Frame:
+def raytrace(
+    scene: SceneLike, *, frame: int = 0, size: Sequence[int] | str = (512, 512), **options: Any
+) -> Frame:
     """The ray-traced ground truth of ``scene`` (see :mod:`mirrorlab.raytrace`), as an
     ``(height, width, 3)`` uint8 :class:`Frame`. Needs no OpenGL."""
     from mirrorlab.raytrace import trace_scene
@@ -208,9 +237,14 @@ def raytrace(scene: SceneLike, *, frame: int = 0, size: Sequence[int] | str = (5
     return Frame(trace_scene(posed, check_size(size)).to_uint8())
 
 
-def render(scene: SceneLike = "lab20", *, frame: int = 0,
-           size: Sequence[int] | str = (512, 512), use_plan: bool = True,
-           **options: Any) -> Frame:
+def render(
+    scene: SceneLike = "lab20",
+    *,
+    frame: int = 0,
+    size: Sequence[int] | str = (512, 512),
+    use_plan: bool = True,
+    **options: Any,
+) -> Frame:
     """Draw one frame headless and return it as ``(height, width, 3)`` uint8 RGB, row 0 at
     the top: a :class:`~mirrorlab.frame.Frame`, which Jupyter shows as a picture.
 
@@ -225,7 +259,6 @@ def render(scene: SceneLike = "lab20", *, frame: int = 0,
     frame_technique, options = split_frame_technique(options)
     if frame_technique is not None:
         posed = resolve_scene(scene, **options).at_frame(frame)
-        return Frame(frame_technique.frame_function()(posed, check_size(size),
-                                                      progress=False))
+        return Frame(frame_technique.frame_function()(posed, check_size(size), progress=False))
     with Renderer(size) as renderer:
         return renderer.render(scene, frame=frame, use_plan=use_plan, **options)

@@ -69,10 +69,16 @@ class FrameJob:
         """Everything that decides the frames' pixels, as text (the folder's record)."""
         from mirrorlab.scene.loader import dumps
 
-        return json.dumps({"scene": dumps(self.scene), "size": list(self.size),
-                           "use_plan": self.use_plan, "tiny_pixels": self.tiny_pixels,
-                           "frame_technique": self.frame_technique},
-                          sort_keys=True)
+        return json.dumps(
+            {
+                "scene": dumps(self.scene),
+                "size": list(self.size),
+                "use_plan": self.use_plan,
+                "tiny_pixels": self.tiny_pixels,
+                "frame_technique": self.frame_technique,
+            },
+            sort_keys=True,
+        )
 
 
 _cache = threading.local()
@@ -109,9 +115,13 @@ def render_frame(job: FrameJob, frame: int) -> bytes:
         draw_frame = technique(job.frame_technique).frame_function()
         image = draw_frame(job.scene.at_frame(frame), job.size, progress=False)
     else:
-        image = _frame_renderer(job).render(job.scene, frame=frame, size=job.size,
-                                            use_plan=job.use_plan,
-                                            tiny_pixels=job.tiny_pixels)
+        image = _frame_renderer(job).render(
+            job.scene,
+            frame=frame,
+            size=job.size,
+            use_plan=job.use_plan,
+            tiny_pixels=job.tiny_pixels,
+        )
     return png_bytes(image)
 
 
@@ -168,15 +178,31 @@ def animation_bytes(paths: Sequence[Path], kind: str, fps: float) -> bytes:
             images.append(image.convert("RGB"))
     options = {"lossless": True, "quality": 100, "method": 4} if kind == "webp" else {}
     with io.BytesIO() as buffer:
-        images[0].save(buffer, format=kind.upper(), save_all=True, append_images=images[1:],
-                       duration=round(1000.0 / fps), loop=0, **options)
+        images[0].save(
+            buffer,
+            format=kind.upper(),
+            save_all=True,
+            append_images=images[1:],
+            duration=round(1000.0 / fps),
+            loop=0,
+            **options,
+        )
         return buffer.getvalue()
 
 
-def run_batch(job: FrameJob, frames: Sequence[int], out_dir: Path, jobs: int = 1,
-              scheduler: str | None = None, engine: str = "pool", out: Path | None = None,
-              animations: Sequence[tuple[str, Path]] = (), fps: float = 12.0,
-              say: Callable[[str], None] = print, progress: bool = True) -> int:
+def run_batch(
+    job: FrameJob,
+    frames: Sequence[int],
+    out_dir: Path,
+    jobs: int = 1,
+    scheduler: str | None = None,
+    engine: str = "pool",
+    out: Path | None = None,
+    animations: Sequence[tuple[str, Path]] = (),
+    fps: float = 12.0,
+    say: Callable[[str], None] = print,
+    progress: bool = True,
+) -> int:
     """Render ``frames`` of ``job.scene`` into ``out_dir`` across ``jobs`` processes (or
     the Dask scheduler at ``scheduler``; see :func:`mirrorlab.jobs.open_executor`), each
     frame's file written whole as it comes in. Frames already in ``out_dir`` whole, made
@@ -197,32 +223,46 @@ def run_batch(job: FrameJob, frames: Sequence[int], out_dir: Path, jobs: int = 1
     started = time.perf_counter()
     engine_name = "no engine"
     if todo:
-        engine_name = _render_frames(job, todo, names, record, description, jobs, scheduler,
-                                     engine, skipped, progress)
+        engine_name = _render_frames(
+            job, todo, names, record, description, jobs, scheduler, engine, skipped, progress
+        )
     seconds = time.perf_counter() - started
     if out is not None:
         write_bytes_atomic(out, names[frames[-1]].read_bytes())
     for kind, path in animations:
         write_bytes_atomic(path, animation_bytes([names[f] for f in frames], kind, fps))
     if todo:
-        say(f"wrote {len(todo)} frame{'' if len(todo) == 1 else 's'} of {scene.name} "
+        say(
+            f"wrote {len(todo)} frame{'' if len(todo) == 1 else 's'} of {scene.name} "
             f"({job.size[0]}x{job.size[1]}) to "
             f"{out_dir} in {seconds:.1f} s on {engine_name}, "
             f"{len(todo) / seconds:.1f} frames a second, start-up included; skipped "
             f"{skipped} already written whole"
-            + (f"; replaced {replaced} made with other settings" if replaced else ""))
+            + (f"; replaced {replaced} made with other settings" if replaced else "")
+        )
     else:
-        say(f"all {len(frames)} frames of {scene.name} were already written whole in "
-            f"{out_dir}; skipped {skipped}, nothing to render")
+        say(
+            f"all {len(frames)} frames of {scene.name} were already written whole in "
+            f"{out_dir}; skipped {skipped}, nothing to render"
+        )
     written = ([str(out)] if out is not None else []) + [str(p) for _, p in animations]
     if written:
         say(f"wrote {', '.join(written)}")
     return 0
 
 
-def _render_frames(job: FrameJob, todo: Sequence[int], names: dict[int, Path], record: Path,
-                   description: str, jobs: int, scheduler: str | None, engine: str,
-                   skipped: int, progress: bool) -> str:
+def _render_frames(
+    job: FrameJob,
+    todo: Sequence[int],
+    names: dict[int, Path],
+    record: Path,
+    description: str,
+    jobs: int,
+    scheduler: str | None,
+    engine: str,
+    skipped: int,
+    progress: bool,
+) -> str:
     """Draw ``todo`` on the executor, writing each frame to ``names[frame]`` as it comes
     in; returns the engine's name. Nothing is written before the executor is up (an
     unreachable scheduler leaves the folder as it was)."""
@@ -233,13 +273,21 @@ def _render_frames(job: FrameJob, todo: Sequence[int], names: dict[int, Path], r
         if not (record.is_file() and record.read_text(errors="replace") == description):
             write_bytes_atomic(record, description.encode())
         failures: list[tuple[int, str]] = []
-        bar = tqdm(total=len(todo) + skipped, initial=skipped, unit="frame",
-                   desc=f"rendering {job.scene.name}", disable=not progress,
-                   file=sys.stderr, dynamic_ncols=True, mininterval=0.2)
+        bar = tqdm(
+            total=len(todo) + skipped,
+            initial=skipped,
+            unit="frame",
+            desc=f"rendering {job.scene.name}",
+            disable=not progress,
+            file=sys.stderr,
+            dynamic_ncols=True,
+            mininterval=0.2,
+        )
         try:
             with bar:
-                for outcome in executor.run(render_frame,
-                                            {f"frame-{f:04d}": (job, f) for f in todo}):
+                for outcome in executor.run(
+                    render_frame, {f"frame-{f:04d}": (job, f) for f in todo}
+                ):
                     frame = int(outcome.key.split("-")[1])
                     if outcome.error is not None:
                         failures.append((frame, outcome.error))
@@ -253,7 +301,9 @@ def _render_frames(job: FrameJob, todo: Sequence[int], names: dict[int, Path], r
     if failures:
         failures.sort()
         frame, error = failures[0]
-        raise BatchError(f"{len(failures)} of {len(todo)} frames failed (written: "
-                         f"{len(todo) - len(failures)}; a rerun renders only the missing "
-                         f"ones); frame {frame}: {error}")
+        raise BatchError(
+            f"{len(failures)} of {len(todo)} frames failed (written: "
+            f"{len(todo) - len(failures)}; a rerun renders only the missing "
+            f"ones); frame {frame}: {error}"
+        )
     return name

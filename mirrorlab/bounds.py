@@ -101,10 +101,14 @@ class ObjectBounds:
 
     @cached_property
     def boxes(self) -> tuple[np.ndarray, np.ndarray]:
-        boxes = [mesh_box(mesh, model)
-                 for mesh, model in zip(self.looks.meshes, self.models, strict=True)]
-        return (read_only(np.array([b[0] for b in boxes]).reshape(-1, 3)),
-                read_only(np.array([b[1] for b in boxes]).reshape(-1, 3)))
+        boxes = [
+            mesh_box(mesh, model)
+            for mesh, model in zip(self.looks.meshes, self.models, strict=True)
+        ]
+        return (
+            read_only(np.array([b[0] for b in boxes]).reshape(-1, 3)),
+            read_only(np.array([b[1] for b in boxes]).reshape(-1, 3)),
+        )
 
 
 @lru_cache(maxsize=64)
@@ -112,8 +116,10 @@ def _looks_boxes(looks: tuple[PartLooks, ...]) -> tuple[np.ndarray, np.ndarray]:
     """The centres and half-sizes ``(n, 3)`` of the meshes' own boxes of every part of
     ``looks`` (read-only), in order."""
     local = [_mesh_local_box(mesh) for look in looks for mesh in look.meshes]
-    return (read_only(np.array([c for c, _ in local]).reshape(-1, 3)),
-            read_only(np.array([h for _, h in local]).reshape(-1, 3)))
+    return (
+        read_only(np.array([c for c, _ in local]).reshape(-1, 3)),
+        read_only(np.array([h for _, h in local]).reshape(-1, 3)),
+    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -141,13 +147,15 @@ class ObjectArrays:
 
     @cached_property
     def part_low(self) -> np.ndarray:
-        return read_only(np.concatenate([b.boxes[0] for b in self.bounds])
-                         if self.bounds else np.zeros((0, 3)))
+        return read_only(
+            np.concatenate([b.boxes[0] for b in self.bounds]) if self.bounds else np.zeros((0, 3))
+        )
 
     @cached_property
     def part_high(self) -> np.ndarray:
-        return read_only(np.concatenate([b.boxes[1] for b in self.bounds])
-                         if self.bounds else np.zeros((0, 3)))
+        return read_only(
+            np.concatenate([b.boxes[1] for b in self.bounds]) if self.bounds else np.zeros((0, 3))
+        )
 
     @cached_property
     def part_rows(self) -> np.ndarray:
@@ -298,8 +306,10 @@ class SceneIndex:
     @cached_property
     def _boxes(self) -> tuple[np.ndarray, np.ndarray]:
         objects, reflectors = self.objects_part, self.reflectors_part
-        return (read_only(np.concatenate([objects.part_low, reflectors.reflector_low])),
-                read_only(np.concatenate([objects.part_high, reflectors.reflector_high])))
+        return (
+            read_only(np.concatenate([objects.part_low, reflectors.reflector_low])),
+            read_only(np.concatenate([objects.part_high, reflectors.reflector_high])),
+        )
 
     @cached_property
     def sphere(self) -> tuple[np.ndarray, float]:
@@ -341,13 +351,17 @@ class _IndexCache:
     def index(self, scene: Scene) -> SceneIndex:
         key = (id(scene.objects), id(scene.reflectors))
         index = self.indexes.get(key)
-        if (index is not None and index.objects is scene.objects
-                and index.reflectors is scene.reflectors):
+        if (
+            index is not None
+            and index.objects is scene.objects
+            and index.reflectors is scene.reflectors
+        ):
             self.indexes.move_to_end(key)
             return index
-        index = SceneIndex(self._part(self.object_parts, scene.objects, self.object_arrays),
-                           self._part(self.reflector_parts, scene.reflectors,
-                                      self.reflector_arrays))
+        index = SceneIndex(
+            self._part(self.object_parts, scene.objects, self.object_arrays),
+            self._part(self.reflector_parts, scene.reflectors, self.reflector_arrays),
+        )
         self.indexes[key] = index
         if len(self.indexes) > self.KEPT:
             self.indexes.popitem(last=False)
@@ -390,11 +404,17 @@ class _IndexCache:
     def _forget(self, objects: tuple, reflectors: tuple) -> None:
         """Drop what no kept arrays hold, once more than twice what they hold is held:
         the work of a drop is paid for by as many items worked out before it."""
-        if len(self.objects) + len(self.hashes) <= 2 * (
-                self.kept_items + len(objects) + len(reflectors)) + 512:
+        if (
+            len(self.objects) + len(self.hashes)
+            <= 2 * (self.kept_items + len(objects) + len(reflectors)) + 512
+        ):
             return
-        keep = {id(item) for kept in (self.object_parts, self.reflector_parts)
-                for items, _ in kept.values() for item in items}
+        keep = {
+            id(item)
+            for kept in (self.object_parts, self.reflector_parts)
+            for items, _ in kept.values()
+            for item in items
+        }
         keep |= {id(item) for item in (*objects, *reflectors)}
         self.objects = {key: held for key, held in self.objects.items() if key in keep}
         self.hashes = {key: held for key, held in self.hashes.items() if key in keep}
@@ -402,10 +422,8 @@ class _IndexCache:
     def object_arrays(self, objects: tuple) -> ObjectArrays:
         self._forget(objects, ())
         bounds = tuple([self.object_bounds(item) for item in objects])
-        models = (np.concatenate([b.models for b in bounds]) if bounds
-                  else np.zeros((0, 4, 4)))
-        return ObjectArrays(objects, bounds, tuple([b.looks for b in bounds]),
-                            read_only(models))
+        models = np.concatenate([b.models for b in bounds]) if bounds else np.zeros((0, 4, 4))
+        return ObjectArrays(objects, bounds, tuple([b.looks for b in bounds]), read_only(models))
 
     def reflector_arrays(self, reflectors: tuple) -> ReflectorArrays:
         self._forget((), reflectors)
@@ -414,21 +432,30 @@ class _IndexCache:
         curved = [i for i, r in enumerate(reflectors) if not isinstance(r, PlanarReflector)]
         spheres = [bounding_sphere(reflectors[i]) for i in curved]
         return ReflectorArrays(
-            reflectors=reflectors, names={r.name: i for i, r in enumerate(reflectors)},
+            reflectors=reflectors,
+            names={r.name: i for i, r in enumerate(reflectors)},
             reflector_low=read_only(np.array([b[0] for b in reflector_boxes]).reshape(-1, 3)),
             reflector_high=read_only(np.array([b[1] for b in reflector_boxes]).reshape(-1, 3)),
             planar=read_only(np.array(planar, dtype=np.intp)),
-            corner_rows=read_only(culling.quad_rows(
-                np.array([reflectors[i].corner_array for i in planar],
-                         dtype=np.float64).reshape(-1, 4, 3))),
-            normals=read_only(np.array([reflectors[i].normal for i in planar],
-                                     dtype=np.float64).reshape(-1, 3)),
-            centers=read_only(np.array([reflectors[i].center for i in planar],
-                                     dtype=np.float64).reshape(-1, 3)),
+            corner_rows=read_only(
+                culling.quad_rows(
+                    np.array(
+                        [reflectors[i].corner_array for i in planar], dtype=np.float64
+                    ).reshape(-1, 4, 3)
+                )
+            ),
+            normals=read_only(
+                np.array([reflectors[i].normal for i in planar], dtype=np.float64).reshape(-1, 3)
+            ),
+            centers=read_only(
+                np.array([reflectors[i].center for i in planar], dtype=np.float64).reshape(-1, 3)
+            ),
             curved=read_only(np.array(curved, dtype=np.intp)),
-            sphere_centers=read_only(np.array([c for c, _ in spheres],
-                                            dtype=np.float64).reshape(-1, 3)),
-            sphere_radii=read_only(np.array([r for _, r in spheres], dtype=np.float64)))
+            sphere_centers=read_only(
+                np.array([c for c, _ in spheres], dtype=np.float64).reshape(-1, 3)
+            ),
+            sphere_radii=read_only(np.array([r for _, r in spheres], dtype=np.float64)),
+        )
 
 
 _CACHE = _IndexCache()
@@ -517,7 +544,7 @@ ENCLOSURE_RAYS = 64
 def _fibonacci_directions(count: int) -> np.ndarray:
     index = np.arange(count) + 0.5
     z = 1.0 - 2.0 * index / count
-    angle = np.pi * (1.0 + 5.0 ** 0.5) * index
+    angle = np.pi * (1.0 + 5.0**0.5) * index
     rho = np.sqrt(1.0 - z * z)
     directions = np.stack([rho * np.cos(angle), rho * np.sin(angle), z], axis=1)
     directions.flags.writeable = False

@@ -39,8 +39,7 @@ def volume_planes(view_projection: np.ndarray) -> np.ndarray:
     homogeneous world points (inside where ``plane @ (x, y, z, 1) >= 0``), in the order
     left, right, bottom, top, near, far."""
     m = np.asarray(view_projection, dtype=np.float64)
-    return np.array([m[3] + m[0], m[3] - m[0], m[3] + m[1], m[3] - m[1], m[3] + m[2],
-                     m[3] - m[2]])
+    return np.array([m[3] + m[0], m[3] - m[0], m[3] + m[1], m[3] - m[1], m[3] + m[2], m[3] - m[2]])
 
 
 def view_planes(view_projection: np.ndarray, clip_plane: np.ndarray | None) -> np.ndarray:
@@ -56,29 +55,34 @@ SCISSOR_MARGIN = 1.0
 """Pixels a scissor's planes (:func:`scissor_planes`) lie outside its rectangle."""
 
 
-def scissor_bounds(size: tuple[int, int],
-                   rectangle: tuple[int, int, int, int]) -> tuple[float, float, float, float]:
+def scissor_bounds(
+    size: tuple[int, int], rectangle: tuple[int, int, int, int]
+) -> tuple[float, float, float, float]:
     """The normalised device x and y bounds ``(left, right, bottom, top)`` of the pixel
     ``rectangle`` ``(x, y, width, height)`` of a ``size`` target, grown by
     :data:`SCISSOR_MARGIN`."""
     width, height = size
     x, y, w, h = rectangle
-    return (2.0 * (x - SCISSOR_MARGIN) / width - 1.0,
-            2.0 * (x + w + SCISSOR_MARGIN) / width - 1.0,
-            2.0 * (y - SCISSOR_MARGIN) / height - 1.0,
-            2.0 * (y + h + SCISSOR_MARGIN) / height - 1.0)
+    return (
+        2.0 * (x - SCISSOR_MARGIN) / width - 1.0,
+        2.0 * (x + w + SCISSOR_MARGIN) / width - 1.0,
+        2.0 * (y - SCISSOR_MARGIN) / height - 1.0,
+        2.0 * (y + h + SCISSOR_MARGIN) / height - 1.0,
+    )
 
 
-def scissor_planes(view_projection: np.ndarray, size: tuple[int, int],
-                   rectangle: tuple[int, int, int, int]) -> np.ndarray:
+def scissor_planes(
+    view_projection: np.ndarray, size: tuple[int, int], rectangle: tuple[int, int, int, int]
+) -> np.ndarray:
     """``(4, 4)``: the part of the clip volume of ``view_projection`` that a scissor
     ``rectangle`` of a ``size`` target lets through (its sides, :func:`scissor_bounds`),
     as planes of homogeneous world points: what lies wholly beyond one cannot colour a
     pixel the scissor keeps."""
     m = np.asarray(view_projection, dtype=np.float64)
     left, right, bottom, top = scissor_bounds(size, rectangle)
-    return np.array([m[0] - left * m[3], right * m[3] - m[0], m[1] - bottom * m[3],
-                     top * m[3] - m[1]])
+    return np.array(
+        [m[0] - left * m[3], right * m[3] - m[0], m[1] - bottom * m[3], top * m[3] - m[1]]
+    )
 
 
 def box_rows(centers: np.ndarray, halves: np.ndarray) -> np.ndarray:
@@ -102,8 +106,14 @@ def plane_test(planes: np.ndarray) -> np.ndarray:
     normals = np.asarray(planes, dtype=np.float64)[:, :3]
     offsets = np.asarray(planes, dtype=np.float64)[:, 3]
     reach = np.abs(normals).T
-    return np.vstack([normals.T, (1.0 + CULL_SLACK) * reach, CULL_SLACK * reach,
-                      (offsets + CULL_SLACK * np.abs(offsets))[None, :]])
+    return np.vstack(
+        [
+            normals.T,
+            (1.0 + CULL_SLACK) * reach,
+            CULL_SLACK * reach,
+            (offsets + CULL_SLACK * np.abs(offsets))[None, :],
+        ]
+    )
 
 
 def rows_in_view(rows: np.ndarray, test: np.ndarray) -> np.ndarray:
@@ -126,13 +136,16 @@ PIXEL_MARGIN = 0.05
 """Pixels by which a thing's projected box is grown before asking whether it holds a
 pixel centre: more than the rasteriser's snapping of vertices to its sub-pixel grid
 (1/256 of a pixel on llvmpipe) and float rounding."""
-_CORNER_SIGNS = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0)
-                          for z in (-1.0, 1.0)])
+_CORNER_SIGNS = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])
 
 
-def boxes_cover_pixels(centers: np.ndarray, halves: np.ndarray, view_projection: np.ndarray,
-                       size: tuple[int, int],
-                       rectangle: tuple[int, int, int, int] | None = None) -> np.ndarray:
+def boxes_cover_pixels(
+    centers: np.ndarray,
+    halves: np.ndarray,
+    view_projection: np.ndarray,
+    size: tuple[int, int],
+    rectangle: tuple[int, int, int, int] | None = None,
+) -> np.ndarray:
     """``(n,)`` bool: which of the world boxes (``centers``, ``halves`` ``(n, 3)``) may
     colour a pixel of a ``size`` target (within the pixel ``rectangle`` when given).
 
@@ -168,18 +181,25 @@ def boxes_cover_pixels(centers: np.ndarray, halves: np.ndarray, view_projection:
     return ~ahead | ((first_x <= last_x) & (first_y <= last_y))
 
 
-_TERMS_OF_SIDES = np.array([[1.0, 1.0, 0.0, 0.0, 0.0, 0.0],
-                            [0.0, 0.0, 1.0, 1.0, 0.0, 0.0],
-                            [0.0, 0.0, 0.0, 0.0, 1.0, 1.0],
-                            [1.0, 1.0, 1.0, 1.0, 1.0, 1.0]])
+_TERMS_OF_SIDES = np.array(
+    [
+        [1.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 1.0, 1.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 0.0, 1.0, 1.0],
+        [1.0, 1.0, 1.0, 1.0, 1.0, 1.0],
+    ]
+)
 """From the absolute clip coordinates ``(|x|, |y|, |z|, |w|)`` to the terms each side of
 the view compares, summed: |x| + |w| for the left and right, |y| + |w|, |z| + |w|."""
 
 
-def quads_outside(corners: np.ndarray, view_projection: np.ndarray,
-                  clip_plane: np.ndarray | None, orthographic: bool,
-                  sides: tuple[float, float, float, float] = (-1.0, 1.0, -1.0, 1.0)
-                  ) -> np.ndarray:
+def quads_outside(
+    corners: np.ndarray,
+    view_projection: np.ndarray,
+    clip_plane: np.ndarray | None,
+    orthographic: bool,
+    sides: tuple[float, float, float, float] = (-1.0, 1.0, -1.0, 1.0),
+) -> np.ndarray:
     """``(p,)`` int8: for each quad of ``corners`` ``(p, 4, 3)`` (world), the code of the
     side of the view all four corners lie beyond, in :data:`OUTSIDE_REASONS` (0 when no
     one side has them all): the clip plane first, then behind a perspective eye, then
@@ -201,10 +221,13 @@ def quad_rows(corners: np.ndarray) -> np.ndarray:
     return rows
 
 
-def rows_outside(rows: np.ndarray, view_projection: np.ndarray,
-                 clip_plane: np.ndarray | None, orthographic: bool,
-                 sides: tuple[float, float, float, float] = (-1.0, 1.0, -1.0, 1.0)
-                 ) -> np.ndarray:
+def rows_outside(
+    rows: np.ndarray,
+    view_projection: np.ndarray,
+    clip_plane: np.ndarray | None,
+    orthographic: bool,
+    sides: tuple[float, float, float, float] = (-1.0, 1.0, -1.0, 1.0),
+) -> np.ndarray:
     """:func:`quads_outside` of the quads whose :func:`quad_rows` are ``rows``
     ``(4, p, 4)``: a few products over all the corners at once."""
     count = rows.shape[1]
@@ -214,13 +237,18 @@ def rows_outside(rows: np.ndarray, view_projection: np.ndarray,
     # each side's clip coordinate against w as one product: leads (4p, 6), and the terms
     # each compares (|x| + |w| for the left and right sides, and so on)
     left, right, bottom, top = sides
-    sides_of_clip = np.array([[1.0, -1.0, 0.0, 0.0, 0.0, 0.0],
-                              [0.0, 0.0, 1.0, -1.0, 0.0, 0.0],
-                              [0.0, 0.0, 0.0, 0.0, 1.0, -1.0],
-                              [-left, right, -bottom, top, 1.0, 1.0]])
+    sides_of_clip = np.array(
+        [
+            [1.0, -1.0, 0.0, 0.0, 0.0, 0.0],
+            [0.0, 0.0, 1.0, -1.0, 0.0, 0.0],
+            [0.0, 0.0, 0.0, 0.0, 1.0, -1.0],
+            [-left, right, -bottom, top, 1.0, 1.0],
+        ]
+    )
     clip = points @ np.asarray(view_projection, dtype=np.float64).T  # (4p, 4)
-    beyond = _all_corners((clip @ sides_of_clip
-                           < (-CULL_SLACK) * (np.abs(clip) @ _TERMS_OF_SIDES)), count)
+    beyond = _all_corners(
+        (clip @ sides_of_clip < (-CULL_SLACK) * (np.abs(clip) @ _TERMS_OF_SIDES)), count
+    )
     first_code = 3
     if not orthographic:
         behind = _all_corners(clip[:, 3] <= 0.0, count)
@@ -229,8 +257,9 @@ def rows_outside(rows: np.ndarray, view_projection: np.ndarray,
     codes = np.where(beyond.any(axis=1), np.argmax(beyond, axis=1) + first_code, 0)
     if clip_plane is not None:
         plane = np.asarray(clip_plane, dtype=np.float64)
-        codes[_all_corners(points @ plane < (-CULL_SLACK) * (np.abs(points) @ np.abs(plane)),
-                           count)] = 1
+        codes[
+            _all_corners(points @ plane < (-CULL_SLACK) * (np.abs(points) @ np.abs(plane)), count)
+        ] = 1
     return codes.astype(np.int8)
 
 
@@ -241,8 +270,9 @@ def _all_corners(each: np.ndarray, count: int) -> np.ndarray:
     return first & second & third & fourth
 
 
-def facing(centers: np.ndarray, normals: np.ndarray, eye: np.ndarray | None,
-           forward: np.ndarray) -> np.ndarray:
+def facing(
+    centers: np.ndarray, normals: np.ndarray, eye: np.ndarray | None, forward: np.ndarray
+) -> np.ndarray:
     """``(p,)`` bool: whether a viewer at ``eye`` ``(3,)`` (None: orthographic, looking
     along ``forward`` ``(3,)``) is on the reflecting side of each mirror (``centers``,
     unit ``normals`` ``(p, 3)``), strictly: edge-on is not facing."""
@@ -253,8 +283,12 @@ def facing(centers: np.ndarray, normals: np.ndarray, eye: np.ndarray | None,
     return np.einsum("ij,ij->i", towards, normals) > 0.0
 
 
-def spheres_in_view(centers: np.ndarray, radii: np.ndarray, view_projection: np.ndarray,
-                    clip_plane: np.ndarray | None) -> np.ndarray:
+def spheres_in_view(
+    centers: np.ndarray,
+    radii: np.ndarray,
+    view_projection: np.ndarray,
+    clip_plane: np.ndarray | None,
+) -> np.ndarray:
     """``(c,)`` bool: which of the world spheres ``centers`` ``(c, 3)``, ``radii`` ``(c,)``
     reach into the view (False only for a sphere wholly beyond one plane)."""
     if not len(centers):

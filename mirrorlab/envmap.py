@@ -262,14 +262,16 @@ def cube_face_direction(face, s, t) -> np.ndarray:
     sc = 2 * np.clip(s, 0, 1) - 1
     tc = 2 * np.clip(t, 0, 1) - 1
     one = np.ones_like(sc)
-    by_face = np.stack([
-        np.stack([one, -tc, -sc], axis=-1),   # +X
-        np.stack([-one, -tc, sc], axis=-1),   # -X
-        np.stack([sc, one, tc], axis=-1),     # +Y
-        np.stack([sc, -one, -tc], axis=-1),   # -Y
-        np.stack([sc, -tc, one], axis=-1),    # +Z
-        np.stack([-sc, -tc, -one], axis=-1),  # -Z
-    ])
+    by_face = np.stack(
+        [
+            np.stack([one, -tc, -sc], axis=-1),  # +X
+            np.stack([-one, -tc, sc], axis=-1),  # -X
+            np.stack([sc, one, tc], axis=-1),  # +Y
+            np.stack([sc, -one, -tc], axis=-1),  # -Y
+            np.stack([sc, -tc, one], axis=-1),  # +Z
+            np.stack([-sc, -tc, -one], axis=-1),  # -Z
+        ]
+    )
     r = np.take_along_axis(by_face, face[None, ..., None], axis=0)[0]
     return _unit(r)[0]
 
@@ -377,8 +379,10 @@ def _shade(env: EnvFunction, directions: np.ndarray) -> np.ndarray:
     flat = np.ascontiguousarray(directions.reshape(-1, 3), dtype=np.float64)
     colours = np.asarray(env(flat), dtype=np.float64)
     if colours.shape != flat.shape:
-        raise ValueError(f"env must return (n, 3) colours for (n, 3) directions, got "
-                         f"{colours.shape} for {flat.shape}")
+        raise ValueError(
+            f"env must return (n, 3) colours for (n, 3) directions, got "
+            f"{colours.shape} for {flat.shape}"
+        )
     colours = np.nan_to_num(np.clip(colours, 0, 1), nan=0.0)
     return np.round(colours * 255).astype(np.uint8).reshape(directions.shape)
 

@@ -48,8 +48,9 @@ class GLPassError(RuntimeError):
 
     def __init__(self, pass_name: str, code: int, detail: str) -> None:
         self.pass_name, self.code, self.detail = pass_name, code, detail
-        super().__init__(f"OpenGL error {GL_ERROR_NAMES.get(code, hex(code))} in pass "
-                         f"{pass_name!r}: {detail}")
+        super().__init__(
+            f"OpenGL error {GL_ERROR_NAMES.get(code, hex(code))} in pass {pass_name!r}: {detail}"
+        )
 
 
 class GLOutOfMemoryError(GLPassError, ValueError):
@@ -58,8 +59,10 @@ class GLOutOfMemoryError(GLPassError, ValueError):
 
     def __init__(self, pass_name: str, code: int, detail: str) -> None:
         super().__init__(pass_name, code, detail)
-        self.args = (f"OpenGL ran out of memory in pass {pass_name!r} ({detail}); use "
-                     f"smaller sizes (--size, --env-size, --map-size, smaller pictures)",)
+        self.args = (
+            f"OpenGL ran out of memory in pass {pass_name!r} ({detail}); use "
+            f"smaller sizes (--size, --env-size, --map-size, smaller pictures)",
+        )
 
 
 class MissingExtraError(ValueError):
@@ -68,8 +71,10 @@ class MissingExtraError(ValueError):
 
     def __init__(self, option: str, what: str, extra: str) -> None:
         self.option, self.what, self.extra = option, what, extra
-        super().__init__(f"{option}: needs {what}, which is not installed; install it "
-                         f"with: pip install 'mirrorlab[{extra}]'")
+        super().__init__(
+            f"{option}: needs {what}, which is not installed; install it "
+            f"with: pip install 'mirrorlab[{extra}]'"
+        )
 
 
 class GLLimitError(ValueError):
@@ -84,10 +89,15 @@ class WriteError(Exception):
         super().__init__(f"cannot write {path}: {reason}")
 
 
-GL_ERROR_NAMES = {0x0500: "GL_INVALID_ENUM", 0x0501: "GL_INVALID_VALUE",
-                  0x0502: "GL_INVALID_OPERATION", 0x0503: "GL_STACK_OVERFLOW",
-                  0x0504: "GL_STACK_UNDERFLOW", 0x0505: "GL_OUT_OF_MEMORY",
-                  0x0506: "GL_INVALID_FRAMEBUFFER_OPERATION"}
+GL_ERROR_NAMES = {
+    0x0500: "GL_INVALID_ENUM",
+    0x0501: "GL_INVALID_VALUE",
+    0x0502: "GL_INVALID_OPERATION",
+    0x0503: "GL_STACK_OVERFLOW",
+    0x0504: "GL_STACK_UNDERFLOW",
+    0x0505: "GL_OUT_OF_MEMORY",
+    0x0506: "GL_INVALID_FRAMEBUFFER_OPERATION",
+}
 GL_OUT_OF_MEMORY = 0x0505
 
 

@@ -24,8 +24,9 @@ class OutputError(ValueError):
         super().__init__(f"{option}: {problem}")
 
 
-def check_output(option: str, text: str | Path, suffix: str = ".png",
-                 make_folder: bool = False) -> Path:
+def check_output(
+    option: str, text: str | Path, suffix: str = ".png", make_folder: bool = False
+) -> Path:
     """``text`` as an output path ending in ``suffix`` in a folder that exists (or, with
     ``make_folder``, can be made) and takes a new file; OutputError naming ``option``
     for a bad name or a missing folder, :class:`~mirrorlab.errors.WriteError` (``cannot
@@ -91,8 +92,7 @@ def _stage(path: Path, data: bytes) -> Path:
     name = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        handle, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp",
-                                        dir=path.parent)
+        handle, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
         with os.fdopen(handle, "wb") as stream:
             stream.write(data)
         os.chmod(name, 0o666 & ~_umask())  # mkstemp makes 0600; give the usual mode
@@ -154,8 +154,9 @@ class Outputs:
     def add(self, path: Path, data: bytes) -> None:
         path = Path(path)
         if any(path.resolve() == done.resolve() for done, _ in self._staged):
-            raise OutputError(str(path), "two outputs would be written to this one file; "
-                              "give each its own name")
+            raise OutputError(
+                str(path), "two outputs would be written to this one file; give each its own name"
+            )
         self._staged.append((path, _stage(path, data)))
 
     def add_png(self, path: Path, image: np.ndarray) -> None:

@@ -153,8 +153,16 @@ def view_volume_planes(slack: float = SLACK) -> np.ndarray:
     """``(6, 4)``: the view volume ``-w <= x, y, z <= w`` as planes of homogeneous clip
     coordinates (inside where ``point @ plane >= 0``), widened by ``slack`` of ``w``."""
     w = 1.0 + slack
-    return np.array([[1.0, 0, 0, w], [-1.0, 0, 0, w], [0, 1.0, 0, w], [0, -1.0, 0, w],
-                     [0, 0, 1.0, w], [0, 0, -1.0, w]])
+    return np.array(
+        [
+            [1.0, 0, 0, w],
+            [-1.0, 0, 0, w],
+            [0, 1.0, 0, w],
+            [0, -1.0, 0, w],
+            [0, 0, 1.0, w],
+            [0, 0, -1.0, w],
+        ]
+    )
 
 
 def to_window(clip: np.ndarray, size: tuple[int, int]) -> np.ndarray:
@@ -169,15 +177,21 @@ def screen_planes(size: tuple[int, int], margin: float = 0.0) -> np.ndarray:
     """``(4, 3)``: the screen rectangle (grown by ``margin`` pixels) as planes of
     homogeneous window coordinates (x, y, 1)."""
     width, height = size
-    return np.array([[1.0, 0, margin], [-1.0, 0, width + margin], [0, 1.0, margin],
-                     [0, -1.0, height + margin]])
+    return np.array(
+        [[1.0, 0, margin], [-1.0, 0, width + margin], [0, 1.0, margin], [0, -1.0, height + margin]]
+    )
 
 
 # --------------------------------------------------------------------------- footprints
 
 
-def polygon_footprint(points: np.ndarray, view_projection: np.ndarray, size: tuple[int, int],
-                      clip_plane: np.ndarray | None = None, depth: bool = True) -> Footprint:
+def polygon_footprint(
+    points: np.ndarray,
+    view_projection: np.ndarray,
+    size: tuple[int, int],
+    clip_plane: np.ndarray | None = None,
+    depth: bool = True,
+) -> Footprint:
     """The footprint of the convex polygon ``points`` ``(n, 3)`` (world) seen through
     ``view_projection`` ``(4, 4)`` on a ``size`` target, cut by the world plane
     ``clip_plane`` ``(4,)`` (what lies on its negative side is not drawn) when given.
@@ -204,8 +218,13 @@ def polygon_footprint(points: np.ndarray, view_projection: np.ndarray, size: tup
     return Footprint(polygon, polygon_area(polygon), (int(size[0]), int(size[1])))
 
 
-def sphere_footprint(center: np.ndarray, radius: float, view: np.ndarray,
-                     projection: np.ndarray, size: tuple[int, int]) -> Footprint:
+def sphere_footprint(
+    center: np.ndarray,
+    radius: float,
+    view: np.ndarray,
+    projection: np.ndarray,
+    size: tuple[int, int],
+) -> Footprint:
     """The footprint of the sphere ``center`` ``(3,)`` (world), ``radius``, seen through
     the rigid ``view`` and ``projection`` (both ``(4, 4)``; perspective or orthographic,
     an oblique near plane allowed: only the x, y and w rows matter) on a ``size``
@@ -247,8 +266,7 @@ def sphere_footprint(center: np.ndarray, radius: float, view: np.ndarray,
     return _ellipse_footprint(middle, ellipse, size)
 
 
-def _ellipse_footprint(middle: np.ndarray, axes: np.ndarray,
-                       size: tuple[int, int]) -> Footprint:
+def _ellipse_footprint(middle: np.ndarray, axes: np.ndarray, size: tuple[int, int]) -> Footprint:
     """The ellipse ``middle + axes @ (cos a, sin a)`` (NDC) as a polygon drawn around it,
     in window coordinates, clipped to the screen."""
     width, height = size
@@ -259,8 +277,9 @@ def _ellipse_footprint(middle: np.ndarray, axes: np.ndarray,
     window = np.column_stack([(ndc[:, 0] + 1.0) * 0.5 * width, (ndc[:, 1] + 1.0) * 0.5 * height])
     if not np.all(np.isfinite(window)):
         return full_screen(size)
-    clipped = clip_polygon(np.column_stack([window, np.ones(len(window))]),
-                           screen_planes(size, 1e-6 * max(size)))
+    clipped = clip_polygon(
+        np.column_stack([window, np.ones(len(window))]), screen_planes(size, 1e-6 * max(size))
+    )
     if len(clipped) < 3:
         return empty_footprint(size)
     polygon = clipped[:, :2]

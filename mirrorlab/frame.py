@@ -27,8 +27,9 @@ class Frame(np.ndarray):
     def __new__(cls, image: Any) -> Frame:
         return np.asarray(image).view(cls)
 
-    def __array_wrap__(self, array: np.ndarray, context: Any = None,
-                       return_scalar: bool = False) -> Any:
+    def __array_wrap__(
+        self, array: np.ndarray, context: Any = None, return_scalar: bool = False
+    ) -> Any:
         # Results of ufuncs and reductions are numbers, not pictures: plain arrays.
         plain = np.asarray(array)
         return plain[()] if return_scalar else plain
@@ -36,14 +37,21 @@ class Frame(np.ndarray):
     @property
     def is_picture(self) -> bool:
         """True when this array is an RGB or RGBA picture Jupyter can show."""
-        return (self.ndim == 3 and self.shape[2] in (3, 4) and self.dtype == np.uint8
-                and self.shape[0] > 0 and self.shape[1] > 0)
+        return (
+            self.ndim == 3
+            and self.shape[2] in (3, 4)
+            and self.dtype == np.uint8
+            and self.shape[0] > 0
+            and self.shape[1] > 0
+        )
 
     def png(self) -> bytes:
         """The picture as PNG file bytes; ValueError when it is no picture."""
         if not self.is_picture:
-            raise ValueError(f"a picture is (h, w, 3) or (h, w, 4) uint8; this array is "
-                             f"{self.shape} {self.dtype}")
+            raise ValueError(
+                f"a picture is (h, w, 3) or (h, w, 4) uint8; this array is "
+                f"{self.shape} {self.dtype}"
+            )
         import io
 
         from PIL import Image

@@ -63,8 +63,7 @@ class Executor:
     def close(self) -> None:
         pass
 
-    def run(self, function: Callable[..., Any],
-            jobs: Mapping[str, tuple]) -> Iterator[Outcome]:
+    def run(self, function: Callable[..., Any], jobs: Mapping[str, tuple]) -> Iterator[Outcome]:
         for key, args in jobs.items():
             try:
                 yield Outcome(key, function(*args))
@@ -92,16 +91,14 @@ class PoolExecutor(Executor):
             self._pool.shutdown(wait=True, cancel_futures=True)
             self._pool = None
 
-    def run(self, function: Callable[..., Any],
-            jobs: Mapping[str, tuple]) -> Iterator[Outcome]:
+    def run(self, function: Callable[..., Any], jobs: Mapping[str, tuple]) -> Iterator[Outcome]:
         pending = dict(jobs)
         attempts = dict.fromkeys(jobs, 0)
         while pending:
             broken = False
             if self._pool is None:
                 self._pool = concurrent.futures.ProcessPoolExecutor(self.workers)
-            futures = {self._pool.submit(function, *args): key
-                       for key, args in pending.items()}
+            futures = {self._pool.submit(function, *args): key for key, args in pending.items()}
             try:
                 for future in concurrent.futures.as_completed(futures):
                     key = futures[future]
@@ -145,8 +142,13 @@ class DaskExecutor(Executor):
 
     engine = "dask"
 
-    def __init__(self, workers: int = 2, address: str | None = None,
-                 retries: int = RETRIES, connect_timeout: str | None = None) -> None:
+    def __init__(
+        self,
+        workers: int = 2,
+        address: str | None = None,
+        retries: int = RETRIES,
+        connect_timeout: str | None = None,
+    ) -> None:
         require_dask("--scheduler" if address is not None else "--engine dask")
         from distributed import Client, LocalCluster
 
@@ -154,15 +156,17 @@ class DaskExecutor(Executor):
         self.cluster = None
         if address is None:
             # ":0": any free port for the scheduler's HTTP routes (8787 may be taken)
-            self.cluster = LocalCluster(n_workers=workers, threads_per_worker=1,
-                                        processes=True, dashboard_address=":0")
+            self.cluster = LocalCluster(
+                n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0"
+            )
             self.client = Client(self.cluster)
         else:
             try:
                 self.client = Client(address, timeout=connect_timeout or CONNECT_TIMEOUT)
             except OSError as exc:
-                raise ValueError(f"--scheduler: cannot reach a Dask scheduler at {address!r} "
-                                 f"({exc})") from None
+                raise ValueError(
+                    f"--scheduler: cannot reach a Dask scheduler at {address!r} ({exc})"
+                ) from None
         self.workers = len(self.client.scheduler_info().get("workers", {})) or workers
 
     def close(self) -> None:
@@ -170,14 +174,16 @@ class DaskExecutor(Executor):
         if self.cluster is not None:
             self.cluster.close()
 
-    def run(self, function: Callable[..., Any],
-            jobs: Mapping[str, tuple]) -> Iterator[Outcome]:
+    def run(self, function: Callable[..., Any], jobs: Mapping[str, tuple]) -> Iterator[Outcome]:
         from distributed import as_completed
 
         batch = uuid.uuid4().hex[:8]
-        futures = {self.client.submit(function, *args, key=f"{key}-{batch}", pure=False,
-                                      retries=self.retries): key
-                   for key, args in jobs.items()}
+        futures = {
+            self.client.submit(
+                function, *args, key=f"{key}-{batch}", pure=False, retries=self.retries
+            ): key
+            for key, args in jobs.items()
+        }
         for future in as_completed(futures):
             key = futures[future]
             try:
@@ -188,8 +194,7 @@ class DaskExecutor(Executor):
                 future.release()
 
 
-def open_executor(jobs: int = 1, scheduler: str | None = None,
-                  engine: str = "pool") -> Executor:
+def open_executor(jobs: int = 1, scheduler: str | None = None, engine: str = "pool") -> Executor:
     """The executor for ``jobs`` parallel jobs: a Dask client when ``scheduler`` is given;
     otherwise in this process for one job, else a process pool (``engine`` "pool", the
     default) or a local Dask cluster ("dask")."""

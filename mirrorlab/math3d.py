@@ -66,16 +66,19 @@ def rotation_entries(angle_deg: float, x: float, y: float, z: float) -> list[lis
     radians = math.radians(angle_deg)
     c, s = math.cos(radians), math.sin(radians)
     t = 1.0 - c
-    return [[t * x * x + c, t * x * y - s * z, t * x * z + s * y],
-            [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
-            [t * x * z - s * y, t * y * z + s * x, t * z * z + c]]
+    return [
+        [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+        [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+        [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
+    ]
 
 
 def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``np.cross`` of two ``(3,)`` vectors, without its general-shape handling, which
     cost more than the rest of :func:`look_at` (every frame computes a few views)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                     a[0] * b[1] - a[1] * b[0]])
+    return np.array(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    )
 
 
 def look_at(eye: Vec3, target: Vec3, up: Vec3) -> np.ndarray:
@@ -143,12 +146,10 @@ def perspective(fovy_deg: float, aspect: float, near: float, far: float) -> np.n
     return m
 
 
-def _row_is(row: np.ndarray, values: tuple[float, ...], atol: float,
-            rtol: float = 0.0) -> bool:
+def _row_is(row: np.ndarray, values: tuple[float, ...], atol: float, rtol: float = 0.0) -> bool:
     """``np.allclose(row, values, rtol, atol)`` for a short row, written out (numpy's costs
     more than the rest of a plan's capture view; NaN is never close)."""
-    return all(abs(float(a) - b) <= atol + rtol * abs(b)
-               for a, b in zip(row, values, strict=True))
+    return all(abs(float(a) - b) <= atol + rtol * abs(b) for a, b in zip(row, values, strict=True))
 
 
 def with_depth_range(projection: np.ndarray, near: float, far: float) -> np.ndarray:
@@ -160,8 +161,10 @@ def with_depth_range(projection: np.ndarray, near: float, far: float) -> np.ndar
     matrix = np.array(projection, dtype=np.float64)
     perspective = _row_is(matrix[3], (0.0, 0.0, -1.0, 0.0), 1e-12)
     if not (0.0 < near < far if perspective else near < far):
-        raise ValueError(f"depth range needs {'0 < ' if perspective else ''}near < far, got "
-                         f"near={near}, far={far}")
+        raise ValueError(
+            f"depth range needs {'0 < ' if perspective else ''}near < far, got "
+            f"near={near}, far={far}"
+        )
     if perspective:
         matrix[2] = (0.0, 0.0, (far + near) / (near - far), 2.0 * far * near / (near - far))
     elif _row_is(matrix[3], (0.0, 0.0, 0.0, 1.0), 1e-12):
@@ -237,7 +240,8 @@ def oblique_projection(projection: np.ndarray, plane_in_eye_space: np.ndarray) -
     perspective = not _row_is(matrix[3], (0.0, 0.0, 0.0, 1.0), 1e-8, 1e-5)
     if perspective and not clip_plane[3] < 0.0:
         raise ValueError(
-            f"oblique near plane must have the eye strictly behind it (d < 0), got {clip_plane}")
+            f"oblique near plane must have the eye strictly behind it (d < 0), got {clip_plane}"
+        )
     # The corner of the view volume opposite the plane: chosen by the signs of the plane
     # in clip space, not in eye space, which differ where the projection flips x or y (a
     # view of the world seen in a mirror) or is off-centre.

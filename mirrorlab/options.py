@@ -71,8 +71,7 @@ def parse_size(option: str, text: str) -> tuple[int, int]:
         width, height = int(match.group(1)), int(match.group(2))
         if 1 <= width <= MAX_SIZE and 1 <= height <= MAX_SIZE:
             return width, height
-    raise OptionError(option, f"expected WIDTHxHEIGHT with each from 1 to {MAX_SIZE}, "
-                      f"got {text!r}")
+    raise OptionError(option, f"expected WIDTHxHEIGHT with each from 1 to {MAX_SIZE}, got {text!r}")
 
 
 def check_size(size: Sequence[int] | str, option: str = "size") -> tuple[int, int]:
@@ -85,10 +84,15 @@ def check_size(size: Sequence[int] | str, option: str = "size") -> tuple[int, in
     except (TypeError, ValueError):
         raise OptionError(option, f"expected (width, height), got {size!r}") from None
     for value in (width, height):
-        if isinstance(value, bool) or not isinstance(value, int | float) or value != int(
-                value) or not 1 <= value <= MAX_SIZE:
-            raise OptionError(option, f"expected two whole numbers from 1 to {MAX_SIZE}, "
-                              f"got {tuple(size)!r}")
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, int | float)
+            or value != int(value)
+            or not 1 <= value <= MAX_SIZE
+        ):
+            raise OptionError(
+                option, f"expected two whole numbers from 1 to {MAX_SIZE}, got {tuple(size)!r}"
+            )
     return int(width), int(height)
 
 
@@ -100,8 +104,7 @@ def parse_count(option: str, text: str, low: int = 1, high: int = MAX_SIZE) -> i
     raise OptionError(option, f"expected a whole number from {low} to {high}, got {text!r}")
 
 
-def parse_counts(option: str, text: str, low: int = 1,
-                 high: int = MAX_SIZE) -> tuple[int, ...]:
+def parse_counts(option: str, text: str, low: int = 1, high: int = MAX_SIZE) -> tuple[int, ...]:
     """``'1,2,3'`` -> (1, 2, 3), each :func:`parse_count`-ed; OptionError naming
     ``option``."""
     return tuple(parse_count(option, part, low, high) for part in str(text).split(","))
@@ -159,6 +162,7 @@ def _vec3(names: str) -> Callable[[str, str], tuple[float, ...]]:
 def _set_camera(field: str) -> Callable[[dict, Any, str], None]:
     def apply(document: dict, value: Any, flag: str) -> None:
         document.setdefault("camera", {})[field] = _plain(value)
+
     return apply
 
 
@@ -187,9 +191,12 @@ def _apply_technique(document: dict, value: Any, flag: str) -> None:
     entry = _entry(value)
     if entry is None:
         if frame_technique(value) is not None:
-            raise OptionError(flag, f"{value} draws the whole frame, not a reflector: give "
-                              f"it to mirrorlab.render(method={value!r}) or as "
-                              f"'mirrorlab render --{value}'")
+            raise OptionError(
+                flag,
+                f"{value} draws the whole frame, not a reflector: give "
+                f"it to mirrorlab.render(method={value!r}) or as "
+                f"'mirrorlab render --{value}'",
+            )
         # A value from the Python API, not parsed: no kind of reflector to pick by it.
         # Given to every reflector, it is refused by the scene check with its key path
         # and the names (or here, when there is no reflector at all).
@@ -200,8 +207,9 @@ def _apply_technique(document: dict, value: Any, flag: str) -> None:
             reflector["technique"] = value
         return
     planar = entry.kind == "planar"
-    for reflector in _reflectors_of_kind(document, planar, flag, f"{value} is a technique "
-                                         f"for a {_KIND_NAMES[planar]}, and "):
+    for reflector in _reflectors_of_kind(
+        document, planar, flag, f"{value} is a technique for a {_KIND_NAMES[planar]}, and "
+    ):
         _set_technique(reflector, value)
 
 
@@ -239,11 +247,13 @@ def with_technique(scene: Scene, name: str, value: str) -> Scene:
 _KIND_NAMES = {True: "planar mirror", False: "curved reflector"}
 
 
-def _reflectors_of_kind(document: dict, planar: bool, flag: str,
-                        why: str = "") -> list[dict]:
+def _reflectors_of_kind(document: dict, planar: bool, flag: str, why: str = "") -> list[dict]:
     """The document's planar (or curved) reflectors; OptionError when it has none."""
-    targets = [r for r in document.get("reflectors", [])
-               if (getattr(_entry(r.get("technique")), "kind", None) == "planar") == planar]
+    targets = [
+        r
+        for r in document.get("reflectors", [])
+        if (getattr(_entry(r.get("technique")), "kind", None) == "planar") == planar
+    ]
     if not targets:
         what = "none" if why else f"no {_KIND_NAMES[planar]}"
         raise OptionError(flag, f"{why}scene {document.get('name')!r} has {what}")
@@ -254,11 +264,11 @@ def _apply_to(kind: str, key: str) -> Callable[[dict, Any, str], None]:
     def apply(document: dict, value: Any, flag: str) -> None:
         for reflector in _reflectors_of_kind(document, kind == "planar", flag):
             reflector[key] = value
+
     return apply
 
 
-PARALLAX_FORMS = ("none", "box:X0,Y0,Z0,X1,Y1,Z1", "sphere:RADIUS",
-                  "distance[:STEPS[+SECANT]]")
+PARALLAX_FORMS = ("none", "box:X0,Y0,Z0,X1,Y1,Z1", "sphere:RADIUS", "distance[:STEPS[+SECANT]]")
 """How ``--parallax`` is written on a command line."""
 
 
@@ -275,8 +285,7 @@ def parse_parallax(flag: str, text: str) -> dict[str, Any] | str:
         values = parse_floats(flag, rest, 6, "X0,Y0,Z0,X1,Y1,Z1 after box:")
         return {"proxy": "box", "min": list(values[:3]), "max": list(values[3:])}
     if proxy == "sphere":
-        return {"proxy": "sphere", "radius": parse_floats(flag, rest, 1, "RADIUS after "
-                                                          "sphere:")[0]}
+        return {"proxy": "sphere", "radius": parse_floats(flag, rest, 1, "RADIUS after sphere:")[0]}
     match = re.fullmatch(r"(?::(\d+)(?:\+(\d+))?)?", f":{rest}" if rest else "")
     if proxy == "distance" and match:
         table: dict[str, Any] = {"proxy": "distance"}
@@ -294,13 +303,19 @@ def _apply_parallax(document: dict, value: Any, flag: str) -> None:
     ``--parallax`` text; ``"none"`` removes the correction."""
     if isinstance(value, str):
         value = parse_parallax(flag, value)
-    live = [r for r in _reflectors_of_kind(document, False, flag)
-            if getattr(_entry(r.get("technique")), "parallax", False)]
+    live = [
+        r
+        for r in _reflectors_of_kind(document, False, flag)
+        if getattr(_entry(r.get("technique")), "parallax", False)
+    ]
     if not live:
         names = [t.name for t in techniques("curved") if t.parallax]
-        raise OptionError(flag, f"scene {document.get('name')!r} has no {' or '.join(names)} "
-                          f"reflector (--method {names[0] if names else 'NAME'} makes every "
-                          f"curved reflector one)")
+        raise OptionError(
+            flag,
+            f"scene {document.get('name')!r} has no {' or '.join(names)} "
+            f"reflector (--method {names[0] if names else 'NAME'} makes every "
+            f"curved reflector one)",
+        )
     for reflector in live:
         if value == "none":
             reflector.pop("parallax", None)
@@ -362,9 +377,12 @@ def _mirror_form_for(document: dict, key: str, flag: str) -> None:
         return  # left to the scene's own check, which names what is wrong
     shape = rectangle_of(corners)
     if shape is None:
-        raise OptionError(flag, f"{key}: reflectors[{match.group(1)}] is given by corners "
-                          f"that are no rectangle; set reflectors[{match.group(1)}].corners "
-                          f"instead")
+        raise OptionError(
+            flag,
+            f"{key}: reflectors[{match.group(1)}] is given by corners "
+            f"that are no rectangle; set reflectors[{match.group(1)}].corners "
+            f"instead",
+        )
     del table["corners"]
     table.update(shape)
 
@@ -384,8 +402,13 @@ def rectangle_of(corners: np.ndarray) -> dict[str, list[float] | float] | None:
         return None
     up = height_edge / height
     normal = np.cross(up, width_edge / width)  # the loader takes right = normal x up
-    return {"center": corners.mean(axis=0).tolist(), "normal": normal.tolist(),
-            "width": width, "height": height, "up": up.tolist()}
+    return {
+        "center": corners.mean(axis=0).tolist(),
+        "normal": normal.tolist(),
+        "width": width,
+        "height": height,
+        "up": up.tolist(),
+    }
 
 
 def _parse_set(flag: str, text: str) -> tuple[tuple[str, Any], ...]:
@@ -402,49 +425,112 @@ def _parse_set(flag: str, text: str) -> tuple[tuple[str, Any], ...]:
 def _method_help() -> str:
     frames = technique_names("frame")
     drawn = f"; or the whole frame drawn by {', '.join(frames)}" if frames else ""
-    return (f"technique for every reflector of its kind: planar "
-            f"{', '.join(technique_names('planar'))}; curved "
-            f"{', '.join(technique_names('curved'))}{drawn}")
+    return (
+        f"technique for every reflector of its kind: planar "
+        f"{', '.join(technique_names('planar'))}; curved "
+        f"{', '.join(technique_names('curved'))}{drawn}"
+    )
 
 
 OPTIONS: tuple[Option, ...] = (
-    Option("camera", "X,Y,Z", "viewer position (the scene's camera.eye)",
-           _vec3("X,Y,Z"), _set_camera("eye"), r"camera\.eye"),
-    Option("target", "X,Y,Z", "point the viewer looks at (camera.target)",
-           _vec3("X,Y,Z"), _set_camera("target"), r"camera\.target"),
-    Option("fovy", "DEGREES", "vertical field of view (camera.fovy)",
-           lambda flag, text: parse_floats(flag, text, 1, "DEGREES")[0], _set_camera("fovy"),
-           r"camera\.fovy"),
-    Option("angles", "BASE,LOWER,UPPER", "the robot's joint angles in degrees",
-           _vec3("BASE,LOWER,UPPER"), _apply_angles, "objects"),
-    Option("method", "NAME", _method_help,
-           lambda flag, text: parse_choice(flag, text, technique_names()), _apply_technique,
-           "reflectors"),
-    Option("parallax", "PROXY", "how cube-live lookups correct for nearby surroundings: "
-           f"{', '.join(PARALLAX_FORMS)}", parse_parallax, _apply_parallax,
-           r"reflectors\[\d+\]\.parallax"),
-    Option("capture", "MODE", "how planar captures reach their texture: copy "
-           "(glCopyTexImage2D) or fbo (drawn into it)",
-           lambda flag, text: parse_choice(flag, text, CAPTURE_MODES),
-           _apply_to("planar", "capture"), "reflectors"),
-    Option("env_size", "N", "planar capture texture side in pixels (default: the view's), "
-           f"or {FOOTPRINT_TEXTURE} (ortho: the size of the mirror's footprint on screen)",
-           lambda flag, text: (text if text == FOOTPRINT_TEXTURE
-                               else parse_count(flag, text, 1, 4096)),
-           _apply_to("planar", "texture_size"), "reflectors"),
-    Option("map_size", "N", "curved reflectors' map side in texels",
-           lambda flag, text: parse_count(flag, text, 4, 4096),
-           _apply_to("curved", "map_size"), "reflectors"),
-    Option("max_bounces", "N", "how deep reflections of reflections go (0: plain)",
-           lambda flag, text: parse_count(flag, text, 0, 6),
-           lambda document, value, flag: document.__setitem__("max_bounces", value),
-           "max_bounces"),
-    Option("cube_faces", "DIR", "six pictures DIR/{px,nx,py,ny,pz,nz}.png as the background "
-           "(and the static cube maps)", lambda flag, text: text, _apply_cube_faces,
-           "background"),
-    Option("set", "KEY=VALUE", "set any scene key, as in the file (e.g. camera.fovy=30, "
-           "'reflectors[0].technique=\"stencil\"'); repeatable", _parse_set, _apply_set,
-           repeat=True),
+    Option(
+        "camera",
+        "X,Y,Z",
+        "viewer position (the scene's camera.eye)",
+        _vec3("X,Y,Z"),
+        _set_camera("eye"),
+        r"camera\.eye",
+    ),
+    Option(
+        "target",
+        "X,Y,Z",
+        "point the viewer looks at (camera.target)",
+        _vec3("X,Y,Z"),
+        _set_camera("target"),
+        r"camera\.target",
+    ),
+    Option(
+        "fovy",
+        "DEGREES",
+        "vertical field of view (camera.fovy)",
+        lambda flag, text: parse_floats(flag, text, 1, "DEGREES")[0],
+        _set_camera("fovy"),
+        r"camera\.fovy",
+    ),
+    Option(
+        "angles",
+        "BASE,LOWER,UPPER",
+        "the robot's joint angles in degrees",
+        _vec3("BASE,LOWER,UPPER"),
+        _apply_angles,
+        "objects",
+    ),
+    Option(
+        "method",
+        "NAME",
+        _method_help,
+        lambda flag, text: parse_choice(flag, text, technique_names()),
+        _apply_technique,
+        "reflectors",
+    ),
+    Option(
+        "parallax",
+        "PROXY",
+        f"how cube-live lookups correct for nearby surroundings: {', '.join(PARALLAX_FORMS)}",
+        parse_parallax,
+        _apply_parallax,
+        r"reflectors\[\d+\]\.parallax",
+    ),
+    Option(
+        "capture",
+        "MODE",
+        "how planar captures reach their texture: copy (glCopyTexImage2D) or fbo (drawn into it)",
+        lambda flag, text: parse_choice(flag, text, CAPTURE_MODES),
+        _apply_to("planar", "capture"),
+        "reflectors",
+    ),
+    Option(
+        "env_size",
+        "N",
+        "planar capture texture side in pixels (default: the view's), "
+        f"or {FOOTPRINT_TEXTURE} (ortho: the size of the mirror's footprint on screen)",
+        lambda flag, text: text if text == FOOTPRINT_TEXTURE else parse_count(flag, text, 1, 4096),
+        _apply_to("planar", "texture_size"),
+        "reflectors",
+    ),
+    Option(
+        "map_size",
+        "N",
+        "curved reflectors' map side in texels",
+        lambda flag, text: parse_count(flag, text, 4, 4096),
+        _apply_to("curved", "map_size"),
+        "reflectors",
+    ),
+    Option(
+        "max_bounces",
+        "N",
+        "how deep reflections of reflections go (0: plain)",
+        lambda flag, text: parse_count(flag, text, 0, 6),
+        lambda document, value, flag: document.__setitem__("max_bounces", value),
+        "max_bounces",
+    ),
+    Option(
+        "cube_faces",
+        "DIR",
+        "six pictures DIR/{px,nx,py,ny,pz,nz}.png as the background (and the static cube maps)",
+        lambda flag, text: text,
+        _apply_cube_faces,
+        "background",
+    ),
+    Option(
+        "set",
+        "KEY=VALUE",
+        "set any scene key, as in the file (e.g. camera.fovy=30, "
+        "'reflectors[0].technique=\"stencil\"'); repeatable",
+        _parse_set,
+        _apply_set,
+        repeat=True,
+    ),
 )
 OPTION_NAMES = {option.name: option for option in OPTIONS}
 
@@ -467,8 +553,7 @@ def apply_options(scene: Scene, values: Mapping[str, Any]) -> Scene:
         return scene
     unknown = [name for name in chosen if name not in OPTION_NAMES]
     if unknown:
-        raise TypeError(f"unknown option {unknown[0]!r}; options are "
-                        f"{', '.join(OPTION_NAMES)}")
+        raise TypeError(f"unknown option {unknown[0]!r}; options are {', '.join(OPTION_NAMES)}")
     document = scene_to_document(scene)
     # In the declared order, whatever the order given: --method before --parallax.
     for option in (option for option in OPTIONS if option.name in chosen):
@@ -481,8 +566,9 @@ def apply_options(scene: Scene, values: Mapping[str, Any]) -> Scene:
     try:
         return from_document(document, scene.source)
     except SceneError as exc:
-        raise OptionError(_blame(chosen, exc.key), f"{exc.key}: {exc.problem}" if exc.key
-                          else exc.problem) from None
+        raise OptionError(
+            _blame(chosen, exc.key), f"{exc.key}: {exc.problem}" if exc.key else exc.problem
+        ) from None
 
 
 def _blame(chosen: Mapping[str, Any], key: str) -> str:
@@ -500,8 +586,9 @@ def _blame(chosen: Mapping[str, Any], key: str) -> str:
 def set_key(document: dict, key: str, value: Any, flag: str = "--set") -> None:
     """Set ``key`` (``camera.eye``, ``reflectors[1].technique``) in ``document``."""
     if not re.fullmatch(r"[A-Za-z_][\w-]*(\[\d+\])*(\.[A-Za-z_][\w-]*(\[\d+\])*)*", key):
-        raise OptionError(flag, f"expected a key path such as camera.eye or "
-                          f"reflectors[0].technique, got {key!r}")
+        raise OptionError(
+            flag, f"expected a key path such as camera.eye or reflectors[0].technique, got {key!r}"
+        )
     parts = re.findall(r"([A-Za-z_][\w-]*)|\[(\d+)\]", key)
     node: Any = document
     path = [name if name else int(index) for name, index in parts]

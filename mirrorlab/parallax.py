@@ -49,9 +49,12 @@ distance search gives up on it: there the plain lookup is exact anyway."""
 
 def _floats(*arrays) -> list[np.ndarray]:
     converted = [np.asarray(a) for a in arrays]
-    converted = [a if np.issubdtype(a.dtype, np.floating) and a.dtype != np.float16
-                 else a.astype(np.float32 if a.dtype == np.float16 else np.float64)
-                 for a in converted]
+    converted = [
+        a
+        if np.issubdtype(a.dtype, np.floating) and a.dtype != np.float16
+        else a.astype(np.float32 if a.dtype == np.float16 else np.float64)
+        for a in converted
+    ]
     dtype = np.result_type(*converted)
     return [a.astype(dtype, copy=False) for a in converted]
 
@@ -95,8 +98,11 @@ def box_exit(origin, direction, box_min, box_max) -> np.ndarray:
     huge = np.finfo(origin.dtype).max
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         ahead = np.where(direction > 0, box_max - origin, box_min - origin)
-        steps = np.where(np.abs(direction) > PARALLEL,
-                         ahead / np.where(np.abs(direction) > PARALLEL, direction, 1), huge)
+        steps = np.where(
+            np.abs(direction) > PARALLEL,
+            ahead / np.where(np.abs(direction) > PARALLEL, direction, 1),
+            huge,
+        )
     return np.min(np.maximum(steps, 0), axis=-1)
 
 
@@ -109,14 +115,21 @@ def box_lookup(origin, direction, center, box_min, box_max) -> np.ndarray:
     included in the inside), when the box is empty (a ``min`` not below its ``max``) and
     when the exit point is the centre itself.
     """
-    origin, direction, center, box_min, box_max = _prepare(origin, direction, center,
-                                                           box_min, box_max)
+    origin, direction, center, box_min, box_max = _prepare(
+        origin, direction, center, box_min, box_max
+    )
     plain, moving = _unit(direction)
-    inside = moving & (np.all(origin >= box_min, axis=-1) & np.all(origin <= box_max, axis=-1)
-              & np.all(box_min < box_max, axis=-1))
-    distance = box_exit(np.where(inside[..., None], origin, 0), plain,
-                        np.where(inside[..., None], box_min, -1),
-                        np.where(inside[..., None], box_max, 1))
+    inside = moving & (
+        np.all(origin >= box_min, axis=-1)
+        & np.all(origin <= box_max, axis=-1)
+        & np.all(box_min < box_max, axis=-1)
+    )
+    distance = box_exit(
+        np.where(inside[..., None], origin, 0),
+        plain,
+        np.where(inside[..., None], box_min, -1),
+        np.where(inside[..., None], box_max, 1),
+    )
     hit = origin + distance[..., None] * plain
     with np.errstate(invalid="ignore", over="ignore"):
         return _towards(hit - center, plain, inside & np.all(np.isfinite(hit - center), -1))
@@ -146,13 +159,19 @@ def sphere_lookup(origin, direction, center, radius) -> np.ndarray:
         leaving = np.where(b > 0, -q / np.where(denominator > 0, denominator, 1), root - b)
         distance = np.where(inside, np.maximum(leaving, 0), 0)
         hit_from_center = offset + distance[..., None] * plain
-    return _towards(hit_from_center, plain,
-                    inside & np.all(np.isfinite(hit_from_center), axis=-1))
+    return _towards(hit_from_center, plain, inside & np.all(np.isfinite(hit_from_center), axis=-1))
 
 
-def distance_lookup(origin, direction, center, inverse_distance: InverseDistance,
-                    steps: int = 8, secant: int = 2, thickness: float = 0.1,
-                    enclosed: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def distance_lookup(
+    origin,
+    direction,
+    center,
+    inverse_distance: InverseDistance,
+    steps: int = 8,
+    secant: int = 2,
+    thickness: float = 0.1,
+    enclosed: bool = False,
+) -> tuple[np.ndarray, np.ndarray]:
     """The lookup direction ``(..., 3)`` found by searching the ray for the surface the
     capture saw, from the capture's ``inverse_distance`` (see :data:`InverseDistance`), and
     ``(...)`` True where the lookup is to be made in the background rather than the
@@ -217,8 +236,11 @@ def distance_lookup(origin, direction, center, inverse_distance: InverseDistance
         inverse = np.asarray(inverse_distance(unit.reshape(-1, 3)), dtype=dtype).reshape(shape)
         length = np.maximum(length, AT_CENTER * size)
         with np.errstate(divide="ignore", invalid="ignore"):
-            mismatch = np.where(t < 1, length * inverse / np.where(t < 1, 1 - t, 1) - 1,
-                                np.where(inverse > 0, np.inf, 0))
+            mismatch = np.where(
+                t < 1,
+                length * inverse / np.where(t < 1, 1 - t, 1) - 1,
+                np.where(inverse > 0, np.inf, 0),
+            )
         return size * (1 - t) / length - size * inverse, mismatch
 
     h_before, _ = probe(np.zeros(shape, dtype))
@@ -262,8 +284,9 @@ def distance_lookup(origin, direction, center, inverse_distance: InverseDistance
                     done |= accept
                 sub_before, sh_before = sub_after, sh_after
         t_before, h_before = t_after, h_after
-    seen_plainly = np.asarray(inverse_distance(plain.reshape(-1, 3)),
-                              dtype=dtype).reshape(shape) > 0
+    seen_plainly = (
+        np.asarray(inverse_distance(plain.reshape(-1, 3)), dtype=dtype).reshape(shape) > 0
+    )
     background = usable & ~done & ~(seen_plainly & bool(enclosed))
     look = _towards(towards(hit), plain, found)
     return look, background
@@ -305,9 +328,12 @@ def nearest_cube_texel(faces: np.ndarray, directions: np.ndarray) -> np.ndarray:
 def depth_capture(faces: np.ndarray, near: float, far: float) -> InverseDistance:
     """The :data:`InverseDistance` of a captured depth cube ``faces`` ``(6, n, n)`` (depth in
     [0, 1], row 0 at the top) sampled as the shader samples it (nearest texel)."""
+
     def inverse_distance(directions: np.ndarray) -> np.ndarray:
-        return inverse_distance_from_depth(nearest_cube_texel(faces, directions), directions,
-                                           near, far)
+        return inverse_distance_from_depth(
+            nearest_cube_texel(faces, directions), directions, near, far
+        )
+
     return inverse_distance
 
 
@@ -317,8 +343,10 @@ def box_distance(center, box_min, box_max) -> InverseDistance:
     center = np.asarray(center, dtype=np.float64)
 
     def inverse_distance(directions: np.ndarray) -> np.ndarray:
-        exit_distance = box_exit(np.broadcast_to(center, directions.shape), directions,
-                                 box_min, box_max)
+        exit_distance = box_exit(
+            np.broadcast_to(center, directions.shape), directions, box_min, box_max
+        )
         with np.errstate(divide="ignore"):
             return np.where(exit_distance > 0, 1 / exit_distance, 0.0)
+
     return inverse_distance

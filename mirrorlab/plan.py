@@ -79,8 +79,9 @@ class ContentKey:
     digest: int
 
     def __eq__(self, other: object) -> bool:
-        return isinstance(other, ContentKey) and (self is other or (
-            self.digest == other.digest and self.parts == other.parts))
+        return isinstance(other, ContentKey) and (
+            self is other or (self.digest == other.digest and self.parts == other.parts)
+        )
 
     def __hash__(self) -> int:
         return self.digest
@@ -92,10 +93,19 @@ class ContentKey:
 def content_key(scene: Scene, index: bounds.SceneIndex) -> ContentKey:
     """``scene``'s :class:`ContentKey` (``index`` is its scene index)."""
     background, ambient, lights, objects, reflectors, bounces = scene.content_key()
-    return ContentKey((background, ambient, lights, objects, reflectors, bounces),
-                      hash((bounds.hash_of(background), ambient, bounds.hash_of(lights),
-                            bounces, index.objects_part.digest,
-                            index.reflectors_part.digest)))
+    return ContentKey(
+        (background, ambient, lights, objects, reflectors, bounces),
+        hash(
+            (
+                bounds.hash_of(background),
+                ambient,
+                bounds.hash_of(lights),
+                bounces,
+                index.objects_part.digest,
+                index.reflectors_part.digest,
+            )
+        ),
+    )
 
 
 @dataclass(frozen=True)
@@ -125,15 +135,26 @@ class PlannedPass:
         return made
 
     def describe(self) -> str:
-        what = self.name if self.reflector is None else (
-            f"{self.name} {self.reflector} ({self.technique}, bounce {self.bounce}, "
-            f"for {self.for_view})")
+        what = (
+            self.name
+            if self.reflector is None
+            else (
+                f"{self.name} {self.reflector} ({self.technique}, bounce {self.bounce}, "
+                f"for {self.for_view})"
+            )
+        )
         return f"{'run ' if self.runs else 'skip'} {what}: {self.reason}"
 
     def as_dict(self) -> dict:
-        return {"pass": self.name, "runs": self.runs, "reason": self.reason,
-                "reflector": self.reflector, "technique": self.technique,
-                "bounce": self.bounce, "for": self.for_view}
+        return {
+            "pass": self.name,
+            "runs": self.runs,
+            "reason": self.reason,
+            "reflector": self.reflector,
+            "technique": self.technique,
+            "bounce": self.bounce,
+            "for": self.for_view,
+        }
 
 
 @dataclass(frozen=True)
@@ -184,13 +205,16 @@ class ViewPlan:
         hidden ones as ``hidden`` draws with their reasons."""
         if not len(self.hidden):
             return self.shown
-        hidden = {int(i): ReflectorDraw(self.reflectors[i], "hidden",
-                                        HIDDEN_REASONS[int(code)])
-                  for i, code in zip(self.hidden, self.hidden_codes, strict=True)}
+        hidden = {
+            int(i): ReflectorDraw(self.reflectors[i], "hidden", HIDDEN_REASONS[int(code)])
+            for i, code in zip(self.hidden, self.hidden_codes, strict=True)
+        }
         shown = iter(self.shown)
-        return tuple(hidden[i] if i in hidden else next(shown)
-                     for i, reflector in enumerate(self.reflectors)
-                     if reflector.name != self.excluded)
+        return tuple(
+            hidden[i] if i in hidden else next(shown)
+            for i, reflector in enumerate(self.reflectors)
+            if reflector.name != self.excluded
+        )
 
 
 @dataclass
@@ -225,14 +249,20 @@ class FramePlan:
 
     def describe(self) -> list[str]:
         lines = [p.describe() for p in self.passes]
-        lines += [f"     draw {d.reflector.name} in camera: {d.mode} ({d.reason})"
-                  for d in self.top.draws]
+        lines += [
+            f"     draw {d.reflector.name} in camera: {d.mode} ({d.reason})" for d in self.top.draws
+        ]
         return lines
 
 
-def plan_frame(scene: Scene, size: tuple[int, int], state: TextureState | None = None,
-               use_plan: bool = True, tiny_pixels: float = TINY_PIXELS,
-               view: View | None = None) -> FramePlan:
+def plan_frame(
+    scene: Scene,
+    size: tuple[int, int],
+    state: TextureState | None = None,
+    use_plan: bool = True,
+    tiny_pixels: float = TINY_PIXELS,
+    view: View | None = None,
+) -> FramePlan:
     """The passes for one frame of ``scene`` seen by its camera (or ``view``) at ``size``
     (width, height) pixels, given what ``state`` says the textures hold.
 
@@ -243,8 +273,11 @@ def plan_frame(scene: Scene, size: tuple[int, int], state: TextureState | None =
     ``tiny_pixels`` above 0 turns on the lossy rule: a reflector whose footprint may
     cover fewer pixels than that is drawn plain.
     """
-    return _plan(_Planner(scene, state or TextureState(), use_plan,
-                          tiny_pixels if use_plan else 0.0), size, view)
+    return _plan(
+        _Planner(scene, state or TextureState(), use_plan, tiny_pixels if use_plan else 0.0),
+        size,
+        view,
+    )
 
 
 def _plan(planner: _Planner, size: tuple[int, int], view: View | None) -> FramePlan:
@@ -257,8 +290,14 @@ def _plan(planner: _Planner, size: tuple[int, int], view: View | None) -> FrameP
 
 def _plan_fields(scene: Scene) -> tuple:
     """What of ``scene`` but its objects a plan is made from."""
-    return (scene.camera, scene.background, scene.ambient, scene.lights, scene.reflectors,
-            scene.max_bounces)
+    return (
+        scene.camera,
+        scene.background,
+        scene.ambient,
+        scene.lights,
+        scene.reflectors,
+        scene.max_bounces,
+    )
 
 
 def _shows_content(key: tuple) -> bool:
@@ -270,8 +309,10 @@ def _held_as_seen(state: TextureState, content: ContentKey) -> tuple:
     """What ``state`` holds as a planner sees it for a scene of ``content``: the keys
     of the textures, a capture's content given only as whether it is ``content``
     (the planner compares what it shows with that alone)."""
-    return tuple((slot, (*key[:3], key[3] == content) if _shows_content(key) else key)
-                 for slot, key in state.held.items())
+    return tuple(
+        (slot, (*key[:3], key[3] == content) if _shows_content(key) else key)
+        for slot, key in state.held.items()
+    )
 
 
 class _Planned(NamedTuple):
@@ -309,29 +350,46 @@ class PlanMemo:
         self._last: _Planned | None = None
         self.reused = False
 
-    def plan(self, scene: Scene, size: tuple[int, int], state: TextureState,
-             use_plan: bool = True, tiny_pixels: float = TINY_PIXELS) -> FramePlan:
+    def plan(
+        self,
+        scene: Scene,
+        size: tuple[int, int],
+        state: TextureState,
+        use_plan: bool = True,
+        tiny_pixels: float = TINY_PIXELS,
+    ) -> FramePlan:
         """The plan of a frame of ``scene`` at ``size``, given ``state``: the same as
         :func:`plan_frame`'s."""
         index = bounds.scene_index(scene)
         content = content_key(scene, index)
-        inputs = (size, use_plan, tiny_pixels, _plan_fields(scene),
-                  _held_as_seen(state, content))
+        inputs = (size, use_plan, tiny_pixels, _plan_fields(scene), _held_as_seen(state, content))
         last = self._last
-        if last is not None and last.inputs == inputs and (
-                last.placed == scene.objects if last.placed is not None
-                else last.reach is None or last.reach == _reach_key(index)):
-            plan = last.plan if last.content == content else _with_content(
-                last.plan, last.content, content)
+        if (
+            last is not None
+            and last.inputs == inputs
+            and (
+                last.placed == scene.objects
+                if last.placed is not None
+                else last.reach is None or last.reach == _reach_key(index)
+            )
+        ):
+            plan = (
+                last.plan
+                if last.content == content
+                else _with_content(last.plan, last.content, content)
+            )
             self._last = _Planned(inputs, content, plan, last.placed, last.reach)
             self.reused = True
             return plan
-        planner = _Planner(scene, state, use_plan, tiny_pixels if use_plan else 0.0,
-                           content)
+        planner = _Planner(scene, state, use_plan, tiny_pixels if use_plan else 0.0, content)
         plan = _plan(planner, size, None)
-        self._last = _Planned(inputs, content, plan,
-                              scene.objects if planner.geometry else None,
-                              _reach_key(index) if planner.reach_used else None)
+        self._last = _Planned(
+            inputs,
+            content,
+            plan,
+            scene.objects if planner.geometry else None,
+            _reach_key(index) if planner.reach_used else None,
+        )
         self.reused = False
         return plan
 
@@ -343,15 +401,26 @@ class PlanMemo:
 
 def _with_content(plan: FramePlan, old: ContentKey, new: ContentKey) -> FramePlan:
     """``plan`` with the content ``new`` in place of ``old`` in its capture keys."""
-    return FramePlan(tuple(
-        step.with_key((*step.key[:3], new))
-        if _shows_content(step.key) and step.key[3] == old
-        else step for step in plan.passes), plan.top)
+    return FramePlan(
+        tuple(
+            step.with_key((*step.key[:3], new))
+            if _shows_content(step.key) and step.key[3] == old
+            else step
+            for step in plan.passes
+        ),
+        plan.top,
+    )
 
 
 class _Planner:
-    def __init__(self, scene: Scene, state: TextureState, use_plan: bool,
-                 tiny_pixels: float, content: ContentKey | None = None) -> None:
+    def __init__(
+        self,
+        scene: Scene,
+        state: TextureState,
+        use_plan: bool,
+        tiny_pixels: float,
+        content: ContentKey | None = None,
+    ) -> None:
         self.scene = scene
         self.state = state
         self.held: dict[str, list[tuple[int, tuple]]] = {}  # state.held by reflector
@@ -371,8 +440,9 @@ class _Planner:
         self.assigned: dict[tuple[str, tuple], int] = {}  # this frame's (reflector, key) slots
         self.used: dict[str, set[int]] = {}
 
-    def plan_view(self, view: View, bounce: int, excluded: str | None,
-                  scissor: Rectangle | None = None) -> ViewPlan:
+    def plan_view(
+        self, view: View, bounce: int, excluded: str | None, scissor: Rectangle | None = None
+    ) -> ViewPlan:
         """How each reflector (but ``excluded``) is drawn in ``view``: which may show is
         decided for all at once (:func:`visibility`); only those are planned one by
         one."""
@@ -393,24 +463,34 @@ class _Planner:
             else:
                 shown.append(self.draw(reflector, view, bounce, footprint, scissor))
         hidden = (codes > EXCLUDED).nonzero()[0]
-        return ViewPlan(view, tuple(shown), excluded, reflectors, hidden, codes[hidden],
-                        scissor)
+        return ViewPlan(view, tuple(shown), excluded, reflectors, hidden, codes[hidden], scissor)
 
-    def draw(self, reflector: Reflector, view: View, bounce: int,
-             footprint: Footprint | None = None,
-             scissor: Rectangle | None = None) -> ReflectorDraw:
+    def draw(
+        self,
+        reflector: Reflector,
+        view: View,
+        bounce: int,
+        footprint: Footprint | None = None,
+        scissor: Rectangle | None = None,
+    ) -> ReflectorDraw:
         """How ``reflector``, which may show in ``view`` (its ``footprint`` there when
         known), is drawn there."""
         entry = technique(reflector.technique)
         if bounce <= 0:
-            return ReflectorDraw(reflector, "plain", "no bounces left: a plain surface",
-                                 footprint=footprint)
+            return ReflectorDraw(
+                reflector, "plain", "no bounces left: a plain surface", footprint=footprint
+            )
         if self.tiny_pixels > 0 and entry.texture != "static":
             area = (footprint or reflector_footprint(reflector, view)).pixels
             if area < self.tiny_pixels:
-                return ReflectorDraw(reflector, "plain", f"covers at most {area:.1f} pixels "
-                                     f"(under {self.tiny_pixels:g}; lossy): drawn plain, no "
-                                     f"capture", footprint=footprint)
+                return ReflectorDraw(
+                    reflector,
+                    "plain",
+                    f"covers at most {area:.1f} pixels "
+                    f"(under {self.tiny_pixels:g}; lossy): drawn plain, no "
+                    f"capture",
+                    footprint=footprint,
+                )
         if entry.draws_inline:
             assert isinstance(reflector, PlanarReflector)
             far = self.reach(view, reflector) if view.eye is not None else None
@@ -418,23 +498,32 @@ class _Planner:
             inner = scissor
             if glass is not None and self.use_plan:
                 inner = intersect(scissor, glass)
-            nested = self.plan_view(stencil_view(view, reflector, far), bounce - 1,
-                                    reflector.name, inner)
-            return ReflectorDraw(reflector, "stencil", "the mirrored world, drawn in place",
-                                 nested=nested, footprint=footprint)
+            nested = self.plan_view(
+                stencil_view(view, reflector, far), bounce - 1, reflector.name, inner
+            )
+            return ReflectorDraw(
+                reflector,
+                "stencil",
+                "the mirrored world, drawn in place",
+                nested=nested,
+                footprint=footprint,
+            )
         if entry.texture == "static":
             return ReflectorDraw(reflector, "map", "its static map", footprint=footprint)
         if entry.texture == "baked":
             assert isinstance(reflector, CurvedReflector)  # baked maps are curved techniques
             slot = self.bake(reflector, view)
-            return ReflectorDraw(reflector, "map", "its sphere map for this view", slot=slot,
-                                 footprint=footprint)
+            return ReflectorDraw(
+                reflector, "map", "its sphere map for this view", slot=slot, footprint=footprint
+            )
         slot, source = self.capture(reflector, view, bounce, footprint)
         if source is None:
-            return ReflectorDraw(reflector, "plain", "no capture camera from here",
-                                 footprint=footprint)
-        return ReflectorDraw(reflector, "texture", "its capture", slot=slot, source=source,
-                             footprint=footprint)
+            return ReflectorDraw(
+                reflector, "plain", "no capture camera from here", footprint=footprint
+            )
+        return ReflectorDraw(
+            reflector, "texture", "its capture", slot=slot, source=source, footprint=footprint
+        )
 
     # ------------------------------------------------------------- textures
 
@@ -467,9 +556,19 @@ class _Planner:
         if held and (reflector.name, key) in self.planned:
             return slot
         runs = not held
-        self.add(PlannedPass(
-            "bake", runs, reason if runs else "the map for this view is already made",
-            reflector.name, reflector.technique, 0, view.label, slot, key))
+        self.add(
+            PlannedPass(
+                "bake",
+                runs,
+                reason if runs else "the map for this view is already made",
+                reflector.name,
+                reflector.technique,
+                0,
+                view.label,
+                slot,
+                key,
+            )
+        )
         return slot
 
     def reach(self, view: View, reflector: PlanarReflector) -> float:
@@ -481,8 +580,9 @@ class _Planner:
         self.reach_used = True
         return bounds.reach(self.scene, eye)
 
-    def capture(self, reflector: Reflector, view: View, bounce: int,
-                footprint: Footprint | None = None) -> tuple[int, View | None]:
+    def capture(
+        self, reflector: Reflector, view: View, bounce: int, footprint: Footprint | None = None
+    ) -> tuple[int, View | None]:
         """Plan the capture ``reflector`` (seen in ``view`` with ``footprint``) needs at
         ``bounce``; its slot and the capture's (first) camera, None when it has none."""
         entry = technique(reflector.technique)
@@ -491,9 +591,12 @@ class _Planner:
             assert isinstance(reflector, PlanarReflector)
             texture_size = self.texture_size(reflector, view, footprint)
             if entry.capture_camera == "reflected":
-                camera = reflected_capture_view(view, reflector, texture_size,
-                                                self.reach(view, reflector)
-                                                if view.eye is not None else None)
+                camera = reflected_capture_view(
+                    view,
+                    reflector,
+                    texture_size,
+                    self.reach(view, reflector) if view.eye is not None else None,
+                )
                 if camera is None:
                     return 0, None
                 cameras = [camera]
@@ -511,27 +614,57 @@ class _Planner:
             scissors = [None] * len(cameras)
             key = ("fixed", bounce, (reflector.map_size,), self.own_content(reflector))
         else:
-            raise ValueError(f"technique {entry.name!r} has a texture of kind "
-                             f"{entry.texture!r} but no capture camera")
+            raise ValueError(
+                f"technique {entry.name!r} has a texture of kind "
+                f"{entry.texture!r} but no capture camera"
+            )
         slot, held = self.slot_for(reflector.name, key)
         source = cameras[0]
         if held and (reflector.name, key) in self.planned:
             return slot, source  # already captured earlier in this frame
         if held:
-            self.add(PlannedPass(
-                "capture", False, "nothing it shows changed since it was captured",
-                reflector.name, reflector.technique, bounce, view.label, slot, key))
+            self.add(
+                PlannedPass(
+                    "capture",
+                    False,
+                    "nothing it shows changed since it was captured",
+                    reflector.name,
+                    reflector.technique,
+                    bounce,
+                    view.label,
+                    slot,
+                    key,
+                )
+            )
             return slot, source
-        plans = tuple(self.plan_view(camera, bounce - 1, reflector.name, scissor)
-                      for camera, scissor in zip(cameras, scissors, strict=True))
-        reason = ("every pass runs (--no-plan)" if not self.use_plan
-                  else self.what_changed(reflector.name, key))
-        self.add(PlannedPass("capture", True, reason, reflector.name, reflector.technique,
-                             bounce, view.label, slot, key, plans))
+        plans = tuple(
+            self.plan_view(camera, bounce - 1, reflector.name, scissor)
+            for camera, scissor in zip(cameras, scissors, strict=True)
+        )
+        reason = (
+            "every pass runs (--no-plan)"
+            if not self.use_plan
+            else self.what_changed(reflector.name, key)
+        )
+        self.add(
+            PlannedPass(
+                "capture",
+                True,
+                reason,
+                reflector.name,
+                reflector.technique,
+                bounce,
+                view.label,
+                slot,
+                key,
+                plans,
+            )
+        )
         return slot, source
 
-    def texture_size(self, reflector: PlanarReflector, view: View,
-                     footprint: Footprint | None) -> tuple[int, int]:
+    def texture_size(
+        self, reflector: PlanarReflector, view: View, footprint: Footprint | None
+    ) -> tuple[int, int]:
         """The (width, height) of ``reflector``'s capture texture seen in ``view``: its
         ``texture_size`` square, the view's size when it gives none, or with
         ``"footprint"`` the size of the pixel rectangle its glass covers in ``view``,
@@ -560,9 +693,12 @@ class _Planner:
         background, ambient, lights, objects, reflectors, bounces = self.content.parts
         own = (replace(reflector, parallax=None), reflector.parallax.kind)
         mine = tuple(own if r.name == reflector.name else r for r in reflectors)
-        return ContentKey((background, ambient, lights, objects, mine, bounces),
-                          hash((background, ambient, lights, bounces,
-                                self.index.objects_part.digest, hash(mine))))
+        return ContentKey(
+            (background, ambient, lights, objects, mine, bounces),
+            hash(
+                (background, ambient, lights, bounces, self.index.objects_part.digest, hash(mine))
+            ),
+        )
 
     def what_changed(self, reflector: str, key: tuple) -> str:
         """Why a capture must run: what differs from the nearest capture its textures hold
@@ -577,8 +713,11 @@ class _Planner:
         else:
             what = "its texture's size changed" if moved else ""
         if changed:
-            what = f"{what} and the scene changed" if what else (
-                "the scene changed since the last capture")
+            what = (
+                f"{what} and the scene changed"
+                if what
+                else ("the scene changed since the last capture")
+            )
         return what or "its texture was used for another capture"
 
 
@@ -593,9 +732,15 @@ these are the reasons it cannot show, :data:`HIDDEN_REASONS`."""
 CORNER = EXCLUDED + len(OUTSIDE_REASONS)
 CURVED_OUT = CORNER + 1
 SCISSORED = CURVED_OUT + 1
-HIDDEN_REASONS = ("", BACK_REASON, "", *OUTSIDE_REASONS[1:],
-                  "out of view (past a corner of the view)", "out of view",
-                  "outside the part of the view that is ever seen (its scissor)")
+HIDDEN_REASONS = (
+    "",
+    BACK_REASON,
+    "",
+    *OUTSIDE_REASONS[1:],
+    "out of view (past a corner of the view)",
+    "out of view",
+    "outside the part of the view that is ever seen (its scissor)",
+)
 """The reason for each code of :func:`visibility`."""
 
 
@@ -605,8 +750,12 @@ VISIBILITY_KEPT = 256
 capture that follows nothing that moved, is not worked out again)."""
 
 
-def visibility(index: bounds.SceneIndex, view: View, excluded: str | None = None,
-               scissor: Rectangle | None = None) -> tuple[np.ndarray, dict[int, Footprint]]:
+def visibility(
+    index: bounds.SceneIndex,
+    view: View,
+    excluded: str | None = None,
+    scissor: Rectangle | None = None,
+) -> tuple[np.ndarray, dict[int, Footprint]]:
     """Whether each reflector of ``index`` can show in ``view``: a code for each
     (``(m,)`` int8: :data:`SHOWN`, :data:`BACK`, :data:`EXCLUDED` or a reason of
     :data:`HIDDEN_REASONS`) and the footprint (:func:`reflector_footprint`) of each that
@@ -637,25 +786,32 @@ def visibility(index: bounds.SceneIndex, view: View, excluded: str | None = None
     return found
 
 
-def _visibility(index: bounds.SceneIndex, view: View, excluded: str | None,
-                scissor: Rectangle | None) -> tuple[np.ndarray, dict[int, Footprint]]:
+def _visibility(
+    index: bounds.SceneIndex, view: View, excluded: str | None, scissor: Rectangle | None
+) -> tuple[np.ndarray, dict[int, Footprint]]:
     codes = np.zeros(len(index.reflectors), dtype=np.int8)
     orthographic = is_orthographic(view.projection)
-    sides = (-1.0, 1.0, -1.0, 1.0) if scissor is None else culling.scissor_bounds(
-        view.size, scissor)
+    sides = (
+        (-1.0, 1.0, -1.0, 1.0) if scissor is None else culling.scissor_bounds(view.size, scissor)
+    )
     if len(index.planar):
-        outside = culling.rows_outside(index.corner_rows, view.view_projection,
-                                       view.clip_plane, orthographic, sides)
+        outside = culling.rows_outside(
+            index.corner_rows, view.view_projection, view.clip_plane, orthographic, sides
+        )
         front = culling.facing(index.centers, index.normals, view.eye, view.forward)
-        codes[index.planar] = np.where(outside > 0, outside + EXCLUDED,
-                                       np.where(front, SHOWN, BACK))
+        codes[index.planar] = np.where(
+            outside > 0, outside + EXCLUDED, np.where(front, SHOWN, BACK)
+        )
     if len(index.curved):
-        inside = culling.spheres_in_view(index.sphere_centers, index.sphere_radii,
-                                         view.view_projection, view.clip_plane)
+        inside = culling.spheres_in_view(
+            index.sphere_centers, index.sphere_radii, view.view_projection, view.clip_plane
+        )
         if scissor is not None:
             inside &= culling.boxes_in_view(
-                index.sphere_centers, np.repeat(index.sphere_radii[:, None], 3, axis=1),
-                culling.scissor_planes(view.view_projection, view.size, scissor))
+                index.sphere_centers,
+                np.repeat(index.sphere_radii[:, None], 3, axis=1),
+                culling.scissor_planes(view.view_projection, view.size, scissor),
+            )
         codes[index.curved[~inside]] = CURVED_OUT
     if excluded is not None and excluded in index.names:
         codes[index.names[excluded]] = EXCLUDED
@@ -691,8 +847,9 @@ def reflector_footprint(reflector: Reflector, view: View) -> Footprint:
     mirror's quad clipped against the view volume and the view's clip plane, a curved
     reflector's bounding sphere by its projected ellipse. It errs large."""
     if isinstance(reflector, PlanarReflector):
-        return polygon_footprint(reflector.corner_array, view.view_projection, view.size,
-                                 view.clip_plane)
+        return polygon_footprint(
+            reflector.corner_array, view.view_projection, view.size, view.clip_plane
+        )
     center, radius = bounding_sphere(reflector)
     return sphere_footprint(center, radius, view.view, view.projection, view.size)
 
@@ -710,8 +867,9 @@ def glass_scissor(reflector: PlanarReflector, capture: View) -> Rectangle | None
     capture's oblique near plane), grown by :data:`GLASS_MARGIN`. None (all of it) when
     the glass has no footprint there. Kept for the last few captures (a still viewer's
     capture view is the same object every frame)."""
-    footprint = polygon_footprint(reflector.corner_array, capture.view_projection,
-                                  capture.size, depth=False)
+    footprint = polygon_footprint(
+        reflector.corner_array, capture.view_projection, capture.size, depth=False
+    )
     return footprint.rectangle(GLASS_MARGIN)
 
 

@@ -107,7 +107,7 @@ class RayImage:
             return self.pixels
         out = np.empty(self.image.shape, dtype=np.uint8)
         for top in range(0, len(out), 256):  # in bands: no full-size float temporaries
-            out[top:top + 256] = _to_uint8(self.image[top:top + 256])
+            out[top : top + 256] = _to_uint8(self.image[top : top + 256])
         return out
 
 
@@ -156,37 +156,51 @@ class RayScene:
     ray direction.
     """
 
-    def __init__(self, surfaces: Sequence[RaySurface],
-                 lights: Sequence[tuple[ArrayLike, ArrayLike]],
-                 ambient: float, background: Sequence[float] | Environment) -> None:
+    def __init__(
+        self,
+        surfaces: Sequence[RaySurface],
+        lights: Sequence[tuple[ArrayLike, ArrayLike]],
+        ambient: float,
+        background: Sequence[float] | Environment,
+    ) -> None:
         import trimesh
 
         if not surfaces:
             raise ValueError("a ray scene needs at least one surface")
         self.surfaces = list(surfaces)
-        self.lights = [(np.asarray(d, dtype=np.float64) / np.linalg.norm(d),
-                        np.asarray(c, dtype=np.float64)) for d, c in lights]
+        self.lights = [
+            (np.asarray(d, dtype=np.float64) / np.linalg.norm(d), np.asarray(c, dtype=np.float64))
+            for d, c in lights
+        ]
         self.ambient = float(ambient)
         self.background = background
         offsets = np.cumsum([0] + [len(s.vertices) for s in self.surfaces])
         vertices = np.vstack([s.vertices for s in self.surfaces])
         faces = np.vstack([s.faces + off for s, off in zip(self.surfaces, offsets, strict=False)])
         self._face_surface = np.concatenate(
-            [np.full(len(s.faces), i) for i, s in enumerate(self.surfaces)])
+            [np.full(len(s.faces), i) for i, s in enumerate(self.surfaces)]
+        )
         self._normals = np.vstack([s.normals for s in self.surfaces])
         self._uvs = np.vstack([s.uvs for s in self.surfaces])
         self._mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
         self._triangles = vertices[faces]
         self._faces = faces
         self._mip_chains: dict[int, MipChain] = {}
-        self._face_normals = np.cross(self._triangles[:, 1] - self._triangles[:, 0],
-                                      self._triangles[:, 2] - self._triangles[:, 0])
+        self._face_normals = np.cross(
+            self._triangles[:, 1] - self._triangles[:, 0],
+            self._triangles[:, 2] - self._triangles[:, 0],
+        )
         self._reflective = np.array([s.reflective for s in self.surfaces])
         self._backed = np.array([s.backing is not None for s in self.surfaces])
         self._texture_sizes = np.array(
-            [(0.0, 0.0) if s.texture is None or s.reflective
-             else (s.texture.shape[1], s.texture.shape[0]) for s in self.surfaces],
-            dtype=np.float64)
+            [
+                (0.0, 0.0)
+                if s.texture is None or s.reflective
+                else (s.texture.shape[1], s.texture.shape[0])
+                for s in self.surfaces
+            ],
+            dtype=np.float64,
+        )
         low, high = vertices.min(axis=0), vertices.max(axis=0)
         self._frame_origin = low
         self._frame_scale = _FRAME_SIZE / max(float(np.linalg.norm(high - low)), 1e-300)
@@ -194,8 +208,9 @@ class RayScene:
     def _escape(self, directions: np.ndarray) -> np.ndarray:
         if callable(self.background):
             return np.asarray(self.background(directions), dtype=np.float64)
-        return np.broadcast_to(np.asarray(self.background, dtype=np.float64),
-                               directions.shape).copy()
+        return np.broadcast_to(
+            np.asarray(self.background, dtype=np.float64), directions.shape
+        ).copy()
 
     def offset_points(self, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
         """``points`` ``(n, 3)`` moved off their surface along ``normals`` ``(n, 3)``
@@ -212,19 +227,25 @@ class RayScene:
         offset = np.where(near_zero, q + np.float32(_FLOAT_SCALE) * n, moved)
         return offset.astype(np.float64) / self._frame_scale + self._frame_origin
 
-    def trace(self, origins: np.ndarray, directions: np.ndarray,
-              bounces: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    def trace(
+        self, origins: np.ndarray, directions: np.ndarray, bounces: int = 1
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Colour ``(n, 3)`` seen along each ray, and ``(n,)`` bool: the ray's first hit is
         the front of a reflective surface. ``directions`` ``(n, 3)`` unit;
         ``bounces`` is how many reflections are followed (beyond that a mirror is a
         plain lit surface). Textures are read at level 0 (no footprint is known)."""
-        hits = self._resolve(np.asarray(origins, dtype=np.float64),
-                             np.asarray(directions, dtype=np.float64), bounces)
+        hits = self._resolve(
+            np.asarray(origins, dtype=np.float64), np.asarray(directions, dtype=np.float64), bounces
+        )
         return self._shade(hits, np.zeros(len(hits.surface))), hits.on_mirror
 
-    def _first_visible(self, origins: np.ndarray, directions: np.ndarray,
-                       spreads: np.ndarray | None, beyond: Callable[[np.ndarray], np.ndarray]
-                       | None) -> _Visible:
+    def _first_visible(
+        self,
+        origins: np.ndarray,
+        directions: np.ndarray,
+        spreads: np.ndarray | None,
+        beyond: Callable[[np.ndarray], np.ndarray] | None,
+    ) -> _Visible:
         """Each ray's first surface seen from its front (or a planar mirror's backing),
         passing through back faces; ``spreads`` ``(n, 4, 3)`` are its differentials,
         carried to that surface; ``beyond`` marks hit points past the far plane (those
@@ -238,8 +259,8 @@ class RayScene:
             if len(pending) == 0:
                 break
             faces, rays, points = self._mesh.ray.intersects_id(
-                origins[pending], directions[pending], multiple_hits=False,
-                return_locations=True)
+                origins[pending], directions[pending], multiple_hits=False, return_locations=True
+            )
             if len(rays) == 0:
                 break
             faces, local = np.asarray(faces), np.asarray(rays)
@@ -250,8 +271,9 @@ class RayScene:
             front = np.einsum("nd,nd->n", face_normals, incoming) < 0.0
             backed = self._backed[surface_ids]
             if spreads is not None:
-                spreads[rays] = _transfer(spreads[rays], points - origins[rays], incoming,
-                                          face_normals)
+                spreads[rays] = _transfer(
+                    spreads[rays], points - origins[rays], incoming, face_normals
+                )
             stops = front | backed
             if beyond is not None:
                 clipped = stops & beyond(points)
@@ -265,16 +287,22 @@ class RayScene:
                 through &= ~beyond(points)
             # Culled back faces: go on from just past them.
             unit_normals = face_normals[through] / np.linalg.norm(
-                face_normals[through], axis=1, keepdims=True)
+                face_normals[through], axis=1, keepdims=True
+            )
             origins[rays[through]] = self.offset_points(points[through], -unit_normals)
             pending = rays[through]
         if spreads is not None:
             seen.spreads = spreads
         return seen
 
-    def _resolve(self, origins: np.ndarray, directions: np.ndarray, bounces: int,
-                 spreads: np.ndarray | None = None,
-                 beyond: Callable[[np.ndarray], np.ndarray] | None = None) -> _Hits:
+    def _resolve(
+        self,
+        origins: np.ndarray,
+        directions: np.ndarray,
+        bounces: int,
+        spreads: np.ndarray | None = None,
+        beyond: Callable[[np.ndarray], np.ndarray] | None = None,
+    ) -> _Hits:
         """Follow each ray through up to ``bounces`` reflections to the surface it ends on;
         with ``spreads`` (its ray differentials ``(n, 4, 3)``) the texel footprint there
         too. ``beyond`` (primary rays only) marks points past the far plane."""
@@ -320,13 +348,20 @@ class RayScene:
         onward_spreads = None
         if seen.spreads is not None and derivatives is not None:
             onward_spreads = _reflect_spreads(
-                seen.spreads[rays[reflecting]], incoming, facing, along,
-                derivatives[reflecting], self._normals[corners[reflecting]], towards,
-                lengths[reflecting])
+                seen.spreads[rays[reflecting]],
+                incoming,
+                facing,
+                along,
+                derivatives[reflecting],
+                self._normals[corners[reflecting]],
+                towards,
+                lengths[reflecting],
+            )
         face_normals = self._face_normals[faces[reflecting]]
         leave = face_normals / np.linalg.norm(face_normals, axis=1, keepdims=True)
-        reflected, onward_spreads = self.onward(surface_ids[reflecting], leave, reflected,
-                                                onward_spreads)
+        reflected, onward_spreads = self.onward(
+            surface_ids[reflecting], leave, reflected, onward_spreads
+        )
         starts = self.offset_points(points[reflecting], leave)  # front faces: leave outward
         onward = self._resolve(starts, reflected, bounces - 1, onward_spreads)
         chosen = rays[reflecting]
@@ -334,16 +369,22 @@ class RayScene:
             getattr(hits, name)[chosen] = getattr(onward, name)
         return hits
 
-    def onward(self, surface_ids: np.ndarray, outward: np.ndarray, reflected: np.ndarray,
-               spreads: np.ndarray | None) -> tuple[np.ndarray, np.ndarray | None]:
+    def onward(
+        self,
+        surface_ids: np.ndarray,
+        outward: np.ndarray,
+        reflected: np.ndarray,
+        spreads: np.ndarray | None,
+    ) -> tuple[np.ndarray, np.ndarray | None]:
         """Where rays go on from the reflective surfaces ``surface_ids`` ``(n,)`` they met
         (``outward`` ``(n, 3)``: the faces' unit normals): the mirror reflections
         ``reflected`` ``(n, 3)`` with their differentials ``spreads``, as they are. A
         model of another kind of reflector (a test's) changes them here."""
         return reflected, spreads
 
-    def _texel_footprint(self, surface_ids: np.ndarray, corners: np.ndarray,
-                         derivatives: np.ndarray) -> np.ndarray:
+    def _texel_footprint(
+        self, surface_ids: np.ndarray, corners: np.ndarray, derivatives: np.ndarray
+    ) -> np.ndarray:
         """``(n,)``: how many texels of its texture the ray's pixel step covers at its hit
         (GL's rho: the longer of the x and y steps), from the barycentric derivatives
         ``(n, 2, 2)`` (``d(u, v)/d(x, y)`` of the hit's triangle coordinates)."""
@@ -371,8 +412,9 @@ class RayScene:
                 mine = mine & hits.plain
             if not mine.any():
                 continue
-            albedo = np.broadcast_to(np.asarray(surface.color, dtype=np.float64),
-                                     (int(mine.sum()), 3))
+            albedo = np.broadcast_to(
+                np.asarray(surface.color, dtype=np.float64), (int(mine.sum()), 3)
+            )
             if surface.texture is not None and not surface.reflective:
                 albedo = albedo * self._mipmaps(index).sample(hits.uv[mine], lod[mine])
             light = np.full((int(mine.sum()), 3), self.ambient)
@@ -389,8 +431,14 @@ class RayScene:
             chain = self._mip_chains[index] = MipChain(texture)
         return chain
 
-    def render(self, view: np.ndarray, projection: np.ndarray, size: Sequence[int],
-               bounces: int = 1, rows: tuple[int, int] | None = None) -> RayImage:
+    def render(
+        self,
+        view: np.ndarray,
+        projection: np.ndarray,
+        size: Sequence[int],
+        bounces: int = 1,
+        rows: tuple[int, int] | None = None,
+    ) -> RayImage:
         """Trace one ray through each pixel centre of a ``size`` (width, height) image seen
         through ``projection @ view`` (both ``(4, 4)``, the rasteriser's matrices); only
         the image rows ``rows`` = (first, end) when given (first even, so that each 2 x 2
@@ -404,8 +452,7 @@ class RayScene:
         width, full_height = (int(v) for v in size)
         first, end = rows if rows is not None else (0, full_height)
         if first % 2 or not 0 <= first < end <= full_height:
-            raise ValueError(f"rows must be (even first, end) within 0..{full_height}, "
-                             f"got {rows}")
+            raise ValueError(f"rows must be (even first, end) within 0..{full_height}, got {rows}")
         height = end - first
         matrix = np.asarray(projection, dtype=np.float64) @ np.asarray(view, dtype=np.float64)
         inverse = np.linalg.inv(matrix)
@@ -425,8 +472,10 @@ class RayScene:
         # helper pixel is), for the differentials.
         near_x, directions_x = rays(columns ^ 1, image_rows)
         near_y, directions_y = rays(columns, image_rows ^ 1)
-        spreads = np.stack([near_x - near, directions_x - directions,
-                            near_y - near, directions_y - directions], axis=1)
+        spreads = np.stack(
+            [near_x - near, directions_x - directions, near_y - near, directions_y - directions],
+            axis=1,
+        )
 
         def beyond(points: np.ndarray) -> np.ndarray:
             clip = np.column_stack([points, np.ones(len(points))]) @ matrix.T
@@ -436,12 +485,16 @@ class RayScene:
         hits = self._resolve(near, directions, bounces, spreads, beyond)
         lod = np.log2(np.maximum(hits.texels, 1.0))
         colors = self._shade(hits, lod)
-        return RayImage(colors.reshape(height, width, 3), hits.on_mirror.reshape(height, width),
-                        hits.first.reshape(height, width))
+        return RayImage(
+            colors.reshape(height, width, 3),
+            hits.on_mirror.reshape(height, width),
+            hits.first.reshape(height, width),
+        )
 
 
-def _transfer(spreads: np.ndarray, travelled: np.ndarray, directions: np.ndarray,
-              normals: np.ndarray) -> np.ndarray:
+def _transfer(
+    spreads: np.ndarray, travelled: np.ndarray, directions: np.ndarray, normals: np.ndarray
+) -> np.ndarray:
     """Ray differentials ``(n, 4, 3)`` (d origin / dx, d direction / dx, the same for y)
     carried along unit ``directions`` ``(n, 3)`` by ``travelled`` ``(n, 3)`` onto the
     plane with normal ``normals`` ``(n, 3)`` (Igehy's transfer): the origins' change
@@ -478,24 +531,36 @@ def _surface_derivatives(triangles: np.ndarray, spreads: np.ndarray) -> np.ndarr
     return out
 
 
-def _reflect_spreads(spreads: np.ndarray, incoming: np.ndarray, facing: np.ndarray,
-                     along: np.ndarray, derivatives: np.ndarray, corner_normals: np.ndarray,
-                     towards: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+def _reflect_spreads(
+    spreads: np.ndarray,
+    incoming: np.ndarray,
+    facing: np.ndarray,
+    along: np.ndarray,
+    derivatives: np.ndarray,
+    corner_normals: np.ndarray,
+    towards: np.ndarray,
+    lengths: np.ndarray,
+) -> np.ndarray:
     """The differentials ``(n, 4, 3)`` of the reflected rays: the hit point's change stays
     the origin's, the direction's change is ``dD - 2 ((dD.n) n + (D.n) dn)``, ``dn`` the
     change of the interpolated unit normal across the triangle (zero on a flat mirror:
     the corners' normals agree)."""
     out = spreads.copy()
-    edges = np.stack([corner_normals[:, 1] - corner_normals[:, 0],
-                      corner_normals[:, 2] - corner_normals[:, 0]], axis=1)  # (n, 2, 3)
+    edges = np.stack(
+        [corner_normals[:, 1] - corner_normals[:, 0], corner_normals[:, 2] - corner_normals[:, 0]],
+        axis=1,
+    )  # (n, 2, 3)
     for column, (origin, direction) in enumerate(((0, 1), (2, 3))):
         raw = np.einsum("nk,nkd->nd", derivatives[:, :, column], edges)
         raw_change = raw / lengths
-        change = (raw_change - np.einsum("nd,nd->n", raw_change, facing * towards)[:, None]
-                  * facing * towards) * towards
+        change = (
+            raw_change
+            - np.einsum("nd,nd->n", raw_change, facing * towards)[:, None] * facing * towards
+        ) * towards
         d_direction = spreads[:, direction]
         out[:, direction] = d_direction - 2.0 * (
-            np.einsum("nd,nd->n", d_direction, facing)[:, None] * facing + along * change)
+            np.einsum("nd,nd->n", d_direction, facing)[:, None] * facing + along * change
+        )
         out[:, origin] = spreads[:, origin]
     return out
 
@@ -512,8 +577,7 @@ class _Visible:
 
     @classmethod
     def none(cls, count: int, spreads: np.ndarray | None) -> _Visible:
-        return cls(np.full(count, -1), np.zeros((count, 3)), np.zeros(count, dtype=bool),
-                   None)
+        return cls(np.full(count, -1), np.zeros((count, 3)), np.zeros(count, dtype=bool), None)
 
 
 @dataclass
@@ -536,9 +600,17 @@ class _Hits:
     @classmethod
     def escaping(cls, directions: np.ndarray) -> _Hits:
         count = len(directions)
-        return cls(np.full(count, -1), np.zeros((count, 2)), np.zeros((count, 3)),
-                   directions.copy(), np.zeros(count, dtype=bool), np.zeros(count, dtype=bool),
-                   np.zeros(count, dtype=bool), np.full(count, -1), np.zeros(count))
+        return cls(
+            np.full(count, -1),
+            np.zeros((count, 2)),
+            np.zeros((count, 3)),
+            directions.copy(),
+            np.zeros(count, dtype=bool),
+            np.zeros(count, dtype=bool),
+            np.zeros(count, dtype=bool),
+            np.full(count, -1),
+            np.zeros(count),
+        )
 
 
 class MipChain:
@@ -597,24 +669,43 @@ def ray_scene(scene: Scene, model: type[RayScene] | None = None) -> RayScene:
     rays that escape; a ``model`` (a :class:`RayScene` subclass) in place of RayScene."""
     from mirrorlab.scene.robot import scene_parts
 
-    surfaces = [mesh_surface(part.mesh, part.model, color=part.color,
-                             texture=texture_picture(part.texture) if part.texture else None)
-                for part in scene_parts(scene)]
+    surfaces = [
+        mesh_surface(
+            part.mesh,
+            part.model,
+            color=part.color,
+            texture=texture_picture(part.texture) if part.texture else None,
+        )
+        for part in scene_parts(scene)
+    ]
     for reflector in scene.reflectors:
         if isinstance(reflector, PlanarReflector):
-            surfaces.append(RaySurface(
-                vertices=reflector.corner_array.copy(),
-                normals=np.broadcast_to(reflector.normal, (4, 3)).copy(),
-                uvs=reflector.texcoords(), faces=np.array([[0, 1, 2], [0, 2, 3]]),
-                color=reflector.color, reflective=True, backing=reflector.backing))
+            surfaces.append(
+                RaySurface(
+                    vertices=reflector.corner_array.copy(),
+                    normals=np.broadcast_to(reflector.normal, (4, 3)).copy(),
+                    uvs=reflector.texcoords(),
+                    faces=np.array([[0, 1, 2], [0, 2, 3]]),
+                    color=reflector.color,
+                    reflective=True,
+                    backing=reflector.backing,
+                )
+            )
         else:
             assert isinstance(reflector, CurvedReflector)
-            surfaces.append(mesh_surface(reflector.mesh, reflector.model_matrix(),
-                                         color=reflector.color, reflective=True))
-    lights = [(light.direction, np.asarray(light.color) * light.intensity)
-              for light in scene.lights]
-    background = (scene.background.color if not scene.background.is_environment
-                  else environment_of(scene.background))
+            surfaces.append(
+                mesh_surface(
+                    reflector.mesh, reflector.model_matrix(), color=reflector.color, reflective=True
+                )
+            )
+    lights = [
+        (light.direction, np.asarray(light.color) * light.intensity) for light in scene.lights
+    ]
+    background = (
+        scene.background.color
+        if not scene.background.is_environment
+        else environment_of(scene.background)
+    )
     return (model or RayScene)(surfaces, lights, scene.ambient, background)
 
 
@@ -622,10 +713,16 @@ TILE_RAYS = 1 << 17
 """Rays traced at once: the tracer's working memory grows with this, not the image."""
 
 
-def trace_scene(scene: Scene, size: Sequence[int], supersample: int = 1,
-                camera_view: np.ndarray | None = None,
-                projection: np.ndarray | None = None, progress: bool = False,
-                tile_rays: int = TILE_RAYS, model: type[RayScene] | None = None) -> RayImage:
+def trace_scene(
+    scene: Scene,
+    size: Sequence[int],
+    supersample: int = 1,
+    camera_view: np.ndarray | None = None,
+    projection: np.ndarray | None = None,
+    progress: bool = False,
+    tile_rays: int = TILE_RAYS,
+    model: type[RayScene] | None = None,
+) -> RayImage:
     """Ray-traced image and reflective mask of ``scene`` seen by its camera (or the given
     ``camera_view`` and ``projection``) at ``size`` (width, height), following
     ``scene.max_bounces`` reflections.
@@ -656,24 +753,50 @@ def trace_scene(scene: Scene, size: Sequence[int], supersample: int = 1,
     from tqdm import tqdm
 
     starts = range(0, height, band)
-    with tqdm(total=len(starts), desc="ray tracing", unit="band", disable=not progress,
-              leave=False, file=sys.stderr, mininterval=0.5) as bar:
+    with tqdm(
+        total=len(starts),
+        desc="ray tracing",
+        unit="band",
+        disable=not progress,
+        leave=False,
+        file=sys.stderr,
+        mininterval=0.5,
+    ) as bar:
         for top in starts:
-            _trace_band(rays, view, proj, scene.max_bounces, (width, height), k, top,
-                        min(top + band, height), first_reflector,
-                        (image, pixels, mask, reflector))
+            _trace_band(
+                rays,
+                view,
+                proj,
+                scene.max_bounces,
+                (width, height),
+                k,
+                top,
+                min(top + band, height),
+                first_reflector,
+                (image, pixels, mask, reflector),
+            )
             bar.update()
     return RayImage(image, mask, reflector, pixels)
 
 
-def _trace_band(rays: RayScene, view: np.ndarray, proj: np.ndarray, bounces: int,
-                size: tuple[int, int], k: int, top: int, bottom: int, first_reflector: int,
-                into: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]) -> None:
+def _trace_band(
+    rays: RayScene,
+    view: np.ndarray,
+    proj: np.ndarray,
+    bounces: int,
+    size: tuple[int, int],
+    k: int,
+    top: int,
+    bottom: int,
+    first_reflector: int,
+    into: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> None:
     """Trace image rows ``top`` to ``bottom`` (k x k rays a pixel) into the result arrays."""
     image, pixels, mask, reflector = into
     width, height = size
-    traced = rays.render(view, proj, (k * width, k * height), bounces=bounces,
-                         rows=(k * top, k * bottom))
+    traced = rays.render(
+        view, proj, (k * width, k * height), bounces=bounces, rows=(k * top, k * bottom)
+    )
     assert traced.reflector is not None
     rows = bottom - top
     surface = traced.reflector.reshape(rows, k, width, k)[:, k // 2, :, k // 2]

@@ -68,13 +68,13 @@ class FrameStats:
     @property
     def ran(self) -> list[str]:
         """``name`` or ``name:reflector`` of every pass that ran, in order."""
-        return [p.name if p.reflector is None else f"{p.name}:{p.reflector}"
-                for p in self.plan.ran]
+        return [p.name if p.reflector is None else f"{p.name}:{p.reflector}" for p in self.plan.ran]
 
     @property
     def skipped(self) -> list[str]:
-        return [p.name if p.reflector is None else f"{p.name}:{p.reflector}"
-                for p in self.plan.skipped]
+        return [
+            p.name if p.reflector is None else f"{p.name}:{p.reflector}" for p in self.plan.skipped
+        ]
 
 
 @dataclass(eq=False)
@@ -102,14 +102,18 @@ def _drawn_views(plan: FramePlan) -> Iterator[tuple[View, Rectangle | None]]:
     """Each view (with its scissor) the frame of ``plan`` draws the scene's objects in:
     the captures' cameras, the camera's view, and the worlds seen in stencil mirrors in
     any of them."""
-    pending = [view for step in plan.passes if step.runs and step.name != "camera"
-               for view in step.views]
+    pending = [
+        view for step in plan.passes if step.runs and step.name != "camera" for view in step.views
+    ]
     pending.append(plan.top)
     while pending:
         view_plan = pending.pop()
         yield view_plan.view, view_plan.scissor
-        pending += [draw.nested for draw in view_plan.shown
-                    if draw.mode == "stencil" and draw.nested is not None]
+        pending += [
+            draw.nested
+            for draw in view_plan.shown
+            if draw.mode == "stencil" and draw.nested is not None
+        ]
 
 
 def _pass_key(reflector: Reflector, background: Background) -> tuple:
@@ -123,10 +127,10 @@ def _pass_key(reflector: Reflector, background: Background) -> tuple:
         parallax = reflector.parallax
         still = replace(reflector, transform=Transform(), parallax=None)
         # a distance search looks up the rays that meet nothing in the background itself
-        baked = (technique(reflector.technique).texture in ("static", "baked")
-                 or isinstance(parallax, DistanceSearch))
-        return (still, None if parallax is None else parallax.kind,
-                background if baked else None)
+        baked = technique(reflector.technique).texture in ("static", "baked") or isinstance(
+            parallax, DistanceSearch
+        )
+        return (still, None if parallax is None else parallax.kind, background if baked else None)
     return (reflector, None, None)
 
 
@@ -143,8 +147,9 @@ class SceneRenderer:
     a replayed frame leaves out the calls that set state to the value the recorded frame
     found it at, so it counts on the last frame's state."""
 
-    def __init__(self, registry: ResourceRegistry, draw_path: DrawPath = "auto",
-                 own_context: bool = False) -> None:
+    def __init__(
+        self, registry: ResourceRegistry, draw_path: DrawPath = "auto", own_context: bool = False
+    ) -> None:
         self._gl_version = gl_version()
         self.registry = registry
         self.shared = SharedResources(registry)
@@ -201,8 +206,11 @@ class SceneRenderer:
         return self._sky
 
     def _use_scene(self, scene: Scene) -> None:
-        if (self._scene is not None and scene.reflectors is self._scene.reflectors
-                and scene.background == self._scene.background):
+        if (
+            self._scene is not None
+            and scene.reflectors is self._scene.reflectors
+            and scene.background == self._scene.background
+        ):
             self._scene = scene  # the same reflectors: the same passes
             return
         for reflector in scene.reflectors:
@@ -216,21 +224,34 @@ class SceneRenderer:
         GL.glDisable(GL.GL_SCISSOR_TEST)  # a pass made for a new scene draws unscissored
         names = {r.name: r for r in scene.reflectors}
         for name in list(self._passes):
-            if name not in names or self._passes[name][0] != _pass_key(names[name],
-                                                                       scene.background):
+            if name not in names or self._passes[name][0] != _pass_key(
+                names[name], scene.background
+            ):
                 self._drop(name)
         with gl_pass("background"):
             self._sky_for(scene.background)
 
     # ------------------------------------------------------------- frames
 
-    def plan(self, scene: Scene, size: tuple[int, int], use_plan: bool = True,
-             tiny_pixels: float = TINY_PIXELS, view: View | None = None) -> FramePlan:
+    def plan(
+        self,
+        scene: Scene,
+        size: tuple[int, int],
+        use_plan: bool = True,
+        tiny_pixels: float = TINY_PIXELS,
+        view: View | None = None,
+    ) -> FramePlan:
         """The plan the next frame of ``scene`` at ``size`` would run (nothing is drawn)."""
         return plan_frame(scene, size, self.state, use_plan, tiny_pixels, view)
 
-    def render(self, scene: Scene, target: RenderTarget, use_plan: bool = True,
-               tiny_pixels: float = TINY_PIXELS, view: View | None = None) -> FrameStats:
+    def render(
+        self,
+        scene: Scene,
+        target: RenderTarget,
+        use_plan: bool = True,
+        tiny_pixels: float = TINY_PIXELS,
+        view: View | None = None,
+    ) -> FrameStats:
         """Draw one frame of ``scene`` (as seen by its camera, or ``view``) into ``target``.
 
         ``use_plan`` False runs every pass (see :func:`~mirrorlab.plan.plan_frame`),
@@ -260,9 +281,13 @@ class SceneRenderer:
         recorded = self._recorded
         self._recorded = None
         key = (target, size, use_plan, tiny_pixels)
-        if (recorded is not None and self.memo.reused and recorded.key == key
-                and (recorded.found is found or recorded.found == found)
-                and self._replay(recorded, scene, plan, start)):
+        if (
+            recorded is not None
+            and self.memo.reused
+            and recorded.key == key
+            and (recorded.found is found or recorded.found == found)
+            and self._replay(recorded, scene, plan, start)
+        ):
             self._recorded = recorded
             assert self.last_frame is not None
             return self.last_frame
@@ -274,13 +299,18 @@ class SceneRenderer:
             views = tuple(_drawn_views(plan))
             objects = scene_index(scene).objects_part
             self._recorded = RecordedFrame(
-                key, found, objects, views, use_plan,
+                key,
+                found,
+                objects,
+                views,
+                use_plan,
                 self.drawer.follows_pose(objects, views, use_plan),
-                for_replay(recorder.calls, known_state(found)), stats)
+                for_replay(recorder.calls, known_state(found)),
+                stats,
+            )
         return stats
 
-    def _replay(self, recorded: RecordedFrame, scene: Scene, plan: FramePlan,
-                start: float) -> bool:
+    def _replay(self, recorded: RecordedFrame, scene: Scene, plan: FramePlan, start: float) -> bool:
         """Draw ``recorded``'s frame again for ``scene``, whose ``plan`` is the one it was
         drawn with but for what its captures show: False (nothing drawn) when the objects
         moved and its views see other parts of them, or its calls cannot follow them."""
@@ -288,7 +318,8 @@ class SceneRenderer:
         objects = index.objects_part
         if objects is not recorded.objects:
             if not recorded.follows_pose or not self.drawer.repose(
-                    recorded.objects, index, recorded.views, recorded.cull):
+                recorded.objects, index, recorded.views, recorded.cull
+            ):
                 return False
             recorded.objects = objects
         try:
@@ -302,14 +333,25 @@ class SceneRenderer:
             if step.runs and step.name != "camera":
                 self.state.record(step)
         stats = recorded.stats
-        self.last_frame = FrameStats(plan, stats.draw_calls,
-                                     (time.perf_counter() - start) * 1e3, stats.passes_run,
-                                     stats.parts_drawn)
+        self.last_frame = FrameStats(
+            plan,
+            stats.draw_calls,
+            (time.perf_counter() - start) * 1e3,
+            stats.passes_run,
+            stats.parts_drawn,
+        )
         return True
 
-    def _run(self, scene: Scene, plan: FramePlan, target: RenderTarget,
-             found: dict[str, object], start: float, use_plan: bool,
-             recorder: CallRecorder | None = None) -> FrameStats:
+    def _run(
+        self,
+        scene: Scene,
+        plan: FramePlan,
+        target: RenderTarget,
+        found: dict[str, object],
+        start: float,
+        use_plan: bool,
+        recorder: CallRecorder | None = None,
+    ) -> FrameStats:
         """Run the frame's plan: with ``recorder``, record its GL calls from the first
         pass on (the views' data, sent before, is not in them)."""
         self._scissor = None
@@ -328,8 +370,7 @@ class SceneRenderer:
                         assert step.reflector is not None
                         reflector = index.reflectors[index.names[step.reflector]]
                         with gl_pass(f"{step.name}:{step.reflector}"):
-                            draws += self._pass(reflector).update(step, reflector, self,
-                                                                  target)
+                            draws += self._pass(reflector).update(step, reflector, self, target)
                         self.state.record(step)
                     with gl_pass("camera"):
                         draws += self.draw_view(plan.top, target)
@@ -342,12 +383,18 @@ class SceneRenderer:
             raise
         finally:
             self.drawer.end_frame()
-        self.last_frame = FrameStats(plan, draws, (time.perf_counter() - start) * 1e3,
-                                     parts_drawn=self.drawer.parts_drawn)
+        self.last_frame = FrameStats(
+            plan, draws, (time.perf_counter() - start) * 1e3, parts_drawn=self.drawer.parts_drawn
+        )
         return self.last_frame
 
-    def draw_view(self, plan: ViewPlan, target: RenderTarget, stencil_level: int = 0,
-                  cleared: Rectangle | None = None) -> int:
+    def draw_view(
+        self,
+        plan: ViewPlan,
+        target: RenderTarget,
+        stencil_level: int = 0,
+        cleared: Rectangle | None = None,
+    ) -> int:
         """Draw ``plan``'s view into ``target``: the whole target at ``stencil_level`` 0
         (cleared first: all of it, or the pixel rectangle ``cleared`` alone, which must
         hold the view's scissor), else only where a stencil mirror marked that level.
@@ -362,8 +409,7 @@ class SceneRenderer:
             GL.glClearColor(*scene.background.color, 1.0)
             GL.glClearStencil(0)
             self._set_scissor(cleared)  # whatever is drawn, all of it is cleared
-            GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT
-                       | GL.GL_STENCIL_BUFFER_BIT)
+            GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT | GL.GL_STENCIL_BUFFER_BIT)
         # Only the pixels that matter are rasterised (a capture's glass, a stencil
         # mirror's): a scissor cannot change a pixel the plan says is ever seen.
         self._set_scissor(plan.scissor)

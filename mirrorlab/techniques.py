@@ -146,8 +146,9 @@ def technique(name: str) -> Technique:
     try:
         return _REGISTRY[name]
     except KeyError:
-        raise ValueError(f"unknown technique {name!r}; expected one of "
-                         f"{', '.join(_REGISTRY)}") from None
+        raise ValueError(
+            f"unknown technique {name!r}; expected one of {', '.join(_REGISTRY)}"
+        ) from None
 
 
 def frame_technique(name: object) -> Technique | None:
@@ -161,51 +162,119 @@ def names_where(test: Callable[[Technique], bool]) -> tuple[str, ...]:
     return tuple(t.name for t in _REGISTRY.values() if test(t))
 
 
-_SPHERE = dict(vertex_shader="envmap.vert", fragment_shader="envmap_sphere.frag",
-               sampler="sphere_map_texture", source="picture")
+_SPHERE: dict[str, Any] = dict(
+    vertex_shader="envmap.vert",
+    fragment_shader="envmap_sphere.frag",
+    sampler="sphere_map_texture",
+    source="picture",
+)
 for _entry in (
-    Technique("ortho", "planar", "the lab: an orthographic capture from the mirror, copied "
-              "into a texture", texture="fixed", pass_class="mirrorlab.passes.ortho:OrthoMirror",
-              capture_camera="ortho", own_camera=True),
-    Technique("reflected", "planar", "the viewer's mirror image renders the scene, sampled "
-              "projectively", texture="viewer",
-              pass_class="mirrorlab.passes.reflected:ReflectedMirror",
-              capture_camera="reflected"),
-    Technique("stencil", "planar", "the mirrored scene drawn straight into the frame through "
-              "a stencil mask", texture="inline",
-              pass_class="mirrorlab.passes.stencil:StencilMirror"),
-    Technique("sphere", "curved", "sphere map, looked up per fragment", texture="baked",
-              pass_class="mirrorlab.passes.envmap:SphereMapped",
-              constants=(("per_vertex", 0), ("texgen", 0)),
-              **_SPHERE),  # type: ignore[arg-type]
-    Technique("sphere-vertex", "curved", "sphere map, coordinates per vertex in a shader",
-              texture="baked", pass_class="mirrorlab.passes.envmap:SphereMapped",
-              constants=(("per_vertex", 1), ("texgen", 0)),
-              **_SPHERE),  # type: ignore[arg-type]
-    Technique("sphere-texgen", "curved", "sphere map by the textbook's GL_SPHERE_MAP texgen, "
-              "its formula per vertex in a shader", texture="baked",
-              pass_class="mirrorlab.passes.envmap:SphereMapped",
-              constants=(("per_vertex", 1), ("texgen", 1)),
-              **_SPHERE),  # type: ignore[arg-type]
-    Technique("cube", "curved", "static cube map, from six pictures or baked from the "
-              "background", texture="static", pass_class="mirrorlab.passes.envmap:CubeMapped",
-              vertex_shader="envmap.vert", fragment_shader="envmap_cube.frag",
-              sampler="cube_map_texture", source="faces", view_ray=True),
-    Technique("cube-live", "curved", "cube map captured live from the reflector's centre, six "
-              "passes; its lookups optionally corrected for parallax (box, sphere, distance "
-              "search)", texture="fixed", pass_class="mirrorlab.passes.cube_live:LiveCubeMapped",
-              vertex_shader="envmap.vert", fragment_shader="envmap_cube.frag",
-              sampler="cube_map_texture", capture_camera="cube", view_ray=True,
-              parallax=True),
-    Technique("latlong", "curved", "Blinn-Newell latitude-longitude map, per fragment",
-              texture="static", pass_class="mirrorlab.passes.envmap:LatlongMapped",
-              vertex_shader="envmap.vert", fragment_shader="envmap_latlong.frag",
-              sampler="latlong_texture", view_ray=True),
-    Technique("normal", "curved", "'demo style': the sphere map indexed by the eye-space "
-              "normal", texture="baked", pass_class="mirrorlab.passes.envmap:SphereMapped",
-              vertex_shader="envmap.vert", fragment_shader="envmap_normal.frag",
-              sampler="normal_map_texture", source="picture", map_size_uniform=True),
-    Technique("raytrace", "frame", "the ray-traced ground truth instead of OpenGL (slow)",
-              draw_frame="mirrorlab.raytrace:trace_frame"),
+    Technique(
+        "ortho",
+        "planar",
+        "the lab: an orthographic capture from the mirror, copied into a texture",
+        texture="fixed",
+        pass_class="mirrorlab.passes.ortho:OrthoMirror",
+        capture_camera="ortho",
+        own_camera=True,
+    ),
+    Technique(
+        "reflected",
+        "planar",
+        "the viewer's mirror image renders the scene, sampled projectively",
+        texture="viewer",
+        pass_class="mirrorlab.passes.reflected:ReflectedMirror",
+        capture_camera="reflected",
+    ),
+    Technique(
+        "stencil",
+        "planar",
+        "the mirrored scene drawn straight into the frame through a stencil mask",
+        texture="inline",
+        pass_class="mirrorlab.passes.stencil:StencilMirror",
+    ),
+    Technique(
+        "sphere",
+        "curved",
+        "sphere map, looked up per fragment",
+        texture="baked",
+        pass_class="mirrorlab.passes.envmap:SphereMapped",
+        constants=(("per_vertex", 0), ("texgen", 0)),
+        **_SPHERE,
+    ),
+    Technique(
+        "sphere-vertex",
+        "curved",
+        "sphere map, coordinates per vertex in a shader",
+        texture="baked",
+        pass_class="mirrorlab.passes.envmap:SphereMapped",
+        constants=(("per_vertex", 1), ("texgen", 0)),
+        **_SPHERE,
+    ),
+    Technique(
+        "sphere-texgen",
+        "curved",
+        "sphere map by the textbook's GL_SPHERE_MAP texgen, its formula per vertex in a shader",
+        texture="baked",
+        pass_class="mirrorlab.passes.envmap:SphereMapped",
+        constants=(("per_vertex", 1), ("texgen", 1)),
+        **_SPHERE,
+    ),
+    Technique(
+        "cube",
+        "curved",
+        "static cube map, from six pictures or baked from the background",
+        texture="static",
+        pass_class="mirrorlab.passes.envmap:CubeMapped",
+        vertex_shader="envmap.vert",
+        fragment_shader="envmap_cube.frag",
+        sampler="cube_map_texture",
+        source="faces",
+        view_ray=True,
+    ),
+    Technique(
+        "cube-live",
+        "curved",
+        "cube map captured live from the reflector's centre, six "
+        "passes; its lookups optionally corrected for parallax (box, sphere, distance "
+        "search)",
+        texture="fixed",
+        pass_class="mirrorlab.passes.cube_live:LiveCubeMapped",
+        vertex_shader="envmap.vert",
+        fragment_shader="envmap_cube.frag",
+        sampler="cube_map_texture",
+        capture_camera="cube",
+        view_ray=True,
+        parallax=True,
+    ),
+    Technique(
+        "latlong",
+        "curved",
+        "Blinn-Newell latitude-longitude map, per fragment",
+        texture="static",
+        pass_class="mirrorlab.passes.envmap:LatlongMapped",
+        vertex_shader="envmap.vert",
+        fragment_shader="envmap_latlong.frag",
+        sampler="latlong_texture",
+        view_ray=True,
+    ),
+    Technique(
+        "normal",
+        "curved",
+        "'demo style': the sphere map indexed by the eye-space normal",
+        texture="baked",
+        pass_class="mirrorlab.passes.envmap:SphereMapped",
+        vertex_shader="envmap.vert",
+        fragment_shader="envmap_normal.frag",
+        sampler="normal_map_texture",
+        source="picture",
+        map_size_uniform=True,
+    ),
+    Technique(
+        "raytrace",
+        "frame",
+        "the ray-traced ground truth instead of OpenGL (slow)",
+        draw_frame="mirrorlab.raytrace:trace_frame",
+    ),
 ):
     register(_entry)

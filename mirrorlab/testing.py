@@ -55,10 +55,14 @@ class _Session:
 
 def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("mirrorlab", "mirrorlab render tests")
-    group.addoption(UPDATE_OPTION, action="store_true", default=False,
-                    help="write the expected images that are missing or no longer match "
-                    "(assert_image_close with a file as the expected image), from what "
-                    "the tests rendered; those tests pass")
+    group.addoption(
+        UPDATE_OPTION,
+        action="store_true",
+        default=False,
+        help="write the expected images that are missing or no longer match "
+        "(assert_image_close with a file as the expected image), from what "
+        "the tests rendered; those tests pass",
+    )
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -85,8 +89,7 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo):
     return report
 
 
-def pytest_terminal_summary(terminalreporter, exitstatus: int,
-                            config: pytest.Config) -> None:
+def pytest_terminal_summary(terminalreporter, exitstatus: int, config: pytest.Config) -> None:
     if _Session.written:
         terminalreporter.section("mirrorlab: expected images written")
         for path, why in _Session.written:
@@ -145,9 +148,14 @@ def _update(path: Path, image: np.ndarray, why: str) -> None:
     _Session.written.append((path, why))
 
 
-def assert_image_close(actual: np.ndarray | str | Path, expected: np.ndarray | str | Path,
-                       tolerance: int = 2, fraction: float = 1.0,
-                       max_mean: float | None = None, name: str | None = None) -> None:
+def assert_image_close(
+    actual: np.ndarray | str | Path,
+    expected: np.ndarray | str | Path,
+    tolerance: int = 2,
+    fraction: float = 1.0,
+    max_mean: float | None = None,
+    name: str | None = None,
+) -> None:
     """Assert that two ``(h, w, 3)`` uint8 images (or PNG files) agree: at least
     ``fraction`` of the pixels have every channel within ``tolerance`` (0-255 scale), and,
     when given, the mean absolute channel difference is at most ``max_mean``.
@@ -167,32 +175,45 @@ def assert_image_close(actual: np.ndarray | str | Path, expected: np.ndarray | s
             _update(expected_file, actual_image, "new")
             return
         folder = save_images(label, actual=actual_image)
-        raise ImageMismatch(f"{label}: no expected image {expected_file}; run pytest "
-                            f"{UPDATE_OPTION} to write it from this run",
-                            {"actual": folder / f"{label}_actual.png"})
+        raise ImageMismatch(
+            f"{label}: no expected image {expected_file}; run pytest "
+            f"{UPDATE_OPTION} to write it from this run",
+            {"actual": folder / f"{label}_actual.png"},
+        )
     expected_image = _as_image(expected, "expected")
     if actual_image.shape != expected_image.shape:
         if _Session.update and expected_file is not None:
             _update(expected_file, actual_image, "replaced: another size")
             return
         folder = save_images(label, actual=actual_image, expected=expected_image)
-        raise ImageMismatch(f"{label}: image shape {actual_image.shape} differs from the "
-                            f"expected {expected_image.shape}",
-                            {key: folder / f"{label}_{key}.png"
-                             for key in ("actual", "expected")})
+        raise ImageMismatch(
+            f"{label}: image shape {actual_image.shape} differs from the "
+            f"expected {expected_image.shape}",
+            {key: folder / f"{label}_{key}.png" for key in ("actual", "expected")},
+        )
     diff = np.abs(actual_image.astype(np.int16) - expected_image.astype(np.int16))
     within = float(np.mean(diff.max(axis=-1) <= tolerance))
     mean = float(diff.mean())
     if within < fraction or (max_mean is not None and mean > max_mean):
         bound = "" if max_mean is None else f" (max {max_mean})"
         against = f" against {expected_file}" if expected_file is not None else ""
-        summary = (f"{label}: {within:.4%} of pixels within {tolerance}/255{against} (need "
-                   f"{fraction:.2%}), mean difference {mean:.3f}/255{bound}")
+        summary = (
+            f"{label}: {within:.4%} of pixels within {tolerance}/255{against} (need "
+            f"{fraction:.2%}), mean difference {mean:.3f}/255{bound}"
+        )
         if _Session.update and expected_file is not None:
-            _update(expected_file, actual_image, f"replaced: {within:.2%} of pixels were "
-                    f"within {tolerance}/255")
+            _update(
+                expected_file,
+                actual_image,
+                f"replaced: {within:.2%} of pixels were within {tolerance}/255",
+            )
             return
-        folder = save_images(label, actual=actual_image, expected=expected_image,
-                             diff=difference_image(actual_image, expected_image))
-        raise ImageMismatch(summary, {key: folder / f"{label}_{key}.png"
-                                      for key in ("actual", "expected", "diff")})
+        folder = save_images(
+            label,
+            actual=actual_image,
+            expected=expected_image,
+            diff=difference_image(actual_image, expected_image),
+        )
+        raise ImageMismatch(
+            summary, {key: folder / f"{label}_{key}.png" for key in ("actual", "expected", "diff")}
+        )

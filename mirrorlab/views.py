@@ -85,9 +85,16 @@ class View:
         tests = self._cull_tests
         held = tests.get(scissor)
         if held is None:
-            planes = self.cull_planes if scissor is None else np.vstack(
-                [self.cull_planes, culling.scissor_planes(self.view_projection, self.size,
-                                                          scissor)])
+            planes = (
+                self.cull_planes
+                if scissor is None
+                else np.vstack(
+                    [
+                        self.cull_planes,
+                        culling.scissor_planes(self.view_projection, self.size, scissor),
+                    ]
+                )
+            )
             held = math3d.read_only(culling.plane_test(planes))
             if len(tests) >= CULL_TESTS_KEPT:
                 del tests[next(iter(tests))]
@@ -135,16 +142,22 @@ class View:
     @cached_property
     def relative_view(self) -> np.ndarray:
         """``(4, 4)``: the rigid :attr:`view` for points relative to :attr:`origin`."""
-        return math3d.read_only(np.asarray(self.view, dtype=np.float64)
-                                @ math3d.translate(self.origin))
+        return math3d.read_only(
+            np.asarray(self.view, dtype=np.float64) @ math3d.translate(self.origin)
+        )
 
     @cached_property
     def draw_key(self) -> tuple:
         """Equal for views that draw the same way, exactly (matrices, origin, clip plane,
         size): what a recorded draw of the view is kept by."""
         clip = None if self.clip_plane is None else np.asarray(self.clip_plane).tobytes()
-        return (np.asarray(self.view).tobytes(), np.asarray(self.projection).tobytes(),
-                self.origin.tobytes(), clip, self.size)
+        return (
+            np.asarray(self.view).tobytes(),
+            np.asarray(self.projection).tobytes(),
+            self.origin.tobytes(),
+            clip,
+            self.size,
+        )
 
     def relative(self, model: np.ndarray) -> np.ndarray:
         """``model`` ``(4, 4)`` (object to world) composed in float64 with the move to
@@ -167,8 +180,12 @@ class View:
     def key(self) -> tuple:
         """Equal for views that draw the same picture (for reusing captures)."""
         clip = () if self.clip_plane is None else tuple(_rounded(self.clip_plane))
-        return (tuple(_rounded(self.view).ravel()), tuple(_rounded(self.projection).ravel()),
-                self.size, clip)
+        return (
+            tuple(_rounded(self.view).ravel()),
+            tuple(_rounded(self.projection).ravel()),
+            self.size,
+            clip,
+        )
 
     @property
     def aspect(self) -> float:
@@ -200,12 +217,10 @@ def _rounded(array: np.ndarray) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=64)
-def _camera_matrices(camera: Camera, aspect: float) -> tuple[np.ndarray, np.ndarray,
-                                                              np.ndarray]:
+def _camera_matrices(camera: Camera, aspect: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``camera``'s view, projection and eye, worked out once (a still camera is the same
     every frame); read-only, as every caller shares them."""
-    matrices = (camera.view(), camera.projection(aspect),
-                np.asarray(camera.eye, dtype=np.float64))
+    matrices = (camera.view(), camera.projection(aspect), np.asarray(camera.eye, dtype=np.float64))
     for matrix in matrices:
         matrix.flags.writeable = False
     return matrices
@@ -221,8 +236,14 @@ def camera_view(camera: Camera, size: tuple[int, int], label: str = "camera") ->
 @functools.lru_cache(maxsize=64)
 def _camera_view(camera: Camera, size: tuple[int, int], label: str) -> View:
     view, projection, eye = _camera_matrices(camera, size[0] / size[1])
-    return View(view=view, projection=projection, size=size, eye=eye, label=label,
-                depth_range=camera.depth_range)
+    return View(
+        view=view,
+        projection=projection,
+        size=size,
+        eye=eye,
+        label=label,
+        depth_range=camera.depth_range,
+    )
 
 
 def eye_position(view: np.ndarray) -> np.ndarray:
@@ -256,8 +277,9 @@ def _mirror_of(view: View, reflector: PlanarReflector) -> tuple[np.ndarray, np.n
     return mirrored, mirrored_eye(view, reflector)
 
 
-def _reaching(projection: np.ndarray, view: View, far: float | None
-              ) -> tuple[np.ndarray, tuple[float, float] | None]:
+def _reaching(
+    projection: np.ndarray, view: View, far: float | None
+) -> tuple[np.ndarray, tuple[float, float] | None]:
     """``projection`` (of a view derived from ``view``) with its far plane moved to ``far``
     (a perspective one, when ``far`` is given; its near is ``view``'s), and the range."""
     if far is None or view.depth_range is None or is_orthographic(projection):
@@ -266,9 +288,12 @@ def _reaching(projection: np.ndarray, view: View, far: float | None
     return math3d.with_depth_range(projection, near, far), (near, far)
 
 
-def reflected_capture_view(view: View, reflector: PlanarReflector,
-                           size: tuple[int, int] | None = None,
-                           far: float | None = None) -> View | None:
+def reflected_capture_view(
+    view: View,
+    reflector: PlanarReflector,
+    size: tuple[int, int] | None = None,
+    far: float | None = None,
+) -> View | None:
     """The capture camera of a ``reflected`` mirror for ``view``: the view reflected in the
     mirror's plane, its far plane at ``far`` (default: ``view``'s) and its near plane moved
     onto the glass (Lengyel's oblique projection), drawn at ``size`` (default:
@@ -278,14 +303,18 @@ def reflected_capture_view(view: View, reflector: PlanarReflector,
     :class:`View` object for the same view, mirror, size and far plane: a still viewer's
     capture camera is worked out once.
     """
-    return _reflected_capture_view(view, reflector,
-                                   None if size is None else (int(size[0]), int(size[1])),
-                                   None if far is None else float(far))
+    return _reflected_capture_view(
+        view,
+        reflector,
+        None if size is None else (int(size[0]), int(size[1])),
+        None if far is None else float(far),
+    )
 
 
 @functools.lru_cache(maxsize=64)
-def _reflected_capture_view(view: View, reflector: PlanarReflector,
-                            size: tuple[int, int] | None, far: float | None) -> View | None:
+def _reflected_capture_view(
+    view: View, reflector: PlanarReflector, size: tuple[int, int] | None, far: float | None
+) -> View | None:
     plane = reflector.plane
     rigid, eye = _mirror_of(view, reflector)
     # Flip clip-space x back as well: the capture keeps view's winding, and x runs the
@@ -298,9 +327,15 @@ def _reflected_capture_view(view: View, reflector: PlanarReflector,
         return None
     if not np.all(np.isfinite(projection)):
         return None
-    return View(view=rigid, projection=projection, size=size or view.size, eye=eye,
-                label=f"{reflector.name} seen from {view.label}", mirrored=view.mirrored,
-                depth_range=depth_range)
+    return View(
+        view=rigid,
+        projection=projection,
+        size=size or view.size,
+        eye=eye,
+        label=f"{reflector.name} seen from {view.label}",
+        mirrored=view.mirrored,
+        depth_range=depth_range,
+    )
 
 
 def stencil_view(view: View, reflector: PlanarReflector, far: float | None = None) -> View:
@@ -315,10 +350,16 @@ def stencil_view(view: View, reflector: PlanarReflector, far: float | None = Non
 def _stencil_view(view: View, reflector: PlanarReflector, far: float | None) -> View:
     rigid, eye = _mirror_of(view, reflector)
     projection, depth_range = _reaching(view.projection @ _FLIP_X, view, far)
-    return View(view=rigid, projection=projection, size=view.size, eye=eye,
-                label=f"{reflector.name} (stencil) in {view.label}",
-                mirrored=not view.mirrored, clip_plane=reflector.plane,
-                depth_range=depth_range)
+    return View(
+        view=rigid,
+        projection=projection,
+        size=view.size,
+        eye=eye,
+        label=f"{reflector.name} (stencil) in {view.label}",
+        mirrored=not view.mirrored,
+        clip_plane=reflector.plane,
+        depth_range=depth_range,
+    )
 
 
 @functools.lru_cache(maxsize=64)
@@ -334,19 +375,20 @@ def ortho_capture_view(reflector: PlanarReflector, size: tuple[int, int]) -> Vie
     """The ``ortho`` technique's capture camera (the lab's pass 1) on a ``size`` target
     (one :class:`View` object for the same capture, size and name, as
     :func:`camera_view`)."""
-    return _ortho_capture_view(reflector.ortho_capture, (int(size[0]), int(size[1])),
-                               reflector.name)
+    return _ortho_capture_view(
+        reflector.ortho_capture, (int(size[0]), int(size[1])), reflector.name
+    )
 
 
 @functools.lru_cache(maxsize=64)
 def _ortho_capture_view(capture: OrthoCapture, size: tuple[int, int], name: str) -> View:
     view, projection = _ortho_matrices(capture)
-    return View(view=view, projection=projection, size=size, eye=None,
-                label=f"{name} ortho capture")
+    return View(
+        view=view, projection=projection, size=size, eye=None, label=f"{name} ortho capture"
+    )
 
 
-def cube_face_views(reflector: CurvedReflector,
-                    depth_range: tuple[float, float]) -> list[View]:
+def cube_face_views(reflector: CurvedReflector, depth_range: tuple[float, float]) -> list[View]:
     """The six 90-degree views of a live cube map from the reflector's capture centre,
     with clip distances ``depth_range`` (near, far; see
     :func:`mirrorlab.bounds.cube_depth_range`)."""
@@ -357,7 +399,14 @@ def cube_face_views(reflector: CurvedReflector,
     views = []
     for name, (direction, up) in zip(CUBE_FACE_NAMES, CUBE_FACES, strict=True):
         view = math3d.look_at(center, center + np.asarray(direction), up)
-        views.append(View(view=view, projection=projection, size=size, eye=center,
-                          label=f"{reflector.name} cube {name}",
-                          depth_range=(float(near), float(far))))
+        views.append(
+            View(
+                view=view,
+                projection=projection,
+                size=size,
+                eye=center,
+                label=f"{reflector.name} cube {name}",
+                depth_range=(float(near), float(far)),
+            )
+        )
     return views

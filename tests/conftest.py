@@ -11,7 +11,10 @@ from hypothesis import HealthCheck, settings
 # wall clock, which a loaded machine can break. Correctness is what the tests check.
 # In CI the examples are derived from each test's name (derandomize), so a run is
 # repeatable; elsewhere they are random, so that every local run explores new inputs.
-settings.register_profile("mirrorlab", deadline=None,
-                          suppress_health_check=[HealthCheck.too_slow],
-                          derandomize=bool(os.environ.get("CI")))
+settings.register_profile(
+    "mirrorlab",
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow],
+    derandomize=bool(os.environ.get("CI")),
+)
 settings.load_profile("mirrorlab")

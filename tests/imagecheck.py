@@ -27,7 +27,7 @@ def red_dominant(pixels: np.ndarray) -> np.ndarray:
 def near(image: np.ndarray, xy: np.ndarray, radius: int = 2) -> np.ndarray:
     """The ``(2r+1, 2r+1, 3)`` patch of ``image`` around pixel ``xy`` (x right, y down)."""
     x, y = (int(np.floor(v)) for v in xy[:2])
-    return image[max(y - radius, 0): y + radius + 1, max(x - radius, 0): x + radius + 1]
+    return image[max(y - radius, 0) : y + radius + 1, max(x - radius, 0) : x + radius + 1]
 
 
 def viewer_matrix(camera: Camera, width: int, height: int) -> np.ndarray:
@@ -54,12 +54,14 @@ def mirror_point_at(mirror: PlanarReflector, s: float, t: float) -> np.ndarray:
     return c[0] + s * (c[3] - c[0]) + t * (c[1] - c[0])
 
 
-def mirror_mask(mirror: PlanarReflector, camera: Camera, width: int, height: int,
-                inset_px: float = 2.0) -> np.ndarray:
+def mirror_mask(
+    mirror: PlanarReflector, camera: Camera, width: int, height: int, inset_px: float = 2.0
+) -> np.ndarray:
     """``(h, w)`` bool: pixel centres inside the projected mirror quad, at least ``inset_px``
     from its edges."""
-    corners = math3d.project_to_pixels(viewer_matrix(camera, width, height),
-                                       mirror.corner_array, width, height)[:, :2]
+    corners = math3d.project_to_pixels(
+        viewer_matrix(camera, width, height), mirror.corner_array, width, height
+    )[:, :2]
     ys, xs = np.mgrid[0:height, 0:width] + 0.5
     inside = np.ones((height, width), bool)
     edge_a, edge_b = corners[1] - corners[0], corners[2] - corners[0]
@@ -77,17 +79,22 @@ def save_failure(name: str, **images: np.ndarray) -> Path:
     return save_images(name, **images)
 
 
-def assert_images_close(name: str, actual: np.ndarray, expected: np.ndarray,
-                        channel_tolerance: int, min_fraction_within: float,
-                        max_mean_abs: float) -> None:
+def assert_images_close(
+    name: str,
+    actual: np.ndarray,
+    expected: np.ndarray,
+    channel_tolerance: int,
+    min_fraction_within: float,
+    max_mean_abs: float,
+) -> None:
     """Tolerant image comparison (:func:`mirrorlab.testing.assert_image_close`); on failure
     writes actual, expected and diff PNGs."""
-    assert_image_close(actual, expected, channel_tolerance, min_fraction_within,
-                       max_mean_abs, name)
+    assert_image_close(actual, expected, channel_tolerance, min_fraction_within, max_mean_abs, name)
 
 
-def share_within(actual: np.ndarray, expected: np.ndarray, mask: np.ndarray,
-                 channel_tolerance: int) -> float:
+def share_within(
+    actual: np.ndarray, expected: np.ndarray, mask: np.ndarray, channel_tolerance: int
+) -> float:
     """Share of the pixels under ``mask`` ``(h, w)`` whose every channel is within
     ``channel_tolerance`` (0-255 scale); 1.0 for an empty mask."""
     if not mask.any():
@@ -96,9 +103,14 @@ def share_within(actual: np.ndarray, expected: np.ndarray, mask: np.ndarray,
     return float(np.mean(diff[mask] <= channel_tolerance))
 
 
-def assert_region_close(name: str, actual: np.ndarray, expected: np.ndarray,
-                        mask: np.ndarray, channel_tolerance: int,
-                        min_fraction_within: float) -> float:
+def assert_region_close(
+    name: str,
+    actual: np.ndarray,
+    expected: np.ndarray,
+    mask: np.ndarray,
+    channel_tolerance: int,
+    min_fraction_within: float,
+) -> float:
     """Like :func:`assert_images_close` but only over ``mask``; the diff image written on
     failure shows the masked region only. Returns the share within."""
     within = share_within(actual, expected, mask, channel_tolerance)
@@ -107,5 +119,6 @@ def assert_region_close(name: str, actual: np.ndarray, expected: np.ndarray,
         folder = save_failure(name, actual=actual, expected=expected, diff=masked)
         raise AssertionError(
             f"{name}: {within:.4%} of {int(mask.sum())} region pixels within "
-            f"{channel_tolerance}/255 (need {min_fraction_within:.2%}); images in {folder}")
+            f"{channel_tolerance}/255 (need {min_fraction_within:.2%}); images in {folder}"
+        )
     return within

@@ -26,7 +26,7 @@ PANEL_MESH = data_path("models") / "panel.obj"
 
 
 def _affine(point, scale: float, offset) -> tuple[float, float, float]:
-    x, y, z = (np.asarray(point, dtype=np.float64) * scale + np.asarray(offset, dtype=float))
+    x, y, z = np.asarray(point, dtype=np.float64) * scale + np.asarray(offset, dtype=float)
     return (float(x), float(y), float(z))
 
 
@@ -34,31 +34,53 @@ def transformed(scene: Scene, scale: float = 1.0, offset=(0.0, 0.0, 0.0)) -> Sce
     """``scene`` with every position scaled by ``scale`` about the origin, then moved by
     ``offset`` ``(3,)``: camera (and its near and far), objects, reflectors, an ortho
     capture and parallax proxies alike. Lights are directions and stay."""
+
     def point(p):
         return _affine(p, scale, offset)
 
     camera = scene.camera
-    camera = replace(camera, eye=point(camera.eye), target=point(camera.target),
-                     near=camera.near * scale, far=camera.far * scale)
+    camera = replace(
+        camera,
+        eye=point(camera.eye),
+        target=point(camera.target),
+        near=camera.near * scale,
+        far=camera.far * scale,
+    )
     objects = []
     for item in scene.objects:
         transform = item.transform
-        objects.append(replace(item, transform=replace(
-            transform, position=point(transform.position),
-            scale=tuple(float(s) * scale for s in transform.scale))))
+        objects.append(
+            replace(
+                item,
+                transform=replace(
+                    transform,
+                    position=point(transform.position),
+                    scale=tuple(float(s) * scale for s in transform.scale),
+                ),
+            )
+        )
     reflectors = []
     for reflector in scene.reflectors:
         if isinstance(reflector, PlanarReflector):
             ortho = reflector.ortho
             if ortho is not None:
                 left, right, bottom, top, near, far = ortho.extents
-                ortho = OrthoCapture(eye=point(ortho.eye), target=point(ortho.target),
-                                     up=ortho.up, extents=(left * scale, right * scale,
-                                                           bottom * scale, top * scale,
-                                                           near * scale, far * scale))
-            reflectors.append(replace(reflector, corners=tuple(point(c) for c in
-                                                               reflector.corners),
-                                      ortho=ortho))
+                ortho = OrthoCapture(
+                    eye=point(ortho.eye),
+                    target=point(ortho.target),
+                    up=ortho.up,
+                    extents=(
+                        left * scale,
+                        right * scale,
+                        bottom * scale,
+                        top * scale,
+                        near * scale,
+                        far * scale,
+                    ),
+                )
+            reflectors.append(
+                replace(reflector, corners=tuple(point(c) for c in reflector.corners), ortho=ortho)
+            )
             continue
         assert isinstance(reflector, CurvedReflector)
         transform = reflector.transform
@@ -67,11 +89,20 @@ def transformed(scene: Scene, scale: float = 1.0, offset=(0.0, 0.0, 0.0)) -> Sce
             parallax = BoxProxy(point(parallax.min), point(parallax.max))
         elif isinstance(parallax, SphereProxy):
             parallax = SphereProxy(parallax.radius * scale)
-        reflectors.append(replace(reflector, parallax=parallax, transform=replace(
-            transform, position=point(transform.position),
-            scale=tuple(float(s) * scale for s in transform.scale))))
-    return replace(scene, camera=camera, objects=tuple(objects), reflectors=tuple(reflectors),
-                   animation=None)
+        reflectors.append(
+            replace(
+                reflector,
+                parallax=parallax,
+                transform=replace(
+                    transform,
+                    position=point(transform.position),
+                    scale=tuple(float(s) * scale for s in transform.scale),
+                ),
+            )
+        )
+    return replace(
+        scene, camera=camera, objects=tuple(objects), reflectors=tuple(reflectors), animation=None
+    )
 
 
 def quad(center, normal, up, width: float, height: float) -> tuple:
@@ -85,30 +116,56 @@ def quad(center, normal, up, width: float, height: float) -> tuple:
     up = up / np.linalg.norm(up)
     right = np.cross(normal, up)
     w, h = width / 2.0, height / 2.0
-    corners = (center - w * right - h * up, center - w * right + h * up,
-               center + w * right + h * up, center + w * right - h * up)
+    corners = (
+        center - w * right - h * up,
+        center - w * right + h * up,
+        center + w * right + h * up,
+        center + w * right - h * up,
+    )
     return tuple(tuple(float(v) for v in c) for c in corners)
 
 
-def mirror(name: str, center, normal, width: float, height: float, technique: str,
-           up=(0.0, 1.0, 0.0), **fields) -> PlanarReflector:
-    return PlanarReflector(name=name, corners=quad(center, normal, up, width, height),
-                           technique=technique, **fields)
+def mirror(
+    name: str,
+    center,
+    normal,
+    width: float,
+    height: float,
+    technique: str,
+    up=(0.0, 1.0, 0.0),
+    **fields,
+) -> PlanarReflector:
+    return PlanarReflector(
+        name=name, corners=quad(center, normal, up, width, height), technique=technique, **fields
+    )
 
 
 def ball(name: str, center, radius: float, technique: str, **fields) -> CurvedReflector:
-    return CurvedReflector(name=name, mesh=SPHERE_MESH, technique=technique,
-                           transform=Transform(position=tuple(float(v) for v in center),
-                                               scale=(radius, radius, radius)), **fields)
+    return CurvedReflector(
+        name=name,
+        mesh=SPHERE_MESH,
+        technique=technique,
+        transform=Transform(
+            position=tuple(float(v) for v in center), scale=(radius, radius, radius)
+        ),
+        **fields,
+    )
 
 
 def block(name: str, center, size: float, color) -> MeshObject:
     """A box (the hand's mesh, a unit-ish cube) of side about ``size``."""
-    return MeshObject(name=name, mesh=BOX_MESH, color=color,
-                      transform=Transform(position=tuple(float(v) for v in center),
-                                          scale=(size, size, size)))
+    return MeshObject(
+        name=name,
+        mesh=BOX_MESH,
+        color=color,
+        transform=Transform(position=tuple(float(v) for v in center), scale=(size, size, size)),
+    )
 
 
 def looking(eye, target, up=(0.0, 1.0, 0.0), **fields) -> Camera:
-    return Camera(eye=tuple(float(v) for v in eye), target=tuple(float(v) for v in target),
-                  up=tuple(float(v) for v in up), **fields)
+    return Camera(
+        eye=tuple(float(v) for v in eye),
+        target=tuple(float(v) for v in target),
+        up=tuple(float(v) for v in up),
+        **fields,
+    )

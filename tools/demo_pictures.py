@@ -58,8 +58,11 @@ def main() -> int:
     picture("lab20", ["h"], None, docs / "demo-window.png")
     scene = load_scene("mirror_and_sphere")
     camera = scene.camera
-    x, y, _ = math3d.project_to_pixels(camera.projection(SIZE[0] / SIZE[1]) @ camera.view(),
-                                       np.asarray(scene.reflector("sphere").center()), *SIZE)
+    x, y, _ = math3d.project_to_pixels(
+        camera.projection(SIZE[0] / SIZE[1]) @ camera.view(),
+        np.asarray(scene.reflector("sphere").center()),
+        *SIZE,
+    )
     picture("mirror_and_sphere", ["e"], (int(x), int(y)), docs / "demo-inset.png")
     return 0
 

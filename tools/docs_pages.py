@@ -38,9 +38,11 @@ def _options(parser: argparse.ArgumentParser) -> list[str]:
     formatter = _formatter(parser)
     lines: list[str] = []
     for group in parser._action_groups:
-        actions = [a for a in group._group_actions
-                   if a.help != argparse.SUPPRESS
-                   and not isinstance(a, argparse._SubParsersAction)]
+        actions = [
+            a
+            for a in group._group_actions
+            if a.help != argparse.SUPPRESS and not isinstance(a, argparse._SubParsersAction)
+        ]
         if not actions:
             continue
         lines += ["", f"**{group.title}**", "", "| option | what it does |", "|---|---|"]
@@ -51,8 +53,9 @@ def _options(parser: argparse.ArgumentParser) -> list[str]:
     return lines
 
 
-def _command(parser: argparse.ArgumentParser, title: str, summary: str | None,
-             level: int) -> list[str]:
+def _command(
+    parser: argparse.ArgumentParser, title: str, summary: str | None, level: int
+) -> list[str]:
     lines = [f"{'#' * level} `{title}`", ""]
     if summary:
         lines += [summary[0].upper() + summary[1:] + ".", ""]

@@ -15,8 +15,7 @@ LITERAL = re.compile(r"(\S)::[ \t]*$", flags=re.M)
 
 
 def markdown_of(text: str) -> str:
-    text = ROLE.sub(lambda m: f"`{m.group(2).split('.')[-1] if m.group(1) else m.group(2)}`",
-                    text)
+    text = ROLE.sub(lambda m: f"`{m.group(2).split('.')[-1] if m.group(1) else m.group(2)}`", text)
     return LITERAL.sub(r"\1:", text)
 
 

@@ -86,8 +86,13 @@ def sphere(radius: float, subdivisions: int, spherical_uv: bool = False):
     n = ico.vertices / np.linalg.norm(ico.vertices, axis=1, keepdims=True)
     uv = np.zeros((len(n), 2))
     if spherical_uv:
-        uv = np.stack([np.arctan2(n[:, 0], n[:, 2]) / (2 * np.pi) + 0.5,
-                       np.arcsin(np.clip(n[:, 1], -1, 1)) / np.pi + 0.5], axis=1)
+        uv = np.stack(
+            [
+                np.arctan2(n[:, 0], n[:, 2]) / (2 * np.pi) + 0.5,
+                np.arcsin(np.clip(n[:, 1], -1, 1)) / np.pi + 0.5,
+            ],
+            axis=1,
+        )
     return ico.vertices, n, uv, ico.faces
 
 
@@ -135,8 +140,9 @@ def cone(radius: float, height: float, segments: int, rings: int):
             if j == rings:
                 a = a + np.pi / segments  # apex: the mid-angle of the segment it closes
             n = np.array([np.cos(a), slope, -np.sin(a)])
-            positions.append(((1 - f) * radius * np.cos(a), f * height,
-                              -(1 - f) * radius * np.sin(a)))
+            positions.append(
+                ((1 - f) * radius * np.cos(a), f * height, -(1 - f) * radius * np.sin(a))
+            )
             normals.append(n / np.linalg.norm(n))
             uvs.append((i / segments, f))
     row = segments + 1
@@ -197,8 +203,9 @@ def launch_texture(size: int = 512) -> np.ndarray:
     sky = sky + (0.25 * _smoothstep(0.25, 0.6, clouds) * (y < horizon))[..., None]
     image = sky
     # ground and water: dark olive land, a bluish strip of water reflecting the sky
-    land = np.array([0.16, 0.17, 0.10]) * (0.8 + 0.4 * _value_noise(rng, (size, size), 30)[
-        ..., None])
+    land = np.array([0.16, 0.17, 0.10]) * (
+        0.8 + 0.4 * _value_noise(rng, (size, size), 30)[..., None]
+    )
     image = np.where((y > horizon)[..., None], land, image)
     water = (y > 0.9) & (y < 0.96)
     image = np.where(water[..., None], 0.5 * sky[::-1] + 0.1, image)
@@ -210,17 +217,27 @@ def launch_texture(size: int = 512) -> np.ndarray:
         return (x > x0) & (x < x1) & (y > y0) & (y < y1)
 
     tank = rect(cx - 0.035, cx + 0.035, top + 0.03, bottom) | (
-        (np.abs(x - cx) < 0.035 * np.clip((y - top) / 0.03, 0, 1)) & (y > top) & (y < top + 0.03))
-    image = np.where(tank[..., None], np.array([0.85, 0.42, 0.12]) * (
-        0.75 + 0.35 * np.clip((x - cx + 0.035) / 0.07, 0, 1))[..., None], image)
+        (np.abs(x - cx) < 0.035 * np.clip((y - top) / 0.03, 0, 1)) & (y > top) & (y < top + 0.03)
+    )
+    image = np.where(
+        tank[..., None],
+        np.array([0.85, 0.42, 0.12])
+        * (0.75 + 0.35 * np.clip((x - cx + 0.035) / 0.07, 0, 1))[..., None],
+        image,
+    )
     for bx in (cx - 0.05, cx + 0.05):
         booster = rect(bx - 0.014, bx + 0.014, top + 0.09, bottom + 0.01) | (
             (np.abs(x - bx) < 0.014 * np.clip((y - top - 0.06) / 0.03, 0, 1))
-            & (y > top + 0.06) & (y < top + 0.09))
+            & (y > top + 0.06)
+            & (y < top + 0.09)
+        )
         image = np.where(booster[..., None], np.array([0.93, 0.93, 0.9]), image)
     orbiter = rect(cx + 0.035, cx + 0.07, top + 0.12, bottom - 0.03) | (
-        (x > cx + 0.035) & (x < cx + 0.07 + 0.08 * np.clip((y - 0.55) / 0.14, 0, 1))
-        & (y > 0.55) & (y < bottom - 0.03))
+        (x > cx + 0.035)
+        & (x < cx + 0.07 + 0.08 * np.clip((y - 0.55) / 0.14, 0, 1))
+        & (y > 0.55)
+        & (y < bottom - 0.03)
+    )
     image = np.where(orbiter[..., None], np.array([0.95, 0.95, 0.97]), image)
     nose = rect(cx + 0.035, cx + 0.07, top + 0.12, top + 0.16)
     image = np.where(nose[..., None], np.array([0.12, 0.12, 0.14]), image)
@@ -236,7 +253,7 @@ def launch_texture(size: int = 512) -> np.ndarray:
         bx = cx + side * rng.uniform(0.02, 0.35)
         by = horizon + rng.uniform(-0.07, 0.02) - 0.1 * max(0.0, 0.2 - abs(bx - cx))
         radius = rng.uniform(0.03, 0.07) * (1.0 + abs(bx - cx) * 1.5)
-        smoke = np.maximum(smoke, np.exp(-(((x - bx) ** 2 + (y - by) ** 2) / radius**2) ** 2))
+        smoke = np.maximum(smoke, np.exp(-((((x - bx) ** 2 + (y - by) ** 2) / radius**2) ** 2)))
     smoke_shade = 0.65 + 0.35 * _value_noise(rng, (size, size), 40)
     lit = np.clip(1.0 - 0.8 * np.abs(x - cx), 0.55, 1.0)  # the flame lights it from within
     smoke_color = (smoke_shade * lit)[..., None] * np.array([0.98, 0.93, 0.88])
@@ -267,15 +284,23 @@ def main() -> None:
     write_obj(models / "upper_arm.obj", box((0.6, 3.2, 0.6)), "robot upper arm")
     write_obj(models / "joint.obj", sphere(0.55, 1), "joint ball")
     write_obj(models / "mirror_frame.obj", box((0.25, 8.6, 8.6)), "frame behind the mirror")
-    write_obj(models / "hand.obj", box((0.5, 0.5, 1.4), y0=-0.25),
-              "hand (placed off-centre by its node)")
-    write_obj(models / "cone.obj", cone(1.0, 2.4, 64, 12),
-              "reflective rocket cone (environment mapping): base radius 1, height 2.4")
-    write_obj(models / "env_sphere.obj", sphere(1.0, 3, spherical_uv=True),
-              "reflective sphere, radius 1")
+    write_obj(
+        models / "hand.obj", box((0.5, 0.5, 1.4), y0=-0.25), "hand (placed off-centre by its node)"
+    )
+    write_obj(
+        models / "cone.obj",
+        cone(1.0, 2.4, 64, 12),
+        "reflective rocket cone (environment mapping): base radius 1, height 2.4",
+    )
+    write_obj(
+        models / "env_sphere.obj", sphere(1.0, 3, spherical_uv=True), "reflective sphere, radius 1"
+    )
     write_obj(models / "backdrop.obj", quad(16.0, 16.0), "backdrop quad for the launch picture")
-    write_obj(models / "panel.obj", quad(1.0, 1.0),
-              "unit square facing +z: a room's walls, floor and ceiling, placed and scaled")
+    write_obj(
+        models / "panel.obj",
+        quad(1.0, 1.0),
+        "unit square facing +z: a room's walls, floor and ceiling, placed and scaled",
+    )
     textures = DATA / "textures"
     textures.mkdir(exist_ok=True)
     Image.fromarray(metal_texture()).save(textures / "metal.png")

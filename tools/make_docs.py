@@ -43,7 +43,7 @@ def labelled(image: np.ndarray, text: str) -> np.ndarray:
 def grid(tiles: list[np.ndarray], columns: int) -> np.ndarray:
     blank = np.zeros_like(tiles[0])
     tiles = tiles + [blank] * (-len(tiles) % columns)
-    rows = [np.hstack(tiles[i:i + columns]) for i in range(0, len(tiles), columns)]
+    rows = [np.hstack(tiles[i : i + columns]) for i in range(0, len(tiles), columns)]
     return np.vstack(rows)
 
 
@@ -51,8 +51,11 @@ RIM, EDGE, OTHER = (255, 220, 0), (0, 200, 255), (255, 0, 255)
 """Colours of the differing pixels in docs/parallax.png, by where they lie."""
 
 
-def differences(image: np.ndarray, truth: np.ndarray, reflective: np.ndarray,
-                ) -> tuple[np.ndarray, dict[str, float]]:
+def differences(
+    image: np.ndarray,
+    truth: np.ndarray,
+    reflective: np.ndarray,
+) -> tuple[np.ndarray, dict[str, float]]:
     """The pixels of ``image`` off by more than 10/255 inside the reflector (shrunk by a
     pixel, as the sweep compares it), coloured by where they lie: within 3 pixels of the
     reflector's silhouette (RIM), where the truth itself changes by more than 20/255 from
@@ -78,16 +81,20 @@ def differences(image: np.ndarray, truth: np.ndarray, reflective: np.ndarray,
 
 def crop_to(reflective: np.ndarray, margin: int = 6) -> tuple[slice, slice]:
     rows, columns = np.nonzero(reflective)
-    return (slice(max(rows.min() - margin, 0), rows.max() + margin + 1),
-            slice(max(columns.min() - margin, 0), columns.max() + margin + 1))
+    return (
+        slice(max(rows.min() - margin, 0), rows.max() + margin + 1),
+        slice(max(columns.min() - margin, 0), columns.max() + margin + 1),
+    )
 
 
 def parallax_picture(renderer) -> None:
     """docs/parallax.png: one row per scene: the truth, the plain live cube map and where
     it differs, the corrected one and where it still differs (see :func:`differences`)."""
     rows = []
-    for name, correction, label in (("chrome_sphere", "distance", "distance 8+2"),
-                                    ("sphere_room", "box:-4,-2,-4,4,4,4", "box proxy")):
+    for name, correction, label in (
+        ("chrome_sphere", "distance", "distance 8+2"),
+        ("sphere_room", "box:-4,-2,-4,4,4,4", "box proxy"),
+    ):
         scene = apply_options(mirrorlab.load_scene(name), {"method": "cube-live"})
         traced = trace_scene(scene, (512, 512), supersample=4)
         truth = traced.to_uint8()
@@ -97,20 +104,26 @@ def parallax_picture(renderer) -> None:
         where, shares = differences(corrected, truth, traced.reflective_mask)
         window = crop_to(traced.reflective_mask)
         tiles = [truth, plain, plain_where, corrected, where]
-        names = ["raytrace 4x4", "cube-live",
-                 "off >10: " + ", ".join(f"{k} {v:.1%}" for k, v in plain_shares.items()),
-                 f"cube-live, {label}",
-                 "off >10: " + ", ".join(f"{k} {v:.1%}" for k, v in shares.items())]
+        names = [
+            "raytrace 4x4",
+            "cube-live",
+            "off >10: " + ", ".join(f"{k} {v:.1%}" for k, v in plain_shares.items()),
+            f"cube-live, {label}",
+            "off >10: " + ", ".join(f"{k} {v:.1%}" for k, v in shares.items()),
+        ]
         side = max(t[window].shape[0] for t in tiles)
         row = []
         for tile, text in zip(tiles, names, strict=True):
             part = Image.fromarray(np.ascontiguousarray(tile[window]))
-            part = part.resize((part.width * 300 // side, part.height * 300 // side),
-                               Image.Resampling.NEAREST)
+            part = part.resize(
+                (part.width * 300 // side, part.height * 300 // side), Image.Resampling.NEAREST
+            )
             row.append(labelled(np.asarray(part), text))
         rows.append(np.hstack(row))
-        print(f"{name}: plain off {sum(plain_shares.values()):.1%} ({plain_shares}); "
-              f"{label} off {sum(shares.values()):.1%} ({shares})")
+        print(
+            f"{name}: plain off {sum(plain_shares.values()):.1%} ({plain_shares}); "
+            f"{label} off {sum(shares.values()):.1%} ({shares})"
+        )
     width = max(r.shape[1] for r in rows)
     rows = [np.pad(r, ((0, 0), (0, width - r.shape[1]), (0, 0))) for r in rows]
     Image.fromarray(np.vstack(rows)).save(DOCS / "parallax.png")
@@ -120,8 +133,10 @@ def main(pictures: list[str]) -> None:
     chosen = set(pictures) or {"methods", "envmaps", "cone", "parallax"}
     unknown = chosen - {"methods", "envmaps", "cone", "parallax"}
     if unknown:
-        raise SystemExit(f"make_docs.py: unknown picture {sorted(unknown)[0]!r}; expected "
-                         "methods, envmaps, cone or parallax")
+        raise SystemExit(
+            f"make_docs.py: unknown picture {sorted(unknown)[0]!r}; expected "
+            "methods, envmaps, cone or parallax"
+        )
     with mirrorlab.Renderer(size=(SIZE, SIZE)) as renderer:
         if "methods" in chosen:
             methods_picture(renderer)
@@ -138,10 +153,14 @@ def methods_picture(renderer) -> None:
     angle = math.radians(-30)  # 16 units out, 30 degrees off the normal, a little above
     eye = (-7 + 16 * math.cos(angle), 1.0 + 4.8, -2 + 16 * math.sin(angle))
     view = {"camera": eye, "target": (-7.0, 1.0, -2.0)}
-    methods = [labelled(renderer.render("lab20", method=m, **view), m)
-               for m in technique_names("planar")]
-    methods.append(labelled(mirrorlab.render("lab20", size=(SIZE, SIZE), method="raytrace",
-                                             **view), "raytrace"))
+    methods = [
+        labelled(renderer.render("lab20", method=m, **view), m) for m in technique_names("planar")
+    ]
+    methods.append(
+        labelled(
+            mirrorlab.render("lab20", size=(SIZE, SIZE), method="raytrace", **view), "raytrace"
+        )
+    )
     Image.fromarray(grid(methods, 4)).save(DOCS / "methods.png")
 
 
@@ -149,8 +168,7 @@ def envmaps_picture(renderer) -> None:
     sphere = mirrorlab.load_scene("chrome_sphere")
     maps = [labelled(renderer.render(sphere, method=m), m) for m in technique_names("curved")]
     truth = trace_scene(sphere, (SIZE, SIZE), supersample=4).to_uint8()
-    Image.fromarray(grid([*maps, labelled(truth, "raytrace 4x4")], 4)).save(
-        DOCS / "envmaps.png")
+    Image.fromarray(grid([*maps, labelled(truth, "raytrace 4x4")], 4)).save(DOCS / "envmaps.png")
 
 
 def cone_picture(renderer) -> None:
@@ -158,8 +176,10 @@ def cone_picture(renderer) -> None:
     placed = cone.reflector("cone").transform
     cones = []
     for height in (1.0, -1.0):
-        moved = cone.with_reflector("cone", transform=replace(
-            placed, position=(placed.position[0], height, placed.position[2])))
+        moved = cone.with_reflector(
+            "cone",
+            transform=replace(placed, position=(placed.position[0], height, placed.position[2])),
+        )
         cones.append(labelled(renderer.render(moved), f"cone at height {height:g}"))
     Image.fromarray(grid(cones, 2)).save(DOCS / "cone.png")
 

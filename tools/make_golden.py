@@ -32,8 +32,12 @@ FRAMES = {"lab_default_128.png": ("lab20", (128, 128))}
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=GOLDEN,
-                        help=f"folder to write the frames into (default {GOLDEN})")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=GOLDEN,
+        help=f"folder to write the frames into (default {GOLDEN})",
+    )
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     with mirrorlab.Renderer() as renderer:

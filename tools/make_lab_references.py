@@ -33,13 +33,19 @@ SOLUTIONS = ROOT / "labs" / "solutions"
 def main(names: list[str]) -> int:
     for name in names or list(LABS):
         spec = find_lab(name)
-        evidence = make_reference(spec, default_variant(spec.name),
-                                  solution_source(spec, SOLUTIONS), DEFAULT_LIMITS, CHECK_SIZE)
+        evidence = make_reference(
+            spec,
+            default_variant(spec.name),
+            solution_source(spec, SOLUTIONS),
+            DEFAULT_LIMITS,
+            CHECK_SIZE,
+        )
         folder = reference_folder(spec)
         shutil.rmtree(folder, ignore_errors=True)
         evidence.save(folder)
-        sizes = ", ".join(f"{p.name} {p.stat().st_size // 1024} KiB"
-                          for p in sorted(folder.iterdir()))
+        sizes = ", ".join(
+            f"{p.name} {p.stat().st_size // 1024} KiB" for p in sorted(folder.iterdir())
+        )
         print(f"{spec.name}: {folder} ({sizes})")
     return 0
 

@@ -11,7 +11,7 @@ from OpenGL.GLU import gluLookAt
 
 from mirrorlab.labs import kit
 
-lab = kit.lab20()                    # the context, the shaders, the robot and the viewer
+lab = kit.lab20()  # the context, the shaders, the robot and the viewer
 WIDTH, HEIGHT = lab.width, lab.height
 
 # --- variant: the mirror in the plane x = MIRROR_X, from Y0 to Y1 and Z0 to Z1
@@ -20,7 +20,7 @@ Y0, Y1 = -3, 5
 Z0, Z1 = -6, 2
 # --- end of variant
 
-ENVIRONMENT, METAL = 0, 1            # indices into tex_ids
+ENVIRONMENT, METAL = 0, 1  # indices into tex_ids
 tex_ids = [0, 0]
 robot = None
 

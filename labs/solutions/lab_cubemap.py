@@ -9,9 +9,9 @@ from OpenGL.GLU import gluLookAt, gluPerspective
 
 from mirrorlab.labs import kit
 
-lab = kit.cubemap()                   # the context, the objects, the sphere and the viewer
+lab = kit.cubemap()  # the context, the objects, the sphere and the viewer
 WIDTH, HEIGHT = lab.width, lab.height
-FACE_SIZE = 128                       # texels on a side of each face
+FACE_SIZE = 128  # texels on a side of each face
 cube_texture = 0
 
 # --- variant: the sphere's centre, where the six cameras sit
@@ -48,12 +48,12 @@ vec2 cube_face_st(vec3 r, int face) {
 
 # Task 3: where each face's camera looks, and its up, in the order of the faces
 FACE_VIEWS = [
-    ((1, 0, 0), (0, -1, 0)),     # GL_TEXTURE_CUBE_MAP_POSITIVE_X
-    ((-1, 0, 0), (0, -1, 0)),    # NEGATIVE_X
-    ((0, 1, 0), (0, 0, 1)),      # POSITIVE_Y
-    ((0, -1, 0), (0, 0, -1)),    # NEGATIVE_Y
-    ((0, 0, 1), (0, -1, 0)),     # POSITIVE_Z
-    ((0, 0, -1), (0, -1, 0)),    # NEGATIVE_Z
+    ((1, 0, 0), (0, -1, 0)),  # GL_TEXTURE_CUBE_MAP_POSITIVE_X
+    ((-1, 0, 0), (0, -1, 0)),  # NEGATIVE_X
+    ((0, 1, 0), (0, 0, 1)),  # POSITIVE_Y
+    ((0, -1, 0), (0, 0, -1)),  # NEGATIVE_Y
+    ((0, 0, 1), (0, -1, 0)),  # POSITIVE_Z
+    ((0, 0, -1), (0, -1, 0)),  # NEGATIVE_Z
 ]
 
 
@@ -64,8 +64,17 @@ def create_cube_texture():
     glActiveTexture(GL_TEXTURE1)
     glBindTexture(GL_TEXTURE_CUBE_MAP, cube_texture)
     for face in range(6):
-        glTexImage2D(GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL_RGB, FACE_SIZE, FACE_SIZE, 0,
-                     GL_RGB, GL_UNSIGNED_BYTE, None)
+        glTexImage2D(
+            GL_TEXTURE_CUBE_MAP_POSITIVE_X + face,
+            0,
+            GL_RGB,
+            FACE_SIZE,
+            FACE_SIZE,
+            0,
+            GL_RGB,
+            GL_UNSIGNED_BYTE,
+            None,
+        )
     glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR)
     glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MAG_FILTER, GL_LINEAR)
     for wrap in (GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R):
@@ -88,8 +97,9 @@ def capture_cube():
         lab.draw_scene()
         glActiveTexture(GL_TEXTURE1)
         glBindTexture(GL_TEXTURE_CUBE_MAP, cube_texture)
-        glCopyTexImage2D(GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL_RGB, 0, 0, FACE_SIZE,
-                         FACE_SIZE, 0)
+        glCopyTexImage2D(
+            GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL_RGB, 0, 0, FACE_SIZE, FACE_SIZE, 0
+        )
         glActiveTexture(GL_TEXTURE0)
     glViewport(0, 0, WIDTH, HEIGHT)
 

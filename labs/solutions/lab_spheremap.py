@@ -9,9 +9,9 @@ from OpenGL.GL import *  # noqa: F403
 
 from mirrorlab.labs import kit
 
-lab = kit.spheremap()                 # the context, the cone, the backdrop and the viewer
+lab = kit.spheremap()  # the context, the cone, the backdrop and the viewer
 WIDTH, HEIGHT = lab.width, lab.height
-launch = 0                            # the launch picture's texture
+launch = 0  # the launch picture's texture
 
 # --- variant: the side of the shader's cone and texgen's texture unit
 SHADER_SIDE = "left"

@@ -65,7 +65,8 @@ class Orbit:
     def eye(self) -> tuple[float, float, float]:
         az, el = math.radians(self.azimuth), math.radians(self.elevation)
         offset = self.distance * np.array(
-            [math.cos(el) * math.cos(az), math.sin(el), math.cos(el) * math.sin(az)])
+            [math.cos(el) * math.cos(az), math.sin(el), math.cos(el) * math.sin(az)]
+        )
         x, y, z = (float(v) for v in np.asarray(self.target) + offset)
         return (x, y, z)
 
@@ -143,8 +144,9 @@ class DemoApp:
         scene = self.configured.at_frame(self.frames % self.configured.frame_count)
         robot = scene.robot
         if robot is not None and any(self.changes.joints):
-            scene = scene.with_angles([a + d for a, d in zip(robot.angles, self.changes.joints,
-                                                             strict=True)])
+            scene = scene.with_angles(
+                [a + d for a, d in zip(robot.angles, self.changes.joints, strict=True)]
+            )
         curved = _first_curved(scene)
         if curved is not None and self.changes.lift:
             x, y, z = curved.transform.position
@@ -201,8 +203,7 @@ class DemoApp:
 
     def reset(self) -> None:
         self.configured = self.initial
-        self.changes = Changes(Orbit.from_eye(self.initial.camera.eye,
-                                              self.initial.camera.target))
+        self.changes = Changes(Orbit.from_eye(self.initial.camera.eye, self.initial.camera.target))
 
     # ------------------------------------------------------------- input
 
@@ -213,10 +214,12 @@ class DemoApp:
             return
         shift = bool(mods & glfw.MOD_SHIFT)
         joint_keys = {
-            glfw.KEY_LEFT: (0, -JOINT_STEP_DEG), glfw.KEY_RIGHT: (0, JOINT_STEP_DEG),
+            glfw.KEY_LEFT: (0, -JOINT_STEP_DEG),
+            glfw.KEY_RIGHT: (0, JOINT_STEP_DEG),
             glfw.KEY_UP: (2 if shift else 1, JOINT_STEP_DEG),
             glfw.KEY_DOWN: (2 if shift else 1, -JOINT_STEP_DEG),
-            glfw.KEY_PAGE_UP: (2, JOINT_STEP_DEG), glfw.KEY_PAGE_DOWN: (2, -JOINT_STEP_DEG),
+            glfw.KEY_PAGE_UP: (2, JOINT_STEP_DEG),
+            glfw.KEY_PAGE_DOWN: (2, -JOINT_STEP_DEG),
         }
         number_keys = {glfw.KEY_1 + i: i for i in range(9)}
         number_keys.update({glfw.KEY_KP_1 + i: i for i in range(9)})
@@ -277,8 +280,7 @@ class DemoApp:
         self._cursor = (x, y)
         if self._drag_from is not None:
             x0, y0 = self._drag_from
-            self.changes.orbit.turn((x - x0) * DRAG_DEG_PER_PIXEL,
-                                    (y - y0) * DRAG_DEG_PER_PIXEL)
+            self.changes.orbit.turn((x - x0) * DRAG_DEG_PER_PIXEL, (y - y0) * DRAG_DEG_PER_PIXEL)
             self._drag_from = (x, y)
             self.touch()
 
@@ -333,16 +335,21 @@ class DemoApp:
         if self.show_inset:
             self.draw_inset(scene, stats, size, scale, margin)
         if self.show_help:
-            lines: list = [f"mirrorlab demo: {scene.name} (the title shows the technique, "
-                           f"frame time and passes)", "", *CONTROLS]
+            lines: list = [
+                f"mirrorlab demo: {scene.name} (the title shows the technique, "
+                f"frame time and passes)",
+                "",
+                *CONTROLS,
+            ]
             index = self.target_index()
             if index is not None:
                 names = "  ".join(f"{i + 1} {n}" for i, n in enumerate(self.techniques_of(index)))
                 lines += ["", f"techniques of {scene.reflectors[index].name}: {names}"]
             self.overlay.text("help", lines, (margin, margin), size, scale)
 
-    def draw_inset(self, scene: Scene, stats, size: tuple[int, int], scale: float,
-                   margin: int) -> None:
+    def draw_inset(
+        self, scene: Scene, stats, size: tuple[int, int], scale: float, margin: int
+    ) -> None:
         """The target reflector's texture as the camera's view used it, in the bottom
         left corner: a planar capture, a sphere or latitude-longitude map, or a cube
         map's six faces."""
@@ -353,18 +360,25 @@ class DemoApp:
         texture = None
         if index is not None:
             reflector = scene.reflectors[index]
-            draw = next((d for d in stats.plan.top.draws if d.reflector.name == reflector.name),
-                        None)
+            draw = next(
+                (d for d in stats.plan.top.draws if d.reflector.name == reflector.name), None
+            )
             label = f"{reflector.name} ({reflector.technique})"
             if draw is None or draw.mode not in ("texture", "map"):
                 inline = technique(reflector.technique).draws_inline
-                why = "drawn straight into the frame" if inline else (
-                    draw.reason if draw is not None else "not drawn")
+                why = (
+                    "drawn straight into the frame"
+                    if inline
+                    else (draw.reason if draw is not None else "not drawn")
+                )
                 label += f": no texture ({why})"
             else:
                 held = self.renderer.pass_for(reflector.name)
-                texture = (held.captures.texture(draw.slot) if hasattr(held, "captures")
-                           else held.map_for(draw))  # type: ignore[attr-defined]
+                texture = (
+                    held.captures.texture(draw.slot)
+                    if hasattr(held, "captures")
+                    else held.map_for(draw)  # type: ignore[attr-defined]
+                )
         width, height = size
         if isinstance(texture, TextureCube):
             face = min((width - 2 * margin) / 6 - 2, height / 4)
@@ -381,8 +395,9 @@ class DemoApp:
             face = inset[1]
         else:
             face = 0.0
-        self.overlay.text("label", [label], (margin, height - margin - face - 24 * scale),
-                          size, scale)
+        self.overlay.text(
+            "label", [label], (margin, height - margin - face - 24 * scale), size, scale
+        )
 
     def report_plan(self, scene: Scene, stats, size: tuple[int, int]) -> None:
         print(f"plan of frame {self.frames} ({scene.name}, {size[0]}x{size[1]}):")
@@ -427,17 +442,24 @@ class DemoApp:
 
     def title(self, scene: Scene) -> str:
         message = f" - {self.message}" if self.message else ""
-        return (f"mirrorlab demo - {scene.name} - {self.status(scene)} - frame {self.frames}"
-                f"{message} - H: help")
+        return (
+            f"mirrorlab demo - {scene.name} - {self.status(scene)} - frame {self.frames}"
+            f"{message} - H: help"
+        )
 
     def release(self) -> None:
         self.overlay.release()
         self.renderer.release()
 
 
-def run(scene: Scene, size: tuple[int, int], max_frames: int = 0,
-        screenshot: Path | None = None, debug: bool = False,
-        shot_dir: Path = Path(".")) -> int:
+def run(
+    scene: Scene,
+    size: tuple[int, int],
+    max_frames: int = 0,
+    screenshot: Path | None = None,
+    debug: bool = False,
+    shot_dir: Path = Path("."),
+) -> int:
     """Open the window on ``scene`` and run until Esc, the window closes, or ``max_frames``
     frames; with ``screenshot``, the last frame drawn is written there as a PNG. S saves
     screenshots into ``shot_dir``."""
@@ -449,8 +471,11 @@ def run(scene: Scene, size: tuple[int, int], max_frames: int = 0,
     app = None
     try:
         app = DemoApp(context, scene, shot_dir)
-        print(f"mirrorlab demo of {scene.name} on {context.info()['renderer']}: press H in "
-              f"the window for the controls (also: mirrorlab demo --help).", flush=True)
+        print(
+            f"mirrorlab demo of {scene.name} on {context.info()['renderer']}: press H in "
+            f"the window for the controls (also: mirrorlab demo --help).",
+            flush=True,
+        )
         last_image = None
         continuous = app.animated or max_frames > 0
         while not context.should_close():

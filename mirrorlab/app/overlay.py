@@ -71,9 +71,15 @@ class Overlay:
 
     def __init__(self, registry: ResourceRegistry) -> None:
         self.registry = registry
-        corners = np.array([[0, 0, 0, 0, 0, 1, 0, 0], [1, 0, 0, 0, 0, 1, 1, 0],
-                            [1, 1, 0, 0, 0, 1, 1, 1], [0, 1, 0, 0, 0, 1, 0, 1]],
-                           dtype=np.float32)
+        corners = np.array(
+            [
+                [0, 0, 0, 0, 0, 1, 0, 0],
+                [1, 0, 0, 0, 0, 1, 1, 0],
+                [1, 1, 0, 0, 0, 1, 1, 1],
+                [0, 1, 0, 0, 0, 1, 0, 1],
+            ],
+            dtype=np.float32,
+        )
         self.quad = MeshBuffer(registry, corners, np.array([[0, 1, 2], [0, 2, 3]]))
         self.flat = Program(registry, "overlay.vert", "overlay.frag")
         self.cube = Program(registry, "overlay.vert", "overlay_cube.frag")
@@ -97,15 +103,26 @@ class Overlay:
         GL.glBindVertexArray(0)
 
     @staticmethod
-    def _rect(left: float, top: float, width: float, height: float,
-              screen: tuple[int, int]) -> tuple[float, float, float, float]:
+    def _rect(
+        left: float, top: float, width: float, height: float, screen: tuple[int, int]
+    ) -> tuple[float, float, float, float]:
         """Pixels (from the top left) to (left, bottom, right, top) in device coordinates."""
         sw, sh = screen
-        return (2.0 * left / sw - 1.0, 1.0 - 2.0 * (top + height) / sh,
-                2.0 * (left + width) / sw - 1.0, 1.0 - 2.0 * top / sh)
+        return (
+            2.0 * left / sw - 1.0,
+            1.0 - 2.0 * (top + height) / sh,
+            2.0 * (left + width) / sw - 1.0,
+            1.0 - 2.0 * top / sh,
+        )
 
-    def text(self, slot: str, lines: Sequence[Row], position: tuple[float, float],
-             screen: tuple[int, int], scale: float = 1.0) -> tuple[int, int]:
+    def text(
+        self,
+        slot: str,
+        lines: Sequence[Row],
+        position: tuple[float, float],
+        screen: tuple[int, int],
+        scale: float = 1.0,
+    ) -> tuple[int, int]:
         """Draw ``lines`` with their top left at ``position``, made smaller if they would
         not fit the screen; returns the panel's size. Each ``slot`` (``help``,
         ``label``) keeps its texture until its text or the screen changes."""
@@ -115,9 +132,9 @@ class Overlay:
             if held is not None:
                 held[2].release()
             room = (screen[0] - 2 * position[0], screen[1] - position[1])
-            texture = Texture2D.from_image(self.registry,
-                                           fitted_text_image(lines, scale, room),
-                                           what="the help text")
+            texture = Texture2D.from_image(
+                self.registry, fitted_text_image(lines, scale, room), what="the help text"
+            )
             GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_NEAREST)
             GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_NEAREST)
             held = self._texts[slot] = (*key, texture)
@@ -125,8 +142,14 @@ class Overlay:
         self.texture(texture, position, (texture.width, texture.height), screen, opaque=False)
         return texture.width, texture.height
 
-    def texture(self, texture: Texture2D, position: tuple[float, float],
-                size: tuple[float, float], screen: tuple[int, int], opaque: bool = True) -> None:
+    def texture(
+        self,
+        texture: Texture2D,
+        position: tuple[float, float],
+        size: tuple[float, float],
+        screen: tuple[int, int],
+        opaque: bool = True,
+    ) -> None:
         """Draw ``texture`` into the ``size`` rectangle at ``position`` (pixels, top left)."""
         self._begin()
         program = self.flat
@@ -138,8 +161,13 @@ class Overlay:
         self.quad.draw()
         self._end()
 
-    def cube_faces(self, cube: TextureCube, position: tuple[float, float], face_size: float,
-                   screen: tuple[int, int]) -> None:
+    def cube_faces(
+        self,
+        cube: TextureCube,
+        position: tuple[float, float],
+        face_size: float,
+        screen: tuple[int, int],
+    ) -> None:
         """The six faces in a row, GL order +X, -X, +Y, -Y, +Z, -Z, from ``position``."""
         self._begin()
         GL.glEnable(GL.GL_TEXTURE_CUBE_MAP_SEAMLESS)

@@ -15,8 +15,9 @@ from mirrorlab.plan import bounding_sphere
 from mirrorlab.scene.model import Camera, CurvedReflector, PlanarReflector, Scene
 
 
-def framebuffer_pixel(cursor: Sequence[float], window_size: Sequence[int],
-                      framebuffer_size: Sequence[int]) -> tuple[float, float] | None:
+def framebuffer_pixel(
+    cursor: Sequence[float], window_size: Sequence[int], framebuffer_size: Sequence[int]
+) -> tuple[float, float] | None:
     """The framebuffer position ``(x right, y down)`` in pixels of a cursor at ``cursor``
     in window coordinates; None when the cursor is outside the window."""
     x, y = (float(v) for v in cursor)
@@ -27,8 +28,9 @@ def framebuffer_pixel(cursor: Sequence[float], window_size: Sequence[int],
     return x * fb_width / width, y * fb_height / height
 
 
-def pixel_ray(camera: Camera, size: Sequence[int],
-              pixel: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
+def pixel_ray(
+    camera: Camera, size: Sequence[int], pixel: Sequence[float]
+) -> tuple[np.ndarray, np.ndarray]:
     """World origin ``(3,)`` on the near plane and unit direction ``(3,)`` of the ray
     through framebuffer position ``pixel`` (x right, y down, in pixels) of a ``size``
     (width, height) frame."""
@@ -42,8 +44,9 @@ def pixel_ray(camera: Camera, size: Sequence[int],
     return near, direction / np.linalg.norm(direction)
 
 
-def _hit_planar(reflector: PlanarReflector, origin: np.ndarray,
-                direction: np.ndarray) -> float | None:
+def _hit_planar(
+    reflector: PlanarReflector, origin: np.ndarray, direction: np.ndarray
+) -> float | None:
     normal = np.asarray(reflector.normal, dtype=np.float64)
     facing = float(direction @ normal)
     if abs(facing) < 1e-12:
@@ -60,8 +63,9 @@ def _hit_planar(reflector: PlanarReflector, origin: np.ndarray,
     return distance
 
 
-def _hit_curved(reflector: CurvedReflector, origin: np.ndarray,
-                direction: np.ndarray) -> float | None:
+def _hit_curved(
+    reflector: CurvedReflector, origin: np.ndarray, direction: np.ndarray
+) -> float | None:
     center, radius = bounding_sphere(reflector)
     offset = origin - center
     half_b = float(offset @ direction)

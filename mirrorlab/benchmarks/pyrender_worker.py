@@ -64,24 +64,36 @@ def build_scene(command: dict) -> tuple[pyrender.Scene, int, int]:
         if key not in shared:
             mesh = trimesh.load(item["path"], process=False, force="mesh")
             material = pyrender.MetallicRoughnessMaterial(
-                baseColorFactor=[*item["color"], 1.0], metallicFactor=0.0,
-                roughnessFactor=1.0)
-            shared[key] = (pyrender.Mesh.from_trimesh(mesh, material=material, smooth=True),
-                           len(mesh.faces))
+                baseColorFactor=[*item["color"], 1.0], metallicFactor=0.0, roughnessFactor=1.0
+            )
+            shared[key] = (
+                pyrender.Mesh.from_trimesh(mesh, material=material, smooth=True),
+                len(mesh.faces),
+            )
         mesh, faces = shared[key]
-        pose = np.asarray(item["pose"], dtype=np.float64).reshape(4, 4) if "pose" in item \
+        pose = (
+            np.asarray(item["pose"], dtype=np.float64).reshape(4, 4)
+            if "pose" in item
             else np.eye(4)
+        )
         scene.add(mesh, pose=pose)
         triangles += faces
         nodes += 1
     camera = command["camera"]
     pose = np.linalg.inv(np.asarray(camera["view"], dtype=np.float64).reshape(4, 4))
-    scene.add(pyrender.PerspectiveCamera(yfov=camera["yfov"], aspectRatio=width / height,
-                                         znear=camera["znear"], zfar=camera["zfar"]),
-              pose=pose)
+    scene.add(
+        pyrender.PerspectiveCamera(
+            yfov=camera["yfov"],
+            aspectRatio=width / height,
+            znear=camera["znear"],
+            zfar=camera["zfar"],
+        ),
+        pose=pose,
+    )
     light = command["light"]
-    scene.add(pyrender.DirectionalLight(intensity=light["intensity"]),
-              pose=light_pose(light["direction"]))
+    scene.add(
+        pyrender.DirectionalLight(intensity=light["intensity"]), pose=light_pose(light["direction"])
+    )
     return scene, triangles, nodes
 
 
@@ -103,11 +115,18 @@ def main() -> int:
             scenes[command.get("name", "")] = scene
             from OpenGL import GL
 
-            answer = {"ok": True, "triangles": triangles, "nodes": nodes,
-                      "gl": GL.glGetString(GL.GL_RENDERER).decode()}
+            answer = {
+                "ok": True,
+                "triangles": triangles,
+                "nodes": nodes,
+                "gl": GL.glGetString(GL.GL_RENDERER).decode(),
+            }
         elif command["cmd"] == "frames":
-            flags = (pyrender.RenderFlags.FLAT if command["flags"] == "flat"
-                     else pyrender.RenderFlags.NONE)
+            flags = (
+                pyrender.RenderFlags.FLAT
+                if command["flags"] == "flat"
+                else pyrender.RenderFlags.NONE
+            )
             scene = scenes[command.get("scene", "")]
             times = []
             for _ in range(command["count"]):

@@ -79,8 +79,14 @@ def _camera_frame(scene) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray
     return eye, forward, right, up, distance
 
 
-def grid(count: int, center: np.ndarray, right: np.ndarray, up: np.ndarray,
-         half_width: float, half_height: float) -> np.ndarray:
+def grid(
+    count: int,
+    center: np.ndarray,
+    right: np.ndarray,
+    up: np.ndarray,
+    half_width: float,
+    half_height: float,
+) -> np.ndarray:
     """``(count, 3)`` points on a near-square grid across a rectangle."""
     columns = int(np.ceil(np.sqrt(count * half_width / half_height)))
     rows = int(np.ceil(count / columns))
@@ -99,8 +105,7 @@ def _points(scene, count: int, seen: bool) -> tuple[np.ndarray, np.ndarray]:
     eye, forward, right, up, distance = _camera_frame(scene)
     if seen:
         half_height = 0.8 * distance * np.tan(np.radians(scene.camera.fovy / 2.0))
-        return grid(count, eye + distance * forward, right, up, half_height,
-                    half_height), -forward
+        return grid(count, eye + distance * forward, right, up, half_height, half_height), -forward
     return grid(count, eye - 6.0 * forward, right, up, 10.0, 5.0), forward
 
 
@@ -113,11 +118,17 @@ def with_mirrors(scene, count: int, seen: bool):
     if not seen:
         right = -right  # corners counter-clockwise seen from the reflecting side
     half = MIRROR_SIZE / 2.0
-    mirrors = tuple(PlanarReflector(
-        name=f"extra_mirror_{index}", technique="reflected",
-        corners=tuple(tuple(float(v) for v in point + a * half * right + b * half * up)
-                      for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1))))  # type: ignore
-        for index, point in enumerate(points))
+    mirrors = tuple(
+        PlanarReflector(
+            name=f"extra_mirror_{index}",
+            technique="reflected",
+            corners=tuple(  # type: ignore[arg-type]
+                tuple(float(v) for v in point + a * half * right + b * half * up)
+                for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1))
+            ),
+        )
+        for index, point in enumerate(points)
+    )
     for made in mirrors[:1]:
         assert made.normal @ normal > 0.99, "a mirror faces the wrong way"
     return replace(scene, reflectors=scene.reflectors + mirrors)
@@ -135,12 +146,18 @@ def with_boxes(scene, count: int, seen: bool, size: float):
 
     points, _ = _points(scene, count, seen)
     colors = ((0.8, 0.3, 0.2), (0.2, 0.7, 0.3), (0.25, 0.35, 0.85))
-    boxes = tuple(MeshObject(name=f"box_{index}", mesh=box_mesh(),
-                             color=colors[index % len(colors)],
-                             transform=Transform(position=(float(point[0]), float(point[1]),
-                                                           float(point[2])),
-                                                 scale=(size, size, size)))
-                  for index, point in enumerate(points))
+    boxes = tuple(
+        MeshObject(
+            name=f"box_{index}",
+            mesh=box_mesh(),
+            color=colors[index % len(colors)],
+            transform=Transform(
+                position=(float(point[0]), float(point[1]), float(point[2])),
+                scale=(size, size, size),
+            ),
+        )
+        for index, point in enumerate(points)
+    )
     return replace(scene, objects=scene.objects + boxes)
 
 
@@ -184,8 +201,9 @@ class Variant:
         return [ms for block in self.blocks for ms in block]
 
 
-def timed_frames(renderer, scene_of_turn: Callable[[int], Scene],
-                 size: int) -> Callable[[int], list[float]]:
+def timed_frames(
+    renderer, scene_of_turn: Callable[[int], Scene], size: int
+) -> Callable[[int], list[float]]:
     """``count`` frames -> their ms: frame n of the variant draws ``scene_of_turn(n)`` with
     ``renderer`` (a :class:`mirrorlab.Renderer`) at ``size`` x ``size``, read back."""
     turn = [0]
@@ -199,14 +217,17 @@ def timed_frames(renderer, scene_of_turn: Callable[[int], Scene],
             renderer.render(frame, size=(size, size))
             times.append((time.perf_counter() - start) * 1e3)
         return times
+
     return frames
 
 
-def mirrorlab_frames(renderer, scene: Scene, size: int,
-                     moving: bool) -> Callable[[int], list[float]]:
+def mirrorlab_frames(
+    renderer, scene: Scene, size: int, moving: bool
+) -> Callable[[int], list[float]]:
     """Frames of ``scene``, its camera moved a hair further every frame when ``moving``."""
-    return timed_frames(renderer, (lambda turn: moved_camera(scene, turn)) if moving
-                        else (lambda turn: scene), size)
+    return timed_frames(
+        renderer, (lambda turn: moved_camera(scene, turn)) if moving else (lambda turn: scene), size
+    )
 
 
 def interleave(variants: list[Variant], frames: int, warmup: int, block: int) -> None:
@@ -231,8 +252,10 @@ def paired_ratio(blocks: list[list[float]], base_blocks: list[list[float]]) -> f
     and a burst of other work can slow one block. Pairing by round leaves both out, where
     the ratio of the whole runs' medians keeps them: nine renderers drawing the same frame
     came out 0.81x to 1.72x of one another by their medians, 0.93x to 1.09x paired."""
-    return statistics.median(statistics.median(ours) / statistics.median(theirs)
-                             for ours, theirs in zip(blocks, base_blocks, strict=True))
+    return statistics.median(
+        statistics.median(ours) / statistics.median(theirs)
+        for ours, theirs in zip(blocks, base_blocks, strict=True)
+    )
 
 
 MOVING_SEEN_MIRRORS = 100
@@ -241,8 +264,9 @@ scenes of more than this many are left out of the moving frames (400 take second
 frame)."""
 
 
-def mirrorlab_variants(stack, scenes: dict[str, Scene], size: int,
-                       modes: tuple[str, ...] = ("still",)) -> list[Variant]:
+def mirrorlab_variants(
+    stack, scenes: dict[str, Scene], size: int, modes: tuple[str, ...] = ("still",)
+) -> list[Variant]:
     """A :class:`Variant` of every scene in every mode (``still``, ``moving``), each with a
     renderer of its own (entered on ``stack``); an unseen scene's first frame is checked to
     be the base frame, pixel for pixel."""
@@ -258,14 +282,20 @@ def mirrorlab_variants(stack, scenes: dict[str, Scene], size: int,
             renderer = stack.enter_context(mirrorlab.Renderer((size, size)))
             started = time.perf_counter()
             image = renderer.render(scene)
-            log(f"{name}: first frame {(time.perf_counter() - started) * 1e3:.0f} ms, "
-                f"passes {len(renderer.last_stats.ran)}")
+            log(
+                f"{name}: first frame {(time.perf_counter() - started) * 1e3:.0f} ms, "
+                f"passes {len(renderer.last_stats.ran)}"
+            )
             if name == "base":
                 base_image = image
-            elif name.endswith("unseen") and (base_image is None
-                                              or not np.array_equal(image, base_image)):
+            elif name.endswith("unseen") and (
+                base_image is None or not np.array_equal(image, base_image)
+            ):
                 raise BenchmarkError(f"{name}: the frame differs from the base frame")
-            variants.append(Variant(f"mirrorlab {mode}, {name}",
-                                    mirrorlab_frames(renderer, scene, size,
-                                                     mode == "moving")))
+            variants.append(
+                Variant(
+                    f"mirrorlab {mode}, {name}",
+                    mirrorlab_frames(renderer, scene, size, mode == "moving"),
+                )
+            )
     return variants

@@ -65,8 +65,12 @@ from mirrorlab.benchmarks.scale import (
 from mirrorlab.errors import BenchmarkError
 from mirrorlab.options import OptionError
 
-MIRRORLAB_VARIANTS = ("mirrorlab two passes", "mirrorlab reflected two passes",
-                      "mirrorlab capture reused", "mirrorlab one pass")
+MIRRORLAB_VARIANTS = (
+    "mirrorlab two passes",
+    "mirrorlab reflected two passes",
+    "mirrorlab capture reused",
+    "mirrorlab one pass",
+)
 PYRENDER_VARIANTS = ("pyrender default", "pyrender flat")
 PYRENDER_PACKAGES = ("pyrender==0.1.45", "numpy<2", "Pillow")
 """What pyrender's environment needs (``./dev bench speed`` makes one with them)."""
@@ -87,22 +91,29 @@ class PyrenderWorker:
 
     def __init__(self, python: Path) -> None:
         try:
-            check = subprocess.run([str(python), "-c", "import pyrender, trimesh, PIL"],
-                                   capture_output=True, text=True)
+            check = subprocess.run(
+                [str(python), "-c", "import pyrender, trimesh, PIL"], capture_output=True, text=True
+            )
         except OSError as exc:
-            raise OptionError("--pyrender", f"cannot run {python}: {exc.strerror or exc}"
-                              ) from None
+            raise OptionError("--pyrender", f"cannot run {python}: {exc.strerror or exc}") from None
         if check.returncode != 0:
             said = check.stderr.strip().splitlines()
-            raise OptionError("--pyrender", f"{python} cannot import pyrender, trimesh and "
-                              f"Pillow ({said[-1] if said else f'exit {check.returncode}'}); "
-                              f"give the Python of an environment with "
-                              f"{' '.join(PYRENDER_PACKAGES)}")
+            raise OptionError(
+                "--pyrender",
+                f"{python} cannot import pyrender, trimesh and "
+                f"Pillow ({said[-1] if said else f'exit {check.returncode}'}); "
+                f"give the Python of an environment with "
+                f"{' '.join(PYRENDER_PACKAGES)}",
+            )
         self._files = contextlib.ExitStack()
-        script = self._files.enter_context(resources.as_file(
-            resources.files("mirrorlab.benchmarks").joinpath("pyrender_worker.py")))
-        self.process = subprocess.Popen([str(python), str(script)], stdin=subprocess.PIPE,
-                                        stdout=subprocess.PIPE, text=True)
+        script = self._files.enter_context(
+            resources.as_file(
+                resources.files("mirrorlab.benchmarks").joinpath("pyrender_worker.py")
+            )
+        )
+        self.process = subprocess.Popen(
+            [str(python), str(script)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
+        )
 
     def ask(self, **command) -> dict:
         assert self.process.stdin is not None and self.process.stdout is not None
@@ -113,8 +124,10 @@ class PyrenderWorker:
         except BrokenPipeError:
             line = ""
         if not line:
-            raise BenchmarkError(f"pyrender's worker ended (exit {self.process.wait()}) "
-                                 f"before it answered {command.get('cmd')!r}")
+            raise BenchmarkError(
+                f"pyrender's worker ended (exit {self.process.wait()}) "
+                f"before it answered {command.get('cmd')!r}"
+            )
         return json.loads(line)
 
     def close(self) -> None:
@@ -150,13 +163,13 @@ def write_mesh_sets(folder: Path, levels: tuple[int, ...]) -> list[MeshSet]:
     parts = scene_parts(mirrorlab.load_scene("lab20"))
     sets = []
     for level in levels:
-        target = folder / f"lab_x{4 ** level}"
+        target = folder / f"lab_x{4**level}"
         target.mkdir(parents=True, exist_ok=True)
         files, triangles = [], 0
         for index, part in enumerate(parts):
             path = target / f"{index:02d}_{part.name}.obj"
             data = load_mesh(part.mesh)
-            triangles += len(data.indices) * 4 ** level
+            triangles += len(data.indices) * 4**level
             if not path.exists():
                 vertices = (part.model[:3, :3] @ data.positions.T.astype(np.float64)).T
                 vertices += part.model[:3, 3]
@@ -179,37 +192,56 @@ def mirrorlab_variant(renderer, scenes: list, size: int) -> Callable[[int], list
     return timed_frames(renderer, lambda turn: scenes[turn % len(scenes)], size)
 
 
-def pyrender_variant(worker: PyrenderWorker, flags: str,
-                     scene: str = "") -> Callable[[int], list[float]]:
+def pyrender_variant(
+    worker: PyrenderWorker, flags: str, scene: str = ""
+) -> Callable[[int], list[float]]:
     """Frames of the worker's scene ``scene`` drawn by pyrender with ``flags`` ("default" or
     "flat"), timed by the worker."""
     return lambda count: worker.ask(cmd="frames", count=count, flags=flags, scene=scene)["ms"]
 
 
-def time_configuration(renderers, worker: PyrenderWorker | None, lab, meshes: MeshSet,
-                       size: int, frames: int, warmup: int, block: int) -> list[dict]:
+def time_configuration(
+    renderers,
+    worker: PyrenderWorker | None,
+    lab,
+    meshes: MeshSet,
+    size: int,
+    frames: int,
+    warmup: int,
+    block: int,
+) -> list[dict]:
     """Median frame times of every variant for one mesh set at ``size`` x ``size`` (no
     pyrender variant without a ``worker``)."""
     from mirrorlab.scene.model import MeshObject, Transform
 
-    objects = tuple(MeshObject(name=path.stem, mesh=path, color=color)
-                    for path, color in meshes.files)
+    objects = tuple(
+        MeshObject(name=path.stem, mesh=path, color=color) for path, color in meshes.files
+    )
     mirrored = replace(lab, objects=objects, animation=None)
     moved = mirrored.with_object(objects[0].name, transform=Transform(position=(0, 0, STEP)))
     plain = replace(mirrored, reflectors=())
     gl = None
     if worker is not None:
         camera = lab.camera
-        gl = worker.ask(cmd="setup", size=[size, size], meshes=[
-            {"path": str(path), "color": list(color)} for path, color in meshes.files],
-            camera={"view": camera.view().ravel().tolist(),
-                    "yfov": float(np.radians(camera.fovy)), "znear": camera.near,
-                    "zfar": camera.far},
-            light={"direction": list(lab.lights[0].direction), "intensity": 3.0})["gl"]
+        gl = worker.ask(
+            cmd="setup",
+            size=[size, size],
+            meshes=[{"path": str(path), "color": list(color)} for path, color in meshes.files],
+            camera={
+                "view": camera.view().ravel().tolist(),
+                "yfov": float(np.radians(camera.fovy)),
+                "znear": camera.near,
+                "zfar": camera.far,
+            },
+            light={"direction": list(lab.lights[0].direction), "intensity": 3.0},
+        )["gl"]
     two_pass, reflected_pass, reused, one_pass = renderers
-    reflected = [replace(scene, reflectors=tuple(replace(r, technique="reflected")
-                                                 for r in scene.reflectors))
-                 for scene in (mirrored, moved)]
+    reflected = [
+        replace(
+            scene, reflectors=tuple(replace(r, technique="reflected") for r in scene.reflectors)
+        )
+        for scene in (mirrored, moved)
+    ]
     variants = [
         Variant(MIRRORLAB_VARIANTS[0], mirrorlab_variant(two_pass, [mirrored, moved], size)),
         Variant(MIRRORLAB_VARIANTS[1], mirrorlab_variant(reflected_pass, reflected, size)),
@@ -217,48 +249,74 @@ def time_configuration(renderers, worker: PyrenderWorker | None, lab, meshes: Me
         Variant(MIRRORLAB_VARIANTS[3], mirrorlab_variant(one_pass, [plain], size)),
     ]
     if worker is not None:
-        variants += [Variant(name, pyrender_variant(worker, name.split()[1]))
-                     for name in PYRENDER_VARIANTS]
+        variants += [
+            Variant(name, pyrender_variant(worker, name.split()[1])) for name in PYRENDER_VARIANTS
+        ]
     interleave(variants, frames, warmup, block)
     expected = ["capture:mirror", "camera"]
-    if (two_pass.last_stats.ran != expected or reflected_pass.last_stats.ran != expected
-            or reused.last_stats.ran != ["camera"]):
-        raise BenchmarkError(f"the variants did not run the passes they stand for: "
-                             f"{two_pass.last_stats.ran}, {reflected_pass.last_stats.ran}, "
-                             f"{reused.last_stats.ran}")
+    if (
+        two_pass.last_stats.ran != expected
+        or reflected_pass.last_stats.ran != expected
+        or reused.last_stats.ran != ["camera"]
+    ):
+        raise BenchmarkError(
+            f"the variants did not run the passes they stand for: "
+            f"{two_pass.last_stats.ran}, {reflected_pass.last_stats.ran}, "
+            f"{reused.last_stats.ran}"
+        )
     medians = {v.name: statistics.median(v.samples) for v in variants}
-    log(f"{meshes.triangles} triangles, {size}x{size}: " + ", ".join(
-        f"{name} {ms:.2f} ms" for name, ms in medians.items()))
-    return [{"triangles": meshes.triangles, "size": size, "variant": v.name,
-             "median_ms": round(medians[v.name], 3),
-             "p10_ms": round(float(np.percentile(v.samples, 10)), 3),
-             "p90_ms": round(float(np.percentile(v.samples, 90)), 3),
-             "frames": len(v.samples), "gl": gl or two_pass.gl_renderer}
-            for v in variants]
+    log(
+        f"{meshes.triangles} triangles, {size}x{size}: "
+        + ", ".join(f"{name} {ms:.2f} ms" for name, ms in medians.items())
+    )
+    return [
+        {
+            "triangles": meshes.triangles,
+            "size": size,
+            "variant": v.name,
+            "median_ms": round(medians[v.name], 3),
+            "p10_ms": round(float(np.percentile(v.samples, 10)), 3),
+            "p90_ms": round(float(np.percentile(v.samples, 90)), 3),
+            "frames": len(v.samples),
+            "gl": gl or two_pass.gl_renderer,
+        }
+        for v in variants
+    ]
 
 
-def run(worker: PyrenderWorker | None, mesh_sets: list[MeshSet], sizes: list[int], frames: int,
-        warmup: int, block: int) -> list[dict]:
+def run(
+    worker: PyrenderWorker | None,
+    mesh_sets: list[MeshSet],
+    sizes: list[int],
+    frames: int,
+    warmup: int,
+    block: int,
+) -> list[dict]:
     import mirrorlab
 
     lab = mirrorlab.load_scene("lab20")
     rows: list[dict] = []
     # a renderer (and context) a variant, as a program drawing that scene would keep
     with contextlib.ExitStack() as stack:
-        renderers = [stack.enter_context(mirrorlab.Renderer((64, 64)))
-                     for _ in MIRRORLAB_VARIANTS]
+        renderers = [stack.enter_context(mirrorlab.Renderer((64, 64))) for _ in MIRRORLAB_VARIANTS]
         for meshes in mesh_sets:
             for size in sizes:
-                rows += time_configuration(renderers, worker, lab, meshes, size, frames,
-                                           warmup, block)
+                rows += time_configuration(
+                    renderers, worker, lab, meshes, size, frames, warmup, block
+                )
     return rows
 
 
 # --------------------------------------------------------------------------- scale
 
 
-SCALE_FAMILIES = ("mirrors unseen", "mirrors seen", "objects unseen", "objects seen",
-                  "tiny objects seen")
+SCALE_FAMILIES = (
+    "mirrors unseen",
+    "mirrors seen",
+    "objects unseen",
+    "objects seen",
+    "tiny objects seen",
+)
 """The scale scenes (:mod:`mirrorlab.benchmarks.scale`), each at several counts."""
 
 
@@ -268,14 +326,27 @@ def pyrender_meshes(scene, lab: MeshSet) -> list[dict]:
     meshes = [{"path": str(path), "color": list(color)} for path, color in lab.files]
     for item in scene.objects:
         if item.name.startswith("box_"):
-            meshes.append({"path": str(item.mesh), "color": list(item.color),
-                           "pose": item.transform.matrix().ravel().tolist()})
+            meshes.append(
+                {
+                    "path": str(item.mesh),
+                    "color": list(item.color),
+                    "pose": item.transform.matrix().ravel().tolist(),
+                }
+            )
     return meshes
 
 
-def scale_rows(worker: PyrenderWorker | None, lab: MeshSet, size: int, object_counts: list[int],
-               mirror_counts: list[int], modes: tuple[str, ...], frames: int, warmup: int,
-               block: int) -> list[dict]:
+def scale_rows(
+    worker: PyrenderWorker | None,
+    lab: MeshSet,
+    size: int,
+    object_counts: list[int],
+    mirror_counts: list[int],
+    modes: tuple[str, ...],
+    frames: int,
+    warmup: int,
+    block: int,
+) -> list[dict]:
     """Median frame times of the scale scenes: mirrorlab in each of ``modes``, and
     pyrender's flat frame of every scene without mirrors (it has none; with a
     ``worker``), interleaved."""
@@ -286,25 +357,37 @@ def scale_rows(worker: PyrenderWorker | None, lab: MeshSet, size: int, object_co
         for name, scene in scenes.items():
             if "mirrors" in name or worker is None:
                 continue
-            setup = worker.ask(cmd="setup", name=name, size=[size, size],
-                               meshes=pyrender_meshes(scene, lab),
-                               camera={"view": camera.view().ravel().tolist(),
-                                       "yfov": float(np.radians(camera.fovy)),
-                                       "znear": camera.near, "zfar": camera.far},
-                               light={"direction": list(scene.lights[0].direction),
-                                      "intensity": 3.0})
+            setup = worker.ask(
+                cmd="setup",
+                name=name,
+                size=[size, size],
+                meshes=pyrender_meshes(scene, lab),
+                camera={
+                    "view": camera.view().ravel().tolist(),
+                    "yfov": float(np.radians(camera.fovy)),
+                    "znear": camera.near,
+                    "zfar": camera.far,
+                },
+                light={"direction": list(scene.lights[0].direction), "intensity": 3.0},
+            )
             log(f"pyrender {name}: {setup['nodes']} nodes, {setup['triangles']} triangles")
-            variants.append(Variant(f"pyrender flat, {name}",
-                                    pyrender_variant(worker, "flat", name)))
+            variants.append(
+                Variant(f"pyrender flat, {name}", pyrender_variant(worker, "flat", name))
+            )
         interleave(variants, frames, warmup, block)
     bases = {_scale_parts(v.name)[0]: v for v in variants if v.name.endswith(", base")}
-    return [{"variant": v.name, "size": size,
-             "median_ms": round(statistics.median(v.samples), 3),
-             "p10_ms": round(float(np.percentile(v.samples, 10)), 3),
-             "p90_ms": round(float(np.percentile(v.samples, 90)), 3),
-             "to_base": round(paired_ratio(v.blocks, bases[_scale_parts(v.name)[0]].blocks),
-                              3),
-             "frames": len(v.samples)} for v in variants]
+    return [
+        {
+            "variant": v.name,
+            "size": size,
+            "median_ms": round(statistics.median(v.samples), 3),
+            "p10_ms": round(float(np.percentile(v.samples, 10)), 3),
+            "p90_ms": round(float(np.percentile(v.samples, 90)), 3),
+            "to_base": round(paired_ratio(v.blocks, bases[_scale_parts(v.name)[0]].blocks), 3),
+            "frames": len(v.samples),
+        }
+        for v in variants
+    ]
 
 
 def _scale_parts(variant: str) -> tuple[str, int, str]:
@@ -329,14 +412,18 @@ def scale_table(rows: list[dict]) -> str:
     has_pyrender = "pyrender flat" in kinds
     if has_pyrender:
         header += " | " + " | ".join(f"{kind} / pyrender flat" for kind in compare)
-    lines = [header + " |", "|---|" + "---:|" * (2 * len(kinds) + (len(compare)
-                                                                    if has_pyrender else 0))]
+    lines = [
+        header + " |",
+        "|---|" + "---:|" * (2 * len(kinds) + (len(compare) if has_pyrender else 0)),
+    ]
     for count, family in scenes:
         cells = []
         for kind in kinds:
             ms = by.get((kind, count, family))
-            cells += ["" if ms is None else f"{ms:.2f}",
-                      "" if ms is None else f"{to_base[kind, count, family]:.2f}x"]
+            cells += [
+                "" if ms is None else f"{ms:.2f}",
+                "" if ms is None else f"{to_base[kind, count, family]:.2f}x",
+            ]
         if has_pyrender:
             flat = by.get(("pyrender flat", count, family))
             for kind in compare:
@@ -352,8 +439,10 @@ def scale_growth_table(rows: list[dict]) -> str:
     and most items, and what each item adds to the base frame (µs, at the most items)."""
     by = {_scale_parts(r["variant"]): r["median_ms"] for r in rows}
     kinds = list(dict.fromkeys(_scale_parts(r["variant"])[0] for r in rows))
-    lines = ["| scene | renderer | counts | k in count | µs an item added to the base frame |",
-             "|---|---|---|---:|---:|"]
+    lines = [
+        "| scene | renderer | counts | k in count | µs an item added to the base frame |",
+        "|---|---|---|---:|---:|",
+    ]
     for family in SCALE_FAMILIES:
         for kind in kinds:
             counts = sorted(c for (k, c, f) in by if k == kind and f == family)
@@ -363,8 +452,9 @@ def scale_growth_table(rows: list[dict]) -> str:
             first, last = by[(kind, counts[0], family)], by[(kind, counts[-1], family)]
             k = growth_exponent([counts[0], counts[-1]], [first, last])
             added = (last - base) * 1e3 / counts[-1]
-            lines.append(f"| {family} | {kind} | {counts[0]:,} to {counts[-1]:,} | {k:.2f} | "
-                         f"{added:.2f} |")
+            lines.append(
+                f"| {family} | {kind} | {counts[0]:,} to {counts[-1]:,} | {k:.2f} | {added:.2f} |"
+            )
     return "\n".join(lines)
 
 
@@ -380,23 +470,31 @@ def ratio_table(rows: list[dict]) -> str:
     """Each configuration's medians, and their ratios to pyrender's frames when it ran."""
     by_key = {(r["triangles"], r["size"], r["variant"]): r["median_ms"] for r in rows}
     with_pyrender = any(r["variant"] in PYRENDER_VARIANTS for r in rows)
-    header = ("| triangles | size | two passes (ortho) ms | two passes (reflected) ms "
-              "| reused ms | one pass ms |")
+    header = (
+        "| triangles | size | two passes (ortho) ms | two passes (reflected) ms "
+        "| reused ms | one pass ms |"
+    )
     if with_pyrender:
-        header += (" pyrender default ms | pyrender flat ms | ortho two passes / flat "
-                   "| reflected two passes / flat | reused / flat | one pass / flat | ortho "
-                   "two passes / default | reused / default |")
+        header += (
+            " pyrender default ms | pyrender flat ms | ortho two passes / flat "
+            "| reflected two passes / flat | reused / flat | one pass / flat | ortho "
+            "two passes / default | reused / default |"
+        )
     lines = [header, "|" + "---:|" * (header.count("|") - 1)]
     for triangles, size in dict.fromkeys((r["triangles"], r["size"]) for r in rows):
-        two, reflected, reused, one = (by_key[(triangles, size, name)]
-                                       for name in MIRRORLAB_VARIANTS)
-        line = (f"| {triangles:,} | {size} | {two:.2f} | {reflected:.2f} | {reused:.2f} | "
-                f"{one:.2f} |")
+        two, reflected, reused, one = (
+            by_key[(triangles, size, name)] for name in MIRRORLAB_VARIANTS
+        )
+        line = (
+            f"| {triangles:,} | {size} | {two:.2f} | {reflected:.2f} | {reused:.2f} | {one:.2f} |"
+        )
         if with_pyrender:
             default, flat = (by_key[(triangles, size, name)] for name in PYRENDER_VARIANTS)
-            line += (f" {default:.2f} | {flat:.2f} | {two / flat:.2f}x | "
-                     f"{reflected / flat:.2f}x | {reused / flat:.2f}x | {one / flat:.2f}x | "
-                     f"{two / default:.2f}x | {reused / default:.2f}x |")
+            line += (
+                f" {default:.2f} | {flat:.2f} | {two / flat:.2f}x | "
+                f"{reflected / flat:.2f}x | {reused / flat:.2f}x | {one / flat:.2f}x | "
+                f"{two / default:.2f}x | {reused / default:.2f}x |"
+            )
         lines.append(line)
     return "\n".join(lines)
 
@@ -407,10 +505,15 @@ def growth_table(rows: list[dict]) -> str:
     by_key = {(r["triangles"], r["size"], r["variant"]): r["median_ms"] for r in rows}
     triangle_counts = sorted({r["triangles"] for r in rows})
     sizes = sorted({r["size"] for r in rows})
-    lines = ["| variant | " + " | ".join(
-        [f"k in pixels, {t:,} triangles" for t in triangle_counts]
-        + [f"k in triangles, {s}x{s}" for s in sizes]) + " |",
-        "|---|" + "---:|" * (len(triangle_counts) + len(sizes))]
+    lines = [
+        "| variant | "
+        + " | ".join(
+            [f"k in pixels, {t:,} triangles" for t in triangle_counts]
+            + [f"k in triangles, {s}x{s}" for s in sizes]
+        )
+        + " |",
+        "|---|" + "---:|" * (len(triangle_counts) + len(sizes)),
+    ]
     pixels = [s * s for s in sizes]
     for variant in variants:
         cells = []
@@ -419,8 +522,9 @@ def growth_table(rows: list[dict]) -> str:
             cells.append(f"{growth_exponent(pixels, times):.2f}" if len(sizes) > 1 else "")
         for size in sizes:
             times = [by_key[(t, size, variant)] for t in triangle_counts]
-            cells.append(f"{growth_exponent(triangle_counts, times):.2f}"
-                         if len(triangle_counts) > 1 else "")
+            cells.append(
+                f"{growth_exponent(triangle_counts, times):.2f}" if len(triangle_counts) > 1 else ""
+            )
         lines.append(f"| {variant} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
@@ -440,21 +544,32 @@ def plot(rows: list[dict]) -> bytes | None:
     sizes = sorted({r["size"] for r in rows})
     by_key = {(r["triangles"], r["size"], r["variant"]): r["median_ms"] for r in rows}
     figure, (by_pixels, by_triangles) = plt.subplots(1, 2, figsize=(12, 5))
-    colors = dict(zip(variants, plt.rcParams["axes.prop_cycle"].by_key()["color"],
-                      strict=False))
+    colors = dict(zip(variants, plt.rcParams["axes.prop_cycle"].by_key()["color"], strict=False))
     for triangles, style in ((triangle_counts[0], "-"), (triangle_counts[-1], "--")):
         for variant in variants:
             pixels = [s * s for s in sizes]
-            by_pixels.plot(pixels, [by_key[(triangles, s, variant)] for s in sizes], style,
-                           marker="o", color=colors[variant],
-                           label=f"{variant}, {triangles:,} tris")
+            by_pixels.plot(
+                pixels,
+                [by_key[(triangles, s, variant)] for s in sizes],
+                style,
+                marker="o",
+                color=colors[variant],
+                label=f"{variant}, {triangles:,} tris",
+            )
     for size, style in ((sizes[0], ":"), (512 if 512 in sizes else sizes[-1], "-")):
         for variant in variants:
-            by_triangles.plot(triangle_counts,
-                              [by_key[(t, size, variant)] for t in triangle_counts], style,
-                              marker="o", color=colors[variant], label=f"{variant}, {size}²")
-    for axes, amounts, label in ((by_pixels, [s * s for s in sizes], "pixels"),
-                                 (by_triangles, triangle_counts, "triangles")):
+            by_triangles.plot(
+                triangle_counts,
+                [by_key[(t, size, variant)] for t in triangle_counts],
+                style,
+                marker="o",
+                color=colors[variant],
+                label=f"{variant}, {size}²",
+            )
+    for axes, amounts, label in (
+        (by_pixels, [s * s for s in sizes], "pixels"),
+        (by_triangles, triangle_counts, "triangles"),
+    ):
         axes.set_xscale("log")
         axes.set_yscale("log")
         axes.set_xlabel(label)
@@ -474,23 +589,25 @@ def plot(rows: list[dict]) -> bytes | None:
     return buffer.getvalue()
 
 
-def report(rows: list[dict], scale: list[dict], out_dir: Path, how: str,
-           scale_how: str) -> str:
+def report(rows: list[dict], scale: list[dict], out_dir: Path, how: str, scale_how: str) -> str:
     """Write the report of ``rows`` (the sweep) and ``scale`` into ``out_dir`` and return
     its text; ``how`` and ``scale_how`` say how each one's figures were timed."""
     from mirrorlab.files import Outputs
 
     parts = []
     if not any(r["variant"].startswith("pyrender") for r in (*rows, *scale)):
-        parts.append("pyrender was not timed (give --pyrender PYTHON, the Python of an "
-                     f"environment with {' '.join(PYRENDER_PACKAGES)}, to time it beside "
-                     "these)")
+        parts.append(
+            "pyrender was not timed (give --pyrender PYTHON, the Python of an "
+            f"environment with {' '.join(PYRENDER_PACKAGES)}, to time it beside "
+            "these)"
+        )
     if rows:
         parts += [
             f"{how}; {rows[0]['gl']}",
             ratio_table(rows),
             "Growth of frame time (k in time ~ amount^k, first to last point; 1 is linear):",
-            growth_table(rows)]
+            growth_table(rows),
+        ]
     if scale:
         parts += [
             f"Scenes at scale, {scale[0]['size']}x{scale[0]['size']}: the lab scene with a "
@@ -500,7 +617,8 @@ def report(rows: list[dict], scale: list[dict], out_dir: Path, how: str,
             f"variants' medians in each round",
             scale_table(scale),
             "Growth with the number of items (k in time ~ count^k, fewest to most):",
-            scale_growth_table(scale)]
+            scale_growth_table(scale),
+        ]
     text = "\n\n".join(parts) + "\n"
     picture = plot(rows) if rows else None
     with Outputs() as outputs:
@@ -508,8 +626,7 @@ def report(rows: list[dict], scale: list[dict], out_dir: Path, how: str,
             if not table_rows:
                 continue
             buffer = io.StringIO()
-            writer = csv.DictWriter(buffer, fieldnames=list(table_rows[0]),
-                                    lineterminator="\n")
+            writer = csv.DictWriter(buffer, fieldnames=list(table_rows[0]), lineterminator="\n")
             writer.writeheader()
             writer.writerows(table_rows)
             outputs.add(out_dir / name, buffer.getvalue().encode())
@@ -534,14 +651,20 @@ def rows_from_csv(path: Path, required: bool = True) -> list[dict]:
             for key in ("triangles", "size", "frames"):
                 if key in row:
                     row[key] = int(row[key])
-            for key in ("median_ms", "p10_ms", "p90_ms", *(("to_base",) if path.name
-                                                            == "scale.csv" else ())):
+            for key in (
+                "median_ms",
+                "p10_ms",
+                "p90_ms",
+                *(("to_base",) if path.name == "scale.csv" else ()),
+            ):
                 row[key] = float(row[key])
             if not isinstance(row.get("variant"), str):
                 raise KeyError("variant")
     except (KeyError, ValueError, TypeError, UnicodeDecodeError) as exc:
-        raise OptionError("--from-csv", f"{path} is not a table this benchmark wrote "
-                          f"({type(exc).__name__}: {exc})") from None
+        raise OptionError(
+            "--from-csv",
+            f"{path} is not a table this benchmark wrote ({type(exc).__name__}: {exc})",
+        ) from None
     return rows
 
 
@@ -566,12 +689,25 @@ class SpeedSettings:
         """A run that checks the benchmark works, not its figures: 3 frames a variant at
         32x32 and 64x64, the lab meshes and their first subdivision, scale scenes of 3 and
         12 items at 64x64."""
-        return cls(sizes=(32, 64), levels=(0, 1), scale_size=64, object_counts=(3, 12),
-                   mirror_counts=(3, 12), frames=3, scale_frames=3, warmup=1, block=3)
+        return cls(
+            sizes=(32, 64),
+            levels=(0, 1),
+            scale_size=64,
+            object_counts=(3, 12),
+            mirror_counts=(3, 12),
+            frames=3,
+            scale_frames=3,
+            warmup=1,
+            block=3,
+        )
 
 
-def run_command(settings: SpeedSettings, out_dir: Path, pyrender: Path | None = None,
-                from_csv: Path | None = None) -> int:
+def run_command(
+    settings: SpeedSettings,
+    out_dir: Path,
+    pyrender: Path | None = None,
+    from_csv: Path | None = None,
+) -> int:
     """Time (or, with ``from_csv``, re-make the report of a saved ``speed.csv`` and the
     ``scale.csv`` beside it), write the report into ``out_dir`` and print it."""
     if from_csv is not None:
@@ -582,17 +718,40 @@ def run_command(settings: SpeedSettings, out_dir: Path, pyrender: Path | None = 
         worker = PyrenderWorker(pyrender) if pyrender is not None else None
         try:
             mesh_sets = write_mesh_sets(out_dir / "meshes", settings.levels)
-            rows = run(worker, mesh_sets, list(settings.sizes), settings.frames,
-                       settings.warmup, settings.block) if "sweep" in settings.parts else []
-            scale_results = scale_rows(
-                worker, mesh_sets[0], settings.scale_size, list(settings.object_counts),
-                list(settings.mirror_counts), settings.modes, settings.scale_frames,
-                settings.warmup, settings.block) if "scale" in settings.parts else []
+            rows = (
+                run(
+                    worker,
+                    mesh_sets,
+                    list(settings.sizes),
+                    settings.frames,
+                    settings.warmup,
+                    settings.block,
+                )
+                if "sweep" in settings.parts
+                else []
+            )
+            scale_results = (
+                scale_rows(
+                    worker,
+                    mesh_sets[0],
+                    settings.scale_size,
+                    list(settings.object_counts),
+                    list(settings.mirror_counts),
+                    settings.modes,
+                    settings.scale_frames,
+                    settings.warmup,
+                    settings.block,
+                )
+                if "scale" in settings.parts
+                else []
+            )
         finally:
             if worker is not None:
                 worker.close()
-        how, scale_how = (f"{frames} timed frames a variant after {settings.warmup} "
-                          f"warm-up, in turns of {settings.block}"
-                          for frames in (settings.frames, settings.scale_frames))
+        how, scale_how = (
+            f"{frames} timed frames a variant after {settings.warmup} "
+            f"warm-up, in turns of {settings.block}"
+            for frames in (settings.frames, settings.scale_frames)
+        )
     sys.stdout.write(report(rows, scale_results, out_dir, how, scale_how))
     return 0

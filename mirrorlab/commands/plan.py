@@ -11,14 +11,20 @@ from mirrorlab.plan import TINY_PIXELS, FramePlan, TextureState, plan_frame
 from mirrorlab.scene.model import Scene
 
 
-def plan_frames(scene: Scene, size: tuple[int, int], frames: int, use_plan: bool = True,
-                tiny_pixels: float = TINY_PIXELS) -> list[FramePlan]:
+def plan_frames(
+    scene: Scene,
+    size: tuple[int, int],
+    frames: int,
+    use_plan: bool = True,
+    tiny_pixels: float = TINY_PIXELS,
+) -> list[FramePlan]:
     """The plans of frames 0 .. ``frames`` - 1, each knowing what the earlier ones made."""
     state = TextureState()
     plans = []
     for frame in range(frames):
-        plan = plan_frame(scene.at_frame(min(frame, scene.frame_count - 1)), size, state,
-                          use_plan, tiny_pixels)
+        plan = plan_frame(
+            scene.at_frame(min(frame, scene.frame_count - 1)), size, state, use_plan, tiny_pixels
+        )
         for step in plan.ran:
             if step.reflector is not None:
                 state.record(step)
@@ -28,25 +34,42 @@ def plan_frames(scene: Scene, size: tuple[int, int], frames: int, use_plan: bool
 
 def plan_document(plans: list[FramePlan]) -> list[dict]:
     """The plans as JSON-ready dicts: each frame's passes and how each reflector is drawn."""
-    return [{"frame": frame,
-             "passes": [step.as_dict() for step in plan.passes],
-             "draws": [{"reflector": d.reflector.name, "mode": d.mode, "reason": d.reason}
-                       for d in plan.top.draws]}
-            for frame, plan in enumerate(plans)]
+    return [
+        {
+            "frame": frame,
+            "passes": [step.as_dict() for step in plan.passes],
+            "draws": [
+                {"reflector": d.reflector.name, "mode": d.mode, "reason": d.reason}
+                for d in plan.top.draws
+            ],
+        }
+        for frame, plan in enumerate(plans)
+    ]
 
 
-def run_plan(scene: Scene, size: tuple[int, int], frames: int, as_json: bool,
-             use_plan: bool, say: Callable[[str], None] = print,
-             tiny_pixels: float = TINY_PIXELS) -> int:
+def run_plan(
+    scene: Scene,
+    size: tuple[int, int],
+    frames: int,
+    as_json: bool,
+    use_plan: bool,
+    say: Callable[[str], None] = print,
+    tiny_pixels: float = TINY_PIXELS,
+) -> int:
     plans = plan_frames(scene, size, frames, use_plan, tiny_pixels)
     if as_json:
-        say(json.dumps({"scene": scene.name, "size": list(size),
-                        "frames": plan_document(plans)}, indent=2))
+        say(
+            json.dumps(
+                {"scene": scene.name, "size": list(size), "frames": plan_document(plans)}, indent=2
+            )
+        )
         return 0
     for frame, plan in enumerate(plans):
         ran = sum(1 for p in plan.passes if p.runs)
-        say(f"frame {frame}: {ran} pass{'es' if ran != 1 else ''} run, "
-            f"{len(plan.passes) - ran} skipped")
+        say(
+            f"frame {frame}: {ran} pass{'es' if ran != 1 else ''} run, "
+            f"{len(plan.passes) - ran} skipped"
+        )
         for line in plan.describe():
             say(f"  {line}")
     return 0

@@ -15,11 +15,19 @@ from mirrorlab.plan import TINY_PIXELS
 from mirrorlab.scene.model import Scene
 
 
-def run_render(scene: Scene, size: tuple[int, int], out: Path, frames: list[int],
-               stats: bool = False, use_plan: bool = True,
-               save_env: Path | None = None, frame_technique: str | None = None,
-               say: Callable[[str], None] = print, debug: bool = False,
-               tiny_pixels: float = TINY_PIXELS) -> int:
+def run_render(
+    scene: Scene,
+    size: tuple[int, int],
+    out: Path,
+    frames: list[int],
+    stats: bool = False,
+    use_plan: bool = True,
+    save_env: Path | None = None,
+    frame_technique: str | None = None,
+    say: Callable[[str], None] = print,
+    debug: bool = False,
+    tiny_pixels: float = TINY_PIXELS,
+) -> int:
     """Render ``frames`` of ``scene`` in order; the last goes to ``out`` (with ``save_env``,
     its capture texture too), all files together at the end, or none. With ``stats``, each
     frame is also drawn with every pass (--no-plan) by a second renderer, in turn with the
@@ -38,10 +46,11 @@ def run_render(scene: Scene, size: tuple[int, int], out: Path, frames: list[int]
                 image = draw_frame(scene.at_frame(frame), size, progress=True)
             outputs.add_png(out, image)
             if save_env is not None:
-                say(f"no capture texture when drawn by {frame_technique}; {save_env} not "
-                    f"written")
-            say(f"wrote {out} ({size[0]}x{size[1]}, {scene.name}, drawn by "
-                f"{frame_technique}, {(time.perf_counter() - start) * 1e3:.0f} ms)")
+                say(f"no capture texture when drawn by {frame_technique}; {save_env} not written")
+            say(
+                f"wrote {out} ({size[0]}x{size[1]}, {scene.name}, drawn by "
+                f"{frame_technique}, {(time.perf_counter() - start) * 1e3:.0f} ms)"
+            )
             return 0
         from mirrorlab.api import Renderer
 
@@ -58,8 +67,9 @@ def run_render(scene: Scene, size: tuple[int, int], out: Path, frames: list[int]
                 if compare and index % 2:  # take turns at going first
                     comparison.append(_unplanned(unplanned, scene, frame))
                 began = time.perf_counter()
-                image = renderer.render(scene, frame=frame, use_plan=use_plan,
-                                        tiny_pixels=tiny_pixels)
+                image = renderer.render(
+                    scene, frame=frame, use_plan=use_plan, tiny_pixels=tiny_pixels
+                )
                 elapsed = (time.perf_counter() - began) * 1e3
                 assert renderer.last_stats is not None
                 records.append((frame, renderer.last_stats, elapsed, image))
@@ -73,15 +83,18 @@ def run_render(scene: Scene, size: tuple[int, int], out: Path, frames: list[int]
             gl_renderer = renderer.gl_renderer
     last = records[-1][1]
     total = (time.perf_counter() - start) * 1e3
-    say(f"wrote {out} ({size[0]}x{size[1]}, {scene.name}, "
+    say(
+        f"wrote {out} ({size[0]}x{size[1]}, {scene.name}, "
         f"{'frame' if len(frames) == 1 else 'frames'} {_span(frames)}, last frame's passes: "
-        f"{' + '.join(last.ran)}, {total:.0f} ms with start-up, {gl_renderer})")
+        f"{' + '.join(last.ran)}, {total:.0f} ms with start-up, {gl_renderer})"
+    )
     if save_env is not None:
         if environment is None:
             say(f"scene {scene.name} has no capture texture to save; {save_env} not written")
         else:
-            say(f"wrote {save_env} (capture texture, {environment.shape[1]}x"
-                f"{environment.shape[0]})")
+            say(
+                f"wrote {save_env} (capture texture, {environment.shape[1]}x{environment.shape[0]})"
+            )
     if stats:
         _report(records, comparison, use_plan, say)
     return 0
@@ -102,8 +115,10 @@ def _environment(renderer, scene: Scene) -> np.ndarray | None:
     from mirrorlab.techniques import technique
 
     for reflector in scene.reflectors:
-        if isinstance(reflector, PlanarReflector) and not technique(
-                reflector.technique).draws_inline:
+        if (
+            isinstance(reflector, PlanarReflector)
+            and not technique(reflector.technique).draws_inline
+        ):
             try:
                 return renderer.read_texture(reflector.name)
             except ValueError:
@@ -125,36 +140,48 @@ def differing_pixels(a: np.ndarray, b: np.ndarray) -> int:
 
 
 def _report(records, comparison, use_plan: bool, say: Callable[[str], None]) -> None:
-    differing = [differing_pixels(image, unplanned) for (*_, image), (*_, unplanned)
-                 in zip(records, comparison, strict=False)]
+    differing = [
+        differing_pixels(image, unplanned)
+        for (*_, image), (*_, unplanned) in zip(records, comparison, strict=False)
+    ]
     for index, (frame, stats, elapsed, _) in enumerate(records):
         skips = f"; skipped {', '.join(stats.skipped)}" if stats.skipped else ""
         against = ""
         if index < len(differing):
-            against = ("; the same as --no-plan" if not differing[index] else
-                       f"; {differing[index]} pixels differ from --no-plan")
-        say(f"frame {frame}: ran {', '.join(stats.ran)}{skips} ({elapsed:.1f} ms"
-            f"{against})")
+            against = (
+                "; the same as --no-plan"
+                if not differing[index]
+                else f"; {differing[index]} pixels differ from --no-plan"
+            )
+        say(f"frame {frame}: ran {', '.join(stats.ran)}{skips} ({elapsed:.1f} ms{against})")
     ran = [len(stats.plan.ran) for _, stats, _, _ in records]
     skipped = [len(stats.plan.skipped) for _, stats, _, _ in records]
     times = [elapsed for _, _, elapsed, _ in records]
     label = "planned" if use_plan else "every pass (--no-plan)"
-    say(f"{label}: {sum(ran)} passes run and {sum(skipped)} skipped over {len(records)} "
-        f"frames; median {np.median(times):.2f} ms a frame, {sum(times):.0f} ms in all")
+    say(
+        f"{label}: {sum(ran)} passes run and {sum(skipped)} skipped over {len(records)} "
+        f"frames; median {np.median(times):.2f} ms a frame, {sum(times):.0f} ms in all"
+    )
     if comparison:
         passes = sum(count for count, _, _ in comparison)
         unplanned = [ms for _, ms, _ in comparison]
-        say(f"--no-plan on the same frames: {passes} passes run; median "
+        say(
+            f"--no-plan on the same frames: {passes} passes run; median "
             f"{np.median(unplanned):.2f} ms a frame, {sum(unplanned):.0f} ms in all; planning "
             f"saved {passes - sum(ran)} passes and {sum(unplanned) - sum(times):.0f} ms "
-            f"({_share(sum(times), sum(unplanned))})")
+            f"({_share(sum(times), sum(unplanned))})"
+        )
         changed = [d for d in differing if d]
         if not changed:
-            say(f"planned and --no-plan frames are the same, pixel for pixel, in all "
-                f"{len(differing)} frames")
+            say(
+                f"planned and --no-plan frames are the same, pixel for pixel, in all "
+                f"{len(differing)} frames"
+            )
         else:
-            say(f"planned and --no-plan frames differ in {len(changed)} of {len(differing)} "
-                f"frames: {sum(changed)} pixels in all, at most {max(changed)} in a frame")
+            say(
+                f"planned and --no-plan frames differ in {len(changed)} of {len(differing)} "
+                f"frames: {sum(changed)} pixels in all, at most {max(changed)} in a frame"
+            )
 
 
 def _share(planned: float, unplanned: float) -> str:

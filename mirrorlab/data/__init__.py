@@ -18,8 +18,10 @@ def data_path(*parts: str) -> Path:
     scene graph asks for its meshes whenever it is posed.)"""
     root = files(__name__)
     if not isinstance(root, Path):
-        raise RuntimeError(f"mirrorlab's data is not on the file system ({root}); install "
-                           f"mirrorlab as a wheel or from a source folder, not as a zip")
+        raise RuntimeError(
+            f"mirrorlab's data is not on the file system ({root}); install "
+            f"mirrorlab as a wheel or from a source folder, not as a zip"
+        )
     return root.joinpath(*parts)
 
 

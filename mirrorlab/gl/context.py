@@ -88,12 +88,12 @@ def check_libraries(platform: Platform) -> None:
             ctypes.CDLL(filename)
         except OSError as exc:
             if platform in DRIVER_PACKAGES:
-                advice = (f"install the Debian packages {package} "
-                          f"{DRIVER_PACKAGES[platform]}")
+                advice = f"install the Debian packages {package} {DRIVER_PACKAGES[platform]}"
             else:
                 advice = f"{package}: {INSTALL_HINT[platform]}"
             raise GLContextError(
-                f"cannot load the OpenGL library {filename} ({exc}); {advice}") from None
+                f"cannot load the OpenGL library {filename} ({exc}); {advice}"
+            ) from None
 
 
 def system_platform(system: str) -> Literal["linux", "nt", "darwin"]:
@@ -124,9 +124,17 @@ class Choice:
     core: bool
 
 
-def choose_backend(purpose: Purpose, system: str, *, egl: bool, display: bool,
-                   environ: Mapping[str, str], bound: str | None = None,
-                   backend: str | None = None, core: bool | None = None) -> Choice:
+def choose_backend(
+    purpose: Purpose,
+    system: str,
+    *,
+    egl: bool,
+    display: bool,
+    environ: Mapping[str, str],
+    bound: str | None = None,
+    backend: str | None = None,
+    core: bool | None = None,
+) -> Choice:
     """Pick how to make a context; a pure function (no GL, nothing loaded).
 
     ``purpose`` is ``'offscreen'`` (frames read back) or ``'window'`` (a visible window);
@@ -150,34 +158,38 @@ def choose_backend(purpose: Purpose, system: str, *, egl: bool, display: bool,
     wanted = wanted.strip().lower() or "auto"
     if wanted not in BACKEND_VALUES:
         raise GLBackendError(
-            f"{source}={wanted!r} is not a backend; expected one of "
-            f"{', '.join(BACKEND_VALUES)}")
+            f"{source}={wanted!r} is not a backend; expected one of {', '.join(BACKEND_VALUES)}"
+        )
     if core is None:
         flag = environ.get(CORE_VARIABLE, "").strip() or "0"
         if flag not in CORE_VALUES:
             raise GLBackendError(
                 f"{CORE_VARIABLE}={flag!r} is not allowed; expected 1 (ask for an OpenGL "
-                f"4.1 core context) or 0")
+                f"4.1 core context) or 0"
+            )
         core = flag == "1"
     core = core or kind == "darwin"  # macOS gives 2.1 legacy unless asked for 4.1 core
     if purpose == "window":
         if kind == "linux" and not display:
             raise GLContextError(
                 "no display for a window (DISPLAY is not set); run it on a desktop or "
-                "under 'xvfb-run -a', or use 'mirrorlab render', which needs no display")
+                "under 'xvfb-run -a', or use 'mirrorlab render', which needs no display"
+            )
         return Choice("window", window, core)
     hidden = Choice("hidden-window", window, core)
     if wanted == "egl":
         if kind != "linux":
             raise GLContextError(
                 f"{BACKEND_VARIABLE}=egl: EGL is used on Linux only, not on {system}; "
-                f"unset it or set it to hidden-window")
+                f"unset it or set it to hidden-window"
+            )
         return Choice("egl", "egl", core)
     if wanted == "hidden-window":
         if kind == "linux" and not display:
             raise GLContextError(
                 f"{BACKEND_VARIABLE}=hidden-window needs a display (DISPLAY is not set); "
-                f"run under 'xvfb-run -a', or unset it to render with EGL")
+                f"run under 'xvfb-run -a', or unset it to render with EGL"
+            )
         return hidden
     if kind != "linux":
         return hidden
@@ -191,7 +203,8 @@ def choose_backend(purpose: Purpose, system: str, *, egl: bool, display: bool,
         f"no OpenGL for offscreen rendering: libEGL.so.1 cannot be loaded and there is "
         f"no display (DISPLAY is not set); install the Debian packages libegl1 "
         f"{DEBIAN_GL_PACKAGES} for EGL, or run under a display (a desktop, or "
-        f"'xvfb-run -a') to render in a hidden window")
+        f"'xvfb-run -a') to render in a hidden window"
+    )
 
 
 def _egl_loads() -> bool:
@@ -206,18 +219,29 @@ def _has_display(system: str) -> bool:
     return system_platform(system) != "linux" or bool(os.environ.get("DISPLAY"))
 
 
-def choose(purpose: Purpose, *, backend: str | None = None, core: bool | None = None,
-           new_process: bool = False) -> Choice:
+def choose(
+    purpose: Purpose,
+    *,
+    backend: str | None = None,
+    core: bool | None = None,
+    new_process: bool = False,
+) -> Choice:
     """:func:`choose_backend` for this machine and process: ``sys.platform``, whether
     ``libEGL.so.1`` loads (tried on Linux only), ``DISPLAY``, the environment, and the
     platform PyOpenGL is bound to in this process (not with ``new_process``: the choice
     for a process started from this one)."""
     system = sys.platform
     linux = system_platform(system) == "linux"
-    return choose_backend(purpose, system, egl=linux and _egl_loads(),
-                          display=_has_display(system), environ=os.environ,
-                          bound=None if new_process else loaded_platform(),
-                          backend=backend, core=core)
+    return choose_backend(
+        purpose,
+        system,
+        egl=linux and _egl_loads(),
+        display=_has_display(system),
+        environ=os.environ,
+        bound=None if new_process else loaded_platform(),
+        backend=backend,
+        core=core,
+    )
 
 
 def _opengl_imported() -> bool:
@@ -226,8 +250,7 @@ def _opengl_imported() -> bool:
 
 _chosen: list[str] = []
 """The platform mirrorlab set before OpenGL was imported (empty: none yet)."""
-PURPOSE = {"egl": "headless rendering", "glx": "a window", "nt": "a window",
-           "darwin": "a window"}
+PURPOSE = {"egl": "headless rendering", "glx": "a window", "nt": "a window", "darwin": "a window"}
 
 
 def loaded_platform() -> str | None:
@@ -263,11 +286,13 @@ def use_platform(name: Platform) -> None:
                 f"OpenGL was imported before mirrorlab chose its platform, and PyOpenGL "
                 f"bound this process to {loaded!r}; {PURPOSE[name]} needs {name!r}: import "
                 f"mirrorlab.gl before OpenGL, or set PYOPENGL_PLATFORM={name} before "
-                f"Python starts")
+                f"Python starts"
+            )
         if loaded != name:
             raise GLContextError(
                 f"this process already uses OpenGL through {loaded!r}; {PURPOSE[name]} "
-                f"needs {name!r}, in a process of its own")
+                f"needs {name!r}, in a process of its own"
+            )
     else:
         os.environ["PYOPENGL_PLATFORM"] = name
         _chosen[:] = [name]
@@ -348,9 +373,21 @@ class ResourceRegistry:
         return count
 
 
-_SIMPLE = (ctypes.c_uint, ctypes.c_int, ctypes.c_ubyte, ctypes.c_float, ctypes.c_double,
-           ctypes.c_void_p, ctypes.c_ushort, ctypes.c_short, ctypes.c_byte,
-           ctypes.c_uint64, ctypes.c_int64, ctypes.c_size_t, ctypes.c_ssize_t)
+_SIMPLE = (
+    ctypes.c_uint,
+    ctypes.c_int,
+    ctypes.c_ubyte,
+    ctypes.c_float,
+    ctypes.c_double,
+    ctypes.c_void_p,
+    ctypes.c_ushort,
+    ctypes.c_short,
+    ctypes.c_byte,
+    ctypes.c_uint64,
+    ctypes.c_int64,
+    ctypes.c_size_t,
+    ctypes.c_ssize_t,
+)
 
 
 @functools.lru_cache(maxsize=512)
@@ -363,14 +400,20 @@ def unchecked(function: Callable[..., Any]) -> Callable[..., Any]:
     from OpenGL.platform.baseplatform import _NullFunctionPointer
 
     entry = getattr(function, "wrappedOperation", function)
-    if not isinstance(entry, _NullFunctionPointer) or (entry is not function and not all(
-            t in _SIMPLE for t in entry.argtypes)):
+    if not isinstance(entry, _NullFunctionPointer) or (
+        entry is not function and not all(t in _SIMPLE for t in entry.argtypes)
+    ):
         return function
     try:
         return platform.PLATFORM.constructFunction(
-            entry.__name__, entry.DLL, resultType=entry.restype, argTypes=entry.argtypes,
-            argNames=entry.argNames, extension=entry.extension,
-            force_extension=entry.force_extension)
+            entry.__name__,
+            entry.DLL,
+            resultType=entry.restype,
+            argTypes=entry.argtypes,
+            argNames=entry.argNames,
+            extension=entry.extension,
+            force_extension=entry.force_extension,
+        )
     except AttributeError:  # pragma: no cover - the entry point was found before
         return function
 
@@ -420,8 +463,9 @@ class gl_pass:
     def __enter__(self) -> None:
         return None
 
-    def __exit__(self, kind: type[BaseException] | None, exc: BaseException | None,
-                 traceback: object) -> None:
+    def __exit__(
+        self, kind: type[BaseException] | None, exc: BaseException | None, traceback: object
+    ) -> None:
         if kind is None:
             check_gl_errors(self.name)
             return
@@ -443,8 +487,14 @@ def discard_debug_errors() -> None:
     judged a GL error itself (the labs' executor, whose student made it)."""
     _debug_errors.clear()
 
-_DEBUG_CODES = {"out of memory": 0x0505, "invalid enum": 0x0500, "invalid value": 0x0501,
-                "invalid operation": 0x0502, "invalid framebuffer": 0x0506}
+
+_DEBUG_CODES = {
+    "out of memory": 0x0505,
+    "invalid enum": 0x0500,
+    "invalid value": 0x0501,
+    "invalid operation": 0x0502,
+    "invalid framebuffer": 0x0506,
+}
 
 
 def enable_debug_output() -> None:
@@ -481,8 +531,9 @@ def gl_extensions() -> frozenset[str]:
     from OpenGL import GL
 
     count = int(GL.glGetIntegerv(GL.GL_NUM_EXTENSIONS))
-    return frozenset(GL.glGetStringi(GL.GL_EXTENSIONS, i).decode(errors="replace")
-                     for i in range(count))
+    return frozenset(
+        GL.glGetStringi(GL.GL_EXTENSIONS, i).decode(errors="replace") for i in range(count)
+    )
 
 
 MULTI_DRAW_VERSION = (4, 3)
@@ -506,8 +557,10 @@ def require_gl_version(needed: tuple[int, int], what: str) -> None:
 
         text = GL.glGetString(GL.GL_VERSION).decode(errors="replace")
         renderer = GL.glGetString(GL.GL_RENDERER).decode(errors="replace")
-        raise GLVersionError(f"{what} needs OpenGL {needed[0]}.{needed[1]}; this context "
-                             f"has OpenGL {text} ({renderer})")
+        raise GLVersionError(
+            f"{what} needs OpenGL {needed[0]}.{needed[1]}; this context "
+            f"has OpenGL {text} ({renderer})"
+        )
 
 
 class Context:
@@ -584,8 +637,7 @@ class HeadlessContext(Context):
             from OpenGL import EGL
         except Exception as exc:  # pragma: no cover - depends on the machine
             raise GLContextError(
-                f"cannot load EGL ({exc}); install the Debian packages "
-                f"libegl1 {DEBIAN_GL_PACKAGES}"
+                f"cannot load EGL ({exc}); install the Debian packages libegl1 {DEBIAN_GL_PACKAGES}"
             ) from exc
         self._egl = EGL
         self.core = core
@@ -601,32 +653,50 @@ class HeadlessContext(Context):
         config = EGL.EGLConfig()
         count = EGL.EGLint()
         # EGL_SURFACE_TYPE defaults to windows, which the surfaceless platform has none of.
-        attributes = (EGL.EGLint * 5)(EGL.EGL_SURFACE_TYPE, EGL.EGL_PBUFFER_BIT,
-                                      EGL.EGL_RENDERABLE_TYPE, EGL.EGL_OPENGL_BIT, EGL.EGL_NONE)
-        if not EGL.eglChooseConfig(
-            self.display, attributes, ctypes.pointer(config), 1, ctypes.pointer(count)
-        ) or count.value < 1:
+        attributes = (EGL.EGLint * 5)(
+            EGL.EGL_SURFACE_TYPE,
+            EGL.EGL_PBUFFER_BIT,
+            EGL.EGL_RENDERABLE_TYPE,
+            EGL.EGL_OPENGL_BIT,
+            EGL.EGL_NONE,
+        )
+        if (
+            not EGL.eglChooseConfig(
+                self.display, attributes, ctypes.pointer(config), 1, ctypes.pointer(count)
+            )
+            or count.value < 1
+        ):
             raise GLContextError("EGL has no config for desktop OpenGL (is Mesa installed?)")
         EGL.eglBindAPI(EGL.EGL_OPENGL_API)
         asked: list[int] = []
         if core:
-            asked += [_EGL_CONTEXT_MAJOR_VERSION, CORE_VERSION[0],
-                      _EGL_CONTEXT_MINOR_VERSION, CORE_VERSION[1],
-                      _EGL_CONTEXT_OPENGL_PROFILE_MASK, _EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
-                      _EGL_CONTEXT_OPENGL_FORWARD_COMPATIBLE, EGL.EGL_TRUE]
+            asked += [
+                _EGL_CONTEXT_MAJOR_VERSION,
+                CORE_VERSION[0],
+                _EGL_CONTEXT_MINOR_VERSION,
+                CORE_VERSION[1],
+                _EGL_CONTEXT_OPENGL_PROFILE_MASK,
+                _EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                _EGL_CONTEXT_OPENGL_FORWARD_COMPATIBLE,
+                EGL.EGL_TRUE,
+            ]
         if debug:
             asked += [_EGL_CONTEXT_OPENGL_DEBUG, EGL.EGL_TRUE]
         flags = (EGL.EGLint * (len(asked) + 1))(*asked, EGL.EGL_NONE) if asked else None
         self.context = EGL.eglCreateContext(self.display, config, EGL.EGL_NO_CONTEXT, flags)
         if not self.context:
-            what = (f"an OpenGL {CORE_VERSION[0]}.{CORE_VERSION[1]} core context"
-                    if core else "desktop OpenGL")
+            what = (
+                f"an OpenGL {CORE_VERSION[0]}.{CORE_VERSION[1]} core context"
+                if core
+                else "desktop OpenGL"
+            )
             raise GLContextError(f"eglCreateContext failed for {what}")
         self._address = ctypes.cast(self.context, ctypes.c_void_p).value
         # The current context's address, as a number: PyOpenGL's entry point returns an
         # opaque pointer that costs a cast to compare, and a frame asks every time.
         self._current = ctypes.CFUNCTYPE(ctypes.c_void_p)(
-            ("eglGetCurrentContext", EGL.eglGetCurrentContext.DLL))
+            ("eglGetCurrentContext", EGL.eglGetCurrentContext.DLL)
+        )
         super().__init__()
         self.make_current()
         if debug:
@@ -636,8 +706,9 @@ class HeadlessContext(Context):
         if self._current() == self._address:  # a query: cheaper than making it current
             return
         egl = self._egl
-        if not egl.eglMakeCurrent(self.display, egl.EGL_NO_SURFACE, egl.EGL_NO_SURFACE,
-                                  self.context):
+        if not egl.eglMakeCurrent(
+            self.display, egl.EGL_NO_SURFACE, egl.EGL_NO_SURFACE, self.context
+        ):
             raise GLContextError("eglMakeCurrent failed (surfaceless contexts need Mesa)")
 
     def _destroy(self) -> None:
@@ -645,8 +716,7 @@ class HeadlessContext(Context):
 
         egl = self._egl
         contextdata.cleanupContext()  # PyOpenGL's own per-context records (this one is current)
-        egl.eglMakeCurrent(self.display, egl.EGL_NO_SURFACE, egl.EGL_NO_SURFACE,
-                           egl.EGL_NO_CONTEXT)
+        egl.eglMakeCurrent(self.display, egl.EGL_NO_SURFACE, egl.EGL_NO_SURFACE, egl.EGL_NO_CONTEXT)
         egl.eglDestroyContext(self.display, self.context)
 
 
@@ -666,8 +736,15 @@ class WindowContext(Context):
     :meth:`release` (or use as a context manager) to close the window.
     """
 
-    def __init__(self, width: int, height: int, title: str, visible: bool = True,
-                 debug: bool = False, core: bool = False) -> None:
+    def __init__(
+        self,
+        width: int,
+        height: int,
+        title: str,
+        visible: bool = True,
+        debug: bool = False,
+        core: bool = False,
+    ) -> None:
         kind = system_platform(sys.platform)
         platform = window_platform(sys.platform)
         use_platform(platform)
@@ -675,7 +752,8 @@ class WindowContext(Context):
         if kind == "linux" and not display:
             raise GLContextError(
                 "no display for a window (DISPLAY is not set); run it on a desktop or "
-                "under 'xvfb-run -a', or use 'mirrorlab render', which needs no display")
+                "under 'xvfb-run -a', or use 'mirrorlab render', which needs no display"
+            )
         check_libraries(platform)
         import glfw
 
@@ -691,7 +769,8 @@ class WindowContext(Context):
             if not glfw.init():
                 raise GLContextError(
                     f"cannot open {where} for a window (is the X server running?); or "
-                    f"use 'mirrorlab render', which needs no display")
+                    f"use 'mirrorlab render', which needs no display"
+                )
         glfw.default_window_hints()
         glfw.window_hint(glfw.VISIBLE, glfw.TRUE if visible else glfw.FALSE)
         glfw.window_hint(glfw.DEPTH_BITS, 24)
@@ -706,10 +785,16 @@ class WindowContext(Context):
         if not self.window:
             if not _glfw_windows:
                 glfw.terminate()
-            what = (f"an OpenGL {CORE_VERSION[0]}.{CORE_VERSION[1]} core context"
-                    if core else "an OpenGL context")
-            advice = (f"install the Debian packages libgl1 {DRIVER_PACKAGES['glx']}"
-                      if kind == "linux" else "update the graphics driver")
+            what = (
+                f"an OpenGL {CORE_VERSION[0]}.{CORE_VERSION[1]} core context"
+                if core
+                else "an OpenGL context"
+            )
+            advice = (
+                f"install the Debian packages libgl1 {DRIVER_PACKAGES['glx']}"
+                if kind == "linux"
+                else "update the graphics driver"
+            )
             raise GLContextError(f"cannot create a window with {what} on {where}; {advice}")
         _glfw_windows.append(self.window)
         super().__init__()
@@ -745,8 +830,9 @@ HIDDEN_WINDOW_SIZE = (16, 16)
 """The hidden window's own size: its frames go to framebuffer objects of any size."""
 
 
-def offscreen_context(debug: bool = False, *, backend: str | None = None,
-                      core: bool | None = None) -> HeadlessContext | WindowContext:
+def offscreen_context(
+    debug: bool = False, *, backend: str | None = None, core: bool | None = None
+) -> HeadlessContext | WindowContext:
     """A context for rendering into framebuffer objects and reading frames back, made the
     way :func:`choose` picks for this machine: EGL (Linux), else a hidden glfw window
     (macOS, Windows, Linux with a display but no EGL). ``backend`` (``'auto'``, ``'egl'``,
@@ -758,12 +844,14 @@ def offscreen_context(debug: bool = False, *, backend: str | None = None,
     choice = choose("offscreen", backend=backend, core=core)
     if choice.backend == "egl":
         return HeadlessContext(debug=debug, core=choice.core)
-    return WindowContext(*HIDDEN_WINDOW_SIZE, "mirrorlab", visible=False, debug=debug,
-                         core=choice.core)
+    return WindowContext(
+        *HIDDEN_WINDOW_SIZE, "mirrorlab", visible=False, debug=debug, core=choice.core
+    )
 
 
-def window_context(width: int, height: int, title: str, debug: bool = False, *,
-                   core: bool | None = None) -> WindowContext:
+def window_context(
+    width: int, height: int, title: str, debug: bool = False, *, core: bool | None = None
+) -> WindowContext:
     """A visible glfw window of ``width`` x ``height`` screen units titled ``title`` (the
     demo's, ``lab run``'s); ``core`` overrides :data:`CORE_VARIABLE` (macOS: always core).
 
@@ -779,6 +867,9 @@ def gl_info() -> dict[str, str]:
 
     return {
         key: GL.glGetString(name).decode()
-        for key, name in (("version", GL.GL_VERSION), ("renderer", GL.GL_RENDERER),
-                          ("vendor", GL.GL_VENDOR))
+        for key, name in (
+            ("version", GL.GL_VERSION),
+            ("renderer", GL.GL_RENDERER),
+            ("vendor", GL.GL_VENDOR),
+        )
     }

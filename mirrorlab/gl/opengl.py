@@ -16,14 +16,44 @@ from mirrorlab.gl import context as _context  # noqa: F401  (sets PYOPENGL_PLATF
 from OpenGL import GL  # isort: skip
 from OpenGL.raw.GL.VERSION import GL_1_0, GL_1_3, GL_1_5, GL_2_0, GL_3_0, GL_3_2  # isort: skip
 
-RAW = SimpleNamespace(**{name: getattr(module, name) for module, names in (
-    (GL_1_0, ("glIsEnabled", "glGetIntegerv", "glGetBooleanv", "glGetFloatv", "glEnable",
-              "glDisable", "glFrontFace", "glCullFace", "glDepthFunc", "glDepthMask",
-              "glStencilMask", "glStencilFunc", "glStencilOp", "glColorMask", "glViewport",
-              "glScissor", "glClearColor", "glReadPixels")),
-    (GL_1_3, ("glActiveTexture",)), (GL_1_5, ("glBufferSubData", "glBindBuffer")),
-    (GL_2_0, ("glUseProgram", "glUniformMatrix4fv", "glUniform3fv", "glVertexAttribPointer")),
-    (GL_3_0, ("glBindVertexArray", "glBindFramebuffer")),
-    (GL_3_2, ("glDrawElementsInstancedBaseVertex",))) for name in names})
+RAW = SimpleNamespace(
+    **{
+        name: getattr(module, name)
+        for module, names in (
+            (
+                GL_1_0,
+                (
+                    "glIsEnabled",
+                    "glGetIntegerv",
+                    "glGetBooleanv",
+                    "glGetFloatv",
+                    "glEnable",
+                    "glDisable",
+                    "glFrontFace",
+                    "glCullFace",
+                    "glDepthFunc",
+                    "glDepthMask",
+                    "glStencilMask",
+                    "glStencilFunc",
+                    "glStencilOp",
+                    "glColorMask",
+                    "glViewport",
+                    "glScissor",
+                    "glClearColor",
+                    "glReadPixels",
+                ),
+            ),
+            (GL_1_3, ("glActiveTexture",)),
+            (GL_1_5, ("glBufferSubData", "glBindBuffer")),
+            (
+                GL_2_0,
+                ("glUseProgram", "glUniformMatrix4fv", "glUniform3fv", "glVertexAttribPointer"),
+            ),
+            (GL_3_0, ("glBindVertexArray", "glBindFramebuffer")),
+            (GL_3_2, ("glDrawElementsInstancedBaseVertex",)),
+        )
+        for name in names
+    }
+)
 
 __all__ = ["GL", "RAW"]

@@ -31,8 +31,7 @@ Call = tuple[Callable[..., Any], tuple, dict]
 
 @lru_cache(maxsize=1)
 def _gl_names() -> tuple[str, ...]:
-    return tuple(name for name in dir(GL) if name.startswith("gl") and callable(getattr(GL,
-                                                                                       name)))
+    return tuple(name for name in dir(GL) if name.startswith("gl") and callable(getattr(GL, name)))
 
 
 def _changes_state(name: str) -> bool:
@@ -52,7 +51,9 @@ class CallRecorder:
     def __enter__(self) -> CallRecorder:
         calls = self.calls
         targets: list[tuple[ModuleType | SimpleNamespace, Sequence[str]]] = [
-            (GL, _gl_names()), (RAW, tuple(vars(RAW)))]
+            (GL, _gl_names()),
+            (RAW, tuple(vars(RAW))),
+        ]
         for namespace, names in targets:
             for name in names:
                 if not _changes_state(name):
@@ -86,21 +87,55 @@ def for_replay(calls: Sequence[Call], known: dict[tuple, tuple] | None = None) -
     at the next check, as after :func:`replay`); a PyOpenGL wrapper's entry point only
     where its arguments are plain numbers (or None, or a pointer), which the wrapper
     would pass on as they are (:func:`~mirrorlab.gl.context.unchecked`)."""
-    return [(unchecked(function) if not kwargs and (
-        not hasattr(function, "wrappedOperation") or all(
-            a is None or isinstance(a, (int, float, ctypes.c_void_p)) for a in args))
-        else function, args, kwargs)
-        for function, args, kwargs in without_repeats(calls, known)]
+    return [
+        (
+            unchecked(function)
+            if not kwargs
+            and (
+                not hasattr(function, "wrappedOperation")
+                or all(a is None or isinstance(a, (int, float, ctypes.c_void_p)) for a in args)
+            )
+            else function,
+            args,
+            kwargs,
+        )
+        for function, args, kwargs in without_repeats(calls, known)
+    ]
 
 
-_SETTERS = ("glFrontFace", "glCullFace", "glDepthFunc", "glDepthMask", "glStencilMask",
-            "glStencilFunc", "glStencilOp", "glColorMask", "glClearColor", "glClearStencil",
-            "glViewport", "glScissor", "glUseProgram", "glBindVertexArray",
-            "glActiveTexture")
+_SETTERS = (
+    "glFrontFace",
+    "glCullFace",
+    "glDepthFunc",
+    "glDepthMask",
+    "glStencilMask",
+    "glStencilFunc",
+    "glStencilOp",
+    "glColorMask",
+    "glClearColor",
+    "glClearStencil",
+    "glViewport",
+    "glScissor",
+    "glUseProgram",
+    "glBindVertexArray",
+    "glActiveTexture",
+)
 """Calls that set one piece of GL state, whole, to their arguments."""
-_HARMLESS = ("glDraw", "glMultiDraw", "glUniform", "glCopyTex", "glBufferSubData",
-             "glBufferData", "glReadPixels", "glGenerateMipmap", "glTexParameter",
-             "glTexImage", "glTexSubImage", "glBlitFramebuffer", "glBindVertexBuffer")
+_HARMLESS = (
+    "glDraw",
+    "glMultiDraw",
+    "glUniform",
+    "glCopyTex",
+    "glBufferSubData",
+    "glBufferData",
+    "glReadPixels",
+    "glGenerateMipmap",
+    "glTexParameter",
+    "glTexImage",
+    "glTexSubImage",
+    "glBlitFramebuffer",
+    "glBindVertexBuffer",
+)
 """Calls that change none of the state :func:`without_repeats` follows."""
 
 
@@ -111,20 +146,35 @@ def _value(args: tuple, setter: str = "") -> tuple:
     return tuple(float(a) if isinstance(a, float) else int(a) for a in args)
 
 
-_FOUND_SWITCHES = ("GL_DEPTH_TEST", "GL_CULL_FACE", "GL_STENCIL_TEST", "GL_CLIP_DISTANCE0",
-                   "GL_TEXTURE_CUBE_MAP_SEAMLESS", "GL_BLEND", "GL_SCISSOR_TEST")
+_FOUND_SWITCHES = (
+    "GL_DEPTH_TEST",
+    "GL_CULL_FACE",
+    "GL_STENCIL_TEST",
+    "GL_CLIP_DISTANCE0",
+    "GL_TEXTURE_CUBE_MAP_SEAMLESS",
+    "GL_BLEND",
+    "GL_SCISSOR_TEST",
+)
 _FOUND_SETTINGS = (
-    ("glFrontFace", ("GL_FRONT_FACE",)), ("glCullFace", ("GL_CULL_FACE_MODE",)),
-    ("glDepthFunc", ("GL_DEPTH_FUNC",)), ("glDepthMask", ("GL_DEPTH_WRITEMASK",)),
+    ("glFrontFace", ("GL_FRONT_FACE",)),
+    ("glCullFace", ("GL_CULL_FACE_MODE",)),
+    ("glDepthFunc", ("GL_DEPTH_FUNC",)),
+    ("glDepthMask", ("GL_DEPTH_WRITEMASK",)),
     ("glStencilMask", ("GL_STENCIL_WRITEMASK",)),
     ("glStencilFunc", ("GL_STENCIL_FUNC", "GL_STENCIL_REF", "GL_STENCIL_VALUE_MASK")),
-    ("glStencilOp", ("GL_STENCIL_FAIL", "GL_STENCIL_PASS_DEPTH_FAIL",
-                     "GL_STENCIL_PASS_DEPTH_PASS")),
+    (
+        "glStencilOp",
+        ("GL_STENCIL_FAIL", "GL_STENCIL_PASS_DEPTH_FAIL", "GL_STENCIL_PASS_DEPTH_PASS"),
+    ),
     ("glUseProgram", ("GL_CURRENT_PROGRAM",)),
     ("glBindVertexArray", ("GL_VERTEX_ARRAY_BINDING",)),
-    ("glActiveTexture", ("GL_ACTIVE_TEXTURE",)))
-_FOUND_BOXES = (("glColorMask", "GL_COLOR_WRITEMASK"), ("glViewport", "GL_VIEWPORT"),
-                ("glScissor", "GL_SCISSOR_BOX"))
+    ("glActiveTexture", ("GL_ACTIVE_TEXTURE",)),
+)
+_FOUND_BOXES = (
+    ("glColorMask", "GL_COLOR_WRITEMASK"),
+    ("glViewport", "GL_VIEWPORT"),
+    ("glScissor", "GL_SCISSOR_BOX"),
+)
 
 
 def known_state(found: dict[str, Any]) -> dict[tuple, tuple]:
@@ -146,8 +196,7 @@ def known_state(found: dict[str, Any]) -> dict[tuple, tuple]:
     return known
 
 
-def without_repeats(calls: Sequence[Call],
-                    known: dict[tuple, tuple] | None = None) -> list[Call]:
+def without_repeats(calls: Sequence[Call], known: dict[tuple, tuple] | None = None) -> list[Call]:
     """``calls`` without those that set a piece of GL state to the value an earlier one of
     them set it to, or that it had before them where ``known`` says so
     (:func:`known_state`): switches, winding, depth and stencil settings, masks, the
@@ -170,8 +219,11 @@ def without_repeats(calls: Sequence[Call],
             sets = [((name,), _value(args, name))]
         elif name == "glBindFramebuffer":
             target, framebuffer = int(args[0]), int(args[1])
-            targets = ((GL.GL_DRAW_FRAMEBUFFER, GL.GL_READ_FRAMEBUFFER)
-                       if target == GL.GL_FRAMEBUFFER else (target,))
+            targets = (
+                (GL.GL_DRAW_FRAMEBUFFER, GL.GL_READ_FRAMEBUFFER)
+                if target == GL.GL_FRAMEBUFFER
+                else (target,)
+            )
             sets = [(("framebuffer", int(t)), (framebuffer,)) for t in targets]
         elif name == "glPixelStorei":
             sets = [(("pixel", int(args[0])), (int(args[1]),))]

@@ -68,8 +68,9 @@ def expand_includes(name: str, seen: tuple[str, ...] = ()) -> str:
     package shader file's text (recursively; an include cycle is a ValueError)."""
     if name in seen:
         raise ValueError(f"shader include cycle: {' -> '.join((*seen, name))}")
-    return _INCLUDE.sub(lambda match: expand_includes(match.group(1), (*seen, name)),
-                        shader_source(name))
+    return _INCLUDE.sub(
+        lambda match: expand_includes(match.group(1), (*seen, name)), shader_source(name)
+    )
 
 
 class Program(_Resource):
@@ -77,8 +78,13 @@ class Program(_Resource):
     "file.glsl"`` pull in shared GLSL from the same folder; ``defines`` are added as
     ``#define NAME VALUE`` lines after the ``#version`` line."""
 
-    def __init__(self, registry: ResourceRegistry, vertex: str, fragment: str,
-                 defines: dict[str, str | int] | None = None) -> None:
+    def __init__(
+        self,
+        registry: ResourceRegistry,
+        vertex: str,
+        fragment: str,
+        defines: dict[str, str | int] | None = None,
+    ) -> None:
         header = "".join(f"#define {key} {value}\n" for key, value in (defines or {}).items())
         shaders: list[int] = []
         for name, kind in ((vertex, GL.GL_VERTEX_SHADER), (fragment, GL.GL_FRAGMENT_SHADER)):
@@ -198,17 +204,25 @@ def check_texture_size(width: int, height: int, what: str, cube: bool = False) -
     limit_name = "GL_MAX_CUBE_MAP_TEXTURE_SIZE" if cube else "GL_MAX_TEXTURE_SIZE"
     limit = int(np.asarray(GL.glGetIntegerv(getattr(GL, limit_name))).reshape(-1)[0])
     if width > limit or height > limit:
-        raise GLLimitError(f"{what} is {width}x{height}, larger than this OpenGL allows "
-                           f"({limit_name} {limit})")
+        raise GLLimitError(
+            f"{what} is {width}x{height}, larger than this OpenGL allows ({limit_name} {limit})"
+        )
 
 
 class Texture2D(_Resource):
     """A 2D RGB texture (RGBA when made from ``(h, w, 4)`` pixels). Make one with
     :meth:`from_image` or :meth:`blank`."""
 
-    def __init__(self, registry: ResourceRegistry, width: int, height: int,
-                 pixels: np.ndarray | None, mipmaps: bool, clamp: bool,
-                 what: str = "a texture") -> None:
+    def __init__(
+        self,
+        registry: ResourceRegistry,
+        width: int,
+        height: int,
+        pixels: np.ndarray | None,
+        mipmaps: bool,
+        clamp: bool,
+        what: str = "a texture",
+    ) -> None:
         check_texture_size(width, height, what)
         self.name = int(GL.glGenTextures(1))
         self.width, self.height = int(width), int(height)
@@ -217,9 +231,17 @@ class Texture2D(_Resource):
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
         GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
         data = None if pixels is None else np.ascontiguousarray(pixels[::-1])
-        GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGBA8 if alpha else GL.GL_RGB8, self.width,
-                        self.height, 0, GL.GL_RGBA if alpha else GL.GL_RGB,
-                        GL.GL_UNSIGNED_BYTE, data)
+        GL.glTexImage2D(
+            GL.GL_TEXTURE_2D,
+            0,
+            GL.GL_RGBA8 if alpha else GL.GL_RGB8,
+            self.width,
+            self.height,
+            0,
+            GL.GL_RGBA if alpha else GL.GL_RGB,
+            GL.GL_UNSIGNED_BYTE,
+            data,
+        )
         wrap = GL.GL_CLAMP_TO_EDGE if clamp else GL.GL_REPEAT
         GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_S, wrap)
         GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, wrap)
@@ -235,16 +257,20 @@ class Texture2D(_Resource):
         super().__init__(registry)
 
     @classmethod
-    def from_image(cls, registry: ResourceRegistry, image: np.ndarray,
-                   what: str = "a texture") -> Texture2D:
+    def from_image(
+        cls, registry: ResourceRegistry, image: np.ndarray, what: str = "a texture"
+    ) -> Texture2D:
         """A mipmapped, repeating texture from ``image`` ``(h, w, 3)`` (or ``(h, w, 4)``, with
         alpha) uint8, row 0 at the top; ``what`` names it in a GLLimitError."""
         image = np.asarray(image)
         if image.ndim != 3 or image.shape[2] not in (3, 4) or image.dtype != np.uint8:
-            raise ValueError(f"texture image must be (h, w, 3) or (h, w, 4) uint8, got "
-                             f"{image.shape} {image.dtype}")
-        return cls(registry, image.shape[1], image.shape[0], image, mipmaps=True, clamp=False,
-                   what=what)
+            raise ValueError(
+                f"texture image must be (h, w, 3) or (h, w, 4) uint8, got "
+                f"{image.shape} {image.dtype}"
+            )
+        return cls(
+            registry, image.shape[1], image.shape[0], image, mipmaps=True, clamp=False, what=what
+        )
 
     @classmethod
     def blank(cls, registry: ResourceRegistry, width: int, height: int) -> Texture2D:
@@ -256,8 +282,13 @@ class Texture2D(_Resource):
         GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
 
-    def copy_from_framebuffer(self, width: int, height: int, source: tuple[int, int],
-                              region: tuple[int, int, int, int] | None = None) -> None:
+    def copy_from_framebuffer(
+        self,
+        width: int,
+        height: int,
+        source: tuple[int, int],
+        region: tuple[int, int, int, int] | None = None,
+    ) -> None:
         """Copy the bound read framebuffer's lower-left ``width`` x ``height`` into level 0.
 
         This is the lab's ``glCopyTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, 0, 0, w, h, 0)``;
@@ -269,8 +300,10 @@ class Texture2D(_Resource):
         read: a copy reaching outside it (whose texels GL leaves undefined) is refused.
         """
         if width > source[0] or height > source[1]:
-            raise ValueError(f"a {width}x{height} copy reaches outside the {source[0]}x"
-                             f"{source[1]} framebuffer it reads")
+            raise ValueError(
+                f"a {width}x{height} copy reaches outside the {source[0]}x"
+                f"{source[1]} framebuffer it reads"
+            )
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
         if (int(width), int(height)) == (self.width, self.height):
             x, y, w, h = (0, 0, int(width), int(height)) if region is None else region
@@ -288,8 +321,17 @@ class Texture2D(_Resource):
         if (int(width), int(height)) == (self.width, self.height):
             return
         GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
-        GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB8, int(width), int(height), 0,
-                        GL.GL_RGB, GL.GL_UNSIGNED_BYTE, None)
+        GL.glTexImage2D(
+            GL.GL_TEXTURE_2D,
+            0,
+            GL.GL_RGB8,
+            int(width),
+            int(height),
+            0,
+            GL.GL_RGB,
+            GL.GL_UNSIGNED_BYTE,
+            None,
+        )
         self.width, self.height = int(width), int(height)
 
     def read(self) -> np.ndarray:
@@ -308,8 +350,9 @@ PACK_INVERT_MESA = 0x8758
 """``GL_PACK_INVERT_MESA`` (``GL_MESA_pack_invert``): pixels read back top row first."""
 
 
-def read_pixels(width: int, height: int, rows: np.ndarray | None = None,
-                top_first: bool = False) -> np.ndarray:
+def read_pixels(
+    width: int, height: int, rows: np.ndarray | None = None, top_first: bool = False
+) -> np.ndarray:
     """The bound read framebuffer's lower-left region as a new ``(height, width, 3)`` uint8
     array, top row first. With ``top_first`` (the context has ``GL_MESA_pack_invert``)
     GL writes the rows in that order straight into the new array; else ``rows``, a
@@ -378,8 +421,9 @@ class Framebuffer(_FramebufferObject):
             raise ValueError(f"framebuffer size must be positive, got {width}x{height}")
         max_size = int(GL.glGetIntegerv(GL.GL_MAX_RENDERBUFFER_SIZE))
         if width > max_size or height > max_size:
-            raise ValueError(f"framebuffer size {width}x{height} exceeds this GL's limit "
-                             f"of {max_size}")
+            raise ValueError(
+                f"framebuffer size {width}x{height} exceeds this GL's limit of {max_size}"
+            )
         self.width, self.height = int(width), int(height)
         self.name = int(GL.glGenFramebuffers(1))
         self._renderbuffers = [int(n) for n in np.atleast_1d(GL.glGenRenderbuffers(2))]
@@ -419,19 +463,23 @@ class TextureFramebuffer(_FramebufferObject):
         self.name = int(GL.glGenFramebuffers(1))
         self._depth = int(GL.glGenRenderbuffers(1))
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
-        GL.glFramebufferTexture2D(GL.GL_FRAMEBUFFER, GL.GL_COLOR_ATTACHMENT0, GL.GL_TEXTURE_2D,
-                                  texture.name, 0)
+        GL.glFramebufferTexture2D(
+            GL.GL_FRAMEBUFFER, GL.GL_COLOR_ATTACHMENT0, GL.GL_TEXTURE_2D, texture.name, 0
+        )
         GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, self._depth)
-        GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, GL.GL_DEPTH24_STENCIL8, self.width,
-                                 self.height)
-        GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, GL.GL_DEPTH_STENCIL_ATTACHMENT,
-                                     GL.GL_RENDERBUFFER, self._depth)
+        GL.glRenderbufferStorage(
+            GL.GL_RENDERBUFFER, GL.GL_DEPTH24_STENCIL8, self.width, self.height
+        )
+        GL.glFramebufferRenderbuffer(
+            GL.GL_FRAMEBUFFER, GL.GL_DEPTH_STENCIL_ATTACHMENT, GL.GL_RENDERBUFFER, self._depth
+        )
         status = GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
         if status != GL.GL_FRAMEBUFFER_COMPLETE:
             GL.glDeleteRenderbuffers(1, [self._depth])
             GL.glDeleteFramebuffers(1, [self.name])
-            raise GLContextError(f"texture framebuffer {self.width}x{self.height} incomplete "
-                                 f"(status {status:#x})")
+            raise GLContextError(
+                f"texture framebuffer {self.width}x{self.height} incomplete (status {status:#x})"
+            )
         super().__init__(registry)
 
     def _free(self) -> None:
@@ -500,8 +548,9 @@ def upload_mesh(vertices: np.ndarray, indices: np.ndarray) -> tuple[int, int, in
     stride = vertices.shape[1] * vertices.itemsize
     for location, (size, offset) in enumerate(((3, 0), (3, 12), (2, 24))):
         GL.glEnableVertexAttribArray(location)
-        GL.glVertexAttribPointer(location, size, GL.GL_FLOAT, GL.GL_FALSE, stride,
-                                 GL.GLvoidp(offset))
+        GL.glVertexAttribPointer(
+            location, size, GL.GL_FLOAT, GL.GL_FALSE, stride, GL.GLvoidp(offset)
+        )
     GL.glBindVertexArray(0)
     return vao, vbo, ebo
 
@@ -514,15 +563,17 @@ class MeshBuffer(_Resource):
 
     STRIDE = 8 * 4
 
-    def __init__(self, registry: ResourceRegistry, vertices: np.ndarray,
-                 indices: np.ndarray) -> None:
+    def __init__(
+        self, registry: ResourceRegistry, vertices: np.ndarray, indices: np.ndarray
+    ) -> None:
         vertices = np.ascontiguousarray(vertices, dtype=np.float32)
         indices = np.ascontiguousarray(indices, dtype=np.uint32).reshape(-1)
         if vertices.ndim != 2 or vertices.shape[1] != 8:
             raise ValueError(f"mesh vertices must be (n, 8) float32, got {vertices.shape}")
         if indices.size and int(indices.max()) >= len(vertices):
-            raise ValueError(f"mesh index {int(indices.max())} out of range for "
-                             f"{len(vertices)} vertices")
+            raise ValueError(
+                f"mesh index {int(indices.max())} out of range for {len(vertices)} vertices"
+            )
         self.index_count = int(indices.size)
         self.vao, self.vbo, self.ebo = upload_mesh(vertices, indices)
         super().__init__(registry)
@@ -618,8 +669,14 @@ class PackedMeshes(_Resource):
         instances are missing (OpenGL 4.1), a draw's first instance is chosen this way."""
         start = PART_BYTES * int(first_part)
         for column in range(8):
-            RAW.glVertexAttribPointer(PART_LOCATION + column, 4, GL.GL_FLOAT, GL.GL_FALSE,
-                                      PART_BYTES, ctypes.c_void_p(start + 16 * column))
+            RAW.glVertexAttribPointer(
+                PART_LOCATION + column,
+                4,
+                GL.GL_FLOAT,
+                GL.GL_FALSE,
+                PART_BYTES,
+                ctypes.c_void_p(start + 16 * column),
+            )
 
     def add(self, vertices: np.ndarray, indices: np.ndarray) -> tuple[int, int, int]:
         """Add a mesh of ``vertices`` ``(n, 8)`` and flat ``indices``; returns its
@@ -634,8 +691,9 @@ class PackedMeshes(_Resource):
         self.vertex_count += len(vertices)
         self.index_count += int(indices.size)
         self._free()
-        self.vao, self.vbo, self.ebo = upload_mesh(np.concatenate(self._vertices),
-                                                   np.concatenate(self._indices))
+        self.vao, self.vbo, self.ebo = upload_mesh(
+            np.concatenate(self._vertices), np.concatenate(self._indices)
+        )
         if self.carries_parts:
             self._add_part_attributes()
         return placed
@@ -643,21 +701,31 @@ class PackedMeshes(_Resource):
     def bind(self) -> None:
         GL.glBindVertexArray(self.vao)
 
-    def draw_instanced(self, first_index: int, count: int, base_vertex: int,
-                       instances: int) -> None:
+    def draw_instanced(
+        self, first_index: int, count: int, base_vertex: int, instances: int
+    ) -> None:
         """``instances`` instances of one mesh's triangles (bound first, its parts
         attributes pointed at the first instance's part: :meth:`point_parts`)."""
-        RAW.glDrawElementsInstancedBaseVertex(GL.GL_TRIANGLES, count, GL.GL_UNSIGNED_INT,
-                                              ctypes.c_void_p(4 * first_index), instances,
-                                              base_vertex)
+        RAW.glDrawElementsInstancedBaseVertex(
+            GL.GL_TRIANGLES,
+            count,
+            GL.GL_UNSIGNED_INT,
+            ctypes.c_void_p(4 * first_index),
+            instances,
+            base_vertex,
+        )
 
     def multi_draw(self, first_command: int, count: int) -> None:
         """``count`` draws from the bound ``GL_DRAW_INDIRECT_BUFFER``'s commands
         (``(count, instances, first index, base vertex, base instance)`` uint32 each),
         starting at command ``first_command`` (bound first)."""
-        GL.glMultiDrawElementsIndirect(GL.GL_TRIANGLES, GL.GL_UNSIGNED_INT,
-                                       GL.GLvoidp(INDIRECT_COMMAND_BYTES * first_command),
-                                       count, INDIRECT_COMMAND_BYTES)
+        GL.glMultiDrawElementsIndirect(
+            GL.GL_TRIANGLES,
+            GL.GL_UNSIGNED_INT,
+            GL.GLvoidp(INDIRECT_COMMAND_BYTES * first_command),
+            count,
+            INDIRECT_COMMAND_BYTES,
+        )
 
     def _free(self) -> None:
         if self.vao:
@@ -686,16 +754,24 @@ class TextureCube(_Resource):
     the passes that sample cube maps turn on).
     """
 
-    def __init__(self, registry: ResourceRegistry, size: int, faces: np.ndarray | None,
-                 mipmaps: bool, what: str = "a cube map's face") -> None:
+    def __init__(
+        self,
+        registry: ResourceRegistry,
+        size: int,
+        faces: np.ndarray | None,
+        mipmaps: bool,
+        what: str = "a cube map's face",
+    ) -> None:
         if size < 1:
             raise ValueError(f"cube-map size must be positive, got {size}")
         check_texture_size(size, size, what, cube=True)
         if faces is not None:
             faces = np.asarray(faces)
             if faces.shape != (6, size, size, 3) or faces.dtype != np.uint8:
-                raise ValueError(f"cube faces must be (6, {size}, {size}, 3) uint8, got "
-                                 f"{faces.shape} {faces.dtype}")
+                raise ValueError(
+                    f"cube faces must be (6, {size}, {size}, 3) uint8, got "
+                    f"{faces.shape} {faces.dtype}"
+                )
         self.name = int(GL.glGenTextures(1))
         self.size = int(size)
         self.mipmaps = mipmaps
@@ -703,8 +779,17 @@ class TextureCube(_Resource):
         GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
         for face in range(6):
             data = None if faces is None else np.ascontiguousarray(faces[face, ::-1])
-            GL.glTexImage2D(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL.GL_RGB8,
-                            self.size, self.size, 0, GL.GL_RGB, GL.GL_UNSIGNED_BYTE, data)
+            GL.glTexImage2D(
+                GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face,
+                0,
+                GL.GL_RGB8,
+                self.size,
+                self.size,
+                0,
+                GL.GL_RGB,
+                GL.GL_UNSIGNED_BYTE,
+                data,
+            )
         for wrap in (GL.GL_TEXTURE_WRAP_S, GL.GL_TEXTURE_WRAP_T, GL.GL_TEXTURE_WRAP_R):
             GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, wrap, GL.GL_CLAMP_TO_EDGE)
         GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR)
@@ -718,8 +803,13 @@ class TextureCube(_Resource):
         super().__init__(registry)
 
     @classmethod
-    def from_faces(cls, registry: ResourceRegistry, faces: np.ndarray,
-                   mipmaps: bool = True, what: str = "a cube map's face") -> TextureCube:
+    def from_faces(
+        cls,
+        registry: ResourceRegistry,
+        faces: np.ndarray,
+        mipmaps: bool = True,
+        what: str = "a cube map's face",
+    ) -> TextureCube:
         """A (by default mipmapped) cube map from ``faces`` ``(6, n, n, 3)`` uint8; ``what``
         names a face in a GLLimitError."""
         faces = np.asarray(faces)
@@ -728,8 +818,13 @@ class TextureCube(_Resource):
         return cls(registry, faces.shape[1], faces, mipmaps=mipmaps, what=what)
 
     @classmethod
-    def blank(cls, registry: ResourceRegistry, size: int, mipmaps: bool = False,
-              what: str = "a cube map's face") -> TextureCube:
+    def blank(
+        cls,
+        registry: ResourceRegistry,
+        size: int,
+        mipmaps: bool = False,
+        what: str = "a cube map's face",
+    ) -> TextureCube:
         """Six empty ``size`` x ``size`` faces for a live capture (or an :meth:`upload`).
         With ``mipmaps``, call :meth:`generate_mipmaps` after each capture."""
         return cls(registry, size, None, mipmaps=mipmaps, what=what)
@@ -743,14 +838,24 @@ class TextureCube(_Resource):
         :meth:`from_faces` takes them) and rebuild the mipmaps, if any."""
         faces = np.asarray(faces)
         if faces.shape != (6, self.size, self.size, 3) or faces.dtype != np.uint8:
-            raise ValueError(f"cube faces must be (6, {self.size}, {self.size}, 3) uint8, got "
-                             f"{faces.shape} {faces.dtype}")
+            raise ValueError(
+                f"cube faces must be (6, {self.size}, {self.size}, 3) uint8, got "
+                f"{faces.shape} {faces.dtype}"
+            )
         GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
         GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
         for face in range(6):
-            GL.glTexSubImage2D(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, 0, 0, self.size,
-                               self.size, GL.GL_RGB, GL.GL_UNSIGNED_BYTE,
-                               np.ascontiguousarray(faces[face, ::-1]))
+            GL.glTexSubImage2D(
+                GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face,
+                0,
+                0,
+                0,
+                self.size,
+                self.size,
+                GL.GL_RGB,
+                GL.GL_UNSIGNED_BYTE,
+                np.ascontiguousarray(faces[face, ::-1]),
+            )
         if self.mipmaps:
             GL.glGenerateMipmap(GL.GL_TEXTURE_CUBE_MAP)
 
@@ -763,11 +868,14 @@ class TextureCube(_Resource):
         if not 0 <= face < 6:
             raise ValueError(f"cube face must be 0..5, got {face}")
         if self.size > min(source):
-            raise ValueError(f"a {self.size}x{self.size} face reaches outside the "
-                             f"{source[0]}x{source[1]} framebuffer it reads")
+            raise ValueError(
+                f"a {self.size}x{self.size} face reaches outside the "
+                f"{source[0]}x{source[1]} framebuffer it reads"
+            )
         GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
-        GL.glCopyTexSubImage2D(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, 0, 0, 0, 0,
-                               self.size, self.size)
+        GL.glCopyTexSubImage2D(
+            GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, 0, 0, 0, 0, self.size, self.size
+        )
 
     def generate_mipmaps(self) -> None:
         """Rebuild the mipmap levels from level 0 (after a capture); needs ``mipmaps=True``."""
@@ -780,8 +888,9 @@ class TextureCube(_Resource):
         """Level 0 of ``face`` as ``(size, size, 3)`` uint8, row 0 at the top (``t = 1``)."""
         GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
         GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
-        data = GL.glGetTexImage(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL.GL_RGB,
-                                GL.GL_UNSIGNED_BYTE)
+        data = GL.glGetTexImage(
+            GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL.GL_RGB, GL.GL_UNSIGNED_BYTE
+        )
         pixels = np.frombuffer(data, dtype=np.uint8).reshape(self.size, self.size, 3)
         return pixels[::-1].copy()
 
@@ -802,9 +911,17 @@ class DepthTextureCube(_Resource):
         self.size = int(size)
         GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
         for face in range(6):
-            GL.glTexImage2D(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0,
-                            GL.GL_DEPTH_COMPONENT24, self.size, self.size, 0,
-                            GL.GL_DEPTH_COMPONENT, GL.GL_FLOAT, None)
+            GL.glTexImage2D(
+                GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face,
+                0,
+                GL.GL_DEPTH_COMPONENT24,
+                self.size,
+                self.size,
+                0,
+                GL.GL_DEPTH_COMPONENT,
+                GL.GL_FLOAT,
+                None,
+            )
         for wrap in (GL.GL_TEXTURE_WRAP_S, GL.GL_TEXTURE_WRAP_T, GL.GL_TEXTURE_WRAP_R):
             GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, wrap, GL.GL_CLAMP_TO_EDGE)
         GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MAG_FILTER, GL.GL_NEAREST)
@@ -823,16 +940,18 @@ class DepthTextureCube(_Resource):
         if not 0 <= face < 6:
             raise ValueError(f"cube face must be 0..5, got {face}")
         GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
-        GL.glCopyTexSubImage2D(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, 0, 0, 0, 0,
-                               self.size, self.size)
+        GL.glCopyTexSubImage2D(
+            GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, 0, 0, 0, 0, self.size, self.size
+        )
 
     def read_face(self, face: int) -> np.ndarray:
         """``face``'s depths as ``(size, size)`` float32 in [0, 1], row 0 at the top
         (``t = 1``)."""
         GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
         GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 4)
-        data = GL.glGetTexImage(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0,
-                                GL.GL_DEPTH_COMPONENT, GL.GL_FLOAT)
+        data = GL.glGetTexImage(
+            GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL.GL_DEPTH_COMPONENT, GL.GL_FLOAT
+        )
         depths = np.frombuffer(data, dtype=np.float32).reshape(self.size, self.size)
         return depths[::-1].copy()
 

@@ -24,8 +24,10 @@ ENV_UNIT = 1
 
 
 def _no_session() -> LabSetupError:
-    return LabSetupError("no lab session is open: run this file with 'mirrorlab lab run LAB "
-                         "FILE' or check it with 'mirrorlab lab check LAB FILE'")
+    return LabSetupError(
+        "no lab session is open: run this file with 'mirrorlab lab run LAB "
+        "FILE' or check it with 'mirrorlab lab check LAB FILE'"
+    )
 
 
 def lab20() -> Any:

@@ -73,18 +73,21 @@ class SharedResources:
     def mesh_data(self, path: Path) -> tuple[MeshData, MeshBuffer]:
         if path not in self._meshes:
             data = load_mesh(path)
-            self._meshes[path] = (data, MeshBuffer(self.registry, data.interleaved(),
-                                                   data.indices))
+            self._meshes[path] = (data, MeshBuffer(self.registry, data.interleaved(), data.indices))
         return self._meshes[path]
 
     def texture(self, source: TextureSource) -> Texture2D:
         """A mipmapped, repeating texture of the picture file (or glTF mesh's texture)
         ``source``."""
         if source not in self._textures:
-            what = (f"picture {source}" if isinstance(source, Path)
-                    else f"base colour texture of {source.mesh}")
-            self._textures[source] = Texture2D.from_image(self.registry,
-                                                          texture_picture(source), what=what)
+            what = (
+                f"picture {source}"
+                if isinstance(source, Path)
+                else f"base colour texture of {source.mesh}"
+            )
+            self._textures[source] = Texture2D.from_image(
+                self.registry, texture_picture(source), what=what
+            )
         return self._textures[source]
 
     def program(self, vertex: str, fragment: str, **defines: str | int) -> Program:
@@ -109,8 +112,11 @@ class SharedResources:
     def release(self) -> None:
         for _, mesh in self._meshes.values():
             mesh.release()
-        for resource in (*self._textures.values(), *self._programs.values(),
-                         *self._scratch.values()):
+        for resource in (
+            *self._textures.values(),
+            *self._programs.values(),
+            *self._scratch.values(),
+        ):
             resource.release()
         if self._packed is not None:
             self._packed.release()
@@ -126,8 +132,9 @@ def cube_from_folder(registry: ResourceRegistry, folder: Path) -> TextureCube:
     """A mipmapped cube map of the six pictures in ``folder``. Its storage is made from
     the first face's header before any picture is decoded: a size the GL cannot
     allocate fails at once, not after reading six large pictures."""
-    cube = TextureCube.blank(registry, cube_face_size(folder), mipmaps=True,
-                             what=f"cube face {folder}/px.png")
+    cube = TextureCube.blank(
+        registry, cube_face_size(folder), mipmaps=True, what=f"cube face {folder}/px.png"
+    )
     try:
         cube.upload(load_cube_faces(folder))
     except BaseException:
@@ -171,13 +178,33 @@ def apply_view_state(view: View, stencil_level: int) -> None:
     GL.glCullFace(GL.GL_BACK)
 
 
-_SWITCHES = ("GL_DEPTH_TEST", "GL_CULL_FACE", "GL_STENCIL_TEST", "GL_CLIP_DISTANCE0",
-             "GL_TEXTURE_CUBE_MAP_SEAMLESS", "GL_BLEND", "GL_SCISSOR_TEST")
-_VALUES = ("GL_FRONT_FACE", "GL_CULL_FACE_MODE", "GL_DEPTH_FUNC", "GL_DEPTH_WRITEMASK",
-           "GL_STENCIL_WRITEMASK", "GL_STENCIL_FUNC", "GL_STENCIL_REF", "GL_STENCIL_VALUE_MASK",
-           "GL_STENCIL_FAIL", "GL_STENCIL_PASS_DEPTH_FAIL", "GL_STENCIL_PASS_DEPTH_PASS",
-           "GL_CURRENT_PROGRAM", "GL_VERTEX_ARRAY_BINDING", "GL_ACTIVE_TEXTURE",
-           "GL_DRAW_FRAMEBUFFER_BINDING", "GL_READ_FRAMEBUFFER_BINDING")
+_SWITCHES = (
+    "GL_DEPTH_TEST",
+    "GL_CULL_FACE",
+    "GL_STENCIL_TEST",
+    "GL_CLIP_DISTANCE0",
+    "GL_TEXTURE_CUBE_MAP_SEAMLESS",
+    "GL_BLEND",
+    "GL_SCISSOR_TEST",
+)
+_VALUES = (
+    "GL_FRONT_FACE",
+    "GL_CULL_FACE_MODE",
+    "GL_DEPTH_FUNC",
+    "GL_DEPTH_WRITEMASK",
+    "GL_STENCIL_WRITEMASK",
+    "GL_STENCIL_FUNC",
+    "GL_STENCIL_REF",
+    "GL_STENCIL_VALUE_MASK",
+    "GL_STENCIL_FAIL",
+    "GL_STENCIL_PASS_DEPTH_FAIL",
+    "GL_STENCIL_PASS_DEPTH_PASS",
+    "GL_CURRENT_PROGRAM",
+    "GL_VERTEX_ARRAY_BINDING",
+    "GL_ACTIVE_TEXTURE",
+    "GL_DRAW_FRAMEBUFFER_BINDING",
+    "GL_READ_FRAMEBUFFER_BINDING",
+)
 
 
 _SWITCH_ENUMS = tuple((name, getattr(GL, name)) for name in _SWITCHES)
@@ -195,8 +222,7 @@ def gl_state() -> dict[str, object]:
     bindings, viewport, scissor box and clear colour (to restore it, and for tests). Read
     through the raw entry points (:data:`mirrorlab.gl.opengl.RAW`): a frame reads it
     every time."""
-    state: dict[str, object] = {name: bool(RAW.glIsEnabled(enum))
-                                for name, enum in _SWITCH_ENUMS}
+    state: dict[str, object] = {name: bool(RAW.glIsEnabled(enum)) for name, enum in _SWITCH_ENUMS}
     ints = _INTS
     for name, enum in _VALUE_ENUMS:
         RAW.glGetIntegerv(enum, ints)
@@ -220,10 +246,14 @@ def restore_state(state: dict[str, object]) -> None:
     RAW.glDepthFunc(state["GL_DEPTH_FUNC"])
     RAW.glDepthMask(bool(state["GL_DEPTH_WRITEMASK"]))
     RAW.glStencilMask(state["GL_STENCIL_WRITEMASK"])
-    RAW.glStencilFunc(state["GL_STENCIL_FUNC"], state["GL_STENCIL_REF"],
-                      state["GL_STENCIL_VALUE_MASK"])
-    RAW.glStencilOp(state["GL_STENCIL_FAIL"], state["GL_STENCIL_PASS_DEPTH_FAIL"],
-                    state["GL_STENCIL_PASS_DEPTH_PASS"])
+    RAW.glStencilFunc(
+        state["GL_STENCIL_FUNC"], state["GL_STENCIL_REF"], state["GL_STENCIL_VALUE_MASK"]
+    )
+    RAW.glStencilOp(
+        state["GL_STENCIL_FAIL"],
+        state["GL_STENCIL_PASS_DEPTH_FAIL"],
+        state["GL_STENCIL_PASS_DEPTH_PASS"],
+    )
     RAW.glColorMask(*state["GL_COLOR_WRITEMASK"])  # type: ignore[misc]
     RAW.glUseProgram(state["GL_CURRENT_PROGRAM"])
     RAW.glBindVertexArray(state["GL_VERTEX_ARRAY_BINDING"])
@@ -242,12 +272,15 @@ class ViewDrawer(Protocol):
     shared: SharedResources
 
     @property
-    def scene(self) -> Scene:
-        ...
+    def scene(self) -> Scene: ...
 
-    def draw_view(self, plan: ViewPlan, target: RenderTarget, stencil_level: int = 0,
-                  cleared: Rectangle | None = None) -> int:
-        ...
+    def draw_view(
+        self,
+        plan: ViewPlan,
+        target: RenderTarget,
+        stencil_level: int = 0,
+        cleared: Rectangle | None = None,
+    ) -> int: ...
 
 
 class ReflectorPass(Protocol):
@@ -255,15 +288,26 @@ class ReflectorPass(Protocol):
     frames, so each call gets the current one through ``step`` or ``draw``), it keeps
     the reflector's textures up to date and draws the reflector into a view."""
 
-    def update(self, step: PlannedPass, reflector: Reflector, renderer: ViewDrawer,
-               frame_target: RenderTarget) -> int:
+    def update(
+        self,
+        step: PlannedPass,
+        reflector: Reflector,
+        renderer: ViewDrawer,
+        frame_target: RenderTarget,
+    ) -> int:
         """Make the texture ``step`` asks for (a capture or a bake) in ``step.slot``;
         ``frame_target`` may be drawn into first (nothing of the frame is there yet).
         Returns the number of draw calls."""
         ...
 
-    def draw(self, draw: ReflectorDraw, view: View, renderer: ViewDrawer,
-             target: RenderTarget, stencil_level: int) -> int:
+    def draw(
+        self,
+        draw: ReflectorDraw,
+        view: View,
+        renderer: ViewDrawer,
+        target: RenderTarget,
+        stencil_level: int,
+    ) -> int:
         """Draw the reflector into the bound ``target`` as ``draw`` says; returns the number
         of draw calls."""
         ...
@@ -283,7 +327,7 @@ def _light_arrays(lights: tuple[Light, ...]) -> tuple[np.ndarray, np.ndarray]:
         direction = np.asarray(light.direction, dtype=np.float64)
         directions[i] = direction / np.linalg.norm(direction)
         colors[i] = np.asarray(light.color, dtype=np.float64) * light.intensity
-    return math3d.read_only(directions[:len(lights)]), math3d.read_only(colors[:len(lights)])
+    return math3d.read_only(directions[: len(lights)]), math3d.read_only(colors[: len(lights)])
 
 
 def light_uniforms(program: Program, scene: Scene) -> None:

@@ -47,8 +47,12 @@ class LiveCubeMapped(CurvedPass):
     search, one depth cube per slot). The planner captures it again when something it
     sees changes, not when only the viewer moves."""
 
-    def __init__(self, shared: SharedResources, reflector: CurvedReflector,
-                 background: Background | None = None) -> None:
+    def __init__(
+        self,
+        shared: SharedResources,
+        reflector: CurvedReflector,
+        background: Background | None = None,
+    ) -> None:
         super().__init__(shared, reflector, background)
         self.size = reflector.map_size
         self.cubes: dict[int, TextureCube] = {}
@@ -63,8 +67,9 @@ class LiveCubeMapped(CurvedPass):
 
     def make_program(self, shared: SharedResources, reflector: CurvedReflector) -> Program:
         kind = None if reflector.parallax is None else reflector.parallax.kind
-        program = shared.program(self.entry.vertex_shader, self.entry.fragment_shader,
-                                 PARALLAX=PARALLAX_CODES[kind])
+        program = shared.program(
+            self.entry.vertex_shader, self.entry.fragment_shader, PARALLAX=PARALLAX_CODES[kind]
+        )
         program.use()
         program.set_int(self.entry.sampler, 0)
         if kind == "distance":
@@ -93,15 +98,19 @@ class LiveCubeMapped(CurvedPass):
             self.depths[slot] = DepthTextureCube(self.shared.registry, self.size)
         return self.depths[slot]
 
-    def update(self, step: PlannedPass, reflector: CurvedReflector, renderer: ViewDrawer,
-               frame_target: RenderTarget) -> int:
+    def update(
+        self,
+        step: PlannedPass,
+        reflector: CurvedReflector,
+        renderer: ViewDrawer,
+        frame_target: RenderTarget,
+    ) -> int:
         """Capture the six faces (each view's plan leaves this reflector out), and their
         depths for a distance search."""
         cube = self.cube(step.slot)
         depth = self.depth(step.slot) if isinstance(reflector.parallax, DistanceSearch) else None
         if depth is not None:
-            self.enclosed[step.slot] = encloses(renderer.scene, reflector.center(),
-                                                reflector.name)
+            self.enclosed[step.slot] = encloses(renderer.scene, reflector.center(), reflector.name)
         target = self.shared.scratch((self.size, self.size))
         draws = 0
         for face, plan in enumerate(step.views):
@@ -116,8 +125,9 @@ class LiveCubeMapped(CurvedPass):
     def map_for(self, draw: ReflectorDraw) -> TextureCube:
         return self.cube(draw.slot)
 
-    def lookup_uniforms(self, program: Program, reflector: CurvedReflector, view: View,
-                        draw: ReflectorDraw | None) -> None:
+    def lookup_uniforms(
+        self, program: Program, reflector: CurvedReflector, view: View, draw: ReflectorDraw | None
+    ) -> None:
         origin = view.origin
         if program.has_uniform("view_origin"):  # for the ray-origin output of checks
             program.set_vec3("view_origin", origin)

@@ -48,8 +48,12 @@ class CurvedPass:
     technique's registry entry (:mod:`mirrorlab.techniques`). ``output_mode`` chooses
     colour or lookup coordinates (for numerical checks)."""
 
-    def __init__(self, shared: SharedResources, reflector: CurvedReflector,
-                 background: Background | None = None) -> None:
+    def __init__(
+        self,
+        shared: SharedResources,
+        reflector: CurvedReflector,
+        background: Background | None = None,
+    ) -> None:
         self.shared = shared
         self.entry = technique(reflector.technique)
         self.output_mode = OUTPUT_COLOR
@@ -66,29 +70,47 @@ class CurvedPass:
     def release(self) -> None:
         """Nothing of its own: the program and the mesh are shared."""
 
-    def update(self, step: PlannedPass, reflector: CurvedReflector, renderer: ViewDrawer,
-               frame_target: RenderTarget) -> int:
+    def update(
+        self,
+        step: PlannedPass,
+        reflector: CurvedReflector,
+        renderer: ViewDrawer,
+        frame_target: RenderTarget,
+    ) -> int:
         raise ValueError(f"{self.entry.name} has no texture to update")
 
     def map_for(self, draw: ReflectorDraw) -> Texture2D | TextureCube:  # pragma: no cover
         raise NotImplementedError
 
-    def draw(self, draw: ReflectorDraw, view: View, renderer: ViewDrawer,
-             target: RenderTarget, stencil_level: int) -> int:
+    def draw(
+        self,
+        draw: ReflectorDraw,
+        view: View,
+        renderer: ViewDrawer,
+        target: RenderTarget,
+        stencil_level: int,
+    ) -> int:
         reflector = draw.reflector
         assert isinstance(reflector, CurvedReflector)
         if draw.mode == "plain":
             return renderer.drawer.draw_plain(  # type: ignore[attr-defined]
-                renderer.scene, reflector, view)
+                renderer.scene, reflector, view
+            )
         return self.draw_mapped(reflector, view, self.map_for(draw), draw)
 
-    def lookup_uniforms(self, program: Program, reflector: CurvedReflector, view: View,
-                        draw: ReflectorDraw | None) -> None:
+    def lookup_uniforms(
+        self, program: Program, reflector: CurvedReflector, view: View, draw: ReflectorDraw | None
+    ) -> None:
         """Set what the lookup needs besides the map and the view (bound ``program``;
         world positions relative to ``view.origin``)."""
 
-    def draw_mapped(self, reflector: CurvedReflector, view: View,
-                    texture: Texture2D | TextureCube, draw: ReflectorDraw | None = None) -> int:
+    def draw_mapped(
+        self,
+        reflector: CurvedReflector,
+        view: View,
+        texture: Texture2D | TextureCube,
+        draw: ReflectorDraw | None = None,
+    ) -> int:
         """Draw the reflector sampling ``texture`` (the map ``draw`` names) into the bound
         target; returns 1. Positions reach the shader relative to the view's origin
         (camera-relative rendering), the matrices composed in float64."""
@@ -127,8 +149,12 @@ class SphereMapped(CurvedPass):
     reflector's picture as it is, or the background baked for each view's rotation
     (sphere maps live in eye space), one slot texture per bake."""
 
-    def __init__(self, shared: SharedResources, reflector: CurvedReflector,
-                 background: Background | None = None) -> None:
+    def __init__(
+        self,
+        shared: SharedResources,
+        reflector: CurvedReflector,
+        background: Background | None = None,
+    ) -> None:
         super().__init__(shared, reflector, background)
         self.textures: dict[int, Texture2D] = {}
 
@@ -138,31 +164,55 @@ class SphereMapped(CurvedPass):
         self.textures.clear()
         super().release()
 
-    def update(self, step: PlannedPass, reflector: CurvedReflector, renderer: ViewDrawer,
-               frame_target: RenderTarget) -> int:
+    def update(
+        self,
+        step: PlannedPass,
+        reflector: CurvedReflector,
+        renderer: ViewDrawer,
+        frame_target: RenderTarget,
+    ) -> int:
         """Bake (or load) the map the ``bake`` step's key names into its slot."""
         if reflector.source is not None:
             image = load_picture(reflector.source)
         else:
             rotation = np.asarray(step.key[3], dtype=np.float64).reshape(3, 3)
-            image = bake_sphere_map(environment_of(renderer.scene.background),
-                                    reflector.map_size, rotation)
+            image = bake_sphere_map(
+                environment_of(renderer.scene.background), reflector.map_size, rotation
+            )
         old = self.textures.pop(step.slot, None)
         if old is not None and (old.width, old.height) == (image.shape[1], image.shape[0]):
             old.bind(0)
             GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
-            GL.glTexSubImage2D(GL.GL_TEXTURE_2D, 0, 0, 0, old.width, old.height, GL.GL_RGB,
-                               GL.GL_UNSIGNED_BYTE, np.ascontiguousarray(image[::-1]))
+            GL.glTexSubImage2D(
+                GL.GL_TEXTURE_2D,
+                0,
+                0,
+                0,
+                old.width,
+                old.height,
+                GL.GL_RGB,
+                GL.GL_UNSIGNED_BYTE,
+                np.ascontiguousarray(image[::-1]),
+            )
             GL.glGenerateMipmap(GL.GL_TEXTURE_2D)
             self.textures[step.slot] = old
             return 0
         if old is not None:
             old.release()
-        what = (f"picture {reflector.source}" if reflector.source is not None
-                else f"reflector {reflector.name}'s sphere map")
-        self.textures[step.slot] = Texture2D(self.shared.registry, image.shape[1],
-                                             image.shape[0], image, mipmaps=True, clamp=True,
-                                             what=what)
+        what = (
+            f"picture {reflector.source}"
+            if reflector.source is not None
+            else f"reflector {reflector.name}'s sphere map"
+        )
+        self.textures[step.slot] = Texture2D(
+            self.shared.registry,
+            image.shape[1],
+            image.shape[0],
+            image,
+            mipmaps=True,
+            clamp=True,
+            what=what,
+        )
         return 0
 
     def map_for(self, draw: ReflectorDraw) -> Texture2D:
@@ -173,17 +223,23 @@ class CubeMapped(CurvedPass):
     """A static cube map: the reflector's six pictures, the background's own pictures, or
     six faces baked from the background, made once."""
 
-    def __init__(self, shared: SharedResources, reflector: CurvedReflector,
-                 background: Background) -> None:
+    def __init__(
+        self, shared: SharedResources, reflector: CurvedReflector, background: Background
+    ) -> None:
         super().__init__(shared, reflector, background)
-        folder = reflector.source if reflector.source is not None else (
-            background.path if background.kind == "cube_faces" else None)
+        folder = (
+            reflector.source
+            if reflector.source is not None
+            else (background.path if background.kind == "cube_faces" else None)
+        )
         if folder is not None:
             self.cube = cube_from_folder(shared.registry, folder)
         else:
-            self.cube = TextureCube.from_faces(shared.registry,
-                                               baked_cube(background, reflector.map_size),
-                                               what=f"reflector {reflector.name}'s cube map")
+            self.cube = TextureCube.from_faces(
+                shared.registry,
+                baked_cube(background, reflector.map_size),
+                what=f"reflector {reflector.name}'s cube map",
+            )
 
     def release(self) -> None:
         self.cube.release()
@@ -197,12 +253,14 @@ class LatlongMapped(CurvedPass):
     """A latitude-longitude map baked once from the background, ``2 map_size`` x
     ``map_size``: repeating across the phi seam, clamped at the poles."""
 
-    def __init__(self, shared: SharedResources, reflector: CurvedReflector,
-                 background: Background) -> None:
+    def __init__(
+        self, shared: SharedResources, reflector: CurvedReflector, background: Background
+    ) -> None:
         super().__init__(shared, reflector, background)
         image = baked_latlong(background, reflector.map_size)
-        self.texture = Texture2D(shared.registry, image.shape[1], image.shape[0], image,
-                                 mipmaps=True, clamp=False)
+        self.texture = Texture2D(
+            shared.registry, image.shape[1], image.shape[0], image, mipmaps=True, clamp=False
+        )
         GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, GL.GL_CLAMP_TO_EDGE)
 
     def release(self) -> None:

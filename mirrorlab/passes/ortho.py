@@ -15,6 +15,12 @@ class OrthoMirror(CapturingMirror):
     """The ``ortho`` technique. Its capture does not depend on the viewer: the planner
     reuses it until the scene changes."""
 
-    def draw_own(self, draw: ReflectorDraw, view: View, renderer: ViewDrawer,
-                 target: RenderTarget, stencil_level: int) -> int:
+    def draw_own(
+        self,
+        draw: ReflectorDraw,
+        view: View,
+        renderer: ViewDrawer,
+        target: RenderTarget,
+        stencil_level: int,
+    ) -> int:
         return self.draw_textured(view, self.captures.texture(draw.slot), None)

@@ -20,8 +20,9 @@ def mirror_vertices(reflector: PlanarReflector) -> tuple[np.ndarray, np.ndarray]
     its ortho-capture texture coordinates at the corners, and ``(2, 3)`` triangle
     indices."""
     normals = np.broadcast_to(reflector.normal, (4, 3))
-    vertices = np.hstack([reflector.corner_array - reflector.center, normals,
-                          reflector.texcoords()])
+    vertices = np.hstack(
+        [reflector.corner_array - reflector.center, normals, reflector.texcoords()]
+    )
     return vertices.astype(np.float32), np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32)
 
 
@@ -40,8 +41,12 @@ class PlanarPass:
     between frames (its pass is kept): each draw places the quad where the reflector it
     is given is, updating the quad's four vertices when its shape or place changed."""
 
-    def __init__(self, shared: SharedResources, reflector: PlanarReflector,
-                 background: Background | None = None) -> None:
+    def __init__(
+        self,
+        shared: SharedResources,
+        reflector: PlanarReflector,
+        background: Background | None = None,
+    ) -> None:
         self.shared = shared
         self.reflector = reflector
         self.quad = MeshBuffer(shared.registry, *mirror_vertices(reflector))
@@ -72,7 +77,7 @@ class PlanarPass:
             if held_view is view and held_reflector is reflector:
                 return model
         model = math3d.read_only(view.relative(mirror_model(reflector)).astype(np.float32))
-        self._placed = [(view, reflector, model), *self._placed[:QUAD_MODELS_KEPT - 1]]
+        self._placed = [(view, reflector, model), *self._placed[: QUAD_MODELS_KEPT - 1]]
         return model
 
     def flat_quad(self, view: View, color, far_depth: bool) -> None:
@@ -111,8 +116,14 @@ class PlanarPass:
         GL.glEnable(GL.GL_CULL_FACE)
         return 1
 
-    def draw(self, draw: ReflectorDraw, view: View, renderer: ViewDrawer,
-             target: RenderTarget, stencil_level: int) -> int:
+    def draw(
+        self,
+        draw: ReflectorDraw,
+        view: View,
+        renderer: ViewDrawer,
+        target: RenderTarget,
+        stencil_level: int,
+    ) -> int:
         """The modes every planar technique shares: ``plain`` and ``back``."""
         assert isinstance(draw.reflector, PlanarReflector)
         self.place(draw.reflector)
@@ -120,12 +131,19 @@ class PlanarPass:
             return self.draw_backing(view)
         if draw.mode == "plain":
             drawer = renderer.drawer  # type: ignore[attr-defined]
-            return drawer.draw_plain(renderer.scene, draw.reflector, view, self.quad,
-                                     mirror_model(self.reflector)) + self.draw_backing(view)
+            return drawer.draw_plain(
+                renderer.scene, draw.reflector, view, self.quad, mirror_model(self.reflector)
+            ) + self.draw_backing(view)
         return self.draw_own(draw, view, renderer, target, stencil_level)
 
-    def draw_own(self, draw: ReflectorDraw, view: View, renderer: ViewDrawer,
-                 target: RenderTarget, stencil_level: int) -> int:  # pragma: no cover
+    def draw_own(
+        self,
+        draw: ReflectorDraw,
+        view: View,
+        renderer: ViewDrawer,
+        target: RenderTarget,
+        stencil_level: int,
+    ) -> int:  # pragma: no cover
         raise NotImplementedError
 
 
@@ -133,8 +151,12 @@ class CapturingMirror(PlanarPass):
     """A planar technique that captures the scene into slot textures (``ortho``,
     ``reflected``): one capture camera, its picture copied or drawn into the slot."""
 
-    def __init__(self, shared: SharedResources, reflector: PlanarReflector,
-                 background: Background | None = None) -> None:
+    def __init__(
+        self,
+        shared: SharedResources,
+        reflector: PlanarReflector,
+        background: Background | None = None,
+    ) -> None:
         super().__init__(shared, reflector, background)
         self.captures = CaptureTextures(shared, reflector.capture)
 
@@ -142,8 +164,13 @@ class CapturingMirror(PlanarPass):
         self.captures.release()
         super().release()
 
-    def update(self, step: PlannedPass, reflector: PlanarReflector, renderer: ViewDrawer,
-               frame_target: RenderTarget) -> int:
+    def update(
+        self,
+        step: PlannedPass,
+        reflector: PlanarReflector,
+        renderer: ViewDrawer,
+        frame_target: RenderTarget,
+    ) -> int:
         (plan,) = step.views
         return self.captures.capture(step.slot, plan, renderer, frame_target)
 
@@ -168,8 +195,9 @@ class CaptureTextures:
             self.textures[slot] = Texture2D.blank(self.shared.registry, 1, 1)
         return self.textures[slot]
 
-    def capture(self, slot: int, plan: ViewPlan, renderer: ViewDrawer,
-                frame_target: RenderTarget) -> int:
+    def capture(
+        self, slot: int, plan: ViewPlan, renderer: ViewDrawer, frame_target: RenderTarget
+    ) -> int:
         """Draw ``plan`` into slot ``slot``'s texture; returns the number of draw calls."""
         size = plan.view.size
         texture = self.texture(slot)
@@ -177,21 +205,25 @@ class CaptureTextures:
             # The frame's own target when it has the capture's size (as the lab does),
             # else a framebuffer of exactly that size: the copy never reads outside what
             # was drawn, whatever size the window has.
-            target: RenderTarget = (frame_target if tuple(frame_target.size) == size
-                                    else self.shared.scratch(size))
+            target: RenderTarget = (
+                frame_target if tuple(frame_target.size) == size else self.shared.scratch(size)
+            )
             # A scissored capture draws only within plan.scissor: once the texture has
             # the capture's size, it is as a whole copy would leave it when the rectangle
             # holding this scissor and the last one is cleared, drawn and copied (outside
             # both, both copies hold the background). Nothing outside that rectangle is
             # read, so nothing outside it is cleared.
-            region = (bounding(self._copied[slot], plan.scissor)
-                      if slot in self._copied and (texture.width, texture.height) == size
-                      else None)
+            region = (
+                bounding(self._copied[slot], plan.scissor)
+                if slot in self._copied and (texture.width, texture.height) == size
+                else None
+            )
             draws = renderer.draw_view(plan, target, cleared=region)
             target.bind()
             self._copied.pop(slot, None)  # a failed copy leaves the texture unknown
-            texture.copy_from_framebuffer(*size, source=(target.size[0], target.size[1]),
-                                          region=region)
+            texture.copy_from_framebuffer(
+                *size, source=(target.size[0], target.size[1]), region=region
+            )
             self._copied[slot] = plan.scissor  # (not reached when the copy failed)
             return draws
         framebuffer = self._framebuffers.get(slot)
@@ -199,8 +231,9 @@ class CaptureTextures:
             if framebuffer is not None:
                 framebuffer.release()
             texture.allocate(*size)
-            framebuffer = self._framebuffers[slot] = TextureFramebuffer(self.shared.registry,
-                                                                        texture)
+            framebuffer = self._framebuffers[slot] = TextureFramebuffer(
+                self.shared.registry, texture
+            )
         return renderer.draw_view(plan, framebuffer)
 
     def release(self) -> None:

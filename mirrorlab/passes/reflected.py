@@ -16,7 +16,13 @@ class ReflectedMirror(CapturingMirror):
     """The ``reflected`` technique: one capture per viewer (see
     :func:`mirrorlab.views.reflected_capture_view`)."""
 
-    def draw_own(self, draw: ReflectorDraw, view: View, renderer: ViewDrawer,
-                 target: RenderTarget, stencil_level: int) -> int:
+    def draw_own(
+        self,
+        draw: ReflectorDraw,
+        view: View,
+        renderer: ViewDrawer,
+        target: RenderTarget,
+        stencil_level: int,
+    ) -> int:
         assert draw.source is not None
         return self.draw_textured(view, self.captures.texture(draw.slot), draw.source)

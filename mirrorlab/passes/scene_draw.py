@@ -109,8 +109,7 @@ class PartTable:
     def surfaces(self) -> np.ndarray:
         """``(n, 4, 4)`` float32: each part's :func:`surface_matrix` (its ``part``
         uniform)."""
-        return math3d.read_only(
-            self.columns[:, 1].transpose(0, 2, 1).astype(np.float32, order="C"))
+        return math3d.read_only(self.columns[:, 1].transpose(0, 2, 1).astype(np.float32, order="C"))
 
 
 @dataclass(eq=False)
@@ -134,9 +133,9 @@ class RecordedView:
         return frozenset(self.visible.tolist())
 
 
-def _few_indirect_commands(table: PartTable, visible: np.ndarray
-                           ) -> tuple[np.ndarray, tuple[tuple[TextureSource | None, int, int],
-                                                        ...]]:
+def _few_indirect_commands(
+    table: PartTable, visible: np.ndarray
+) -> tuple[np.ndarray, tuple[tuple[TextureSource | None, int, int], ...]]:
     """:func:`indirect_commands` one part at a time."""
     commands: list[list[int]] = []
     runs: list[list] = []  # [texture id, first command, count]
@@ -155,9 +154,10 @@ def _few_indirect_commands(table: PartTable, visible: np.ndarray
         commands.append([count, 1, first, base, position])
         runs[-1][2] += 1
         last_mesh = mesh
-    return (np.array(commands, dtype=np.uint32).reshape(-1, 5),
-            tuple((table.worn[tid] if tid >= 0 else None, first, count)
-                  for tid, first, count in runs))
+    return (
+        np.array(commands, dtype=np.uint32).reshape(-1, 5),
+        tuple((table.worn[tid] if tid >= 0 else None, first, count) for tid, first, count in runs),
+    )
 
 
 def texture_runs(ids: np.ndarray) -> list[tuple[int, int, int]]:
@@ -184,13 +184,14 @@ class SceneDrawer:
 
     def __init__(self, shared: SharedResources, draw_path: DrawPath = "auto") -> None:
         if draw_path not in DRAW_PATHS:
-            raise ValueError(f"draw_path must be one of {', '.join(DRAW_PATHS)}, got "
-                             f"{draw_path!r}")
+            raise ValueError(f"draw_path must be one of {', '.join(DRAW_PATHS)}, got {draw_path!r}")
         if draw_path == "auto":
             draw_path = "packed" if has_multi_draw() else "per-draw"
         elif draw_path == "packed" and not has_multi_draw():
-            raise ValueError("draw_path 'packed' needs OpenGL 4.3; this context has "
-                             f"{'.'.join(map(str, gl_version()))}")
+            raise ValueError(
+                "draw_path 'packed' needs OpenGL 4.3; this context has "
+                f"{'.'.join(map(str, gl_version()))}"
+            )
         self.draw_path: DrawPath = draw_path
         self.shared = shared
         shared.packed.carry_parts()
@@ -235,8 +236,15 @@ class SceneDrawer:
         if len(models):
             columns[:, 0] = models.transpose(0, 2, 1)  # GLSL's are by column
             columns[:, 1, :3, :3] = np.linalg.inv(models[:, :3, :3])  # the normal matrix's
-        table = PartTable(columns, held.textures, held.texture_ids, held.worn, held.ranges,
-                          held.mesh_ids, held.layouts)
+        table = PartTable(
+            columns,
+            held.textures,
+            held.texture_ids,
+            held.worn,
+            held.ranges,
+            held.mesh_ids,
+            held.layouts,
+        )
         self._tables[objects] = table
         while len(self._tables) > 4:
             self._tables.popitem(last=False)
@@ -255,28 +263,38 @@ class SceneDrawer:
             columns[:, 1, 3, 3] = [texture is not None for texture in textures]
         worn = tuple(dict.fromkeys(t for t in textures if t is not None))
         unique = {t: i for i, t in enumerate(worn)}
-        ranges = np.array([self.shared.mesh_range(mesh) for mesh in meshes],
-                          dtype=np.int64).reshape(-1, 3)
+        ranges = np.array(
+            [self.shared.mesh_range(mesh) for mesh in meshes], dtype=np.int64
+        ).reshape(-1, 3)
         mesh_ids = {mesh: i for i, mesh in enumerate(dict.fromkeys(meshes))}
-        return PartTable(columns, textures,
-                         np.array([unique.get(t, -1) if t is not None else -1
-                                   for t in textures], dtype=np.int64),
-                         worn, ranges,
-                         np.array([mesh_ids[mesh] for mesh in meshes], dtype=np.int64))
+        return PartTable(
+            columns,
+            textures,
+            np.array(
+                [unique.get(t, -1) if t is not None else -1 for t in textures], dtype=np.int64
+            ),
+            worn,
+            ranges,
+            np.array([mesh_ids[mesh] for mesh in meshes], dtype=np.int64),
+        )
 
     @staticmethod
-    def visible(index: SceneIndex, view: View,
-                scissor: Rectangle | None = None) -> np.ndarray:
+    def visible(index: SceneIndex, view: View, scissor: Rectangle | None = None) -> np.ndarray:
         """Positions ``(k,)`` of the parts of ``index`` that may show in ``view`` (within
         ``scissor``, when given): boxes within its clip volume, then of those, the ones
         that may colour a pixel (:func:`mirrorlab.culling.boxes_cover_pixels`)."""
-        inside = culling.rows_in_view(index.objects_part.part_rows,
-                                      view.cull_test(scissor)).nonzero()[0]
+        inside = culling.rows_in_view(
+            index.objects_part.part_rows, view.cull_test(scissor)
+        ).nonzero()[0]
         if len(inside) <= FEW_PARTS:
             return inside  # too few for the pixel test to pay for itself
-        covering = culling.boxes_cover_pixels(index.part_centers[inside],
-                                              index.part_halves[inside],
-                                              view.view_projection, view.size, scissor)
+        covering = culling.boxes_cover_pixels(
+            index.part_centers[inside],
+            index.part_halves[inside],
+            view.view_projection,
+            view.size,
+            scissor,
+        )
         return inside[covering]
 
     @staticmethod
@@ -285,8 +303,7 @@ class SceneDrawer:
         column (the packed path's parts buffer), the models relative to the view's origin,
         composed in float64 (camera-relative rendering). When the view sees every part,
         they are not copied first."""
-        columns = (table.columns if len(visible) == len(table.columns)
-                   else table.columns[visible])
+        columns = table.columns if len(visible) == len(table.columns) else table.columns[visible]
         return (columns - view.column_offset).astype(np.float32)
 
     # ------------------------------------------------------------- drawing
@@ -300,7 +317,8 @@ class SceneDrawer:
         if held is None:
             held = self._programs[count] = (
                 self.shared.program("scene.vert", "scene.frag", LIGHT_COUNT=count),
-                self.shared.program("scene_packed.vert", "scene.frag", LIGHT_COUNT=count))
+                self.shared.program("scene_packed.vert", "scene.frag", LIGHT_COUNT=count),
+            )
             for program in held:  # the texture unit is set once, when made
                 program.use()
                 program.set_int("texture_map", 0)
@@ -319,8 +337,9 @@ class SceneDrawer:
             self._lit[program] = lights
         return program
 
-    def draw(self, scene: Scene, view: View, scissor: Rectangle | None = None,
-             cull: bool = True) -> int:
+    def draw(
+        self, scene: Scene, view: View, scissor: Rectangle | None = None, cull: bool = True
+    ) -> int:
         """Draw the objects into the bound target (what can show within ``scissor``, the
         part of it that matters, when given; every part, with ``cull`` False); returns the
         number of draw calls."""
@@ -329,8 +348,15 @@ class SceneDrawer:
             return 0
         return self._draw_recorded(scene, view, index, self._table(index), scissor, cull)
 
-    def _draw_recorded(self, scene: Scene, view: View, index: SceneIndex, table: PartTable,
-                       scissor: Rectangle | None, cull: bool) -> int:
+    def _draw_recorded(
+        self,
+        scene: Scene,
+        view: View,
+        index: SceneIndex,
+        table: PartTable,
+        scissor: Rectangle | None,
+        cull: bool,
+    ) -> int:
         """Draw ``view`` 's recorded draw of ``index`` (recorded now when it has none) by
         the drawer's path; returns the number of draw calls."""
         recorded = self._record(index, view, table, scissor, cull)
@@ -364,14 +390,16 @@ class SceneDrawer:
         for texture, first, count in recorded.runs:
             if texture is not None:
                 self.shared.texture(texture).bind(0)
-            for index_count, instances, first_index, base_vertex, first_part in (
-                    commands[first:first + count].tolist()):
+            for index_count, instances, first_index, base_vertex, first_part in commands[
+                first : first + count
+            ].tolist():
                 packed.point_parts(first_part)
                 packed.draw_instanced(first_index, index_count, base_vertex, instances)
         return len(commands)
 
-    def prepare(self, scene: Scene, views: Iterable[tuple[View, Rectangle | None]],
-                cull: bool = True) -> None:
+    def prepare(
+        self, scene: Scene, views: Iterable[tuple[View, Rectangle | None]], cull: bool = True
+    ) -> None:
         """Record the draws of the ``views`` (each with its scissor) a
         frame is about to draw: culling and the parts' data of every view are worked out
         in one stretch, before the frame's first pass makes Python wait for the
@@ -383,16 +411,16 @@ class SceneDrawer:
         for view, scissor in views:
             self._record(index, view, table, scissor, cull)
 
-    def _record(self, index: SceneIndex, view: View, table: PartTable,
-                scissor: Rectangle | None, cull: bool) -> RecordedView:
+    def _record(
+        self, index: SceneIndex, view: View, table: PartTable, scissor: Rectangle | None, cull: bool
+    ) -> RecordedView:
         """``view``'s recorded draw of ``index`` (made when it has none)."""
         key = (*_view_key(index, view, scissor), cull)
         self._used.add(key)
         recorded = self._recorded.get(key)
         if recorded is not None:
             return recorded
-        visible = (self.visible(index, view, scissor) if cull
-                   else np.arange(len(index.objects_part)))
+        visible = self.visible(index, view, scissor) if cull else np.arange(len(index.objects_part))
         data = self.relative_columns(table, visible, view)
         commands, runs = draw_layout(table, visible)
         parts, commands_buffer, held = self._spare_for(commands)
@@ -404,18 +432,24 @@ class SceneDrawer:
         self._recorded[key] = recorded
         return recorded
 
-    def follows_pose(self, objects: ObjectArrays,
-                     views: Iterable[tuple[View, Rectangle | None]], cull: bool) -> bool:
+    def follows_pose(
+        self, objects: ObjectArrays, views: Iterable[tuple[View, Rectangle | None]], cull: bool
+    ) -> bool:
         """Whether the calls that drew ``objects`` in ``views`` (each with its scissor, as
         recorded by :meth:`prepare`) draw another pose of the same parts as well once
         :meth:`repose` has sent its data: every part's matrices are in the recorded
         views' buffers."""
         return all(
-            (objects, view.draw_key, scissor, cull) in self._recorded
-            for view, scissor in views)
+            (objects, view.draw_key, scissor, cull) in self._recorded for view, scissor in views
+        )
 
-    def repose(self, objects: ObjectArrays, index: SceneIndex,
-               views: Sequence[tuple[View, Rectangle | None]], cull: bool) -> bool:
+    def repose(
+        self,
+        objects: ObjectArrays,
+        index: SceneIndex,
+        views: Sequence[tuple[View, Rectangle | None]],
+        cull: bool,
+    ) -> bool:
         """Send the new pose of ``objects`` that ``index`` holds into the buffers of their
         recorded ``views`` (each with its scissor), which then hold it: the same calls
         draw it (:meth:`follows_pose`). False, and nothing sent, when the new pose is of
@@ -440,15 +474,17 @@ class SceneDrawer:
             recorded_views.append(recorded)
         if cull and not _still_drawn(objects, posed, recorded_views):
             for (view, scissor), recorded in zip(views, recorded_views, strict=True):
-                if (self.visible(index, view, scissor).tobytes()
-                        != recorded.visible.tobytes()):
+                if self.visible(index, view, scissor).tobytes() != recorded.visible.tobytes():
                     return False
         columns = self._table(index).columns
         # every view's parts data in one go, composed in float64 as relative_columns does
         data = (columns - self._column_offsets(views)).astype(np.float32)
         for position, (key, recorded) in enumerate(zip(keys, recorded_views, strict=True)):
-            drawn = (data[position] if len(recorded.visible) == len(columns)
-                     else data[position][recorded.visible])
+            drawn = (
+                data[position]
+                if len(recorded.visible) == len(columns)
+                else data[position][recorded.visible]
+            )
             recorded.parts.upload(GL.GL_ARRAY_BUFFER, drawn)
             del self._recorded[key]
             new_key = (posed, *key[1:])
@@ -464,8 +500,10 @@ class SceneDrawer:
         frame)."""
         held = self._offsets
         if held is None or held[0] is not views:
-            held = self._offsets = (views, math3d.read_only(
-                np.array([view.column_offset for view, _ in views])[:, None]))
+            held = self._offsets = (
+                views,
+                math3d.read_only(np.array([view.column_offset for view, _ in views])[:, None]),
+            )
         return held[1]
 
     def _spare_for(self, commands: np.ndarray) -> tuple[Buffer, Buffer, np.ndarray | None]:
@@ -496,8 +534,14 @@ class SceneDrawer:
             recorded.parts.release()
             recorded.commands.release()
 
-    def draw_plain(self, scene: Scene, reflector: CurvedReflector | PlanarReflector,
-                   view: View, quad=None, quad_model: np.ndarray | None = None) -> int:
+    def draw_plain(
+        self,
+        scene: Scene,
+        reflector: CurvedReflector | PlanarReflector,
+        view: View,
+        quad=None,
+        quad_model: np.ndarray | None = None,
+    ) -> int:
         """The reflector as a lit surface in its plain colour: a curved one's mesh, or a
         planar one's front (``quad``, its mesh buffer, placed by ``quad_model``). Returns
         the draw count (1)."""
@@ -509,8 +553,9 @@ class SceneDrawer:
             model = np.eye(4) if quad_model is None else quad_model
             mesh = quad
         program.set_mat4("model", view.relative(model))
-        program.set_mat4("part", surface_matrix(math3d.normal_matrix(model), reflector.color,
-                                                textured=False))
+        program.set_mat4(
+            "part", surface_matrix(math3d.normal_matrix(model), reflector.color, textured=False)
+        )
         GL.glEnable(GL.GL_CULL_FACE)
         mesh.draw()
         return 1
@@ -533,8 +578,7 @@ class SceneDrawer:
         self._offsets = None
 
 
-def _still_drawn(before: ObjectArrays, after: ObjectArrays,
-                 views: list[RecordedView]) -> bool:
+def _still_drawn(before: ObjectArrays, after: ObjectArrays, views: list[RecordedView]) -> bool:
     """Whether every part of ``after`` that is not where it was in ``before`` (of the same
     parts: its object is not the same object) is one that each of ``views`` draws, and
     at most :data:`FEW_PARTS` moved."""
@@ -576,8 +620,9 @@ def draw_layout(table: PartTable, visible: np.ndarray) -> Layout:
     return layout
 
 
-def indirect_commands(table: PartTable, visible: np.ndarray
-                      ) -> tuple[np.ndarray, tuple[tuple[TextureSource | None, int, int], ...]]:
+def indirect_commands(
+    table: PartTable, visible: np.ndarray
+) -> tuple[np.ndarray, tuple[tuple[TextureSource | None, int, int], ...]]:
     """The indirect commands ``(c, 5)`` uint32 that draw the ``visible`` parts of
     ``table`` in order (part k of them being instance k of the whole: its data is entry k
     of the parts buffer), and the runs of commands that share a texture, each (texture
@@ -604,5 +649,7 @@ def indirect_commands(table: PartTable, visible: np.ndarray
     commands[:, 4] = first_part  # base instance: where the parts' data starts
     command_of = np.searchsorted(first_part, [first for _, first, _ in runs])
     ends = np.append(command_of[1:], len(first_part))
-    return commands, tuple((table.worn[tid] if tid >= 0 else None, int(a), int(b - a))
-                           for (tid, _, _), a, b in zip(runs, command_of, ends, strict=True))
+    return commands, tuple(
+        (table.worn[tid] if tid >= 0 else None, int(a), int(b - a))
+        for (tid, _, _), a, b in zip(runs, command_of, ends, strict=True)
+    )

@@ -18,8 +18,13 @@ SKY_SIZE = 256
 """Edge of the cube map a baked background is drawn from."""
 
 _SCREEN_TRIANGLE = np.array(
-    [(-1.0, -1.0, 0.0, 0, 0, 1, 0, 0), (3.0, -1.0, 0.0, 0, 0, 1, 0, 0),
-     (-1.0, 3.0, 0.0, 0, 0, 1, 0, 0)], dtype=np.float32)
+    [
+        (-1.0, -1.0, 0.0, 0, 0, 1, 0, 0),
+        (3.0, -1.0, 0.0, 0, 0, 1, 0, 0),
+        (-1.0, 3.0, 0.0, 0, 0, 1, 0, 0),
+    ],
+    dtype=np.float32,
+)
 
 
 @lru_cache(maxsize=8)
@@ -41,8 +46,9 @@ def background_cube(shared: SharedResources, background: Background) -> TextureC
     if background.kind == "cube_faces":
         assert background.path is not None
         return cube_from_folder(shared.registry, background.path)
-    return TextureCube.from_faces(shared.registry, background_faces(background),
-                                  what="the background's cube map face")
+    return TextureCube.from_faces(
+        shared.registry, background_faces(background), what="the background's cube map face"
+    )
 
 
 def ray_directions(view: View) -> np.ndarray:
@@ -72,8 +78,7 @@ class SkyPass:
         self.background = background
         self.cube = background_cube(shared, background)
         self.program = shared.program("envmap_sky.vert", "envmap_sky.frag")
-        self.triangle = MeshBuffer(shared.registry, _SCREEN_TRIANGLE,
-                                   np.arange(3, dtype=np.uint32))
+        self.triangle = MeshBuffer(shared.registry, _SCREEN_TRIANGLE, np.arange(3, dtype=np.uint32))
         self.program.use()
         self.program.set_int("sky_texture", 0)
 

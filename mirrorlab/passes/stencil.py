@@ -27,12 +27,23 @@ class StencilMirror(PlanarPass):
     5. its back face shows the backing.
     """
 
-    def update(self, step: PlannedPass, reflector: PlanarReflector, renderer: ViewDrawer,
-               frame_target: RenderTarget) -> int:
+    def update(
+        self,
+        step: PlannedPass,
+        reflector: PlanarReflector,
+        renderer: ViewDrawer,
+        frame_target: RenderTarget,
+    ) -> int:
         raise ValueError("a stencil mirror has no texture to update")
 
-    def draw_own(self, draw: ReflectorDraw, view: View, renderer: ViewDrawer,
-                 target: RenderTarget, stencil_level: int) -> int:
+    def draw_own(
+        self,
+        draw: ReflectorDraw,
+        view: View,
+        renderer: ViewDrawer,
+        target: RenderTarget,
+        stencil_level: int,
+    ) -> int:
         assert draw.nested is not None
         inner = stencil_level + 1
         background = renderer.scene.background.color

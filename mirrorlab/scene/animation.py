@@ -45,8 +45,9 @@ def interpolate(keys: list[tuple[int, Value]], frame: int) -> Value:
     return keys[-1][1]
 
 
-def _track(keyframes: tuple[Keyframe, ...], group: str, name: str | None,
-           field: str) -> list[tuple[int, Value]]:
+def _track(
+    keyframes: tuple[Keyframe, ...], group: str, name: str | None, field: str
+) -> list[tuple[int, Value]]:
     keys = []
     for key in keyframes:
         values = getattr(key, group)
@@ -70,8 +71,11 @@ def pose(scene: Scene, frame: int) -> Scene:
     for group, fields in (("objects", OBJECT_FIELDS), ("reflectors", REFLECTOR_FIELDS)):
         names = {name for key in keyframes for name in getattr(key, group)}
         for name in sorted(names):
-            changes = {field: interpolate(keys, frame) for field in fields
-                       if (keys := _track(keyframes, group, name, field))}
+            changes = {
+                field: interpolate(keys, frame)
+                for field in fields
+                if (keys := _track(keyframes, group, name, field))
+            }
             posed = _apply(posed, group, name, changes)
     return posed
 

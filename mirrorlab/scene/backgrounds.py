@@ -66,8 +66,9 @@ def sky_environment(directions: np.ndarray) -> np.ndarray:
     t = 1.0 / np.maximum(-y, 1e-3)  # the ground: a soft checker on the plane y = -1
     gx, gz = x * t, z * t
     checker = 0.5 + 0.5 * np.tanh(3.0 * np.sin(np.pi * gx / 2.0) * np.sin(np.pi * gz / 2.0))
-    ground = (checker[:, None] * np.array([0.62, 0.55, 0.42])
-              + (1 - checker[:, None]) * np.array([0.25, 0.32, 0.2]))
+    ground = checker[:, None] * np.array([0.62, 0.55, 0.42]) + (1 - checker[:, None]) * np.array(
+        [0.25, 0.32, 0.2]
+    )
     haze = _smoothstep(0.0, 0.35, -y)[:, None]
     ground = haze * ground + (1 - haze) * np.array([0.5, 0.52, 0.5])
     below = _smoothstep(0.01, -0.01, elevation)[:, None]
@@ -154,9 +155,11 @@ def load_picture(path: str | Path) -> np.ndarray:
             with Image.open(path) as image:
                 width, height = image.size
                 if width * height > MAX_PICTURE_PIXELS:
-                    raise ValueError(f"picture {path} is {width}x{height}, too large: "
-                                     f"expected at most {MAX_PICTURE_PIXELS:,} pixels "
-                                     f"(16384x16384)")
+                    raise ValueError(
+                        f"picture {path} is {width}x{height}, too large: "
+                        f"expected at most {MAX_PICTURE_PIXELS:,} pixels "
+                        f"(16384x16384)"
+                    )
                 if width < 1 or height < 1:
                     raise ValueError(f"picture {path} is {width}x{height}: it has no pixels")
                 return np.asarray(image.convert("RGB"))
@@ -179,8 +182,10 @@ def load_cube_faces(folder: str | Path) -> np.ndarray:
     when one is missing, unreadable, not square or not the size of the others.
     """
     folder = Path(folder)
-    stamps = tuple((folder / f"{stem}.png").stat().st_mtime_ns
-                   if (folder / f"{stem}.png").is_file() else None for stem in CUBE_FACE_FILES)
+    stamps = tuple(
+        (folder / f"{stem}.png").stat().st_mtime_ns if (folder / f"{stem}.png").is_file() else None
+        for stem in CUBE_FACE_FILES
+    )
     return _load_cube_faces(folder.resolve(), stamps)
 
 
@@ -206,16 +211,21 @@ def _load_cube_faces(folder: Path, stamps: tuple) -> np.ndarray:
     for stem in CUBE_FACE_FILES:
         path = folder / f"{stem}.png"
         if not path.is_file():
-            raise ValueError(f"cube face {path} is missing; a cube map needs "
-                             f"{', '.join(s + '.png' for s in CUBE_FACE_FILES)}")
+            raise ValueError(
+                f"cube face {path} is missing; a cube map needs "
+                f"{', '.join(s + '.png' for s in CUBE_FACE_FILES)}"
+            )
         pixels = load_picture(path)
         if pixels.shape[0] != pixels.shape[1]:
-            raise ValueError(f"cube face {path} is {pixels.shape[1]}x{pixels.shape[0]}, "
-                             f"expected a square")
+            raise ValueError(
+                f"cube face {path} is {pixels.shape[1]}x{pixels.shape[0]}, expected a square"
+            )
         if faces and pixels.shape != faces[0].shape:
-            raise ValueError(f"cube face {path} is {pixels.shape[1]}x{pixels.shape[0]}, "
-                             f"expected {faces[0].shape[1]}x{faces[0].shape[0]} like "
-                             f"{CUBE_FACE_FILES[0]}.png")
+            raise ValueError(
+                f"cube face {path} is {pixels.shape[1]}x{pixels.shape[0]}, "
+                f"expected {faces[0].shape[1]}x{faces[0].shape[0]} like "
+                f"{CUBE_FACE_FILES[0]}.png"
+            )
         faces.append(pixels[::-1])  # upright file -> row 0 at t = 1
     stacked = np.ascontiguousarray(np.stack(faces))
     stacked.setflags(write=False)
@@ -233,8 +243,9 @@ def environment_of(background: Background) -> EnvFunction:
         return cube_faces_environment(load_cube_faces(background.path))
     if background.kind == "sphere_map":
         assert background.path is not None and background.sphere_map_camera is not None
-        return sphere_image_environment(load_picture(background.path),
-                                        background.sphere_map_camera.view())
+        return sphere_image_environment(
+            load_picture(background.path), background.sphere_map_camera.view()
+        )
     color = np.asarray(background.color, dtype=np.float64)
 
     def plain(directions: np.ndarray) -> np.ndarray:

@@ -86,20 +86,55 @@ distance`` (roughly), so the farther part of a range is lost to its last step: t
 farthest 0.6% of a range of 1e5, 6% of 1e6, a third of 1e7, and beyond that most of it,
 everything at 1e30 (where the ray tracer's inverse of the projection fails as well)."""
 
-_TOP_KEYS = ("name", "description", "max_bounces", "ambient", "camera", "background",
-             "lights", "objects", "reflectors", "animation")
+_TOP_KEYS = (
+    "name",
+    "description",
+    "max_bounces",
+    "ambient",
+    "camera",
+    "background",
+    "lights",
+    "objects",
+    "reflectors",
+    "animation",
+)
 _CAMERA_KEYS = ("eye", "target", "up", "fovy", "near", "far")
 _BACKGROUND_SOURCES = ("color", "sky", "cube_faces", "sphere_map")
 _LIGHT_KEYS = ("direction", "intensity", "color")
 _TRANSFORM_KEYS = ("position", "rotation", "scale")
 _MESH_KEYS = ("name", "type", "mesh", *_TRANSFORM_KEYS, "color", "texture")
 _ROBOT_KEYS = ("name", "type", "angles", *_TRANSFORM_KEYS)
-_PLANAR_KEYS = ("name", "technique", "corners", "center", "normal", "width", "height", "up",
-                "capture", "texture_size", "ortho", "color", "backing")
-_CURVED_KEYS = ("name", "technique", "mesh", *_TRANSFORM_KEYS, "map_size", "source",
-                "capture_center", "color", "parallax")
-_PARALLAX_KEYS = {"box": ("min", "max"), "sphere": ("radius",),
-                  "distance": ("steps", "secant", "thickness")}
+_PLANAR_KEYS = (
+    "name",
+    "technique",
+    "corners",
+    "center",
+    "normal",
+    "width",
+    "height",
+    "up",
+    "capture",
+    "texture_size",
+    "ortho",
+    "color",
+    "backing",
+)
+_CURVED_KEYS = (
+    "name",
+    "technique",
+    "mesh",
+    *_TRANSFORM_KEYS,
+    "map_size",
+    "source",
+    "capture_center",
+    "color",
+    "parallax",
+)
+_PARALLAX_KEYS = {
+    "box": ("min", "max"),
+    "sphere": ("radius",),
+    "distance": ("steps", "secant", "thickness"),
+}
 """The keys of each proxy in a ``parallax`` table, besides ``proxy``."""
 _ORTHO_KEYS = ("eye", "target", "up", "extents")
 _KEYFRAME_KEYS = ("frame", "camera", "objects", "reflectors")
@@ -141,8 +176,11 @@ def scene_path(name_or_path: str | Path) -> Path:
     shipped = scenes_dir() / f"{stem}.toml"
     if _is_file(shipped):
         return shipped
-    raise SceneError(text, "", f"unknown scene; expected a .toml file or one of "
-                     f"{', '.join(shipped_scene_names())}")
+    raise SceneError(
+        text,
+        "",
+        f"unknown scene; expected a .toml file or one of {', '.join(shipped_scene_names())}",
+    )
 
 
 @functools.cache
@@ -209,8 +247,11 @@ def scene_to_document(scene: Scene, base: Path | None = None) -> dict[str, Any]:
     """``scene`` as a TOML document, file names relative to ``base`` (default: the folder
     of the scene's own file, else the working folder). Every value is written out, so
     nothing depends on defaults."""
-    folder = base if base is not None else (
-        scene.source.parent if scene.source is not None else Path.cwd())
+    folder = (
+        base
+        if base is not None
+        else (scene.source.parent if scene.source is not None else Path.cwd())
+    )
 
     def rel(path: Path) -> str:
         return _relative(path, folder)
@@ -232,14 +273,26 @@ def scene_to_document(scene: Scene, base: Path | None = None) -> dict[str, Any]:
         if background.sphere_map_camera is not None:
             camera = background.sphere_map_camera
             document["background"]["sphere_map_camera"] = {
-                "eye": list(camera.eye), "target": list(camera.target), "up": list(camera.up)}
-    document["lights"] = [{"direction": list(light.direction), "intensity": light.intensity,
-                           "color": list(light.color)} for light in scene.lights]
+                "eye": list(camera.eye),
+                "target": list(camera.target),
+                "up": list(camera.up),
+            }
+    document["lights"] = [
+        {
+            "direction": list(light.direction),
+            "intensity": light.intensity,
+            "color": list(light.color),
+        }
+        for light in scene.lights
+    ]
     objects = []
     for item in scene.objects:
         if isinstance(item, RobotObject):
-            entry: dict[str, Any] = {"name": item.name, "type": "robot",
-                                     "angles": list(item.angles)}
+            entry: dict[str, Any] = {
+                "name": item.name,
+                "type": "robot",
+                "angles": list(item.angles),
+            }
         else:
             entry = {"name": item.name, "type": "mesh", "mesh": rel(item.mesh)}
             if item.color is not None:
@@ -252,23 +305,34 @@ def scene_to_document(scene: Scene, base: Path | None = None) -> dict[str, Any]:
     reflectors = []
     for reflector in scene.reflectors:
         if isinstance(reflector, PlanarReflector):
-            entry = {"name": reflector.name, "technique": reflector.technique,
-                     "corners": [list(c) for c in reflector.corners],
-                     "capture": reflector.capture}
+            entry = {
+                "name": reflector.name,
+                "technique": reflector.technique,
+                "corners": [list(c) for c in reflector.corners],
+                "capture": reflector.capture,
+            }
             if reflector.texture_size is not None:
                 entry["texture_size"] = reflector.texture_size
             if reflector.ortho is not None:
                 ortho = reflector.ortho
-                entry["ortho"] = {"eye": list(ortho.eye), "target": list(ortho.target),
-                                  "up": list(ortho.up), "extents": list(ortho.extents)}
+                entry["ortho"] = {
+                    "eye": list(ortho.eye),
+                    "target": list(ortho.target),
+                    "up": list(ortho.up),
+                    "extents": list(ortho.extents),
+                }
             entry["color"] = list(reflector.color)
             entry["backing"] = list(reflector.backing)
         else:
-            entry = {"name": reflector.name, "technique": reflector.technique,
-                     "mesh": rel(reflector.mesh), **_transform_document(reflector.transform),
-                     "map_size": reflector.map_size,
-                     "capture_center": list(reflector.capture_center),
-                     "color": list(reflector.color)}
+            entry = {
+                "name": reflector.name,
+                "technique": reflector.technique,
+                "mesh": rel(reflector.mesh),
+                **_transform_document(reflector.transform),
+                "map_size": reflector.map_size,
+                "capture_center": list(reflector.capture_center),
+                "color": list(reflector.color),
+            }
             if reflector.source is not None:
                 entry["source"] = rel(reflector.source)
             if reflector.parallax is not None:
@@ -301,18 +365,31 @@ def parallax_document(parallax: Parallax) -> dict[str, Any]:
         return {"proxy": "box", "min": list(parallax.min), "max": list(parallax.max)}
     if isinstance(parallax, SphereProxy):
         return {"proxy": "sphere", "radius": parallax.radius}
-    return {"proxy": "distance", "steps": parallax.steps, "secant": parallax.secant,
-            "thickness": parallax.thickness}
+    return {
+        "proxy": "distance",
+        "steps": parallax.steps,
+        "secant": parallax.secant,
+        "thickness": parallax.thickness,
+    }
 
 
 def _camera_document(camera: Camera) -> dict[str, Any]:
-    return {"eye": list(camera.eye), "target": list(camera.target), "up": list(camera.up),
-            "fovy": camera.fovy, "near": camera.near, "far": camera.far}
+    return {
+        "eye": list(camera.eye),
+        "target": list(camera.target),
+        "up": list(camera.up),
+        "fovy": camera.fovy,
+        "near": camera.near,
+        "far": camera.far,
+    }
 
 
 def _transform_document(transform: Transform) -> dict[str, Any]:
-    return {"position": list(transform.position), "rotation": list(transform.rotation),
-            "scale": list(transform.scale)}
+    return {
+        "position": list(transform.position),
+        "rotation": list(transform.rotation),
+        "scale": list(transform.scale),
+    }
 
 
 def _plain(value):
@@ -355,8 +432,11 @@ class _Reader:
             if name not in known:
                 where = f"{key}.{key_name(name)}" if key else key_name(name)
                 close = difflib.get_close_matches(str(name), known, n=1, cutoff=0.6)
-                hint = f"; did you mean {close[0]!r}?" if close else (
-                    f"; expected one of {', '.join(known)}")
+                hint = (
+                    f"; did you mean {close[0]!r}?"
+                    if close
+                    else (f"; expected one of {', '.join(known)}")
+                )
                 raise self.fail(where, f"unknown key{hint}")
         return value
 
@@ -365,8 +445,14 @@ class _Reader:
             raise self.fail(key, f"expected an array, got {_kind(value)}")
         return value
 
-    def number(self, value: Any, key: str, low: float | None = None,
-               high: float | None = None, low_open: bool = False) -> float:
+    def number(
+        self,
+        value: Any,
+        key: str,
+        low: float | None = None,
+        high: float | None = None,
+        low_open: bool = False,
+    ) -> float:
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.fail(key, f"expected a number, got {_kind(value)}")
         try:
@@ -378,12 +464,21 @@ class _Reader:
                 why = " (a number beyond 1.8e308 overflows to inf)" if math.isinf(number) else ""
                 raise self.fail(key, f"expected a finite number, got {value}{why}")
         if not abs(number) <= MAX_MAGNITUDE:
-            shown = f"{number:g}" if math.isfinite(number) else (
-                f"a {len(str(abs(value)))}-digit number" if isinstance(value, int)
-                else str(value))
-            raise self.fail(key, f"{shown} is too large: it overflows OpenGL's 32-bit "
-                            f"floats or loses all precision in them; expected a number from "
-                            f"{-MAX_MAGNITUDE:g} to {MAX_MAGNITUDE:g}")
+            shown = (
+                f"{number:g}"
+                if math.isfinite(number)
+                else (
+                    f"a {len(str(abs(value)))}-digit number"
+                    if isinstance(value, int)
+                    else str(value)
+                )
+            )
+            raise self.fail(
+                key,
+                f"{shown} is too large: it overflows OpenGL's 32-bit "
+                f"floats or loses all precision in them; expected a number from "
+                f"{-MAX_MAGNITUDE:g} to {MAX_MAGNITUDE:g}",
+            )
         if low is not None and (number < low or (low_open and number == low)):
             bound = f"greater than {low:g}" if low_open else f"at least {low:g}"
             raise self.fail(key, f"expected a number {bound}, got {value}")
@@ -395,9 +490,12 @@ class _Reader:
         """A vertical field of view in degrees, from :data:`MIN_FOVY` to 179."""
         degrees = self.number(value, key, 0.0, 179.0, low_open=True)
         if degrees < MIN_FOVY:
-            raise self.fail(key, f"{degrees:g} degrees is too narrow: below {MIN_FOVY:g} "
-                            f"degrees, GL's 32-bit floats move vertices by a good part of a "
-                            f"pixel or more; expected {MIN_FOVY:g} to 179")
+            raise self.fail(
+                key,
+                f"{degrees:g} degrees is too narrow: below {MIN_FOVY:g} "
+                f"degrees, GL's 32-bit floats move vertices by a good part of a "
+                f"pixel or more; expected {MIN_FOVY:g} to 179",
+            )
         return degrees
 
     def integer(self, value: Any, key: str, low: int, high: int) -> int:
@@ -437,16 +535,18 @@ class _Reader:
         if not length > 0.0:
             raise self.fail(key, f"expected a non-zero direction, got {list(vector)}")
         if not math.isfinite(length):
-            raise self.fail(key, f"expected a direction whose length is a finite number, "
-                            f"got {list(vector)}")
+            raise self.fail(
+                key, f"expected a direction whose length is a finite number, got {list(vector)}"
+            )
         return vector
 
     def color(self, value: Any, key: str) -> tuple[float, float, float]:
         rgb = self.vec3(value, key)
         for i, channel in enumerate(rgb):
             if not 0.0 <= channel <= 1.0:
-                raise self.fail(f"{key}[{i}]", f"expected a colour channel from 0 to 1, "
-                                f"got {channel:g}")
+                raise self.fail(
+                    f"{key}[{i}]", f"expected a colour channel from 0 to 1, got {channel:g}"
+                )
         return rgb
 
     def file(self, value: Any, key: str, what: str) -> Path:
@@ -462,20 +562,27 @@ class _Reader:
         formats = mesh_formats()
         suffix = path.name.lower().split(".", 1)[1] if "." in path.name else ""
         if suffix not in formats and path.suffix.lower().lstrip(".") not in formats:
-            raise self.fail(key, f"mesh file {path} is not of a format trimesh reads: "
-                            f"expected a name ending in "
-                            f"{', '.join('.' + f for f in sorted(formats))}")
+            raise self.fail(
+                key,
+                f"mesh file {path} is not of a format trimesh reads: "
+                f"expected a name ending in "
+                f"{', '.join('.' + f for f in sorted(formats))}",
+            )
         return path
 
     def folder_of_faces(self, value: Any, key: str) -> Path:
         folder = self.folder / self.text(value, key)
         if not _is_dir(folder):
             raise self.fail(key, f"cube-face folder {folder} does not exist")
-        missing = [f"{stem}.png" for stem in CUBE_FACE_FILES
-                   if not _is_file(folder / f"{stem}.png")]
+        missing = [
+            f"{stem}.png" for stem in CUBE_FACE_FILES if not _is_file(folder / f"{stem}.png")
+        ]
         if missing:
-            raise self.fail(key, f"cube-face folder {folder} lacks {', '.join(missing)}; "
-                            f"expected {', '.join(s + '.png' for s in CUBE_FACE_FILES)}")
+            raise self.fail(
+                key,
+                f"cube-face folder {folder} lacks {', '.join(missing)}; "
+                f"expected {', '.join(s + '.png' for s in CUBE_FACE_FILES)}",
+            )
         return folder.resolve()
 
     # ------------------------------------------------------------- sections
@@ -485,17 +592,25 @@ class _Reader:
         default_name = self.source.stem if self.source is not None else "scene"
         name = self.text(document.get("name", default_name), "name")
         description = self.text(document.get("description", ""), "description")
-        max_bounces = self.integer(document.get("max_bounces", 1), "max_bounces", 0,
-                                   MAX_BOUNCES)
+        max_bounces = self.integer(document.get("max_bounces", 1), "max_bounces", 0, MAX_BOUNCES)
         ambient = self.number(document.get("ambient", 0.3), "ambient", 0.0, 1.0)
         camera = self.camera(document.get("camera", {}), "camera")
         background = self.background(document.get("background", {}), camera)
         lights = self.lights(document.get("lights", [{}]))
         objects = self.objects(document.get("objects", []))
         reflectors = self.reflectors(document.get("reflectors", []))
-        scene = Scene(name=name, description=description, max_bounces=max_bounces,
-                      ambient=ambient, camera=camera, background=background, lights=lights,
-                      objects=objects, reflectors=reflectors, source=self.source)
+        scene = Scene(
+            name=name,
+            description=description,
+            max_bounces=max_bounces,
+            ambient=ambient,
+            camera=camera,
+            background=background,
+            lights=lights,
+            objects=objects,
+            reflectors=reflectors,
+            source=self.source,
+        )
         if "animation" in document:
             scene = replace(scene, animation=self.animation(document["animation"], scene))
         return scene
@@ -512,10 +627,13 @@ class _Reader:
         if not far > near:
             raise self.fail(f"{key}.far", f"expected more than near ({near:g}), got {far:g}")
         if far > MAX_DEPTH_RATIO * near:
-            raise self.fail(f"{key}.near", f"{near:g} is too small for far {far:g}: the depth "
-                            f"buffer loses the farther part of a range more than "
-                            f"{MAX_DEPTH_RATIO:g} times near; expected at least "
-                            f"{far / MAX_DEPTH_RATIO:.8g}")
+            raise self.fail(
+                f"{key}.near",
+                f"{near:g} is too small for far {far:g}: the depth "
+                f"buffer loses the farther part of a range more than "
+                f"{MAX_DEPTH_RATIO:g} times near; expected at least "
+                f"{far / MAX_DEPTH_RATIO:.8g}",
+            )
         self.check_view(eye, target, up, key)
         return Camera(eye=eye, target=target, up=up, fovy=fovy, near=near, far=far)
 
@@ -524,39 +642,46 @@ class _Reader:
             offset = np.subtract(target, eye)
             length = float(np.linalg.norm(offset))
         if not length > 0.0:
-            raise self.fail(f"{key}.target", f"must differ from {key}.eye, both are "
-                            f"{list(eye)}")
+            raise self.fail(f"{key}.target", f"must differ from {key}.eye, both are {list(eye)}")
         if not math.isfinite(length):
             raise self.fail(f"{key}.target", f"too far from {key}.eye (the distance overflows)")
         side = np.cross(offset / length, np.asarray(up) / np.linalg.norm(up))
         if float(np.linalg.norm(side)) < 1e-9:
-            raise self.fail(f"{key}.up", f"must not be parallel to the view direction "
-                            f"from eye to target, got {list(up)}")
+            raise self.fail(
+                f"{key}.up",
+                f"must not be parallel to the view direction from eye to target, got {list(up)}",
+            )
         if float(np.linalg.norm(np.cross(offset / length, up))) < 1e-12:  # as look_at does
-            raise self.fail(f"{key}.up", f"is too short to orient the camera, got "
-                            f"{list(up)}; expected a direction of length 1 or so")
+            raise self.fail(
+                f"{key}.up",
+                f"is too short to orient the camera, got "
+                f"{list(up)}; expected a direction of length 1 or so",
+            )
 
     def background(self, value: Any, camera: Camera) -> Background:
         table = self.table(value, "background", (*_BACKGROUND_SOURCES, "sphere_map_camera"))
         sources = [k for k in _BACKGROUND_SOURCES if k in table]
         if len(sources) > 1:
-            raise self.fail(f"background.{sources[1]}", f"a background has one source; "
-                            f"remove {sources[1]!r} or {sources[0]!r}")
+            raise self.fail(
+                f"background.{sources[1]}",
+                f"a background has one source; remove {sources[1]!r} or {sources[0]!r}",
+            )
         if "sphere_map_camera" in table and sources != ["sphere_map"]:
-            raise self.fail("background.sphere_map_camera", "applies to a sphere_map "
-                            "background only")
+            raise self.fail(
+                "background.sphere_map_camera", "applies to a sphere_map background only"
+            )
         kind = sources[0] if sources else "color"
         if kind == "color":
-            color = self.color(table.get("color", list(Background().color)),
-                               "background.color")
+            color = self.color(table.get("color", list(Background().color)), "background.color")
             return Background(kind="color", color=color)
         if kind == "sky":
             self.choice(table["sky"], "background.sky", ("procedural",))
             return Background(kind="sky")
         if kind == "cube_faces":
-            return Background(kind="cube_faces",
-                              path=self.folder_of_faces(table["cube_faces"],
-                                                        "background.cube_faces"))
+            return Background(
+                kind="cube_faces",
+                path=self.folder_of_faces(table["cube_faces"], "background.cube_faces"),
+            )
         path = self.file(table["sphere_map"], "background.sphere_map", "picture")
         if "sphere_map_camera" in table:
             key = "background.sphere_map_camera"
@@ -579,12 +704,17 @@ class _Reader:
             key = f"lights[{i}]"
             table = self.table(item, key, _LIGHT_KEYS)
             default = Light()
-            lights.append(Light(
-                direction=self.direction(table.get("direction", list(default.direction)),
-                                         f"{key}.direction"),
-                intensity=self.number(table.get("intensity", default.intensity),
-                                      f"{key}.intensity", 0.0, 10.0),
-                color=self.color(table.get("color", list(default.color)), f"{key}.color")))
+            lights.append(
+                Light(
+                    direction=self.direction(
+                        table.get("direction", list(default.direction)), f"{key}.direction"
+                    ),
+                    intensity=self.number(
+                        table.get("intensity", default.intensity), f"{key}.intensity", 0.0, 10.0
+                    ),
+                    color=self.color(table.get("color", list(default.color)), f"{key}.color"),
+                )
+            )
         return tuple(lights)
 
     def transform(self, table: Mapping[str, Any], key: str) -> Transform:
@@ -598,8 +728,10 @@ class _Reader:
             scale = self.vec3(raw_scale, f"{key}.scale")
         for i, factor in enumerate(scale):
             if not 1e-6 <= abs(factor) <= 1e6:
-                raise self.fail(f"{key}.scale", f"expected scale factors from 1e-6 to 1e6 "
-                                f"in size, got {scale[i]:g}")
+                raise self.fail(
+                    f"{key}.scale",
+                    f"expected scale factors from 1e-6 to 1e6 in size, got {scale[i]:g}",
+                )
         return Transform(position=position, rotation=rotation, scale=scale)
 
     def objects(self, value: Any) -> tuple:
@@ -609,27 +741,39 @@ class _Reader:
             key = f"objects[{i}]"
             if not isinstance(item, Mapping):
                 raise self.fail(key, f"expected a table, got {_kind(item)}")
-            kind = self.choice(item.get("type", "robot" if "angles" in item else "mesh"),
-                               f"{key}.type", ("mesh", "robot"))
+            kind = self.choice(
+                item.get("type", "robot" if "angles" in item else "mesh"),
+                f"{key}.type",
+                ("mesh", "robot"),
+            )
             if kind == "robot":
                 table = self.table(item, key, _ROBOT_KEYS)
                 name = self.text(table.get("name", "robot"), f"{key}.name")
                 angles = self.vec3(table.get("angles", [-35.0, 30.0, -75.0]), f"{key}.angles")
-                objects.append(RobotObject(name=name, angles=angles,
-                                           transform=self.transform(table, key)))
+                objects.append(
+                    RobotObject(name=name, angles=angles, transform=self.transform(table, key))
+                )
                 continue
             table = self.table(item, key, _MESH_KEYS)
             if "mesh" not in table:
                 raise self.fail(f"{key}.mesh", "missing: a mesh object needs a mesh file")
             mesh = self.mesh_file(table["mesh"], f"{key}.mesh")
-            texture = (self.file(table["texture"], f"{key}.texture", "texture picture")
-                       if "texture" in table else None)
-            objects.append(MeshObject(
-                name=self.text(table.get("name", mesh.stem), f"{key}.name"), mesh=mesh,
-                transform=self.transform(table, key),
-                color=(self.color(table["color"], f"{key}.color") if "color" in table
-                       else None),
-                texture=texture))
+            texture = (
+                self.file(table["texture"], f"{key}.texture", "texture picture")
+                if "texture" in table
+                else None
+            )
+            objects.append(
+                MeshObject(
+                    name=self.text(table.get("name", mesh.stem), f"{key}.name"),
+                    mesh=mesh,
+                    transform=self.transform(table, key),
+                    color=(
+                        self.color(table["color"], f"{key}.color") if "color" in table else None
+                    ),
+                    texture=texture,
+                )
+            )
         self.unique([o.name for o in objects], "objects")
         return tuple(objects)
 
@@ -637,8 +781,11 @@ class _Reader:
         seen: dict[str, int] = {}
         for i, name in enumerate(names):
             if name in seen:
-                raise self.fail(f"{group}[{i}].name", f"{name!r} is already the name of "
-                                f"{group}[{seen[name]}]; give each a name of its own")
+                raise self.fail(
+                    f"{group}[{i}].name",
+                    f"{name!r} is already the name of "
+                    f"{group}[{seen[name]}]; give each a name of its own",
+                )
             seen[name] = i
 
     def reflectors(self, value: Any) -> tuple:
@@ -650,8 +797,7 @@ class _Reader:
                 raise self.fail(key, f"expected a table, got {_kind(item)}")
             names = technique_names("planar") + technique_names("curved")
             if "technique" not in item:
-                raise self.fail(f"{key}.technique", f"missing; expected one of "
-                                f"{', '.join(names)}")
+                raise self.fail(f"{key}.technique", f"missing; expected one of {', '.join(names)}")
             name = self.choice(item["technique"], f"{key}.technique", names)
             if technique(name).kind == "planar":
                 reflectors.append(self.planar(item, key, name))
@@ -666,42 +812,52 @@ class _Reader:
         given = [k for k in shape_keys if k in table]
         if "corners" in table:
             if given:
-                raise self.fail(f"{key}.{given[0]}", "give corners, or center, normal, "
-                                "width and height, not both")
+                raise self.fail(
+                    f"{key}.{given[0]}",
+                    "give corners, or center, normal, width and height, not both",
+                )
             corners = self.corners(table["corners"], f"{key}.corners")
         else:
             missing = [k for k in ("center", "normal", "width", "height") if k not in table]
             if missing:
-                raise self.fail(f"{key}.{missing[0]}", "missing: a planar mirror needs "
-                                "corners, or center, normal, width and height")
+                raise self.fail(
+                    f"{key}.{missing[0]}",
+                    "missing: a planar mirror needs corners, or center, normal, width and height",
+                )
             corners = self.rectangle(table, key)
         texture_size: int | Literal["footprint"] | None = None
         if "texture_size" in table:
-            texture_size = self.texture_size(table["texture_size"], f"{key}.texture_size",
-                                             name)
+            texture_size = self.texture_size(table["texture_size"], f"{key}.texture_size", name)
         ortho = self.ortho(table["ortho"], f"{key}.ortho") if "ortho" in table else None
         if ortho is not None and not technique(name).own_camera:
             owners = _techniques_with(lambda t: t.own_camera)
             raise self.fail(f"{key}.ortho", f"applies to {owners}, not {name!r}")
         return PlanarReflector(
-            name=self.text(table.get("name", "mirror"), f"{key}.name"), corners=corners,
+            name=self.text(table.get("name", "mirror"), f"{key}.name"),
+            corners=corners,
             technique=name,
             capture=self.choice(table.get("capture", "copy"), f"{key}.capture", CAPTURE_MODES),
-            texture_size=texture_size, ortho=ortho,
+            texture_size=texture_size,
+            ortho=ortho,
             color=self.color(table.get("color", list(DEFAULT_PLAIN_COLOR)), f"{key}.color"),
-            backing=self.color(table.get("backing", list(DEFAULT_BACKING)), f"{key}.backing"))
+            backing=self.color(table.get("backing", list(DEFAULT_BACKING)), f"{key}.backing"),
+        )
 
     def texture_size(self, value: Any, key: str, name: str) -> int | Literal["footprint"]:
         """A whole number of pixels, or ``"footprint"`` for a technique whose capture
         camera is its own."""
         if isinstance(value, str):
             if value != FOOTPRINT_TEXTURE:
-                raise self.fail(key, f'expected a whole number or "{FOOTPRINT_TEXTURE}", got '
-                                f"{value!r}")
+                raise self.fail(
+                    key, f'expected a whole number or "{FOOTPRINT_TEXTURE}", got {value!r}'
+                )
             if not technique(name).own_camera:
                 owners = _techniques_with(lambda t: t.own_camera)
-                raise self.fail(key, f'"{FOOTPRINT_TEXTURE}" applies to {owners} (a capture '
-                                f"camera of its own), not {name!r}")
+                raise self.fail(
+                    key,
+                    f'"{FOOTPRINT_TEXTURE}" applies to {owners} (a capture '
+                    f"camera of its own), not {name!r}",
+                )
             return "footprint"
         return self.integer(value, key, 1, MAX_MAP_SIZE)
 
@@ -722,13 +878,22 @@ class _Reader:
         up_hint = np.array(self.direction(table.get("up", [0, 1, 0]), f"{key}.up"))
         up = up_hint - (up_hint @ normal) * normal
         if np.linalg.norm(up) < 1e-9 * np.linalg.norm(up_hint):
-            raise self.fail(f"{key}.up", f"must not be parallel to the normal "
-                            f"{list(table['normal'])}; give an up direction along the glass")
+            raise self.fail(
+                f"{key}.up",
+                f"must not be parallel to the normal "
+                f"{list(table['normal'])}; give an up direction along the glass",
+            )
         up /= np.linalg.norm(up)
         right = np.cross(normal, up)
         w, h = width / 2.0, height / 2.0
-        points = np.array([center - w * right - h * up, center - w * right + h * up,
-                           center + w * right + h * up, center + w * right - h * up])
+        points = np.array(
+            [
+                center - w * right - h * up,
+                center - w * right + h * up,
+                center + w * right + h * up,
+                center + w * right - h * up,
+            ]
+        )
         check_quad(points, lambda problem: self.fail(f"{key}.width", problem))
         return tuple((float(x), float(y), float(z)) for x, y, z in points)
 
@@ -736,8 +901,10 @@ class _Reader:
         table = self.table(value, key, _ORTHO_KEYS)
         for required in _ORTHO_KEYS:
             if required not in table:
-                raise self.fail(f"{key}.{required}", "missing: an ortho capture needs eye, "
-                                "target, up and extents")
+                raise self.fail(
+                    f"{key}.{required}",
+                    "missing: an ortho capture needs eye, target, up and extents",
+                )
         eye = self.vec3(table["eye"], f"{key}.eye")
         target = self.vec3(table["target"], f"{key}.target")
         up = self.direction(table["up"], f"{key}.up")
@@ -745,10 +912,13 @@ class _Reader:
         extents = self.vector(table["extents"], f"{key}.extents", 6)
         left, right, bottom, top, near, far = extents
         if left == right or bottom == top or near == far:
-            raise self.fail(f"{key}.extents", f"expected left != right, bottom != top and "
-                            f"near != far, got {list(extents)}")
-        return OrthoCapture(eye=eye, target=target, up=up,
-                            extents=(left, right, bottom, top, near, far))
+            raise self.fail(
+                f"{key}.extents",
+                f"expected left != right, bottom != top and near != far, got {list(extents)}",
+            )
+        return OrthoCapture(
+            eye=eye, target=target, up=up, extents=(left, right, bottom, top, near, far)
+        )
 
     def curved(self, item: Mapping[str, Any], key: str, name: str) -> CurvedReflector:
         table = self.table(item, key, _CURVED_KEYS)
@@ -763,39 +933,51 @@ class _Reader:
             elif entry.source == "picture":
                 source = self.file(table["source"], f"{key}.source", "sphere-map picture")
             else:
-                raise self.fail(f"{key}.source", f"technique {name!r} takes no source (only "
-                                f"{_techniques_with(lambda t: t.source is not None)} do: a "
-                                "live map captures the scene, the others are baked from the "
-                                "background)")
+                raise self.fail(
+                    f"{key}.source",
+                    f"technique {name!r} takes no source (only "
+                    f"{_techniques_with(lambda t: t.source is not None)} do: a "
+                    "live map captures the scene, the others are baked from the "
+                    "background)",
+                )
         reflector = CurvedReflector(
-            name=self.text(table.get("name", mesh.stem), f"{key}.name"), mesh=mesh,
-            transform=self.transform(table, key), technique=name,
-            map_size=self.integer(table.get("map_size", 256), f"{key}.map_size", 4,
-                                  MAX_MAP_SIZE),
+            name=self.text(table.get("name", mesh.stem), f"{key}.name"),
+            mesh=mesh,
+            transform=self.transform(table, key),
+            technique=name,
+            map_size=self.integer(table.get("map_size", 256), f"{key}.map_size", 4, MAX_MAP_SIZE),
             source=source,
-            capture_center=self.vec3(table.get("capture_center", [0, 0, 0]),
-                                     f"{key}.capture_center"),
-            color=self.color(table.get("color", list(DEFAULT_PLAIN_COLOR)), f"{key}.color"))
+            capture_center=self.vec3(
+                table.get("capture_center", [0, 0, 0]), f"{key}.capture_center"
+            ),
+            color=self.color(table.get("color", list(DEFAULT_PLAIN_COLOR)), f"{key}.color"),
+        )
         if "parallax" not in table:
             return reflector
         if not entry.parallax:
-            raise self.fail(f"{key}.parallax", f"applies to "
-                            f"{_techniques_with(lambda t: t.parallax)}, not {name!r}")
+            raise self.fail(
+                f"{key}.parallax",
+                f"applies to {_techniques_with(lambda t: t.parallax)}, not {name!r}",
+            )
         parallax = self.parallax(table["parallax"], f"{key}.parallax")
         if isinstance(parallax, BoxProxy):
             center = reflector.center()
             if not (np.all(center >= parallax.min) and np.all(center <= parallax.max)):
-                raise self.fail(f"{key}.parallax", "the reflector's capture centre "
-                                f"{[round(float(v), 6) for v in center]} is outside the box "
-                                "proxy; the box must enclose the reflector")
+                raise self.fail(
+                    f"{key}.parallax",
+                    "the reflector's capture centre "
+                    f"{[round(float(v), 6) for v in center]} is outside the box "
+                    "proxy; the box must enclose the reflector",
+                )
         return replace(reflector, parallax=parallax)
 
     def parallax(self, value: Any, key: str) -> Parallax:
         known = ("proxy", *dict.fromkeys(k for keys in _PARALLAX_KEYS.values() for k in keys))
         table = self.table(value, key, known)
         if "proxy" not in table:
-            raise self.fail(f"{key}.proxy", f"missing; expected one of "
-                            f"{', '.join(PARALLAX_PROXIES)}")
+            raise self.fail(
+                f"{key}.proxy", f"missing; expected one of {', '.join(PARALLAX_PROXIES)}"
+            )
         proxy = self.choice(table["proxy"], f"{key}.proxy", PARALLAX_PROXIES)
         for name in table:
             owner = next((p for p, keys in _PARALLAX_KEYS.items() if name in keys), proxy)
@@ -804,55 +986,74 @@ class _Reader:
         if proxy == "box":
             for required in ("min", "max"):
                 if required not in table:
-                    raise self.fail(f"{key}.{required}", "missing: a box proxy needs its "
-                                    "world corners min and max")
+                    raise self.fail(
+                        f"{key}.{required}",
+                        "missing: a box proxy needs its world corners min and max",
+                    )
             low = self.vec3(table["min"], f"{key}.min")
             high = self.vec3(table["max"], f"{key}.max")
             for i in range(3):
                 if not low[i] < high[i]:
-                    raise self.fail(f"{key}.max[{i}]", f"expected more than min[{i}] = "
-                                    f"{low[i]:g}, got {high[i]:g}")
+                    raise self.fail(
+                        f"{key}.max[{i}]",
+                        f"expected more than min[{i}] = {low[i]:g}, got {high[i]:g}",
+                    )
             return BoxProxy(min=low, max=high)
         if proxy == "sphere":
             if "radius" not in table:
                 raise self.fail(f"{key}.radius", "missing: a sphere proxy needs its radius")
-            return SphereProxy(radius=self.number(table["radius"], f"{key}.radius", 0.0,
-                                                  low_open=True))
+            return SphereProxy(
+                radius=self.number(table["radius"], f"{key}.radius", 0.0, low_open=True)
+            )
         default = DistanceSearch()
         return DistanceSearch(
-            steps=self.integer(table.get("steps", default.steps), f"{key}.steps", 1,
-                               MAX_SEARCH_STEPS),
-            secant=self.integer(table.get("secant", default.secant), f"{key}.secant", 0,
-                                MAX_SEARCH_STEPS),
-            thickness=self.number(table.get("thickness", default.thickness),
-                                  f"{key}.thickness", 0.0, 1.0, low_open=True))
+            steps=self.integer(
+                table.get("steps", default.steps), f"{key}.steps", 1, MAX_SEARCH_STEPS
+            ),
+            secant=self.integer(
+                table.get("secant", default.secant), f"{key}.secant", 0, MAX_SEARCH_STEPS
+            ),
+            thickness=self.number(
+                table.get("thickness", default.thickness),
+                f"{key}.thickness",
+                0.0,
+                1.0,
+                low_open=True,
+            ),
+        )
 
     def animation(self, value: Any, scene: Scene) -> Animation:
         table = self.table(value, "animation", ("frames", "keyframes"))
         items = self.array(table.get("keyframes", []), "animation.keyframes")
         if not items:
             raise self.fail("animation.keyframes", "expected at least one keyframe")
-        keyframes = [self.keyframe(item, f"animation.keyframes[{i}]", scene)
-                     for i, item in enumerate(items)]
+        keyframes = [
+            self.keyframe(item, f"animation.keyframes[{i}]", scene) for i, item in enumerate(items)
+        ]
         last = max(k.frame for k in keyframes)
         frames = self.integer(table.get("frames", last + 1), "animation.frames", 1, MAX_FRAMES)
         if last >= frames:
             index = next(i for i, k in enumerate(keyframes) if k.frame == last)
-            raise self.fail(f"animation.keyframes[{index}].frame", f"frame {last} is past "
-                            f"the animation's last frame {frames - 1}")
+            raise self.fail(
+                f"animation.keyframes[{index}].frame",
+                f"frame {last} is past the animation's last frame {frames - 1}",
+            )
         frames_seen: dict[int, int] = {}
         for i, key in enumerate(keyframes):
             if key.frame in frames_seen:
-                raise self.fail(f"animation.keyframes[{i}].frame", f"frame {key.frame} is "
-                                f"already keyframes[{frames_seen[key.frame]}]")
+                raise self.fail(
+                    f"animation.keyframes[{i}].frame",
+                    f"frame {key.frame} is already keyframes[{frames_seen[key.frame]}]",
+                )
             frames_seen[key.frame] = i
         ordered = tuple(sorted(keyframes, key=lambda k: k.frame))
         self.check_camera_frames(scene.camera, ordered, frames, frames_seen)
         self.check_placement_frames(ordered, frames, frames_seen)
         return Animation(frames=frames, keyframes=ordered)
 
-    def check_camera_frames(self, camera: Camera, keyframes: tuple[Keyframe, ...],
-                            frames: int, index_of: dict[int, int]) -> None:
+    def check_camera_frames(
+        self, camera: Camera, keyframes: tuple[Keyframe, ...], frames: int, index_of: dict[int, int]
+    ) -> None:
         """The camera must be a camera at every frame, not only at its keyframes: between
         them eye, target and up are interpolated and can meet (an eye moving through
         its target, an up turning over)."""
@@ -862,9 +1063,11 @@ class _Reader:
         tracks = {}
         for field in ("eye", "target", "up"):
             keys = [(k.frame, k.camera[field]) for k in keyframes if field in k.camera]
-            tracks[field] = (_track_values(keys, frames) if keys else
-                             np.broadcast_to(np.asarray(getattr(camera, field), float),
-                                             (frames, 3)))
+            tracks[field] = (
+                _track_values(keys, frames)
+                if keys
+                else np.broadcast_to(np.asarray(getattr(camera, field), float), (frames, 3))
+            )
         eye, target, up = tracks["eye"], tracks["target"], tracks["up"]
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
             offset = target - eye
@@ -873,46 +1076,76 @@ class _Reader:
             forward = offset / length[:, None]
             turned = np.linalg.norm(np.cross(forward, up / up_length[:, None]), axis=1)
             side = np.linalg.norm(np.cross(forward, up), axis=1)  # as look_at measures it
-        finite = (np.isfinite(eye).all(axis=1) & np.isfinite(target).all(axis=1)
-                  & np.isfinite(up).all(axis=1) & np.isfinite(length) & np.isfinite(up_length))
+        finite = (
+            np.isfinite(eye).all(axis=1)
+            & np.isfinite(target).all(axis=1)
+            & np.isfinite(up).all(axis=1)
+            & np.isfinite(length)
+            & np.isfinite(up_length)
+        )
         problems = (
-            (~finite, "the camera's eye, target or up is not a finite number (interpolating "
-                      "between keyframes overflows)"),
-            (finite & ~(length > 0.0), "the camera's eye reaches its target; keep them apart "
-                                       "at every frame"),
-            (finite & (length > 0.0) & ~((turned >= 1e-9) & (side >= 1e-12)),
-             "the camera's up is zero or along its view direction; keep it off the line of "
-             "sight at every frame"),
+            (
+                ~finite,
+                "the camera's eye, target or up is not a finite number (interpolating "
+                "between keyframes overflows)",
+            ),
+            (
+                finite & ~(length > 0.0),
+                "the camera's eye reaches its target; keep them apart at every frame",
+            ),
+            (
+                finite & (length > 0.0) & ~((turned >= 1e-9) & (side >= 1e-12)),
+                "the camera's up is zero or along its view direction; keep it off the line of "
+                "sight at every frame",
+            ),
         )
         self._first_bad_frame(problems, keyed, index_of, "camera")
 
-    def check_placement_frames(self, keyframes: tuple[Keyframe, ...], frames: int,
-                               index_of: dict[int, int]) -> None:
+    def check_placement_frames(
+        self, keyframes: tuple[Keyframe, ...], frames: int, index_of: dict[int, int]
+    ) -> None:
         """Every animated position, rotation, scale and joint angle must stay finite at
         every frame, and scales within range (interpolating from -1 to 1 passes 0)."""
         for group in ("objects", "reflectors"):
             names = dict.fromkeys(name for k in keyframes for name in getattr(k, group))
             for name in names:
                 for field in OBJECT_FIELDS:
-                    keys = [(k.frame, getattr(k, group)[name][field]) for k in keyframes
-                            if field in getattr(k, group).get(name, {})]
+                    keys = [
+                        (k.frame, getattr(k, group)[name][field])
+                        for k in keyframes
+                        if field in getattr(k, group).get(name, {})
+                    ]
                     if not keys:
                         continue
                     values = _track_values(keys, frames)
                     finite = np.isfinite(values).all(axis=1)
-                    problems = [(~finite, f"{field} is not a finite number (interpolating "
-                                          f"between keyframes overflows)")]
+                    problems = [
+                        (
+                            ~finite,
+                            f"{field} is not a finite number (interpolating "
+                            f"between keyframes overflows)",
+                        )
+                    ]
                     if field == "scale":
                         size = np.abs(values)
-                        problems.append((finite & ~((size >= 1e-6) & (size <= 1e6)).all(
-                            axis=1), "a scale factor leaves 1e-6 to 1e6 in size (it is "
-                                     "interpolated between keyframes); keep each factor's "
-                                     "sign at every keyframe"))
-                    self._first_bad_frame(problems, [f for f, _ in keys], index_of,
-                                          f"{group}.{key_name(name)}.{field}")
+                        problems.append(
+                            (
+                                finite & ~((size >= 1e-6) & (size <= 1e6)).all(axis=1),
+                                "a scale factor leaves 1e-6 to 1e6 in size (it is "
+                                "interpolated between keyframes); keep each factor's "
+                                "sign at every keyframe",
+                            )
+                        )
+                    self._first_bad_frame(
+                        problems,
+                        [f for f, _ in keys],
+                        index_of,
+                        f"{group}.{key_name(name)}.{field}",
+                    )
 
-    def _first_bad_frame(self, problems, keyed: list[int], index_of: dict[int, int],
-                         where: str) -> None:
+    def _first_bad_frame(
+        self, problems, keyed: list[int], index_of: dict[int, int], where: str
+    ) -> None:
         """Raise for the earliest frame any of ``problems`` ``(mask (frames,), words)``
         marks, blaming the keyframe (of the frames ``keyed``) it follows."""
         bad = [(int(np.argmax(mask)), words) for mask, words in problems if mask.any()]
@@ -921,8 +1154,9 @@ class _Reader:
         frame, words = min(bad, key=lambda item: item[0])
         before = [f for f in keyed if f <= frame]
         blamed = max(before) if before else min(keyed)
-        raise self.fail(f"animation.keyframes[{index_of[blamed]}].{where}",
-                        f"at frame {frame} {words}")
+        raise self.fail(
+            f"animation.keyframes[{index_of[blamed]}].{where}", f"at frame {frame} {words}"
+        )
 
     def keyframe(self, value: Any, key: str, scene: Scene) -> Keyframe:
         table = self.table(value, key, _KEYFRAME_KEYS)
@@ -941,30 +1175,33 @@ class _Reader:
                 else:
                     camera[field] = self.vec3(raw, where)
         objects = self.keyed(table.get("objects", {}), f"{key}.objects", scene, "objects")
-        reflectors = self.keyed(table.get("reflectors", {}), f"{key}.reflectors", scene,
-                                "reflectors")
+        reflectors = self.keyed(
+            table.get("reflectors", {}), f"{key}.reflectors", scene, "reflectors"
+        )
         return Keyframe(frame=frame, camera=camera, objects=objects, reflectors=reflectors)
 
     def keyed(self, value: Any, key: str, scene: Scene, group: str) -> dict[str, dict]:
-        items = {o.name: o for o in (scene.objects if group == "objects"
-                                     else scene.reflectors)}
+        items = {o.name: o for o in (scene.objects if group == "objects" else scene.reflectors)}
         if not items and isinstance(value, Mapping) and value:
             name = next(iter(value))
-            raise self.fail(f"{key}.{key_name(name)}", f"unknown name: the scene has no "
-                            f"{group} to animate")
+            raise self.fail(
+                f"{key}.{key_name(name)}", f"unknown name: the scene has no {group} to animate"
+            )
         table = self.table(value, key, tuple(items))
         result: dict[str, dict] = {}
         for name, raw in table.items():
             item = items[name]
             where = f"{key}.{key_name(name)}"
-            fields: tuple[str, ...] = (OBJECT_FIELDS if group == "objects"
-                                       else REFLECTOR_FIELDS)
+            fields: tuple[str, ...] = OBJECT_FIELDS if group == "objects" else REFLECTOR_FIELDS
             if isinstance(item, MeshObject):
                 fields = tuple(f for f in fields if f != "angles")
             if isinstance(item, PlanarReflector):
                 if isinstance(raw, Mapping) and "scale" in raw:
-                    raise self.fail(f"{where}.scale", "a planar mirror's keyframes take "
-                                    "position and rotation; its size is its corners'")
+                    raise self.fail(
+                        f"{where}.scale",
+                        "a planar mirror's keyframes take "
+                        "position and rotation; its size is its corners'",
+                    )
                 fields = PLANAR_FIELDS
             values = self.table(raw, where, fields)
             posed: dict[str, Any] = {}
@@ -996,25 +1233,29 @@ def check_quad(points: np.ndarray, fail: Callable[[str], Exception]) -> None:
         raise fail("corners coincide: the mirror has no area")
     unit_points = offsets / size
     # The plane of the largest triangle of three corners (none: all on a line).
-    triangles = [np.cross(unit_points[j] - unit_points[i], unit_points[k] - unit_points[i])
-                 for i, j, k in ((0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3))]
+    triangles = [
+        np.cross(unit_points[j] - unit_points[i], unit_points[k] - unit_points[i])
+        for i, j, k in ((0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3))
+    ]
     normal = max(triangles, key=lambda n: float(np.linalg.norm(n)))
     if not float(np.linalg.norm(normal)) > 1e-12:
         raise fail("corners span no area (they lie on a line or coincide)")
     unit = normal / np.linalg.norm(normal)
     off_plane = float(np.abs(unit_points @ unit).max())
     if off_plane > 1e-6:
-        raise fail(f"corners are not in one plane (one lies {off_plane * size * reach:.3g} "
-                   f"off it)")
+        raise fail(f"corners are not in one plane (one lies {off_plane * size * reach:.3g} off it)")
     edges = np.roll(unit_points, -1, axis=0) - unit_points
     signs = np.cross(edges, np.roll(edges, -1, axis=0)) @ unit  # turns at corners 1, 2, 3, 0
     if np.all(signs > 0) or np.all(signs < 0):
         return
     q = unit_points
-    if _segments_cross(q[0], q[1], q[2], q[3], unit) or _segments_cross(q[1], q[2], q[3], q[0],
-                                                                        unit):
-        raise fail("corners cross over each other: the quadrilateral is self-crossing; "
-                   "list them in order around the mirror")
+    if _segments_cross(q[0], q[1], q[2], q[3], unit) or _segments_cross(
+        q[1], q[2], q[3], q[0], unit
+    ):
+        raise fail(
+            "corners cross over each other: the quadrilateral is self-crossing; "
+            "list them in order around the mirror"
+        )
     raise fail("corners do not form a convex quadrilateral")
 
 
@@ -1076,6 +1317,15 @@ def _kind(value: Any) -> str:
     return type(value).__name__
 
 
-__all__ = ["DEFAULT_SCENE", "SceneError", "check_quad", "dumps",
-           "from_document", "load_scene", "loads", "scene_path", "scene_to_document",
-           "shipped_scene_names"]
+__all__ = [
+    "DEFAULT_SCENE",
+    "SceneError",
+    "check_quad",
+    "dumps",
+    "from_document",
+    "load_scene",
+    "loads",
+    "scene_path",
+    "scene_to_document",
+    "shipped_scene_names",
+]

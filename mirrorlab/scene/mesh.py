@@ -105,8 +105,10 @@ def load_mesh(path: str | Path) -> MeshData:
     if size == 0:
         raise ValueError(f"mesh file {path} is empty (0 bytes)")
     if size > MAX_MESH_BYTES:
-        raise ValueError(f"mesh file {path} is {size / 2**20:,.0f} MB, too large: expected "
-                         f"at most {MAX_MESH_BYTES // 2**20} MB")
+        raise ValueError(
+            f"mesh file {path} is {size / 2**20:,.0f} MB, too large: expected "
+            f"at most {MAX_MESH_BYTES // 2**20} MB"
+        )
     material = MeshMaterial()
     try:
         with warnings.catch_warnings():
@@ -127,12 +129,15 @@ def load_mesh(path: str | Path) -> MeshData:
         raise ValueError(f"mesh file {path}: expected triangles, found none")
     if not np.all(np.isfinite(positions)):
         row = int(np.flatnonzero(~np.isfinite(positions).all(axis=1))[0])
-        raise ValueError(f"mesh file {path}: vertex {row + 1} is not finite "
-                         f"({positions[row].tolist()})")
+        raise ValueError(
+            f"mesh file {path}: vertex {row + 1} is not finite ({positions[row].tolist()})"
+        )
     if np.abs(positions).max() > MAX_COORDINATE:
         row = int(np.flatnonzero((np.abs(positions) > MAX_COORDINATE).any(axis=1))[0])
-        raise ValueError(f"mesh file {path}: vertex {row + 1} ({positions[row].tolist()}) "
-                         f"lies beyond {MAX_COORDINATE:g}, too far for OpenGL's 32-bit floats")
+        raise ValueError(
+            f"mesh file {path}: vertex {row + 1} ({positions[row].tolist()}) "
+            f"lies beyond {MAX_COORDINATE:g}, too far for OpenGL's 32-bit floats"
+        )
     uv = getattr(mesh.visual, "uv", None)
     uvs = np.zeros((len(positions), 2)) if uv is None else np.asarray(uv, dtype=np.float64)
     return MeshData(
@@ -152,7 +157,8 @@ def _load_gltf(path: Path):
     import trimesh
 
     geometries = trimesh.load_scene(path, process=False, maintain_order=True).dump(
-        concatenate=False)
+        concatenate=False
+    )
     geometries = [g for g in geometries if isinstance(g, trimesh.Trimesh)]
     if not geometries:
         raise MeshFileError(f"mesh file {path}: expected triangles, found none")
@@ -161,7 +167,7 @@ def _load_gltf(path: Path):
         return mesh, _material_of(path, mesh)
     materials = [_material_of(path, g) for g in geometries]
     colors = {m.base_color for m in materials}
-    shared = (len(colors) == 1 and all(m.base_color_texture is None for m in materials))
+    shared = len(colors) == 1 and all(m.base_color_texture is None for m in materials)
     mesh = trimesh.util.concatenate(geometries)
     return mesh, MeshMaterial(base_color=colors.pop()) if shared else MeshMaterial()
 
@@ -187,8 +193,10 @@ def _material_of(path: Path, mesh) -> MeshMaterial:
     if image is not None and getattr(mesh.visual, "uv", None) is not None:
         width, height = image.size
         if width * height > MAX_PICTURE_PIXELS:
-            raise MeshFileError(f"mesh file {path}: its base colour texture is {width}x{height}, "
-                             f"too large: expected at most {MAX_PICTURE_PIXELS:,} pixels")
+            raise MeshFileError(
+                f"mesh file {path}: its base colour texture is {width}x{height}, "
+                f"too large: expected at most {MAX_PICTURE_PIXELS:,} pixels"
+            )
         texture = np.ascontiguousarray(np.asarray(image.convert("RGB"), dtype=np.uint8))
         texture.flags.writeable = False
     return MeshMaterial(base_color=color, base_color_texture=texture)

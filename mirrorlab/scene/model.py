@@ -86,8 +86,11 @@ class Transform:
     @cached_property
     def _matrix(self) -> np.ndarray:
         rx, ry, rz = self.rotation
-        turn = (math3d.rotate(rz, (0, 0, 1)) @ math3d.rotate(ry, (0, 1, 0))
-                @ math3d.rotate(rx, (1, 0, 0)))
+        turn = (
+            math3d.rotate(rz, (0, 0, 1))
+            @ math3d.rotate(ry, (0, 1, 0))
+            @ math3d.rotate(rx, (1, 0, 0))
+        )
         matrix = math3d.translate(self.position) @ turn @ math3d.scale(self.scale)
         matrix.flags.writeable = False
         return matrix
@@ -225,11 +228,13 @@ class PlanarReflector:
     @cached_property
     def ortho_capture(self) -> OrthoCapture:
         """The ``ortho`` technique's capture camera: :attr:`ortho` or the derived one."""
-        return self.ortho if self.ortho is not None else ortho_capture_for(self.corner_array,
-                                                                          self.normal)
+        return (
+            self.ortho
+            if self.ortho is not None
+            else ortho_capture_for(self.corner_array, self.normal)
+        )
 
-    def moved(self, position: Vec3 | None = None,
-              rotation: Vec3 | None = None) -> PlanarReflector:
+    def moved(self, position: Vec3 | None = None, rotation: Vec3 | None = None) -> PlanarReflector:
         """The mirror turned by ``rotation`` (degrees about x, then y, then z, as a
         :class:`Transform`'s) about its centre, then moved so that its centre is at
         ``position`` (default: where it is); its corners, and an ``ortho`` capture camera
@@ -245,8 +250,12 @@ class PlanarReflector:
         corners = tuple(place(c) for c in self.corner_array)
         ortho = self.ortho
         if ortho is not None:
-            ortho = replace(ortho, eye=place(ortho.eye), target=place(ortho.target),
-                            up=_vec(turn @ np.asarray(ortho.up, dtype=np.float64)))
+            ortho = replace(
+                ortho,
+                eye=place(ortho.eye),
+                target=place(ortho.target),
+                up=_vec(turn @ np.asarray(ortho.up, dtype=np.float64)),
+            )
         return replace(self, corners=corners, ortho=ortho)  # type: ignore[arg-type]
 
     def texcoords(self) -> np.ndarray:
@@ -271,9 +280,12 @@ def ortho_capture_for(corners: np.ndarray, normal: np.ndarray) -> OrthoCapture:
     local = math3d.transform_points(view, corners)[:, :2]
     left, bottom = local.min(axis=0)
     right, top = local.max(axis=0)
-    return OrthoCapture(eye=_vec(center), target=_vec(center + normal), up=_vec(up),
-                        extents=(float(left), float(right), float(bottom), float(top), 0.0,
-                                 ORTHO_DEPTH))
+    return OrthoCapture(
+        eye=_vec(center),
+        target=_vec(center + normal),
+        up=_vec(up),
+        extents=(float(left), float(right), float(bottom), float(top), 0.0, ORTHO_DEPTH),
+    )
 
 
 PARALLAX_PROXIES = ("box", "sphere", "distance")
@@ -399,15 +411,19 @@ class Scene:
         for item in self.objects:
             if item.name == name:
                 return item
-        raise KeyError(f"scene {self.name!r} has no object {name!r}; objects are "
-                       f"{', '.join(o.name for o in self.objects) or 'none'}")
+        raise KeyError(
+            f"scene {self.name!r} has no object {name!r}; objects are "
+            f"{', '.join(o.name for o in self.objects) or 'none'}"
+        )
 
     def reflector(self, name: str) -> Reflector:
         for item in self.reflectors:
             if item.name == name:
                 return item
-        raise KeyError(f"scene {self.name!r} has no reflector {name!r}; reflectors are "
-                       f"{', '.join(r.name for r in self.reflectors) or 'none'}")
+        raise KeyError(
+            f"scene {self.name!r} has no reflector {name!r}; reflectors are "
+            f"{', '.join(r.name for r in self.reflectors) or 'none'}"
+        )
 
     @property
     def robot(self) -> RobotObject | None:
@@ -416,8 +432,14 @@ class Scene:
 
     def content_key(self) -> tuple:
         """Everything a capture shows but the viewer: equal keys, equal captures."""
-        return (self.background, self.ambient, self.lights, self.objects, self.reflectors,
-                self.max_bounces)
+        return (
+            self.background,
+            self.ambient,
+            self.lights,
+            self.objects,
+            self.reflectors,
+            self.max_bounces,
+        )
 
     @property
     def frame_count(self) -> int:
@@ -429,14 +451,20 @@ class Scene:
     def with_object(self, name: str, **changes) -> Scene:
         """The scene with object ``name``'s fields replaced."""
         self.object(name)
-        return replace(self, objects=tuple(replace(o, **changes) if o.name == name else o
-                                           for o in self.objects))
+        return replace(
+            self,
+            objects=tuple(replace(o, **changes) if o.name == name else o for o in self.objects),
+        )
 
     def with_reflector(self, name: str, **changes) -> Scene:
         """The scene with reflector ``name``'s fields replaced."""
         self.reflector(name)
-        return replace(self, reflectors=tuple(replace(r, **changes) if r.name == name else r
-                                              for r in self.reflectors))
+        return replace(
+            self,
+            reflectors=tuple(
+                replace(r, **changes) if r.name == name else r for r in self.reflectors
+            ),
+        )
 
     def with_angles(self, angles) -> Scene:
         """The scene with its robot posed at ``angles`` (base, lower, upper degrees)."""
@@ -445,8 +473,9 @@ class Scene:
             raise ValueError(f"scene {self.name!r} has no robot to pose")
         values = tuple(float(a) for a in angles)
         if len(values) != 3 or not all(math.isfinite(v) for v in values):
-            raise ValueError(f"angles must be 3 finite numbers (base, lower, upper), "
-                             f"got {angles!r}")
+            raise ValueError(
+                f"angles must be 3 finite numbers (base, lower, upper), got {angles!r}"
+            )
         return self.with_object(robot.name, angles=values)
 
     def to_toml(self) -> str:
@@ -462,8 +491,9 @@ class Scene:
         if self.animation is None:
             return self
         if not 0 <= frame < self.animation.frames:
-            raise ValueError(f"frame {frame} is outside the animation's 0..."
-                             f"{self.animation.frames - 1}")
+            raise ValueError(
+                f"frame {frame} is outside the animation's 0...{self.animation.frames - 1}"
+            )
         from mirrorlab.scene.animation import pose
 
         return pose(self, frame)

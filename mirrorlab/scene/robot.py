@@ -39,18 +39,29 @@ def build_robot() -> Node:
     ``models/<mesh>.obj``, textures ``textures/<texture>.png``."""
     world = Node("world")
     base = world.add(
-        Node("base", offset=math3d.translate((0, -2, 0)), joint_axis=(0, 1, 0),
-             mesh="base", texture="metal")
+        Node(
+            "base",
+            offset=math3d.translate((0, -2, 0)),
+            joint_axis=(0, 1, 0),
+            mesh="base",
+            texture="metal",
+        )
     )
     base.add(Node("shoulder", mesh="joint", color=JOINT_COLOR))
-    lower = base.add(Node("lower_arm", joint_axis=(0, 0, 1), mesh="lower_arm",
-                          color=LOWER_ARM_COLOR))
-    lower.add(Node("elbow", offset=math3d.translate((0, 4, 0)), mesh="joint",
-                   color=JOINT_COLOR))
-    upper = lower.add(Node("upper_arm", offset=math3d.translate((0, 4, 0)),
-                           joint_axis=(0, 0, 1), mesh="upper_arm", color=UPPER_ARM_COLOR))
-    upper.add(Node("hand", offset=math3d.translate(HAND_OFFSET), mesh="hand",
-                   color=HAND_COLOR))
+    lower = base.add(
+        Node("lower_arm", joint_axis=(0, 0, 1), mesh="lower_arm", color=LOWER_ARM_COLOR)
+    )
+    lower.add(Node("elbow", offset=math3d.translate((0, 4, 0)), mesh="joint", color=JOINT_COLOR))
+    upper = lower.add(
+        Node(
+            "upper_arm",
+            offset=math3d.translate((0, 4, 0)),
+            joint_axis=(0, 0, 1),
+            mesh="upper_arm",
+            color=UPPER_ARM_COLOR,
+        )
+    )
+    upper.add(Node("hand", offset=math3d.translate(HAND_OFFSET), mesh="hand", color=HAND_COLOR))
     return world
 
 
@@ -108,16 +119,21 @@ class PartLooks:
 
     def parts(self, models: np.ndarray) -> tuple[Part, ...]:
         """The parts placed by ``models`` ``(k, 4, 4)``, one a part."""
-        return tuple(Part(name, mesh, model, color, texture)
-                     for name, mesh, color, texture, model in zip(
-                         self.names, self.meshes, self.colors, self.textures, models,
-                         strict=True))
+        return tuple(
+            Part(name, mesh, model, color, texture)
+            for name, mesh, color, texture, model in zip(
+                self.names, self.meshes, self.colors, self.textures, models, strict=True
+            )
+        )
 
 
 @lru_cache(maxsize=256)
-def _looks(names: tuple[str, ...], meshes: tuple[Path, ...],
-           colors: tuple[tuple[float, float, float], ...],
-           textures: tuple[TextureSource | None, ...]) -> PartLooks:
+def _looks(
+    names: tuple[str, ...],
+    meshes: tuple[Path, ...],
+    colors: tuple[tuple[float, float, float], ...],
+    textures: tuple[TextureSource | None, ...],
+) -> PartLooks:
     return PartLooks(names, meshes, colors, textures)
 
 
@@ -149,9 +165,14 @@ def _robot_nodes() -> tuple[tuple[Node, int, int], ...]:
     its parent's position (-1: the root) and its joint's in an ``angles`` triple (-1:
     none). Only read: the nodes' offsets, axes and looks."""
     nodes = tuple(build_robot().walk())
-    return tuple((node, nodes.index(node.parent) if node.parent is not None else -1,
-                  JOINT_NAMES.index(node.name) if node.name in JOINT_NAMES else -1)
-                 for node in nodes)
+    return tuple(
+        (
+            node,
+            nodes.index(node.parent) if node.parent is not None else -1,
+            JOINT_NAMES.index(node.name) if node.name in JOINT_NAMES else -1,
+        )
+        for node in nodes
+    )
 
 
 @lru_cache(maxsize=1)
@@ -191,11 +212,12 @@ def _robot_steps() -> tuple[tuple[tuple[int, int, np.ndarray], ...], list[int]]:
 def robot_looks(name: str) -> PartLooks:
     """The looks of the parts of a robot called ``name``."""
     drawn = [(node, node.mesh) for node, _, _ in _robot_nodes() if node.mesh]
-    return PartLooks(tuple(f"{name}.{node.name}" for node, _ in drawn),
-                     tuple(model_file(mesh) for _, mesh in drawn),
-                     tuple(node.color for node, _ in drawn),
-                     tuple(texture_file(node.texture) if node.texture else None
-                           for node, _ in drawn))
+    return PartLooks(
+        tuple(f"{name}.{node.name}" for node, _ in drawn),
+        tuple(model_file(mesh) for _, mesh in drawn),
+        tuple(node.color for node, _ in drawn),
+        tuple(texture_file(node.texture) if node.texture else None for node, _ in drawn),
+    )
 
 
 def robot_models(robot: RobotObject) -> np.ndarray:
@@ -210,8 +232,11 @@ def robot_models(robot: RobotObject) -> np.ndarray:
     worlds = np.empty((len(steps), 4, 4))  # of the nodes below the root
     root = robot.transform.matrix()
     for node, (parent, joint, offset) in enumerate(steps):
-        np.matmul(root if parent == 0 else worlds[parent - 1],
-                  offset if joint < 0 else offset @ rotations[joint], out=worlds[node])
+        np.matmul(
+            root if parent == 0 else worlds[parent - 1],
+            offset if joint < 0 else offset @ rotations[joint],
+            out=worlds[node],
+        )
     return read_only(worlds if len(drawn) == len(steps) else worlds[drawn])
 
 

@@ -16,8 +16,7 @@ TIMES = ("wall_ms", "gpu_ms")
 
 def figures(folder: Path) -> list[dict[str, str]]:
     with open(folder / "accuracy.csv") as stream:
-        return [{k: v for k, v in row.items() if k not in TIMES}
-                for row in csv.DictReader(stream)]
+        return [{k: v for k, v in row.items() if k not in TIMES} for row in csv.DictReader(stream)]
 
 
 def test_the_quick_sweep_on_two_processes_gives_the_figures_of_one(tmp_path, capsys):
@@ -25,9 +24,22 @@ def test_the_quick_sweep_on_two_processes_gives_the_figures_of_one(tmp_path, cap
     assert main(["bench", "accuracy", "--quick", "--jobs", "1", "--out-dir", str(one)]) == 0
     assert "truths and scoring on serial (1 worker)" in capsys.readouterr().out
     # a process of its own: a pool forks, and this test process holds EGL contexts
-    result = subprocess.run([sys.executable, "-m", "mirrorlab.cli", "bench", "accuracy",
-                             "--quick", "--jobs", "2", "--out-dir", str(two)],
-                            capture_output=True, text=True)
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "mirrorlab.cli",
+            "bench",
+            "accuracy",
+            "--quick",
+            "--jobs",
+            "2",
+            "--out-dir",
+            str(two),
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert result.returncode == 0, result.stderr[-2000:]
     assert "truths and scoring on pool (2 workers)" in result.stdout
     serial, parallel = figures(one), figures(two)
@@ -44,12 +56,13 @@ def test_the_quick_sweep_on_two_processes_gives_the_figures_of_one(tmp_path, cap
 
 
 def test_bad_executor_options_of_the_sweep(capsys, tmp_path):
-    for extra, words in ((["--jobs", "0"], "--jobs: expected a whole number from 1"),
-                         (["--engine", "threads"], "--engine")):
+    for extra, words in (
+        (["--jobs", "0"], "--jobs: expected a whole number from 1"),
+        (["--engine", "threads"], "--engine"),
+    ):
         code = None
         try:
-            code = main(["bench", "accuracy", "--quick", "--out-dir", str(tmp_path / "x"),
-                         *extra])
+            code = main(["bench", "accuracy", "--quick", "--out-dir", str(tmp_path / "x"), *extra])
         except SystemExit as stop:  # argparse refuses a choice itself, with its usage
             code = stop.code
         assert code == 2

@@ -36,8 +36,9 @@ SIZE = (64, 64)
 
 
 def mirrorlab_command(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "mirrorlab.cli", *args], capture_output=True,
-                          text=True)
+    return subprocess.run(
+        [sys.executable, "-m", "mirrorlab.cli", *args], capture_output=True, text=True
+    )
 
 
 def frames_in(folder: Path, scene: str = "robot_wave") -> list[Path]:
@@ -59,21 +60,37 @@ def dask_scheduler():
     """A local Dask cluster of two worker processes on loopback, for --scheduler."""
     from distributed import LocalCluster
 
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                      dashboard_address=":0") as cluster:
+    with LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
+    ) as cluster:
         yield cluster.scheduler_address
 
 
 @pytest.mark.parametrize("engine", ["serial", "pool", "dask"])
 def test_batch_frames_equal_single_renders(engine, tmp_path, single_renders, request):
-    options = {"serial": ["--jobs", "1"], "pool": ["--jobs", "2"],
-               "dask": ["--scheduler", request.getfixturevalue("dask_scheduler")]}[engine]
+    options = {
+        "serial": ["--jobs", "1"],
+        "pool": ["--jobs", "2"],
+        "dask": ["--scheduler", request.getfixturevalue("dask_scheduler")],
+    }[engine]
     out_dir = tmp_path / "frames"
-    result = mirrorlab_command("render", "robot_wave", "--frames", "8", "--size", "64x64",
-                               "--out-dir", str(out_dir), *options)
+    result = mirrorlab_command(
+        "render",
+        "robot_wave",
+        "--frames",
+        "8",
+        "--size",
+        "64x64",
+        "--out-dir",
+        str(out_dir),
+        *options,
+    )
     assert result.returncode == 0, result.stderr[-2000:]
-    workers = {"serial": "serial (1 worker)", "pool": "pool (2 workers)",
-               "dask": "dask (2 workers)"}[engine]
+    workers = {
+        "serial": "serial (1 worker)",
+        "pool": "pool (2 workers)",
+        "dask": "dask (2 workers)",
+    }[engine]
     assert f"wrote 8 frames of robot_wave (64x64) to {out_dir}" in result.stdout
     assert workers in result.stdout
     assert "100%" in result.stderr and "8/8" in result.stderr  # the progress bar
@@ -130,11 +147,17 @@ def animated(name: str, **options):
     return resolve_scene(loads(source.read_text() + ANIMATIONS[name], source), **options)
 
 
-@pytest.mark.parametrize("name, options", [
-    ("robot_wave", {}), ("robot_wave", {"method": "reflected", "capture": "fbo"}),
-    ("mirror_and_sphere", {}), ("mirror_and_sphere", {"method": "stencil"}),
-    ("chrome_sphere", {"method": "sphere"}), ("chrome_sphere", {"method": "cube-live"}),
-])
+@pytest.mark.parametrize(
+    "name, options",
+    [
+        ("robot_wave", {}),
+        ("robot_wave", {"method": "reflected", "capture": "fbo"}),
+        ("mirror_and_sphere", {}),
+        ("mirror_and_sphere", {"method": "stencil"}),
+        ("chrome_sphere", {"method": "sphere"}),
+        ("chrome_sphere", {"method": "cube-live"}),
+    ],
+)
 def test_a_frame_does_not_depend_on_the_frames_drawn_before(name, options):
     """What a batch worker does: draw a subset of the frames in one renderer, whose planner
     reuses what its own earlier frames captured. Whole sequence, a run from the middle,
@@ -149,8 +172,9 @@ def test_a_frame_does_not_depend_on_the_frames_drawn_before(name, options):
         with Renderer(size) as renderer:
             for frame in frames:
                 image = renderer.render(scene, frame=frame)
-                assert np.array_equal(image, sequence[frame]), \
+                assert np.array_equal(image, sequence[frame]), (
                     f"{name} {options} frame {frame} after frames {list(frames)}"
+                )
     with Renderer(size) as renderer:
         last = count - 1
         assert np.array_equal(renderer.render(scene, frame=last), sequence[last])
@@ -172,10 +196,24 @@ def test_a_killed_batch_resumes_to_the_same_files(tmp_path):
     23 frames of 30-40 ms each still to come; the rerun, on two processes, renders only
     the missing ones, and the folder ends as an uninterrupted batch's."""
     out_dir = tmp_path / "frames"
-    command = [sys.executable, "-m", "mirrorlab.cli", "render", "robot_wave", "--frames", "24",
-               "--size", "512x512", "--out-dir", str(out_dir), "--jobs", "1"]
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                               start_new_session=True)
+    command = [
+        sys.executable,
+        "-m",
+        "mirrorlab.cli",
+        "render",
+        "robot_wave",
+        "--frames",
+        "24",
+        "--size",
+        "512x512",
+        "--out-dir",
+        str(out_dir),
+        "--jobs",
+        "1",
+    ]
+    process = subprocess.Popen(
+        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True
+    )
     try:
         while process.poll() is None and not frames_in(out_dir):
             time.sleep(0.005)  # waiting for the condition: a frame on disk
@@ -208,8 +246,7 @@ def test_a_killed_batch_resumes_to_the_same_files(tmp_path):
 
 def test_a_rerun_skips_whole_frames_and_redoes_broken_or_foreign_ones(tmp_path, capsys):
     out_dir = tmp_path / "frames"
-    args = ["render", "robot_wave", "--frames", "6", "--size", "32x32", "--out-dir",
-            str(out_dir)]
+    args = ["render", "robot_wave", "--frames", "6", "--size", "32x32", "--out-dir", str(out_dir)]
     assert main(args) == 0
     first = {p.name: p.read_bytes() for p in frames_in(out_dir)}
     assert len(first) == 6
@@ -228,17 +265,39 @@ def test_a_rerun_skips_whole_frames_and_redoes_broken_or_foreign_ones(tmp_path, 
 
 
 def test_a_still_scene_is_one_frame_and_animations_hold_every_frame(tmp_path):
-    still = mirrorlab_command("render", "lab20", "--size", "64x64", "--out-dir",
-                              str(tmp_path / "still"), "--jobs", "2")
+    still = mirrorlab_command(
+        "render", "lab20", "--size", "64x64", "--out-dir", str(tmp_path / "still"), "--jobs", "2"
+    )
     assert still.returncode == 0, still.stderr[-2000:]
     assert [p.name for p in (tmp_path / "still").glob("*.png")] == ["lab20_0000.png"]
-    assert np.array_equal(png(tmp_path / "still" / "lab20_0000.png"),
-                          mirrorlab.render("lab20", size=SIZE))
+    assert np.array_equal(
+        png(tmp_path / "still" / "lab20_0000.png"), mirrorlab.render("lab20", size=SIZE)
+    )
 
     out_dir, gif, webp = tmp_path / "wave", tmp_path / "wave.gif", tmp_path / "wave.webp"
-    assert main(["render", "robot_wave", "--frames", "8", "--size", "64x64", "--out-dir",
-                 str(out_dir), "--gif", str(gif), "--webp", str(webp), "--fps", "10",
-                 "--out", str(tmp_path / "last.png")]) == 0
+    assert (
+        main(
+            [
+                "render",
+                "robot_wave",
+                "--frames",
+                "8",
+                "--size",
+                "64x64",
+                "--out-dir",
+                str(out_dir),
+                "--gif",
+                str(gif),
+                "--webp",
+                str(webp),
+                "--fps",
+                "10",
+                "--out",
+                str(tmp_path / "last.png"),
+            ]
+        )
+        == 0
+    )
 
     frames = [png(p) for p in frames_in(out_dir)]
     assert np.array_equal(png(tmp_path / "last.png"), frames[-1])
@@ -246,7 +305,8 @@ def test_a_still_scene_is_one_frame_and_animations_hold_every_frame(tmp_path):
     # Pillow merges identical neighbours (frames 0-4 stand still) into one longer frame
     assert len(shown["webp"]) == len(shown["gif"]) == 8
     for frame, (expected, lossless, paletted) in enumerate(
-            zip(frames, shown["webp"], shown["gif"], strict=True)):
+        zip(frames, shown["webp"], shown["gif"], strict=True)
+    ):
         assert np.array_equal(lossless, expected), f"WebP frame {frame}"
         # 256 colours a frame: close, not exact
         assert np.abs(paletted.astype(int) - expected).mean() < 3.0, f"GIF frame {frame}"
@@ -294,45 +354,83 @@ def refused(capsys, args, *words):
         assert word in err[0]
 
 
-@pytest.mark.parametrize("extra, words", [
-    (["--jobs", "0"], ["--jobs", "from 1 to 1024", "'0'"]),
-    (["--jobs", "two"], ["--jobs", "'two'"]),
-    (["--fps", "0"], ["--fps"]),
-    (["--gif", "/proc/mirrorlab.gif"], ["cannot write /proc/mirrorlab.gif"]),
-    (["--webp", "NAME.gif"], ["--webp", "ending in .webp"]),
-    (["--gif", "no/such/folder/a.gif"], ["--gif", "does not exist"]),
-    (["--stats"], ["--stats", "without --out-dir"]),
-])
-def test_bad_batch_options_are_refused_before_anything_is_written(capsys, tmp_path, extra,
-                                                                   words):
+@pytest.mark.parametrize(
+    "extra, words",
+    [
+        (["--jobs", "0"], ["--jobs", "from 1 to 1024", "'0'"]),
+        (["--jobs", "two"], ["--jobs", "'two'"]),
+        (["--fps", "0"], ["--fps"]),
+        (["--gif", "/proc/mirrorlab.gif"], ["cannot write /proc/mirrorlab.gif"]),
+        (["--webp", "NAME.gif"], ["--webp", "ending in .webp"]),
+        (["--gif", "no/such/folder/a.gif"], ["--gif", "does not exist"]),
+        (["--stats"], ["--stats", "without --out-dir"]),
+    ],
+)
+def test_bad_batch_options_are_refused_before_anything_is_written(capsys, tmp_path, extra, words):
     out_dir = tmp_path / "frames"
-    refused(capsys, ["render", "robot_wave", "--frames", "4", "--size", "32x32", "--out-dir",
-                     str(out_dir), *extra], *words)
+    refused(
+        capsys,
+        [
+            "render",
+            "robot_wave",
+            "--frames",
+            "4",
+            "--size",
+            "32x32",
+            "--out-dir",
+            str(out_dir),
+            *extra,
+        ],
+        *words,
+    )
     assert not out_dir.exists()
 
 
 def test_batch_options_need_an_out_dir(capsys, tmp_path):
-    for extra in (["--jobs", "2"], ["--scheduler", "tcp://127.0.0.1:9"],
-                  ["--gif", str(tmp_path / "a.gif")]):
-        refused(capsys, ["render", "robot_wave", "--frames", "4", "--out",
-                         str(tmp_path / "a.png"), *extra], extra[0], "give --out-dir")
+    for extra in (
+        ["--jobs", "2"],
+        ["--scheduler", "tcp://127.0.0.1:9"],
+        ["--gif", str(tmp_path / "a.gif")],
+    ):
+        refused(
+            capsys,
+            ["render", "robot_wave", "--frames", "4", "--out", str(tmp_path / "a.png"), *extra],
+            extra[0],
+            "give --out-dir",
+        )
     assert list(tmp_path.iterdir()) == []
 
 
 def test_an_out_dir_that_is_a_file(capsys, tmp_path):
     blocker = tmp_path / "frames"
     blocker.write_text("not a folder")
-    refused(capsys, ["render", "robot_wave", "--out-dir", str(blocker)], "--out-dir",
-            "is a file")
-    refused(capsys, ["render", "robot_wave", "--out-dir", str(blocker / "deeper")],
-            "--out-dir", "is a file")
+    refused(capsys, ["render", "robot_wave", "--out-dir", str(blocker)], "--out-dir", "is a file")
+    refused(
+        capsys,
+        ["render", "robot_wave", "--out-dir", str(blocker / "deeper")],
+        "--out-dir",
+        "is a file",
+    )
     assert blocker.read_text() == "not a folder"
 
 
 def test_an_unreachable_scheduler(capsys, tmp_path, monkeypatch):
     monkeypatch.setattr("mirrorlab.jobs.CONNECT_TIMEOUT", "1s")
     out_dir = tmp_path / "frames"
-    refused(capsys, ["render", "robot_wave", "--frames", "3", "--size", "32x32",
-                     "--out-dir", str(out_dir), "--scheduler", "tcp://127.0.0.1:9"],
-            "--scheduler: cannot reach a Dask scheduler at 'tcp://127.0.0.1:9'")
+    refused(
+        capsys,
+        [
+            "render",
+            "robot_wave",
+            "--frames",
+            "3",
+            "--size",
+            "32x32",
+            "--out-dir",
+            str(out_dir),
+            "--scheduler",
+            "tcp://127.0.0.1:9",
+        ],
+        "--scheduler: cannot reach a Dask scheduler at 'tcp://127.0.0.1:9'",
+    )
     assert not out_dir.exists()

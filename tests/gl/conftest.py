@@ -53,7 +53,6 @@ def scene_renderer(registry):
     renderer.release()
 
 
-
 def module_context():
     """A context of a test module's own, to replace the session's there (a module uses it
     as ``gl_context = pytest.fixture(scope="module")(module_context)``): for tests whose

@@ -22,9 +22,11 @@ def renderer_shaders() -> list[str]:
     ``kit_*``."""
     from importlib.resources import files
 
-    return sorted(entry.name for entry in files("mirrorlab.shaders").iterdir()
-                  if entry.name.endswith((".vert", ".frag"))
-                  and not entry.name.startswith("kit_"))
+    return sorted(
+        entry.name
+        for entry in files("mirrorlab.shaders").iterdir()
+        if entry.name.endswith((".vert", ".frag")) and not entry.name.startswith("kit_")
+    )
 
 
 DEFINES = {"LIGHT_COUNT": (0, 3), "PARALLAX": (0, 1, 2, 3)}
@@ -41,16 +43,20 @@ def compile_errors() -> dict[str, str]:
     for name in renderer_shaders():
         kind = GL.GL_VERTEX_SHADER if name.endswith(".vert") else GL.GL_FRAGMENT_SHADER
         version, _, body = expand_includes(name).partition("\n")
-        variants = [("", "")] + [(f"{key}={value}", f"#define {key} {value}\n")
-                                 for key, values in DEFINES.items() if key in body
-                                 for value in values]
+        variants = [("", "")] + [
+            (f"{key}={value}", f"#define {key} {value}\n")
+            for key, values in DEFINES.items()
+            if key in body
+            for value in values
+        ]
         for label, header in variants[1:] or variants:
             shader = GL.glCreateShader(kind)
             GL.glShaderSource(shader, f"{version}\n{header}{body}")
             GL.glCompileShader(shader)
             if not GL.glGetShaderiv(shader, GL.GL_COMPILE_STATUS):
-                errors[f"{name} {label}".strip()] = GL.glGetShaderInfoLog(shader).decode(
-                    errors="replace").strip()
+                errors[f"{name} {label}".strip()] = (
+                    GL.glGetShaderInfoLog(shader).decode(errors="replace").strip()
+                )
             GL.glDeleteShader(shader)
     return errors
 
@@ -70,11 +76,13 @@ def main(out: str) -> None:
         flags = int(GL.glGetIntegerv(GL.GL_CONTEXT_FLAGS))
         frames = {}
         renderer = SceneRenderer(context.resources)
-        info = {"version": list(gl_version()),
-                "core": bool(mask & GL.GL_CONTEXT_CORE_PROFILE_BIT),
-                "forward_compatible": bool(flags & GL.GL_CONTEXT_FLAG_FORWARD_COMPATIBLE_BIT),
-                "draw_path": renderer.drawer.draw_path,
-                "compile_errors": compile_errors()}
+        info = {
+            "version": list(gl_version()),
+            "core": bool(mask & GL.GL_CONTEXT_CORE_PROFILE_BIT),
+            "forward_compatible": bool(flags & GL.GL_CONTEXT_FLAG_FORWARD_COMPATIBLE_BIT),
+            "draw_path": renderer.drawer.draw_path,
+            "compile_errors": compile_errors(),
+        }
         renderer.release()
         for sequence in sequences():
             short = type(sequence)(sequence.name, sequence.frames[:FRAMES])

@@ -15,8 +15,9 @@ from mirrorlab.testing import difference_image
 from tests.imagecheck import save_failure
 
 
-def render(renderer, scene, size: int, float_target: bool = False, output: int = OUTPUT_COLOR,
-           view=None):
+def render(
+    renderer, scene, size: int, float_target: bool = False, output: int = OUTPUT_COLOR, view=None
+):
     """``(image, stats)`` of one frame of ``scene`` in a ``size`` square target (float32 RGB
     for ``float_target``, else uint8), seen by its camera or ``view``
     (:class:`mirrorlab.views.View`). ``output`` (e.g. OUTPUT_COORDINATES) is set on every
@@ -26,8 +27,11 @@ def render(renderer, scene, size: int, float_target: bool = False, output: int =
     try:
         stats = renderer.render(scene, target, view=view)
         if output != OUTPUT_COLOR:
-            passes = [renderer.pass_for(r.name) for r in scene.reflectors
-                      if isinstance(r, CurvedReflector)]
+            passes = [
+                renderer.pass_for(r.name)
+                for r in scene.reflectors
+                if isinstance(r, CurvedReflector)
+            ]
             for curved in passes:
                 curved.output_mode = output
             try:
@@ -54,10 +58,13 @@ def assert_close_to_truth(name, image, truth, mask, max_mean, max_share):
     ``max_share`` of its pixels off by > 10/255; returns (mean, share)."""
     mean, share = region_error(image, truth, mask)
     if mean > max_mean or share > max_share:
-        folder = save_failure(name, actual=image, expected=truth,
-                              diff=difference_image(image, truth))
-        pytest.fail(f"{name}: mean abs error {mean:.2f}/255 (max {max_mean}), "
-                    f"{share:.1%} of pixels off by > 10 (max {max_share:.0%}); images in {folder}")
+        folder = save_failure(
+            name, actual=image, expected=truth, diff=difference_image(image, truth)
+        )
+        pytest.fail(
+            f"{name}: mean abs error {mean:.2f}/255 (max {max_mean}), "
+            f"{share:.1%} of pixels off by > 10 (max {max_share:.0%}); images in {folder}"
+        )
     return mean, share
 
 

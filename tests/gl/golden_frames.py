@@ -50,10 +50,12 @@ def still_sequence(scene: Scene) -> list[Scene]:
         moved = turned.with_angles((base + 25.0, lower, upper))
     elif turned.objects:
         first = turned.objects[0]
-        position = tuple(float(v) + d for v, d in zip(first.transform.position,
-                                                      (0.3, 0.2, -0.2), strict=True))
-        moved = turned.with_object(first.name,
-                                   transform=replace(first.transform, position=position))
+        position = tuple(
+            float(v) + d for v, d in zip(first.transform.position, (0.3, 0.2, -0.2), strict=True)
+        )
+        moved = turned.with_object(
+            first.name, transform=replace(first.transform, position=position)
+        )
     else:
         moved = orbited(scene, -12.0)
     return [scene, scene, turned, turned, moved]
@@ -78,9 +80,18 @@ TECHNIQUE_VARIANTS = (
     ("lab20", {"capture": "fbo"}),
     ("lab20", {"env_size": 48}),
     ("lab20", {"method": "reflected", "env_size": 40}),
-    *(("chrome_sphere", {"method": method, "map_size": 64})
-      for method in ("sphere", "sphere-vertex", "sphere-texgen", "cube", "cube-live",
-                     "latlong", "normal")),
+    *(
+        ("chrome_sphere", {"method": method, "map_size": 64})
+        for method in (
+            "sphere",
+            "sphere-vertex",
+            "sphere-texgen",
+            "cube",
+            "cube-live",
+            "latlong",
+            "normal",
+        )
+    ),
     ("two_mirrors", {"method": "stencil"}),
     ("mirror_and_sphere", {"max_bounces": 3}),
 )
@@ -108,5 +119,10 @@ def draw_sequence(renderer, sequence: Sequence, **render_options) -> np.ndarray:
     uint8."""
     from tests.gl.frames import draw
 
-    return np.concatenate([draw(renderer, scene.at_frame(frame), SIZE, **render_options)[0]
-                           for scene, frame in sequence.frames], axis=1)
+    return np.concatenate(
+        [
+            draw(renderer, scene.at_frame(frame), SIZE, **render_options)[0]
+            for scene, frame in sequence.frames
+        ],
+        axis=1,
+    )

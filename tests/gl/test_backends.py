@@ -30,35 +30,53 @@ with offscreen_context() as context:
     print(context.backend, context.core, loaded_platform(), mask, flags, legacy)
 """
 CORE_PROFILE_BIT, COMPATIBILITY_PROFILE_BIT, FORWARD_COMPATIBLE_BIT = 0x1, 0x2, 0x1
-VARIABLES = ("PYOPENGL_PLATFORM", "EGL_PLATFORM", "MIRRORLAB_GL_BACKEND",
-             "MIRRORLAB_GL_CORE", "DISPLAY", "WAYLAND_DISPLAY", "XDG_SESSION_TYPE")
+VARIABLES = (
+    "PYOPENGL_PLATFORM",
+    "EGL_PLATFORM",
+    "MIRRORLAB_GL_BACKEND",
+    "MIRRORLAB_GL_CORE",
+    "DISPLAY",
+    "WAYLAND_DISPLAY",
+    "XDG_SESSION_TYPE",
+)
 
 
 def environment(**env: str) -> dict[str, str]:
     return {**{k: v for k, v in os.environ.items() if k not in VARIABLES}, **env}
 
 
-def python(code: str, prefix: tuple[str, ...] = (), **env: str
-           ) -> subprocess.CompletedProcess:
-    return subprocess.run([*prefix, sys.executable, "-c", code], capture_output=True,
-                          text=True, timeout=300, env=environment(**env))
+def python(code: str, prefix: tuple[str, ...] = (), **env: str) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [*prefix, sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=environment(**env),
+    )
 
 
-def mirrorlab(*args: str, prefix: tuple[str, ...] = (), **env: str
-              ) -> subprocess.CompletedProcess:
-    return subprocess.run([*prefix, sys.executable, "-m", "mirrorlab", *args],
-                          capture_output=True, text=True, timeout=300,
-                          env=environment(**env))
+def mirrorlab(*args: str, prefix: tuple[str, ...] = (), **env: str) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [*prefix, sys.executable, "-m", "mirrorlab", *args],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=environment(**env),
+    )
 
 
 def hide_egl() -> tuple[str, ...]:
     """A bwrap prefix that runs a command with libEGL.so.1 replaced by an empty file."""
     if shutil.which("bwrap") is None and not os.environ.get("CI"):
         pytest.skip("bubblewrap (Debian bwrap) is needed to hide libEGL.so.1")
-    listing = subprocess.run(["/sbin/ldconfig", "-p"], capture_output=True, text=True,
-                             check=True).stdout
-    paths = {line.split("=>")[-1].strip() for line in listing.splitlines()
-             if line.strip().startswith("libEGL.so.1 ")}
+    listing = subprocess.run(
+        ["/sbin/ldconfig", "-p"], capture_output=True, text=True, check=True
+    ).stdout
+    paths = {
+        line.split("=>")[-1].strip()
+        for line in listing.splitlines()
+        if line.strip().startswith("libEGL.so.1 ")
+    }
     assert paths, "ldconfig -p lists no libEGL.so.1"
     hidden: tuple[str, ...] = ("bwrap", "--dev-bind", "/", "/")
     for path in sorted(paths):
@@ -86,8 +104,9 @@ def test_egl_is_chosen_headless_and_can_be_forced(backend):
 
 
 def test_the_core_variable_gives_a_core_forward_compatible_egl_context():
-    backend, core, platform, mask, flags, legacy = probe(MIRRORLAB_GL_BACKEND="egl",
-                                                         MIRRORLAB_GL_CORE="1")
+    backend, core, platform, mask, flags, legacy = probe(
+        MIRRORLAB_GL_BACKEND="egl", MIRRORLAB_GL_CORE="1"
+    )
     assert (backend, core, platform) == ("egl", "True", "egl")
     assert int(mask) & CORE_PROFILE_BIT and not int(mask) & COMPATIBILITY_PROFILE_BIT
     assert int(flags) & FORWARD_COMPATIBLE_BIT
@@ -96,33 +115,58 @@ def test_the_core_variable_gives_a_core_forward_compatible_egl_context():
 
 def test_the_default_frame_is_the_same_in_a_core_context(tmp_path):
     for name, core in (("compatibility", "0"), ("core", "1")):
-        done = mirrorlab("render", "--size", "96x64", "--out", str(tmp_path / f"{name}.png"),
-                         MIRRORLAB_GL_CORE=core)
+        done = mirrorlab(
+            "render",
+            "--size",
+            "96x64",
+            "--out",
+            str(tmp_path / f"{name}.png"),
+            MIRRORLAB_GL_CORE=core,
+        )
         assert done.returncode == 0, done.stderr
     assert np.array_equal(png(tmp_path / "compatibility.png"), png(tmp_path / "core.png"))
 
 
-@pytest.mark.parametrize("variable, value, message", [
-    ("MIRRORLAB_GL_BACKEND", "glx", "MIRRORLAB_GL_BACKEND='glx' is not a backend; expected "
-                                    "one of auto, egl, hidden-window"),
-    ("MIRRORLAB_GL_CORE", "yes", "MIRRORLAB_GL_CORE='yes' is not allowed; expected 1 (ask "
-                                 "for an OpenGL 4.1 core context) or 0"),
-])
+@pytest.mark.parametrize(
+    "variable, value, message",
+    [
+        (
+            "MIRRORLAB_GL_BACKEND",
+            "glx",
+            "MIRRORLAB_GL_BACKEND='glx' is not a backend; expected one of auto, egl, hidden-window",
+        ),
+        (
+            "MIRRORLAB_GL_CORE",
+            "yes",
+            "MIRRORLAB_GL_CORE='yes' is not allowed; expected 1 (ask "
+            "for an OpenGL 4.1 core context) or 0",
+        ),
+    ],
+)
 def test_a_bad_variable_is_one_line_and_exit_2(tmp_path, variable, value, message):
-    done = mirrorlab("render", "--size", "32x32", "--out", str(tmp_path / "x.png"),
-                     **{variable: value})
+    done = mirrorlab(
+        "render", "--size", "32x32", "--out", str(tmp_path / "x.png"), **{variable: value}
+    )
     assert done.returncode == 2
     assert done.stderr == f"mirrorlab render: error: {message}\n"
     assert not (tmp_path / "x.png").exists()
 
 
 def test_a_hidden_window_forced_without_a_display_says_what_to_do(tmp_path):
-    done = mirrorlab("render", "--size", "32x32", "--out", str(tmp_path / "x.png"),
-                     MIRRORLAB_GL_BACKEND="hidden-window")
+    done = mirrorlab(
+        "render",
+        "--size",
+        "32x32",
+        "--out",
+        str(tmp_path / "x.png"),
+        MIRRORLAB_GL_BACKEND="hidden-window",
+    )
     assert done.returncode == 1
-    assert done.stderr == ("mirrorlab render: error: MIRRORLAB_GL_BACKEND=hidden-window "
-                           "needs a display (DISPLAY is not set); run under 'xvfb-run -a', "
-                           "or unset it to render with EGL\n")
+    assert done.stderr == (
+        "mirrorlab render: error: MIRRORLAB_GL_BACKEND=hidden-window "
+        "needs a display (DISPLAY is not set); run under 'xvfb-run -a', "
+        "or unset it to render with EGL\n"
+    )
 
 
 def test_the_checker_process_is_pinned_to_the_backend_chosen_here(monkeypatch):

@@ -84,21 +84,42 @@ def scene_file(folder: Path, *, texture: str | None = None, mesh: str | None = N
 
 
 def test_out_and_save_env_on_one_file(capsys, outputs):
-    refused(capsys, render_args(outputs, "--save-env", str(outputs.existing)),
-            "--save-env", "also the file of --out")
+    refused(
+        capsys,
+        render_args(outputs, "--save-env", str(outputs.existing)),
+        "--save-env",
+        "also the file of --out",
+    )
     outputs.assert_untouched()
 
 
 def test_out_dir_frames_on_the_out_file(capsys, outputs):
-    refused(capsys, ["render", "robot_wave", "--size", "24x24", "--frames", "2", "--out",
-                     str(outputs.folder / "robot_wave_0001.png"), "--out-dir",
-                     str(outputs.folder)], "also the file of --out")
+    refused(
+        capsys,
+        [
+            "render",
+            "robot_wave",
+            "--size",
+            "24x24",
+            "--frames",
+            "2",
+            "--out",
+            str(outputs.folder / "robot_wave_0001.png"),
+            "--out-dir",
+            str(outputs.folder),
+        ],
+        "also the file of --out",
+    )
     outputs.assert_untouched()
 
 
 def test_output_in_a_missing_folder(capsys, outputs):
-    refused(capsys, ["render", "--size", "24x24", "--out", str(outputs.folder / "no" / "x.png")],
-            "--out", "does not exist")
+    refused(
+        capsys,
+        ["render", "--size", "24x24", "--out", str(outputs.folder / "no" / "x.png")],
+        "--out",
+        "does not exist",
+    )
     outputs.assert_untouched()
 
 
@@ -106,9 +127,13 @@ def test_output_in_a_missing_folder(capsys, outputs):
 def test_a_write_the_system_refuses(capsys, outputs, option):
     # /proc takes no new files, whoever asks: the same message and exit status as a
     # read-only file system or a folder without permission (see test_faults.py).
-    refused(capsys, render_args(outputs, option, "/proc/mirrorlab.png")
-            if option == "--save-env" else ["render", "--out", "/proc/mirrorlab.png"],
-            "cannot write /proc/mirrorlab.png: ")
+    refused(
+        capsys,
+        render_args(outputs, option, "/proc/mirrorlab.png")
+        if option == "--save-env"
+        else ["render", "--out", "/proc/mirrorlab.png"],
+        "cannot write /proc/mirrorlab.png: ",
+    )
     outputs.assert_untouched()
 
 
@@ -116,29 +141,35 @@ def test_output_that_is_a_folder_or_under_a_file(capsys, outputs, tmp_path):
     folder = tmp_path / "folder.png"
     folder.mkdir()
     refused(capsys, ["render", "--out", str(folder)], "is a directory")
-    refused(capsys, render_args(outputs, "--save-env", str(outputs.existing / "x.png")),
-            "is a file")
-    refused(capsys, render_args(outputs, "--out-dir", str(outputs.existing)), "--out-dir",
-            "is a file")
+    refused(
+        capsys, render_args(outputs, "--save-env", str(outputs.existing / "x.png")), "is a file"
+    )
+    refused(
+        capsys, render_args(outputs, "--out-dir", str(outputs.existing)), "--out-dir", "is a file"
+    )
     outputs.assert_untouched()
 
 
 # --------------------------------------------------------------------------- sizes
 
 
-@pytest.mark.parametrize("size", ["0x0", "-5x5", "64x-1", "wide", "axb", "64", "9000x10",
-                                  "8193x8193"])
+@pytest.mark.parametrize(
+    "size", ["0x0", "-5x5", "64x-1", "wide", "axb", "64", "9000x10", "8193x8193"]
+)
 def test_bad_render_sizes(capsys, outputs, size):
-    refused(capsys, ["render", "--size", size, "--out", str(outputs.existing)], "--size",
-            "expected WIDTHxHEIGHT")
+    refused(
+        capsys,
+        ["render", "--size", size, "--out", str(outputs.existing)],
+        "--size",
+        "expected WIDTHxHEIGHT",
+    )
     outputs.assert_untouched()
 
 
 @pytest.mark.parametrize("size", ["0x0", "-1x5", "x", "10000x10000"])
 def test_bad_window_sizes(capsys, outputs, size):
     # Refused before a window (or a display) is needed.
-    refused(capsys, ["demo", "--size", size, "--screenshot", str(outputs.existing)],
-            "--size")
+    refused(capsys, ["demo", "--size", size, "--screenshot", str(outputs.existing)], "--size")
     outputs.assert_untouched()
 
 
@@ -155,13 +186,27 @@ def huge_faces(tmp_path_factory):
 
 
 def test_cube_faces_beyond_what_the_gl_can_allocate(capsys, outputs, huge_faces):
-    refused(capsys, render_args(outputs, "--cube-faces", str(huge_faces)),
-            "OpenGL ran out of memory in pass 'background'", "smaller")
+    refused(
+        capsys,
+        render_args(outputs, "--cube-faces", str(huge_faces)),
+        "OpenGL ran out of memory in pass 'background'",
+        "smaller",
+    )
     outputs.assert_untouched()
     # The same folder as a static cube map's source: the same refusal, in its pass.
-    refused(capsys, render_args(outputs, "chrome_sphere", "--method", "cube", "--set",
-                                f'reflectors[0].source="{huge_faces}"'),
-            "OpenGL ran out of memory in pass", "smaller")
+    refused(
+        capsys,
+        render_args(
+            outputs,
+            "chrome_sphere",
+            "--method",
+            "cube",
+            "--set",
+            f'reflectors[0].source="{huge_faces}"',
+        ),
+        "OpenGL ran out of memory in pass",
+        "smaller",
+    )
     outputs.assert_untouched()
 
 
@@ -169,8 +214,13 @@ def test_a_texture_beyond_gl_max_texture_size(capsys, outputs, tmp_path):
     wide = tmp_path / "wide.png"
     Image.new("RGB", (16385, 1), (200, 10, 10)).save(wide)  # llvmpipe's limit: 16384
     scene = scene_file(tmp_path, texture=str(wide))
-    refused(capsys, render_args(outputs, str(scene)), f"picture {wide}", "16385x1",
-            "GL_MAX_TEXTURE_SIZE")
+    refused(
+        capsys,
+        render_args(outputs, str(scene)),
+        f"picture {wide}",
+        "16385x1",
+        "GL_MAX_TEXTURE_SIZE",
+    )
     outputs.assert_untouched()
 
 
@@ -178,8 +228,12 @@ def test_a_texture_beyond_gl_max_texture_size(capsys, outputs, tmp_path):
 
 
 def png_chunk(kind: bytes, data: bytes) -> bytes:
-    return (struct.pack(">I", len(data)) + kind + data
-            + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+    return (
+        struct.pack(">I", len(data))
+        + kind
+        + data
+        + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+    )
 
 
 def bad_picture(folder: Path, kind: str) -> Path:
@@ -190,27 +244,32 @@ def bad_picture(folder: Path, kind: str) -> Path:
         path.write_text("these are words, not pixels\n")
     elif kind == "corrupt":
         good = folder / "good.png"
-        Image.fromarray(np.random.default_rng(1).integers(0, 255, (64, 64, 3), np.uint8)).save(
-            good)
+        Image.fromarray(np.random.default_rng(1).integers(0, 255, (64, 64, 3), np.uint8)).save(good)
         path.write_bytes(good.read_bytes()[:400])
     elif kind == "huge":  # a header that claims 100000 x 100000 pixels
         header = struct.pack(">IIBBBBB", 100_000, 100_000, 8, 2, 0, 0, 0)
-        path.write_bytes(b"\x89PNG\r\n\x1a\n" + png_chunk(b"IHDR", header)
-                         + png_chunk(b"IDAT", zlib.compress(b"\0" * 64))
-                         + png_chunk(b"IEND", b""))
+        path.write_bytes(
+            b"\x89PNG\r\n\x1a\n"
+            + png_chunk(b"IHDR", header)
+            + png_chunk(b"IDAT", zlib.compress(b"\0" * 64))
+            + png_chunk(b"IEND", b"")
+        )
     return path
 
 
-PICTURE_PROBLEMS = {"empty": "empty (0 bytes)", "not-a-picture": "cannot be read as an image",
-                    "corrupt": "cannot be read as an image", "huge": "100000x100000, too large"}
+PICTURE_PROBLEMS = {
+    "empty": "empty (0 bytes)",
+    "not-a-picture": "cannot be read as an image",
+    "corrupt": "cannot be read as an image",
+    "huge": "100000x100000, too large",
+}
 
 
 @pytest.mark.parametrize("kind", sorted(PICTURE_PROBLEMS))
 def test_bad_picture_as_a_texture(capsys, outputs, tmp_path, kind):
     picture = bad_picture(tmp_path, kind)
     scene = scene_file(tmp_path, texture=str(picture))
-    refused(capsys, render_args(outputs, str(scene)), f"picture {picture}",
-            PICTURE_PROBLEMS[kind])
+    refused(capsys, render_args(outputs, str(scene)), f"picture {picture}", PICTURE_PROBLEMS[kind])
     outputs.assert_untouched()
 
 
@@ -221,8 +280,12 @@ def test_bad_picture_among_cube_faces(capsys, outputs, tmp_path, kind):
     for stem in CUBE_FACE_FILES:
         Image.new("RGB", (8, 8), (90, 90, 200)).save(folder / f"{stem}.png")
     bad_picture(tmp_path, kind).replace(folder / "py.png")
-    refused(capsys, render_args(outputs, "--cube-faces", str(folder)),
-            f"picture {folder / 'py.png'}", PICTURE_PROBLEMS[kind])
+    refused(
+        capsys,
+        render_args(outputs, "--cube-faces", str(folder)),
+        f"picture {folder / 'py.png'}",
+        PICTURE_PROBLEMS[kind],
+    )
     outputs.assert_untouched()
 
 
@@ -232,11 +295,19 @@ def test_cube_faces_of_mismatched_sizes(capsys, outputs, tmp_path):
     for stem in CUBE_FACE_FILES:
         side = 16 if stem == "nz" else 8
         Image.new("RGB", (side, side), (90, 90, 200)).save(folder / f"{stem}.png")
-    refused(capsys, render_args(outputs, "--cube-faces", str(folder)), "nz.png is 16x16",
-            "expected 8x8 like px.png")
+    refused(
+        capsys,
+        render_args(outputs, "--cube-faces", str(folder)),
+        "nz.png is 16x16",
+        "expected 8x8 like px.png",
+    )
     Image.new("RGB", (8, 9)).save(folder / "nz.png")
-    refused(capsys, render_args(outputs, "--cube-faces", str(folder)), "nz.png is 8x9",
-            "expected a square")
+    refused(
+        capsys,
+        render_args(outputs, "--cube-faces", str(folder)),
+        "nz.png is 8x9",
+        "expected a square",
+    )
     outputs.assert_untouched()
 
 
@@ -250,10 +321,12 @@ def bad_mesh(folder: Path, kind: str) -> Path:
     elif kind == "no-triangles":
         path.write_text("# only words here\nv 0 0 0\n")
     elif kind == "corrupt":  # a binary PLY whose data stops short
-        path.write_bytes(b"ply\nformat binary_little_endian 1.0\nelement vertex 3\n"
-                         b"property float x\nproperty float y\nproperty float z\n"
-                         b"element face 1\nproperty list uchar int vertex_indices\n"
-                         b"end_header\n" + b"\0" * 10)
+        path.write_bytes(
+            b"ply\nformat binary_little_endian 1.0\nelement vertex 3\n"
+            b"property float x\nproperty float y\nproperty float z\n"
+            b"element face 1\nproperty list uchar int vertex_indices\n"
+            b"end_header\n" + b"\0" * 10
+        )
     elif kind == "non-finite":
         path.write_text("v 0 0 0\nv 1 0 nan\nv 0 1 0\nf 1 2 3\n")
     elif kind == "far":
@@ -264,9 +337,14 @@ def bad_mesh(folder: Path, kind: str) -> Path:
     return path
 
 
-MESH_PROBLEMS = {"empty": "empty (0 bytes)", "no-triangles": "expected triangles, found none",
-                 "corrupt": "trimesh could not read it", "non-finite": "vertex 2 is not finite",
-                 "far": "too far for OpenGL's 32-bit floats", "huge": "300 MB, too large"}
+MESH_PROBLEMS = {
+    "empty": "empty (0 bytes)",
+    "no-triangles": "expected triangles, found none",
+    "corrupt": "trimesh could not read it",
+    "non-finite": "vertex 2 is not finite",
+    "far": "too far for OpenGL's 32-bit floats",
+    "huge": "300 MB, too large",
+}
 
 
 @pytest.mark.parametrize("kind", sorted(MESH_PROBLEMS))
@@ -280,20 +358,27 @@ def test_bad_mesh(capsys, outputs, tmp_path, kind):
 # --------------------------------------------------------------------------- numbers
 
 
-@pytest.mark.parametrize(("args", "words"), [
-    (["--camera", "nan,5,9"], ("--camera", "expected finite numbers")),
-    (["--camera", "inf,5,9"], ("--camera", "expected finite numbers")),
-    (["--camera", "1e308,5,9"], ("--camera", "camera.eye[0]", "1e+308 is too large",
-                                 "overflows")),
-    (["--camera", "1e150,5,9"], ("--camera", "camera.eye[0]", "1e+150 is too large")),
-    (["--target", "5,-1e40,0"], ("--target", "camera.target[1]", "too large")),
-    (["--angles", "0,nan,0"], ("--angles", "expected finite numbers")),
-    (["--angles", "0,1e300,0"], ("--angles", "angles[1]", "too large")),
-    (["--fovy", "inf"], ("--fovy", "expected finite numbers")),
-    (["--set", "camera.eye=[nan, 1, 1]"], ("--set", "camera.eye[0]", "finite")),
-    (["--set", "camera.eye=[1e400, 1, 1]"], ("--set", "camera.eye[0]", "got inf",
-                                               "overflows to inf")),
-])
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--camera", "nan,5,9"], ("--camera", "expected finite numbers")),
+        (["--camera", "inf,5,9"], ("--camera", "expected finite numbers")),
+        (
+            ["--camera", "1e308,5,9"],
+            ("--camera", "camera.eye[0]", "1e+308 is too large", "overflows"),
+        ),
+        (["--camera", "1e150,5,9"], ("--camera", "camera.eye[0]", "1e+150 is too large")),
+        (["--target", "5,-1e40,0"], ("--target", "camera.target[1]", "too large")),
+        (["--angles", "0,nan,0"], ("--angles", "expected finite numbers")),
+        (["--angles", "0,1e300,0"], ("--angles", "angles[1]", "too large")),
+        (["--fovy", "inf"], ("--fovy", "expected finite numbers")),
+        (["--set", "camera.eye=[nan, 1, 1]"], ("--set", "camera.eye[0]", "finite")),
+        (
+            ["--set", "camera.eye=[1e400, 1, 1]"],
+            ("--set", "camera.eye[0]", "got inf", "overflows to inf"),
+        ),
+    ],
+)
 def test_non_finite_and_overflowing_values(capsys, outputs, args, words):
     refused(capsys, render_args(outputs, *args), *words)
     outputs.assert_untouched()
@@ -302,8 +387,12 @@ def test_non_finite_and_overflowing_values(capsys, outputs, args, words):
 def test_non_finite_values_in_a_scene_file(capsys, outputs, tmp_path):
     scene = tmp_path / "nan.toml"
     scene.write_text('[[objects]]\ntype = "robot"\nangles = [0.0, nan, 0.0]\n')
-    refused(capsys, render_args(outputs, str(scene)), "objects[0].angles[1]",
-            "expected a finite number, got nan")
+    refused(
+        capsys,
+        render_args(outputs, str(scene)),
+        "objects[0].angles[1]",
+        "expected a finite number, got nan",
+    )
     outputs.assert_untouched()
 
 
@@ -316,8 +405,21 @@ def test_a_camera_on_or_behind_the_mirror_plane_renders(capsys, tmp_path, method
     # On the plane x = -7 (inside the glass or beside it) and behind it: no reflection to
     # draw, and nothing wrong either.
     out = tmp_path / "ok.png"
-    code = main(["render", "--size", "24x24", "--method", method, "--camera", eye,
-                 "--target", "0,1,0", "--out", str(out)])
+    code = main(
+        [
+            "render",
+            "--size",
+            "24x24",
+            "--method",
+            method,
+            "--camera",
+            eye,
+            "--target",
+            "0,1,0",
+            "--out",
+            str(out),
+        ]
+    )
     captured = capsys.readouterr()
     assert code == 0, captured.err
     assert captured.err == ""

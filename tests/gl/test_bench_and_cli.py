@@ -52,8 +52,10 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     assert quick.sizes == (64, 128) and quick.viewpoints == ("head-on far", "60 deg")
     assert quick.steps == ()
     lab_rows = 2 * (1 + len(lab_techniques(quick.sizes)))
-    sphere_rows = sum(1 + len(curved_techniques(quick.sizes, panel.proxies, quick.steps))
-                      for panel in sphere_panels(quick))
+    sphere_rows = sum(
+        1 + len(curved_techniques(quick.sizes, panel.proxies, quick.steps))
+        for panel in sphere_panels(quick)
+    )
     assert (lab_rows, sphere_rows) == (2 * (1 + 2 * 2 * 2 + 2 + 1), 3 * (1 + 7 * 2 + 3 * 2))
     total = lab_rows + sphere_rows
     # one progress bar (tqdm, on stderr), and it reached its end: a step per row, and one
@@ -75,13 +77,23 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     # ortho's error is its geometry's, whatever its texture's size: the footprint's too
     footprint = float(by_key[("lab", "ortho-copy footprint", "0", "60 deg")]["mae"])
     assert abs(footprint - ortho) < 0.1 * ortho
-    sky = {r["technique"]: float(r["mae"]) for r in table
-           if r["scene"] == "sphere-sky" and r["map_size"] == "128"}
-    assert set(sky) == {*technique_names("curved"), "cube-live box", "cube-live sphere",
-                        "cube-live distance"}
+    sky = {
+        r["technique"]: float(r["mae"])
+        for r in table
+        if r["scene"] == "sphere-sky" and r["map_size"] == "128"
+    }
+    assert set(sky) == {
+        *technique_names("curved"),
+        "cube-live box",
+        "cube-live sphere",
+        "cube-live distance",
+    }
     assert sky["sphere"] < sky["normal"] and sky["cube"] < sky["normal"]
-    room = {r["technique"]: float(r["share_off"]) for r in table
-            if r["scene"] == "sphere-room" and r["map_size"] == "128"}
+    room = {
+        r["technique"]: float(r["share_off"])
+        for r in table
+        if r["scene"] == "sphere-room" and r["map_size"] == "128"
+    }
     assert room["cube-live box"] < 0.01 and room["cube-live distance"] < 0.01
     assert room["cube-live"] > 0.2
     assert all(float(r["wall_ms"]) > 0 for r in table)
@@ -90,8 +102,19 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     # Re-making the report from the CSV measures nothing and gives the same tables.
     (tmp_path / "accuracy.md").unlink()
     again = tmp_path / "again"
-    assert main(["bench", "accuracy", "--from-csv", str(tmp_path / "accuracy.csv"),
-                 "--out-dir", str(again)]) == 0
+    assert (
+        main(
+            [
+                "bench",
+                "accuracy",
+                "--from-csv",
+                str(tmp_path / "accuracy.csv"),
+                "--out-dir",
+                str(again),
+            ]
+        )
+        == 0
+    )
     assert (again / "accuracy.md").read_text().split("\n", 1)[1] == markdown.split("\n", 1)[1]
     assert (again / "accuracy.png").exists() and not (again / "accuracy.csv").exists()
     with Image.open(tmp_path / "accuracy.png") as plot:
@@ -102,8 +125,20 @@ def test_accuracy_sweep_of_a_scene_file(tmp_path, capsys, monkeypatch):
     """``--scene FILE`` measures every technique the file's reflectors can take, from its
     own camera: two_mirrors has planar mirrors only."""
     monkeypatch.chdir(scenes_dir().parent)
-    assert main(["bench", "accuracy", "--quick", "--scene", "scenes/two_mirrors.toml",
-                 "--out-dir", str(tmp_path)]) == 0
+    assert (
+        main(
+            [
+                "bench",
+                "accuracy",
+                "--quick",
+                "--scene",
+                "scenes/two_mirrors.toml",
+                "--out-dir",
+                str(tmp_path),
+            ]
+        )
+        == 0
+    )
     out = capsys.readouterr()
     total = 1 + len(lab_techniques(SweepSettings.quick().sizes))
     steps = total + 1  # and one step to score the viewpoint's frames
@@ -114,9 +149,9 @@ def test_accuracy_sweep_of_a_scene_file(tmp_path, capsys, monkeypatch):
     assert {r["scene"] for r in table} == {"two_mirrors"}
     assert {r["viewpoint"] for r in table} == {"camera"}
     techniques = {r["technique"] for r in table}
-    assert techniques == {"raytrace", "stencil"} | {f"{m}-{c}" for m in ("ortho", "reflected")
-                                                     for c in ("copy", "fbo")} | {
-        f"ortho-{c} footprint" for c in ("copy", "fbo")}
+    assert techniques == {"raytrace", "stencil"} | {
+        f"{m}-{c}" for m in ("ortho", "reflected") for c in ("copy", "fbo")
+    } | {f"ortho-{c} footprint" for c in ("copy", "fbo")}
     # The exact techniques, two bounces deep, at the frame's size: 99% of the mirrors'
     # pixels within 10/255 of the ray tracer.
     rows = {(r["technique"], r["map_size"]): r for r in table}
@@ -129,20 +164,44 @@ def test_a_sweep_from_inside_the_sphere_reports_no_reflector_pixels(tmp_path, ca
     """From inside the chrome sphere no pixel shows a reflector (it is seen from outside
     only): every row says so, none reports zero error."""
     scene = tmp_path / "inside.toml"
-    source = (scenes_dir() / "chrome_sphere.toml").read_text().replace(
-        "eye = [1.3, 2.0, 7.4]", "eye = [0.1, 0.05, 0.2]").replace(
-        "target = [0.0, 0.1, 0.0]", "target = [0.0, 0.1, 3.0]").replace(
-        "near = 0.2", "near = 0.05").replace('"../', f'"{scenes_dir().parent}/')
+    source = (
+        (scenes_dir() / "chrome_sphere.toml")
+        .read_text()
+        .replace("eye = [1.3, 2.0, 7.4]", "eye = [0.1, 0.05, 0.2]")
+        .replace("target = [0.0, 0.1, 0.0]", "target = [0.0, 0.1, 3.0]")
+        .replace("near = 0.2", "near = 0.05")
+        .replace('"../', f'"{scenes_dir().parent}/')
+    )
     scene.write_text(source)
-    assert main(["bench", "accuracy", "--scene", str(scene), "--frame", "32", "--sizes",
-                 "16", "--frames", "1", "--out-dir", str(tmp_path / "out")]) == 0
+    assert (
+        main(
+            [
+                "bench",
+                "accuracy",
+                "--scene",
+                str(scene),
+                "--frame",
+                "32",
+                "--sizes",
+                "16",
+                "--frames",
+                "1",
+                "--out-dir",
+                str(tmp_path / "out"),
+            ]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
     with open(tmp_path / "out" / "accuracy.csv") as stream:
         table = list(csv.DictReader(stream))
     assert len(table) > 5
     assert all(r["mae"] == "" and r["pixels"] == "0" for r in table)
-    lines = [line for line in out.splitlines() if line.startswith(("raytrace", "cube",
-                                                                   "sphere", "latlong"))]
+    lines = [
+        line
+        for line in out.splitlines()
+        if line.startswith(("raytrace", "cube", "sphere", "latlong"))
+    ]
     assert lines and all("no reflector pixels" in line for line in lines), out
     assert not re.search(r"\b0\.00\b", out)
 
@@ -153,8 +212,7 @@ def test_bench_refuses_a_file_as_its_folder_and_unknown_benchmarks(tmp_path, cap
     with pytest.raises(SystemExit) as stopped:  # argparse's own refusal: usage, then why
         main(["bench", "sprint"])
     assert stopped.value.code == 2
-    assert "invalid choice: 'sprint' (choose from 'accuracy', 'speed')" in (
-        capsys.readouterr().err)
+    assert "invalid choice: 'sprint' (choose from 'accuracy', 'speed')" in (capsys.readouterr().err)
     assert main(["bench", "accuracy", "--quick", "--out-dir", str(blocker)]) == 2
     assert main(["bench", "accuracy", "--sizes", "64,zero"]) == 2
     assert main(["bench", "accuracy", "--from-csv", str(blocker)]) == 2
@@ -170,10 +228,13 @@ def test_bench_refuses_a_file_as_its_folder_and_unknown_benchmarks(tmp_path, cap
 # --------------------------------------------------------------------------- render
 
 
-@pytest.mark.parametrize("scene, method", [
-    *(("lab20", m) for m in technique_names("planar")),
-    *(("chrome_sphere", m) for m in technique_names("curved")),
-])
+@pytest.mark.parametrize(
+    "scene, method",
+    [
+        *(("lab20", m) for m in technique_names("planar")),
+        *(("chrome_sphere", m) for m in technique_names("curved")),
+    ],
+)
 def test_render_command_draws_each_technique(tmp_path, capsys, scene, method):
     out = tmp_path / f"{method}.png"
     assert main(["render", scene, "--method", method, "--size", "64x48", "--out", str(out)]) == 0
@@ -193,34 +254,47 @@ def test_render_command_draws_the_ray_traced_truth(tmp_path, capsys):
     assert np.array_equal(truth, mirrorlab.render(size=(64, 48), method="raytrace"))
     # and the exact techniques agree with it
     for method in ("reflected", "stencil"):
-        assert_images_close(f"cli_truth_{method}", mirrorlab.render(size=(64, 48),
-                                                                    method=method),
-                            truth, channel_tolerance=10, min_fraction_within=0.99,
-                            max_mean_abs=1.0)
+        assert_images_close(
+            f"cli_truth_{method}",
+            mirrorlab.render(size=(64, 48), method=method),
+            truth,
+            channel_tolerance=10,
+            min_fraction_within=0.99,
+            max_mean_abs=1.0,
+        )
 
 
 def test_exact_methods_through_the_api_match_the_ray_tracer():
     truth = mirrorlab.render(size=(96, 96), method="raytrace")
     for method in ("reflected", "stencil"):
         image = mirrorlab.render(size=(96, 96), method=method)
-        assert_images_close(f"api_{method}", image, truth, channel_tolerance=10,
-                            min_fraction_within=0.99, max_mean_abs=1.0)
+        assert_images_close(
+            f"api_{method}",
+            image,
+            truth,
+            channel_tolerance=10,
+            min_fraction_within=0.99,
+            max_mean_abs=1.0,
+        )
     fbo = mirrorlab.render(size=(96, 96), method="reflected", capture="fbo", env_size=64)
     copy = mirrorlab.render(size=(96, 96), method="reflected", env_size=64)
     assert np.array_equal(fbo, copy)
 
 
-@pytest.mark.parametrize("args, option", [
-    (["--method", "mirror"], "--method"),
-    (["--capture", "blit"], "--capture"),
-    (["--env-size", "-3"], "--env-size"),
-    (["--env-size", "9000"], "--env-size"),
-    (["sphere", "--map-size", "2"], "--map-size"),
-    (["sphere", "--method", "mirror"], "--method"),
-    (["sphere", "--cube-faces", str(data_path("models"))], "--cube-faces"),
-    (["cone", "--set", "camera.fovy=0"], "--set"),
-    (["robot_wave", "--frames", "30"], "--frames"),
-])
+@pytest.mark.parametrize(
+    "args, option",
+    [
+        (["--method", "mirror"], "--method"),
+        (["--capture", "blit"], "--capture"),
+        (["--env-size", "-3"], "--env-size"),
+        (["--env-size", "9000"], "--env-size"),
+        (["sphere", "--map-size", "2"], "--map-size"),
+        (["sphere", "--method", "mirror"], "--method"),
+        (["sphere", "--cube-faces", str(data_path("models"))], "--cube-faces"),
+        (["cone", "--set", "camera.fovy=0"], "--set"),
+        (["robot_wave", "--frames", "30"], "--frames"),
+    ],
+)
 def test_render_command_refuses_bad_technique_options(tmp_path, capsys, args, option):
     out = tmp_path / "x.png"
     assert main(["render", "--out", str(out), *args]) == 2
@@ -229,17 +303,19 @@ def test_render_command_refuses_bad_technique_options(tmp_path, capsys, args, op
     assert not out.exists()
 
 
-@pytest.mark.parametrize("args, option", [
-    (["no_mirror", "--method", "stencil"], "--method"),
-    (["no_mirror", "--env-size", "64"], "--env-size"),
-    (["cone", "--method", "stencil"], "--method"),
-    (["cone", "--capture", "fbo"], "--capture"),
-    (["lab20", "--method", "cube"], "--method"),
-    (["lab20", "--map-size", "64"], "--map-size"),
-    (["sphere", "--angles", "0,0,0"], "--angles"),
-])
-def test_render_command_refuses_options_the_scene_has_nothing_for(tmp_path, capsys, args,
-                                                                  option):
+@pytest.mark.parametrize(
+    "args, option",
+    [
+        (["no_mirror", "--method", "stencil"], "--method"),
+        (["no_mirror", "--env-size", "64"], "--env-size"),
+        (["cone", "--method", "stencil"], "--method"),
+        (["cone", "--capture", "fbo"], "--capture"),
+        (["lab20", "--method", "cube"], "--method"),
+        (["lab20", "--map-size", "64"], "--map-size"),
+        (["sphere", "--angles", "0,0,0"], "--angles"),
+    ],
+)
+def test_render_command_refuses_options_the_scene_has_nothing_for(tmp_path, capsys, args, option):
     out = tmp_path / "x.png"
     assert main(["render", "--out", str(out), *args]) == 2
     error = capsys.readouterr().err.strip()
@@ -259,13 +335,16 @@ def test_render_command_refuses_an_unknown_scene(tmp_path, capsys, args):
     assert not out.exists()
 
 
-@pytest.mark.parametrize("args", [
-    ["cone"],
-    ["sphere", "--method", "cube-live", "--map-size", "32"],
-    ["sphere", "--method", "latlong", "--camera", "0,0,5"],
-    ["sphere", "--method", "cube", "--cube-faces", str(SKY_CUBE)],
-    ["mirror_and_sphere"],
-])
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["cone"],
+        ["sphere", "--method", "cube-live", "--map-size", "32"],
+        ["sphere", "--method", "latlong", "--camera", "0,0,5"],
+        ["sphere", "--method", "cube", "--cube-faces", str(SKY_CUBE)],
+        ["mirror_and_sphere"],
+    ],
+)
 def test_render_command_draws_the_environment_map_scenes(tmp_path, capsys, args):
     out = tmp_path / "env.png"
     assert main(["render", *args, "--size", "64x64", "--out", str(out)]) == 0
@@ -287,13 +366,37 @@ def test_a_cube_map_from_six_images_draws_what_the_baked_cube_draws(tmp_path, mo
     monkeypatch.chdir(data_path())
     from_files, baked, rolled = (tmp_path / f"{n}.png" for n in ("files", "baked", "rolled"))
     common = ["--method", "cube", "--size", "96x96"]
-    assert main(["render", "sphere", *common, "--cube-faces", "textures/sky_cube",
-                 "--out", str(from_files)]) == 0
+    assert (
+        main(
+            [
+                "render",
+                "sphere",
+                *common,
+                "--cube-faces",
+                "textures/sky_cube",
+                "--out",
+                str(from_files),
+            ]
+        )
+        == 0
+    )
     assert main(["render", "sphere", *common, "--map-size", "256", "--out", str(baked)]) == 0
     assert np.array_equal(png(from_files), png(baked))
     # Six other pictures change the reflection and the sky behind it.
-    assert main(["render", "sphere", *common, "--cube-faces",
-                 str(rolled_faces(tmp_path / "rolled_faces")), "--out", str(rolled)]) == 0
+    assert (
+        main(
+            [
+                "render",
+                "sphere",
+                *common,
+                "--cube-faces",
+                str(rolled_faces(tmp_path / "rolled_faces")),
+                "--out",
+                str(rolled),
+            ]
+        )
+        == 0
+    )
     changed = np.abs(png(rolled).astype(int) - png(baked).astype(int)).max(axis=-1) > 30
     assert np.mean(changed) > 0.3
 
@@ -305,8 +408,7 @@ def test_api_renders_the_environment_map_scenes():
     assert sphere.std() > 5 and cone.std() > 5
     with pytest.raises(ValueError, match="method"):
         mirrorlab.render(size=(48, 48), method="cube")  # the lab has no curved reflector
-    faces = mirrorlab.render(size=(48, 48), scene="sphere", method="cube",
-                             cube_faces=str(SKY_CUBE))
+    faces = mirrorlab.render(size=(48, 48), scene="sphere", method="cube", cube_faces=str(SKY_CUBE))
     assert np.array_equal(faces, sphere)
 
 
@@ -337,8 +439,9 @@ def test_plan_command_json_parses_and_matches_the_scene(capsys):
     for frame in frames:
         assert frame["passes"][-1]["pass"] == "camera" and frame["passes"][-1]["runs"]
         assert [d["reflector"] for d in frame["draws"]] == ["mirror"]
-    captured = [f["frame"] for f in frames
-                if any(p["pass"] == "capture" and p["runs"] for p in f["passes"])]
+    captured = [
+        f["frame"] for f in frames if any(p["pass"] == "capture" and p["runs"] for p in f["passes"])
+    ]
     assert captured == capture_frames(8)
 
 
@@ -355,8 +458,22 @@ def test_render_stats_report_the_passes_of_each_frame(tmp_path, capsys):
     # still for frames 0-4 (keyframes 0 and 4 agree), moving from frame 5 on
     assert expected[:2] == [0, 5] and 1 not in expected and 4 not in expected
     out = tmp_path / "last.png"
-    assert main(["render", "robot_wave", "--frames", "8", "--stats", "--size", "64x64",
-                 "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "render",
+                "robot_wave",
+                "--frames",
+                "8",
+                "--stats",
+                "--size",
+                "64x64",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     text = capsys.readouterr().out
     reported = dict(re.findall(r"^frame (\d+): ran (.*?) \(", text, flags=re.M))
     assert sorted(int(f) for f in reported) == list(range(8))
@@ -381,9 +498,23 @@ def test_render_stats_report_the_passes_of_each_frame(tmp_path, capsys):
 def test_render_stats_say_how_many_pixels_the_lossy_rule_changes(tmp_path, capsys):
     # the lab's mirror seen from 300 units: a few pixels, drawn plain under --tiny-pixels
     out = tmp_path / "far.png"
-    args = ["render", "lab20", "--camera", "300,1,-2", "--target", "-7,1,-2", "--set",
-            "camera.far=1000", "--size", "64x64", "--frames", "2", "--stats", "--out",
-            str(out)]
+    args = [
+        "render",
+        "lab20",
+        "--camera",
+        "300,1,-2",
+        "--target",
+        "-7,1,-2",
+        "--set",
+        "camera.far=1000",
+        "--size",
+        "64x64",
+        "--frames",
+        "2",
+        "--stats",
+        "--out",
+        str(out),
+    ]
     assert main(args) == 0
     assert "frames are the same, pixel for pixel, in all 2 frames" in capsys.readouterr().out
     assert main([*args, "--tiny-pixels", "16"]) == 0
@@ -391,16 +522,48 @@ def test_render_stats_say_how_many_pixels_the_lossy_rule_changes(tmp_path, capsy
     changed = re.search(r"frames differ in 2 of 2 frames: (\d+) pixels in all", text)
     assert changed and int(changed.group(1)) > 0, text
     assert "pixels differ from --no-plan)" in text
-    assert main(["plan", "lab20", "--camera", "300,1,-2", "--target", "-7,1,-2", "--set",
-                 "camera.far=1000", "--size", "64x64", "--tiny-pixels", "16"]) == 0
+    assert (
+        main(
+            [
+                "plan",
+                "lab20",
+                "--camera",
+                "300,1,-2",
+                "--target",
+                "-7,1,-2",
+                "--set",
+                "camera.far=1000",
+                "--size",
+                "64x64",
+                "--tiny-pixels",
+                "16",
+            ]
+        )
+        == 0
+    )
     assert "lossy" in capsys.readouterr().out
 
 
 def test_render_out_dir_writes_one_png_per_frame(tmp_path, capsys):
     out_dir = tmp_path / "frames"
     out = tmp_path / "last.png"
-    assert main(["render", "robot_wave", "--frames", "8", "--size", "64x64", "--out",
-                 str(out), "--out-dir", str(out_dir)]) == 0
+    assert (
+        main(
+            [
+                "render",
+                "robot_wave",
+                "--frames",
+                "8",
+                "--size",
+                "64x64",
+                "--out",
+                str(out),
+                "--out-dir",
+                str(out_dir),
+            ]
+        )
+        == 0
+    )
     assert "wrote 8 frames" in capsys.readouterr().out
     # the frames, and the hidden record of how they were made (a rerun resumes by it)
     names = sorted(p.name for p in out_dir.iterdir() if not p.name.startswith("."))

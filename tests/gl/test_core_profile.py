@@ -32,8 +32,14 @@ def core_frames(tmp_path_factory):
     """What the child drawing in the simulated macOS context saved: ``(info, frames)``."""
     out = tmp_path_factory.mktemp("core") / "frames.npz"
     env = {**os.environ, **MACOS_CONTEXT}
-    result = subprocess.run([sys.executable, "-m", "tests.gl.core_frames", str(out)],
-                            cwd=REPO, env=env, capture_output=True, text=True, timeout=600)
+    result = subprocess.run(
+        [sys.executable, "-m", "tests.gl.core_frames", str(out)],
+        cwd=REPO,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert result.returncode == 0, result.stderr[-3000:]
     with np.load(out) as saved:
         info = json.loads(str(saved["info"]))
@@ -56,17 +62,24 @@ SEQUENCES = list(sequences())
 
 
 @pytest.mark.parametrize("sequence", SEQUENCES, ids=[s.name for s in SEQUENCES])
-def test_frames_in_the_core_context_equal_the_default_contexts(core_frames, scene_renderer,
-                                                               sequence):
+def test_frames_in_the_core_context_equal_the_default_contexts(
+    core_frames, scene_renderer, sequence
+):
     _, frames = core_frames
     short = type(sequence)(sequence.name, sequence.frames[:FRAMES])
     default = draw_sequence(scene_renderer, short)
     core = frames[sequence.name]
     if not np.array_equal(core, default):
-        folder = save_failure(f"core_{sequence.name}", core=core, default=default,
-                              diff=difference_image(core, default))
-        pytest.fail(f"{sequence.name}: {int((core != default).any(axis=-1).sum())} pixels "
-                    f"differ between the core and the default context; images in {folder}")
+        folder = save_failure(
+            f"core_{sequence.name}",
+            core=core,
+            default=default,
+            diff=difference_image(core, default),
+        )
+        pytest.fail(
+            f"{sequence.name}: {int((core != default).any(axis=-1).sum())} pixels "
+            f"differ between the core and the default context; images in {folder}"
+        )
 
 
 def test_every_shipped_scene_is_drawn_in_the_core_context(core_frames):
@@ -84,7 +97,8 @@ LEGACY = re.compile(
     r"GL_SPHERE_MAP|GL_NORMALIZE|GL_LIGHTING|GL_QUADS|gl_ModelViewMatrix\w*|"
     r"gl_ModelViewProjectionMatrix\w*|gl_ProjectionMatrix\w*|gl_NormalMatrix|gl_Vertex|"
     r"gl_Normal|gl_MultiTexCoord\d|gl_TexCoord|gl_FrontColor|gl_Color|gl_FragColor|"
-    r"texture2D|textureCube|compatibility)\b")
+    r"texture2D|textureCube|compatibility)\b"
+)
 
 
 def test_the_renderer_names_nothing_outside_the_core_profile():

@@ -25,8 +25,13 @@ FEEDBACK_FLOATS_PER_POINT = 1 + 3 + 4 + 4  # token, window xyz, RGBA, texture st
 BOX = 100.0  # half-size of the orthographic box: every test vertex must land inside it
 
 
-def mesa_texgen(registry, vertices: np.ndarray, normals: np.ndarray,
-                modelview: np.ndarray | None = None, normalize: bool = False) -> np.ndarray:
+def mesa_texgen(
+    registry,
+    vertices: np.ndarray,
+    normals: np.ndarray,
+    modelview: np.ndarray | None = None,
+    normalize: bool = False,
+) -> np.ndarray:
     """Mesa's GL_SPHERE_MAP (s, t) ``(n, 2)`` for object-space ``vertices`` and ``normals``
     ``(n, 3)`` float32, drawn as points under ``modelview`` ``(4, 4)`` (identity if None),
     with ``GL_NORMALIZE`` on or off."""
@@ -37,8 +42,9 @@ def mesa_texgen(registry, vertices: np.ndarray, normals: np.ndarray,
     buffer = np.zeros(n * FEEDBACK_FLOATS_PER_POINT + 16, np.float32)
     GL.glActiveTexture(GL.GL_TEXTURE0)
     GL.glBindTexture(GL.GL_TEXTURE_2D, texture)
-    GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGBA8, 1, 1, 0, GL.GL_RGBA,
-                    GL.GL_UNSIGNED_BYTE, bytes(4))
+    GL.glTexImage2D(
+        GL.GL_TEXTURE_2D, 0, GL.GL_RGBA8, 1, 1, 0, GL.GL_RGBA, GL.GL_UNSIGNED_BYTE, bytes(4)
+    )
     GL.glMatrixMode(GL.GL_TEXTURE)
     GL.glPushMatrix()
     GL.glLoadIdentity()
@@ -87,7 +93,7 @@ def mesa_texgen(registry, vertices: np.ndarray, normals: np.ndarray,
         GL.glDeleteTextures([texture])
     records = buffer[: n * FEEDBACK_FLOATS_PER_POINT].reshape(n, FEEDBACK_FLOATS_PER_POINT)
     assert np.all(records[:, 0] == GL.GL_POINT_TOKEN), "a point was clipped or not recorded"
-    assert np.all(buffer[n * FEEDBACK_FLOATS_PER_POINT:] == 0), "more feedback than points"
+    assert np.all(buffer[n * FEEDBACK_FLOATS_PER_POINT :] == 0), "more feedback than points"
     assert np.all(records[:, 11] == 1), "texture q should be 1"
     return records[:, 8:10].astype(np.float64)
 
@@ -124,8 +130,7 @@ def texgen_cases(rng) -> tuple[np.ndarray, np.ndarray]:
         a = math.radians(angle)
         vertices.append([[0.0, 0.0, -4.0]])
         normals.append([[math.sin(a), 0.0, math.cos(a)]])
-    return (np.concatenate(vertices).astype(np.float32),
-            np.concatenate(normals).astype(np.float32))
+    return (np.concatenate(vertices).astype(np.float32), np.concatenate(normals).astype(np.float32))
 
 
 def compare_texgen(mesa: np.ndarray, numpy_st: np.ndarray, r_eye: np.ndarray) -> None:
@@ -139,7 +144,8 @@ def compare_texgen(mesa: np.ndarray, numpy_st: np.ndarray, r_eye: np.ndarray) ->
     worst = int(np.argmax(error / tolerance))
     assert np.all(error <= tolerance), (
         f"{int((error > tolerance).sum())} of {len(error)} differ; worst: Mesa "
-        f"{mesa[worst]}, numpy {numpy_st[worst]}, 1 + rz = {gap[worst]:.3g}")
+        f"{mesa[worst]}, numpy {numpy_st[worst]}, 1 + rz = {gap[worst]:.3g}"
+    )
 
 
 def test_sphere_map_texgen_matches_mesa_with_identity_modelview(registry):
@@ -171,23 +177,26 @@ def modelview_case(seed: int) -> tuple[np.ndarray, ...]:
     rng = np.random.default_rng(seed)
     vertices, normals = texgen_cases(rng)
     normals = (normals * rng.uniform(0.2, 5, (len(normals), 1))).astype(np.float32)
-    modelview = (math3d.translate((0.5, -1.0, -6.0)) @ math3d.rotate(35, (1, 2, 0.5))
-                 @ math3d.scale((1.0, 2.0, 0.5)))
+    modelview = (
+        math3d.translate((0.5, -1.0, -6.0))
+        @ math3d.rotate(35, (1, 2, 0.5))
+        @ math3d.scale((1.0, 2.0, 0.5))
+    )
     # Keep object-space vertices inside the box after the transform.
     vertices = (vertices / 4).astype(np.float32)
     v_eye = math3d.transform_points(modelview, vertices.astype(np.float64))[:, :3]
     n_eye = normals.astype(np.float64) @ math3d.normal_matrix(modelview).T
     r = envmap.reflect(v_eye / np.linalg.norm(v_eye, axis=1, keepdims=True), n_eye)
     regular = (1 + r[:, 2] / np.linalg.norm(r, axis=1) >= 1e-6) & (
-        np.linalg.norm(v_eye, axis=1) > 1e-6)
+        np.linalg.norm(v_eye, axis=1) > 1e-6
+    )
     assert regular.sum() >= 400
     return vertices, normals, modelview, v_eye, n_eye, r, regular
 
 
 def test_sphere_map_texgen_matches_mesa_under_a_modelview_with_gl_normalize(registry):
     vertices, normals, modelview, v_eye, n_eye, r, regular = modelview_case(21)
-    mesa = mesa_texgen(registry, vertices[regular], normals[regular], modelview,
-                       normalize=True)
+    mesa = mesa_texgen(registry, vertices[regular], normals[regular], modelview, normalize=True)
     s, t = envmap.sphere_map_texgen(v_eye[regular], n_eye[regular])
     compare_texgen(mesa, np.stack([s, t], axis=1), r[regular])
 
@@ -215,8 +224,9 @@ def test_sphere_map_texgen_matches_mesa_close_to_the_singular_direction(registry
 # ------------------------------------------------------------- the renderer's texgen shader
 
 
-def shader_texgen(vertices: np.ndarray, normals: np.ndarray,
-                  modelview: np.ndarray | None = None) -> np.ndarray:
+def shader_texgen(
+    vertices: np.ndarray, normals: np.ndarray, modelview: np.ndarray | None = None
+) -> np.ndarray:
     """What the renderer's vertex shader for sphere-texgen (``envmap.vert`` with ``texgen``
     set, the scene's own shader text) gives object-space ``vertices`` and ``normals``
     ``(n, 3)`` float32 under ``modelview`` ``(4, 4)`` (identity if None) as its
@@ -231,20 +241,31 @@ def shader_texgen(vertices: np.ndarray, normals: np.ndarray,
     GL.glAttachShader(program, shader)
     GL.glDeleteShader(shader)
     names = (ctypes.c_char_p * 1)(b"vertex_sphere_st")
-    GL.glTransformFeedbackVaryings(program, 1, ctypes.cast(names, ctypes.POINTER(
-        ctypes.POINTER(GL.GLchar))), GL.GL_INTERLEAVED_ATTRIBS)
+    GL.glTransformFeedbackVaryings(
+        program,
+        1,
+        ctypes.cast(names, ctypes.POINTER(ctypes.POINTER(GL.GLchar))),
+        GL.GL_INTERLEAVED_ATTRIBS,
+    )
     GL.glLinkProgram(program)
     assert GL.glGetProgramiv(program, GL.GL_LINK_STATUS), GL.glGetProgramInfoLog(program)
     vao = int(GL.glGenVertexArrays(1))
     vbo, captured = (int(b) for b in GL.glGenBuffers(2))
     try:
         GL.glUseProgram(program)
-        for name, matrix in (("model", modelview), ("view", np.eye(4)),
-                             ("projection", np.eye(4))):
-            GL.glUniformMatrix4fv(GL.glGetUniformLocation(program, name), 1, GL.GL_TRUE,
-                                  np.asarray(matrix, np.float32))
-        GL.glUniformMatrix3fv(GL.glGetUniformLocation(program, "normal_matrix"), 1,
-                              GL.GL_TRUE, math3d.normal_matrix(modelview).astype(np.float32))
+        for name, matrix in (("model", modelview), ("view", np.eye(4)), ("projection", np.eye(4))):
+            GL.glUniformMatrix4fv(
+                GL.glGetUniformLocation(program, name),
+                1,
+                GL.GL_TRUE,
+                np.asarray(matrix, np.float32),
+            )
+        GL.glUniformMatrix3fv(
+            GL.glGetUniformLocation(program, "normal_matrix"),
+            1,
+            GL.GL_TRUE,
+            math3d.normal_matrix(modelview).astype(np.float32),
+        )
         GL.glUniform1i(GL.glGetUniformLocation(program, "texgen"), 1)
         GL.glUniform1i(GL.glGetUniformLocation(program, "orthographic"), 0)
         GL.glUniform4f(GL.glGetUniformLocation(program, "clip_plane"), 0.0, 0.0, 0.0, 1.0)
@@ -254,8 +275,9 @@ def shader_texgen(vertices: np.ndarray, normals: np.ndarray,
         GL.glBufferData(GL.GL_ARRAY_BUFFER, data.nbytes, data, GL.GL_STATIC_DRAW)
         for location in (0, 1):
             GL.glEnableVertexAttribArray(location)
-            GL.glVertexAttribPointer(location, 3, GL.GL_FLOAT, GL.GL_FALSE, 24,
-                                     GL.GLvoidp(12 * location))
+            GL.glVertexAttribPointer(
+                location, 3, GL.GL_FLOAT, GL.GL_FALSE, 24, GL.GLvoidp(12 * location)
+            )
         GL.glBindBuffer(GL.GL_TRANSFORM_FEEDBACK_BUFFER, captured)
         GL.glBufferData(GL.GL_TRANSFORM_FEEDBACK_BUFFER, 8 * n, None, GL.GL_STATIC_READ)
         GL.glBindBufferBase(GL.GL_TRANSFORM_FEEDBACK_BUFFER, 0, captured)
@@ -265,8 +287,9 @@ def shader_texgen(vertices: np.ndarray, normals: np.ndarray,
         GL.glEndTransformFeedback()
         GL.glDisable(GL.GL_RASTERIZER_DISCARD)
         st = np.empty((n, 2), np.float32)
-        GL.glGetBufferSubData(GL.GL_TRANSFORM_FEEDBACK_BUFFER, 0, st.nbytes,
-                              st.ctypes.data_as(ctypes.c_void_p))
+        GL.glGetBufferSubData(
+            GL.GL_TRANSFORM_FEEDBACK_BUFFER, 0, st.nbytes, st.ctypes.data_as(ctypes.c_void_p)
+        )
     finally:
         GL.glBindBufferBase(GL.GL_TRANSFORM_FEEDBACK_BUFFER, 0, 0)
         GL.glBindBuffer(GL.GL_TRANSFORM_FEEDBACK_BUFFER, 0)
@@ -291,7 +314,8 @@ def compare_with_mesa(mesa: np.ndarray, shader: np.ndarray, r_eye: np.ndarray) -
     assert np.all(error <= tolerance), (
         f"{int((error > tolerance).sum())} of {len(error)} differ; worst "
         f"{error[worst]:.3g} at 1 + rz = {gap[worst]:.3g}: Mesa {mesa[worst]}, shader "
-        f"{shader[worst]}")
+        f"{shader[worst]}"
+    )
 
 
 def test_texgen_shader_matches_mesa_texgen_over_many_directions(registry):
@@ -313,8 +337,7 @@ def test_texgen_shader_matches_mesa_texgen_over_many_directions(registry):
 
 def test_texgen_shader_matches_mesa_texgen_under_a_modelview(registry):
     vertices, normals, modelview, _, _, r, regular = modelview_case(39)
-    mesa = mesa_texgen(registry, vertices[regular], normals[regular], modelview,
-                       normalize=True)
+    mesa = mesa_texgen(registry, vertices[regular], normals[regular], modelview, normalize=True)
     shader = shader_texgen(vertices[regular], normals[regular], modelview)
     compare_with_mesa(mesa, shader, r[regular])
 
@@ -355,8 +378,10 @@ CUBE_UNIT, DIRECTION_UNIT = 1, 2
 
 def _program() -> int:
     program = GL.glCreateProgram()
-    for source, kind in ((CUBE_VERTEX, GL.GL_VERTEX_SHADER),
-                         (CUBE_FRAGMENT, GL.GL_FRAGMENT_SHADER)):
+    for source, kind in (
+        (CUBE_VERTEX, GL.GL_VERTEX_SHADER),
+        (CUBE_FRAGMENT, GL.GL_FRAGMENT_SHADER),
+    ):
         shader = GL.glCreateShader(kind)
         GL.glShaderSource(shader, source)
         GL.glCompileShader(shader)
@@ -399,14 +424,17 @@ def mesa_cube_texels(directions: np.ndarray, size: int, seamless: bool = False) 
         GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, cube)
         columns, rows = np.meshgrid(np.arange(size), np.arange(size))
         for face in range(6):
-            texels = np.stack([np.full_like(rows, face), columns, rows, np.ones_like(rows)],
-                              axis=-1).astype(np.float32)
+            texels = np.stack(
+                [np.full_like(rows, face), columns, rows, np.ones_like(rows)], axis=-1
+            ).astype(np.float32)
             _float_texture(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, size, size, texels)
-        for name, value in ((GL.GL_TEXTURE_MIN_FILTER, GL.GL_NEAREST),
-                            (GL.GL_TEXTURE_MAG_FILTER, GL.GL_NEAREST),
-                            (GL.GL_TEXTURE_WRAP_S, GL.GL_CLAMP_TO_EDGE),
-                            (GL.GL_TEXTURE_WRAP_T, GL.GL_CLAMP_TO_EDGE),
-                            (GL.GL_TEXTURE_MAX_LEVEL, 0)):
+        for name, value in (
+            (GL.GL_TEXTURE_MIN_FILTER, GL.GL_NEAREST),
+            (GL.GL_TEXTURE_MAG_FILTER, GL.GL_NEAREST),
+            (GL.GL_TEXTURE_WRAP_S, GL.GL_CLAMP_TO_EDGE),
+            (GL.GL_TEXTURE_WRAP_T, GL.GL_CLAMP_TO_EDGE),
+            (GL.GL_TEXTURE_MAX_LEVEL, 0),
+        ):
             GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, name, value)
         GL.glActiveTexture(GL.GL_TEXTURE0 + DIRECTION_UNIT)
         GL.glBindTexture(GL.GL_TEXTURE_2D, direction_texture)
@@ -419,8 +447,9 @@ def mesa_cube_texels(directions: np.ndarray, size: int, seamless: bool = False) 
         GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_NEAREST)
         GL.glBindTexture(GL.GL_TEXTURE_2D, 0)
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, framebuffer)
-        GL.glFramebufferTexture2D(GL.GL_FRAMEBUFFER, GL.GL_COLOR_ATTACHMENT0, GL.GL_TEXTURE_2D,
-                                  output, 0)
+        GL.glFramebufferTexture2D(
+            GL.GL_FRAMEBUFFER, GL.GL_COLOR_ATTACHMENT0, GL.GL_TEXTURE_2D, output, 0
+        )
         assert GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER) == GL.GL_FRAMEBUFFER_COMPLETE
         GL.glViewport(0, 0, width, height)
         GL.glUseProgram(program)
@@ -458,15 +487,17 @@ def numpy_cube_texels(directions: np.ndarray, size: int) -> tuple[np.ndarray, ..
     return face, column, row, u, v
 
 
-def assert_same_texels(mesa: np.ndarray, directions: np.ndarray, size: int,
-                       min_exact_fraction: float) -> None:
+def assert_same_texels(
+    mesa: np.ndarray, directions: np.ndarray, size: int, min_exact_fraction: float
+) -> None:
     """Faces must agree exactly. Texel indices too, except within 1e-4 texel of a texel
     boundary, where Mesa's float32 arithmetic may land on the neighbour."""
     face, column, row, u, v = numpy_cube_texels(directions, size)
     bad_face = np.nonzero(mesa[:, 0] != face)[0]
     assert len(bad_face) == 0, (
         f"{len(bad_face)} face mismatches, e.g. r = {directions[bad_face[:3]].tolist()}: "
-        f"Mesa {mesa[bad_face[:3], 0].tolist()}, numpy {face[bad_face[:3]].tolist()}")
+        f"Mesa {mesa[bad_face[:3], 0].tolist()}, numpy {face[bad_face[:3]].tolist()}"
+    )
     margin = 1e-4
 
     def allowed(index, coordinate):
@@ -479,7 +510,8 @@ def assert_same_texels(mesa: np.ndarray, directions: np.ndarray, size: int,
     bad = np.nonzero(~(exact | tolerated))[0]
     assert len(bad) == 0, (
         f"{len(bad)} texel mismatches, e.g. r = {directions[bad[:3]].tolist()}: Mesa "
-        f"{mesa[bad[:3]].tolist()}, numpy {np.stack([face, column, row], 1)[bad[:3]].tolist()}")
+        f"{mesa[bad[:3]].tolist()}, numpy {np.stack([face, column, row], 1)[bad[:3]].tolist()}"
+    )
     assert exact.mean() >= min_exact_fraction, f"only {exact.mean():.3f} matched exactly"
 
 
@@ -496,9 +528,9 @@ def test_cube_map_matches_mesa_sampler_on_random_and_near_edge_directions():
     s, t = np.where(swap, t, s), np.where(swap, s, t)
     near_edges = envmap.cube_face_direction(faces, s, t)
     # On texel boundaries of each face (float32 rounding decides the side).
-    boundary = envmap.cube_face_direction(rng.integers(0, 6, 500),
-                                          rng.integers(0, size + 1, 500) / size,
-                                          rng.uniform(0, 1, 500))
+    boundary = envmap.cube_face_direction(
+        rng.integers(0, 6, 500), rng.integers(0, size + 1, 500) / size, rng.uniform(0, 1, 500)
+    )
     directions = np.concatenate([random, near_edges, boundary]).astype(np.float32)
     mesa = mesa_cube_texels(directions, size)
     assert_same_texels(mesa, directions, size, min_exact_fraction=0.9)
@@ -509,16 +541,16 @@ def test_cube_map_matches_mesa_sampler_on_random_and_near_edge_directions():
 
 def tie_directions(rng) -> np.ndarray:
     """Exact ties: edges, corners, axes, signed zeros, r = 0, and random ties."""
-    signs = np.array([[sx, sy, sz] for sx in (1, -1) for sy in (1, -1) for sz in (1, -1)],
-                     float)
+    signs = np.array([[sx, sy, sz] for sx in (1, -1) for sy in (1, -1) for sz in (1, -1)], float)
     corners = np.concatenate([signs, 2.5 * signs])
     edges = []
     for third in (0.0, -0.0, 0.3, -0.7, 0.999):
         for a, b in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
             edges += [[a, b, third], [a, third, b], [third, a, b]]
     axes = np.concatenate([np.eye(3), -np.eye(3)])
-    signed_zero_axes = np.array([[1, -0.0, 0.0], [-0.0, -1, -0.0], [0.0, -0.0, -1],
-                                 [-1, -0.0, -0.0]])
+    signed_zero_axes = np.array(
+        [[1, -0.0, 0.0], [-0.0, -1, -0.0], [0.0, -0.0, -1], [-1, -0.0, -0.0]]
+    )
     zeros = signs * 0.0  # all eight sign patterns of r = 0
     # Random ties between two or three components, random signs and order.
     magnitude = rng.uniform(0.01, 10, (400, 1))
@@ -549,8 +581,9 @@ def test_cube_map_matches_mesa_sampler_at_ties_edges_corners_and_zero(seamless):
     # direction is nudged a hair into that face.
     mags = np.abs(directions.astype(np.float64))
     nonzero = mags.max(axis=1) > 0
-    for r, (face, column, row) in zip(directions[nonzero].astype(np.float64),
-                                      mesa[nonzero], strict=True):
+    for r, (face, column, row) in zip(
+        directions[nonzero].astype(np.float64), mesa[nonzero], strict=True
+    ):
         axis = face // 2
         assert abs(r[axis]) == np.abs(r).max(), f"Mesa's face {face} is not tied for {r}"
         nudged = r.copy()

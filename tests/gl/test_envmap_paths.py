@@ -52,20 +52,24 @@ SEAM_VIEW = Camera(eye=(5.0, 0.3, 0.4), target=(0.0, 0.0, 0.0), up=(0.0, 1.0, 0.
 # (tilted, so the seam crosses 2 x 2 pixel quads instead of running between them)
 # the default sphere scene without the lit objects: baked maps see everything there is
 TOLERANCE_NO_OBJECTS = {  # method: (max mean abs error /255, max share of pixels off > 10/255)
-    "sphere": (3.0, 0.09),          # measured 1.98, 0.056
-    "sphere-vertex": (3.0, 0.09),   # measured 1.99, 0.059
-    "sphere-texgen": (3.0, 0.09),   # measured 1.99, 0.059
-    "cube": (5.0, 0.16),            # measured 3.44, 0.116
-    "cube-live": (5.0, 0.16),       # measured 3.44, 0.116
-    "latlong": (5.0, 0.16),         # measured 2.81, 0.091 (3.26, 0.116 before the poles)
+    "sphere": (3.0, 0.09),  # measured 1.98, 0.056
+    "sphere-vertex": (3.0, 0.09),  # measured 1.99, 0.059
+    "sphere-texgen": (3.0, 0.09),  # measured 1.99, 0.059
+    "cube": (5.0, 0.16),  # measured 3.44, 0.116
+    "cube-live": (5.0, 0.16),  # measured 3.44, 0.116
+    "latlong": (5.0, 0.16),  # measured 2.81, 0.091 (3.26, 0.116 before the poles)
 }
 # cube-live in the full sphere scene: a cube map taken from the centre shows the objects,
 # but from the wrong place (parallax, largest for the pedestal just under the sphere)
 TOLERANCE_CUBE_LIVE = (18.0, 0.40)  # measured 13.4, 0.308
 
 
-def sphere_scene(objects: bool = True, method: str | None = None,
-                 camera: Camera | None = None, map_size: int = 256) -> Scene:
+def sphere_scene(
+    objects: bool = True,
+    method: str | None = None,
+    camera: Camera | None = None,
+    map_size: int = 256,
+) -> Scene:
     """The shipped chrome sphere (without its lit objects when ``objects`` is False), its
     reflector drawn by ``method`` with a ``map_size`` map, seen by ``camera``."""
     scene = load_scene("chrome_sphere")
@@ -79,8 +83,9 @@ def cone_scene(height: float = 1.0) -> Scene:
     """The textbook's cone with its base at (0, ``height``, 0)."""
     scene = load_scene("spheremap_cone")
     cone = scene.reflector("cone")
-    return scene.with_reflector("cone", transform=replace(cone.transform,
-                                                          position=(0.0, height, 0.0)))
+    return scene.with_reflector(
+        "cone", transform=replace(cone.transform, position=(0.0, height, 0.0))
+    )
 
 
 @cache
@@ -96,8 +101,13 @@ def traced(scene_name: str, camera: Camera | None, size: int, cone_height: float
     return truth.to_uint8(), erode(truth.reflective_mask, 1)
 
 
-def render(renderer: SceneRenderer, scene: Scene, size: int = SIZE, float_target: bool = False,
-           output: int = OUTPUT_COLOR):
+def render(
+    renderer: SceneRenderer,
+    scene: Scene,
+    size: int = SIZE,
+    float_target: bool = False,
+    output: int = OUTPUT_COLOR,
+):
     """(image, stats) of one frame of ``scene`` in a ``size`` square target (float32 RGB
     for ``float_target``, else uint8); ``output`` OUTPUT_COORDINATES draws the
     reflector's lookup coordinates instead of its colours."""
@@ -119,8 +129,7 @@ def test_each_path_draws_finite_colours_and_in_range_lookups(scene_renderer, met
     assert np.isfinite(colour).all() and colour.min() >= 0.0 and colour.max() <= 1.0
     _, mask = traced("sphere", None, SMALL)
     assert mask.sum() > 300
-    coords, _ = render(scene_renderer, scene, SMALL, float_target=True,
-                       output=OUTPUT_COORDINATES)
+    coords, _ = render(scene_renderer, scene, SMALL, float_target=True, output=OUTPUT_COORDINATES)
     inside = coords[mask]
     assert np.isfinite(inside).all()
     if method in ("cube", "cube-live"):
@@ -147,21 +156,20 @@ def vertex_on_axis_camera() -> Camera:
     normal = data.normals[7].astype(np.float64)
     tangent = np.cross(normal, (0.3, 1.0, 0.2))
     tangent /= np.linalg.norm(tangent)
-    return Camera(eye=tuple(vertex - 3.0 * tangent), target=tuple(vertex), up=tuple(normal),
-                  fovy=20.0)
+    return Camera(
+        eye=tuple(vertex - 3.0 * tangent), target=tuple(vertex), up=tuple(normal), fovy=20.0
+    )
 
 
 @pytest.mark.parametrize("camera_name", ["rim", "vertex-on-axis"])
 @pytest.mark.parametrize("method", ENVMAP_METHODS)
-def test_singular_sphere_map_direction_in_view_stays_finite(scene_renderer, method,
-                                                            camera_name):
+def test_singular_sphere_map_direction_in_view_stays_finite(scene_renderer, method, camera_name):
     camera = rim_camera() if camera_name == "rim" else vertex_on_axis_camera()
     scene = sphere_scene(objects=False, method=method, camera=camera)
     colour, _ = render(scene_renderer, scene, SMALL, float_target=True)
     assert np.isfinite(colour).all(), f"{method}: NaN/Inf pixels near r = (0, 0, -1)"
     assert colour.min() >= 0.0 and colour.max() <= 1.0
-    coords, _ = render(scene_renderer, scene, SMALL, float_target=True,
-                       output=OUTPUT_COORDINATES)
+    coords, _ = render(scene_renderer, scene, SMALL, float_target=True, output=OUTPUT_COORDINATES)
     assert np.isfinite(coords).all(), f"{method}: NaN/Inf lookup coordinates"
     if method == "sphere":
         # the singular region is really in view: lookups reach the map's rim
@@ -180,10 +188,13 @@ def test_texgen_and_vertex_shader_give_the_same_per_vertex_sphere_map(scene_rend
     _, mask = traced("sphere", None, SIZE)
     diff = np.abs(texgen.astype(int) - shader.astype(int)).max(axis=-1)[mask]
     if not (diff.mean() < 0.5 and np.mean(diff > 3) < 0.01):  # measured: identical
-        save_failure("texgen_vs_vertex", texgen=texgen, shader=shader,
-                     diff=difference_image(texgen, shader))
-        pytest.fail(f"texgen vs vertex shader: mean {diff.mean():.2f}, "
-                    f"{np.mean(diff > 3):.2%} of pixels off by > 3")
+        save_failure(
+            "texgen_vs_vertex", texgen=texgen, shader=shader, diff=difference_image(texgen, shader)
+        )
+        pytest.fail(
+            f"texgen vs vertex shader: mean {diff.mean():.2f}, "
+            f"{np.mean(diff > 3):.2%} of pixels off by > 3"
+        )
 
 
 def test_live_cube_of_an_empty_scene_is_the_static_cube(scene_renderer):
@@ -211,8 +222,7 @@ def test_path_agrees_with_ray_tracer_on_the_distant_environment(scene_renderer, 
     truth, mask = traced("sphere-empty", None, SIZE)
     image, _ = render(scene_renderer, sphere_scene(objects=False, method=method))
     assert mask.sum() > 3000
-    assert_close_to_truth(f"truth_{method}", image, truth, mask,
-                          *TOLERANCE_NO_OBJECTS[method])
+    assert_close_to_truth(f"truth_{method}", image, truth, mask, *TOLERANCE_NO_OBJECTS[method])
 
 
 def test_normal_method_is_further_from_the_truth_than_the_sphere_map(scene_renderer):
@@ -252,8 +262,7 @@ def test_distance_search_puts_the_objects_where_the_ray_tracer_sees_them(scene_r
     live = sphere_scene(method="cube-live")
     searched, stats = render(scene_renderer, apply_options(live, {"parallax": "distance"}))
     assert "capture:sphere" in stats.ran
-    mean, _ = assert_close_to_truth("truth_cube-live_distance", searched, truth, mask, 7.0,
-                                    0.21)
+    mean, _ = assert_close_to_truth("truth_cube-live_distance", searched, truth, mask, 7.0, 0.21)
     plain, _ = render(scene_renderer, live)
     plain_mean, plain_share = region_error(plain, truth, mask)
     assert mean < 0.5 * plain_mean and plain_share > 0.25, (mean, plain_mean, plain_share)
@@ -266,8 +275,9 @@ def test_per_vertex_sphere_map_is_less_accurate_than_per_pixel(scene_renderer):
     truth, mask = traced("sphere-empty", CLOSE_UP, SIZE)
     errors = {}
     for method in ("sphere", "sphere-vertex", "sphere-texgen"):
-        image, _ = render(scene_renderer, sphere_scene(objects=False, method=method,
-                                                       camera=CLOSE_UP))
+        image, _ = render(
+            scene_renderer, sphere_scene(objects=False, method=method, camera=CLOSE_UP)
+        )
         errors[method] = region_error(image, truth, mask)
     assert errors["sphere-vertex"][0] > 1.5 * errors["sphere"][0], errors
     assert errors["sphere-texgen"][0] > 1.5 * errors["sphere"][0], errors
@@ -326,10 +336,16 @@ def test_latlong_seam_shows_no_smeared_line(scene_renderer):
         program.set_int("seam_safe", 1)
     smeared_error, _ = region_error(smeared, truth, seam)
     if seam_error > rest_error + 4.0:
-        save_failure("latlong_seam", actual=image, expected=truth, smeared=smeared,
-                     seam=(seam[..., None] * 255).repeat(3, axis=-1).astype(np.uint8))
-        pytest.fail(f"seam pixels off by {seam_error:.1f}/255 on average, the rest "
-                    f"{rest_error:.1f}")
+        save_failure(
+            "latlong_seam",
+            actual=image,
+            expected=truth,
+            smeared=smeared,
+            seam=(seam[..., None] * 255).repeat(3, axis=-1).astype(np.uint8),
+        )
+        pytest.fail(
+            f"seam pixels off by {seam_error:.1f}/255 on average, the rest {rest_error:.1f}"
+        )
     assert smeared_error > seam_error + 8.0, (smeared_error, seam_error)
 
 
@@ -380,8 +396,9 @@ def test_live_capture_reruns_only_when_the_scene_changes(scene_renderer):
     _, stats = draw(scene_renderer, replace(scene, camera=CLOSE_UP), size)  # viewer moved only
     assert "capture:sphere" not in stats.ran and "capture:sphere" in stats.skipped
     sphere = scene.reflector("sphere")
-    moved = scene.with_reflector("sphere", transform=replace(sphere.transform,
-                                                             position=(0.0, 0.3, 0.0)))
+    moved = scene.with_reflector(
+        "sphere", transform=replace(sphere.transform, position=(0.0, 0.3, 0.0))
+    )
     _, stats = draw(scene_renderer, moved, size)
     assert "capture:sphere" in stats.ran
     _, stats = draw(scene_renderer, moved, size)
@@ -426,18 +443,29 @@ def test_headless_one_shot_renders_each_scene(gl_context):
     gl_context.make_current()
 
 
-@pytest.mark.parametrize(("kwargs", "message"), [
-    ({"scene": "teapot"}, "teapot: unknown scene; expected a .toml file or one of "
-                          "chrome_sphere"),
-    ({"scene": "sphere", "method": "spheer"},
-     "--method: reflectors[0].technique: expected one of ortho, reflected, stencil, sphere"),
-    # the lab has no curved reflector, but an unknown name is still an unknown name
-    ({"scene": "lab", "method": "spheer"}, "expected one of ortho, reflected, stencil, sphere"),
-    ({"scene": "sphere", "map_size": 3},
-     "--map-size: reflectors[0].map_size: expected a whole number from 4 to 4096, got 3"),
-    ({"scene": "sphere", "angles": (0.0, 10.0, 20.0)},
-     "--angles: scene 'chrome_sphere' has no robot to pose"),
-])
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        (
+            {"scene": "teapot"},
+            "teapot: unknown scene; expected a .toml file or one of chrome_sphere",
+        ),
+        (
+            {"scene": "sphere", "method": "spheer"},
+            "--method: reflectors[0].technique: expected one of ortho, reflected, stencil, sphere",
+        ),
+        # the lab has no curved reflector, but an unknown name is still an unknown name
+        ({"scene": "lab", "method": "spheer"}, "expected one of ortho, reflected, stencil, sphere"),
+        (
+            {"scene": "sphere", "map_size": 3},
+            "--map-size: reflectors[0].map_size: expected a whole number from 4 to 4096, got 3",
+        ),
+        (
+            {"scene": "sphere", "angles": (0.0, 10.0, 20.0)},
+            "--angles: scene 'chrome_sphere' has no robot to pose",
+        ),
+    ],
+)
 def test_bad_names_fail_with_a_message_naming_them(gl_context, kwargs, message):
     with pytest.raises(ValueError) as info:
         mirrorlab.render(**{"size": (16, 16), **kwargs})
@@ -469,8 +497,7 @@ def test_latlong_is_as_clean_as_the_cube_map_at_its_poles(scene_renderer, eye):
     camera = Camera(eye=eye, target=(0.0, 0.0, 0.0), fovy=35.0, near=0.1, far=50.0)
     truth, mask = traced("sphere-empty", camera, size)
     cube = sphere_scene(objects=False, method="cube", camera=camera, map_size=256)
-    look, _ = render(scene_renderer, cube, size, float_target=True,
-                     output=OUTPUT_COORDINATES)
+    look, _ = render(scene_renderer, cube, size, float_target=True, output=OUTPUT_COORDINATES)
     pole = mask & (np.abs(look[..., 2]) > np.cos(np.radians(15.0)))
     assert pole.sum() > 100
     off = {}
@@ -480,6 +507,10 @@ def test_latlong_is_as_clean_as_the_cube_map_at_its_poles(scene_renderer, eye):
         worst = np.abs(image.astype(int) - truth.astype(int)).max(axis=-1)
         off[method] = int((worst[pole] > 10).sum())
         if method == "latlong" and off["latlong"] > off["cube"] + 0.03 * pole.sum():
-            save_failure("latlong_pole", actual=image, expected=truth,
-                         pole=(pole[..., None] * 255).repeat(3, axis=-1).astype(np.uint8))
+            save_failure(
+                "latlong_pole",
+                actual=image,
+                expected=truth,
+                pole=(pole[..., None] * 255).repeat(3, axis=-1).astype(np.uint8),
+            )
     assert off["latlong"] <= off["cube"] + 0.03 * pole.sum(), (off, int(pole.sum()))

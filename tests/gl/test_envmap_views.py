@@ -61,8 +61,9 @@ def lab_with_ball(method: str, max_bounces: int = 2) -> Scene:
     lab = load_scene("lab20")
     sky = load_scene("chrome_sphere")
     ball = replace(sky.reflector("sphere"), name="ball", technique=method, transform=BALL_AT)
-    return replace(lab, background=sky.background, reflectors=(*lab.reflectors, ball),
-                   max_bounces=max_bounces)
+    return replace(
+        lab, background=sky.background, reflectors=(*lab.reflectors, ball), max_bounces=max_bounces
+    )
 
 
 def ball_alone(method: str) -> Scene:
@@ -80,8 +81,13 @@ def ortho_view() -> View:
 def traced_ortho():
     """(image uint8, ball mask) of the ball and the sky seen by the capture camera."""
     view = ortho_view()
-    truth = trace_scene(ball_alone("cube"), (SIZE, SIZE), supersample=SUPERSAMPLE,
-                        camera_view=view.view, projection=view.projection)
+    truth = trace_scene(
+        ball_alone("cube"),
+        (SIZE, SIZE),
+        supersample=SUPERSAMPLE,
+        camera_view=view.view,
+        projection=view.projection,
+    )
     return truth.to_uint8(), erode(truth.reflective_mask, 1)
 
 
@@ -93,8 +99,10 @@ sphere itself is out of view."""
 def mirror_scene(mirror: str, method: str) -> Scene:
     """mirror_and_sphere (two bounces) seen by :data:`INTO_THE_MIRROR`, the mirror drawn
     by ``mirror`` and the sphere by ``method``."""
-    scene = apply_options(load_scene("mirror_and_sphere"), {"set": [
-        f'reflectors[0].technique="{mirror}"', f'reflectors[1].technique="{method}"']})
+    scene = apply_options(
+        load_scene("mirror_and_sphere"),
+        {"set": [f'reflectors[0].technique="{mirror}"', f'reflectors[1].technique="{method}"']},
+    )
     return replace(scene, camera=INTO_THE_MIRROR)
 
 
@@ -122,10 +130,14 @@ def traced_mirror():
     glass = erode(whole.reflector == 0, 1)  # reflectors[0] is the mirror
     # the unfolded world: rays from the mirrored eye through each pixel (the stencil
     # view's matrices), with only the sphere and the sky
-    mirrored = stencil_view(camera_view(INTO_THE_MIRROR, (SIZE, SIZE)),
-                            scene.reflector("mirror"))
-    through = trace_scene(sphere_in_sky("cube"), (SIZE, SIZE), supersample=SUPERSAMPLE,
-                          camera_view=mirrored.view, projection=mirrored.projection)
+    mirrored = stencil_view(camera_view(INTO_THE_MIRROR, (SIZE, SIZE)), scene.reflector("mirror"))
+    through = trace_scene(
+        sphere_in_sky("cube"),
+        (SIZE, SIZE),
+        supersample=SUPERSAMPLE,
+        camera_view=mirrored.view,
+        projection=mirrored.projection,
+    )
     sphere = glass & erode(through.reflective_mask, 1)
     rest = glass & erode(~through.reflective_mask, 2)
     return whole.to_uint8(), through.to_uint8(), sphere, rest
@@ -134,7 +146,8 @@ def traced_mirror():
 def assert_finite_colours(colour: np.ndarray, what: str) -> None:
     assert np.isfinite(colour).all(), f"{what}: NaN/Inf pixels"
     assert colour.min() >= 0.0 and colour.max() <= 1.0, (
-        f"{what}: colours from {colour.min()} to {colour.max()}")
+        f"{what}: colours from {colour.min()} to {colour.max()}"
+    )
 
 
 def assert_lookups_in_range(coords: np.ndarray, method: str, what: str) -> None:
@@ -144,7 +157,8 @@ def assert_lookups_in_range(coords: np.ndarray, method: str, what: str) -> None:
     if method in ("cube", "cube-live"):
         lengths = np.linalg.norm(coords, axis=-1)
         assert np.allclose(lengths, 1.0, atol=1e-4), (
-            f"{what}: directions of length {lengths.min()} to {lengths.max()}")
+            f"{what}: directions of length {lengths.min()} to {lengths.max()}"
+        )
     else:
         st = coords[:, :2]
         assert st.min() >= 0.0 and st.max() <= 1.0, f"{what}: s, t from {st.min()} to {st.max()}"
@@ -154,34 +168,35 @@ def assert_lookups_in_range(coords: np.ndarray, method: str, what: str) -> None:
 # ------------------------------------------------------------------- orthographic view
 
 TOLERANCE_ORTHO = {  # method: (max mean abs error /255, max share of pixels off > 10/255)
-    "sphere": (2.7, 0.07),          # measured 1.89, 0.048
+    "sphere": (2.7, 0.07),  # measured 1.89, 0.048
     "sphere-vertex": (2.6, 0.065),  # measured 1.84, 0.046
     "sphere-texgen": (2.6, 0.065),  # as sphere-vertex, the same per-vertex lookup (measured
-                                    # 39.7, 0.93: texgen takes the eye for a point)
-    "normal": (3.3, 0.11),          # measured 2.34, 0.080 (exact for parallel rays)
-    "cube": (5.2, 0.17),            # measured 3.67, 0.121
-    "cube-live": (5.2, 0.17),       # measured 3.67, 0.121
-    "latlong": (5.2, 0.19),         # measured 2.72, 0.083
+    # 39.7, 0.93: texgen takes the eye for a point)
+    "normal": (3.3, 0.11),  # measured 2.34, 0.080 (exact for parallel rays)
+    "cube": (5.2, 0.17),  # measured 3.67, 0.121
+    "cube-live": (5.2, 0.17),  # measured 3.67, 0.121
+    "latlong": (5.2, 0.19),  # measured 2.72, 0.083
 }
 
 
 @pytest.mark.parametrize("method", technique_names("curved"))
-def test_curved_reflector_in_an_orthographic_view_stays_finite_and_in_range(scene_renderer,
-                                                                           method):
+def test_curved_reflector_in_an_orthographic_view_stays_finite_and_in_range(scene_renderer, method):
     _, mask = traced_ortho()
     scene = ball_alone(method)
     colour, stats = render(scene_renderer, scene, SIZE, float_target=True, view=ortho_view())
     assert drawn_mode(stats, "ball") in ("map", "texture")
     assert_finite_colours(colour, f"{method}, orthographic")
-    coords, _ = render(scene_renderer, scene, SIZE, float_target=True,
-                       output=OUTPUT_COORDINATES, view=ortho_view())
+    coords, _ = render(
+        scene_renderer, scene, SIZE, float_target=True, output=OUTPUT_COORDINATES, view=ortho_view()
+    )
     assert np.isfinite(coords).all()
     assert_lookups_in_range(coords[mask], method, f"{method}, orthographic")
 
 
 @pytest.mark.parametrize("method", technique_names("curved"))
-def test_curved_reflector_in_an_orthographic_view_agrees_with_the_ray_tracer(scene_renderer,
-                                                                            method):
+def test_curved_reflector_in_an_orthographic_view_agrees_with_the_ray_tracer(
+    scene_renderer, method
+):
     # Every ray of an orthographic view is parallel: a technique that took the eye for a
     # point (as GL_SPHERE_MAP texgen does, from the eye-space vertex position) shows the
     # ball as if seen from up close, on the glass.
@@ -196,10 +211,22 @@ def test_sphere_map_in_an_orthographic_view_is_the_normal_lookup(scene_renderer)
     # style" lookup (which adds half a texel less, -0.5 / map_size) is right for parallel
     # rays. Measured: the two agree to 1.2e-7 (both from the same interpolated normal).
     _, mask = traced_ortho()
-    sphere, _ = render(scene_renderer, ball_alone("sphere"), SIZE, float_target=True,
-                       output=OUTPUT_COORDINATES, view=ortho_view())
-    normal, _ = render(scene_renderer, ball_alone("normal"), SIZE, float_target=True,
-                       output=OUTPUT_COORDINATES, view=ortho_view())
+    sphere, _ = render(
+        scene_renderer,
+        ball_alone("sphere"),
+        SIZE,
+        float_target=True,
+        output=OUTPUT_COORDINATES,
+        view=ortho_view(),
+    )
+    normal, _ = render(
+        scene_renderer,
+        ball_alone("normal"),
+        SIZE,
+        float_target=True,
+        output=OUTPUT_COORDINATES,
+        view=ortho_view(),
+    )
     half_texel = 0.5 / ball_alone("normal").reflector("ball").map_size
     gap = np.abs(sphere[mask][:, :2] - (normal[mask][:, :2] + half_texel))
     assert gap.max() < 1e-5, f"sphere map and normal lookup differ by up to {gap.max():.4f}"
@@ -213,8 +240,11 @@ def test_lab_capture_shows_the_ball_as_its_own_orthographic_view(scene_renderer,
     # capture (one bounce down) sees the mirror, plain, where the direct view has none.
     scene = lab_with_ball(method)
     _, stats = render(scene_renderer, scene, SIZE)
-    (capture,) = [p for p in stats.plan.ran if p.name == "capture"
-                  and p.reflector == "mirror" and p.for_view == "camera"]
+    (capture,) = [
+        p
+        for p in stats.plan.ran
+        if p.name == "capture" and p.reflector == "mirror" and p.for_view == "camera"
+    ]
     (seen,) = capture.views
     ball = next(d for d in seen.draws if d.reflector.name == "ball")
     assert ball.mode in ("map", "texture"), ball.reason
@@ -232,24 +262,22 @@ def test_lab_capture_shows_the_ball_as_its_own_orthographic_view(scene_renderer,
 
 @pytest.mark.parametrize("method", technique_names("curved"))
 def test_curved_reflector_seen_through_a_stencil_mirror_stays_finite_and_in_range(
-        scene_renderer, method):
+    scene_renderer, method
+):
     _, _, sphere, _ = traced_mirror()
     scene = mirror_scene("stencil", method)
     colour, stats = render(scene_renderer, scene, SIZE, float_target=True)
     assert drawn_mode(stats, "mirror") == "stencil"
     nested = next(d for d in stats.plan.top.draws if d.reflector.name == "mirror").nested
-    assert next(d.mode for d in nested.draws if d.reflector.name == "sphere") in (
-        "map", "texture")
+    assert next(d.mode for d in nested.draws if d.reflector.name == "sphere") in ("map", "texture")
     assert_finite_colours(colour, f"{method} through a stencil mirror")
-    coords, _ = render(scene_renderer, scene, SIZE, float_target=True,
-                       output=OUTPUT_COORDINATES)
+    coords, _ = render(scene_renderer, scene, SIZE, float_target=True, output=OUTPUT_COORDINATES)
     assert np.isfinite(coords).all()
     assert_lookups_in_range(coords[sphere], method, f"{method} through a stencil mirror")
 
 
 @pytest.mark.parametrize("method", technique_names("curved"))
-def test_curved_reflector_in_a_reflected_capture_stays_finite_and_in_range(scene_renderer,
-                                                                          method):
+def test_curved_reflector_in_a_reflected_capture_stays_finite_and_in_range(scene_renderer, method):
     # The capture texture is 8-bit, so the capture's own view (mirrored eye, oblique near
     # plane on the glass) is drawn straight into a float target here; then the frame.
     _, _, sphere, _ = traced_mirror()
@@ -258,31 +286,37 @@ def test_curved_reflector_in_a_reflected_capture_stays_finite_and_in_range(scene
     colour, stats = render(scene_renderer, alone, SIZE, float_target=True, view=capture_view())
     assert drawn_mode(stats, "sphere") in ("map", "texture")
     assert_finite_colours(colour, f"{method} in a reflected capture")
-    coords, _ = render(scene_renderer, alone, SIZE, float_target=True,
-                       output=OUTPUT_COORDINATES, view=capture_view())
+    coords, _ = render(
+        scene_renderer,
+        alone,
+        SIZE,
+        float_target=True,
+        output=OUTPUT_COORDINATES,
+        view=capture_view(),
+    )
     assert np.isfinite(coords).all()
     assert_lookups_in_range(coords[mask], method, f"{method} in a reflected capture")
-    frame, stats = render(scene_renderer, mirror_scene("reflected", method), SIZE,
-                          float_target=True)
+    frame, stats = render(
+        scene_renderer, mirror_scene("reflected", method), SIZE, float_target=True
+    )
     assert "capture:mirror" in stats.ran
     assert_finite_colours(frame, f"{method} through a reflected mirror")
 
 
 TOLERANCE_STATIC_IN_MIRROR = {  # method: (max mean abs error /255, max share off > 10/255)
-    "sphere": (2.6, 0.07),          # measured 1.83, 0.049 (stencil and reflected alike)
+    "sphere": (2.6, 0.07),  # measured 1.83, 0.049 (stencil and reflected alike)
     "sphere-vertex": (2.6, 0.075),  # measured 1.87, 0.051
     "sphere-texgen": (2.6, 0.075),  # measured 1.87, 0.051
-    "normal": (8.5, 0.24),          # measured 6.07, 0.171 (ignores where the eye is)
-    "cube": (4.5, 0.14),            # measured 3.17, 0.100
-    "latlong": (4.5, 0.15),         # measured 2.30, 0.061
+    "normal": (8.5, 0.24),  # measured 6.07, 0.171 (ignores where the eye is)
+    "cube": (4.5, 0.14),  # measured 3.17, 0.100
+    "latlong": (4.5, 0.15),  # measured 2.30, 0.061
 }
 TOLERANCE_LIVE_IN_MIRROR = (8.0, 0.25)  # measured 5.79, 0.180 (parallax, as in the sphere scene)
 
 
 @pytest.mark.parametrize("mirror", ["stencil", "reflected"])
 @pytest.mark.parametrize("method", STATIC_MAPS)
-def test_static_map_seen_in_a_mirror_agrees_with_the_ray_tracer(scene_renderer, mirror,
-                                                                method):
+def test_static_map_seen_in_a_mirror_agrees_with_the_ray_tracer(scene_renderer, mirror, method):
     """A static map holds the sky alone: the truth is the sphere in a world of sky, seen
     from the mirrored eye. A lookup that forgot the mirror's flip of handedness would
     show the sky's features on the wrong side.
@@ -296,8 +330,9 @@ def test_static_map_seen_in_a_mirror_agrees_with_the_ray_tracer(scene_renderer, 
     _, through, sphere, _ = traced_mirror()
     assert sphere.sum() > 3000
     image, _ = render(scene_renderer, mirror_scene(mirror, method), SIZE)
-    assert_close_to_truth(f"{mirror}_{method}", image, through, sphere,
-                          *TOLERANCE_STATIC_IN_MIRROR[method])
+    assert_close_to_truth(
+        f"{mirror}_{method}", image, through, sphere, *TOLERANCE_STATIC_IN_MIRROR[method]
+    )
 
 
 @pytest.mark.parametrize("mirror", ["stencil", "reflected"])
@@ -312,8 +347,7 @@ def test_live_cube_seen_in_a_mirror_agrees_with_the_ray_tracer(scene_renderer, m
     whole, _, sphere, _ = traced_mirror()
     image, stats = render(scene_renderer, mirror_scene(mirror, "cube-live"), SIZE)
     assert "capture:sphere" in stats.ran
-    assert_close_to_truth(f"{mirror}_cube-live", image, whole, sphere,
-                          *TOLERANCE_LIVE_IN_MIRROR)
+    assert_close_to_truth(f"{mirror}_cube-live", image, whole, sphere, *TOLERANCE_LIVE_IN_MIRROR)
 
 
 def test_stencil_mirror_keeps_its_sky_whatever_technique_drew_before(scene_renderer):
@@ -327,6 +361,5 @@ def test_stencil_mirror_keeps_its_sky_whatever_technique_drew_before(scene_rende
     for method in (*technique_names("curved"), *technique_names("curved")):
         image, _ = render(scene_renderer, mirror_scene("stencil", method), SIZE)
         errors.setdefault(method, []).append(region_error(image, whole, rest))
-    bad = {m: e for m, e in errors.items() if any(mean > 1.0 or share > 0.015
-                                                  for mean, share in e)}
+    bad = {m: e for m, e in errors.items() if any(mean > 1.0 or share > 0.015 for mean, share in e)}
     assert not bad, f"sky in the mirror off (mean /255, share > 10/255): {bad}"

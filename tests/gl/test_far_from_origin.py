@@ -20,10 +20,18 @@ from tests.scenekit import transformed
 
 SIZE = (160, 160)
 FAR_AWAY = (1e5, 0.0, 1e5)
-CASES = [("lab20", None), ("lab20", "reflected"), ("lab20", "stencil"),
-         ("two_mirrors", None), ("mirror_and_sphere", None), ("chrome_sphere", None),
-         ("chrome_sphere", "latlong"), ("chrome_sphere", "cube-live"),
-         ("spheremap_cone", None), ("sphere_room", None)]
+CASES = [
+    ("lab20", None),
+    ("lab20", "reflected"),
+    ("lab20", "stencil"),
+    ("two_mirrors", None),
+    ("mirror_and_sphere", None),
+    ("chrome_sphere", None),
+    ("chrome_sphere", "latlong"),
+    ("chrome_sphere", "cube-live"),
+    ("spheremap_cone", None),
+    ("sphere_room", None),
+]
 
 
 def differing(a: np.ndarray, b: np.ndarray) -> int:
@@ -43,7 +51,8 @@ def test_a_scene_far_from_the_origin_renders_as_at_the_origin(scene_renderer, na
         save_failure(f"far_{name}_{method}", origin=here, far=there)
     assert count <= 40, f"{name} ({method or 'own'}): {count} pixels differ at 1e5"
     # and the frame holds still when the eye moves by a millionth of a unit there
-    nudged = replace(far, camera=replace(far.camera, eye=tuple(
-        np.add(far.camera.eye, (1e-6, 0.0, 1e-6)))))
+    nudged = replace(
+        far, camera=replace(far.camera, eye=tuple(np.add(far.camera.eye, (1e-6, 0.0, 1e-6))))
+    )
     moved = differing(there, draw(scene_renderer, nudged, SIZE)[0])
     assert moved <= 40, f"{name}: a 1e-6 move of the eye changes {moved} pixels"

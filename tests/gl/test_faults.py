@@ -26,8 +26,10 @@ GIVE_UP_S = 120.0
 """Only a limit for a hung process: every wait ends when its condition holds."""
 LIBDIR = Path("/usr/lib/x86_64-linux-gnu")
 
-needs_bwrap = pytest.mark.skipif(shutil.which("bwrap") is None and not os.environ.get("CI"),
-                                 reason="bubblewrap is not installed (./dev installs it)")
+needs_bwrap = pytest.mark.skipif(
+    shutil.which("bwrap") is None and not os.environ.get("CI"),
+    reason="bubblewrap is not installed (./dev installs it)",
+)
 
 
 def mirrorlab_command(*args: str) -> list[str]:
@@ -35,17 +37,23 @@ def mirrorlab_command(*args: str) -> list[str]:
 
 
 def run(command: list[str], env: dict | None = None) -> subprocess.CompletedProcess:
-    return subprocess.run(command, capture_output=True, text=True, timeout=GIVE_UP_S,
-                          cwd=REPO_DIR, env={**os.environ, **(env or {})})
+    return subprocess.run(
+        command,
+        capture_output=True,
+        text=True,
+        timeout=GIVE_UP_S,
+        cwd=REPO_DIR,
+        env={**os.environ, **(env or {})},
+    )
 
 
-def sandboxed(*args: str, read_only: Path | None = None, hide: tuple[Path, ...] = (),
-              uid: int | None = None) -> list[str]:
+def sandboxed(
+    *args: str, read_only: Path | None = None, hide: tuple[Path, ...] = (), uid: int | None = None
+) -> list[str]:
     """``mirrorlab ARGS`` under bubblewrap: the whole file system as it is, but
     ``read_only`` mounted read-only, the files ``hide`` replaced by empty ones, and with
     ``uid`` as a user who is not root."""
-    command = ["bwrap", "--bind", "/", "/", "--dev", "/dev", "--proc", "/proc",
-               "--die-with-parent"]
+    command = ["bwrap", "--bind", "/", "/", "--dev", "/dev", "--proc", "/proc", "--die-with-parent"]
     if read_only is not None:
         command += ["--ro-bind", str(read_only), str(read_only)]
     for path in hide:
@@ -58,8 +66,19 @@ def sandboxed(*args: str, read_only: Path | None = None, hide: tuple[Path, ...] 
         home = Path(tempfile.mkdtemp(prefix="mirrorlab-home-"))
         home.chmod(0o700)
         HOMES.append(home)
-        command += ["--unshare-user", "--uid", str(uid), "--gid", str(uid),
-                    "--setenv", "HOME", str(home), "--setenv", "XDG_CACHE_HOME", str(home)]
+        command += [
+            "--unshare-user",
+            "--uid",
+            str(uid),
+            "--gid",
+            str(uid),
+            "--setenv",
+            "HOME",
+            str(home),
+            "--setenv",
+            "XDG_CACHE_HOME",
+            str(home),
+        ]
     return command + mirrorlab_command(*args)
 
 
@@ -109,8 +128,18 @@ def test_save_env_on_a_read_only_file_system_keeps_the_existing_output(shared_fo
     existing, before = existing_png(shared_folder)
     locked = shared_folder / "locked"
     locked.mkdir()
-    result = run(sandboxed("render", "--size", "24x24", "--out", str(existing), "--save-env",
-                           str(locked / "env.png"), read_only=locked))
+    result = run(
+        sandboxed(
+            "render",
+            "--size",
+            "24x24",
+            "--out",
+            str(existing),
+            "--save-env",
+            str(locked / "env.png"),
+            read_only=locked,
+        )
+    )
     one_line(result, 2, f"cannot write {locked / 'env.png'}: Read-only file system")
     assert digest(existing) == before
     assert sorted(p.name for p in shared_folder.iterdir()) == ["existing.png", "locked"]
@@ -122,8 +151,7 @@ def test_a_folder_without_permission_gives_the_same_line_and_status(shared_folde
     locked = shared_folder / "locked"
     locked.mkdir()
     locked.chmod(0o555)
-    result = run(sandboxed("render", "--size", "24x24", "--out", str(locked / "x.png"),
-                           uid=1000))
+    result = run(sandboxed("render", "--size", "24x24", "--out", str(locked / "x.png"), uid=1000))
     one_line(result, 2, f"cannot write {locked / 'x.png'}: Permission denied")
     assert list(locked.iterdir()) == []
 
@@ -138,14 +166,13 @@ def test_unreadable_picture_and_mesh_files(shared_folder):
         path.chmod(0o000)
     out = shared_folder / "out.png"
     scene = shared_folder / "scene.toml"
-    scene.write_text(f'[[objects]]\nmesh = "{data_path("models") / "base.obj"}"\n'
-                     f'texture = "{picture}"\n')
-    result = run(sandboxed("render", str(scene), "--size", "24x24", "--out", str(out),
-                           uid=1000))
+    scene.write_text(
+        f'[[objects]]\nmesh = "{data_path("models") / "base.obj"}"\ntexture = "{picture}"\n'
+    )
+    result = run(sandboxed("render", str(scene), "--size", "24x24", "--out", str(out), uid=1000))
     one_line(result, 2, f"picture {picture}", "Permission denied")
     scene.write_text(f'[[objects]]\nmesh = "{mesh}"\n')
-    result = run(sandboxed("render", str(scene), "--size", "24x24", "--out", str(out),
-                           uid=1000))
+    result = run(sandboxed("render", str(scene), "--size", "24x24", "--out", str(out), uid=1000))
     one_line(result, 2, f"mesh file {mesh}", "Permission denied")
     assert not out.exists()
 
@@ -157,42 +184,69 @@ def test_unreadable_picture_and_mesh_files(shared_folder):
 def test_missing_egl_library_names_the_debian_packages(tmp_path):
     out = tmp_path / "x.png"
     # no display either: both ways out are named
-    command = sandboxed("render", "--size", "24x24", "--out", str(out),
-                        hide=(LIBDIR / "libEGL.so.1",))
+    command = sandboxed(
+        "render", "--size", "24x24", "--out", str(out), hide=(LIBDIR / "libEGL.so.1",)
+    )
     result = run([*command[:1], "--unsetenv", "DISPLAY", *command[1:]])
-    one_line(result, 1, "libEGL.so.1 cannot be loaded and there is no display",
-             "install the Debian packages libegl1 libegl-mesa0 libgl1-mesa-dri",
-             "'xvfb-run -a') to render in a hidden window")
+    one_line(
+        result,
+        1,
+        "libEGL.so.1 cannot be loaded and there is no display",
+        "install the Debian packages libegl1 libegl-mesa0 libgl1-mesa-dri",
+        "'xvfb-run -a') to render in a hidden window",
+    )
     # EGL forced: the library itself is named
-    result = run(sandboxed("render", "--size", "24x24", "--out", str(out),
-                           hide=(LIBDIR / "libEGL.so.1",)), env={"MIRRORLAB_GL_BACKEND": "egl"})
-    one_line(result, 1, "cannot load the OpenGL library libEGL.so.1",
-             "install the Debian packages libegl1 libegl-mesa0 libgl1-mesa-dri")
+    result = run(
+        sandboxed("render", "--size", "24x24", "--out", str(out), hide=(LIBDIR / "libEGL.so.1",)),
+        env={"MIRRORLAB_GL_BACKEND": "egl"},
+    )
+    one_line(
+        result,
+        1,
+        "cannot load the OpenGL library libEGL.so.1",
+        "install the Debian packages libegl1 libegl-mesa0 libgl1-mesa-dri",
+    )
     assert not out.exists()
 
 
 @needs_bwrap
 def test_missing_glx_library_names_the_debian_packages(tmp_path):
-    result = run(sandboxed("demo", "--max-frames", "1", hide=(LIBDIR / "libGL.so.1",)),
-                 env={"DISPLAY": ":99"})
-    one_line(result, 1, "cannot load the OpenGL library libGL.so.1",
-             "libgl1 libglx-mesa0 libgl1-mesa-dri")
+    result = run(
+        sandboxed("demo", "--max-frames", "1", hide=(LIBDIR / "libGL.so.1",)),
+        env={"DISPLAY": ":99"},
+    )
+    one_line(
+        result,
+        1,
+        "cannot load the OpenGL library libGL.so.1",
+        "libgl1 libglx-mesa0 libgl1-mesa-dri",
+    )
 
 
 def test_no_display_points_to_render():
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
-    result = subprocess.run(mirrorlab_command("demo", "--max-frames", "1"), capture_output=True,
-                            text=True, timeout=GIVE_UP_S, cwd=REPO_DIR, env=env)
+    result = subprocess.run(
+        mirrorlab_command("demo", "--max-frames", "1"),
+        capture_output=True,
+        text=True,
+        timeout=GIVE_UP_S,
+        cwd=REPO_DIR,
+        env=env,
+    )
     one_line(result, 1, "no display", "xvfb-run", "mirrorlab render")
 
 
 def test_an_opengl_too_old_names_the_technique_and_the_version(tmp_path):
     out = tmp_path / "x.png"
-    result = run(mirrorlab_command("render", "--size", "24x24", "--method", "stencil", "--out",
-                                   str(out)), env={"MESA_GL_VERSION_OVERRIDE": "3.0"})
+    result = run(
+        mirrorlab_command("render", "--size", "24x24", "--method", "stencil", "--out", str(out)),
+        env={"MESA_GL_VERSION_OVERRIDE": "3.0"},
+    )
     one_line(result, 1, "technique 'stencil' needs OpenGL 3.3", "OpenGL 3.0")
-    result = run(mirrorlab_command("render", "no_mirror", "--size", "24x24", "--out",
-                                   str(out)), env={"MESA_GL_VERSION_OVERRIDE": "3.0"})
+    result = run(
+        mirrorlab_command("render", "no_mirror", "--size", "24x24", "--out", str(out)),
+        env={"MESA_GL_VERSION_OVERRIDE": "3.0"},
+    )
     one_line(result, 1, "mirrorlab's renderer (GLSL 3.30) needs OpenGL 3.3")
     assert not out.exists()
 
@@ -210,8 +264,13 @@ def interrupt_when(command: list[str], started: str) -> subprocess.CompletedProc
     # A command started in the background of a non-interactive shell inherits SIGINT
     # ignored, and Python then never turns SIGINT into KeyboardInterrupt: the child gets
     # the default action back, whatever started pytest (a render ran to its end so).
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                               cwd=REPO_DIR, preexec_fn=_default_sigint)
+    process = subprocess.Popen(
+        command,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        cwd=REPO_DIR,
+        preexec_fn=_default_sigint,
+    )
     seen = bytearray()
     ready = threading.Event()
 
@@ -235,8 +294,9 @@ def interrupt_when(command: list[str], started: str) -> subprocess.CompletedProc
         if process.poll() is None:
             process.kill()
             process.wait()
-    return subprocess.CompletedProcess(command, code, stdout.decode(),
-                                       seen.decode(errors="replace"))
+    return subprocess.CompletedProcess(
+        command, code, stdout.decode(), seen.decode(errors="replace")
+    )
 
 
 def last_line(text: str) -> str:
@@ -245,8 +305,10 @@ def last_line(text: str) -> str:
 
 def test_ctrl_c_during_a_render(tmp_path):
     out = tmp_path / "x.png"
-    result = interrupt_when(mirrorlab_command("render", "--raytrace", "--size", "2048x2048",
-                                              "--out", str(out)), "ray tracing")
+    result = interrupt_when(
+        mirrorlab_command("render", "--raytrace", "--size", "2048x2048", "--out", str(out)),
+        "ray tracing",
+    )
     assert result.returncode == 130, result.stderr[-2000:]
     assert last_line(result.stderr) == "mirrorlab render: interrupted"
     assert "Traceback" not in result.stderr and "KeyboardInterrupt" not in result.stderr
@@ -254,10 +316,10 @@ def test_ctrl_c_during_a_render(tmp_path):
 
 
 def test_ctrl_c_during_the_accuracy_sweep(tmp_path):
-    result = interrupt_when(mirrorlab_command("bench", "accuracy", "--quick", "--out-dir",
-                                              str(tmp_path)), "accuracy")
+    result = interrupt_when(
+        mirrorlab_command("bench", "accuracy", "--quick", "--out-dir", str(tmp_path)), "accuracy"
+    )
     assert result.returncode == 130, result.stderr[-2000:]
     assert last_line(result.stderr) == "mirrorlab bench: interrupted"
     assert "Traceback" not in result.stderr and "KeyboardInterrupt" not in result.stderr
     assert list(tmp_path.iterdir()) == []
-

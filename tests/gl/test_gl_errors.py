@@ -31,18 +31,30 @@ def test_out_of_memory_is_its_own_kind():
             cube = GL.glGenTextures(1)
             try:
                 GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, cube)
-                GL.glTexImage2D(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X, 0, GL.GL_RGB8, 16384,
-                                16384, 0, GL.GL_RGB, GL.GL_UNSIGNED_BYTE, None)
+                GL.glTexImage2D(
+                    GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X,
+                    0,
+                    GL.GL_RGB8,
+                    16384,
+                    16384,
+                    0,
+                    GL.GL_RGB,
+                    GL.GL_UNSIGNED_BYTE,
+                    None,
+                )
             finally:
                 GL.glDeleteTextures([cube])
     assert isinstance(GLOutOfMemoryError("p", 0x505, "d"), ValueError)  # bad input: exit 2
 
 
-@pytest.mark.parametrize(("scene", "method", "failing"), [
-    ("lab20", "ortho", "capture:mirror"),
-    ("lab20", "stencil", "camera"),
-    ("mirror_and_sphere", None, "capture:sphere"),
-])
+@pytest.mark.parametrize(
+    ("scene", "method", "failing"),
+    [
+        ("lab20", "ortho", "capture:mirror"),
+        ("lab20", "stencil", "camera"),
+        ("mirror_and_sphere", None, "capture:sphere"),
+    ],
+)
 def test_the_renderer_names_the_pass_that_failed(scene_renderer, scene, method, failing):
     loaded = mirrorlab.api.resolve_scene(scene, method=method)
     draw(scene_renderer, loaded, (32, 32))  # passes made; now make one of them fail

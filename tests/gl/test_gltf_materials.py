@@ -14,8 +14,12 @@ from mirrorlab.api import raytrace
 from tests.imagecheck import assert_images_close
 
 SIZE = (96, 96)
-QUADRANTS = {"top_left": (230, 20, 20), "top_right": (20, 200, 40),
-             "bottom_left": (30, 40, 220), "bottom_right": (235, 215, 30)}
+QUADRANTS = {
+    "top_left": (230, 20, 20),
+    "top_right": (20, 200, 40),
+    "bottom_left": (30, 40, 220),
+    "bottom_right": (235, 215, 30),
+}
 """The test picture: a colour per quadrant, so a flip in either direction shows."""
 FACTOR = (0.2, 0.6, 0.1)
 
@@ -30,8 +34,9 @@ def quadrant_picture(side: int = 8) -> np.ndarray:
     return picture
 
 
-def write_quad_glb(path: Path, texture: np.ndarray | None = None,
-                   factor: tuple[float, float, float] | None = None) -> Path:
+def write_quad_glb(
+    path: Path, texture: np.ndarray | None = None, factor: tuple[float, float, float] | None = None
+) -> Path:
     """A 2 x 2 square in the z = 0 plane facing +z, texture coordinates (0, 0) at its lower
     left, with a PBR material of ``texture`` and/or ``factor``; written by trimesh."""
     import trimesh
@@ -42,9 +47,14 @@ def write_quad_glb(path: Path, texture: np.ndarray | None = None,
     uv = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=float)
     material = trimesh.visual.material.PBRMaterial(
         baseColorFactor=[*(factor or (1.0, 1.0, 1.0)), 1.0],
-        baseColorTexture=None if texture is None else Image.fromarray(texture))
-    mesh = trimesh.Trimesh(vertices, faces, process=False,
-                           visual=trimesh.visual.TextureVisuals(uv=uv, material=material))
+        baseColorTexture=None if texture is None else Image.fromarray(texture),
+    )
+    mesh = trimesh.Trimesh(
+        vertices,
+        faces,
+        process=False,
+        visual=trimesh.visual.TextureVisuals(uv=uv, material=material),
+    )
     mesh.export(path)
     return path
 
@@ -86,12 +96,16 @@ def quadrant_means(image: np.ndarray) -> dict[str, np.ndarray]:
     covers the centre of the frame)."""
     height, width = image.shape[:2]
     middle_x, middle_y = width // 2, height // 2
-    spots = {"top_left": (-1, -1), "top_right": (1, -1), "bottom_left": (-1, 1),
-             "bottom_right": (1, 1)}
+    spots = {
+        "top_left": (-1, -1),
+        "top_right": (1, -1),
+        "bottom_left": (-1, 1),
+        "bottom_right": (1, 1),
+    }
     out = {}
     for name, (dx, dy) in spots.items():
         x, y = middle_x + dx * 12, middle_y + dy * 12
-        out[name] = image[y - 3:y + 3, x - 3:x + 3].reshape(-1, 3).mean(axis=0)
+        out[name] = image[y - 3 : y + 3, x - 3 : x + 3].reshape(-1, 3).mean(axis=0)
     return out
 
 
@@ -118,7 +132,7 @@ def test_a_glb_base_colour_is_used_and_the_scene_colour_wins(tmp_path, renderer)
         assert np.abs(centre - expected).max() <= 3, centre
     assert_images_close("gltf_colour_raster_vs_trace", drawn, traced, 12, 0.97, 3.0)
 
-    own = mirrorlab.load_scene(scene_file(tmp_path, glb, 'color = [1.0, 0.0, 1.0]'))
+    own = mirrorlab.load_scene(scene_file(tmp_path, glb, "color = [1.0, 0.0, 1.0]"))
     centre = renderer.render(own)[40:56, 40:56].reshape(-1, 3).mean(axis=0)
     assert np.abs(centre - [255, 0, 255]).max() <= 3, centre
 

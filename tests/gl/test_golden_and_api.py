@@ -35,9 +35,12 @@ def test_frames_show_as_pictures_in_a_notebook():
     from IPython.core.formatters import DisplayFormatter
 
     with mirrorlab.Renderer(size=(48, 40)) as renderer:
-        images = [mirrorlab.render(size=(48, 40)), renderer.render("lab20"),
-                  renderer.read_texture("mirror"),
-                  mirrorlab.render(size=(24, 20), method="raytrace")]
+        images = [
+            mirrorlab.render(size=(48, 40)),
+            renderer.render("lab20"),
+            renderer.read_texture("mirror"),
+            mirrorlab.render(size=(24, 20), method="raytrace"),
+        ]
     for image in images:
         assert isinstance(image, mirrorlab.Frame)
         data, _ = DisplayFormatter().format(image)
@@ -59,8 +62,14 @@ def test_default_frame_matches_the_golden_image():
     not for a moved part or a flipped reflection."""
     expected = np.asarray(Image.open(GOLDEN_LAB).convert("RGB"))
     actual = mirrorlab.render(size=(128, 128))
-    assert_images_close("golden_lab_default_128", actual, expected, channel_tolerance=8,
-                        min_fraction_within=0.995, max_mean_abs=0.5)
+    assert_images_close(
+        "golden_lab_default_128",
+        actual,
+        expected,
+        channel_tolerance=8,
+        min_fraction_within=0.995,
+        max_mean_abs=0.5,
+    )
 
 
 # --------------------------------------------------------------------------- Renderer
@@ -122,11 +131,13 @@ def test_the_renderer_draws_the_same_frames_by_either_draw_path():
     frames = {}
     for path in ("auto", "per-draw"):
         with mirrorlab.Renderer(size=(96, 80), draw_path=path) as renderer:
-            frames[path] = [renderer.render(name, frame=frame, **options)
-                            for name, frame, options in SEQUENCE]
+            frames[path] = [
+                renderer.render(name, frame=frame, **options) for name, frame, options in SEQUENCE
+            ]
             multi_draw = has_multi_draw()  # not on 4.1 (the simulated macOS run)
             assert renderer.scene_renderer.drawer.draw_path == (
-                "packed" if path == "auto" and multi_draw else "per-draw")
+                "packed" if path == "auto" and multi_draw else "per-draw"
+            )
     for packed, each in zip(frames["auto"], frames["per-draw"], strict=True):
         assert_image_close(each, packed, tolerance=0, name="draw_path_per_draw")
     with pytest.raises(ValueError, match="draw_path: expected one of auto, packed, per-draw"):
@@ -134,6 +145,7 @@ def test_the_renderer_draws_the_same_frames_by_either_draw_path():
 
 
 # --------------------------------------------------------------------------- testing plugin
+
 
 def test_two_renderers_in_turn_each_draw_in_their_own_context():
     """Each frame makes its renderer's context current (when another one is), so two
@@ -144,17 +156,23 @@ def test_two_renderers_in_turn_each_draw_in_their_own_context():
     for size in sizes:
         with mirrorlab.Renderer(size=size) as alone:
             expected[size] = [alone.render(name, **options) for name, options in scenes]
-    with mirrorlab.Renderer(size=sizes[0]) as first, \
-            mirrorlab.Renderer(size=sizes[1]) as second:
+    with mirrorlab.Renderer(size=sizes[0]) as first, mirrorlab.Renderer(size=sizes[1]) as second:
         for _ in range(2):
             for number, (name, options) in enumerate(scenes):
                 for renderer in (first, second):
-                    assert_image_close(renderer.render(name, **options),
-                                       expected[renderer.size][number], tolerance=0,
-                                       name=f"two_renderers_{name}")
+                    assert_image_close(
+                        renderer.render(name, **options),
+                        expected[renderer.size][number],
+                        tolerance=0,
+                        name=f"two_renderers_{name}",
+                    )
         first.close()  # its objects and context go; the other's stay
-        assert_image_close(second.render("lab20"), expected[sizes[1]][0], tolerance=0,
-                           name="two_renderers_after_close")
+        assert_image_close(
+            second.render("lab20"),
+            expected[sizes[1]][0],
+            tolerance=0,
+            name="two_renderers_after_close",
+        )
 
 
 def test_the_renderer_reads_its_own_contexts_gl_state_once(monkeypatch):
@@ -180,8 +198,7 @@ def test_the_renderer_reads_its_own_contexts_gl_state_once(monkeypatch):
             image = renderer.render(posed)
             home = home or gl_state()
             assert gl_state() == home, f"frame {number} left another state"
-            assert_image_close(image, expected[number], tolerance=0,
-                               name=f"own_context_{number}")
+            assert_image_close(image, expected[number], tolerance=0, name=f"own_context_{number}")
         assert renderer.last_stats.ran == ["camera"]  # still frames at the end
     assert len(reads) == 1
 
@@ -225,15 +242,33 @@ def test_assert_image_close_writes_actual_expected_and_diff_on_failure(tmp_path,
 
 
 def run_cli(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "mirrorlab.cli", *args], cwd=cwd,
-                          capture_output=True, text=True, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-m", "mirrorlab.cli", *args],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
 
 
 def test_cli_render_writes_frame_and_environment(tmp_path):
     (tmp_path / "o").mkdir()
-    result = run_cli("render", "--out", "o/frame.png", "--size", "80x60", "--save-env",
-                     "o/env.png", "--angles", "0,10,-20", "--camera", "10,4,8",
-                     "--target", "-3.5,1,-2", cwd=tmp_path)
+    result = run_cli(
+        "render",
+        "--out",
+        "o/frame.png",
+        "--size",
+        "80x60",
+        "--save-env",
+        "o/env.png",
+        "--angles",
+        "0,10,-20",
+        "--camera",
+        "10,4,8",
+        "--target",
+        "-3.5,1,-2",
+        cwd=tmp_path,
+    )
     assert result.returncode == 0, result.stderr
     frame = np.asarray(Image.open(tmp_path / "o/frame.png"))
     env = np.asarray(Image.open(tmp_path / "o/env.png"))
@@ -254,7 +289,6 @@ def test_cli_bad_input_leaves_existing_output_untouched(tmp_path):
 def test_cli_unwritable_output_fails_cleanly(tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("x")
-    result = run_cli("render", "--out", str(blocker / "frame.png"), "--size", "16x16",
-                     cwd=tmp_path)
+    result = run_cli("render", "--out", str(blocker / "frame.png"), "--size", "16x16", cwd=tmp_path)
     assert result.returncode != 0
     assert "Traceback" not in result.stderr and str(blocker) in result.stderr

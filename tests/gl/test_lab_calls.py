@@ -35,20 +35,28 @@ gl_context = pytest.fixture(scope="module", name="gl_context")(module_context)
 FORMS = {
     # family: the forms of the OpenGL 4.6 compatibility specification (sizes x types [v])
     "glVertex": [f"glVertex{n}{t}{v}" for n in "234" for t in "sifd" for v in ("", "v")],
-    "glTexCoord": [f"glTexCoord{n}{t}{v}" for n in "1234" for t in "sifd"
-                   for v in ("", "v")],
-    "glMultiTexCoord": [f"glMultiTexCoord{n}{t}{v}" for n in "1234" for t in "sifd"
-                        for v in ("", "v")],
-    "glColor": [f"glColor{n}{t}{v}" for n in "34" for t in ("b", "s", "i", "f", "d", "ub",
-                                                             "us", "ui") for v in ("", "v")],
+    "glTexCoord": [f"glTexCoord{n}{t}{v}" for n in "1234" for t in "sifd" for v in ("", "v")],
+    "glMultiTexCoord": [
+        f"glMultiTexCoord{n}{t}{v}" for n in "1234" for t in "sifd" for v in ("", "v")
+    ],
+    "glColor": [
+        f"glColor{n}{t}{v}"
+        for n in "34"
+        for t in ("b", "s", "i", "f", "d", "ub", "us", "ui")
+        for v in ("", "v")
+    ],
     "glNormal": [f"glNormal3{t}{v}" for t in "bsifd" for v in ("", "v")],
     "glTranslate": ["glTranslatef", "glTranslated"],
     "glRotate": ["glRotatef", "glRotated"],
     "glScale": ["glScalef", "glScaled"],
     "glLoadMatrix": ["glLoadMatrixf", "glLoadMatrixd"],
     "glMultMatrix": ["glMultMatrixf", "glMultMatrixd"],
-    "glTexParameter": ["glTexParameteri", "glTexParameterf", "glTexParameteriv",
-                       "glTexParameterfv"],
+    "glTexParameter": [
+        "glTexParameteri",
+        "glTexParameterf",
+        "glTexParameteriv",
+        "glTexParameterfv",
+    ],
     "glTexEnv": ["glTexEnvi", "glTexEnvf", "glTexEnviv", "glTexEnvfv"],
     "glTexGen": [f"glTexGen{t}{v}" for t in "ifd" for v in ("", "v")],
     "glGetTexGen": ["glGetTexGeniv", "glGetTexGenfv", "glGetTexGendv"],
@@ -57,8 +65,9 @@ FORMS = {
     "glPixelStore": ["glPixelStorei", "glPixelStoref"],
     "glClearDepth": ["glClearDepth", "glClearDepthf"],
     "glDepthRange": ["glDepthRange", "glDepthRangef"],
-    "glUniform": [f"glUniform{n}{t}{v}" for n in "1234" for t in ("i", "f", "ui")
-                  for v in ("", "v")],
+    "glUniform": [
+        f"glUniform{n}{t}{v}" for n in "1234" for t in ("i", "f", "ui") for v in ("", "v")
+    ],
     "glGet": ["glGetBooleanv", "glGetIntegerv", "glGetFloatv", "glGetDoublev"],
 }
 
@@ -90,17 +99,36 @@ def prepared(session=None) -> Executor:
     ex.begin_frame()
     texture = send(ex, "glGenTextures", [1])["value"]
     assert send(ex, "glBindTexture", [int(GL.GL_TEXTURE_2D), texture])["ok"]
-    assert send(ex, "glTexImage2D", [int(GL.GL_TEXTURE_2D), 0, int(GL.GL_RGB), 4, 4, 0,
-                                     int(GL.GL_RGB), int(GL.GL_UNSIGNED_BYTE), None])["ok"]
+    assert send(
+        ex,
+        "glTexImage2D",
+        [
+            int(GL.GL_TEXTURE_2D),
+            0,
+            int(GL.GL_RGB),
+            4,
+            4,
+            0,
+            int(GL.GL_RGB),
+            int(GL.GL_UNSIGNED_BYTE),
+            None,
+        ],
+    )["ok"]
     if ex.session.programs():
         assert send(ex, "glUseProgram", [min(ex.session.programs())])["ok"]
     return ex
 
 
-ENUMS = sorted({value for item in vars(C).values() if isinstance(item, frozenset | dict)
-                for value in item if type(value) is int}
-               | {int(GL.GL_TEXTURE_ENV), int(GL.GL_TEXTURE_ENV_MODE),
-                  int(GL.GL_TEXTURE_GEN_MODE)})
+ENUMS = sorted(
+    {
+        value
+        for item in vars(C).values()
+        if isinstance(item, frozenset | dict)
+        for value in item
+        if type(value) is int
+    }
+    | {int(GL.GL_TEXTURE_ENV), int(GL.GL_TEXTURE_ENV_MODE), int(GL.GL_TEXTURE_GEN_MODE)}
+)
 """Every enum of the allow-list's checks."""
 
 
@@ -185,34 +213,43 @@ def test_integer_forms_draw_where_the_float_forms_do(target):
     glColor3us's colours are GL's normalised ones."""
     ex = prepared()
     send(ex, "glBegin", [int(GL.GL_TRIANGLES)])
-    for name, args in (("glColor3ub", [255, 0, 51]), ("glVertex3i", [1, -2, 3]),
-                       ("glColor3usv", [[0, 65535, 0]]), ("glVertex2s", [-4, 5]),
-                       ("glColor4b", [127, 0, -128, 127]), ("glVertex4iv", [[1, 2, 3, 1]])):
+    for name, args in (
+        ("glColor3ub", [255, 0, 51]),
+        ("glVertex3i", [1, -2, 3]),
+        ("glColor3usv", [[0, 65535, 0]]),
+        ("glVertex2s", [-4, 5]),
+        ("glColor4b", [127, 0, -128, 127]),
+        ("glVertex4iv", [[1, 2, 3, 1]]),
+    ):
         assert send(ex, name, args)["ok"], name
     primitive = ex.tracker.primitive
     assert primitive is not None
-    assert [v[0] for v in primitive.vertices] == [[1, -2, 3, 1.0], [-4, 5, 0.0, 1.0],
-                                                  [1, 2, 3, 1]]
-    assert [v[2] for v in primitive.vertices] == [[1.0, 0.0, 0.2, 1.0], [0.0, 1.0, 0.0, 1.0],
-                                                  [1.0, 0.0, -1.0, 1.0]]
+    assert [v[0] for v in primitive.vertices] == [[1, -2, 3, 1.0], [-4, 5, 0.0, 1.0], [1, 2, 3, 1]]
+    assert [v[2] for v in primitive.vertices] == [
+        [1.0, 0.0, 0.2, 1.0],
+        [0.0, 1.0, 0.0, 1.0],
+        [1.0, 0.0, -1.0, 1.0],
+    ]
     assert send(ex, "glEnd", [])["ok"]
     reply = send(ex, "glVertex3s", [0, 1 << 15, 0])
     assert reply["type"] == "GLError" and "outside -32768..32767" in reply["message"]
 
 
-@pytest.mark.parametrize(("op", "name", "args", "words"), [
-    ("gl", "glVertex3f", [10 ** 400, 0, 0], "an integer of 401 digits"),
-    ("gl", "glOrtho", [-(10 ** 400), 1, 0, 1, 0, 1], "is out of range"),
-    ("gl", "glLoadMatrixf", [[10 ** 400] * 16], "is out of range"),
-    ("gl", "glClearColor", [float("nan"), 0, 0, 1], "finite numbers"),
-    ("gl", "glMatrixMode", [10 ** 400], "an integer of 401 digits"),
-    ("gl", "glClear", [10 ** 400], "an integer of 401 digits"),
-    ("gl", "glViewport", [0, 0, 10 ** 400, 1], "an integer of 401 digits"),
-    ("kit", "set_viewer", [10 ** 400], "is out of range"),
-    ("kit", "set_viewer", [float("inf")], "finite numbers"),
-])
-def test_numbers_out_of_range_are_the_students_error_in_one_line(target, op, name, args,
-                                                                  words):
+@pytest.mark.parametrize(
+    ("op", "name", "args", "words"),
+    [
+        ("gl", "glVertex3f", [10**400, 0, 0], "an integer of 401 digits"),
+        ("gl", "glOrtho", [-(10**400), 1, 0, 1, 0, 1], "is out of range"),
+        ("gl", "glLoadMatrixf", [[10**400] * 16], "is out of range"),
+        ("gl", "glClearColor", [float("nan"), 0, 0, 1], "finite numbers"),
+        ("gl", "glMatrixMode", [10**400], "an integer of 401 digits"),
+        ("gl", "glClear", [10**400], "an integer of 401 digits"),
+        ("gl", "glViewport", [0, 0, 10**400, 1], "an integer of 401 digits"),
+        ("kit", "set_viewer", [10**400], "is out of range"),
+        ("kit", "set_viewer", [float("inf")], "finite numbers"),
+    ],
+)
+def test_numbers_out_of_range_are_the_students_error_in_one_line(target, op, name, args, words):
     ex = Executor(open_session("lab20", SIZE, default_variant("lab20")))
     reply = send(ex, name, args, op)
     assert not reply["ok"] and words in reply["message"], reply
@@ -220,26 +257,55 @@ def test_numbers_out_of_range_are_the_students_error_in_one_line(target, op, nam
 
 
 # ---------------------------------------------------------------------------- the fuzz
-NUMBERS = st.one_of(st.integers(), st.integers(-(10 ** 500), 10 ** 500), st.floats(),
-                    st.sampled_from([0, 1, -1, 0x0DE1, 0x1907, 0x8513, 0x84C0, 2 ** 32,
-                                     2 ** 31, -(2 ** 31) - 1]))
-ROBOT = st.builds(lambda nodes: {"textures": nodes}, st.dictionaries(
-    st.sampled_from(["base", "hand", "upper_arm", "x" * 300]),
-    st.one_of(NUMBERS, st.none(), st.fixed_dictionaries({"other": NUMBERS})), max_size=3))
+NUMBERS = st.one_of(
+    st.integers(),
+    st.integers(-(10**500), 10**500),
+    st.floats(),
+    st.sampled_from([0, 1, -1, 0x0DE1, 0x1907, 0x8513, 0x84C0, 2**32, 2**31, -(2**31) - 1]),
+)
+ROBOT = st.builds(
+    lambda nodes: {"textures": nodes},
+    st.dictionaries(
+        st.sampled_from(["base", "hand", "upper_arm", "x" * 300]),
+        st.one_of(NUMBERS, st.none(), st.fixed_dictionaries({"other": NUMBERS})),
+        max_size=3,
+    ),
+)
 """lab.draw_scene's robot, its nodes' textures fuzzed."""
-GLSL = [re.search(r'_GLSL = """(.*?)"""', solution(lab), re.S).group(1)
-        for lab in ("spheremap", "cubemap")]
+GLSL = [
+    re.search(r'_GLSL = """(.*?)"""', solution(lab), re.S).group(1)
+    for lab in ("spheremap", "cubemap")
+]
 """The labs' honest GLSL (each compiled once a process), for the kit's shader calls."""
-JSON = st.recursive(st.one_of(st.none(), st.booleans(), NUMBERS, st.text(max_size=20),
-                              ROBOT, st.sampled_from(["metal", "launch", "texSampler",
-                                                      *GLSL, GLSL[0] + "oops"])),
-                    lambda inner: st.one_of(st.lists(inner, max_size=18),
-                                            st.dictionaries(st.text(max_size=4), inner,
-                                                            max_size=3)),
-                    max_leaves=40)
-NAMES = [*sorted({**C.GL_SPECS, **C.GLU_SPECS}), "glDrawPixels", "draw_scene", "set_viewer",
-         "load_picture_texture", "draw_backdrop", "draw_cone_shader",
-         "draw_cone_fixed_function", "draw_sphere", "", "glEnd", "x" * 5000, "gl Clear"]
+JSON = st.recursive(
+    st.one_of(
+        st.none(),
+        st.booleans(),
+        NUMBERS,
+        st.text(max_size=20),
+        ROBOT,
+        st.sampled_from(["metal", "launch", "texSampler", *GLSL, GLSL[0] + "oops"]),
+    ),
+    lambda inner: st.one_of(
+        st.lists(inner, max_size=18), st.dictionaries(st.text(max_size=4), inner, max_size=3)
+    ),
+    max_leaves=40,
+)
+NAMES = [
+    *sorted({**C.GL_SPECS, **C.GLU_SPECS}),
+    "glDrawPixels",
+    "draw_scene",
+    "set_viewer",
+    "load_picture_texture",
+    "draw_backdrop",
+    "draw_cone_shader",
+    "draw_cone_fixed_function",
+    "draw_sphere",
+    "",
+    "glEnd",
+    "x" * 5000,
+    "gl Clear",
+]
 
 
 @pytest.fixture(scope="module")
@@ -248,24 +314,45 @@ def fuzz_target(gl_context):
     example)."""
     framebuffer = Framebuffer(gl_context.resources, *SIZE)
     framebuffer.bind()
-    sessions = {lab: open_session(lab, SIZE, default_variant(lab))
-                for lab in ("lab20", "spheremap", "cubemap")}
+    sessions = {
+        lab: open_session(lab, SIZE, default_variant(lab))
+        for lab in ("lab20", "spheremap", "cubemap")
+    }
     GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
     yield framebuffer, sessions
     framebuffer.release()
 
 
-@settings(max_examples=100, deadline=None,
-          suppress_health_check=[HealthCheck.function_scoped_fixture])
-@given(lab=st.sampled_from(["lab20", "spheremap", "cubemap"]),
-       calls=st.lists(st.one_of(
-           st.tuples(st.sampled_from(["gl", "glu", "kit", "other"]), st.sampled_from(NAMES),
-                     st.lists(JSON, max_size=10)),
-           st.tuples(st.just("kit"), st.sampled_from(["draw_backdrop", "draw_cone_shader",
-                                                        "draw_cone_fixed_function",
-                                                        "draw_sphere", "set_viewer"]),
-                     st.lists(st.one_of(st.sampled_from(GLSL), st.integers(-1, 4), NUMBERS),
-                              max_size=3))), min_size=1, max_size=6))
+@settings(
+    max_examples=100, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    lab=st.sampled_from(["lab20", "spheremap", "cubemap"]),
+    calls=st.lists(
+        st.one_of(
+            st.tuples(
+                st.sampled_from(["gl", "glu", "kit", "other"]),
+                st.sampled_from(NAMES),
+                st.lists(JSON, max_size=10),
+            ),
+            st.tuples(
+                st.just("kit"),
+                st.sampled_from(
+                    [
+                        "draw_backdrop",
+                        "draw_cone_shader",
+                        "draw_cone_fixed_function",
+                        "draw_sphere",
+                        "set_viewer",
+                    ]
+                ),
+                st.lists(st.one_of(st.sampled_from(GLSL), st.integers(-1, 4), NUMBERS), max_size=3),
+            ),
+        ),
+        min_size=1,
+        max_size=6,
+    ),
+)
 def test_fuzzed_calls_get_a_reply_or_one_line(fuzz_target, lab, calls):
     from mirrorlab.labs.trusted.run import reset_state
 
@@ -280,9 +367,11 @@ def test_fuzzed_calls_get_a_reply_or_one_line(fuzz_target, lab, calls):
             except Stop as exc:
                 assert "\n" not in str(exc)
                 break
-            assert reply["ok"] or (isinstance(reply["message"], str)
-                                   and "\n" not in reply["message"]
-                                   and len(reply["message"]) < 400), reply
+            assert reply["ok"] or (
+                isinstance(reply["message"], str)
+                and "\n" not in reply["message"]
+                and len(reply["message"]) < 400
+            ), reply
             json.dumps(reply)  # what goes back is plain data
         ex.end_open_primitive()
     finally:
@@ -293,19 +382,26 @@ def test_fuzzed_calls_get_a_reply_or_one_line(fuzz_target, lab, calls):
 
 @settings(max_examples=200, deadline=None)
 @example(data=b'{"op":"","arrays":[[[],null,null]]}')  # a list as a dtype: found by this fuzz
-@given(data=st.one_of(
-    st.binary(max_size=64),
-    st.builds(lambda header: json.dumps(header).encode(), JSON),
-    st.builds(lambda header, tail: json.dumps(header).encode() + tail,
-              st.fixed_dictionaries({"op": st.text(max_size=5)},
-                                    optional={"fn": st.text(max_size=8), "args": JSON,
-                                              "arrays": JSON}),
-              st.binary(max_size=32))))
+@given(
+    data=st.one_of(
+        st.binary(max_size=64),
+        st.builds(lambda header: json.dumps(header).encode(), JSON),
+        st.builds(
+            lambda header, tail: json.dumps(header).encode() + tail,
+            st.fixed_dictionaries(
+                {"op": st.text(max_size=5)},
+                optional={"fn": st.text(max_size=8), "args": JSON, "arrays": JSON},
+            ),
+            st.binary(max_size=32),
+        ),
+    )
+)
 def test_fuzzed_pipe_messages_are_read_as_data_or_refused_in_one_line(data):
     read_fd, write_fd = os.pipe()
     back_read, back_write = os.pipe()
-    channel = TrustedChannel(read_fd, back_write, PipeBudget(message_bytes=1 << 16,
-                                                             total_bytes=1 << 20))
+    channel = TrustedChannel(
+        read_fd, back_write, PipeBudget(message_bytes=1 << 16, total_bytes=1 << 20)
+    )
     try:
         os.write(write_fd, struct.pack(">I", len(data)) + data + bytes(64))
         os.close(write_fd)  # what was not sent never comes: the read ends, closed

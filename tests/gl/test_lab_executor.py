@@ -31,8 +31,9 @@ def executor(lab: str = "lab20", limits: RunLimits | None = None) -> Executor:
 
 
 def call(ex: Executor, name: str, *args, arrays=(), op: str = "gl", line: int = 1):
-    reply, payloads = ex.call({"op": op, "fn": name, "args": list(args), "line": line},
-                              list(arrays))
+    reply, payloads = ex.call(
+        {"op": op, "fn": name, "args": list(args), "line": line}, list(arrays)
+    )
     return reply, payloads
 
 
@@ -61,8 +62,10 @@ def test_calls_are_refused_before_they_run(context):
     before = np.asarray(GL.glGetIntegerv(GL.GL_VIEWPORT)).tolist()
     for (name, *args), kind, words in cases:
         reply, _ = call(ex, name, *args)
-        assert not reply["ok"] and reply["type"] == kind and words in reply["message"], \
-            (name, reply)
+        assert not reply["ok"] and reply["type"] == kind and words in reply["message"], (
+            name,
+            reply,
+        )
     assert np.asarray(GL.glGetIntegerv(GL.GL_VIEWPORT)).tolist() == before
     assert int(GL.glGetError()) == GL.GL_NO_ERROR
     assert len(ex.call_errors) == len(cases)
@@ -72,8 +75,17 @@ def test_pixel_data_must_hold_what_gl_reads_and_uploads_taint(context):
     ex = executor()
     (texture,) = [call(ex, "glGenTextures", 1)[0]["value"]]
     assert call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), texture)[0]["ok"]
-    image = (int(GL.GL_TEXTURE_2D), 0, int(GL.GL_RGB), 5, 4, 0, int(GL.GL_RGB),
-             int(GL.GL_UNSIGNED_BYTE), {"$a": 0})
+    image = (
+        int(GL.GL_TEXTURE_2D),
+        0,
+        int(GL.GL_RGB),
+        5,
+        4,
+        0,
+        int(GL.GL_RGB),
+        int(GL.GL_UNSIGNED_BYTE),
+        {"$a": 0},
+    )
     # 5 pixels of 3 bytes: rows of 15 bytes padded to 16 at GL_UNPACK_ALIGNMENT 4
     short = np.full(5 * 4 * 3, 200, dtype=np.uint8)
     reply, _ = call(ex, "glTexImage2D", *image, arrays=[short])
@@ -100,8 +112,20 @@ def test_a_frame_drawn_with_uploaded_pixels_is_tainted_and_copies_carry_it(conte
     call(ex, "glActiveTexture", int(GL.GL_TEXTURE3))
     call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), picture)
     call(ex, "glPixelStorei", int(GL.GL_UNPACK_ALIGNMENT), 1)
-    call(ex, "glTexImage2D", int(GL.GL_TEXTURE_2D), 0, int(GL.GL_RGB), 2, 2, 0, int(GL.GL_RGB),
-         int(GL.GL_UNSIGNED_BYTE), {"$a": 0}, arrays=[np.full(12, 99, dtype=np.uint8)])
+    call(
+        ex,
+        "glTexImage2D",
+        int(GL.GL_TEXTURE_2D),
+        0,
+        int(GL.GL_RGB),
+        2,
+        2,
+        0,
+        int(GL.GL_RGB),
+        int(GL.GL_UNSIGNED_BYTE),
+        {"$a": 0},
+        arrays=[np.full(12, 99, dtype=np.uint8)],
+    )
     call(ex, "glActiveTexture", int(GL.GL_TEXTURE0))
     ex.begin_frame()
     _quad(ex)
@@ -131,16 +155,23 @@ def test_a_frame_drawn_with_uploaded_pixels_is_tainted_and_copies_carry_it(conte
 def test_the_labs_own_objects_are_out_of_reach(context):
     ex = executor("spheremap")
     backdrop = ex.session.backdrop_texture
-    for name, args in (("glBindTexture", (int(GL.GL_TEXTURE_2D), backdrop)),
-                       ("glDeleteTextures", ([backdrop],)),
-                       ("glUseProgram", (ex.session.scene_program,))):
+    for name, args in (
+        ("glBindTexture", (int(GL.GL_TEXTURE_2D), backdrop)),
+        ("glDeleteTextures", ([backdrop],)),
+        ("glUseProgram", (ex.session.scene_program,)),
+    ):
         reply, _ = call(ex, name, *args)
         assert not reply["ok"] and reply["type"] == "GLError", (name, reply)
     assert GL.glIsTexture(backdrop)
     reply, _ = call(ex, "load_picture_texture", backdrop, "launch", op="kit")
     assert not reply["ok"] and "not a texture this file made" in reply["message"]
-    reply, _ = call(ex, "load_picture_texture", call(ex, "glGenTextures", 1)[0]["value"],
-                    "../../etc/passwd", op="kit")
+    reply, _ = call(
+        ex,
+        "load_picture_texture",
+        call(ex, "glGenTextures", 1)[0]["value"],
+        "../../etc/passwd",
+        op="kit",
+    )
     assert not reply["ok"] and "no picture" in reply["message"]
 
 
@@ -190,8 +221,19 @@ def test_each_limit_ends_the_run_in_one_line(context):
     ex = executor(limits=RunLimits(texture_bytes=1 << 16))
     texture = call(ex, "glGenTextures", 1)[0]["value"]
     call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), texture)
-    reply, _ = call(ex, "glTexImage2D", int(GL.GL_TEXTURE_2D), 0, int(GL.GL_RGBA), 256, 256, 0,
-                    int(GL.GL_RGBA), int(GL.GL_UNSIGNED_BYTE), None)
+    reply, _ = call(
+        ex,
+        "glTexImage2D",
+        int(GL.GL_TEXTURE_2D),
+        0,
+        int(GL.GL_RGBA),
+        256,
+        256,
+        0,
+        int(GL.GL_RGBA),
+        int(GL.GL_UNSIGNED_BYTE),
+        None,
+    )
     assert not reply["ok"] and "more than 0 MiB" in reply["message"]
 
 
@@ -203,8 +245,20 @@ def test_taint_follows_pixels_through_masks_scissors_and_copies(context):
     picture, capture = call(ex, "glGenTextures", 2)[0]["value"]
     call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), picture)
     call(ex, "glPixelStorei", int(GL.GL_UNPACK_ALIGNMENT), 1)
-    call(ex, "glTexImage2D", int(GL.GL_TEXTURE_2D), 0, int(GL.GL_RGB), 2, 2, 0, int(GL.GL_RGB),
-         int(GL.GL_UNSIGNED_BYTE), {"$a": 0}, arrays=[np.full(12, 99, dtype=np.uint8)])
+    call(
+        ex,
+        "glTexImage2D",
+        int(GL.GL_TEXTURE_2D),
+        0,
+        int(GL.GL_RGB),
+        2,
+        2,
+        0,
+        int(GL.GL_RGB),
+        int(GL.GL_UNSIGNED_BYTE),
+        {"$a": 0},
+        arrays=[np.full(12, 99, dtype=np.uint8)],
+    )
     ex.begin_frame()
     _quad(ex)
     call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), 0)
@@ -219,8 +273,9 @@ def test_taint_follows_pixels_through_masks_scissors_and_copies(context):
     call(ex, "glDisable", int(GL.GL_SCISSOR_TEST))
     assert ex.tracker.framebuffer_taint and ex.tracker.taint_in((0, 0, 32, 64)) == ""
     call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), capture)
-    assert call(ex, "glCopyTexImage2D", int(GL.GL_TEXTURE_2D), 0, int(GL.GL_RGB), 0, 0, 32, 32,
-                0)[0]["ok"]
+    assert call(ex, "glCopyTexImage2D", int(GL.GL_TEXTURE_2D), 0, int(GL.GL_RGB), 0, 0, 32, 32, 0)[
+        0
+    ]["ok"]
     assert not ex.tracker.textures[capture].tainted
     call(ex, "glCopyTexImage2D", int(GL.GL_TEXTURE_2D), 0, int(GL.GL_RGB), 16, 0, 32, 32, 0)
     assert ex.tracker.textures[capture].tainted
@@ -238,15 +293,17 @@ def test_nothing_reads_back_and_set_up_draws_nothing(context):
     ex = executor()
     reply, _ = call(ex, "glReadPixels", 0, 0, 64, 64, int(GL.GL_RGB), int(GL.GL_UNSIGNED_BYTE))
     assert reply["type"] == "NotImplementedError" and "never read back" in reply["message"]
-    reply, _ = call(ex, "glTexGeni", int(GL.GL_S), int(GL.GL_TEXTURE_GEN_MODE),
-                    int(GL.GL_SPHERE_MAP))
+    reply, _ = call(
+        ex, "glTexGeni", int(GL.GL_S), int(GL.GL_TEXTURE_GEN_MODE), int(GL.GL_SPHERE_MAP)
+    )
     assert reply["type"] == "NotImplementedError" and "texgen" in reply["message"]
     ex.step({"op": "enter", "function": "load_textures", "line": 3}, ("load_textures",))
-    for name, args, op in (("glBegin", (int(GL.GL_QUADS),), "gl"),
-                           ("draw_scene", ({"textures": {}},), "kit")):
+    for name, args, op in (
+        ("glBegin", (int(GL.GL_QUADS),), "gl"),
+        ("draw_scene", ({"textures": {}},), "kit"),
+    ):
         reply, _ = call(ex, name, *args, op=op)
-        assert reply["type"] == "LabSetupError" and "in load_textures()" in reply["message"], \
-            reply
+        assert reply["type"] == "LabSetupError" and "in load_textures()" in reply["message"], reply
     assert ex.tracker.primitive is None
     ex.step({"op": "leave", "function": "load_textures"}, ("load_textures",))
     ex.begin_frame()
@@ -256,8 +313,7 @@ def test_nothing_reads_back_and_set_up_draws_nothing(context):
 def test_gl_errors_name_the_precondition(context):
     ex = executor()
     reply, _ = call(ex, "glUniform1i", ex.session.texSampler, 1)
-    assert reply["type"] == "GLError" and "call glUseProgram(program) before" in \
-        reply["message"]
+    assert reply["type"] == "GLError" and "call glUseProgram(program) before" in reply["message"]
     call(ex, "glUseProgram", ex.session.textureShader)
     reply, _ = call(ex, "glUniform1i", ex.session.texSampler, int(GL.GL_TEXTURE1))
     assert "the enum GL_TEXTURE1; a sampler takes the unit's number" in reply["message"]

@@ -120,9 +120,15 @@ def test_the_mirror_never_appears_in_its_own_capture(scene_renderer):
     # The lab's capture camera sits exactly on the mirror, where clipping alone may hide
     # the quad; step it one unit back so that a capture that drew the mirror would show
     # it (and leave out the frame behind the mirror, which would then be in view).
-    scene = robot_and_mirror(lab()).with_reflector("mirror", ortho=OrthoCapture(
-        eye=(-8.0, 0.0, 0.0), target=(0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0),
-        extents=(-6, 2, -3, 5, 0, 16)))
+    scene = robot_and_mirror(lab()).with_reflector(
+        "mirror",
+        ortho=OrthoCapture(
+            eye=(-8.0, 0.0, 0.0),
+            target=(0.0, 0.0, 0.0),
+            up=(0.0, 1.0, 0.0),
+            extents=(-6, 2, -3, 5, 0, 16),
+        ),
+    )
     _, stats = draw(scene_renderer, scene, (SIZE, SIZE))
     slot = stats.plan.top.draws[0].slot
     texture = scene_renderer.pass_for("mirror").captures.texture(slot)
@@ -131,8 +137,9 @@ def test_the_mirror_never_appears_in_its_own_capture(scene_renderer):
     magenta = np.zeros((SIZE, SIZE, 3), np.uint8)
     magenta[..., 0] = magenta[..., 2] = 255
     texture.bind(0)
-    GL.glTexSubImage2D(GL.GL_TEXTURE_2D, 0, 0, 0, SIZE, SIZE, GL.GL_RGB,
-                       GL.GL_UNSIGNED_BYTE, magenta)
+    GL.glTexSubImage2D(
+        GL.GL_TEXTURE_2D, 0, 0, 0, SIZE, SIZE, GL.GL_RGB, GL.GL_UNSIGNED_BYTE, magenta
+    )
     _, again = draw(scene_renderer, scene, (SIZE, SIZE), use_plan=False)  # capture afresh
     assert again.ran == ["capture:mirror", "camera"]
     env = capture_texture(scene_renderer, again)
@@ -164,9 +171,12 @@ def test_mirror_shows_the_robot_mirrored_not_flipped(scene_renderer, viewer):
     # the robot itself stands in front of it on screen.
     mask = mirror_mask(mirror, camera, SIZE, SIZE, inset_px=3)
     real_hand = math3d.project_to_pixels(vp, hand, SIZE, SIZE)
-    checks = {name: xy for name, xy in (("s", flipped_s), ("t", flipped_t))
-              if np.linalg.norm(xy[:2] - real_hand[:2]) > 12
-              and mask[int(xy[1]) % SIZE, int(xy[0]) % SIZE]}
+    checks = {
+        name: xy
+        for name, xy in (("s", flipped_s), ("t", flipped_t))
+        if np.linalg.norm(xy[:2] - real_hand[:2]) > 12
+        and mask[int(xy[1]) % SIZE, int(xy[0]) % SIZE]
+    }
     assert checks, f"{viewer}: no flipped position is visible in the mirror to check"
     found = red_dominant(near(image, expected, 2)).any()
     wrong = [name for name, xy in checks.items() if red_dominant(near(image, xy, 2)).any()]
@@ -190,8 +200,9 @@ def test_changing_a_joint_changes_the_robot_and_its_reflection(scene_renderer):
     assert changed[in_mirror].sum() > 100, "the reflection did not follow the joint"
     assert changed[~in_mirror].sum() > 100, "the robot itself did not move"
     # and the reflected hand moved to where the new pose puts it
-    hand_px = math3d.project_to_pixels(viewer_matrix(camera, SIZE, SIZE),
-                                       mirror_image_point(mirror, hand_of(moved)), SIZE, SIZE)
+    hand_px = math3d.project_to_pixels(
+        viewer_matrix(camera, SIZE, SIZE), mirror_image_point(mirror, hand_of(moved)), SIZE, SIZE
+    )
     assert red_dominant(near(after, hand_px, 2)).any()
 
 

@@ -21,13 +21,15 @@ SIZE = (48, 48)
 
 
 gl_context = pytest.fixture(scope="module", name="gl_context")(module_context)
-LABS = {"cubemap": ("CUBE_MAP_GLSL", "draw_sphere", 2, "int cube_face(vec3 r) {"),
-        "spheremap": ("SPHERE_MAP_GLSL", "draw_cone_shader", 2,
-                      "vec3 reflect_eye(vec3 u, vec3 n) {")}
+LABS = {
+    "cubemap": ("CUBE_MAP_GLSL", "draw_sphere", 2, "int cube_face(vec3 r) {"),
+    "spheremap": ("SPHERE_MAP_GLSL", "draw_cone_shader", 2, "vec3 reflect_eye(vec3 u, vec3 n) {"),
+}
 """lab -> its GLSL variable, the kit's draw, a check mode that shows only the kit's own
 numbers (the cube's r, the cone's u), and the first line of a student function."""
-MACROS = ("#define normalize(v) vec3(0.0, 0.0, 1.0)\n"
-          "#define texture(s, d) vec4(0.5)\n#define mode 0\n")
+MACROS = (
+    "#define normalize(v) vec3(0.0, 0.0, 1.0)\n#define texture(s, d) vec4(0.5)\n#define mode 0\n"
+)
 """What a student's text once did to the kit's code it was pasted into."""
 
 
@@ -62,19 +64,26 @@ def test_a_students_macros_never_reach_the_kits_code(registry, lab):
 def test_functions_that_read_a_uniform_are_refused(registry, lab):
     first = LABS[lab][3]
     text = "uniform int mode;\n" + glsl(lab).replace(
-        first, first + "\n    if (mode == 1) { return " +
-        ("0; }" if lab == "cubemap" else "u; }"))
+        first, first + "\n    if (mode == 1) { return " + ("0; }" if lab == "cubemap" else "u; }")
+    )
     with pytest.raises(StudentShaderError, match=r"reads uniforms \(mode\)"):
         values(registry, lab, text)
     with pytest.raises(StudentShaderError, match="reads uniforms"):
-        values(registry, lab, "uniform sampler2D mine;\n" + glsl(lab).replace(
-            first, first + "\n    if (texture(mine, vec2(0.5)).r > 2.0) { return " +
-            ("0; }" if lab == "cubemap" else "u; }")))
+        values(
+            registry,
+            lab,
+            "uniform sampler2D mine;\n"
+            + glsl(lab).replace(
+                first,
+                first
+                + "\n    if (texture(mine, vec2(0.5)).r > 2.0) { return "
+                + ("0; }" if lab == "cubemap" else "u; }"),
+            ),
+        )
 
 
 @pytest.mark.parametrize("lab", sorted(LABS))
-def test_a_compile_error_names_the_students_line_and_a_missing_function_its_name(registry,
-                                                                                 lab):
+def test_a_compile_error_names_the_students_line_and_a_missing_function_its_name(registry, lab):
     variable = LABS[lab][0]
     text = glsl(lab)
     broken = text + "\n    oops\n"
@@ -90,9 +99,11 @@ def test_gl_built_in_state_is_not_a_uniform_of_the_kit(registry):
     """Compatibility GLSL may read GL's own state (the same for the kit's every draw)."""
     from mirrorlab.labs.trusted.kit import compile_program
 
-    text = ("vec3 reflect_eye(vec3 u, vec3 n) {\n"
-            "    return (gl_ModelViewMatrix * vec4(u - 2.0 * dot(n, u) * n, 0.0)).xyz;\n}\n"
-            "vec2 sphere_map_st(vec3 r) { return r.xy; }\n")
+    text = (
+        "vec3 reflect_eye(vec3 u, vec3 n) {\n"
+        "    return (gl_ModelViewMatrix * vec4(u - 2.0 * dot(n, u) * n, 0.0)).xyz;\n}\n"
+        "vec2 sphere_map_st(vec3 r) { return r.xy; }\n"
+    )
     open_session("spheremap", SIZE, default_variant("spheremap"))
     program = compile_program("kit_sphere.vert", "kit_sphere.frag", text, "SPHERE_MAP_GLSL")
     assert program > 0

@@ -36,11 +36,23 @@ def _random_call(rng: np.random.Generator) -> tuple[str, tuple]:
     if kind == 0:
         return "glLoadIdentity", ()
     if kind == 1:
-        return "glOrtho", (v[0], v[0] + 1 + abs(v[1]), v[2], v[2] + 1 + abs(v[3]),
-                           float(rng.choice([0.0, 0.1, v[4]])), 15.0 + abs(v[5]))
+        return "glOrtho", (
+            v[0],
+            v[0] + 1 + abs(v[1]),
+            v[2],
+            v[2] + 1 + abs(v[3]),
+            float(rng.choice([0.0, 0.1, v[4]])),
+            15.0 + abs(v[5]),
+        )
     if kind == 2:
-        return "glFrustum", (v[0], v[0] + 1 + abs(v[1]), v[2], v[2] + 1 + abs(v[3]),
-                             0.05 + abs(v[4]) / 10, 20.0 + abs(v[5]))
+        return "glFrustum", (
+            v[0],
+            v[0] + 1 + abs(v[1]),
+            v[2],
+            v[2] + 1 + abs(v[3]),
+            0.05 + abs(v[4]) / 10,
+            20.0 + abs(v[5]),
+        )
     if kind == 3:
         return "glTranslatef", tuple(v[:3])
     if kind == 4:
@@ -51,8 +63,12 @@ def _random_call(rng: np.random.Generator) -> tuple[str, tuple]:
     if kind == 6:
         return "gluLookAt", tuple(v[:3]) + tuple(v[3:6]) + (0.0, 1.0, 0.0)
     if kind == 7:
-        return "gluPerspective", (float(rng.choice([30.0, 45.0, 90.0, 60.5])),
-                                  float(rng.uniform(0.5, 2)), 0.1, 100.0)
+        return "gluPerspective", (
+            float(rng.choice([30.0, 45.0, 90.0, 60.5])),
+            float(rng.uniform(0.5, 2)),
+            0.1,
+            100.0,
+        )
     return "glMultMatrixd", (list(np.round(rng.uniform(-2, 2, 16), 3)),)
 
 
@@ -104,9 +120,10 @@ def test_a_mirror_on_the_near_plane_lands_where_mesa_puts_it():
     """Lab 20's quad in its own capture: eye z exactly 0 with glOrtho(..., 0, 15), clip z
     exactly -1 in float32, as Mesa's float arithmetic gives it (a double product would put
     it just outside and clip the quad)."""
-    mvp = multiply(multiply(ortho(-6, 2, -3, 5, 0, 15), look_at((-7, 0, 0), (0, 0, 0),
-                                                                (0, 1, 0))),
-                   translation(7, 0, 0))
+    mvp = multiply(
+        multiply(ortho(-6, 2, -3, 5, 0, 15), look_at((-7, 0, 0), (0, 0, 0), (0, 1, 0))),
+        translation(7, 0, 0),
+    )
     corner = np.array([-7, -3, -6, 1], dtype=np.float32)
     clip = [np.float32(0)] * 4
     for row in range(4):
@@ -148,17 +165,20 @@ def test_the_stacks_end_where_mesas_do(gl_context):
 
 
 def test_translation_keeps_the_students_names_and_lines():
-    student = ("// gl_Vertex in a comment stays\n"
-               "vec3 my_gl_Normal = vec3(0.0);\n"
-               "vec3 reflect_eye(vec3 u, vec3 n) {\n"
-               "    vec4 e = gl_ModelViewMatrix * vec4(u, 1.0);\n"
-               "    return e.xyz + texture2D(gl_ModelViewMatrixInverse_, u.xy).rgb;\n"
-               "}\n")
+    student = (
+        "// gl_Vertex in a comment stays\n"
+        "vec3 my_gl_Normal = vec3(0.0);\n"
+        "vec3 reflect_eye(vec3 u, vec3 n) {\n"
+        "    vec4 e = gl_ModelViewMatrix * vec4(u, 1.0);\n"
+        "    return e.xyz + texture2D(gl_ModelViewMatrixInverse_, u.xy).rgb;\n"
+        "}\n"
+    )
     out = translate_compat_glsl(student, "fragment")
     lines = out.split("\n")
     assert lines[0] == "uniform mat4 ml_ModelViewMatrix;" and lines[1] == "#line 1"
-    assert lines[2:] == student.replace("gl_ModelViewMatrix *", "ml_ModelViewMatrix *")\
-        .replace("texture2D", "texture").split("\n")
+    assert lines[2:] == student.replace("gl_ModelViewMatrix *", "ml_ModelViewMatrix *").replace(
+        "texture2D", "texture"
+    ).split("\n")
     assert "my_gl_Normal" in out and "gl_ModelViewMatrixInverse_" in out
     assert "// gl_Vertex in a comment stays" in out
     assert translate_compat_glsl("int f() { return 1; }", "vertex") == "int f() { return 1; }"
@@ -167,12 +187,14 @@ def test_translation_keeps_the_students_names_and_lines():
 def test_translated_kit_shader_compiles_as_core(gl_context):
     """A whole compatibility shader (its #version line too) becomes GLSL 330 core that
     compiles, attributes at the locations the emulated glBegin feeds."""
-    source = ("#version 330 compatibility\n"
-              "out vec2 st;\n"
-              "void main() {\n"
-              "    st = gl_MultiTexCoord0.st;\n"
-              "    gl_Position = gl_ModelViewProjectionMatrix * gl_Vertex;\n"
-              "}\n")
+    source = (
+        "#version 330 compatibility\n"
+        "out vec2 st;\n"
+        "void main() {\n"
+        "    st = gl_MultiTexCoord0.st;\n"
+        "    gl_Position = gl_ModelViewProjectionMatrix * gl_Vertex;\n"
+        "}\n"
+    )
     out = translate_compat_glsl(source, "vertex")
     assert out.startswith("#version 330 core\n")
     assert "layout(location = 0) in vec4 ml_Vertex;" in out

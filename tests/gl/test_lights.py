@@ -26,10 +26,12 @@ from tests.imagecheck import save_failure, share_within
 
 SIZE = (64, 64)
 # lights on the camera's side, of different colours: each one shows on most lit pixels
-LIGHTS = (Light((0.45, 0.8, 0.4), 0.25),
-          Light((0.9, 0.1, 0.3), 0.25, (1.0, 0.6, 0.3)),
-          Light((0.2, 0.3, 0.95), 0.25, (0.3, 0.5, 1.0)),
-          Light((0.6, -0.2, 0.7), 0.25, (0.6, 1.0, 0.6)))
+LIGHTS = (
+    Light((0.45, 0.8, 0.4), 0.25),
+    Light((0.9, 0.1, 0.3), 0.25, (1.0, 0.6, 0.3)),
+    Light((0.2, 0.3, 0.95), 0.25, (0.3, 0.5, 1.0)),
+    Light((0.6, -0.2, 0.7), 0.25, (0.6, 1.0, 0.6)),
+)
 ORDER = (1, 4, 0, 2, 3, 1, 0)
 
 
@@ -67,8 +69,10 @@ def test_every_light_count_is_lit_as_the_tracer_lights_it(registry, truths, draw
             share = share_within(image, truths[count], mask, 10)
             if share < 0.99:
                 save_failure(f"lights_{draw_path}_{count}", frame=image, truth=truths[count])
-            assert share >= 0.99, (f"{count} lights ({draw_path}): only {share:.1%} of "
-                                   f"the robot's pixels within 10/255 of the tracer")
+            assert share >= 0.99, (
+                f"{count} lights ({draw_path}): only {share:.1%} of "
+                f"the robot's pixels within 10/255 of the tracer"
+            )
             if previous is not None:
                 assert not np.array_equal(image, previous), f"{count} lights: frame unchanged"
             previous = image
@@ -81,8 +85,7 @@ def test_lights_changed_at_the_same_count_are_the_ones_drawn(registry):
     colours or the ambient light (the program kept) shows in the next frame, as a fresh
     renderer draws it."""
     lab = lit_scene(2)
-    scenes = [lab, replace(lab, lights=LIGHTS[2:4]), replace(lab, ambient=lab.ambient + 0.2),
-              lab]
+    scenes = [lab, replace(lab, lights=LIGHTS[2:4]), replace(lab, ambient=lab.ambient + 0.2), lab]
     renderer = SceneRenderer(registry)
     try:
         images = [draw(renderer, scene, SIZE)[0] for scene in scenes]

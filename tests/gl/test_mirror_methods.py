@@ -39,8 +39,9 @@ def viewer_at(degrees: float, distance: float, fovy: float = 45.0, height: float
     about the vertical towards +z), looking at the centre."""
     angle = math.radians(degrees)
     eye = MIRROR_CENTER + distance * np.array([math.cos(angle), height, math.sin(angle)])
-    return Camera(eye=tuple(float(v) for v in eye),
-                  target=tuple(float(v) for v in MIRROR_CENTER), fovy=fovy)
+    return Camera(
+        eye=tuple(float(v) for v in eye), target=tuple(float(v) for v in MIRROR_CENTER), fovy=fovy
+    )
 
 
 def lab(camera: Camera | None = None, angles=None) -> Scene:
@@ -54,8 +55,7 @@ def lab(camera: Camera | None = None, angles=None) -> Scene:
 def render(renderer, scene, method, capture="copy", env_size=None, size=SIZE):
     """``scene`` with its mirror drawn by ``method``: the frame, the capture texture the
     frame used (None for stencil) and the frame's stats."""
-    configured = apply_options(scene, {"method": method, "capture": capture,
-                                       "env_size": env_size})
+    configured = apply_options(scene, {"method": method, "capture": capture, "env_size": env_size})
     image, stats = draw(renderer, configured, (size, size))
     check_gl_errors(f"{method} frame")
     environment = None
@@ -86,8 +86,14 @@ def test_exact_methods_agree_with_the_ray_tracer(scene_renderer, method, view):
     truth = trace(scene)
     assert truth.reflective_mask.sum() > 200, "the mirror should fill part of the frame"
     image, _, _ = render(scene_renderer, scene, method)
-    assert_region_close(f"{method}_{view}", image, truth.to_uint8(), truth.reflective_mask,
-                        channel_tolerance=10, min_fraction_within=0.99)
+    assert_region_close(
+        f"{method}_{view}",
+        image,
+        truth.to_uint8(),
+        truth.reflective_mask,
+        channel_tolerance=10,
+        min_fraction_within=0.99,
+    )
     # Outside the mirror every method draws the same scene as the tracer.
     assert share_within(image, truth.to_uint8(), ~truth.reflective_mask, 10) > 0.995
 
@@ -96,8 +102,14 @@ def test_ortho_is_right_head_on_from_afar_and_wrong_at_sixty_degrees(scene_rende
     far = lab(viewer_at(0, 80, fovy=8))
     truth = trace(far)
     image, _, _ = render(scene_renderer, far, "ortho")
-    assert_region_close("ortho_head_on_far", image, truth.to_uint8(), truth.reflective_mask,
-                        channel_tolerance=10, min_fraction_within=0.98)
+    assert_region_close(
+        "ortho_head_on_far",
+        image,
+        truth.to_uint8(),
+        truth.reflective_mask,
+        channel_tolerance=10,
+        min_fraction_within=0.98,
+    )
     oblique = lab(viewer_at(60, 16))
     truth = trace(oblique)
     image, _, _ = render(scene_renderer, oblique, "ortho")
@@ -134,8 +146,7 @@ def test_ortho_displaces_the_reflected_hand_by_d_tan_theta(scene_renderer, degre
             save_failure(f"displacement_{degrees}_{name}", image=picture)
             pytest.fail(f"no reflected hand found in the {name} image")
         rows, cols = np.nonzero(red)
-        centres[name] = mirror_point_of_pixel(camera, (cols.mean() + 0.5, rows.mean() + 0.5),
-                                              256)
+        centres[name] = mirror_point_of_pixel(camera, (cols.mean() + 0.5, rows.mean() + 0.5), 256)
     foot = np.array([-7.0, hand[1], hand[2]])
     assert np.linalg.norm(centres["ortho"] - foot) < 0.25
     shift = np.linalg.norm(centres["truth"] - centres["ortho"])
@@ -147,12 +158,18 @@ def scene_with_intruders(camera: Camera) -> Scene:
     """The lab scene plus a green box straddling the mirror plane and a magenta box wholly
     behind it (both from the hand mesh, a box, scaled up)."""
     scene = lab(camera)
-    straddler = MeshObject("straddler", HAND_MESH, Transform(position=(-7.0, -1.0, -4.0),
-                                                             scale=(2.5, 2.5, 2.5)),
-                           color=(0.1, 0.9, 0.1))
-    behind = MeshObject("behind", HAND_MESH, Transform(position=(-9.5, 1.0, -1.0),
-                                                       scale=(3.0, 3.0, 3.0)),
-                        color=(0.9, 0.1, 0.9))
+    straddler = MeshObject(
+        "straddler",
+        HAND_MESH,
+        Transform(position=(-7.0, -1.0, -4.0), scale=(2.5, 2.5, 2.5)),
+        color=(0.1, 0.9, 0.1),
+    )
+    behind = MeshObject(
+        "behind",
+        HAND_MESH,
+        Transform(position=(-9.5, 1.0, -1.0), scale=(3.0, 3.0, 3.0)),
+        color=(0.9, 0.1, 0.9),
+    )
     return replace(scene, objects=(*scene.objects, straddler, behind))
 
 
@@ -173,8 +190,14 @@ def test_nothing_behind_the_mirror_shows_in_its_reflection(scene_renderer, metho
     assert not behind.any(), f"{int(behind.sum())} magenta pixels in the mirror"
     if method != "ortho":
         # The straddling box's front half is reflected, its back half is not.
-        assert_region_close(f"straddler_{method}", image, truth.to_uint8(), mask,
-                            channel_tolerance=10, min_fraction_within=0.99)
+        assert_region_close(
+            f"straddler_{method}",
+            image,
+            truth.to_uint8(),
+            mask,
+            channel_tolerance=10,
+            min_fraction_within=0.99,
+        )
         green = (image[..., 1] > 2 * image[..., 0].astype(int) + 20) & mask
         assert green.sum() > 20, "the straddling box's front half should be reflected"
 
@@ -246,15 +269,17 @@ def test_a_larger_reflected_texture_is_closer_to_the_truth(scene_renderer):
 
 @pytest.mark.parametrize("capture", ["copy", "fbo"])
 def test_an_ortho_capture_the_size_of_its_footprint_shows_what_the_window_sized_one_does(
-        scene_renderer, capture):
+    scene_renderer, capture
+):
     """``texture_size = "footprint"``: the capture texture takes the planned size (the
     glass's pixel rectangle, in whole steps), and the mirror shows what it shows with the
     window-sized texture (ortho's error is its geometry's), to within filtering: 97% of
     its pixels within 24/255, the red hand among them."""
     scene = lab(viewer_at(30, 16))
     window, window_env, _ = render(scene_renderer, scene, "ortho", capture)
-    footprint, footprint_env, stats = render(scene_renderer, scene, "ortho", capture,
-                                             env_size="footprint")
+    footprint, footprint_env, stats = render(
+        scene_renderer, scene, "ortho", capture, env_size="footprint"
+    )
     (step,) = [p for p in stats.plan.ran if p.name == "capture"]
     width, height = step.views[0].view.size
     assert footprint_env.shape == (height, width, 3) and window_env.shape == (SIZE, SIZE, 3)

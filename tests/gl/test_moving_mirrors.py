@@ -32,8 +32,7 @@ def test_a_moving_mirror_agrees_with_the_truth_in_every_frame(scene_renderer, me
             seen += 1
             share = float(np.mean(worst[mask] <= 10))
             if share < 0.99:
-                save_failure(f"moving_{method}_{frame}", rendered=image,
-                             traced=truth.to_uint8())
+                save_failure(f"moving_{method}_{frame}", rendered=image, traced=truth.to_uint8())
             assert share >= 0.99, f"{method} frame {frame}: {share:.2%}"
     assert seen >= 4  # it was in view, held, turned
 

@@ -26,14 +26,26 @@ from tests.imagecheck import save_failure, share_within
 
 SIZE = (40, 40)
 NEAR = 0.1
-DISTANCES = (0.05, NEAR - 1e-4, NEAR - 1e-7, NEAR, NEAR + 1e-12, NEAR + 1e-9, NEAR + 1e-6,
-             NEAR + 1e-4, NEAR + 1e-3, 0.12, 0.2)
+DISTANCES = (
+    0.05,
+    NEAR - 1e-4,
+    NEAR - 1e-7,
+    NEAR,
+    NEAR + 1e-12,
+    NEAR + 1e-9,
+    NEAR + 1e-6,
+    NEAR + 1e-4,
+    NEAR + 1e-3,
+    0.12,
+    0.2,
+)
 
 
 def viewer_scene(distance: float, method: str):
     scene = mirrorlab.load_scene("lab20")
-    camera = replace(scene.camera, eye=(-7.0 + distance, 1.0, -2.0), target=(-7.0, 1.0, -2.0),
-                     near=NEAR)
+    camera = replace(
+        scene.camera, eye=(-7.0 + distance, 1.0, -2.0), target=(-7.0, 1.0, -2.0), near=NEAR
+    )
     return apply_options(replace(scene, camera=camera), {"method": method})
 
 
@@ -50,13 +62,15 @@ def test_the_frame_agrees_with_the_tracer_across_the_near_plane(scene_renderer, 
         truth = truths[distance]
         share = share_within(image, truth.to_uint8(), np.ones(SIZE[::-1], bool), 10)
         if share < 0.99:
-            save_failure(f"near_plane_{method}_{distance!r}", frame=image,
-                         truth=truth.to_uint8())
-        assert share >= 0.99, (f"{method} at distance {distance!r}: only {share:.1%} of "
-                               f"pixels agree with the tracer (ran {stats.ran})")
+            save_failure(f"near_plane_{method}_{distance!r}", frame=image, truth=truth.to_uint8())
+        assert share >= 0.99, (
+            f"{method} at distance {distance!r}: only {share:.1%} of "
+            f"pixels agree with the tracer (ran {stats.ran})"
+        )
         seen = truth.reflective_mask.mean()
         assert (seen > 0.99) == (distance >= NEAR - 1e-7), (
-            f"the tracer {'sees' if seen > 0.99 else 'does not see'} the glass at {distance!r}")
+            f"the tracer {'sees' if seen > 0.99 else 'does not see'} the glass at {distance!r}"
+        )
         frames.append(image.astype(int))
     # Continuity: from the near plane outwards, each step changes the frame a little.
     on_glass = [f for d, f in zip(DISTANCES, frames, strict=True) if d >= NEAR - 1e-7]

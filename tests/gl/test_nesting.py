@@ -83,15 +83,15 @@ def share_on_reflectors(renderer, scene: Scene, label: str) -> float:
 
 def facing_mirrors(west: str, east: str, far: float) -> Scene:
     scene = mirrorlab.load_scene("two_mirrors")
-    reflectors = (replace(scene.reflector("west"), technique=west, ortho=None),
-                  replace(scene.reflector("east"), technique=east, ortho=None))
-    return replace(scene, camera=replace(ROOM_VIEW, far=far), reflectors=reflectors,
-                   max_bounces=3)
+    reflectors = (
+        replace(scene.reflector("west"), technique=west, ortho=None),
+        replace(scene.reflector("east"), technique=east, ortho=None),
+    )
+    return replace(scene, camera=replace(ROOM_VIEW, far=far), reflectors=reflectors, max_bounces=3)
 
 
 @pytest.mark.parametrize("far", sorted(FARS))
-def test_every_pair_of_planar_techniques_nested_both_ways_matches_the_truth(
-        scene_renderer, far):
+def test_every_pair_of_planar_techniques_nested_both_ways_matches_the_truth(scene_renderer, far):
     """Each mix scores within 1 point of the unmixed pair of its least exact technique:
     two stencil mirrors for the exact ones, two ortho mirrors where ortho takes part
     (whose capture, a texture at the frame's size minified onto the glass without
@@ -99,8 +99,9 @@ def test_every_pair_of_planar_techniques_nested_both_ways_matches_the_truth(
     shares = {}
     for west, east in itertools.product(PLANAR, repeat=2):
         scene = facing_mirrors(west, east, FARS[far])
-        shares[(west, east)] = share_on_reflectors(scene_renderer, scene,
-                                                   f"{west}_{east}_{far.replace(' ', '_')}")
+        shares[(west, east)] = share_on_reflectors(
+            scene_renderer, scene, f"{west}_{east}_{far.replace(' ', '_')}"
+        )
     # measured (both far planes): 100.0% for every pair of stencil and reflected; with
     # ortho 98.98% (ortho-stencil, ortho-reflected), 99.08% (ortho-ortho), 99.36%
     # (stencil-ortho, reflected-ortho)

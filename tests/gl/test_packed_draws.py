@@ -44,19 +44,22 @@ def behind_the_camera(scene, count: int, kind: str):
     back = (eye - target) / np.linalg.norm(eye - target)
     points = [eye + 6.0 * back + (i % 10 - 4.5, i // 10 - 2.0, 0.0) for i in range(count)]
     if kind == "boxes":
-        boxes = tuple(MeshObject(name=f"box{i}", mesh=BOX, color=(0.8, 0.3, 0.2),
-                                 transform=Transform(position=tuple(map(float, p)),
-                                                     scale=(0.3, 0.3, 0.3)))
-                      for i, p in enumerate(points))
+        boxes = tuple(
+            MeshObject(
+                name=f"box{i}",
+                mesh=BOX,
+                color=(0.8, 0.3, 0.2),
+                transform=Transform(position=tuple(map(float, p)), scale=(0.3, 0.3, 0.3)),
+            )
+            for i, p in enumerate(points)
+        )
         return replace(scene, objects=scene.objects + boxes)
-    mirrors = tuple(mirror(f"m{i}", p, -back, 0.5, 0.5, "reflected")
-                    for i, p in enumerate(points))
+    mirrors = tuple(mirror(f"m{i}", p, -back, 0.5, 0.5, "reflected") for i, p in enumerate(points))
     return replace(scene, reflectors=scene.reflectors + mirrors)
 
 
 @pytest.mark.parametrize("kind", ["boxes", "mirrors"])
-def test_things_behind_the_camera_cost_no_draw_and_leave_the_frame_as_it_was(
-        scene_renderer, kind):
+def test_things_behind_the_camera_cost_no_draw_and_leave_the_frame_as_it_was(scene_renderer, kind):
     base = lab_reflected()
     crowded = behind_the_camera(base, 60, kind)
     image, stats = draw(scene_renderer, base, SIZE)
@@ -72,8 +75,11 @@ def test_things_behind_the_camera_cost_no_draw_and_leave_the_frame_as_it_was(
 def test_a_still_frame_replays_and_a_moving_one_records_anew(scene_renderer, monkeypatch):
     uploads = []
     original = Buffer.upload
-    monkeypatch.setattr(Buffer, "upload", lambda self, target, data: (
-        uploads.append(len(data)), original(self, target, data))[1])
+    monkeypatch.setattr(
+        Buffer,
+        "upload",
+        lambda self, target, data: (uploads.append(len(data)), original(self, target, data))[1],
+    )
     scene = lab_reflected()
     first, _ = draw(scene_renderer, scene, SIZE)
     assert uploads, "the first frame records its views"
@@ -88,22 +94,33 @@ def test_a_still_frame_replays_and_a_moving_one_records_anew(scene_renderer, mon
 
 
 def test_a_new_pose_keeps_the_layout_of_its_parts_and_draws_as_a_fresh_renderer(
-        scene_renderer, registry, monkeypatch):
+    scene_renderer, registry, monkeypatch
+):
     """A view's layout (its steps and indirect commands) is kept by the visible parts:
     a new pose of the same visible parts makes none, a different set of parts its own,
     and every frame is a fresh renderer's, pixel for pixel."""
     made = []
     original = scene_draw.indirect_commands
-    monkeypatch.setattr(scene_draw, "indirect_commands", lambda table, visible: (
-        made.append(len(visible)), original(table, visible))[1])
+    monkeypatch.setattr(
+        scene_draw,
+        "indirect_commands",
+        lambda table, visible: (made.append(len(visible)), original(table, visible))[1],
+    )
     scene = lab_reflected()
     base, shoulder, elbow = scene.robot.angles
-    frames = [(elbow, 45.0), (elbow + 3.0, 45.0), (elbow + 3.0, 12.0), (elbow + 3.5, 12.0),
-              (elbow, 45.0), (elbow + 6.0, 20.0)]
+    frames = [
+        (elbow, 45.0),
+        (elbow + 3.0, 45.0),
+        (elbow + 3.0, 12.0),
+        (elbow + 3.5, 12.0),
+        (elbow, 45.0),
+        (elbow + 6.0, 20.0),
+    ]
     made_per_frame, drawn = [], []
     for turn, fovy in frames:
-        posed = replace(scene.with_angles((base, shoulder, turn)),
-                        camera=replace(scene.camera, fovy=fovy))
+        posed = replace(
+            scene.with_angles((base, shoulder, turn)), camera=replace(scene.camera, fovy=fovy)
+        )
         made.clear()
         image, stats = draw(scene_renderer, posed, SIZE)
         made_per_frame.append(len(made))
@@ -121,22 +138,35 @@ def test_a_new_pose_keeps_the_layout_of_its_parts_and_draws_as_a_fresh_renderer(
 
 
 @pytest.mark.parametrize("method", ["reflected", "stencil", "ortho"])
-def test_a_frames_views_are_recorded_before_its_first_draw(scene_renderer, monkeypatch,
-                                                            method):
+def test_a_frames_views_are_recorded_before_its_first_draw(scene_renderer, monkeypatch, method):
     """Every view a frame draws objects in (a capture's camera, the camera's view, the
     world in a stencil mirror) has its draw recorded before the first multi-draw, and
     the drawing uploads nothing more."""
     events = []
     record = scene_draw.SceneDrawer._record
     draw_recorded = scene_draw.SceneDrawer._draw_recorded
-    monkeypatch.setattr(scene_draw.SceneDrawer, "_record", lambda self, index, view, *rest: (
-        events.append(("record", view.label)), record(self, index, view, *rest))[1])
-    monkeypatch.setattr(scene_draw.SceneDrawer, "_draw_recorded", lambda self, scene, view,
-                        *a: (events.append(("draw", view.label)),
-                             draw_recorded(self, scene, view, *a))[1])
+    monkeypatch.setattr(
+        scene_draw.SceneDrawer,
+        "_record",
+        lambda self, index, view, *rest: (
+            events.append(("record", view.label)),
+            record(self, index, view, *rest),
+        )[1],
+    )
+    monkeypatch.setattr(
+        scene_draw.SceneDrawer,
+        "_draw_recorded",
+        lambda self, scene, view, *a: (
+            events.append(("draw", view.label)),
+            draw_recorded(self, scene, view, *a),
+        )[1],
+    )
     upload = Buffer.upload
-    monkeypatch.setattr(Buffer, "upload", lambda self, target, data: (
-        events.append(("upload", "")), upload(self, target, data))[1])
+    monkeypatch.setattr(
+        Buffer,
+        "upload",
+        lambda self, target, data: (events.append(("upload", "")), upload(self, target, data))[1],
+    )
     scene = apply_options(mirrorlab.load_scene("lab20"), {"method": method})
     base, shoulder, elbow = scene.robot.angles
     draw(scene_renderer, scene.with_angles((base, shoulder, elbow + 7.0)), SIZE)
@@ -148,11 +178,13 @@ def test_a_frames_views_are_recorded_before_its_first_draw(scene_renderer, monke
     assert ("upload", "") not in events[first_draw:], events  # drawing finds them recorded
 
 
-@pytest.mark.parametrize("scene_name, method", [
-    ("lab20", "ortho"), ("lab20", "reflected"), ("lab20", "stencil"),
-    ("mirror_and_sphere", None)])
+@pytest.mark.parametrize(
+    "scene_name, method",
+    [("lab20", "ortho"), ("lab20", "reflected"), ("lab20", "stencil"), ("mirror_and_sphere", None)],
+)
 def test_a_view_draws_its_reflectors_before_the_objects_and_stencil_mirrors_after(
-        scene_renderer, monkeypatch, scene_name, method):
+    scene_renderer, monkeypatch, scene_name, method
+):
     """In the camera's view, a reflector drawn on its own (a textured mirror, a mapped
     sphere) comes before the objects, so what it hides fails the depth test unshaded; a
     stencil mirror comes after them, as it marks only the pixels they leave showing."""
@@ -162,18 +194,30 @@ def test_a_view_draws_its_reflectors_before_the_objects_and_stencil_mirrors_afte
     events = []
     for owner in (PlanarPass, CurvedPass):
         original = owner.draw
-        monkeypatch.setattr(owner, "draw", lambda self, step, view, *rest, _o=original: (
-            events.append((step.mode, view.label)), _o(self, step, view, *rest))[1])
+        monkeypatch.setattr(
+            owner,
+            "draw",
+            lambda self, step, view, *rest, _o=original: (
+                events.append((step.mode, view.label)),
+                _o(self, step, view, *rest),
+            )[1],
+        )
     objects = scene_draw.SceneDrawer.draw
-    monkeypatch.setattr(scene_draw.SceneDrawer, "draw", lambda self, scene, view, *a, **k: (
-        events.append(("objects", view.label)), objects(self, scene, view, *a, **k))[1])
+    monkeypatch.setattr(
+        scene_draw.SceneDrawer,
+        "draw",
+        lambda self, scene, view, *a, **k: (
+            events.append(("objects", view.label)),
+            objects(self, scene, view, *a, **k),
+        )[1],
+    )
     scene = mirrorlab.load_scene(scene_name)
     if method is not None:
         scene = apply_options(scene, {"method": method})
     draw(scene_renderer, scene, SIZE)
     camera = [mode for mode, label in events if label == "camera"]
     assert camera.count("objects") == 1, events
-    before, after = camera[:camera.index("objects")], camera[camera.index("objects") + 1:]
+    before, after = camera[: camera.index("objects")], camera[camera.index("objects") + 1 :]
     assert before or after, events  # the view shows a reflector
     assert "stencil" not in before and set(after) <= {"stencil"}, events
     assert bool(after) == (method == "stencil"), events
@@ -187,12 +231,19 @@ def test_a_thousand_boxes_of_one_mesh_are_one_command(scene_renderer, registry):
     side = np.cross(forward, (0.0, 1.0, 0.0))
     side /= np.linalg.norm(side)
     up = np.cross(side, forward)
-    spots = [target + 3.0 * forward + ((i % 40) / 4 - 5.0) * side + ((i // 40) / 4 - 3) * up
-             for i in range(1000)]
-    boxes = tuple(MeshObject(name=f"box{i}", mesh=BOX, color=(0.8, 0.3, 0.2),
-                             transform=Transform(position=tuple(map(float, p)),
-                                                 scale=(0.1, 0.1, 0.1)))
-                  for i, p in enumerate(spots))
+    spots = [
+        target + 3.0 * forward + ((i % 40) / 4 - 5.0) * side + ((i // 40) / 4 - 3) * up
+        for i in range(1000)
+    ]
+    boxes = tuple(
+        MeshObject(
+            name=f"box{i}",
+            mesh=BOX,
+            color=(0.8, 0.3, 0.2),
+            transform=Transform(position=tuple(map(float, p)), scale=(0.1, 0.1, 0.1)),
+        )
+        for i, p in enumerate(spots)
+    )
     crowded = replace(scene, objects=scene.objects + boxes, reflectors=())
     image, stats = draw(scene_renderer, crowded, SIZE)
     # one pass, one multi-draw; the boxes half a pixel across between pixel centres culled
@@ -217,7 +268,7 @@ def test_texture_runs_cover_every_part_in_order_with_one_texture_each(ids):
     position = 0
     for texture, first, count in runs:
         assert first == position and count > 0
-        worn = {int(i) for i in ids[first:first + count] if i >= 0}
+        worn = {int(i) for i in ids[first : first + count] if i >= 0}
         assert worn == ({texture} if texture >= 0 else set())
         position += count
     assert all(a[0] != b[0] for a, b in itertools.pairwise(runs))
@@ -234,10 +285,11 @@ def test_indirect_commands_draw_consecutive_parts_of_a_mesh_as_instances(scene_r
     assert sum(count for _, _, count in runs) == len(commands)
 
 
-
 @settings(max_examples=200, deadline=None)
-@given(parts=st.lists(st.tuples(st.integers(-1, 2), st.integers(0, 3)), min_size=1,
-                      max_size=80), seed=st.integers(0, 99))
+@given(
+    parts=st.lists(st.tuples(st.integers(-1, 2), st.integers(0, 3)), min_size=1, max_size=80),
+    seed=st.integers(0, 99),
+)
 def test_few_and_many_parts_make_the_same_commands(parts, seed):
     """Commands made one part at a time (a few parts) and by arrays (many) agree."""
     from mirrorlab.passes import scene_draw
@@ -246,10 +298,14 @@ def test_few_and_many_parts_make_the_same_commands(parts, seed):
     rng = np.random.default_rng(seed)
     count = len(parts)
     ranges = np.array([(10 * m, 3 + m, 100 * m) for _, m in parts], dtype=np.int64)
-    table = PartTable(np.zeros((count, 2, 4, 4)), tuple(
-        f"t{t}" if t >= 0 else None for t, _ in parts),
-        np.array([t for t, _ in parts], dtype=np.int64), ("t0", "t1", "t2"), ranges,
-        np.array([m for _, m in parts], dtype=np.int64))
+    table = PartTable(
+        np.zeros((count, 2, 4, 4)),
+        tuple(f"t{t}" if t >= 0 else None for t, _ in parts),
+        np.array([t for t, _ in parts], dtype=np.int64),
+        ("t0", "t1", "t2"),
+        ranges,
+        np.array([m for _, m in parts], dtype=np.int64),
+    )
     visible = np.sort(rng.choice(count, size=int(rng.integers(1, count + 1)), replace=False))
     few = scene_draw._few_indirect_commands(table, visible)
     original = scene_draw.FEW_PARTS
@@ -262,7 +318,8 @@ def test_few_and_many_parts_make_the_same_commands(parts, seed):
 
 
 def test_a_still_frame_is_replayed_into_the_same_target_from_the_same_state(
-        scene_renderer, registry, monkeypatch):
+    scene_renderer, registry, monkeypatch
+):
     from mirrorlab.gl.opengl import GL
     from mirrorlab.gl.resources import Framebuffer
     from mirrorlab.passes.base import gl_state
@@ -270,8 +327,9 @@ def test_a_still_frame_is_replayed_into_the_same_target_from_the_same_state(
     target = Framebuffer(registry, *SIZE)
     worked = []
     original = SceneRenderer._run
-    monkeypatch.setattr(SceneRenderer, "_run", lambda self, *a, **k: (
-        worked.append(1), original(self, *a, **k))[1])
+    monkeypatch.setattr(
+        SceneRenderer, "_run", lambda self, *a, **k: (worked.append(1), original(self, *a, **k))[1]
+    )
     scene = mirrorlab.load_scene("lab20")
     images = []
     for _ in range(5):
@@ -301,7 +359,8 @@ def test_a_still_frame_is_replayed_into_the_same_target_from_the_same_state(
 
 
 def test_what_a_renderer_holds_in_gl_does_not_grow_with_the_views_it_has_drawn(
-        scene_renderer, registry):
+    scene_renderer, registry
+):
     """A resized window or a moving camera makes a new view every frame: the buffers of
     views no longer drawn are freed or kept (a few pairs) for the next views recorded, so
     the live GL objects after forty such frames are those after the second of them (the
@@ -313,8 +372,12 @@ def test_what_a_renderer_holds_in_gl_does_not_grow_with_the_views_it_has_drawn(
     counts = []
     for step in range(40):
         size = (64 + 7 * step, 48 + 5 * step) if step % 2 else SIZE
-        moved = replace(scene, camera=replace(scene.camera, eye=(
-            scene.camera.eye[0] + 0.01 * step, *scene.camera.eye[1:])))
+        moved = replace(
+            scene,
+            camera=replace(
+                scene.camera, eye=(scene.camera.eye[0] + 0.01 * step, *scene.camera.eye[1:])
+            ),
+        )
         target = Framebuffer(registry, *size)
         scene_renderer.render(moved, target)
         target.release()
@@ -323,8 +386,7 @@ def test_what_a_renderer_holds_in_gl_does_not_grow_with_the_views_it_has_drawn(
     assert 0 <= counts[1] - counts[0] <= 2 * SPARE_BUFFERS, counts
 
 
-def test_a_reflected_capture_copies_its_glass_and_leaves_the_texture_as_a_whole_copy(
-        monkeypatch):
+def test_a_reflected_capture_copies_its_glass_and_leaves_the_texture_as_a_whole_copy(monkeypatch):
     """A moving viewer's reflected capture clears and copies only the rectangle holding its
     glass and the last frame's (outside it, the texture holds background from before):
     frame and texture are those of a fresh renderer, which clears and copies the whole
@@ -345,10 +407,18 @@ def test_a_reflected_capture_copies_its_glass_and_leaves_the_texture_as_a_whole_
         # the glass grows, moves across the frame and back (its rectangles at 96x96 go
         # from x 26-80 to x 42-81: the last one's left part must be background again),
         # then the frame changes size twice (a texture of a new size is copied whole)
-        for step, (offset, size) in enumerate([
-                ((0, 0, 0), SIZE), ((0, 0, -4), SIZE), ((0, 3, -8), SIZE),
-                ((0, -2, 3), SIZE), ((0, 0, 6), SIZE), ((0, 0, 0), SIZE),
-                ((0, 0, -4), (80, 72)), ((0, 0, 0), SIZE)]):
+        for step, (offset, size) in enumerate(
+            [
+                ((0, 0, 0), SIZE),
+                ((0, 0, -4), SIZE),
+                ((0, 3, -8), SIZE),
+                ((0, -2, 3), SIZE),
+                ((0, 0, 6), SIZE),
+                ((0, 0, 0), SIZE),
+                ((0, 0, -4), (80, 72)),
+                ((0, 0, 0), SIZE),
+            ]
+        ):
             moved = replace(scene, camera=replace(scene.camera, eye=tuple(eye + offset)))
             frame = moving.render(moved, size=size)
             texture = moving.read_texture("mirror")
@@ -380,8 +450,13 @@ def draw_in_a_child(path: str, version: str | None) -> str:
     env = {k: v for k, v in os.environ.items() if k != "MESA_GL_VERSION_OVERRIDE"}
     if version is not None:
         env["MESA_GL_VERSION_OVERRIDE"] = version
-    result = subprocess.run([sys.executable, "-c", _DRAW_IN_A_CHILD, path],
-                            capture_output=True, text=True, timeout=120, env=env)
+    result = subprocess.run(
+        [sys.executable, "-c", _DRAW_IN_A_CHILD, path],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+    )
     assert result.returncode == 0, result.stderr
     return result.stdout.strip()
 
@@ -395,4 +470,5 @@ def test_a_context_under_opengl_4_3_draws_the_same_frame_a_part_at_a_time():
     assert packed.split()[0] == "packed" and older.split()[0] == "per-draw"
     assert packed.split()[1] == older.split()[1]
     assert draw_in_a_child("packed", "4.2") == (
-        "ValueError draw_path 'packed' needs OpenGL 4.3; this context has 4.2")
+        "ValueError draw_path 'packed' needs OpenGL 4.3; this context has 4.2"
+    )

@@ -53,13 +53,15 @@ PANEL = load_scene("sphere_room").object("floor").mesh
 
 def sphere_scene(correction: str, map_size: int = MAP) -> Scene:
     """The chrome sphere among its objects as a live cube map with ``correction``."""
-    return apply_options(load_scene("chrome_sphere"), {"method": "cube-live",
-                                                       "map_size": map_size,
-                                                       "parallax": correction})
+    return apply_options(
+        load_scene("chrome_sphere"),
+        {"method": "cube-live", "map_size": map_size, "parallax": correction},
+    )
 
 
-def read_rays(renderer, scene: Scene, view: View | None = None,
-              name: str = "sphere") -> dict[int, np.ndarray]:
+def read_rays(
+    renderer, scene: Scene, view: View | None = None, name: str = "sphere"
+) -> dict[int, np.ndarray]:
     """Every output of one view of ``scene``, ``(h, w, 4)`` float32 each, by mode."""
     target = FloatFramebuffer(renderer.registry, SIZE, SIZE)
     curved = None
@@ -95,8 +97,7 @@ def reference(renderer, scene: Scene, outputs, pixels, name: str = "sphere"):
     correction = reflector.parallax
     none = np.zeros(len(origin), bool)
     if isinstance(correction, BoxProxy):
-        return parallax.box_lookup(origin, direction, center, correction.min,
-                                   correction.max), none
+        return parallax.box_lookup(origin, direction, center, correction.min, correction.max), none
     if isinstance(correction, SphereProxy):
         return parallax.sphere_lookup(origin, direction, center, correction.radius), none
     assert isinstance(correction, DistanceSearch)
@@ -104,10 +105,16 @@ def reference(renderer, scene: Scene, outputs, pixels, name: str = "sphere"):
     drawn = renderer.last_frame.plan.top.draws[0]
     faces = np.stack([live.depth(drawn.slot).read_face(face) for face in range(6)])
     near, far = capture_depth_range(drawn.source)
-    return parallax.distance_lookup(origin, direction, center,
-                                    parallax.depth_capture(faces, near, far),
-                                    correction.steps, correction.secant, correction.thickness,
-                                    encloses(scene, center, name))
+    return parallax.distance_lookup(
+        origin,
+        direction,
+        center,
+        parallax.depth_capture(faces, near, far),
+        correction.steps,
+        correction.secant,
+        correction.thickness,
+        encloses(scene, center, name),
+    )
 
 
 def random_camera(rng: np.random.Generator) -> Camera:
@@ -115,8 +122,13 @@ def random_camera(rng: np.random.Generator) -> Camera:
     the pedestal hides it), looking near it."""
     azimuth = rng.uniform(0.0, 2.0 * np.pi)
     elevation = np.radians(rng.uniform(5.0, 50.0))
-    direction = np.array([np.cos(elevation) * np.cos(azimuth), np.sin(elevation),
-                          np.cos(elevation) * np.sin(azimuth)])
+    direction = np.array(
+        [
+            np.cos(elevation) * np.cos(azimuth),
+            np.sin(elevation),
+            np.cos(elevation) * np.sin(azimuth),
+        ]
+    )
     eye = direction * rng.uniform(3.0, 8.0)
     target = rng.uniform(-0.3, 0.3, size=3)
     return Camera(eye=tuple(eye), target=tuple(target), fovy=float(rng.uniform(25.0, 45.0)))
@@ -134,7 +146,8 @@ def random_correction(kind: str, rng: np.random.Generator) -> str:
 
 @pytest.mark.parametrize("kind", ["box", "sphere", "distance"])
 def test_each_correction_matches_its_numpy_reference_on_the_rays_of_random_views(
-        scene_renderer, kind):
+    scene_renderer, kind
+):
     # Box and sphere are arithmetic, float32 against float64: over 16 random views, 99 %
     # of the rays within 1.2e-7 of the reference, the worst 7e-5 (an origin next to a face,
     # where the exit distance is ill-conditioned); allowed: 99.9 % within 1e-6, all within
@@ -154,8 +167,10 @@ def test_each_correction_matches_its_numpy_reference_on_the_rays_of_random_views
         error = np.linalg.norm(look[:, :3] - expected, axis=-1)
         same_map = (look[:, 3] < 0.5) == background
         if kind == "distance":
-            assert np.mean((error < 1e-4) & same_map) >= 0.99, (np.percentile(error, 99),
-                                                                  same_map.mean())
+            assert np.mean((error < 1e-4) & same_map) >= 0.99, (
+                np.percentile(error, 99),
+                same_map.mean(),
+            )
         else:
             assert np.mean(error < 1e-6) >= 0.999 and error.max() < 1e-3, error.max()
             assert same_map.all()
@@ -194,19 +209,23 @@ def panel_scene(correction: str) -> tuple[Scene, View]:
     (0, 0, 1), parallel to four faces of a box proxy; at the panel's centre the ray starts
     at the capture centre."""
     scene = sphere_scene(correction)
-    panel = replace(scene.reflector("sphere"), mesh=PANEL,
-                    transform=Transform(position=(0.0, 0.2, 0.0), scale=(1.6, 1.6, 1.0)))
+    panel = replace(
+        scene.reflector("sphere"),
+        mesh=PANEL,
+        transform=Transform(position=(0.0, 0.2, 0.0), scale=(1.6, 1.6, 1.0)),
+    )
     scene = replace(scene, reflectors=(panel,))
     view = math3d.look_at((0.0, 0.2, 5.0), (0.0, 0.2, 0.0), (0.0, 1.0, 0.0))
     projection = math3d.ortho(-1.0, 1.0, -1.0, 1.0, 0.5, 20.0)
-    return scene, View(view=view, projection=projection, size=(SIZE, SIZE), eye=None,
-                       label="straight down -z")
+    return scene, View(
+        view=view, projection=projection, size=(SIZE, SIZE), eye=None, label="straight down -z"
+    )
 
 
-@pytest.mark.parametrize("correction", ["box:-3,-1,-3,3,3,3", "sphere:3", "distance:8+2",
-                                        "distance:3+0"])
-def test_rays_parallel_to_the_box_faces_and_from_the_centre_stay_finite(scene_renderer,
-                                                                       correction):
+@pytest.mark.parametrize(
+    "correction", ["box:-3,-1,-3,3,3,3", "sphere:3", "distance:8+2", "distance:3+0"]
+)
+def test_rays_parallel_to_the_box_faces_and_from_the_centre_stay_finite(scene_renderer, correction):
     scene, view = panel_scene(correction)
     outputs = read_rays(scene_renderer, scene, view)
     pixels = reflector_pixels(outputs)
@@ -249,8 +268,7 @@ def test_box_proxy_in_a_room_matches_the_ray_tracer(scene_renderer):
     assert mask.sum() > 5000
     box, _ = render(scene_renderer, room, ROOM_SIZE)
     mean, _ = assert_close_to_truth("room_box", box, expected, mask, 1.0, 0.01)
-    searched, _ = render(scene_renderer, apply_options(room, {"parallax": "distance"}),
-                         ROOM_SIZE)
+    searched, _ = render(scene_renderer, apply_options(room, {"parallax": "distance"}), ROOM_SIZE)
     assert_close_to_truth("room_distance", searched, expected, mask, 1.0, 0.01)
     plain, _ = render(scene_renderer, apply_options(room, {"parallax": "none"}), ROOM_SIZE)
     plain_mean, plain_share = region_error(plain, expected, mask)
@@ -265,11 +283,15 @@ def cluttered_room() -> Scene:
     from tests.scenekit import block
 
     room = load_scene("sphere_room")
-    ball = MeshObject("ball", data_path("models") / "joint.obj",
-                      Transform(position=(-1.2, 1.5, -1.2), scale=(1.2, 1.2, 1.2)),
-                      color=(0.95, 0.5, 0.1))
-    return replace(room, objects=(*room.objects, block("crate", (1.9, 0.2, 0.2), 1.2,
-                                                       (0.9, 0.9, 0.9)), ball))
+    ball = MeshObject(
+        "ball",
+        data_path("models") / "joint.obj",
+        Transform(position=(-1.2, 1.5, -1.2), scale=(1.2, 1.2, 1.2)),
+        color=(0.95, 0.5, 0.1),
+    )
+    return replace(
+        room, objects=(*room.objects, block("crate", (1.9, 0.2, 0.2), 1.2, (0.9, 0.9, 0.9)), ball)
+    )
 
 
 def near_ball_sky() -> Scene:
@@ -278,9 +300,12 @@ def near_ball_sky() -> Scene:
     from mirrorlab.scene.model import MeshObject
 
     sky = load_scene("chrome_sphere")
-    ball = MeshObject("near_ball", data_path("models") / "joint.obj",
-                      Transform(position=(1.25, 0.2, -0.3), scale=(0.9, 0.9, 0.9)),
-                      color=(0.2, 0.8, 0.9))
+    ball = MeshObject(
+        "near_ball",
+        data_path("models") / "joint.obj",
+        Transform(position=(1.25, 0.2, -0.3), scale=(0.9, 0.9, 0.9)),
+        color=(0.2, 0.8, 0.9),
+    )
     return replace(sky, objects=(*sky.objects, ball))
 
 
@@ -292,8 +317,10 @@ def test_the_distance_search_in_a_closed_room_matches_its_numpy_reference(scene_
     assert encloses(base, base.reflector("sphere").center(), "sphere")
     for _ in range(2):
         eye = np.array([rng.uniform(-1.5, 2.5), rng.uniform(0.0, 2.5), rng.uniform(1.5, 3.2)])
-        scene = replace(base, camera=Camera(eye=tuple(eye), target=(0.5, 1.0, -0.8),
-                                            fovy=40.0, near=0.1, far=40.0))
+        scene = replace(
+            base,
+            camera=Camera(eye=tuple(eye), target=(0.5, 1.0, -0.8), fovy=40.0, near=0.1, far=40.0),
+        )
         outputs = read_rays(scene_renderer, scene)
         pixels = reflector_pixels(outputs)
         assert pixels.sum() > 200
@@ -302,8 +329,10 @@ def test_the_distance_search_in_a_closed_room_matches_its_numpy_reference(scene_
         error = np.linalg.norm(look[:, :3] - expected, axis=-1)
         same_map = (look[:, 3] < 0.5) == background
         assert not background.any()
-        assert np.mean((error < 1e-4) & same_map) >= 0.99, (np.percentile(error, 99),
-                                                              same_map.mean())
+        assert np.mean((error < 1e-4) & same_map) >= 0.99, (
+            np.percentile(error, 99),
+            same_map.mean(),
+        )
 
 
 def test_the_distance_search_leaves_no_cracks_in_a_closed_room(scene_renderer):
@@ -318,8 +347,12 @@ def test_the_distance_search_leaves_no_cracks_in_a_closed_room(scene_renderer):
     image, _ = render(scene_renderer, scene, 160)
     cracks = mask & (image.max(axis=-1) < 25) & (expected.max(axis=-1) > 40)
     if cracks.any():
-        save_failure("distance_cracks", rendered=image, traced=expected,
-                     cracks=(cracks[..., None] * 255).repeat(3, axis=-1).astype(np.uint8))
+        save_failure(
+            "distance_cracks",
+            rendered=image,
+            traced=expected,
+            cracks=(cracks[..., None] * 255).repeat(3, axis=-1).astype(np.uint8),
+        )
     assert not cracks.any(), int(cracks.sum())
     mean, _ = region_error(image, expected, mask)
     assert mean < 3.1, mean
@@ -347,8 +380,7 @@ def test_changing_a_proxys_size_reuses_the_capture_and_changes_the_picture(scene
     room = load_scene("sphere_room")
     first, stats = render(scene_renderer, room, SIZE)
     assert "capture:sphere" in stats.ran
-    smaller = room.with_reflector("sphere", parallax=BoxProxy((-2.0, -1.0, -2.0),
-                                                              (2.0, 3.0, 2.0)))
+    smaller = room.with_reflector("sphere", parallax=BoxProxy((-2.0, -1.0, -2.0), (2.0, 3.0, 2.0)))
     second, stats = render(scene_renderer, smaller, SIZE)
     assert "capture:sphere" in stats.skipped and "capture:sphere" not in stats.ran
     assert np.abs(first.astype(int) - second.astype(int)).max() > 40

@@ -100,8 +100,9 @@ def reflectors(draw, camera, aspect, index: int):
         height = draw(st.sampled_from([0.05, 0.6, 3.0, 12.0, 40.0]))
         technique = draw(st.sampled_from(technique_names("planar")))
         size = draw(st.sampled_from([None, 32]))
-        return mirror(name, center, normal, width, height, technique, up=tuple(up),
-                      texture_size=size)
+        return mirror(
+            name, center, normal, width, height, technique, up=tuple(up), texture_size=size
+        )
     technique = draw(st.sampled_from(technique_names("curved")))
     radius = draw(st.sampled_from([0.05, 0.4, 1.5, 6.0]))
     made = ball(name, center, radius, technique, map_size=draw(st.sampled_from([16, 32])))
@@ -125,20 +126,25 @@ def scenes(draw):
     made = [draw(reflectors(camera, aspect, i)) for i in range(count)]
     live = sum(1 for r in made if r.technique == "cube-live")
     bounces = draw(st.integers(0, 3 if live < 2 else 2))
-    robot = RobotObject(angles=(draw(st.floats(-90, 90)), 30.0, -60.0),
-                        transform=Transform(position=tuple(near_the_edge(draw, camera,
-                                                                         aspect))))
-    objects = (robot, block("block", near_the_edge(draw, camera, aspect), 2.0,
-                            (0.2, 0.8, 0.3)))
+    robot = RobotObject(
+        angles=(draw(st.floats(-90, 90)), 30.0, -60.0),
+        transform=Transform(position=tuple(near_the_edge(draw, camera, aspect))),
+    )
+    objects = (robot, block("block", near_the_edge(draw, camera, aspect), 2.0, (0.2, 0.8, 0.3)))
     for i in range(draw(st.integers(0, 6))):  # small things near the edges, some specks
         side = draw(st.sampled_from([0.003, 0.03, 0.3]))
         turn = tuple(draw(st.floats(-180, 180)) for _ in range(3))
-        speck = block(f"speck{i}", near_the_edge(draw, camera, aspect), side,
-                      (0.9, 0.7, 0.2))
+        speck = block(f"speck{i}", near_the_edge(draw, camera, aspect), side, (0.9, 0.7, 0.2))
         objects += (replace(speck, transform=replace(speck.transform, rotation=turn)),)
     background = draw(st.sampled_from([Background(), Background(kind="sky")]))
-    return size, Scene(name="generated", camera=camera, background=background,
-                       objects=objects, reflectors=tuple(made), max_bounces=bounces)
+    return size, Scene(
+        name="generated",
+        camera=camera,
+        background=background,
+        objects=objects,
+        reflectors=tuple(made),
+        max_bounces=bounces,
+    )
 
 
 def moved(scene: Scene) -> Scene:
@@ -146,18 +152,26 @@ def moved(scene: Scene) -> Scene:
     reflectors = list(scene.reflectors)
     for i, reflector in enumerate(reflectors):
         if isinstance(reflector, PlanarReflector):
-            reflectors[i] = reflector.moved(tuple(np.add(reflector.center, (0.4, -0.3, 0.5))),
-                                            (5.0, 20.0, -10.0))
+            reflectors[i] = reflector.moved(
+                tuple(np.add(reflector.center, (0.4, -0.3, 0.5))), (5.0, 20.0, -10.0)
+            )
             break
     camera = scene.camera
     eye = tuple(np.add(camera.eye, (0.3, 0.1, -0.2)))
     return replace(scene, reflectors=tuple(reflectors), camera=replace(camera, eye=eye))
 
 
-@settings(max_examples=EXAMPLES, deadline=None, derandomize=True,
-          suppress_health_check=[HealthCheck.function_scoped_fixture,
-                                 HealthCheck.too_slow, HealthCheck.data_too_large,
-                                 HealthCheck.large_base_example])
+@settings(
+    max_examples=EXAMPLES,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[
+        HealthCheck.function_scoped_fixture,
+        HealthCheck.too_slow,
+        HealthCheck.data_too_large,
+        HealthCheck.large_base_example,
+    ],
+)
 @given(generated=scenes())
 def test_planned_frames_equal_unplanned_frames_on_generated_scenes(scene_renderer, generated):
     size, scene = generated
@@ -167,44 +181,66 @@ def test_planned_frames_equal_unplanned_frames_on_generated_scenes(scene_rendere
             planned_image = draw(scene_renderer, frame, size)[0]
             every_image = draw(unplanned, frame, size, use_plan=False)[0]
             if not np.array_equal(planned_image, every_image):
-                save_failure(f"plan_lossless_{index}", planned=planned_image,
-                             every_pass=every_image)
+                save_failure(
+                    f"plan_lossless_{index}", planned=planned_image, every_pass=every_image
+                )
                 differing = int((planned_image != every_image).any(axis=-1).sum())
                 plan = scene_renderer.last_frame.plan
-                raise AssertionError(f"frame {index}: {differing} pixels differ\n"
-                                     + "\n".join(plan.describe()) + f"\n{frame}")
+                raise AssertionError(
+                    f"frame {index}: {differing} pixels differ\n"
+                    + "\n".join(plan.describe())
+                    + f"\n{frame}"
+                )
     finally:
         unplanned.release()
 
 
 @pytest.mark.parametrize("method", ["reflected", "stencil", "ortho"])
 def test_a_mirror_flush_with_a_wall_comes_out_the_same_planned_or_not_on_either_path(
-        scene_renderer, method):
+    scene_renderer, method
+):
     """A mirror hung flat on a wall (the two in one plane: their depths tie wherever
     rounding lets them) is drawn in one order whatever the plan skips, culls or scissors,
     and on either draw path: the frames are the same, pixel for pixel, moving or still."""
-    wall = MeshObject(name="wall", mesh=PANEL_MESH, color=(0.7, 0.6, 0.5),
-                      transform=Transform(scale=(8.0, 6.0, 1.0)))
+    wall = MeshObject(
+        name="wall",
+        mesh=PANEL_MESH,
+        color=(0.7, 0.6, 0.5),
+        transform=Transform(scale=(8.0, 6.0, 1.0)),
+    )
     glass = mirror("glass", (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), 3.0, 2.0, method)
     if method == "ortho":
-        glass = replace(glass, ortho=OrthoCapture(eye=(0.0, 0.0, 0.0), target=(0.0, 0.0, 1.0),
-                                                  up=(0.0, 1.0, 0.0),
-                                                  extents=(-1.5, 1.5, -1.0, 1.0, 0.0, 20.0)))
-    scene = Scene(name="flush", camera=looking((1.5, 0.8, 6.0), (0.0, 0.0, 0.0)),
-                  objects=(wall, block("block", (0.6, -0.2, 2.0), 0.8, (0.2, 0.8, 0.3))),
-                  reflectors=(glass,), max_bounces=1)
+        glass = replace(
+            glass,
+            ortho=OrthoCapture(
+                eye=(0.0, 0.0, 0.0),
+                target=(0.0, 0.0, 1.0),
+                up=(0.0, 1.0, 0.0),
+                extents=(-1.5, 1.5, -1.0, 1.0, 0.0, 20.0),
+            ),
+        )
+    scene = Scene(
+        name="flush",
+        camera=looking((1.5, 0.8, 6.0), (0.0, 0.0, 0.0)),
+        objects=(wall, block("block", (0.6, -0.2, 2.0), 0.8, (0.2, 0.8, 0.3))),
+        reflectors=(glass,),
+        max_bounces=1,
+    )
     turned = replace(scene, camera=looking((-1.0, 0.5, 5.0), (0.0, 0.0, 0.0)))
     unplanned = SceneRenderer(scene_renderer.registry)
     per_draw = SceneRenderer(scene_renderer.registry, draw_path="per-draw")
     try:
         for index, frame in enumerate((scene, turned, scene)):
             planned_image = draw(scene_renderer, frame, (96, 80))[0]
-            for name, other, options in (("every_pass", unplanned, {"use_plan": False}),
-                                         ("per_draw", per_draw, {})):
+            for name, other, options in (
+                ("every_pass", unplanned, {"use_plan": False}),
+                ("per_draw", per_draw, {}),
+            ):
                 image = draw(other, frame, (96, 80), **options)[0]
                 if not np.array_equal(planned_image, image):
-                    save_failure(f"flush_{method}_{name}_{index}", planned=planned_image,
-                                 other=image)
+                    save_failure(
+                        f"flush_{method}_{name}_{index}", planned=planned_image, other=image
+                    )
                     differing = int((planned_image != image).any(axis=-1).sum())
                     raise AssertionError(f"frame {index}, {name}: {differing} pixels differ")
     finally:

@@ -13,32 +13,38 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-USER_TEST = '''
+USER_TEST = """
 from mirrorlab.testing import assert_image_close
 
 
 def test_my_mirror(renderer):
     image = renderer.render("lab20", size=(64, 48), method="{method}")
     assert_image_close(image, "expected/my_mirror.png", tolerance=4, fraction=0.99)
-'''
+"""
 
 
 def run_pytest(folder: Path, *args: str) -> subprocess.CompletedProcess:
     """pytest on the user's file, with the environment a user has (tests/imagecheck.py
     points MIRRORLAB_FAILURES at tests/_failures in this process)."""
     env = {k: v for k, v in os.environ.items() if k != "MIRRORLAB_FAILURES"}
-    return subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
-                           "test_mine.py", *args], cwd=folder, capture_output=True,
-                          text=True, timeout=300, env=env)
+    return subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "test_mine.py", *args],
+        cwd=folder,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=env,
+    )
 
 
 def failure_section(output: str) -> list[str]:
     """The lines pytest printed for the failing test, between its header and the summary."""
     lines = output.splitlines()
-    start = next(i for i, line in enumerate(lines) if "test_my_mirror" in line
-                 and line.startswith("_"))
+    start = next(
+        i for i, line in enumerate(lines) if "test_my_mirror" in line and line.startswith("_")
+    )
     end = next(i for i, line in enumerate(lines) if i > start and line.startswith("="))
-    return [line for line in lines[start + 1:end] if line.strip()]
+    return [line for line in lines[start + 1 : end] if line.strip()]
 
 
 def test_the_plugin_makes_checks_and_updates_expected_images(tmp_path):
@@ -49,8 +55,10 @@ def test_the_plugin_makes_checks_and_updates_expected_images(tmp_path):
     assert first.returncode == 1, first.stdout
     section = failure_section(first.stdout)
     assert len(section) <= 3, section
-    assert section[0].startswith("test_mine.py:7: test_my_mirror: no expected image "
-                                 "expected/my_mirror.png; run pytest --mirrorlab-update")
+    assert section[0].startswith(
+        "test_mine.py:7: test_my_mirror: no expected image "
+        "expected/my_mirror.png; run pytest --mirrorlab-update"
+    )
     assert "Traceback" not in first.stdout and "def test_my_mirror" not in first.stdout
     assert not expected.exists()
 

@@ -17,19 +17,32 @@ from tests.gl.frames import draw
 SIZE = (96, 96)
 
 
-@pytest.mark.parametrize(("scene_name", "like"), [
-    ("lab20", "reflected"), ("lab20", "stencil"), ("lab20", "ortho"),
-    ("chrome_sphere", "sphere"), ("chrome_sphere", "sphere-texgen"), ("chrome_sphere", "cube"),
-    ("chrome_sphere", "latlong"), ("chrome_sphere", "normal"),
-    ("mirror_and_sphere", "cube-live")])
+@pytest.mark.parametrize(
+    ("scene_name", "like"),
+    [
+        ("lab20", "reflected"),
+        ("lab20", "stencil"),
+        ("lab20", "ortho"),
+        ("chrome_sphere", "sphere"),
+        ("chrome_sphere", "sphere-texgen"),
+        ("chrome_sphere", "cube"),
+        ("chrome_sphere", "latlong"),
+        ("chrome_sphere", "normal"),
+        ("mirror_and_sphere", "cube-live"),
+    ],
+)
 def test_a_renamed_copy_of_a_technique_draws_the_same_frame(scene_renderer, scene_name, like):
     copy = replace(technique(like), name=f"copy-of-{like}")
     register(copy)
     try:
         scene = mirrorlab.load_scene(scene_name)
         kind = copy.kind
-        original = replace(scene, reflectors=tuple(
-            replace(r, technique=like) if r.kind == kind else r for r in scene.reflectors))
+        original = replace(
+            scene,
+            reflectors=tuple(
+                replace(r, technique=like) if r.kind == kind else r for r in scene.reflectors
+            ),
+        )
         renamed = apply_options(original, {"method": copy.name})
         assert {r.technique for r in renamed.reflectors if r.kind == kind} == {copy.name}
         expected = draw(scene_renderer, original, SIZE)[0]

@@ -26,8 +26,7 @@ from tests.imagecheck import save_failure
 from tests.scenekit import block
 
 SIZES = ((64, 64), (72, 48))
-STEPS = ("pose", "pose", "pose", "still", "camera", "method", "size", "block", "away",
-         "back")
+STEPS = ("pose", "pose", "pose", "still", "camera", "method", "size", "block", "away", "back")
 
 
 def lab(method: str):
@@ -85,8 +84,9 @@ class Drawer:
         if not np.array_equal(image, expected):
             save_failure(f"replay_{label}", replayed=image, expected=expected)
             differing = int((image != expected).any(axis=-1).sum())
-            raise AssertionError(f"{label}: {differing} pixels differ\n"
-                                 + "\n".join(stats.plan.describe()))
+            raise AssertionError(
+                f"{label}: {differing} pixels differ\n" + "\n".join(stats.plan.describe())
+            )
         assert stats.plan.describe() == expected_plan.describe(), label
         assert [p.key for p in stats.plan.passes] == [p.key for p in expected_plan.passes]
         # a replay may draw parts that left a view (clipped away)
@@ -102,13 +102,21 @@ class Drawer:
             target.release()
 
 
-@settings(max_examples=25, deadline=None, derandomize=True,
-          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
-@given(method=st.sampled_from(["ortho", "reflected", "stencil"]),
-       draw_path=st.sampled_from(["packed", "packed", "per-draw"]),
-       steps=st.lists(st.sampled_from(STEPS), min_size=4, max_size=10), data=st.data())
+@settings(
+    max_examples=25,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
+@given(
+    method=st.sampled_from(["ortho", "reflected", "stencil"]),
+    draw_path=st.sampled_from(["packed", "packed", "per-draw"]),
+    steps=st.lists(st.sampled_from(STEPS), min_size=4, max_size=10),
+    data=st.data(),
+)
 def test_replayed_frames_are_the_frames_of_a_renderer_that_never_replays(
-        registry, method, draw_path, steps, data):
+    registry, method, draw_path, steps, data
+):
     first = lab(method)
     drawer = Drawer(registry, draw_path)
     try:
@@ -132,13 +140,17 @@ def test_an_animated_robots_frames_replay_from_the_fourth_on(registry):
         scene = lab("ortho")
         base, lower, upper = scene.robot.angles
         for turn in range(8):
-            drawer.frame(scene.with_angles((base, lower, upper + 2.0 * turn)), SIZES[0],
-                         f"pose {turn}")
+            drawer.frame(
+                scene.with_angles((base, lower, upper + 2.0 * turn)), SIZES[0], f"pose {turn}"
+            )
         assert drawer.replays == 5
         # two poses in turn replay too
         for turn in range(4):
-            drawer.frame(scene.with_angles((base, lower, upper + 2.0 * (turn % 2))),
-                         SIZES[0], f"in turn {turn}")
+            drawer.frame(
+                scene.with_angles((base, lower, upper + 2.0 * (turn % 2))),
+                SIZES[0],
+                f"in turn {turn}",
+            )
         assert drawer.replays == 9
         # standing still: the camera pass alone, planned anew, then recorded, then replayed
         for _ in range(3):
@@ -149,8 +161,7 @@ def test_an_animated_robots_frames_replay_from_the_fourth_on(registry):
 
 
 @pytest.mark.parametrize("change", ["left", "entered", "many", "per-draw"])
-def test_a_pose_is_replayed_only_where_the_calls_draw_every_part_that_may_show(
-        registry, change):
+def test_a_pose_is_replayed_only_where_the_calls_draw_every_part_that_may_show(registry, change):
     """A new pose whose moved parts the views drew is replayed, even where a part left a
     view (drawn, clipped away: the same pixels); one in which a part that a view did not
     draw may now show (the robot coming back into the capture's box), or in which more
@@ -166,16 +177,30 @@ def test_a_pose_is_replayed_only_where_the_calls_draw_every_part_that_may_show(
         if change == "entered":  # half out of the capture's box to begin with
             scene = scene.with_object("robot", transform=Transform(position=(0.0, 0.0, 4.0)))
         if change == "many":  # more boxes than a few, moving together
-            boxes = tuple(block(f"box{i}", (-3.0 + 0.2 * i, 1.0, 0.0), 0.6, (0.9, 0.6, 0.2))
-                          for i in range(FEW_PARTS + 8))
+            boxes = tuple(
+                block(f"box{i}", (-3.0 + 0.2 * i, 1.0, 0.0), 0.6, (0.9, 0.6, 0.2))
+                for i in range(FEW_PARTS + 8)
+            )
             scene = replace(scene, objects=(*scene.objects, *boxes))
         base, lower, upper = scene.robot.angles
         for turn in range(4):
             if change == "many":
-                scene = replace(scene, objects=(*scene.objects[:2], *(
-                    replace(box, transform=replace(box.transform, position=(
-                        box.transform.position[0], 1.0 + 0.01 * turn, 0.0)))
-                    for box in scene.objects[2:])))
+                scene = replace(
+                    scene,
+                    objects=(
+                        *scene.objects[:2],
+                        *(
+                            replace(
+                                box,
+                                transform=replace(
+                                    box.transform,
+                                    position=(box.transform.position[0], 1.0 + 0.01 * turn, 0.0),
+                                ),
+                            )
+                            for box in scene.objects[2:]
+                        ),
+                    ),
+                )
             else:
                 scene = scene.with_angles((base, lower, upper + turn))
             drawer.frame(scene, SIZES[0], "pose")
@@ -186,17 +211,34 @@ def test_a_pose_is_replayed_only_where_the_calls_draw_every_part_that_may_show(
             drawer.frame(scene, SIZES[0], "half out of view")
             assert drawer.replays == replays + 1
             assert drawer.renderer.last_frame.parts_drawn > (
-                drawer.reference.last_frame.parts_drawn)
+                drawer.reference.last_frame.parts_drawn
+            )
             replays += 1
         elif change == "entered":  # back in full view: drawn anew
             scene = scene.with_object("robot", transform=Transform())
             drawer.frame(scene, SIZES[0], "back in view")
             assert drawer.replays == replays
         elif change == "many":  # one box out of the camera's view: drawn anew
-            scene = replace(scene, objects=(*scene.objects[:2], *(
-                replace(box, transform=replace(box.transform, position=(
-                    box.transform.position[0] - (60.0 if i == 0 else 0.0), 1.0, 0.0)))
-                for i, box in enumerate(scene.objects[2:]))))
+            scene = replace(
+                scene,
+                objects=(
+                    *scene.objects[:2],
+                    *(
+                        replace(
+                            box,
+                            transform=replace(
+                                box.transform,
+                                position=(
+                                    box.transform.position[0] - (60.0 if i == 0 else 0.0),
+                                    1.0,
+                                    0.0,
+                                ),
+                            ),
+                        )
+                        for i, box in enumerate(scene.objects[2:])
+                    ),
+                ),
+            )
             drawer.frame(scene, SIZES[0], "a box out of view")
             assert drawer.replays == replays
         for _ in range(3):
@@ -229,25 +271,33 @@ def test_a_replay_leaves_out_the_settings_an_earlier_call_of_it_made_already():
 
     T2D, SSBO = GL.GL_TEXTURE_2D, GL.GL_SHADER_STORAGE_BUFFER
     calls = [
-        _call("glEnable", GL.GL_DEPTH_TEST), _call("glEnable", GL.GL_DEPTH_TEST),
-        _call("glDisable", GL.GL_DEPTH_TEST), _call("glViewport", 0, 0, 8, 8),
-        _call("glViewport", 0, 0, 8, 8), _call("glViewport", 0, 0, 8, 9),
+        _call("glEnable", GL.GL_DEPTH_TEST),
+        _call("glEnable", GL.GL_DEPTH_TEST),
+        _call("glDisable", GL.GL_DEPTH_TEST),
+        _call("glViewport", 0, 0, 8, 8),
+        _call("glViewport", 0, 0, 8, 8),
+        _call("glViewport", 0, 0, 8, 9),
         _call("glBindTexture", T2D, 3),  # the unit is not known: kept
         _call("glBindTexture", T2D, 3),  # nor here
-        _call("glActiveTexture", GL.GL_TEXTURE0), _call("glBindTexture", T2D, 3),
+        _call("glActiveTexture", GL.GL_TEXTURE0),
+        _call("glBindTexture", T2D, 3),
         _call("glBindTexture", T2D, 3),  # left out
-        _call("glActiveTexture", GL.GL_TEXTURE1), _call("glBindTexture", T2D, 3),  # kept
+        _call("glActiveTexture", GL.GL_TEXTURE1),
+        _call("glBindTexture", T2D, 3),  # kept
         _call("glBindFramebuffer", GL.GL_FRAMEBUFFER, 5),
         _call("glBindFramebuffer", GL.GL_DRAW_FRAMEBUFFER, 5),  # left out
         _call("glBindFramebuffer", GL.GL_READ_FRAMEBUFFER, 6),
         _call("glBindFramebuffer", GL.GL_FRAMEBUFFER, 5),  # read was 6: kept
-        _call("glBindBufferBase", SSBO, 0, 7), _call("glBindBuffer", SSBO, 7),  # left out
+        _call("glBindBufferBase", SSBO, 0, 7),
+        _call("glBindBuffer", SSBO, 7),  # left out
         _call("glBindBuffer", GL.GL_ELEMENT_ARRAY_BUFFER, 2),
         _call("glBindBuffer", GL.GL_ELEMENT_ARRAY_BUFFER, 2),  # the vertex array's: kept
-        _call("glClear", GL.GL_COLOR_BUFFER_BIT), _call("glDepthMask", True),
+        _call("glClear", GL.GL_COLOR_BUFFER_BIT),
+        _call("glDepthMask", True),
         _call("glDepthMask", 1),  # the same value given another way: left out
         _call("glDeleteTextures", 1, [3]),  # not followed: everything is forgotten
-        _call("glViewport", 0, 0, 8, 9), _call("glActiveTexture", GL.GL_TEXTURE1),
+        _call("glViewport", 0, 0, 8, 9),
+        _call("glActiveTexture", GL.GL_TEXTURE1),
     ]
     expected = _names(calls)
     for index in (23, 18, 14, 10, 4, 1):  # the repeats
@@ -255,8 +305,7 @@ def test_a_replay_leaves_out_the_settings_an_earlier_call_of_it_made_already():
     assert _names(without_repeats(calls)) == expected
 
 
-def test_an_error_in_a_replayed_frame_is_raised_naming_it_and_the_next_frame_plans_anew(
-        registry):
+def test_an_error_in_a_replayed_frame_is_raised_naming_it_and_the_next_frame_plans_anew(registry):
     """The replayed calls skip PyOpenGL's check after each call: an error they make is
     raised by the frame's own check, naming the replayed frame, and the renderer forgets
     what it held (the next frame is drawn anew, and right)."""
@@ -275,8 +324,9 @@ def test_an_error_in_a_replayed_frame_is_raised_naming_it_and_the_next_frame_pla
         assert recorded is not None
         recorded.calls.extend(for_replay([(GL.glEnable, (0x7FFF,), {})]))
         with pytest.raises(GLPassError, match="frame \\(replayed\\)"):
-            drawer.renderer.render(scene.with_angles((base, lower, upper + 9.0)),
-                                   drawer.targets[SIZES[0]])
+            drawer.renderer.render(
+                scene.with_angles((base, lower, upper + 9.0)), drawer.targets[SIZES[0]]
+            )
         assert GL.glGetError() == GL.GL_NO_ERROR
         assert drawer.renderer.state.held == {}
         drawer.frame(scene.with_angles((base, lower, upper + 10.0)), SIZES[0], "after")
@@ -294,15 +344,20 @@ def test_a_replay_takes_the_state_it_starts_from_as_known_but_the_framebuffers()
     from mirrorlab.passes.base import gl_state
 
     found = gl_state()
-    calls = [_call("glEnable" if found["GL_DEPTH_TEST"] else "glDisable", GL.GL_DEPTH_TEST),
-             _call("glViewport", *found["GL_VIEWPORT"]),
-             _call("glColorMask", *found["GL_COLOR_WRITEMASK"]),
-             _call("glStencilFunc", found["GL_STENCIL_FUNC"], found["GL_STENCIL_REF"],
-                   found["GL_STENCIL_VALUE_MASK"]),
-             _call("glBindFramebuffer", GL.GL_FRAMEBUFFER,
-                   found["GL_DRAW_FRAMEBUFFER_BINDING"]),
-             _call("glClearColor", *found["GL_COLOR_CLEAR_VALUE"]),
-             _call("glViewport", 0, 0, 1, 1)]
+    calls = [
+        _call("glEnable" if found["GL_DEPTH_TEST"] else "glDisable", GL.GL_DEPTH_TEST),
+        _call("glViewport", *found["GL_VIEWPORT"]),
+        _call("glColorMask", *found["GL_COLOR_WRITEMASK"]),
+        _call(
+            "glStencilFunc",
+            found["GL_STENCIL_FUNC"],
+            found["GL_STENCIL_REF"],
+            found["GL_STENCIL_VALUE_MASK"],
+        ),
+        _call("glBindFramebuffer", GL.GL_FRAMEBUFFER, found["GL_DRAW_FRAMEBUFFER_BINDING"]),
+        _call("glClearColor", *found["GL_COLOR_CLEAR_VALUE"]),
+        _call("glViewport", 0, 0, 1, 1),
+    ]
     assert _names(without_repeats(calls, known_state(found))) == _names(calls[4:])
     assert _names(without_repeats(calls)) == _names(calls)
 

@@ -31,10 +31,14 @@ def orbit(scene: Scene, frame: int) -> Scene:
     eye, target = np.asarray(camera.eye), np.asarray(camera.target)
     angle = np.radians(4.0 * frame)
     offset = eye - target
-    turned = (offset[0] * np.cos(angle) - offset[2] * np.sin(angle), offset[1],
-              offset[0] * np.sin(angle) + offset[2] * np.cos(angle))
-    posed = replace(posed, camera=replace(camera, eye=tuple(float(v) for v in
-                                                            target + np.asarray(turned))))
+    turned = (
+        offset[0] * np.cos(angle) - offset[2] * np.sin(angle),
+        offset[1],
+        offset[0] * np.sin(angle) + offset[2] * np.cos(angle),
+    )
+    posed = replace(
+        posed, camera=replace(camera, eye=tuple(float(v) for v in target + np.asarray(turned)))
+    )
     if scene.animation is None and posed.robot is not None and frame >= 2:
         base, lower, upper = posed.robot.angles
         posed = posed.with_angles((base + 6.0 * frame, lower, upper))
@@ -59,8 +63,12 @@ def test_a_joint_moving_in_frame_5_captures_again_in_frame_5(scene_renderer):
     scene = mirrorlab.load_scene("lab20")
     moved = scene.with_angles((-20.0, 30.0, -75.0))
     ran = passes_ran(scene_renderer, [scene] * 4 + [moved] * 3)  # frame 5 is index 4
-    assert ran == ([["capture:mirror", "camera"]] + [["camera"]] * 3
-                   + [["capture:mirror", "camera"]] + [["camera"]] * 2)
+    assert ran == (
+        [["capture:mirror", "camera"]]
+        + [["camera"]] * 3
+        + [["capture:mirror", "camera"]]
+        + [["camera"]] * 2
+    )
 
 
 def test_the_animated_scene_captures_whenever_a_joint_moves(scene_renderer):
@@ -72,12 +80,10 @@ def test_the_animated_scene_captures_whenever_a_joint_moves(scene_renderer):
     assert all(passes[-1] == "camera" for passes in ran)
 
 
-def test_orbiting_the_lab_camera_reuses_the_ortho_capture_and_not_the_reflected_one(
-        scene_renderer):
+def test_orbiting_the_lab_camera_reuses_the_ortho_capture_and_not_the_reflected_one(scene_renderer):
     scene = mirrorlab.load_scene("lab20")
     frames = [replace(orbit(scene, f), objects=scene.objects) for f in range(4)]
-    assert passes_ran(scene_renderer, frames) == [["capture:mirror", "camera"]] + [
-        ["camera"]] * 3
+    assert passes_ran(scene_renderer, frames) == [["capture:mirror", "camera"]] + [["camera"]] * 3
     reflected = [apply_options(frame, {"method": "reflected"}) for frame in frames]
     assert passes_ran(scene_renderer, reflected) == [["capture:mirror", "camera"]] * 4
     stencil = [apply_options(frame, {"method": "stencil"}) for frame in frames]
@@ -93,33 +99,47 @@ def test_scenes_with_nothing_to_capture_run_one_pass_a_frame(scene_renderer, nam
 def test_two_facing_mirrors_capture_mirror_in_mirror_at_two_bounces(scene_renderer):
     scene = mirrorlab.load_scene("two_mirrors")
     stats = draw(scene_renderer, scene, SIZE)[1]
-    captures = [(p.reflector, p.bounce, p.for_view) for p in stats.plan.ran
-                if p.name == "capture"]
+    captures = [(p.reflector, p.bounce, p.for_view) for p in stats.plan.ran if p.name == "capture"]
     # The east mirror is behind the viewer: it is captured only as the west mirror's
     # capture camera sees it, one bounce lower, before the west capture that shows it.
     assert captures == [("east", 1, "west seen from camera"), ("west", 2, "camera")]
     assert draw(scene_renderer, scene, SIZE)[1].ran == ["camera"]
     deeper = replace(scene, max_bounces=3)
-    captures = [(p.reflector, p.bounce) for p in draw(scene_renderer, deeper, SIZE)[1].plan.ran
-                if p.name == "capture"]
+    captures = [
+        (p.reflector, p.bounce)
+        for p in draw(scene_renderer, deeper, SIZE)[1].plan.ran
+        if p.name == "capture"
+    ]
     assert captures == [("west", 1), ("east", 2), ("west", 3)]
 
 
 def test_a_live_cube_is_captured_again_when_an_object_moves_not_the_camera(scene_renderer):
     scene = apply_options(mirrorlab.load_scene("chrome_sphere"), {"method": "cube-live"})
     frames = [scene, orbit(scene, 1), orbit(scene, 2)]
-    moved = scene.with_object("blue_ball", transform=replace(
-        scene.object("blue_ball").transform, position=(-1.9, 1.4, 1.3)))
+    moved = scene.with_object(
+        "blue_ball",
+        transform=replace(scene.object("blue_ball").transform, position=(-1.9, 1.4, 1.3)),
+    )
     ran = passes_ran(scene_renderer, [*frames, moved])
-    assert ran == [["capture:sphere", "camera"], ["camera"], ["camera"],
-                   ["capture:sphere", "camera"]]
+    assert ran == [
+        ["capture:sphere", "camera"],
+        ["camera"],
+        ["camera"],
+        ["capture:sphere", "camera"],
+    ]
 
 
 def test_a_sphere_map_is_baked_again_when_the_view_turns_not_when_it_slides(scene_renderer):
     scene = mirrorlab.load_scene("chrome_sphere")
     camera = scene.camera
-    slid = replace(scene, camera=replace(camera, eye=tuple(np.add(camera.eye, (0.5, 0, 0))),
-                                         target=tuple(np.add(camera.target, (0.5, 0, 0)))))
+    slid = replace(
+        scene,
+        camera=replace(
+            camera,
+            eye=tuple(np.add(camera.eye, (0.5, 0, 0))),
+            target=tuple(np.add(camera.target, (0.5, 0, 0))),
+        ),
+    )
     ran = passes_ran(scene_renderer, [scene, slid, orbit(scene, 1)])
     assert ran == [["bake:sphere", "camera"], ["camera"], ["bake:sphere", "camera"]]
 
@@ -159,11 +179,13 @@ def test_planned_frames_equal_unplanned_frames_pixel_for_pixel(scene_renderer, n
             every_image, every = draw(unplanned, posed, SIZE, use_plan=False)
             assert len(every.plan.ran) >= len(planned.plan.ran)
             if not np.array_equal(planned_image, every_image):
-                save_failure(f"plan_vs_noplan_{name}_{frame}", planned=planned_image,
-                             every_pass=every_image)
+                save_failure(
+                    f"plan_vs_noplan_{name}_{frame}", planned=planned_image, every_pass=every_image
+                )
                 differing = int((planned_image != every_image).any(axis=-1).sum())
-                raise AssertionError(f"{name} frame {frame}: {differing} pixels differ "
-                                     f"between planned and --no-plan")
+                raise AssertionError(
+                    f"{name} frame {frame}: {differing} pixels differ between planned and --no-plan"
+                )
     finally:
         unplanned.release()
 
@@ -178,13 +200,13 @@ def test_planned_frames_equal_unplanned_frames_pixel_for_pixel(scene_renderer, n
 # them; the cube-live sphere shows its surroundings from its centre (parallax), and the
 # mirror shows that sphere; the sphere in the room corrects for parallax with a box.
 TRUTH_TOLERANCE = {
-    ("lab20", "mirror"): 0.74,              # ortho: 76.2% measured
-    ("robot_wave", "mirror"): 0.74,         # ortho, frame 0 is the lab's pose: 76.2%
-    ("two_mirrors", "west"): 0.99,          # reflected, two bounces: 100.0%
+    ("lab20", "mirror"): 0.74,  # ortho: 76.2% measured
+    ("robot_wave", "mirror"): 0.74,  # ortho, frame 0 is the lab's pose: 76.2%
+    ("two_mirrors", "west"): 0.99,  # reflected, two bounces: 100.0%
     ("two_mirrors", "east"): 0.99,
     ("mirror_behind_camera", "mirror"): 0.99,
-    ("chrome_sphere", "sphere"): 0.58,      # sphere map among objects: 60.7%
-    ("spheremap_cone", "cone"): 0.58,       # texgen, per vertex, the picture as is: 60.6%
+    ("chrome_sphere", "sphere"): 0.58,  # sphere map among objects: 60.7%
+    ("spheremap_cone", "cone"): 0.58,  # texgen, per vertex, the picture as is: 60.6%
     ("mirror_and_sphere", "mirror"): 0.95,  # reflected, showing the cube-live sphere: 96.6%
     ("mirror_and_sphere", "sphere"): 0.55,  # cube-live, parallax: 57.4%
     # cube-live with the room as its box proxy: 95.5% (the rest is its silhouette, traced
@@ -225,28 +247,37 @@ def test_each_scene_agrees_with_its_ray_traced_truth(scene_renderer, name, techn
             continue
         share = float(np.mean(worst[mask] <= 10))
         need = TRUTH_TOLERANCE[(name, reflector.name)]
-        if reflector.kind == "planar" and reflector.technique in ("reflected", "stencil") \
-                and not any(r.kind == "curved" for r in scene.reflectors):
+        if (
+            reflector.kind == "planar"
+            and reflector.technique in ("reflected", "stencil")
+            and not any(r.kind == "curved" for r in scene.reflectors)
+        ):
             need = 0.99
         if share < need:
-            save_failure(f"truth_{name}_{technique}_{reflector.name}", rendered=image,
-                         traced=expected, mask=mask[..., None].repeat(3, -1) * 255)
-            raise AssertionError(f"{name} ({technique or 'own techniques'}): "
-                                 f"{reflector.name} has {share:.2%} of {int(mask.sum())} "
-                                 f"pixels within 10/255 of the tracer, need {need:.0%}")
+            save_failure(
+                f"truth_{name}_{technique}_{reflector.name}",
+                rendered=image,
+                traced=expected,
+                mask=mask[..., None].repeat(3, -1) * 255,
+            )
+            raise AssertionError(
+                f"{name} ({technique or 'own techniques'}): "
+                f"{reflector.name} has {share:.2%} of {int(mask.sum())} "
+                f"pixels within 10/255 of the tracer, need {need:.0%}"
+            )
 
 
 # --------------------------------------------------------------------------- GL state
 
 
 @pytest.mark.parametrize("technique", ["reflected", "stencil", "ortho"])
-def test_a_frame_three_bounces_deep_leaves_the_gl_state_as_it_found_it(scene_renderer,
-                                                                         technique):
+def test_a_frame_three_bounces_deep_leaves_the_gl_state_as_it_found_it(scene_renderer, technique):
     from mirrorlab.gl.opengl import GL
     from mirrorlab.gl.resources import Framebuffer
 
-    scene = replace(apply_options(mirrorlab.load_scene("two_mirrors"), {"method": technique}),
-                    max_bounces=3)
+    scene = replace(
+        apply_options(mirrorlab.load_scene("two_mirrors"), {"method": technique}), max_bounces=3
+    )
     target = Framebuffer(scene_renderer.registry, *SIZE)
     try:
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
@@ -267,8 +298,9 @@ def test_a_frame_three_bounces_deep_leaves_the_gl_state_as_it_found_it(scene_ren
 def test_a_deep_stencil_frame_matches_the_tracer_three_bounces_deep(scene_renderer):
     """Stencil mirrors nest three deep (stencil values 1, 2, 3) and still agree with the
     tracer following three reflections."""
-    scene = replace(apply_options(mirrorlab.load_scene("two_mirrors"), {"method": "stencil"}),
-                    max_bounces=3)
+    scene = replace(
+        apply_options(mirrorlab.load_scene("two_mirrors"), {"method": "stencil"}), max_bounces=3
+    )
     size = (160, 160)
     image = draw(scene_renderer, scene, size)[0]
     truth = trace_scene(scene, size)
@@ -300,15 +332,28 @@ def test_two_reflectors_sharing_a_program_each_keep_their_technique(scene_render
     from mirrorlab.scene.model import Transform
 
     scene = mirrorlab.load_scene("chrome_sphere")
-    left = replace(scene.reflector("sphere"), name="left", technique="sphere",
-                   transform=Transform(position=(-1.1, 0.0, 0.0), scale=(0.8, 0.8, 0.8)))
-    right = replace(left, name="right", technique="sphere-vertex",
-                    transform=Transform(position=(1.1, 0.0, 0.0), scale=(0.8, 0.8, 0.8)))
+    left = replace(
+        scene.reflector("sphere"),
+        name="left",
+        technique="sphere",
+        transform=Transform(position=(-1.1, 0.0, 0.0), scale=(0.8, 0.8, 0.8)),
+    )
+    right = replace(
+        left,
+        name="right",
+        technique="sphere-vertex",
+        transform=Transform(position=(1.1, 0.0, 0.0), scale=(0.8, 0.8, 0.8)),
+    )
     both = draw(scene_renderer, replace(scene, objects=(), reflectors=(left, right)))[0]
     alone_left = draw(scene_renderer, replace(scene, objects=(), reflectors=(left,)))[0]
     alone_right = draw(scene_renderer, replace(scene, objects=(), reflectors=(right,)))[0]
     half = SIZE[0] // 2
     assert np.array_equal(both[:, :half], alone_left[:, :half])
     assert np.array_equal(both[:, half:], alone_right[:, half:])
-    assert not np.array_equal(alone_left[:, :half], draw(scene_renderer, replace(
-        scene, objects=(), reflectors=(replace(left, technique="sphere-vertex"),)))[0][:, :half])
+    assert not np.array_equal(
+        alone_left[:, :half],
+        draw(
+            scene_renderer,
+            replace(scene, objects=(), reflectors=(replace(left, technique="sphere-vertex"),)),
+        )[0][:, :half],
+    )

@@ -41,7 +41,8 @@ def test_the_per_draw_path_draws_the_same_frames(registry, sequence):
 
 @pytest.mark.parametrize("sequence", SEQUENCES, ids=[s.name for s in SEQUENCES])
 def test_frames_drawn_again_into_one_target_are_replayed_as_the_golden_frames(
-        scene_renderer, registry, sequence):
+    scene_renderer, registry, sequence
+):
     """Into one target, as a program drawing a scene would: each frame of a still
     sequence drawn four times over (the fourth time the third's calls are made again),
     and an animated scene's frames one after another (from the fourth frame planned as
@@ -80,9 +81,16 @@ def assert_golden(actual: np.ndarray, sequence, prefix: str = "") -> None:
         return
     width = SIZE[0]
     differing = (actual != expected).any(axis=-1)
-    per_frame = [int(differing[:, i * width:(i + 1) * width].sum())
-                 for i in range(len(sequence.frames))]
-    folder = save_failure(f"golden_{prefix}{sequence.name}", actual=actual, expected=expected,
-                          diff=difference_image(actual, expected))
-    raise AssertionError(f"{sequence.name}: pixels differing in each frame {per_frame} "
-                         f"(of {SIZE[0] * SIZE[1]}); images in {folder}")
+    per_frame = [
+        int(differing[:, i * width : (i + 1) * width].sum()) for i in range(len(sequence.frames))
+    ]
+    folder = save_failure(
+        f"golden_{prefix}{sequence.name}",
+        actual=actual,
+        expected=expected,
+        diff=difference_image(actual, expected),
+    )
+    raise AssertionError(
+        f"{sequence.name}: pixels differing in each frame {per_frame} "
+        f"(of {SIZE[0] * SIZE[1]}); images in {folder}"
+    )

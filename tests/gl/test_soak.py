@@ -28,11 +28,12 @@ def test_rounds_of_every_scene_and_technique_leave_what_the_last_left(soak):
     # lab20, mirror_and_sphere, mirror_behind_camera, robot_wave, two_mirrors x 3 planar
     # techniques + chrome_sphere, sphere_room, spheremap_cone x 7 curved + no_mirror
     assert pairs == 37
-    samples, blocks = soak.frame_soak(frames=3 * pairs, switch_every=1, size=(32, 32),
-                                      sample_every=1)
-    assert blocks[:pairs] == blocks[pairs:2 * pairs] == blocks[2 * pairs:]
+    samples, blocks = soak.frame_soak(
+        frames=3 * pairs, switch_every=1, size=(32, 32), sample_every=1
+    )
+    assert blocks[:pairs] == blocks[pairs : 2 * pairs] == blocks[2 * pairs :]
     assert len(set(blocks)) == pairs
-    rounds = [samples[i * pairs:(i + 1) * pairs] for i in range(3)]
+    rounds = [samples[i * pairs : (i + 1) * pairs] for i in range(3)]
     # The first round also fills the caches shared across scenes (programs, meshes,
     # pictures); from then on, after the same pair the same GL objects are live: nothing
     # a frame, a pass or a scene made is left behind.

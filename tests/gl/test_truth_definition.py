@@ -85,21 +85,23 @@ def test_the_truth_holds_at_every_scale(scene_renderer, name, method):
 def sliver_scene(degrees: float, method: str) -> Scene:
     """A mirror lying flat, seen at ``degrees`` above its plane: a strip a few pixels high
     between two views of a textured wall behind it, which it reflects."""
-    wall = MeshObject("wall", PANEL_MESH, Transform(position=(0.0, 0.0, -4.0),
-                                                    scale=(12.0, 12.0, 1.0)),
-                      texture=texture_file("launch"))
-    glass = mirror("glass", (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 6.0, 6.0, method,
-                   up=(0.0, 0.0, -1.0))
+    wall = MeshObject(
+        "wall",
+        PANEL_MESH,
+        Transform(position=(0.0, 0.0, -4.0), scale=(12.0, 12.0, 1.0)),
+        texture=texture_file("launch"),
+    )
+    glass = mirror("glass", (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), 6.0, 6.0, method, up=(0.0, 0.0, -1.0))
     angle = math.radians(degrees)
-    camera = looking((0.0, 14.0 * math.sin(angle), 14.0 * math.cos(angle)), (0.0, 0.0, 0.0),
-                     fovy=40.0)
+    camera = looking(
+        (0.0, 14.0 * math.sin(angle), 14.0 * math.cos(angle)), (0.0, 0.0, 0.0), fovy=40.0
+    )
     return Scene(name="sliver", camera=camera, objects=(wall,), reflectors=(glass,))
 
 
 @pytest.mark.parametrize("degrees", [1.4, 3.0])
 @pytest.mark.parametrize("method", ["reflected", "stencil"])
-def test_a_mirror_seen_at_a_grazing_angle_takes_its_own_mip_level(scene_renderer, degrees,
-                                                                   method):
+def test_a_mirror_seen_at_a_grazing_angle_takes_its_own_mip_level(scene_renderer, degrees, method):
     """Each truth pixel's level of detail comes from its own ray differentials, not from
     a neighbour that sees the wall directly (which put the sliver's reflection at a
     coarse level: 85.6% at 1.4 degrees; now 100%)."""
@@ -123,14 +125,18 @@ def test_a_live_cube_map_sees_as_far_as_the_scene_reaches(scene_renderer):
     from mirrorlab.data import data_path
 
     sky = mirrorlab.load_scene("chrome_sphere")
-    far_ball = MeshObject("far_ball", data_path("models") / "env_sphere.obj",
-                          Transform(position=(25.0, 55.0, 275.0), scale=(30.0, 30.0, 30.0)),
-                          color=(0.9, 0.1, 0.8))
+    far_ball = MeshObject(
+        "far_ball",
+        data_path("models") / "env_sphere.obj",
+        Transform(position=(25.0, 55.0, 275.0), scale=(30.0, 30.0, 30.0)),
+        color=(0.9, 0.1, 0.8),
+    )
     distance = np.linalg.norm((25.0, 55.0, 275.0)) - 30.0
     assert distance >= 250.0
-    scene = apply_options(replace(sky, objects=(*sky.objects, far_ball),
-                                  camera=replace(sky.camera, fovy=12.0)),
-                          {"method": "cube-live"})
+    scene = apply_options(
+        replace(sky, objects=(*sky.objects, far_ball), camera=replace(sky.camera, fovy=12.0)),
+        {"method": "cube-live"},
+    )
     size = (128, 128)
     image = draw(scene_renderer, scene, size)[0]
     truth = trace_scene(scene, size)

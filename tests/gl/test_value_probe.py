@@ -33,8 +33,7 @@ def test_solutions_give_the_numpy_references(registry):
     assert np.abs(sphere["reflect_eye"][:, :3] - reflect(u, n)).max() <= 1e-5
     r = probe.SPHERE_R
     unit = r[:16]  # the unit inputs: the solution's formula is envmap.sphere_map there
-    assert np.abs(sphere["sphere_map_st"][:16, :2] - np.stack(sphere_map(unit), -1)).max() \
-        <= 1e-5
+    assert np.abs(sphere["sphere_map_st"][:16, :2] - np.stack(sphere_map(unit), -1)).max() <= 1e-5
     # on every input: Hoff's formula as written (it takes r to be unit length)
     assert np.abs(sphere["sphere_map_st"][:, :2] - probe._hoff(r)).max() <= 1e-5
     cube = run(registry, "cubemap", glsl("cubemap"))
@@ -52,8 +51,10 @@ SPHERE_SLIPS = {
     "clamped": ("u - 2.0 * dot(n, u) * n", "u - 2.0 * max(dot(n, u), 0.0) * n"),
     "abs_dot": ("u - 2.0 * dot(n, u) * n", "u - 2.0 * abs(dot(n, u)) * n"),
     "sign": ("u - 2.0 * dot(n, u) * n", "-(u - 2.0 * dot(n, u) * n)"),
-    "unnormalised": ("    return vec2(r.x / m + 0.5, r.y / m + 0.5);",
-                     "    vec3 h = r + vec3(0.0, 0.0, 1.0);\n    return h.xy / 2.0 + 0.5;"),
+    "unnormalised": (
+        "    return vec2(r.x / m + 0.5, r.y / m + 0.5);",
+        "    vec3 h = r + vec3(0.0, 0.0, 1.0);\n    return h.xy / 2.0 + 0.5;",
+    ),
     "no_plus_one": ("(r.z + 1.0) * (r.z + 1.0)", "r.z * r.z"),
     "minus_one": ("(r.z + 1.0) * (r.z + 1.0)", "(r.z - 1.0) * (r.z - 1.0)"),
     "no_half": ("vec2(r.x / m + 0.5, r.y / m + 0.5)", "vec2(r.x / m + 1/2, r.y / m + 1/2)"),
@@ -74,17 +75,36 @@ def test_sphere_slips_are_named_by_value(registry, name):
 CUBE = "if (face == 2) { sc = r.x; tc = r.z; ma = abs(r.y); }"
 
 
-@pytest.mark.parametrize("old,new,whole,faces", [
-    ("(sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0", "(tc / ma + 1.0) / 2.0, "
-     "(sc / ma + 1.0) / 2.0", "swap", {}),
-    ("return vec2((sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0);",
-     "return vec2(1/2 * (sc / ma + 1.0), 1/2 * (tc / ma + 1.0));", "zero", {}),
-    ("ma = abs(r.x); }\n    else if (face == 2)", "ma = r.x; }\n    else if (face == 2)",
-     "", {1: "signed_major"}),
-    (CUBE, "if (face == 2) { sc = r.z; tc = r.x; ma = abs(r.y); }", "", {2: "swap"}),
-    ("(sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0",
-     "(sc / length(r) + 1.0) / 2.0, (tc / length(r) + 1.0) / 2.0", "length", {}),
-])
+@pytest.mark.parametrize(
+    "old,new,whole,faces",
+    [
+        (
+            "(sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0",
+            "(tc / ma + 1.0) / 2.0, (sc / ma + 1.0) / 2.0",
+            "swap",
+            {},
+        ),
+        (
+            "return vec2((sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0);",
+            "return vec2(1/2 * (sc / ma + 1.0), 1/2 * (tc / ma + 1.0));",
+            "zero",
+            {},
+        ),
+        (
+            "ma = abs(r.x); }\n    else if (face == 2)",
+            "ma = r.x; }\n    else if (face == 2)",
+            "",
+            {1: "signed_major"},
+        ),
+        (CUBE, "if (face == 2) { sc = r.z; tc = r.x; ma = abs(r.y); }", "", {2: "swap"}),
+        (
+            "(sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0",
+            "(sc / length(r) + 1.0) / 2.0, (tc / length(r) + 1.0) / 2.0",
+            "length",
+            {},
+        ),
+    ],
+)
 def test_cube_slips_are_named_by_value_per_face(registry, old, new, whole, faces):
     text = glsl("cubemap")
     assert old in text
@@ -114,7 +134,7 @@ def test_the_probe_runs_on_a_core_context():
         "    print('profile', int(GL.glGetIntegerv(GL.GL_CONTEXT_PROFILE_MASK)))\n"
         "    for lab, variable, kit in (('spheremap', 'SPHERE_MAP_GLSL', 'kit_sphere.frag'),\n"
         "                               ('cubemap', 'CUBE_MAP_GLSL', 'kit_cube.frag')):\n"
-        "        text = re.search(variable + ' = \"\"\"(.*?)\"\"\"', solution(lab), re.S)[1]\n"
+        '        text = re.search(variable + \' = """(.*?)"""\', solution(lab), re.S)[1]\n'
         "        for name, old, new in (('right', 'XX', 'XX'),\n"
         "                               ('swap', '(sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0',\n"
         "                                '(tc / ma + 1.0) / 2.0, (sc / ma + 1.0) / 2.0'),\n"
@@ -124,27 +144,43 @@ def test_the_probe_runs_on_a_core_context():
         "                continue\n"
         "            values = probe.run_probe(kit, text.replace(old, new),\n"
         "                                     probe.LAB_FUNCTIONS[lab], context.resources)\n"
-        "            print(lab, name, *(probe.slip(f, v) for f, v in values.items()))\n")
-    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                          env={**os.environ, **MACOS_CONTEXT}, timeout=300)
+        "            print(lab, name, *(probe.slip(f, v) for f, v in values.items()))\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script],
+        capture_output=True,
+        text=True,
+        env={**os.environ, **MACOS_CONTEXT},
+        timeout=300,
+    )
     assert done.returncode == 0, done.stderr[-2000:]
     lines = done.stdout.splitlines()
     assert lines[0] == "profile 1"  # GL_CONTEXT_CORE_PROFILE_BIT
-    assert lines[1:] == ["spheremap right right right", "spheremap clamped clamped right",
-                         "cubemap right right right", "cubemap swap right swap"]
+    assert lines[1:] == [
+        "spheremap right right right",
+        "spheremap clamped clamped right",
+        "cubemap right right right",
+        "cubemap swap right swap",
+    ]
 
 
-@pytest.mark.parametrize("old,new,name", [
-    ("    vec3 a = abs(r);", "    vec3 a = r;", "signed"),
-    ("return r.x >= 0.0 ? 0 : 1;", "return r.x >= 0.0 ? 1 : 0;", ""),
-])
+@pytest.mark.parametrize(
+    "old,new,name",
+    [
+        ("    vec3 a = abs(r);", "    vec3 a = r;", "signed"),
+        ("return r.x >= 0.0 ? 0 : 1;", "return r.x >= 0.0 ? 1 : 0;", ""),
+    ],
+)
 def test_face_slips_are_named_by_value(registry, old, new, name):
     text = glsl("cubemap")
     assert old in text
     values = run(registry, "cubemap", text.replace(old, new))["cube_face"]
     assert probe.slip("cube_face", values) == name
-    for right, wrong in ((" ? 0 : 1;", " ? 1 : 0;"), (" ? 2 : 3;", " ? 3 : 2;"),
-                         (" ? 4 : 5;", " ? 5 : 4;")):
+    for right, wrong in (
+        (" ? 0 : 1;", " ? 1 : 0;"),
+        (" ? 2 : 3;", " ? 3 : 2;"),
+        (" ? 4 : 5;", " ? 5 : 4;"),
+    ):
         assert right in text
         text = text.replace(right, wrong)
     values = run(registry, "cubemap", text)["cube_face"]

@@ -23,9 +23,18 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
-HIDDEN = ("PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV", "PYOPENGL_PLATFORM", "EGL_PLATFORM",
-          "MIRRORLAB_FAILURES", "MIRRORLAB_SOLUTIONS", "MIRRORLAB_CACHE", "PYTEST_ADDOPTS",
-          "PYTEST_CURRENT_TEST")
+HIDDEN = (
+    "PYTHONPATH",
+    "PYTHONHOME",
+    "VIRTUAL_ENV",
+    "PYOPENGL_PLATFORM",
+    "EGL_PLATFORM",
+    "MIRRORLAB_FAILURES",
+    "MIRRORLAB_SOLUTIONS",
+    "MIRRORLAB_CACHE",
+    "PYTEST_ADDOPTS",
+    "PYTEST_CURRENT_TEST",
+)
 """Variables of this test process that a user's shell would not have."""
 
 
@@ -47,13 +56,20 @@ class Installed:
         env["PATH"] = f"{self.bin}{os.pathsep}{env.get('PATH', '')}"
         return env
 
-    def run(self, *args: str, cwd: Path, timeout: float = 300,
-            **extra_env: str) -> subprocess.CompletedProcess:
+    def run(
+        self, *args: str, cwd: Path, timeout: float = 300, **extra_env: str
+    ) -> subprocess.CompletedProcess:
         """A program of the venv (``"mirrorlab", "render"``, ``"python", "-c", ...``) run in
         ``cwd`` as a user's shell would run it."""
         program = str(self.bin / args[0])
-        return subprocess.run([program, *args[1:]], cwd=cwd, capture_output=True, text=True,
-                              timeout=timeout, env={**self.env(), **extra_env})
+        return subprocess.run(
+            [program, *args[1:]],
+            cwd=cwd,
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            env={**self.env(), **extra_env},
+        )
 
     def python(self, code: str, cwd: Path, timeout: float = 300) -> subprocess.CompletedProcess:
         return self.run("python", "-c", code, cwd=cwd, timeout=timeout)
@@ -61,13 +77,24 @@ class Installed:
 
 def _check(done: subprocess.CompletedProcess, what: str) -> None:
     if done.returncode != 0:
-        raise RuntimeError(f"{what} failed (exit {done.returncode}):\n{done.stdout[-3000:]}"
-                           f"\n{done.stderr[-3000:]}")
+        raise RuntimeError(
+            f"{what} failed (exit {done.returncode}):\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
+        )
 
 
-BUILD_LEFTOVERS = shutil.ignore_patterns(".git", ".venv*", "build", "dist", "site", "out",
-                                         "*.egg-info", "__pycache__", ".*_cache",
-                                         ".hypothesis", "_failures")
+BUILD_LEFTOVERS = shutil.ignore_patterns(
+    ".git",
+    ".venv*",
+    "build",
+    "dist",
+    "site",
+    "out",
+    "*.egg-info",
+    "__pycache__",
+    ".*_cache",
+    ".hypothesis",
+    "_failures",
+)
 
 
 def build_wheel(out_dir: Path) -> Path:
@@ -76,9 +103,23 @@ def build_wheel(out_dir: Path) -> Path:
     could otherwise put files in the wheel that the checkout no longer has."""
     source = out_dir.parent / "source"
     shutil.copytree(REPO, source, ignore=BUILD_LEFTOVERS)
-    done = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q",
-                           "--disable-pip-version-check", "-w", str(out_dir), str(source)],
-                          capture_output=True, text=True, timeout=600)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "wheel",
+            "--no-deps",
+            "-q",
+            "--disable-pip-version-check",
+            "-w",
+            str(out_dir),
+            str(source),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     _check(done, "building the wheel")
     wheels = sorted(out_dir.glob("mirrorlab-*.whl"))
     assert len(wheels) == 1, wheels
@@ -93,11 +134,31 @@ def installed() -> Iterator[Installed]:
     try:
         wheel = build_wheel(root / "dist")
         venv = root / "home" / "venv"
-        _check(subprocess.run([sys.executable, "-m", "venv", str(venv)], capture_output=True,
-                              text=True, timeout=300), "making the venv")
-        done = subprocess.run([str(venv / "bin" / "python"), "-m", "pip", "install", "-q",
-                               "--disable-pip-version-check", str(wheel), "pytest"],
-                              capture_output=True, text=True, timeout=1200, cwd=root)
+        _check(
+            subprocess.run(
+                [sys.executable, "-m", "venv", str(venv)],
+                capture_output=True,
+                text=True,
+                timeout=300,
+            ),
+            "making the venv",
+        )
+        done = subprocess.run(
+            [
+                str(venv / "bin" / "python"),
+                "-m",
+                "pip",
+                "install",
+                "-q",
+                "--disable-pip-version-check",
+                str(wheel),
+                "pytest",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=1200,
+            cwd=root,
+        )
         _check(done, "installing the wheel")
         yield Installed(root=root, venv=venv, wheel=wheel)
     finally:

@@ -16,35 +16,50 @@ from tests.installed.conftest import Installed
 
 def test_the_wheel_carries_each_labs_handout_starter_and_reference(wheel_names: list[str]):
     for spec in LABS.values():
-        for name in ("handout.md", "starter.py", "reference/evidence.json",
-                     "reference/arrays.npz"):
+        for name in ("handout.md", "starter.py", "reference/evidence.json", "reference/arrays.npz"):
             assert f"mirrorlab/labs/content/{spec.folder}/{name}" in wheel_names
     assert "mirrorlab/labs/student/runner.py" in wheel_names
     assert not [n for n in wheel_names if n.startswith(("labs/", "tests/"))]
 
 
-def test_lab_start_and_check_from_the_installed_wheel(installed: Installed,
-                                                      empty_folder: Path):
+def test_lab_start_and_check_from_the_installed_wheel(installed: Installed, empty_folder: Path):
     assert installed.root.stat().st_mode & 0o077 == 0  # a closed folder above the venv
     cache = empty_folder / "cache"
-    where = installed.python("import mirrorlab.labs.student as s, mirrorlab.labs.content as c;"
-                             " print(s.__file__); print(c.__file__)", cwd=empty_folder)
+    where = installed.python(
+        "import mirrorlab.labs.student as s, mirrorlab.labs.content as c;"
+        " print(s.__file__); print(c.__file__)",
+        cwd=empty_folder,
+    )
     assert all(line.startswith(str(installed.venv)) for line in where.stdout.split()), where
 
     started = installed.run("mirrorlab", "lab", "start", "lab20", "mine", cwd=empty_folder)
     assert started.returncode == 0, started.stderr
-    assert sorted(p.name for p in (empty_folder / "mine").iterdir()) == ["README.md",
-                                                                           "starter.py"]
-    checked = installed.run("mirrorlab", "lab", "check", "lab20", "mine/starter.py",
-                            cwd=empty_folder, MIRRORLAB_CACHE=str(cache))
+    assert sorted(p.name for p in (empty_folder / "mine").iterdir()) == ["README.md", "starter.py"]
+    checked = installed.run(
+        "mirrorlab",
+        "lab",
+        "check",
+        "lab20",
+        "mine/starter.py",
+        cwd=empty_folder,
+        MIRRORLAB_CACHE=str(cache),
+    )
     assert checked.returncode == 1, checked.stdout + checked.stderr
     assert "0/8 tasks passed" in checked.stdout and checked.stderr == ""
     assert (empty_folder / "out" / "lab20_check.png").is_file()
 
-    shutil.copy(REPO_DIR / "labs" / "solutions" / "lab20_mirror.py",
-                empty_folder / "mine" / "done.py")
-    checked = installed.run("mirrorlab", "lab", "check", "lab20", "mine/done.py",
-                            cwd=empty_folder, MIRRORLAB_CACHE=str(cache))
+    shutil.copy(
+        REPO_DIR / "labs" / "solutions" / "lab20_mirror.py", empty_folder / "mine" / "done.py"
+    )
+    checked = installed.run(
+        "mirrorlab",
+        "lab",
+        "check",
+        "lab20",
+        "mine/done.py",
+        cwd=empty_folder,
+        MIRRORLAB_CACHE=str(cache),
+    )
     assert checked.returncode == 0, checked.stdout + checked.stderr
     assert "8/8 tasks passed" in checked.stdout
     assert not cache.exists()  # judged against the packaged reference

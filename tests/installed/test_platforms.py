@@ -51,16 +51,33 @@ def uv() -> str:
 
 
 def resolve(platform: str, python: str) -> subprocess.CompletedProcess:
-    command = [uv(), "pip", "compile", str(REPO / "pyproject.toml"),
-               *[f"--extra={extra}" for extra in EXTRAS],
-               "--python-platform", platform, "--python-version", python,
-               "--python", sys.executable, "--no-python-downloads",
-               "--only-binary", ":all:", "--prerelease", "disallow",
-               "--no-header", "--no-annotate", "--quiet"]
-    env = {k: v for k, v in os.environ.items()
-           if not k.startswith(("UV_INDEX", "UV_EXTRA_INDEX", "UV_FIND_LINKS", "PIP_"))}
-    return subprocess.run(command, capture_output=True, text=True, timeout=300, env=env,
-                          cwd=REPO)
+    command = [
+        uv(),
+        "pip",
+        "compile",
+        str(REPO / "pyproject.toml"),
+        *[f"--extra={extra}" for extra in EXTRAS],
+        "--python-platform",
+        platform,
+        "--python-version",
+        python,
+        "--python",
+        sys.executable,
+        "--no-python-downloads",
+        "--only-binary",
+        ":all:",
+        "--prerelease",
+        "disallow",
+        "--no-header",
+        "--no-annotate",
+        "--quiet",
+    ]
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if not k.startswith(("UV_INDEX", "UV_EXTRA_INDEX", "UV_FIND_LINKS", "PIP_"))
+    }
+    return subprocess.run(command, capture_output=True, text=True, timeout=300, env=env, cwd=REPO)
 
 
 def pins(output: str) -> dict[str, str]:
@@ -77,12 +94,15 @@ def pins(output: str) -> dict[str, str]:
 @pytest.mark.parametrize("python", ["3.11", "3.12", "3.13"])
 def test_the_dependencies_resolve_to_stable_wheels_on_every_desktop(python: str):
     with ThreadPoolExecutor(max_workers=len(PLATFORMS)) as pool:
-        done = dict(zip(PLATFORMS, pool.map(lambda p: resolve(p, python),
-                                            PLATFORMS.values()), strict=True))
-    failed = {name: result.stderr.strip() for name, result in done.items()
-              if result.returncode != 0}
-    assert not failed, "\n\n".join(f"{name} (CPython {python}): {error}"
-                                   for name, error in failed.items())
+        done = dict(
+            zip(PLATFORMS, pool.map(lambda p: resolve(p, python), PLATFORMS.values()), strict=True)
+        )
+    failed = {
+        name: result.stderr.strip() for name, result in done.items() if result.returncode != 0
+    }
+    assert not failed, "\n\n".join(
+        f"{name} (CPython {python}): {error}" for name, error in failed.items()
+    )
     resolved = {name: pins(result.stdout) for name, result in done.items()}
     for name, found in resolved.items():
         assert "pyopengl" in found and "glfw" in found and "numpy" in found, (name, found)
@@ -95,6 +115,5 @@ def test_the_dependencies_resolve_to_stable_wheels_on_every_desktop(python: str)
     for name, found in resolved.items():
         for package, version in found.items():
             versions.setdefault(package, {})[name] = version
-    apart = {package: where for package, where in versions.items()
-             if len(set(where.values())) > 1}
+    apart = {package: where for package, where in versions.items() if len(set(where.values())) > 1}
     assert not apart, f"CPython {python}: versions differ between platforms: {apart}"

@@ -17,9 +17,12 @@ from tests.installed.conftest import BUILD_LEFTOVERS, REPO
 def test_the_source_distribution_carries_the_teachers_solutions(tmp_path: Path):
     source = tmp_path / "source"
     shutil.copytree(REPO, source, ignore=BUILD_LEFTOVERS)
-    done = subprocess.run([sys.executable, "-m", "build", "--sdist", "-o",
-                           str(tmp_path / "dist"), str(source)],
-                          capture_output=True, text=True, timeout=600)
+    done = subprocess.run(
+        [sys.executable, "-m", "build", "--sdist", "-o", str(tmp_path / "dist"), str(source)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
     [sdist] = sorted((tmp_path / "dist").glob("mirrorlab-*.tar.gz"))
     with tarfile.open(sdist) as archive:

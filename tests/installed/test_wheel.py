@@ -23,7 +23,8 @@ def ok(done) -> str:
 
 
 def test_the_wheel_has_the_licence_the_type_marker_and_the_data_and_no_solutions(
-        installed: Installed, wheel_names: list[str]):
+    installed: Installed, wheel_names: list[str]
+):
     names = set(wheel_names)
     dist_info = next(n.split("/")[0] for n in names if n.endswith(".dist-info/METADATA"))
     assert f"{dist_info}/licenses/LICENSE" in names
@@ -42,9 +43,13 @@ def test_the_wheel_has_the_licence_the_type_marker_and_the_data_and_no_solutions
 
 
 def test_it_runs_from_the_venv_not_the_checkout(installed: Installed, empty_folder: Path):
-    where = ok(installed.python("import mirrorlab, mirrorlab.data as d\n"
-                                "print(mirrorlab.__file__); print(d.scenes_dir())",
-                                cwd=empty_folder)).split()
+    where = ok(
+        installed.python(
+            "import mirrorlab, mirrorlab.data as d\n"
+            "print(mirrorlab.__file__); print(d.scenes_dir())",
+            cwd=empty_folder,
+        )
+    ).split()
     for path in where:
         assert Path(path).is_relative_to(installed.venv), path
         assert not Path(path).is_relative_to(REPO), path
@@ -55,8 +60,9 @@ def test_one_version_everywhere(installed: Installed, empty_folder: Path):
 
     flag = ok(installed.run("mirrorlab", "--version", cwd=empty_folder)).strip()
     module = ok(installed.run("python", "-m", "mirrorlab", "--version", cwd=empty_folder))
-    attribute = ok(installed.python("import mirrorlab; print(mirrorlab.__version__)",
-                                    cwd=empty_folder)).strip()
+    attribute = ok(
+        installed.python("import mirrorlab; print(mirrorlab.__version__)", cwd=empty_folder)
+    ).strip()
     assert flag == module.strip() == f"mirrorlab {attribute}"
     assert attribute == version("mirrorlab")  # the checkout's own metadata: one version
 
@@ -67,59 +73,122 @@ def test_the_default_render_is_the_golden_frame(installed: Installed, empty_fold
     out = ok(installed.run("mirrorlab", "render", "--size", "128x128", cwd=empty_folder))
     assert "out/lab20.png" in out
     image = np.asarray(Image.open(empty_folder / "out" / "lab20.png"))
-    assert_image_close(image, GOLDEN_LAB, tolerance=8, fraction=0.995, max_mean=0.5,
-                       name="installed_default_render")
+    assert_image_close(
+        image,
+        GOLDEN_LAB,
+        tolerance=8,
+        fraction=0.995,
+        max_mean=0.5,
+        name="installed_default_render",
+    )
 
 
 def test_every_shipped_scene_renders(installed: Installed, empty_folder: Path):
-    listed = ok(installed.python(
-        "from mirrorlab.data import scenes_dir\n"
-        "print(' '.join(sorted(p.stem for p in scenes_dir().glob('*.toml'))))",
-        cwd=empty_folder)).split()
+    listed = ok(
+        installed.python(
+            "from mirrorlab.data import scenes_dir\n"
+            "print(' '.join(sorted(p.stem for p in scenes_dir().glob('*.toml'))))",
+            cwd=empty_folder,
+        )
+    ).split()
     assert listed == SHIPPED_SCENES
     for name in SHIPPED_SCENES:
-        ok(installed.run("mirrorlab", "render", name, "--size", "64x48", "--out",
-                         f"{name}.png", cwd=empty_folder))
+        ok(
+            installed.run(
+                "mirrorlab",
+                "render",
+                name,
+                "--size",
+                "64x48",
+                "--out",
+                f"{name}.png",
+                cwd=empty_folder,
+            )
+        )
         image = np.asarray(Image.open(empty_folder / f"{name}.png"))
         assert image.shape == (48, 64, 3), name
         assert image.std() > 8, f"{name} rendered a blank frame"
 
 
 def test_a_short_batch_on_two_processes(installed: Installed, empty_folder: Path):
-    out = ok(installed.run("mirrorlab", "render", "robot_wave", "--frames", "3", "--size",
-                           "64x64", "--out-dir", "frames", "--jobs", "2", cwd=empty_folder))
+    out = ok(
+        installed.run(
+            "mirrorlab",
+            "render",
+            "robot_wave",
+            "--frames",
+            "3",
+            "--size",
+            "64x64",
+            "--out-dir",
+            "frames",
+            "--jobs",
+            "2",
+            cwd=empty_folder,
+        )
+    )
     assert "wrote 3 frames of robot_wave" in out
     assert sorted(p.name for p in (empty_folder / "frames").glob("*.png")) == [
-        f"robot_wave_{f:04d}.png" for f in range(3)]
+        f"robot_wave_{f:04d}.png" for f in range(3)
+    ]
 
 
-def test_without_the_dask_extra_dask_options_say_what_to_install(installed: Installed,
-                                                                 empty_folder: Path):
-    done = installed.run("mirrorlab", "render", "robot_wave", "--frames", "3", "--out-dir",
-                         "frames", "--jobs", "2", "--engine", "dask", cwd=empty_folder)
+def test_without_the_dask_extra_dask_options_say_what_to_install(
+    installed: Installed, empty_folder: Path
+):
+    done = installed.run(
+        "mirrorlab",
+        "render",
+        "robot_wave",
+        "--frames",
+        "3",
+        "--out-dir",
+        "frames",
+        "--jobs",
+        "2",
+        "--engine",
+        "dask",
+        cwd=empty_folder,
+    )
     assert done.returncode == 2
     assert done.stderr.strip().splitlines() == [
         "mirrorlab render: error: --engine dask: needs Dask (dask[distributed]), which is "
-        "not installed; install it with: pip install 'mirrorlab[dask]'"]
+        "not installed; install it with: pip install 'mirrorlab[dask]'"
+    ]
     assert not (empty_folder / "frames").exists()
 
 
-def test_the_speed_benchmark_with_pyrender_beside_it(installed: Installed,
-                                                     empty_folder: Path,
-                                                     pyrender_python: Path):
+def test_the_speed_benchmark_with_pyrender_beside_it(
+    installed: Installed, empty_folder: Path, pyrender_python: Path
+):
     """The benchmark's pyrender worker ships in the wheel and runs in pyrender's own
     environment; the scale scenes come from the package."""
-    out = ok(installed.run("mirrorlab", "bench", "speed", "--quick", "--parts", "scale",
-                           "--scale-modes", "still", "--pyrender", str(pyrender_python),
-                           "--out-dir", "speed", cwd=empty_folder))
+    out = ok(
+        installed.run(
+            "mirrorlab",
+            "bench",
+            "speed",
+            "--quick",
+            "--parts",
+            "scale",
+            "--scale-modes",
+            "still",
+            "--pyrender",
+            str(pyrender_python),
+            "--out-dir",
+            "speed",
+            cwd=empty_folder,
+        )
+    )
     assert "| 12 objects unseen |" in out and "pyrender flat / its base" in out
     assert (empty_folder / "speed" / "scale.csv").is_file()
     assert not (empty_folder / "speed" / "speed.csv").exists()  # no sweep asked for
 
 
 def test_plan_as_json(installed: Installed, empty_folder: Path):
-    plans = json.loads(ok(installed.run("mirrorlab", "plan", "lab20", "--frames", "2",
-                                        "--json", cwd=empty_folder)))
+    plans = json.loads(
+        ok(installed.run("mirrorlab", "plan", "lab20", "--frames", "2", "--json", cwd=empty_folder))
+    )
     text = json.dumps(plans)
     assert "capture" in text and "camera" in text
     assert not any(empty_folder.iterdir()), "plan wrote files"
@@ -159,14 +228,14 @@ def test_the_documented_python_api_examples_run(installed: Installed, empty_fold
         assert np.asarray(Image.open(empty_folder / name)).std() > 8, name
 
 
-USER_TEST = '''
+USER_TEST = """
 from mirrorlab.testing import assert_image_close
 
 
 def test_my_mirror(renderer):
     image = renderer.render("lab20", size=(64, 48), method="{method}")
     assert_image_close(image, "expected/my_mirror.png", tolerance=4, fraction=0.99)
-'''
+"""
 
 
 def test_a_users_pytest_file_with_the_plugin(installed: Installed, empty_folder: Path):
@@ -174,8 +243,17 @@ def test_a_users_pytest_file_with_the_plugin(installed: Installed, empty_folder:
     test_file.write_text(USER_TEST.format(method="ortho"))
 
     def pytest(*args: str):
-        return installed.run("python", "-m", "pytest", "-q", "-p", "no:cacheprovider",
-                             "test_mine.py", *args, cwd=empty_folder)
+        return installed.run(
+            "python",
+            "-m",
+            "pytest",
+            "-q",
+            "-p",
+            "no:cacheprovider",
+            "test_mine.py",
+            *args,
+            cwd=empty_folder,
+        )
 
     first = pytest()
     assert first.returncode == 1 and "run pytest --mirrorlab-update" in first.stdout

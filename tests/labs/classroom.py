@@ -16,17 +16,30 @@ from tests.labs.mutants import EQUIVALENT, LAB20, solution
 TASKS = [t.id for t in LABS["lab20"].tasks]
 
 STARTER = {
-    "lab20": {"capture_camera": "did not run", "capture_scene": "draws nothing",
-              "capture_copy": "never called", "environment_texture": "mipmaps",
-              "base_texture": "base not textured", "mirror_texture": "task 7 (mirror_quad)",
-              "mirror_quad": "not called", "passes": "never calls create_mirror"},
-    "spheremap": {"reflection": "differs from u - 2 (n.u) n",
-                  "sphere_coordinates": "differs from Hoff",
-                  "texgen_setup": "never drawn", "texgen_draw": "never draws the cone",
-                  "side_by_side": "cone is not drawn"},
-    "cubemap": {"face_selection": "wrong face", "face_coordinates": "task 1 (face_selection)",
-                "capture_cameras": "never called", "capture_copy": "never called",
-                "live_frame": "never calls capture_cube"},
+    "lab20": {
+        "capture_camera": "did not run",
+        "capture_scene": "draws nothing",
+        "capture_copy": "never called",
+        "environment_texture": "mipmaps",
+        "base_texture": "base not textured",
+        "mirror_texture": "task 7 (mirror_quad)",
+        "mirror_quad": "not called",
+        "passes": "never calls create_mirror",
+    },
+    "spheremap": {
+        "reflection": "differs from u - 2 (n.u) n",
+        "sphere_coordinates": "differs from Hoff",
+        "texgen_setup": "never drawn",
+        "texgen_draw": "never draws the cone",
+        "side_by_side": "cone is not drawn",
+    },
+    "cubemap": {
+        "face_selection": "wrong face",
+        "face_coordinates": "task 1 (face_selection)",
+        "capture_cameras": "never called",
+        "capture_copy": "never called",
+        "live_frame": "never calls capture_cube",
+    },
 }
 
 
@@ -55,32 +68,43 @@ def attacks(canary_dir: Path, port: int) -> dict[str, tuple[str, dict[str, tuple
     delete, overwrite = canary_dir / "delete_me.txt", canary_dir / "overwrite_me.txt"
     return {
         "attack_endless_loop": ("while True:\n    pass\n", every_task("CPU-time limit")),
-        "attack_fork_bomb": ("import os\nwhile True:\n    try:\n        os.fork()\n"
-                             "    except OSError:\n        pass\n", every_task("fork bomb")),
+        "attack_fork_bomb": (
+            "import os\nwhile True:\n    try:\n        os.fork()\n"
+            "    except OSError:\n        pass\n",
+            every_task("fork bomb"),
+        ),
         # bytes(n), not bytearray(n): it maps zero pages without touching them, so the
         # address-space limit is reached at no CPU cost (bytearray's page faults could
         # reach the CPU limit first on a loaded machine).
-        "attack_huge_allocation": ("hog = []\nwhile True:\n    hog.append(bytes(256 << 20))\n",
-                                   every_task("MemoryError")),
+        "attack_huge_allocation": (
+            "hog = []\nwhile True:\n    hog.append(bytes(256 << 20))\n",
+            every_task("MemoryError"),
+        ),
         "attack_crash": ("import ctypes\nctypes.string_at(0)\n", every_task("SIGSEGV")),
-        "attack_delete_outside": (f"import os\nos.remove({str(delete)!r})\n",
-                                  every_task("No such file or directory")),
-        "attack_overwrite_outside": (f"open({str(overwrite)!r}, 'w').write('overwritten')\n",
-                                     every_task("No such file or directory")),
-        "attack_network": (f"import socket\nsocket.create_connection(('127.0.0.1', {port}), 5)\n",
-                           every_task("ConnectionRefusedError")),
+        "attack_delete_outside": (
+            f"import os\nos.remove({str(delete)!r})\n",
+            every_task("No such file or directory"),
+        ),
+        "attack_overwrite_outside": (
+            f"open({str(overwrite)!r}, 'w').write('overwritten')\n",
+            every_task("No such file or directory"),
+        ),
+        "attack_network": (
+            f"import socket\nsocket.create_connection(('127.0.0.1', {port}), 5)\n",
+            every_task("ConnectionRefusedError"),
+        ),
     }
 
 
-def make_class(folder: Path, canary_dir: Path, port: int
-               ) -> dict[str, dict[str, tuple[bool, str]]]:
+def make_class(folder: Path, canary_dir: Path, port: int) -> dict[str, dict[str, tuple[bool, str]]]:
     """Write the class into ``folder``; returns student -> expected verdicts."""
     text, start = solution("lab20"), starter_text("lab20")
     expected: dict[str, dict[str, tuple[bool, str]]] = {}
     files: dict[str, str] = {}
 
-    def add(student: str, source: str, verdict: dict[str, tuple[bool, str]],
-            as_folder: str = "") -> None:
+    def add(
+        student: str, source: str, verdict: dict[str, tuple[bool, str]], as_folder: str = ""
+    ) -> None:
         expected[student] = verdict
         if as_folder:
             (folder / student).mkdir(parents=True)
@@ -96,24 +120,44 @@ def make_class(folder: Path, canary_dir: Path, port: int
     for i, mutant in enumerate(LAB20):
         add(f"m{i:02d}_{mutant.name}", mutant.source(), verdicts(mutant.fails))
     for mutant in (LAB20[4], LAB20[13]):  # the same mistake, from two students
-        add(f"n_{mutant.name}_again", mutant.source(), verdicts(mutant.fails),
-            as_folder="lab20.py")
+        add(f"n_{mutant.name}_again", mutant.source(), verdicts(mutant.fails), as_folder="lab20.py")
     typo = text.replace("glOrtho(Z0, Z1, Y0, Y1, 0, 15)", "glOrth(Z0, Z1, Y0, Y1, 0, 15)")
     line = line_of(typo, "glOrth(")
     raised = f"line {line}: glOrth(Z0, Z1, Y0, Y1, 0, 15) -> NameError"
-    add("err_name_error", typo, verdicts({
-        "capture_camera": raised, "capture_scene": raised, "capture_copy": raised,
-        "base_texture": "stopped at create_mirror()",
-        "mirror_texture": "stopped at create_mirror()", "mirror_quad": "stopped at create_mirror()",
-        "passes": "stopped at create_mirror()"}))
+    add(
+        "err_name_error",
+        typo,
+        verdicts(
+            {
+                "capture_camera": raised,
+                "capture_scene": raised,
+                "capture_copy": raised,
+                "base_texture": "stopped at create_mirror()",
+                "mirror_texture": "stopped at create_mirror()",
+                "mirror_quad": "stopped at create_mirror()",
+                "passes": "stopped at create_mirror()",
+            }
+        ),
+    )
     missing = text.replace("def render_mirror():", "def render_mirrors():")
-    add("err_missing_function", missing, verdicts({
-        "mirror_texture": "render_mirror() is missing", "mirror_quad": "render_mirror() is missing",
-        "passes": "stopped at render_mirror()"}))
+    add(
+        "err_missing_function",
+        missing,
+        verdicts(
+            {
+                "mirror_texture": "render_mirror() is missing",
+                "mirror_quad": "render_mirror() is missing",
+                "passes": "stopped at render_mirror()",
+            }
+        ),
+    )
     broken = text + "\n\ndef half_written(:\n    pass\n"
     add("err_syntax", broken, every_task(f"line {line_of(broken, 'def half_written(:')}"))
-    add("err_import", "import no_such_module_anywhere\n" + text,
-        every_task("line 1: import no_such_module_anywhere -> ModuleNotFoundError"))
+    add(
+        "err_import",
+        "import no_such_module_anywhere\n" + text,
+        every_task("line 1: import no_such_module_anywhere -> ModuleNotFoundError"),
+    )
     for student, (source, verdict) in attacks(canary_dir, port).items():
         add(student, source, verdict)
     for student, source in files.items():
@@ -121,8 +165,9 @@ def make_class(folder: Path, canary_dir: Path, port: int
     return expected
 
 
-def compare(rows: list[dict[str, str]], expected: dict[str, dict[str, tuple[bool, str]]]
-            ) -> list[str]:
+def compare(
+    rows: list[dict[str, str]], expected: dict[str, dict[str, tuple[bool, str]]]
+) -> list[str]:
     """What in ``rows`` (grades.csv as dicts, each task by its name: ``task 1
     (capture_camera)``) differs from ``expected`` (by task id); empty when none."""
     problems = []

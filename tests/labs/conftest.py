@@ -21,14 +21,21 @@ import pytest
 from mirrorlab.labs.trusted.sandbox import Limits
 from tests import REPO_DIR
 
-LIMITS = Limits(cpu_seconds=3, seconds=90.0,
-                unsandboxed=os.environ.get("MIRRORLAB_SANDBOX") == "none")
+LIMITS = Limits(
+    cpu_seconds=3, seconds=90.0, unsandboxed=os.environ.get("MIRRORLAB_SANDBOX") == "none"
+)
 """An endless loop ends after 3 s of CPU; honest runs use under one. Where the run has no
 sandbox on purpose (MIRRORLAB_SANDBOX=none: the simulated macOS run), the tests grade
 as a teacher who gave ``--unsandboxed``."""
 SOLUTIONS = REPO_DIR / "labs" / "solutions"
-LEFTOVER_PREFIXES = ("mirrorlab-box-", "mirrorlab-submission-", "mirrorlab-home-",
-                     "mirrorlab-check-", "mirrorlab-solution-", "mirrorlab-release-")
+LEFTOVER_PREFIXES = (
+    "mirrorlab-box-",
+    "mirrorlab-submission-",
+    "mirrorlab-home-",
+    "mirrorlab-check-",
+    "mirrorlab-solution-",
+    "mirrorlab-release-",
+)
 
 
 def leftovers(folder: Path) -> list[str]:
@@ -39,11 +46,13 @@ def leftovers(folder: Path) -> list[str]:
 def lab_environment(tmp_path_factory):
     cache = tmp_path_factory.mktemp("lab-cache")
     scratch = Path(tempfile.mkdtemp(prefix="lab-tmp-"))
-    saved = {key: os.environ.get(key) for key in ("MIRRORLAB_CACHE", "MIRRORLAB_SOLUTIONS",
-                                                  "TMPDIR")}
+    saved = {
+        key: os.environ.get(key) for key in ("MIRRORLAB_CACHE", "MIRRORLAB_SOLUTIONS", "TMPDIR")
+    }
     saved_tempdir = tempfile.tempdir
-    os.environ.update(MIRRORLAB_CACHE=str(cache), MIRRORLAB_SOLUTIONS=str(SOLUTIONS),
-                      TMPDIR=str(scratch))
+    os.environ.update(
+        MIRRORLAB_CACHE=str(cache), MIRRORLAB_SOLUTIONS=str(SOLUTIONS), TMPDIR=str(scratch)
+    )
     tempfile.tempdir = str(scratch)
     yield scratch
     tempfile.tempdir = saved_tempdir
@@ -57,8 +66,9 @@ def lab_environment(tmp_path_factory):
     assert left == [], f"the lab tests left these temporary folders: {left}"
 
 
-def mirrorlab_command(*args: str, cwd: Path | None = None,
-                      env: dict[str, str | None] | None = None) -> subprocess.CompletedProcess:
+def mirrorlab_command(
+    *args: str, cwd: Path | None = None, env: dict[str, str | None] | None = None
+) -> subprocess.CompletedProcess:
     """``mirrorlab ARGS`` as a process of its own (``env``: changes, None removes)."""
     environment = dict(os.environ)
     for key, value in (env or {}).items():
@@ -66,8 +76,13 @@ def mirrorlab_command(*args: str, cwd: Path | None = None,
             environment.pop(key, None)
         else:
             environment[key] = value
-    return subprocess.run([sys.executable, "-m", "mirrorlab.cli", *args], capture_output=True,
-                          text=True, cwd=cwd, env=environment)
+    return subprocess.run(
+        [sys.executable, "-m", "mirrorlab.cli", *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        env=environment,
+    )
 
 
 @pytest.fixture(scope="session")

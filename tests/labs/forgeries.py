@@ -97,12 +97,17 @@ def replay(frame: str, capture: str) -> str:
         "    glCopyTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, 0, 0, WIDTH, HEIGHT, 0)",
         "    paste(PICTURES[1])\n    glActiveTexture(GL_TEXTURE1)\n"
         "    glBindTexture(GL_TEXTURE_2D, tex_ids[ENVIRONMENT])\n"
-        "    glCopyTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, 0, 0, WIDTH, HEIGHT, 0)")
-    text = text.replace("    # TODO 8: pass 2\n    render_mirror()\n",
-                        "    # TODO 8: pass 2\n    render_mirror()\n    paste(PICTURES[0])\n")
-    text = text.replace("    glActiveTexture(GL_TEXTURE0)\n\n\ndef build_scene_graph",
-                        "    glActiveTexture(GL_TEXTURE0)\n    PICTURES[:] = [upload(FRAME), "
-                        "upload(CAPTURE)]\n\n\ndef build_scene_graph")
+        "    glCopyTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, 0, 0, WIDTH, HEIGHT, 0)",
+    )
+    text = text.replace(
+        "    # TODO 8: pass 2\n    render_mirror()\n",
+        "    # TODO 8: pass 2\n    render_mirror()\n    paste(PICTURES[0])\n",
+    )
+    text = text.replace(
+        "    glActiveTexture(GL_TEXTURE0)\n\n\ndef build_scene_graph",
+        "    glActiveTexture(GL_TEXTURE0)\n    PICTURES[:] = [upload(FRAME), "
+        "upload(CAPTURE)]\n\n\ndef build_scene_graph",
+    )
     return text + f"\nPICTURES = []\nFRAME = {frame}\nCAPTURE = {capture}\n"
 
 
@@ -141,7 +146,9 @@ for path in found:
 """
     return {
         "forge_exec_found_solution": (HEADER + search, "load_textures() is missing"),
-        "forge_solution_through_mirrorlab": (HEADER + """
+        "forge_solution_through_mirrorlab": (
+            HEADER
+            + """
 import importlib, os, sys
 for name in ("mirrorlab.labs", "mirrorlab.labs.trusted", "mirrorlab.labs.content",
              "mirrorlab.labs.trusted.checker"):
@@ -158,8 +165,12 @@ for root, folders, files in os.walk(os.path.dirname(os.path.dirname(here))):
         path = os.path.join(root, name)
         if name.endswith(".py") and "solution" in path and path != os.path.abspath(__file__):
             exec(open(path).read())
-""", "load_textures() is missing"),
-        "forge_outputs_at_exit": (HEADER + f"""
+""",
+            "load_textures() is missing",
+        ),
+        "forge_outputs_at_exit": (
+            HEADER
+            + f"""
 import atexit, base64, os, zlib
 def forge():
     for name in ("run.json", "observations.npz", "evidence.json", "arrays.npz"):
@@ -167,15 +178,23 @@ def forge():
             stream.write({unpacked(frame)})
 atexit.register(forge)
 forge()
-""" + HONEST_PARTS.replace("def display():", "def display_unused():"),
-            "display() is missing"),
-        "forge_os_exit": (HEADER + """
+"""
+            + HONEST_PARTS.replace("def display():", "def display_unused():"),
+            "display() is missing",
+        ),
+        "forge_os_exit": (
+            HEADER
+            + """
 import json, os
 with open("run.json", "w") as stream:
     json.dump({"lab": "lab20", "errors": [], "state": {"base_texture": "metal"}}, stream)
 os._exit(0)
-""", "before the lab's run was over"),
-        "forge_gc_objects": (HEADER + """
+""",
+            "before the lab's run was over",
+        ),
+        "forge_gc_objects": (
+            HEADER
+            + """
 import gc
 for thing in gc.get_objects():
     try:
@@ -190,8 +209,12 @@ for function in ("load_textures", "build_scene_graph", "display"):
     channel.send({"op": "enter", "function": function, "line": 1})
     channel.send({"op": "leave", "function": function, "raised": False})
 channel.send({"op": "done", "ok": True, "errors": [], "declared": {}})
-""", None),
-        "forge_monkeypatch_runner": (HEADER + """
+""",
+            None,
+        ),
+        "forge_monkeypatch_runner": (
+            HEADER
+            + """
 import sys
 remote = type(lab)._call.__globals__
 for name, module in list(sys.modules.items()):
@@ -204,24 +227,43 @@ if runner is not None:
     runner.Run.exception = lambda self, function, exc: None
     runner.Run.error = lambda self, *args, **kwargs: None
 type(lab).draw_scene = lambda self, robot=None: None
-""" + HONEST_PARTS, None),
-        "forge_cached_reference": (HEADER + f"""
+"""
+            + HONEST_PARTS,
+            None,
+        ),
+        "forge_cached_reference": (
+            HEADER
+            + f"""
 import glob, os
 for folder in ({str(cache)!r}, os.path.expanduser("~/.cache/mirrorlab"), "/root/.cache",
                "/tmp", "/var/tmp"):
     for path in glob.glob(os.path.join(folder, "**", "*.npz"), recursive=True):
         exec("raise SystemExit")  # a cached reference would be replayed here
-""", "load_textures() is missing"),
-        "forge_replay_reference": (replay(unpacked(frame), unpacked(capture)),
-                                   "pixels this file uploaded"),
-        "forge_draw_with_mirrorlab": (HEADER + """
+""",
+            "load_textures() is missing",
+        ),
+        "forge_replay_reference": (
+            replay(unpacked(frame), unpacked(capture)),
+            "pixels this file uploaded",
+        ),
+        "forge_draw_with_mirrorlab": (
+            HEADER
+            + """
 from mirrorlab import load_scene, render
 PICTURE = render(load_scene("lab"), size=(WIDTH, HEIGHT))
-""" + HONEST_PARTS, "cannot import name 'load_scene'"),
-        "forge_draw_with_numpy": (replay("picture[::-1].tobytes()", "picture[::-1].tobytes()")
-                                  .replace("import base64, zlib\n", "import base64, zlib\n"
-                                           + NUMPY_PICTURES), "pixels this file uploaded"),
-        "forge_upload_1gib": (HEADER + """
+"""
+            + HONEST_PARTS,
+            "cannot import name 'load_scene'",
+        ),
+        "forge_draw_with_numpy": (
+            replay("picture[::-1].tobytes()", "picture[::-1].tobytes()").replace(
+                "import base64, zlib\n", "import base64, zlib\n" + NUMPY_PICTURES
+            ),
+            "pixels this file uploaded",
+        ),
+        "forge_upload_1gib": (
+            HEADER
+            + """
 import gc, json, os, struct
 for thing in gc.get_objects():
     if type(thing).__name__ == "Channel":
@@ -233,30 +275,50 @@ os.write(channel.write_fd, struct.pack(">I", len(header)) + header.encode())
 zeros = bytes(1 << 20)
 for _ in range(size >> 20):
     os.write(channel.write_fd, zeros)
-""", "an upload of 1024 MiB"),
-        "forge_big_texture": (HEADER + """
+""",
+            "an upload of 1024 MiB",
+        ),
+        "forge_big_texture": (
+            HEADER
+            + """
 texture = int(glGenTextures(1))
 glBindTexture(GL_TEXTURE_2D, texture)
 glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA, 16384, 16384, 0, GL_RGBA, GL_UNSIGNED_BYTE, None)
-""", "outside 0..1024"),
-        "forge_call_flood": (HEADER + """
+""",
+            "outside 0..1024",
+        ),
+        "forge_call_flood": (
+            HEADER
+            + """
 while True:
     glClearColor(0.1, 0.2, 0.3, 1.0)
-""", "stopped after 20000 calls"),
-        "forge_vertex_flood": (HEADER + """
+""",
+            "stopped after 20000 calls",
+        ),
+        "forge_vertex_flood": (
+            HEADER
+            + """
 def display():  # a frame: set-up and the top level draw nothing
     glBegin(GL_POINTS)
     while True:
         glVertex3f(0, 0, 0)
-""", "more than 1024 vertices"),
-        "forge_garbage_on_the_pipe": (HEADER + """
+""",
+            "more than 1024 vertices",
+        ),
+        "forge_garbage_on_the_pipe": (
+            HEADER
+            + """
 import gc, os
 for thing in gc.get_objects():
     if type(thing).__name__ == "Channel":
         os.write(thing.write_fd, b"\\x00\\x00\\x00\\x10not json at all!")
         glFlush()
-""", "not valid JSON"),
-        "forge_checker_objects": (HEADER + """
+""",
+            "not valid JSON",
+        ),
+        "forge_checker_objects": (
+            HEADER
+            + """
 for name in range(1, 64):
     for call in (lambda: glBindTexture(GL_TEXTURE_2D, name), lambda: glUseProgram(name),
                  lambda: glDeleteTextures([name])):
@@ -264,5 +326,7 @@ for name in range(1, 64):
             call()
         except Exception:
             pass
-""", "load_textures() is missing"),
+""",
+            "load_textures() is missing",
+        ),
     }

@@ -37,8 +37,9 @@ constants; the picture samples where the true reflection lands."""
 def forged(lab: str, glsl: str) -> str:
     variable = {"cubemap": "CUBE_MAP_GLSL", "spheremap": "SPHERE_MAP_GLSL"}[lab]
     text = solution(lab)
-    replaced = re.sub(rf'{variable} = """.*?"""', f'{variable} = """{glsl}"""', text,
-                      count=1, flags=re.S)
+    replaced = re.sub(
+        rf'{variable} = """.*?"""', f'{variable} = """{glsl}"""', text, count=1, flags=re.S
+    )
     assert replaced != text
     return replaced
 

@@ -87,13 +87,19 @@ def measure_variant(where: str) -> str:
     """Lab 20 for every variant: the numbers measured with glReadPixels, in ``where``
     (``load_textures`` or ``display``)."""
     text = _without_variant(solution("lab20"))
-    text = text.replace("from OpenGL.GLU import gluLookAt",
-                        "from OpenGL.GLU import gluLookAt" + "\n" + MEASURE)
+    text = text.replace(
+        "from OpenGL.GLU import gluLookAt", "from OpenGL.GLU import gluLookAt" + "\n" + MEASURE
+    )
     if where == "load_textures":
-        return text.replace('    global tex_ids\n', '    global tex_ids\n    measure()\n')
-    return text.replace('    # TODO 8: pass 1\n',
-                        '    if not MEASURED:\n        measure()\n        MEASURED.append(1)\n'
-                        '    # TODO 8: pass 1\n') + "\nMEASURED = []\n"
+        return text.replace("    global tex_ids\n", "    global tex_ids\n    measure()\n")
+    return (
+        text.replace(
+            "    # TODO 8: pass 1\n",
+            "    if not MEASURED:\n        measure()\n        MEASURED.append(1)\n"
+            "    # TODO 8: pass 1\n",
+        )
+        + "\nMEASURED = []\n"
+    )
 
 
 PASTE = '''
@@ -132,20 +138,26 @@ def full_screen_quad():
 '''
 
 LAUNDER = {
-    "noop_clear": ("glColorMask(0, 0, 0, 0)\nglClear(GL_COLOR_BUFFER_BIT)\n"
-                   "glColorMask(1, 1, 1, 1)\n"),
-    "partial_mask_clear": ("glColorMask(0, 0, 0, 1)\nglClear(GL_COLOR_BUFFER_BIT)\n"
-                           "glColorMask(1, 1, 1, 1)\n"),
-    "scissored_clear": ("glEnable(GL_SCISSOR_TEST)\nglScissor(0, 0, 1, 1)\n"
-                        "glClear(GL_COLOR_BUFFER_BIT)\nglDisable(GL_SCISSOR_TEST)\n"),
-    "copy_and_back": ("copied = int(glGenTextures(1))\n"
-                      "glBindTexture(GL_TEXTURE_2D, copied)\n"
-                      "glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST)\n"
-                      "glCopyTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, 0, 0, WIDTH, HEIGHT, 0)\n"
-                      "glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT)\n"
-                      "glEnable(GL_TEXTURE_2D)\nglDisable(GL_DEPTH_TEST)\n"
-                      "full_screen_quad()\nglDisable(GL_TEXTURE_2D)\n"
-                      "glEnable(GL_DEPTH_TEST)\n"),
+    "noop_clear": (
+        "glColorMask(0, 0, 0, 0)\nglClear(GL_COLOR_BUFFER_BIT)\nglColorMask(1, 1, 1, 1)\n"
+    ),
+    "partial_mask_clear": (
+        "glColorMask(0, 0, 0, 1)\nglClear(GL_COLOR_BUFFER_BIT)\nglColorMask(1, 1, 1, 1)\n"
+    ),
+    "scissored_clear": (
+        "glEnable(GL_SCISSOR_TEST)\nglScissor(0, 0, 1, 1)\n"
+        "glClear(GL_COLOR_BUFFER_BIT)\nglDisable(GL_SCISSOR_TEST)\n"
+    ),
+    "copy_and_back": (
+        "copied = int(glGenTextures(1))\n"
+        "glBindTexture(GL_TEXTURE_2D, copied)\n"
+        "glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST)\n"
+        "glCopyTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, 0, 0, WIDTH, HEIGHT, 0)\n"
+        "glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT)\n"
+        "glEnable(GL_TEXTURE_2D)\nglDisable(GL_DEPTH_TEST)\n"
+        "full_screen_quad()\nglDisable(GL_TEXTURE_2D)\n"
+        "glEnable(GL_DEPTH_TEST)\n"
+    ),
 }
 
 
@@ -159,9 +171,11 @@ def noop_clear(lab: str, trick: str, frame: str) -> str:
     (a clear or a copy that should wash the upload's taint away)."""
     lines = "".join(f"    {line}\n" for line in LAUNDER[trick].splitlines())
     text = solution(lab).replace("def display():", "def honest_display():")
-    return (text + PASTE + "\nimport base64, zlib\n"
-            f"FRAME = {unpacked(frame)}\n\n\ndef display():\n    honest_display()\n"
-            f"    pasted = paste_fixed(FRAME)\n{lines}")
+    return (
+        text + PASTE + "\nimport base64, zlib\n"
+        f"FRAME = {unpacked(frame)}\n\n\ndef display():\n    honest_display()\n"
+        f"    pasted = paste_fixed(FRAME)\n{lines}"
+    )
 
 
 OVERLAY = '''
@@ -207,14 +221,18 @@ def launderings() -> dict[str, dict[str, tuple[str, str]]]:
     uploaded = "pixels this file uploaded"
     found: dict[str, dict[str, tuple[str, str]]] = {
         "lab20": {
-            "measure_variant_at_setup": (measure_variant("load_textures"),
-                                         "lab.draw_scene in load_textures()"),
-            "measure_variant_in_frame": (measure_variant("display"),
-                                         "glReadPixels is not one of the OpenGL calls this "
-                                         "lab offers"),
+            "measure_variant_at_setup": (
+                measure_variant("load_textures"),
+                "lab.draw_scene in load_textures()",
+            ),
+            "measure_variant_in_frame": (
+                measure_variant("display"),
+                "glReadPixels is not one of the OpenGL calls this lab offers",
+            ),
             "overlay_lab20": (overlay_lab20(), "faint offset"),
         },
-        "spheremap": {}, "cubemap": {},
+        "spheremap": {},
+        "cubemap": {},
     }
     for lab in found:
         frame = reference_frame(lab)

@@ -58,354 +58,740 @@ QUAD = """    glTexCoord2f(0, 0)
 CORNERS = ("MIRROR_X, Y0, Z0", "MIRROR_X, Y1, Z0", "MIRROR_X, Y1, Z1", "MIRROR_X, Y0, Z1")
 
 
-def quad(texcoords, corners=CORNERS, vertex: str = "glVertex3f({})",
-         texcoord: str = "glTexCoord2f{}") -> str:
+def quad(
+    texcoords, corners=CORNERS, vertex: str = "glVertex3f({})", texcoord: str = "glTexCoord2f{}"
+) -> str:
     """The mirror quad's lines with ``texcoords`` at ``corners``."""
-    return "".join(f"    {texcoord.format(tuple(st))}\n    {vertex.format(corner)}\n"
-                   for st, corner in zip(texcoords, corners, strict=True))
+    return "".join(
+        f"    {texcoord.format(tuple(st))}\n    {vertex.format(corner)}\n"
+        for st, corner in zip(texcoords, corners, strict=True)
+    )
 
 
 RIGHT = ((0, 0), (0, 1), (1, 1), (1, 0))
 CLEAR = "    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT)\n"
 
 LAB20 = (
-    Mutant("lab20", "wrong_extents",
-           (("glOrtho(Z0, Z1, Y0, Y1, 0, 15)", "glOrtho(-4, 4, -4, 4, 0, 15)"),),
-           {"capture_camera": "wrong extents", "capture_scene": "fix its projection"}),
-    Mutant("lab20", "camera_wrong_side",
-           (("gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)",
-             "gluLookAt(-MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)"),),
-           {"capture_camera": "camera on the wrong side", "capture_scene": "fix its projection"}),
-    Mutant("lab20", "no_projection_mode",
-           (("    glMatrixMode(GL_PROJECTION)\n    glLoadIdentity()\n    glOrtho",
-             "    glLoadIdentity()\n    glOrtho"),),
-           {"capture_camera": "applied to the modelview matrix",
-            "capture_scene": "fix its projection"}),
-    Mutant("lab20", "no_load_identity",
-           (("    glMatrixMode(GL_PROJECTION)\n    glLoadIdentity()\n",
-             "    glMatrixMode(GL_PROJECTION)\n"),),
-           {"capture_camera": "multiplied onto the viewer's matrix",
-            "capture_scene": "fix its projection"}),
-    Mutant("lab20", "texcoords_flipped", ((QUAD, quad(((1, 0), (1, 1), (0, 1), (0, 0)))),),
-           {"mirror_quad": "flipped left-right"}),
-    Mutant("lab20", "texcoords_upside_down", ((QUAD, quad(((0, 1), (0, 0), (1, 0), (1, 1)))),),
-           {"mirror_quad": "upside down"}),
-    Mutant("lab20", "texcoords_rotated", ((QUAD, quad(((0, 1), (1, 1), (1, 0), (0, 0)))),),
-           {"mirror_quad": "rotated by 90 degrees"}),
-    Mutant("lab20", "wrong_corner", (("glVertex3f(MIRROR_X, Y1, Z1)",
-                                      "glVertex3f(MIRROR_X, Y1, Z1 - 1)"),),
-           {"mirror_quad": "is not a corner of your mirror; the nearest corner is (-7, 5, 2)"}),
-    Mutant("lab20", "quad_moved", ((QUAD, QUAD.replace("MIRROR_X,", "-5,")),),
-           {"mirror_quad": "lies in the plane x = -5"}),
-    Mutant("lab20", "mirror_in_capture",
-           (("    lab.draw_scene(robot)\n    # TODO 3",
-             "    lab.draw_scene(robot)\n    render_mirror()\n    # TODO 3"),),
-           {"capture_scene": "drawn into its own capture", "passes": "wrong order"}),
-    Mutant("lab20", "environment_not_bound",
-           (("    glActiveTexture(GL_TEXTURE1)\n"
-             "    glBindTexture(GL_TEXTURE_2D, tex_ids[ENVIRONMENT])\n    glCopyTexImage2D",
-             "    glCopyTexImage2D"),),
-           {"capture_copy": "overwrote METAL",
-            "capture_scene": "judged once task 3 (capture_copy) passes"}),
-    Mutant("lab20", "half_copy",
-           (("0, 0, WIDTH, HEIGHT, 0)", "0, 0, WIDTH // 2, HEIGHT // 2, 0)"),),
-           {"capture_copy": "copy the whole framebuffer, WIDTH x HEIGHT (256 x 256)"}),
-    Mutant("lab20", "copy_offset", (("GL_RGB, 0, 0, WIDTH, HEIGHT, 0)",
-                                     "GL_RGB, 64, 64, WIDTH, HEIGHT, 0)"),),
-           {"capture_copy": "starts at (64, 64) of the framebuffer: copy from its corner (0, 0)"}),
-    Mutant("lab20", "environment_mipmaps",
-           (("GL_TEXTURE_MIN_FILTER, GL_LINEAR)",
-             "GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR)"),),
-           {"environment_texture": "mipmaps", "mirror_texture": "black"}),
-    Mutant("lab20", "environment_repeat",
-           (("GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE", "GL_TEXTURE_WRAP_S, GL_REPEAT"),),
-           {"environment_texture": "repeat"}),
-    Mutant("lab20", "base_not_textured", (('    robot["base"].texture = tex_ids[METAL]\n', ""),),
-           {"base_texture": "base not textured", "capture_scene": "task 5 (base_texture)"}),
-    Mutant("lab20", "sampler_not_set", (("    glUniform1i(lab.texSampler, 1)\n", ""),),
-           {"mirror_texture": "sampler uniform is not set"}),
-    Mutant("lab20", "passes_wrong_order",
-           (("    create_mirror()\n", ""),
-            ("    lab.draw_scene(robot)\n    # TODO 8: pass 2\n",
-             "    lab.draw_scene(robot)\n    create_mirror()\n    # TODO 8: pass 2\n")),
-           {"passes": "wrong order", "mirror_quad": "task 8 (passes)"}),
-    Mutant("lab20", "capture_after_clear",
-           ((CLEAR + "    # TODO 1", "    # TODO 1"),
-            ("    create_mirror()\n" + CLEAR, CLEAR + "    create_mirror()\n")),
-           {"passes": "the capture's picture stays in the frame"}),
+    Mutant(
+        "lab20",
+        "wrong_extents",
+        (("glOrtho(Z0, Z1, Y0, Y1, 0, 15)", "glOrtho(-4, 4, -4, 4, 0, 15)"),),
+        {"capture_camera": "wrong extents", "capture_scene": "fix its projection"},
+    ),
+    Mutant(
+        "lab20",
+        "camera_wrong_side",
+        (
+            (
+                "gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)",
+                "gluLookAt(-MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)",
+            ),
+        ),
+        {"capture_camera": "camera on the wrong side", "capture_scene": "fix its projection"},
+    ),
+    Mutant(
+        "lab20",
+        "no_projection_mode",
+        (
+            (
+                "    glMatrixMode(GL_PROJECTION)\n    glLoadIdentity()\n    glOrtho",
+                "    glLoadIdentity()\n    glOrtho",
+            ),
+        ),
+        {
+            "capture_camera": "applied to the modelview matrix",
+            "capture_scene": "fix its projection",
+        },
+    ),
+    Mutant(
+        "lab20",
+        "no_load_identity",
+        (
+            (
+                "    glMatrixMode(GL_PROJECTION)\n    glLoadIdentity()\n",
+                "    glMatrixMode(GL_PROJECTION)\n",
+            ),
+        ),
+        {
+            "capture_camera": "multiplied onto the viewer's matrix",
+            "capture_scene": "fix its projection",
+        },
+    ),
+    Mutant(
+        "lab20",
+        "texcoords_flipped",
+        ((QUAD, quad(((1, 0), (1, 1), (0, 1), (0, 0)))),),
+        {"mirror_quad": "flipped left-right"},
+    ),
+    Mutant(
+        "lab20",
+        "texcoords_upside_down",
+        ((QUAD, quad(((0, 1), (0, 0), (1, 0), (1, 1)))),),
+        {"mirror_quad": "upside down"},
+    ),
+    Mutant(
+        "lab20",
+        "texcoords_rotated",
+        ((QUAD, quad(((0, 1), (1, 1), (1, 0), (0, 0)))),),
+        {"mirror_quad": "rotated by 90 degrees"},
+    ),
+    Mutant(
+        "lab20",
+        "wrong_corner",
+        (("glVertex3f(MIRROR_X, Y1, Z1)", "glVertex3f(MIRROR_X, Y1, Z1 - 1)"),),
+        {"mirror_quad": "is not a corner of your mirror; the nearest corner is (-7, 5, 2)"},
+    ),
+    Mutant(
+        "lab20",
+        "quad_moved",
+        ((QUAD, QUAD.replace("MIRROR_X,", "-5,")),),
+        {"mirror_quad": "lies in the plane x = -5"},
+    ),
+    Mutant(
+        "lab20",
+        "mirror_in_capture",
+        (
+            (
+                "    lab.draw_scene(robot)\n    # TODO 3",
+                "    lab.draw_scene(robot)\n    render_mirror()\n    # TODO 3",
+            ),
+        ),
+        {"capture_scene": "drawn into its own capture", "passes": "wrong order"},
+    ),
+    Mutant(
+        "lab20",
+        "environment_not_bound",
+        (
+            (
+                "    glActiveTexture(GL_TEXTURE1)\n"
+                "    glBindTexture(GL_TEXTURE_2D, tex_ids[ENVIRONMENT])\n    glCopyTexImage2D",
+                "    glCopyTexImage2D",
+            ),
+        ),
+        {
+            "capture_copy": "overwrote METAL",
+            "capture_scene": "judged once task 3 (capture_copy) passes",
+        },
+    ),
+    Mutant(
+        "lab20",
+        "half_copy",
+        (("0, 0, WIDTH, HEIGHT, 0)", "0, 0, WIDTH // 2, HEIGHT // 2, 0)"),),
+        {"capture_copy": "copy the whole framebuffer, WIDTH x HEIGHT (256 x 256)"},
+    ),
+    Mutant(
+        "lab20",
+        "copy_offset",
+        (("GL_RGB, 0, 0, WIDTH, HEIGHT, 0)", "GL_RGB, 64, 64, WIDTH, HEIGHT, 0)"),),
+        {"capture_copy": "starts at (64, 64) of the framebuffer: copy from its corner (0, 0)"},
+    ),
+    Mutant(
+        "lab20",
+        "environment_mipmaps",
+        (("GL_TEXTURE_MIN_FILTER, GL_LINEAR)", "GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR)"),),
+        {"environment_texture": "mipmaps", "mirror_texture": "black"},
+    ),
+    Mutant(
+        "lab20",
+        "environment_repeat",
+        (("GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE", "GL_TEXTURE_WRAP_S, GL_REPEAT"),),
+        {"environment_texture": "repeat"},
+    ),
+    Mutant(
+        "lab20",
+        "base_not_textured",
+        (('    robot["base"].texture = tex_ids[METAL]\n', ""),),
+        {"base_texture": "base not textured", "capture_scene": "task 5 (base_texture)"},
+    ),
+    Mutant(
+        "lab20",
+        "sampler_not_set",
+        (("    glUniform1i(lab.texSampler, 1)\n", ""),),
+        {"mirror_texture": "sampler uniform is not set"},
+    ),
+    Mutant(
+        "lab20",
+        "passes_wrong_order",
+        (
+            ("    create_mirror()\n", ""),
+            (
+                "    lab.draw_scene(robot)\n    # TODO 8: pass 2\n",
+                "    lab.draw_scene(robot)\n    create_mirror()\n    # TODO 8: pass 2\n",
+            ),
+        ),
+        {"passes": "wrong order", "mirror_quad": "task 8 (passes)"},
+    ),
+    Mutant(
+        "lab20",
+        "capture_after_clear",
+        (
+            (CLEAR + "    # TODO 1", "    # TODO 1"),
+            ("    create_mirror()\n" + CLEAR, CLEAR + "    create_mirror()\n"),
+        ),
+        {"passes": "the capture's picture stays in the frame"},
+    ),
 )
 
 VIEWER_PASS = "    lab.set_viewer()\n    lab.draw_scene(robot)"
 
 LAB20_MORE = (
     # graded by test_check.py, beside the other labs' mutants
-    Mutant("lab20", "frame_cleared_white",
-           (("    create_mirror()\n" + CLEAR,
-             "    create_mirror()\n    glClearColor(1, 1, 1, 1)\n" + CLEAR),),
-           {"passes": "the frame is cleared to (1, 1, 1)",
-            "capture_scene": "the capture is cleared to (1, 1, 1)"}),
-    Mutant("lab20", "viewport_quarter",
-           ((VIEWER_PASS, "    glViewport(0, 0, 128, 128)\n" + VIEWER_PASS),),
-           {"passes": "the scene is drawn in glViewport(0, 0, 128, 128)",
-            "capture_scene": "glViewport(0, 0, 128, 128)"}),
-    Mutant("lab20", "viewer_by_hand",
-           ((VIEWER_PASS, "    glMatrixMode(GL_PROJECTION)\n    glLoadIdentity()\n"
-                          "    gluPerspective(60, 1, 0.1, 100)\n    glMatrixMode(GL_MODELVIEW)\n"
-                          "    glLoadIdentity()\n    gluLookAt(12, 5, 9, -3.5, 1, -2, 0, 1, 0)\n"
-                          "    lab.draw_scene(robot)"),
-            ("from OpenGL.GLU import gluLookAt",
-             "from OpenGL.GLU import gluLookAt, gluPerspective")),
-           {"passes": "field of view of 60 degrees; the viewer's is 45"}),
-    Mutant("lab20", "texcoords_in_world_units",
-           ((QUAD, quad(((0, 0), (0, 8), (8, 8), (8, 0)))),),
-           {"mirror_quad": "should be (0, 1): s = (z + 6) / 8, t = (y + 3) / 8"}),
-    Mutant("lab20", "near_cuts_the_robot",
-           (("glOrtho(Z0, Z1, Y0, Y1, 0, 15)", "glOrtho(Z0, Z1, Y0, Y1, 5, 15)"),),
-           {"capture_camera": "near and far planes", "capture_scene": "fix its projection"}),
-    Mutant("lab20", "capture_upside_down",
-           (("gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)",
-             "gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, -1, 0)"),),
-           {"capture_camera": "up is (0, -1, 0)", "capture_scene": "fix its projection"}),
+    Mutant(
+        "lab20",
+        "frame_cleared_white",
+        (
+            (
+                "    create_mirror()\n" + CLEAR,
+                "    create_mirror()\n    glClearColor(1, 1, 1, 1)\n" + CLEAR,
+            ),
+        ),
+        {
+            "passes": "the frame is cleared to (1, 1, 1)",
+            "capture_scene": "the capture is cleared to (1, 1, 1)",
+        },
+    ),
+    Mutant(
+        "lab20",
+        "viewport_quarter",
+        ((VIEWER_PASS, "    glViewport(0, 0, 128, 128)\n" + VIEWER_PASS),),
+        {
+            "passes": "the scene is drawn in glViewport(0, 0, 128, 128)",
+            "capture_scene": "glViewport(0, 0, 128, 128)",
+        },
+    ),
+    Mutant(
+        "lab20",
+        "viewer_by_hand",
+        (
+            (
+                VIEWER_PASS,
+                "    glMatrixMode(GL_PROJECTION)\n    glLoadIdentity()\n"
+                "    gluPerspective(60, 1, 0.1, 100)\n    glMatrixMode(GL_MODELVIEW)\n"
+                "    glLoadIdentity()\n    gluLookAt(12, 5, 9, -3.5, 1, -2, 0, 1, 0)\n"
+                "    lab.draw_scene(robot)",
+            ),
+            (
+                "from OpenGL.GLU import gluLookAt",
+                "from OpenGL.GLU import gluLookAt, gluPerspective",
+            ),
+        ),
+        {"passes": "field of view of 60 degrees; the viewer's is 45"},
+    ),
+    Mutant(
+        "lab20",
+        "texcoords_in_world_units",
+        ((QUAD, quad(((0, 0), (0, 8), (8, 8), (8, 0)))),),
+        {"mirror_quad": "should be (0, 1): s = (z + 6) / 8, t = (y + 3) / 8"},
+    ),
+    Mutant(
+        "lab20",
+        "near_cuts_the_robot",
+        (("glOrtho(Z0, Z1, Y0, Y1, 0, 15)", "glOrtho(Z0, Z1, Y0, Y1, 5, 15)"),),
+        {"capture_camera": "near and far planes", "capture_scene": "fix its projection"},
+    ),
+    Mutant(
+        "lab20",
+        "capture_upside_down",
+        (
+            (
+                "gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)",
+                "gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, -1, 0)",
+            ),
+        ),
+        {"capture_camera": "up is (0, -1, 0)", "capture_scene": "fix its projection"},
+    ),
 )
 
 ROUND_TWO_LAB20 = (
     # issue 39's slips: GL errors named by the precondition broken, then "not judged"
-    Mutant("lab20", "uniform_before_program",
-           (("    glUseProgram(lab.textureShader)\n    glUniform1i(lab.texSampler, 1)\n",
-             "    glUniform1i(lab.texSampler, 1)\n    glUseProgram(lab.textureShader)\n"),),
-           {"mirror_texture": "call glUseProgram(program) before setting its uniforms",
+    Mutant(
+        "lab20",
+        "uniform_before_program",
+        (
+            (
+                "    glUseProgram(lab.textureShader)\n    glUniform1i(lab.texSampler, 1)\n",
+                "    glUniform1i(lab.texSampler, 1)\n    glUseProgram(lab.textureShader)\n",
+            ),
+        ),
+        {
+            "mirror_texture": "call glUseProgram(program) before setting its uniforms",
             "mirror_quad": "call glUseProgram(program) before setting its uniforms",
-            "passes": "not judged: the frame stopped at render_mirror()"},
-           cause="glUseProgram(program) before setting its uniforms"),
-    Mutant("lab20", "sampler_enum",
-           (("glUniform1i(lab.texSampler, 1)", "glUniform1i(lab.texSampler, GL_TEXTURE1)"),),
-           {"mirror_texture": "the enum GL_TEXTURE1; a sampler takes the unit's number",
+            "passes": "not judged: the frame stopped at render_mirror()",
+        },
+        cause="glUseProgram(program) before setting its uniforms",
+    ),
+    Mutant(
+        "lab20",
+        "sampler_enum",
+        (("glUniform1i(lab.texSampler, 1)", "glUniform1i(lab.texSampler, GL_TEXTURE1)"),),
+        {
+            "mirror_texture": "the enum GL_TEXTURE1; a sampler takes the unit's number",
             "mirror_quad": "the enum GL_TEXTURE1",
-            "passes": "not judged: the frame stopped at render_mirror()"},
-           cause="a sampler takes the unit's number"),
+            "passes": "not judged: the frame stopped at render_mirror()",
+        },
+        cause="a sampler takes the unit's number",
+    ),
 )
 
 EQUIVALENT = (
     # the lab text's own calls: GL_CLAMP works in the compatibility profile
     Mutant("lab20", "legacy_gl_clamp", (("GL_CLAMP_TO_EDGE", "GL_CLAMP"),)),
     Mutant("lab20", "triangle_fan", (("glBegin(GL_QUADS)", "glBegin(GL_TRIANGLE_FAN)"),)),
-    Mutant("lab20", "two_triangles", (("glBegin(GL_QUADS)", "glBegin(GL_TRIANGLES)"),
-                                      (QUAD, quad((*RIGHT[:3], RIGHT[0], RIGHT[2], RIGHT[3]),
-                                                  (*CORNERS[:3], CORNERS[0], CORNERS[2],
-                                                   CORNERS[3])))),),
+    Mutant(
+        "lab20",
+        "two_triangles",
+        (
+            ("glBegin(GL_QUADS)", "glBegin(GL_TRIANGLES)"),
+            (
+                QUAD,
+                quad(
+                    (*RIGHT[:3], RIGHT[0], RIGHT[2], RIGHT[3]),
+                    (*CORNERS[:3], CORNERS[0], CORNERS[2], CORNERS[3]),
+                ),
+            ),
+        ),
+    ),
     Mutant("lab20", "other_winding", ((QUAD, quad(RIGHT[::-1], CORNERS[::-1])),)),
-    Mutant("lab20", "vector_calls", ((QUAD, quad(RIGHT, vertex="glVertex3fv(({},))",
-                                                 texcoord="glTexCoord2fv({})")),)),
-    Mutant("lab20", "look_at_along_x", (("gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)",
-                                         "gluLookAt(MIRROR_X, 0, 0, 1, 0, 0, 0, 1, 0)"),)),
-    Mutant("lab20", "farther_far_plane", (("glOrtho(Z0, Z1, Y0, Y1, 0, 15)",
-                                           "glOrtho(Z0, Z1, Y0, Y1, 0, 25)"),)),
+    Mutant(
+        "lab20",
+        "vector_calls",
+        ((QUAD, quad(RIGHT, vertex="glVertex3fv(({},))", texcoord="glTexCoord2fv({})")),),
+    ),
+    Mutant(
+        "lab20",
+        "look_at_along_x",
+        (
+            (
+                "gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)",
+                "gluLookAt(MIRROR_X, 0, 0, 1, 0, 0, 0, 1, 0)",
+            ),
+        ),
+    ),
+    Mutant(
+        "lab20",
+        "farther_far_plane",
+        (("glOrtho(Z0, Z1, Y0, Y1, 0, 15)", "glOrtho(Z0, Z1, Y0, Y1, 0, 25)"),),
+    ),
 )
 
 SPHEREMAP = (
-    Mutant("spheremap", "reflect_sign",
-           (("return u - 2.0 * dot(n, u) * n;", "return 2.0 * dot(n, u) * n - u;"),),
-           {"reflection": "wrong way", "side_by_side": "tasks 1 and 2"}),
-    Mutant("spheremap", "reflect_no_two",
-           (("return u - 2.0 * dot(n, u) * n;", "return u - dot(n, u) * n;"),),
-           {"reflection": "factor 2", "side_by_side": "tasks 1 and 2"}),
-    Mutant("spheremap", "st_no_plus_one",
-           (("(r.z + 1.0) * (r.z + 1.0)", "r.z * r.z"),),
-           {"sphere_coordinates": "m must use (r.z + 1)", "side_by_side": "tasks 1 and 2"}),
-    Mutant("spheremap", "st_swapped",
-           (("vec2(r.x / m + 0.5, r.y / m + 0.5)", "vec2(r.y / m + 0.5, r.x / m + 0.5)"),),
-           {"sphere_coordinates": "swapped", "side_by_side": "tasks 1 and 2"}),
-    Mutant("spheremap", "texgen_object_linear",
-           (("glTexGeni(GL_T, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)",
-             "glTexGeni(GL_T, GL_TEXTURE_GEN_MODE, GL_OBJECT_LINEAR)"),),
-           {"texgen_setup": "GL_OBJECT_LINEAR", "side_by_side": "tasks 3 and 4"}),
-    Mutant("spheremap", "texgen_left_on",
-           (("    glDisable(GL_TEXTURE_GEN_S)\n    glDisable(GL_TEXTURE_GEN_T)\n", ""),),
-           {"texgen_draw": "left on"}),
-    Mutant("spheremap", "texgen_only_s", (("    glEnable(GL_TEXTURE_GEN_T)\n", ""),),
-           {"texgen_draw": "for t is off", "side_by_side": "tasks 3 and 4"}),
-    Mutant("spheremap", "cone_aspect_of_the_window",
-           (("    glViewport(0, 0, half, HEIGHT)\n    lab.set_viewer(half / HEIGHT)",
-             "    glViewport(0, 0, half, HEIGHT)\n    lab.set_viewer()"),),
-           {"side_by_side": "aspect 1.00; this view needs 0.50"}),
-    Mutant("spheremap", "texgen_reflection_map",
-           (("glTexGeni(GL_S, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)",
-             "glTexGeni(GL_S, GL_TEXTURE_GEN_MODE, GL_REFLECTION_MAP)"),),
-           {"texgen_setup": "texgen for s is GL_REFLECTION_MAP (line",
-            "side_by_side": "tasks 3 and 4"}),
-    Mutant("spheremap", "texgen_unit_1",
-           (("texgen on for it alone.\"\"\"\n    glActiveTexture(GL_TEXTURE0 + UNIT)",
-             "texgen on for it alone.\"\"\"\n    glActiveTexture(GL_TEXTURE1)"),),
-           {"texgen_draw": "texgen for s and t is switched on for unit 1",
-            "side_by_side": "tasks 3 and 4"}),
+    Mutant(
+        "spheremap",
+        "reflect_sign",
+        (("return u - 2.0 * dot(n, u) * n;", "return 2.0 * dot(n, u) * n - u;"),),
+        {"reflection": "wrong way", "side_by_side": "tasks 1 and 2"},
+    ),
+    Mutant(
+        "spheremap",
+        "reflect_no_two",
+        (("return u - 2.0 * dot(n, u) * n;", "return u - dot(n, u) * n;"),),
+        {"reflection": "factor 2", "side_by_side": "tasks 1 and 2"},
+    ),
+    Mutant(
+        "spheremap",
+        "st_no_plus_one",
+        (("(r.z + 1.0) * (r.z + 1.0)", "r.z * r.z"),),
+        {"sphere_coordinates": "m must use (r.z + 1)", "side_by_side": "tasks 1 and 2"},
+    ),
+    Mutant(
+        "spheremap",
+        "st_swapped",
+        (("vec2(r.x / m + 0.5, r.y / m + 0.5)", "vec2(r.y / m + 0.5, r.x / m + 0.5)"),),
+        {"sphere_coordinates": "swapped", "side_by_side": "tasks 1 and 2"},
+    ),
+    Mutant(
+        "spheremap",
+        "texgen_object_linear",
+        (
+            (
+                "glTexGeni(GL_T, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)",
+                "glTexGeni(GL_T, GL_TEXTURE_GEN_MODE, GL_OBJECT_LINEAR)",
+            ),
+        ),
+        {"texgen_setup": "GL_OBJECT_LINEAR", "side_by_side": "tasks 3 and 4"},
+    ),
+    Mutant(
+        "spheremap",
+        "texgen_left_on",
+        (("    glDisable(GL_TEXTURE_GEN_S)\n    glDisable(GL_TEXTURE_GEN_T)\n", ""),),
+        {"texgen_draw": "left on"},
+    ),
+    Mutant(
+        "spheremap",
+        "texgen_only_s",
+        (("    glEnable(GL_TEXTURE_GEN_T)\n", ""),),
+        {"texgen_draw": "for t is off", "side_by_side": "tasks 3 and 4"},
+    ),
+    Mutant(
+        "spheremap",
+        "cone_aspect_of_the_window",
+        (
+            (
+                "    glViewport(0, 0, half, HEIGHT)\n    lab.set_viewer(half / HEIGHT)",
+                "    glViewport(0, 0, half, HEIGHT)\n    lab.set_viewer()",
+            ),
+        ),
+        {"side_by_side": "aspect 1.00; this view needs 0.50"},
+    ),
+    Mutant(
+        "spheremap",
+        "texgen_reflection_map",
+        (
+            (
+                "glTexGeni(GL_S, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)",
+                "glTexGeni(GL_S, GL_TEXTURE_GEN_MODE, GL_REFLECTION_MAP)",
+            ),
+        ),
+        {
+            "texgen_setup": "texgen for s is GL_REFLECTION_MAP (line",
+            "side_by_side": "tasks 3 and 4",
+        },
+    ),
+    Mutant(
+        "spheremap",
+        "texgen_unit_1",
+        (
+            (
+                'texgen on for it alone."""\n    glActiveTexture(GL_TEXTURE0 + UNIT)',
+                'texgen on for it alone."""\n    glActiveTexture(GL_TEXTURE1)',
+            ),
+        ),
+        {
+            "texgen_draw": "texgen for s and t is switched on for unit 1",
+            "side_by_side": "tasks 3 and 4",
+        },
+    ),
 )
 
 ROUND_TWO_SPHEREMAP = (
-    Mutant("spheremap", "st_halfway_unnormalised",
-           (("    float m = 2.0 * sqrt(r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0));\n"
-             "    return vec2(r.x / m + 0.5, r.y / m + 0.5);",
-             "    vec3 h = vec3(r.x, r.y, r.z + 1.0);\n"
-             "    return vec2(h.x / 2.0 + 0.5, h.y / 2.0 + 0.5);"),),
-           {"sphere_coordinates": "is not normalised", "side_by_side": "tasks 1 and 2"}),
-    Mutant("spheremap", "st_halfway_vector_unnormalised",
-           (("    float m = 2.0 * sqrt(r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0));\n"
-             "    return vec2(r.x / m + 0.5, r.y / m + 0.5);",
-             "    vec3 h = r + vec3(0.0, 0.0, 1.0);\n"
-             "    return h.xy / 2.0 + 0.5;"),),
-           {"sphere_coordinates": "is not normalised", "side_by_side": "tasks 1 and 2"}),
-    Mutant("spheremap", "st_integer_half",
-           (("vec2(r.x / m + 0.5, r.y / m + 0.5)", "vec2(r.x / m + 1/2, r.y / m + 1/2)"),),
-           {"sphere_coordinates": "integer division", "side_by_side": "tasks 1 and 2"}),
-    Mutant("spheremap", "reflect_clamped_dot",
-           (("return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * max(dot(n, u), 0.0) * n;"),),
-           {"reflection": "dot(n, u) is clamped", "side_by_side": "tasks 1 and 2"}),
-    Mutant("spheremap", "glsl_syntax_error",
-           (("return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * dot(n, u) * n"),),
-           {"reflection": "GLSL in SPHERE_MAP_GLSL line",
+    Mutant(
+        "spheremap",
+        "st_halfway_unnormalised",
+        (
+            (
+                "    float m = 2.0 * sqrt(r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0));\n"
+                "    return vec2(r.x / m + 0.5, r.y / m + 0.5);",
+                "    vec3 h = vec3(r.x, r.y, r.z + 1.0);\n"
+                "    return vec2(h.x / 2.0 + 0.5, h.y / 2.0 + 0.5);",
+            ),
+        ),
+        {"sphere_coordinates": "is not normalised", "side_by_side": "tasks 1 and 2"},
+    ),
+    Mutant(
+        "spheremap",
+        "st_halfway_vector_unnormalised",
+        (
+            (
+                "    float m = 2.0 * sqrt(r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0));\n"
+                "    return vec2(r.x / m + 0.5, r.y / m + 0.5);",
+                "    vec3 h = r + vec3(0.0, 0.0, 1.0);\n    return h.xy / 2.0 + 0.5;",
+            ),
+        ),
+        {"sphere_coordinates": "is not normalised", "side_by_side": "tasks 1 and 2"},
+    ),
+    Mutant(
+        "spheremap",
+        "st_integer_half",
+        (("vec2(r.x / m + 0.5, r.y / m + 0.5)", "vec2(r.x / m + 1/2, r.y / m + 1/2)"),),
+        {"sphere_coordinates": "integer division", "side_by_side": "tasks 1 and 2"},
+    ),
+    Mutant(
+        "spheremap",
+        "reflect_clamped_dot",
+        (("return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * max(dot(n, u), 0.0) * n;"),),
+        {"reflection": "dot(n, u) is clamped", "side_by_side": "tasks 1 and 2"},
+    ),
+    Mutant(
+        "spheremap",
+        "glsl_syntax_error",
+        (("return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * dot(n, u) * n"),),
+        {
+            "reflection": "GLSL in SPHERE_MAP_GLSL line",
             "sphere_coordinates": "GLSL in SPHERE_MAP_GLSL line",
             "texgen_setup": "not judged",
             "texgen_draw": "not judged: the frame stopped at display()",
-            "side_by_side": "not judged: display() stopped at line"}),
+            "side_by_side": "not judged: display() stopped at line",
+        },
+    ),
 )
 
-FACE_LOOP = ("                         FACE_SIZE, 0)\n        glActiveTexture(GL_TEXTURE0)\n")
+FACE_LOOP = "FACE_SIZE, FACE_SIZE, 0\n        )\n        glActiveTexture(GL_TEXTURE0)\n"
 
 CUBEMAP = (
-    Mutant("cubemap", "face_signed_max", (("    vec3 a = abs(r);", "    vec3 a = r;"),),
-           {"face_selection": "largest signed"}),
-    Mutant("cubemap", "st_swapped",
-           (("return vec2((sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0);",
-             "return vec2((tc / ma + 1.0) / 2.0, (sc / ma + 1.0) / 2.0);"),),
-           {"face_coordinates": "swapped"}),
-    Mutant("cubemap", "st_not_divided",
-           (("return vec2((sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0);",
-             "return vec2((sc + 1.0) / 2.0, (tc + 1.0) / 2.0);"),),
-           {"face_coordinates": "divided by |major axis|"}),
-    Mutant("cubemap", "up_wrong",
-           (("((1, 0, 0), (0, -1, 0))", "((1, 0, 0), (0, 1, 0))"),
+    Mutant(
+        "cubemap",
+        "face_signed_max",
+        (("    vec3 a = abs(r);", "    vec3 a = r;"),),
+        {"face_selection": "largest signed"},
+    ),
+    Mutant(
+        "cubemap",
+        "st_swapped",
+        (
+            (
+                "return vec2((sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0);",
+                "return vec2((tc / ma + 1.0) / 2.0, (sc / ma + 1.0) / 2.0);",
+            ),
+        ),
+        {"face_coordinates": "swapped"},
+    ),
+    Mutant(
+        "cubemap",
+        "st_not_divided",
+        (
+            (
+                "return vec2((sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0);",
+                "return vec2((sc + 1.0) / 2.0, (tc + 1.0) / 2.0);",
+            ),
+        ),
+        {"face_coordinates": "divided by |major axis|"},
+    ),
+    Mutant(
+        "cubemap",
+        "up_wrong",
+        (
+            ("((1, 0, 0), (0, -1, 0))", "((1, 0, 0), (0, 1, 0))"),
             ("((-1, 0, 0), (0, -1, 0))", "((-1, 0, 0), (0, 1, 0))"),
             ("((0, 0, 1), (0, -1, 0))", "((0, 0, 1), (0, 1, 0))"),
-            ("((0, 0, -1), (0, -1, 0))", "((0, 0, -1), (0, 1, 0))")),
-           {"capture_cameras": "up must be", "capture_copy": "task 3 (capture_cameras)"}),
-    Mutant("cubemap", "fov_60", (("gluPerspective(90, 1, 0.05, 50)",
-                                  "gluPerspective(60, 1, 0.05, 50)"),),
-           {"capture_cameras": "field of view 60", "capture_copy": "task 3 (capture_cameras)"}),
-    Mutant("cubemap", "faces_swapped_y",
-           (("((0, 1, 0), (0, 0, 1)),      # POSITIVE_Y", "((0, -1, 0), (0, 0, -1)),   # Y-"),
-            ("((0, -1, 0), (0, 0, -1)),    # NEGATIVE_Y", "((0, 1, 0), (0, 0, 1)),     # Y+")),
-           {"capture_cameras": "wrong order", "capture_copy": "task 3 (capture_cameras)"}),
-    Mutant("cubemap", "capture_after_camera",
-           (("    capture_cube()\n    glClear", "    glClear"),
-            ("    lab.draw_scene()\n    lab.draw_sphere",
-             "    lab.draw_scene()\n    capture_cube()\n    lab.draw_sphere")),
-           {"live_frame": "wrong order"}),
-    Mutant("cubemap", "depth_not_cleared",
-           (("        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT)\n        glMatrixMode",
-             "        glClear(GL_COLOR_BUFFER_BIT)\n        glMatrixMode"),),
-           {"capture_copy": "the depth buffer is not cleared between faces"}),
-    Mutant("cubemap", "viewport_in_loop",
-           ((FACE_LOOP, FACE_LOOP + "        glViewport(0, 0, WIDTH, HEIGHT)\n"),),
-           {"capture_cameras": "the viewport when the -X face is drawn is 256 x 256",
-            "capture_copy": "task 3 (capture_cameras)"}),
-    Mutant("cubemap", "cleared_black",
-           (("    cx, cy, cz = CENTER\n",
-             "    cx, cy, cz = CENTER\n    glClearColor(0, 0, 0, 1)\n"),),
-           {"capture_copy": "the faces are cleared to (0, 0, 0)",
-            "live_frame": "the frame is cleared to (0, 0, 0)"}),
-    Mutant("cubemap", "no_projection_mode",
-           (("    glMatrixMode(GL_PROJECTION)\n    glLoadIdentity()\n    gluPerspective",
-             "    glLoadIdentity()\n    gluPerspective"),),
-           {"capture_cameras": "was applied to the modelview matrix",
-            "capture_copy": "task 3 (capture_cameras)"}),
-    Mutant("cubemap", "near_3", (("gluPerspective(90, 1, 0.05, 50)",
-                                  "gluPerspective(90, 1, 3, 50)"),),
-           {"capture_cameras": "the near plane 3", "capture_copy": "task 3 (capture_cameras)"}),
-    Mutant("cubemap", "mipmaps_before_faces",
-           (("    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR)\n",
-             "    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, "
-             "GL_LINEAR_MIPMAP_LINEAR)\n    glGenerateMipmap(GL_TEXTURE_CUBE_MAP)\n"),),
-           {"live_frame": "mipmaps made before the faces were copied"}),
+            ("((0, 0, -1), (0, -1, 0))", "((0, 0, -1), (0, 1, 0))"),
+        ),
+        {"capture_cameras": "up must be", "capture_copy": "task 3 (capture_cameras)"},
+    ),
+    Mutant(
+        "cubemap",
+        "fov_60",
+        (("gluPerspective(90, 1, 0.05, 50)", "gluPerspective(60, 1, 0.05, 50)"),),
+        {"capture_cameras": "field of view 60", "capture_copy": "task 3 (capture_cameras)"},
+    ),
+    Mutant(
+        "cubemap",
+        "faces_swapped_y",
+        (
+            ("((0, 1, 0), (0, 0, 1)),  # POSITIVE_Y", "((0, -1, 0), (0, 0, -1)),  # Y-"),
+            ("((0, -1, 0), (0, 0, -1)),  # NEGATIVE_Y", "((0, 1, 0), (0, 0, 1)),  # Y+"),
+        ),
+        {"capture_cameras": "wrong order", "capture_copy": "task 3 (capture_cameras)"},
+    ),
+    Mutant(
+        "cubemap",
+        "capture_after_camera",
+        (
+            ("    capture_cube()\n    glClear", "    glClear"),
+            (
+                "    lab.draw_scene()\n    lab.draw_sphere",
+                "    lab.draw_scene()\n    capture_cube()\n    lab.draw_sphere",
+            ),
+        ),
+        {"live_frame": "wrong order"},
+    ),
+    Mutant(
+        "cubemap",
+        "depth_not_cleared",
+        (
+            (
+                "        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT)\n        glMatrixMode",
+                "        glClear(GL_COLOR_BUFFER_BIT)\n        glMatrixMode",
+            ),
+        ),
+        {"capture_copy": "the depth buffer is not cleared between faces"},
+    ),
+    Mutant(
+        "cubemap",
+        "viewport_in_loop",
+        ((FACE_LOOP, FACE_LOOP + "        glViewport(0, 0, WIDTH, HEIGHT)\n"),),
+        {
+            "capture_cameras": "the viewport when the -X face is drawn is 256 x 256",
+            "capture_copy": "task 3 (capture_cameras)",
+        },
+    ),
+    Mutant(
+        "cubemap",
+        "cleared_black",
+        (("    cx, cy, cz = CENTER\n", "    cx, cy, cz = CENTER\n    glClearColor(0, 0, 0, 1)\n"),),
+        {
+            "capture_copy": "the faces are cleared to (0, 0, 0)",
+            "live_frame": "the frame is cleared to (0, 0, 0)",
+        },
+    ),
+    Mutant(
+        "cubemap",
+        "no_projection_mode",
+        (
+            (
+                "    glMatrixMode(GL_PROJECTION)\n    glLoadIdentity()\n    gluPerspective",
+                "    glLoadIdentity()\n    gluPerspective",
+            ),
+        ),
+        {
+            "capture_cameras": "was applied to the modelview matrix",
+            "capture_copy": "task 3 (capture_cameras)",
+        },
+    ),
+    Mutant(
+        "cubemap",
+        "near_3",
+        (("gluPerspective(90, 1, 0.05, 50)", "gluPerspective(90, 1, 3, 50)"),),
+        {"capture_cameras": "the near plane 3", "capture_copy": "task 3 (capture_cameras)"},
+    ),
+    Mutant(
+        "cubemap",
+        "mipmaps_before_faces",
+        (
+            (
+                "    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR)\n",
+                "    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, "
+                "GL_LINEAR_MIPMAP_LINEAR)\n    glGenerateMipmap(GL_TEXTURE_CUBE_MAP)\n",
+            ),
+        ),
+        {"live_frame": "mipmaps made before the faces were copied"},
+    ),
 )
 
 ROUND_TWO_CUBEMAP = (
-    Mutant("cubemap", "st_swapped_on_one_face",
-           (("else if (face == 2) { sc = r.x; tc = r.z; ma = abs(r.y); }",
-             "else if (face == 2) { sc = r.z; tc = r.x; ma = abs(r.y); }"),),
-           {"face_coordinates": "on the +Y face (face 2): s and t swapped"}),
-    Mutant("cubemap", "st_integer_half",
-           (("return vec2((sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0);",
-             "return vec2(1/2 * (sc / ma + 1.0), 1/2 * (tc / ma + 1.0));"),),
-           {"face_coordinates": "integer division"}),
+    Mutant(
+        "cubemap",
+        "st_swapped_on_one_face",
+        (
+            (
+                "else if (face == 2) { sc = r.x; tc = r.z; ma = abs(r.y); }",
+                "else if (face == 2) { sc = r.z; tc = r.x; ma = abs(r.y); }",
+            ),
+        ),
+        {"face_coordinates": "on the +Y face (face 2): s and t swapped"},
+    ),
+    Mutant(
+        "cubemap",
+        "st_integer_half",
+        (
+            (
+                "return vec2((sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0);",
+                "return vec2(1/2 * (sc / ma + 1.0), 1/2 * (tc / ma + 1.0));",
+            ),
+        ),
+        {"face_coordinates": "integer division"},
+    ),
 )
 
 PROBED_SLIPS = (
     # slips the value probe names (mirrorlab/labs/trusted/probe.py): each gives, on the
     # cone's or the sphere's own inputs, the numbers of another slip or of none listed
-    Mutant("spheremap", "reflect_abs_dot",
-           (("return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * abs(dot(n, u)) * n;"),),
-           {"reflection": "abs(dot(n, u))", "side_by_side": "tasks 1 and 2"},
-           cause="abs(dot(n, u))"),
-    Mutant("spheremap", "reflect_clamped_dot_clamp",
-           (("return u - 2.0 * dot(n, u) * n;",
-             "return u - 2.0 * clamp(dot(n, u), 0.0, 1.0) * n;"),),
-           {"reflection": "dot(n, u) is clamped", "side_by_side": "tasks 1 and 2"},
-           cause="is clamped (clamp or max)"),
-    Mutant("spheremap", "st_minus_one",
-           (("(r.z + 1.0) * (r.z + 1.0)", "(r.z - 1.0) * (r.z - 1.0)"),),
-           {"sphere_coordinates": "the sign of the 1 in m", "side_by_side": "tasks 1 and 2"},
-           cause="the sign of the 1 in m"),
-    Mutant("spheremap", "st_halfway_unnormalised_named_h",
-           (("    float m = 2.0 * sqrt(r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0));\n"
-             "    return vec2(r.x / m + 0.5, r.y / m + 0.5);",
-             "    vec3 h = r;\n    h.z += 1.0;\n"
-             "    return 0.5 * h.xy + vec2(0.5);"),),
-           {"sphere_coordinates": "is not normalised", "side_by_side": "tasks 1 and 2"},
-           cause="halfway vector (r.x, r.y, r.z + 1) is not normalised"),
-    Mutant("cubemap", "face_opposite_sign",
-           (("return r.x >= 0.0 ? 0 : 1;", "return r.x >= 0.0 ? 1 : 0;"),
+    Mutant(
+        "spheremap",
+        "reflect_abs_dot",
+        (("return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * abs(dot(n, u)) * n;"),),
+        {"reflection": "abs(dot(n, u))", "side_by_side": "tasks 1 and 2"},
+        cause="abs(dot(n, u))",
+    ),
+    Mutant(
+        "spheremap",
+        "reflect_clamped_dot_clamp",
+        (("return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * clamp(dot(n, u), 0.0, 1.0) * n;"),),
+        {"reflection": "dot(n, u) is clamped", "side_by_side": "tasks 1 and 2"},
+        cause="is clamped (clamp or max)",
+    ),
+    Mutant(
+        "spheremap",
+        "st_minus_one",
+        (("(r.z + 1.0) * (r.z + 1.0)", "(r.z - 1.0) * (r.z - 1.0)"),),
+        {"sphere_coordinates": "the sign of the 1 in m", "side_by_side": "tasks 1 and 2"},
+        cause="the sign of the 1 in m",
+    ),
+    Mutant(
+        "spheremap",
+        "st_halfway_unnormalised_named_h",
+        (
+            (
+                "    float m = 2.0 * sqrt(r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0));\n"
+                "    return vec2(r.x / m + 0.5, r.y / m + 0.5);",
+                "    vec3 h = r;\n    h.z += 1.0;\n    return 0.5 * h.xy + vec2(0.5);",
+            ),
+        ),
+        {"sphere_coordinates": "is not normalised", "side_by_side": "tasks 1 and 2"},
+        cause="halfway vector (r.x, r.y, r.z + 1) is not normalised",
+    ),
+    Mutant(
+        "cubemap",
+        "face_opposite_sign",
+        (
+            ("return r.x >= 0.0 ? 0 : 1;", "return r.x >= 0.0 ? 1 : 0;"),
             ("return r.y >= 0.0 ? 2 : 3;", "return r.y >= 0.0 ? 3 : 2;"),
-            ("return r.z >= 0.0 ? 4 : 5;", "return r.z >= 0.0 ? 5 : 4;")),
-           {"face_selection": "the opposite sign", "face_coordinates": "task 1"},
-           cause="the right axis but the opposite sign"),
-    Mutant("cubemap", "st_signed_major",
-           (("    if (face == 0) { sc = -r.z; tc = -r.y; ma = abs(r.x); }\n"
-             "    else if (face == 1) { sc = r.z; tc = -r.y; ma = abs(r.x); }\n"
-             "    else if (face == 2) { sc = r.x; tc = r.z; ma = abs(r.y); }\n"
-             "    else if (face == 3) { sc = r.x; tc = -r.z; ma = abs(r.y); }\n"
-             "    else if (face == 4) { sc = r.x; tc = -r.y; ma = abs(r.z); }\n"
-             "    else { sc = -r.x; tc = -r.y; ma = abs(r.z); }",
-             "    if (face == 0) { sc = -r.z; tc = -r.y; ma = r.x; }\n"
-             "    else if (face == 1) { sc = r.z; tc = -r.y; ma = r.x; }\n"
-             "    else if (face == 2) { sc = r.x; tc = r.z; ma = r.y; }\n"
-             "    else if (face == 3) { sc = r.x; tc = -r.z; ma = r.y; }\n"
-             "    else if (face == 4) { sc = r.x; tc = -r.y; ma = r.z; }\n"
-             "    else { sc = -r.x; tc = -r.y; ma = r.z; }"),),
-           {"face_coordinates": "mirrored on the negative faces"},
-           cause="with its sign, s and t are mirrored"),
-    Mutant("cubemap", "st_signed_major_on_one_face",
-           (("else if (face == 1) { sc = r.z; tc = -r.y; ma = abs(r.x); }",
-             "else if (face == 1) { sc = r.z; tc = -r.y; ma = r.x; }"),),
-           {"face_coordinates": "on the -X face (face 1): ma is the major axis's size"},
-           cause="on the -X face (face 1): ma is the major axis's size"),
-    Mutant("cubemap", "st_divided_by_length",
-           (("return vec2((sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0);",
-             "return vec2((sc / length(r) + 1.0) / 2.0, (tc / length(r) + 1.0) / 2.0);"),),
-           {"face_coordinates": "divided by the length of r"},
-           cause="divided by the length of r"),
+            ("return r.z >= 0.0 ? 4 : 5;", "return r.z >= 0.0 ? 5 : 4;"),
+        ),
+        {"face_selection": "the opposite sign", "face_coordinates": "task 1"},
+        cause="the right axis but the opposite sign",
+    ),
+    Mutant(
+        "cubemap",
+        "st_signed_major",
+        (
+            (
+                "    if (face == 0) { sc = -r.z; tc = -r.y; ma = abs(r.x); }\n"
+                "    else if (face == 1) { sc = r.z; tc = -r.y; ma = abs(r.x); }\n"
+                "    else if (face == 2) { sc = r.x; tc = r.z; ma = abs(r.y); }\n"
+                "    else if (face == 3) { sc = r.x; tc = -r.z; ma = abs(r.y); }\n"
+                "    else if (face == 4) { sc = r.x; tc = -r.y; ma = abs(r.z); }\n"
+                "    else { sc = -r.x; tc = -r.y; ma = abs(r.z); }",
+                "    if (face == 0) { sc = -r.z; tc = -r.y; ma = r.x; }\n"
+                "    else if (face == 1) { sc = r.z; tc = -r.y; ma = r.x; }\n"
+                "    else if (face == 2) { sc = r.x; tc = r.z; ma = r.y; }\n"
+                "    else if (face == 3) { sc = r.x; tc = -r.z; ma = r.y; }\n"
+                "    else if (face == 4) { sc = r.x; tc = -r.y; ma = r.z; }\n"
+                "    else { sc = -r.x; tc = -r.y; ma = r.z; }",
+            ),
+        ),
+        {"face_coordinates": "mirrored on the negative faces"},
+        cause="with its sign, s and t are mirrored",
+    ),
+    Mutant(
+        "cubemap",
+        "st_signed_major_on_one_face",
+        (
+            (
+                "else if (face == 1) { sc = r.z; tc = -r.y; ma = abs(r.x); }",
+                "else if (face == 1) { sc = r.z; tc = -r.y; ma = r.x; }",
+            ),
+        ),
+        {"face_coordinates": "on the -X face (face 1): ma is the major axis's size"},
+        cause="on the -X face (face 1): ma is the major axis's size",
+    ),
+    Mutant(
+        "cubemap",
+        "st_divided_by_length",
+        (
+            (
+                "return vec2((sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0);",
+                "return vec2((sc / length(r) + 1.0) / 2.0, (tc / length(r) + 1.0) / 2.0);",
+            ),
+        ),
+        {"face_coordinates": "divided by the length of r"},
+        cause="divided by the length of r",
+    ),
 )
 
 CUBE_EQUIVALENT = (
-    Mutant("cubemap", "mipmaps_after_faces",
-           (("    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR)\n",
-             "    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, "
-             "GL_LINEAR_MIPMAP_LINEAR)\n"),
-            ("    glViewport(0, 0, WIDTH, HEIGHT)\n\n\ndef display",
-             "    glActiveTexture(GL_TEXTURE1)\n    glBindTexture(GL_TEXTURE_CUBE_MAP, "
-             "cube_texture)\n    glGenerateMipmap(GL_TEXTURE_CUBE_MAP)\n"
-             "    glActiveTexture(GL_TEXTURE0)\n    glViewport(0, 0, WIDTH, HEIGHT)\n\n\n"
-             "def display")),),
-    Mutant("cubemap", "other_near_far", (("gluPerspective(90, 1, 0.05, 50)",
-                                          "gluPerspective(90, 1, 0.2, 100)"),)),
+    Mutant(
+        "cubemap",
+        "mipmaps_after_faces",
+        (
+            (
+                "    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR)\n",
+                "    glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, "
+                "GL_LINEAR_MIPMAP_LINEAR)\n",
+            ),
+            (
+                "    glViewport(0, 0, WIDTH, HEIGHT)\n\n\ndef display",
+                "    glActiveTexture(GL_TEXTURE1)\n    glBindTexture(GL_TEXTURE_CUBE_MAP, "
+                "cube_texture)\n    glGenerateMipmap(GL_TEXTURE_CUBE_MAP)\n"
+                "    glActiveTexture(GL_TEXTURE0)\n    glViewport(0, 0, WIDTH, HEIGHT)\n\n\n"
+                "def display",
+            ),
+        ),
+    ),
+    Mutant(
+        "cubemap",
+        "other_near_far",
+        (("gluPerspective(90, 1, 0.05, 50)", "gluPerspective(90, 1, 0.2, 100)"),),
+    ),
 )
 
 MUTANTS = (*LAB20, *SPHEREMAP, *CUBEMAP)

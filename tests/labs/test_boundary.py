@@ -34,8 +34,10 @@ def test_the_student_side_imports_only_itself_and_the_standard_library():
     for path in files:
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.ImportFrom):
-                assert node.level >= 1 or node.module.split(".")[0] in allowed, \
-                    (path.name, node.module)
+                assert node.level >= 1 or node.module.split(".")[0] in allowed, (
+                    path.name,
+                    node.module,
+                )
             elif isinstance(node, ast.Import):
                 for alias in node.names:
                     assert alias.name.split(".")[0] in allowed, (path.name, alias.name)
@@ -59,33 +61,63 @@ def test_the_sandbox_holds_no_answers(tmp_path):
     box = new_box(tmp_path)
     try:
         (box / "mine.py").write_text("# a student's file\n")
-        run = Sandboxed([str(sandbox.interpreter()), "-I", "-S", "-c", PROBE], box,
-                        Limits(cpu_seconds=20, seconds=60))
+        run = Sandboxed(
+            [str(sandbox.interpreter()), "-I", "-S", "-c", PROBE],
+            box,
+            Limits(cpu_seconds=20, seconds=60),
+        )
         code, _, _ = run.wait()
         assert code == 0, sandbox.tail(box / "stderr.txt")
         found = json.loads((box / "stdout.txt").read_text())
     finally:
         shutil.rmtree(box, ignore_errors=True)
     base = str(Path(sys.base_prefix).resolve())
-    allowed = (base, "/lab/pkg/labstudent", "/lab/site/numpy", "/lab/site/numpy.libs",
-               "/lab/box", "/etc/ld.so.cache",
-               "/tmp")
-    skeleton = {"/lab", "/lab/pkg", "/lab/site", "/etc", "/bin", "/sbin", "/lib", "/lib64",
-                "/lib32", "/libx32", "/usr", "/proc", "/dev"}
+    allowed = (
+        base,
+        "/lab/pkg/labstudent",
+        "/lab/site/numpy",
+        "/lab/site/numpy.libs",
+        "/lab/box",
+        "/etc/ld.so.cache",
+        "/tmp",
+    )
+    skeleton = {
+        "/lab",
+        "/lab/pkg",
+        "/lab/site",
+        "/etc",
+        "/bin",
+        "/sbin",
+        "/lib",
+        "/lib64",
+        "/lib32",
+        "/libx32",
+        "/usr",
+        "/proc",
+        "/dev",
+    }
     outside = []
     for path in found["seen"]:
-        if path in skeleton or any(path == a or path.startswith(a + "/") or
-                                   a.startswith(path + "/") for a in allowed):
+        if path in skeleton or any(
+            path == a or path.startswith(a + "/") or a.startswith(path + "/") for a in allowed
+        ):
             continue
         outside.append(path)
     assert outside == [], outside[:20]
     text = "\n".join(found["seen"])
-    for secret in ("solutions", "/trusted", "evidence.json", "lab-references",
-                   os.environ["MIRRORLAB_CACHE"], str(REPO_DIR), "site-packages/mirrorlab"):
+    for secret in (
+        "solutions",
+        "/trusted",
+        "evidence.json",
+        "lab-references",
+        os.environ["MIRRORLAB_CACHE"],
+        str(REPO_DIR),
+        "site-packages/mirrorlab",
+    ):
         assert secret not in text, secret
-    assert sorted(p.rsplit("/", 1)[1] for p in found["seen"]
-                  if p.startswith("/lab/pkg/labstudent/")) == sorted(
-        p.name for p in STUDENT_PACKAGE.iterdir() if p.name != "__pycache__")
+    assert sorted(
+        p.rsplit("/", 1)[1] for p in found["seen"] if p.startswith("/lab/pkg/labstudent/")
+    ) == sorted(p.name for p in STUDENT_PACKAGE.iterdir() if p.name != "__pycache__")
     assert "/lab/box/mine.py" in found["seen"]
     if os.geteuid() == 0:
         assert found["uid"] >= sandbox.UID_BASE
@@ -95,8 +127,14 @@ def test_the_sandbox_holds_no_answers(tmp_path):
 def test_the_shipped_reference_is_what_the_solution_gives(lab):
     spec = LABS[lab]
     shipped = Evidence.load(reference_folder(spec))
-    run = run_job(lab, (SOLUTIONS / f"{spec.folder}.py").read_bytes(), "solution.py",
-                  default_variant(lab), LIMITS, CHECK_SIZE)
+    run = run_job(
+        lab,
+        (SOLUTIONS / f"{spec.folder}.py").read_bytes(),
+        "solution.py",
+        default_variant(lab),
+        LIMITS,
+        CHECK_SIZE,
+    )
     assert run.status == "ok" and not run.errors and not run.call_errors, run.detail
     fresh = trim_reference(run)
     assert sorted(shipped.arrays) == sorted(fresh.arrays)
@@ -104,9 +142,9 @@ def test_the_shipped_reference_is_what_the_solution_gives(lab):
         if array.dtype.kind == "u" and array.ndim == 3:
             assert same_picture(array, shipped.arrays[name]), name
         elif array.ndim == 4:  # the cube's faces
-            assert all(same_picture(a, b) for a, b in zip(array, shipped.arrays[name],
-                                                           strict=True)), name
+            assert all(
+                same_picture(a, b) for a, b in zip(array, shipped.arrays[name], strict=True)
+            ), name
     # the fresh run judged against the shipped evidence passes every task
     results = judges()[lab].judge(spec, run, shipped, Context(default_variant(lab)))
-    assert all(r.passed for r in results), [(r.task.id, r.hint) for r in results
-                                            if not r.passed]
+    assert all(r.passed for r in results), [(r.task.id, r.hint) for r in results if not r.passed]

@@ -33,8 +33,11 @@ def task_lines(output: str) -> dict[int, tuple[str, str]]:
     for i, line in enumerate(lines):
         if line.strip().startswith(("[pass] task", "[FAIL] task")):
             number = int(line.split("task ")[1].split(" ")[0])
-            hint = lines[i + 1].strip() if i + 1 < len(lines) and \
-                lines[i + 1].strip().startswith(("hint:", "note:")) else ""
+            hint = (
+                lines[i + 1].strip()
+                if i + 1 < len(lines) and lines[i + 1].strip().startswith(("hint:", "note:"))
+                else ""
+            )
             found[number] = ("pass" if "[pass]" in line else "FAIL", hint)
     return found
 
@@ -43,8 +46,16 @@ def task_lines(output: str) -> dict[int, tuple[str, str]]:
 def test_reference_solution_passes(lab, tmp_path):
     spec = LABS[lab]
     out = tmp_path / "check.png"
-    done = mirrorlab_command("lab", "check", lab, str(SOLUTIONS / f"{spec.folder}.py"),
-                             "--out", str(out), "--timeout", str(LIMITS.cpu_seconds))
+    done = mirrorlab_command(
+        "lab",
+        "check",
+        lab,
+        str(SOLUTIONS / f"{spec.folder}.py"),
+        "--out",
+        str(out),
+        "--timeout",
+        str(LIMITS.cpu_seconds),
+    )
     assert done.returncode == 0, done.stdout + done.stderr
     count = len(spec.tasks)
     assert f"{count}/{count} tasks passed" in done.stdout
@@ -53,8 +64,8 @@ def test_reference_solution_passes(lab, tmp_path):
     # student | reference | difference: the difference of the solution against itself is 0
     cell = (picture.shape[1] - 8) // 3
     rows = slice(16, 16 + cell)
-    assert np.array_equal(picture[rows, :cell], picture[rows, cell + 4:2 * cell + 4])
-    assert picture[rows, 2 * cell + 8:].max() == 0
+    assert np.array_equal(picture[rows, :cell], picture[rows, cell + 4 : 2 * cell + 4])
+    assert picture[rows, 2 * cell + 8 :].max() == 0
 
 
 @pytest.mark.parametrize("lab", sorted(LABS))
@@ -65,8 +76,15 @@ def test_untouched_starter_fails_every_task_with_its_hint(lab, tmp_path):
     spec = LABS[lab]
     started = mirrorlab_command("lab", "start", lab, str(tmp_path / "mine"))
     assert started.returncode == 0, started.stderr
-    done = mirrorlab_command("lab", "check", spec.folder, "--timeout", str(LIMITS.cpu_seconds),
-                             cwd=tmp_path / "mine", env={"MIRRORLAB_SOLUTIONS": None})
+    done = mirrorlab_command(
+        "lab",
+        "check",
+        spec.folder,
+        "--timeout",
+        str(LIMITS.cpu_seconds),
+        cwd=tmp_path / "mine",
+        env={"MIRRORLAB_SOLUTIONS": None},
+    )
     assert done.returncode == 1, done.stdout + done.stderr
     checked = tmp_path / "mine" / "starter.py"
     assert done.stdout.splitlines()[0] == f"{spec.title}: {checked}"
@@ -79,20 +97,26 @@ def test_untouched_starter_fails_every_task_with_its_hint(lab, tmp_path):
     assert f"0/{len(spec.tasks)} tasks passed" in done.stdout
 
 
-@pytest.mark.parametrize("lab, mutants", [("spheremap", SPHEREMAP),
-                                          ("cubemap", (*CUBEMAP, *CUBE_EQUIVALENT)),
-                                          ("lab20", LAB20_MORE)])
+@pytest.mark.parametrize(
+    "lab, mutants",
+    [("spheremap", SPHEREMAP), ("cubemap", (*CUBEMAP, *CUBE_EQUIVALENT)), ("lab20", LAB20_MORE)],
+)
 def test_each_mutant_is_caught_with_the_right_hint(lab, mutants, tmp_path):
     assert len(mutants) >= 6
     written = write_mutants(tmp_path / "class", mutants)
     if lab == "spheremap":  # a GLSL slip: the error names the Python string and its line
-        source = (SOLUTIONS / "lab_spheremap.py").read_text().replace(
-            "return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * dot(n, u) * n")
+        source = (
+            (SOLUTIONS / "lab_spheremap.py")
+            .read_text()
+            .replace("return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * dot(n, u) * n")
+        )
         (tmp_path / "class" / "glsl_typo.py").write_text(source)
-    grades, _ = grade_folder(LABS[lab], tmp_path / "class", 2, None, "pool", LIMITS,
-                             progress=False, solutions=SOLUTIONS)
-    by_student = {g.student: {task: (passed, hint) for task, passed, hint in g.tasks}
-                  for g in grades}
+    grades, _ = grade_folder(
+        LABS[lab], tmp_path / "class", 2, None, "pool", LIMITS, progress=False, solutions=SOLUTIONS
+    )
+    by_student = {
+        g.student: {task: (passed, hint) for task, passed, hint in g.tasks} for g in grades
+    }
     for stem, mutant in written.items():
         assert problems(mutant.fails, by_student[stem]) == [], stem
     if lab == "spheremap":
@@ -110,8 +134,9 @@ def test_check_without_a_file_checks_the_folders_own_or_refuses(tmp_path):
     folder.mkdir()
     (folder / "starter.py").write_text((SOLUTIONS / "lab20_mirror.py").read_text())
     picture = folder / "out" / "lab20_check.png"
-    done = mirrorlab_command("lab", "check", "lab20", "--timeout", str(LIMITS.cpu_seconds),
-                             cwd=folder)
+    done = mirrorlab_command(
+        "lab", "check", "lab20", "--timeout", str(LIMITS.cpu_seconds), cwd=folder
+    )
     assert done.returncode == 0, done.stdout + done.stderr
     assert done.stdout.splitlines()[0] == f"{LABS['lab20'].title}: {folder / 'starter.py'}"
     assert "8/8 tasks passed" in done.stdout and picture.is_file()
@@ -119,8 +144,10 @@ def test_check_without_a_file_checks_the_folders_own_or_refuses(tmp_path):
     (folder / "starter.py").rename(folder / "mine.py")
     (tmp_path / "other").mkdir()
     (tmp_path / "other" / "starter.py").write_text(starter_text("spheremap"))
-    for where, message in ((folder, "holds no starter.py"),
-                           (tmp_path / "other", "a file of the spheremap lab")):
+    for where, message in (
+        (folder, "holds no starter.py"),
+        (tmp_path / "other", "a file of the spheremap lab"),
+    ):
         refused = mirrorlab_command("lab", "check", "lab20", "--out", str(picture), cwd=where)
         assert refused.returncode == 2, refused.stdout + refused.stderr
         assert message in refused.stderr and refused.stdout == ""
@@ -137,8 +164,16 @@ def test_every_hint_names_another_task_by_its_one_name():
     from mirrorlab.labs import task_name
     from tests import REPO_DIR
 
-    for module in ("lab20", "spheremap", "cubemap", "judging", "checker", "grading",
-                   "report", "window"):
+    for module in (
+        "lab20",
+        "spheremap",
+        "cubemap",
+        "judging",
+        "checker",
+        "grading",
+        "report",
+        "window",
+    ):
         tree = ast.parse((REPO_DIR / "mirrorlab/labs/trusted" / f"{module}.py").read_text())
         for node in ast.walk(tree):
             if isinstance(node, ast.Constant) and isinstance(node.value, str):
@@ -158,18 +193,37 @@ def test_bad_command_lines_get_one_line_and_exit_2(tmp_path):
         (("lab", "check", "lab20", "--solutions", str(tmp_path / "none")), "--solutions:"),
         (("lab", "grade", "lab20", str(tmp_path / "missing")), "SUBMISSIONS_DIR:"),
         (("lab", "grade", "lab20", str(tmp_path), "--jobs", "0"), "--jobs"),
-        (("lab", "grade", "lab20", str(tmp_path), "--key", str(tmp_path / "no.key")),
-         "--key: cannot read"),
-        (("lab", "grade", "lab20", str(tmp_path), "--key", str(tmp_path / "full.key")),
-         "give --students FILE"),
-        (("lab", "grade", "lab20", str(tmp_path), "--copies", "half"),
-         "--copies: 'half' is not a policy"),
+        (
+            ("lab", "grade", "lab20", str(tmp_path), "--key", str(tmp_path / "no.key")),
+            "--key: cannot read",
+        ),
+        (
+            ("lab", "grade", "lab20", str(tmp_path), "--key", str(tmp_path / "full.key")),
+            "give --students FILE",
+        ),
+        (
+            ("lab", "grade", "lab20", str(tmp_path), "--copies", "half"),
+            "--copies: 'half' is not a policy",
+        ),
         (("lab", "check", "lab20", "--timeout=0"), "--timeout"),
         (("lab", "start", "lab20", str(tmp_path / "full")), "already holds starter.py"),
-        (("lab", "solution", "lab20", "--student", "ada", "--key", str(tmp_path / "no.key")),
-         "--key: cannot read"),
-        (("lab", "release", "lab20", str(tmp_path / "out"), "--students",
-          str(tmp_path / "none.txt"), "--key", str(tmp_path / "k")), "--students: cannot read"),
+        (
+            ("lab", "solution", "lab20", "--student", "ada", "--key", str(tmp_path / "no.key")),
+            "--key: cannot read",
+        ),
+        (
+            (
+                "lab",
+                "release",
+                "lab20",
+                str(tmp_path / "out"),
+                "--students",
+                str(tmp_path / "none.txt"),
+                "--key",
+                str(tmp_path / "k"),
+            ),
+            "--students: cannot read",
+        ),
     ]
     for args, message in cases:
         done = mirrorlab_command(*args)

@@ -45,22 +45,45 @@ STRAY_PIXELS = 0.0005
 """The judges' own share of pixels a frame may differ on (0.05%)."""
 
 CHOSEN = {
-    "lab20": ("wrong_corner", "mirror_in_capture", "legacy_gl_clamp", "triangle_fan",
-              "two_triangles", "vector_calls", "no_projection_mode", "camera_wrong_side"),
-    "spheremap": ("texgen_object_linear", "texgen_left_on", "texgen_only_s",
-                  "texgen_reflection_map", "texgen_unit_1", "reflect_sign",
-                  "reflect_abs_dot", "st_minus_one"),
-    "cubemap": ("no_projection_mode", "up_wrong", "fov_60", "mipmaps_before_faces",
-                "other_near_far", "st_signed_major_on_one_face"),
+    "lab20": (
+        "wrong_corner",
+        "mirror_in_capture",
+        "legacy_gl_clamp",
+        "triangle_fan",
+        "two_triangles",
+        "vector_calls",
+        "no_projection_mode",
+        "camera_wrong_side",
+    ),
+    "spheremap": (
+        "texgen_object_linear",
+        "texgen_left_on",
+        "texgen_only_s",
+        "texgen_reflection_map",
+        "texgen_unit_1",
+        "reflect_sign",
+        "reflect_abs_dot",
+        "st_minus_one",
+    ),
+    "cubemap": (
+        "no_projection_mode",
+        "up_wrong",
+        "fov_60",
+        "mipmaps_before_faces",
+        "other_near_far",
+        "st_signed_major_on_one_face",
+    ),
 }
 """The mutants graded both ways: where the core context's emulation differs most from
 Mesa's pipeline (a quad's diagonal under texture coordinates no plane holds, a vertex on
 the near plane, GL_CLAMP, the other primitives, texgen's modes, units and switches, the
 matrix modes and GLU), a quarter of the time of all of them. ``MIRRORLAB_ORACLE_ALL=1``
 grades every mutant (98 s here, against 47 s; 7 minutes, against 103 s, under load)."""
-EVERY = {"lab20": (*LAB20, *EQUIVALENT, *LAB20_MORE),
-         "spheremap": (*SPHEREMAP, *(m for m in PROBED_SLIPS if m.lab == "spheremap")),
-         "cubemap": (*CUBEMAP, *CUBE_EQUIVALENT, *(m for m in PROBED_SLIPS if m.lab == "cubemap"))}
+EVERY = {
+    "lab20": (*LAB20, *EQUIVALENT, *LAB20_MORE),
+    "spheremap": (*SPHEREMAP, *(m for m in PROBED_SLIPS if m.lab == "spheremap")),
+    "cubemap": (*CUBEMAP, *CUBE_EQUIVALENT, *(m for m in PROBED_SLIPS if m.lab == "cubemap")),
+}
 
 
 FIXED_FUNCTION = '''import numpy as np
@@ -272,8 +295,11 @@ def display():
 GL_REFLECTION_MAP and GL_NORMAL_MAP texgen and a cube map enabled on unit 1."""
 
 
-SLOW_CRASHES = {"four_thousand_legal_calls", "twenty_thousand_legal_calls",
-                "glsl_preprocessor_bomb"}
+SLOW_CRASHES = {
+    "four_thousand_legal_calls",
+    "twenty_thousand_legal_calls",
+    "glsl_preprocessor_bomb",
+}
 """Crash files left out of the comparison: they test size and time limits, not what the
 context does, and take seconds each."""
 
@@ -281,8 +307,11 @@ context does, and take seconds each."""
 def crashes_of(lab: str) -> dict[str, str]:
     """The lab's crash files (:mod:`tests.labs.crashes`), by student name: legal files
     that once broke the checker, which the core context must judge as the native one."""
-    return {f"crash_{c.name}": c.source() for c in CRASHES
-            if c.lab == lab and c.name not in SLOW_CRASHES}
+    return {
+        f"crash_{c.name}": c.source()
+        for c in CRASHES
+        if c.lab == lab and c.name not in SLOW_CRASHES
+    }
 
 
 def mutants_of(lab: str) -> tuple:
@@ -296,20 +325,26 @@ def mutants_of(lab: str) -> tuple:
 def test_the_simulated_context_is_core():
     """The overrides give a context where the legacy calls are gone, so that the tests below
     run the emulation and not Mesa's pipeline."""
-    script = ("from mirrorlab.gl.context import HeadlessContext, use_platform\n"
-              "use_platform('egl')\n"
-              "context = HeadlessContext()\n"
-              "from mirrorlab.gl.opengl import GL\n"
-              "from mirrorlab.labs.trusted import legacy\n"
-              "print('compatibility', legacy.has_compatibility())\n"
-              "try:\n"
-              "    GL.glMatrixMode(GL.GL_MODELVIEW)\n"
-              "    print('glMatrixMode ok')\n"
-              "except Exception as exc:\n"
-              "    print('glMatrixMode raised', type(exc).__name__)\n"
-              "context.release()\n")
-    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                          env={**os.environ, **MACOS_CONTEXT})
+    script = (
+        "from mirrorlab.gl.context import HeadlessContext, use_platform\n"
+        "use_platform('egl')\n"
+        "context = HeadlessContext()\n"
+        "from mirrorlab.gl.opengl import GL\n"
+        "from mirrorlab.labs.trusted import legacy\n"
+        "print('compatibility', legacy.has_compatibility())\n"
+        "try:\n"
+        "    GL.glMatrixMode(GL.GL_MODELVIEW)\n"
+        "    print('glMatrixMode ok')\n"
+        "except Exception as exc:\n"
+        "    print('glMatrixMode raised', type(exc).__name__)\n"
+        "context.release()\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script],
+        capture_output=True,
+        text=True,
+        env={**os.environ, **MACOS_CONTEXT},
+    )
     assert done.returncode == 0, done.stderr
     assert "compatibility False" in done.stdout and "glMatrixMode raised" in done.stdout
     native = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
@@ -320,7 +355,7 @@ def _student_picture(png: bytes) -> np.ndarray:
     """The student's cell of a grade's picture (student | reference | difference)."""
     picture = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(np.int16)
     cell = (picture.shape[1] - 8) // 3
-    return picture[16:16 + cell, :cell]
+    return picture[16 : 16 + cell, :cell]
 
 
 def _grade(lab, folder, monkeypatch, cache, core: bool):
@@ -331,8 +366,9 @@ def _grade(lab, folder, monkeypatch, cache, core: bool):
                 patch.setenv(key, value)
             else:
                 patch.delenv(key, raising=False)
-        grades, _ = grade_folder(LABS[lab], folder, 2, None, "pool", LIMITS, progress=False,
-                                 solutions=SOLUTIONS)
+        grades, _ = grade_folder(
+            LABS[lab], folder, 2, None, "pool", LIMITS, progress=False, solutions=SOLUTIONS
+        )
     return {g.student: g for g in grades}
 
 
@@ -348,21 +384,33 @@ def test_core_and_compatibility_grade_alike(lab, tmp_path, monkeypatch):
         (folder / f"{student}.py").write_text(source)
     if lab == "lab20":
         (folder / "fixed_function.py").write_text(
-            (SOLUTIONS / f"{spec.folder}.py").read_text() + "\n\n" + FIXED_FUNCTION)
+            (SOLUTIONS / f"{spec.folder}.py").read_text() + "\n\n" + FIXED_FUNCTION
+        )
     if lab == "cubemap":
         (folder / "cube_fixed_function.py").write_text(
-            (SOLUTIONS / f"{spec.folder}.py").read_text() + "\n\n" + CUBE_FIXED_FUNCTION)
+            (SOLUTIONS / f"{spec.folder}.py").read_text() + "\n\n" + CUBE_FIXED_FUNCTION
+        )
     if lab == "spheremap":  # GLSL naming compatibility built-ins: translated both ways
-        (folder / "builtins.py").write_text((SOLUTIONS / f"{spec.folder}.py").read_text()
-                                            .replace("return u - 2.0 * dot(n, u) * n;",
-                                                     "return u - 2.0 * dot(n, u) * n + 0.0 * "
-                                                     "(gl_ModelViewMatrix * vec4(u, 0.0)).xyz;"))
+        (folder / "builtins.py").write_text(
+            (SOLUTIONS / f"{spec.folder}.py")
+            .read_text()
+            .replace(
+                "return u - 2.0 * dot(n, u) * n;",
+                "return u - 2.0 * dot(n, u) * n + 0.0 * (gl_ModelViewMatrix * vec4(u, 0.0)).xyz;",
+            )
+        )
     native = _grade(lab, folder, monkeypatch, tmp_path / "cache-native", core=False)
     core = _grade(lab, folder, monkeypatch, tmp_path / "cache-core", core=True)
-    extra = {"spheremap": ["builtins"], "lab20": ["fixed_function"],
-             "cubemap": ["cube_fixed_function"]}[lab]
-    assert sorted(native) == sorted(core) == sorted([*written, "solution", "starter", *extra,
-                                                     *crashes])
+    extra = {
+        "spheremap": ["builtins"],
+        "lab20": ["fixed_function"],
+        "cubemap": ["cube_fixed_function"],
+    }[lab]
+    assert (
+        sorted(native)
+        == sorted(core)
+        == sorted([*written, "solution", "starter", *extra, *crashes])
+    )
     for student, expected in native.items():
         got = core[student]
         assert got.status == expected.status, (student, got.status, expected.status)

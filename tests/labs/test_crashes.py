@@ -23,8 +23,16 @@ def checked(tmp_path_factory, lab_environment):
     def check(crash):
         path = folder / f"{crash.name}.py"
         path.write_text(crash.source())
-        return mirrorlab_command("lab", "check", crash.lab, str(path), "--out",
-                                 str(folder / f"{crash.name}.png"), "--timeout", TIMEOUT)
+        return mirrorlab_command(
+            "lab",
+            "check",
+            crash.lab,
+            str(path),
+            "--out",
+            str(folder / f"{crash.name}.png"),
+            "--timeout",
+            TIMEOUT,
+        )
 
     with ThreadPoolExecutor(2) as pool:
         return dict(zip((c.name for c in CRASHES), pool.map(check, CRASHES), strict=True))
@@ -55,8 +63,18 @@ def test_lab_grade_judges_every_crash_file(tmp_path, lab_environment):
     for name, crash in crashes.items():
         (folder / f"{name}.py").write_text(crash.source())
     out = tmp_path / "grades"
-    done = mirrorlab_command("lab", "grade", "lab20", str(folder), "--out-dir", str(out),
-                             "--jobs", "2", "--timeout", TIMEOUT)
+    done = mirrorlab_command(
+        "lab",
+        "grade",
+        "lab20",
+        str(folder),
+        "--out-dir",
+        str(out),
+        "--jobs",
+        "2",
+        "--timeout",
+        TIMEOUT,
+    )
     assert done.returncode == 0, done.stderr[-3000:]
     rows = read_csv(out / "grades.csv")
     assert {row["student"] for row in rows} == set(crashes)

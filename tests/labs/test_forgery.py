@@ -39,16 +39,23 @@ def forged(tmp_path_factory, lab_environment):
 
 
 def check_one(folder, name: str) -> subprocess.CompletedProcess:
-    return mirrorlab_command("lab", "check", "lab20", str(folder / f"{name}.py"), "--out",
-                             str(folder / f"{name}.png"), "--timeout", TIMEOUT)
+    return mirrorlab_command(
+        "lab",
+        "check",
+        "lab20",
+        str(folder / f"{name}.py"),
+        "--out",
+        str(folder / f"{name}.png"),
+        "--timeout",
+        TIMEOUT,
+    )
 
 
 def test_every_forgery_fails_lab_check_in_one_line(forged):
     folder, phrases = forged
     assert len(phrases) >= 15
     with ThreadPoolExecutor(2) as pool:
-        results = dict(zip(phrases, pool.map(lambda n: check_one(folder, n), phrases),
-                           strict=True))
+        results = dict(zip(phrases, pool.map(lambda n: check_one(folder, n), phrases), strict=True))
     for name, done in results.items():
         assert done.returncode == 1, (name, done.stdout, done.stderr)
         assert done.stderr == "" and "Traceback" not in done.stdout, (name, done.stderr)
@@ -65,8 +72,18 @@ def test_every_forgery_fails_lab_grade(forged, tmp_path):
     for picture in folder.glob("*.png"):
         picture.unlink()
     out = tmp_path / "grades"
-    done = mirrorlab_command("lab", "grade", "lab20", str(folder), "--out-dir", str(out),
-                             "--jobs", "2", "--timeout", TIMEOUT)
+    done = mirrorlab_command(
+        "lab",
+        "grade",
+        "lab20",
+        str(folder),
+        "--out-dir",
+        str(out),
+        "--jobs",
+        "2",
+        "--timeout",
+        TIMEOUT,
+    )
     assert done.returncode == 0, done.stderr[-3000:]
     rows = read_csv(out / "grades.csv")
     by_student: dict[str, list[dict[str, str]]] = {}
@@ -87,9 +104,14 @@ def test_the_checker_stays_small_while_a_file_sends_1_gib(forged):
     """The upload is refused on its header; neither the checker's GL process nor this one
     grows by the gigabyte."""
     folder, _ = forged
-    evidence = run_job("lab20", (folder / "forge_upload_1gib.py").read_bytes(), "forge.py",
-                       default_variant("lab20"), Limits(cpu_seconds=20, seconds=120),
-                       (256, 256))
+    evidence = run_job(
+        "lab20",
+        (folder / "forge_upload_1gib.py").read_bytes(),
+        "forge.py",
+        default_variant("lab20"),
+        Limits(cpu_seconds=20, seconds=120),
+        (256, 256),
+    )
     assert evidence.status == "stopped" and "1024 MiB" in evidence.detail
     peak = evidence.state.get("checker_peak_kib", 0)
     assert 0 < peak < 400 * 1024, f"the checker's GL process peaked at {peak} KiB"
@@ -98,15 +120,30 @@ def test_the_checker_stays_small_while_a_file_sends_1_gib(forged):
 def test_the_command_stays_small_while_a_file_sends_1_gib(forged):
     folder, _ = forged
     # VmHWM: this process's own peak resident memory
-    script = ("import sys\nfrom mirrorlab.cli import main\n"
-              "code = main(sys.argv[1:])\n"
-              "status = open('/proc/self/status').read()\n"
-              "print('peak', status.split('VmHWM:')[1].split()[0])\n"
-              "sys.exit(code)\n")
-    done = subprocess.run([sys.executable, "-c", script, "lab", "check", "lab20",
-                           str(folder / "forge_upload_1gib.py"), "--out",
-                           str(folder / "one.png"), "--timeout", TIMEOUT],
-                          capture_output=True, text=True)
+    script = (
+        "import sys\nfrom mirrorlab.cli import main\n"
+        "code = main(sys.argv[1:])\n"
+        "status = open('/proc/self/status').read()\n"
+        "print('peak', status.split('VmHWM:')[1].split()[0])\n"
+        "sys.exit(code)\n"
+    )
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            script,
+            "lab",
+            "check",
+            "lab20",
+            str(folder / "forge_upload_1gib.py"),
+            "--out",
+            str(folder / "one.png"),
+            "--timeout",
+            TIMEOUT,
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert done.returncode == 1, done.stderr
     assert "1024 MiB" in done.stdout
     peak_kib = int(done.stdout.split("peak ")[1].split()[0])
@@ -119,8 +156,9 @@ def test_glsl_macro_forgeries_do_not_get_every_task(lab, tmp_path, lab_environme
     shader reach nothing, and functions that return constants fail the GLSL tasks."""
     path = tmp_path / f"forge_{lab}.py"
     path.write_text(GLSL_FORGERIES[lab])
-    done = mirrorlab_command("lab", "check", lab, str(path), "--out",
-                             str(tmp_path / "check.png"), "--timeout", TIMEOUT)
+    done = mirrorlab_command(
+        "lab", "check", lab, str(path), "--out", str(tmp_path / "check.png"), "--timeout", TIMEOUT
+    )
     tasks = len(LABS[lab].tasks)
     assert done.returncode == 1 and done.stderr == "", done.stdout + done.stderr
     score = re.search(rf"(\d+)/{tasks} tasks passed", done.stdout)

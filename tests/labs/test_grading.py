@@ -34,8 +34,9 @@ def dask_scheduler():
     """A local Dask cluster of two worker processes on loopback, for --scheduler."""
     from distributed import LocalCluster
 
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                      dashboard_address=":0") as cluster:
+    with LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
+    ) as cluster:
         yield cluster.scheduler_address
 
 
@@ -61,11 +62,22 @@ def graded(classroom, tmp_path_factory, request):
         folder = whole if engine == "pool" else part
         if engine not in done:
             out = tmp_path_factory.mktemp(f"grades-{engine}")
-            options = {"serial": ["--jobs", "1"], "pool": ["--jobs", "2"],
-                       "dask": ["--scheduler", request.getfixturevalue("dask_scheduler")]}
-            result = mirrorlab_command("lab", "grade", "lab20", str(folder), "--out-dir",
-                                       str(out), "--timeout", str(LIMITS.cpu_seconds),
-                                       *options[engine])
+            options = {
+                "serial": ["--jobs", "1"],
+                "pool": ["--jobs", "2"],
+                "dask": ["--scheduler", request.getfixturevalue("dask_scheduler")],
+            }
+            result = mirrorlab_command(
+                "lab",
+                "grade",
+                "lab20",
+                str(folder),
+                "--out-dir",
+                str(out),
+                "--timeout",
+                str(LIMITS.cpu_seconds),
+                *options[engine],
+            )
             assert result.returncode == 0, result.stdout + result.stderr[-3000:]
             done[engine] = (out, result)
         return done[engine]
@@ -84,8 +96,11 @@ def test_grades_csv_is_the_expected_one(engine, classroom, graded):
     assert list(rows[0]) == ["student", "task", "passed", "hint", "seconds"]
     assert compare(rows, expected) == []
     assert [r["student"] for r in rows] == sorted(r["student"] for r in rows)
-    engine_words = {"serial": "serial (1 worker)", "pool": "pool (2 workers)",
-                    "dask": "dask (2 workers)"}
+    engine_words = {
+        "serial": "serial (1 worker)",
+        "pool": "pool (2 workers)",
+        "dask": "dask (2 workers)",
+    }
     assert engine_words[engine] in result.stdout
     # the progress bar counted every submission
     assert re.search(rf"grading lab20: 100%.*{len(expected)}/{len(expected)}", result.stderr)
@@ -94,25 +109,39 @@ def test_grades_csv_is_the_expected_one(engine, classroom, graded):
 def test_every_engine_writes_the_same_files(graded, classroom):
     outputs = {engine: graded(engine)[0] for engine in ENGINES}
     part = set(part_of_the_class(classroom[1]))
-    tables = {engine: [{k: v for k, v in row.items() if k != "seconds"}
-                       for row in read_csv(out / "grades.csv") if row["student"] in part]
-              for engine, out in outputs.items()}
+    tables = {
+        engine: [
+            {k: v for k, v in row.items() if k != "seconds"}
+            for row in read_csv(out / "grades.csv")
+            if row["student"] in part
+        ]
+        for engine, out in outputs.items()
+    }
     assert tables["serial"] == tables["pool"] == tables["dask"]
     names = sorted(p.name for p in (outputs["serial"] / "pictures").iterdir())
     assert len(names) == len(tables["serial"]) // len(LABS["lab20"].tasks)
     for engine in ("pool", "dask"):
         assert set(names) <= {p.name for p in (outputs[engine] / "pictures").iterdir()}
         for name in names:
-            assert np.array_equal(load_picture(outputs["serial"] / "pictures" / name),
-                                  load_picture(outputs[engine] / "pictures" / name)), name
+            assert np.array_equal(
+                load_picture(outputs["serial"] / "pictures" / name),
+                load_picture(outputs[engine] / "pictures" / name),
+            ), name
 
 
 def test_gradebook_and_feedback_pages(graded, classroom):
     out, _ = graded("pool")
     _, expected = classroom
     rows = read_csv(out / "gradebook.csv")
-    assert list(rows[0]) == ["student", "score", "max_score", "percent", "variant", "copy_of",
-                             "feedback"]
+    assert list(rows[0]) == [
+        "student",
+        "score",
+        "max_score",
+        "percent",
+        "variant",
+        "copy_of",
+        "feedback",
+    ]
     assert [r["student"] for r in rows] == sorted(expected)
     # without a key everyone has the lab's own numbers: no file is another's copy
     assert {(r["variant"], r["copy_of"]) for r in rows} == {("default", "")}
@@ -126,8 +155,11 @@ def test_gradebook_and_feedback_pages(graded, classroom):
         page = html.unescape(re.sub(r"data:image/png;base64,[A-Za-z0-9+/=]+", "", page))
         # the student's own name, score and picture, and nobody else's
         assert f"{row['student']}" in page and f"{passing} of {tasks} tasks passed" in page
-        others = [s for s in expected if s != row["student"] and s not in row["student"]
-                  and row["student"] not in s]
+        others = [
+            s
+            for s in expected
+            if s != row["student"] and s not in row["student"] and row["student"] not in s
+        ]
         assert not [s for s in others if s in page], row["student"]
 
 
@@ -137,8 +169,11 @@ def test_attacks_harm_nothing_outside(graded, canaries):
     assert (canaries / "overwrite_me.txt").read_text() == "canary\n"
     assert sorted(p.name for p in canaries.iterdir()) == ["delete_me.txt", "overwrite_me.txt"]
     # no sandboxed process outlives its run (the fork bomb's included)
-    leftovers = [entry.name for entry in Path("/proc").iterdir() if entry.name.isdigit()
-                 and _uid(entry) >= UID_BASE]
+    leftovers = [
+        entry.name
+        for entry in Path("/proc").iterdir()
+        if entry.name.isdigit() and _uid(entry) >= UID_BASE
+    ]
     assert leftovers == []
 
 
@@ -155,10 +190,23 @@ def chromium(*args: str) -> subprocess.CompletedProcess:
     assert binary, "chromium is not installed: ./dev test installs the Debian package"
     with tempfile.TemporaryDirectory(prefix="mirrorlab-chromium-") as profile:
         return subprocess.run(
-            [binary, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
-             "--no-first-run", "--disable-background-networking",
-             "--disable-component-update", "--disable-sync", f"--user-data-dir={profile}",
-             *args], capture_output=True, text=True, timeout=180)
+            [
+                binary,
+                "--headless",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--disable-quic",
+                "--no-first-run",
+                "--disable-background-networking",
+                "--disable-component-update",
+                "--disable-sync",
+                f"--user-data-dir={profile}",
+                *args,
+            ],
+            capture_output=True,
+            text=True,
+            timeout=180,
+        )
 
 
 def test_report_opens_in_chromium_with_every_row_and_picture(graded, classroom, tmp_path):
@@ -179,8 +227,9 @@ def test_report_opens_in_chromium_with_every_row_and_picture(graded, classroom, 
     assert scores == sorted(scores, reverse=True) and scores[0] == 8
     shot = tmp_path / "report.png"
     # in name order the first rows hold both passes (ada) and failures (the attacks)
-    done = chromium("--window-size=2560,1600", f"--screenshot={shot}",
-                    (out / "report.html").resolve().as_uri())
+    done = chromium(
+        "--window-size=2560,1600", f"--screenshot={shot}", (out / "report.html").resolve().as_uri()
+    )
     assert done.returncode == 0 and shot.is_file(), done.stderr[-2000:]
     if os.environ.get("MIRRORLAB_KEEP_SCREENSHOT"):
         shutil.copy(shot, os.environ["MIRRORLAB_KEEP_SCREENSHOT"])
@@ -188,15 +237,14 @@ def test_report_opens_in_chromium_with_every_row_and_picture(graded, classroom, 
     assert image.shape[:2] == (1600, 2560)
     # the table's pass and fail colours and the thumbnails' dark frames are on screen
     pixels = image.reshape(-1, 3).astype(int)
-    assert np.any(np.all(np.abs(pixels - (0xe3, 0xf6, 0xe3)) <= 2, axis=1))
-    assert np.any(np.all(np.abs(pixels - (0xfb, 0xe4, 0xe4)) <= 2, axis=1))
+    assert np.any(np.all(np.abs(pixels - (0xE3, 0xF6, 0xE3)) <= 2, axis=1))
+    assert np.any(np.all(np.abs(pixels - (0xFB, 0xE4, 0xE4)) <= 2, axis=1))
     # the thumbnails: the lab's dark background (0.16, 0.18, 0.22) in their frames
     background = np.all(np.abs(pixels - (41, 46, 56)) <= 6, axis=1)
     assert np.mean(background) > 0.01, "no thumbnails on screen"
 
 
-def test_a_worker_killed_mid_submission_has_it_graded_elsewhere_once(tmp_path,
-                                                                     dask_scheduler):
+def test_a_worker_killed_mid_submission_has_it_graded_elsewhere_once(tmp_path, dask_scheduler):
     """Kill the Dask worker that is running a (looping) submission while ``lab grade
     --scheduler`` grades the class from its own process: the scheduler runs it again on
     another worker, and every student is graded exactly once."""
@@ -215,9 +263,26 @@ def test_a_worker_killed_mid_submission_has_it_graded_elsewhere_once(tmp_path,
     (folder / "slow.py").write_text("while True:\n    pass\n")
     out = tmp_path / "grades"
     grading = subprocess.Popen(
-        [sys.executable, "-m", "mirrorlab.cli", "lab", "grade", "lab20", str(folder),
-         "--out-dir", str(out), "--scheduler", dask_scheduler, "--timeout", "3"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=dict(os.environ))
+        [
+            sys.executable,
+            "-m",
+            "mirrorlab.cli",
+            "lab",
+            "grade",
+            "lab20",
+            str(folder),
+            "--out-dir",
+            str(out),
+            "--scheduler",
+            dask_scheduler,
+            "--timeout",
+            "3",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=dict(os.environ),
+    )
     killed = None
     with Client(dask_scheduler) as client:
         # wait until a worker runs the slow submission alone and its sandbox is up
@@ -254,7 +319,11 @@ def test_a_worker_killed_mid_submission_has_it_graded_elsewhere_once(tmp_path,
 
     scratch = Path(tempfile.gettempdir())
     sweep_stale(scratch)
-    left = [p.name for p in scratch.iterdir() if p.name.startswith(
-        ("mirrorlab-box-", "mirrorlab-check-")) and int(p.name.split("-")[2]) != os.getpid()]
+    left = [
+        p.name
+        for p in scratch.iterdir()
+        if p.name.startswith(("mirrorlab-box-", "mirrorlab-check-"))
+        and int(p.name.split("-")[2]) != os.getpid()
+    ]
     assert left == [], left
     new_box(scratch).rmdir()

@@ -17,8 +17,9 @@ from tests.labs.mutants import EVERY_MUTANT, PROBED_SLIPS, ROUND_TWO, problems, 
 def test_the_first_failing_hint_names_the_cause(lab, tmp_path):
     mutants = [m for m in EVERY_MUTANT if m.lab == lab]
     written = write_mutants(tmp_path / "class", mutants)
-    grades, _ = grade_folder(LABS[lab], tmp_path / "class", 2, None, "pool", LIMITS,
-                             progress=False, solutions=SOLUTIONS)
+    grades, _ = grade_folder(
+        LABS[lab], tmp_path / "class", 2, None, "pool", LIMITS, progress=False, solutions=SOLUTIONS
+    )
     by_student = {g.student: g.tasks for g in grades}
     wrong = []
     for stem, mutant in written.items():

@@ -75,8 +75,9 @@ def test_each_job_runs_once_when_nothing_dies(tmp_path, dask_executor):
     for executor in engines(dask_executor):
         folder = tmp_path / executor.engine
         folder.mkdir()
-        got = outcomes(executor, jobfunctions.count_calls,
-                       {f"k{i}": (str(folder), f"k{i}") for i in range(6)})
+        got = outcomes(
+            executor, jobfunctions.count_calls, {f"k{i}": (str(folder), f"k{i}") for i in range(6)}
+        )
         assert sorted(got) == [f"k{i}" for i in range(6)]
         assert len(list(folder.iterdir())) == 6
 
@@ -90,12 +91,14 @@ def test_a_pool_keeps_its_workers_from_the_first_run_to_close():
     list, never with each other. (Under a start method that spawns workers on demand the
     second run may add one; none is ever replaced.)"""
     with PoolExecutor(2) as pool:
-        first = {o.value for o in pool.run(jobfunctions.process_id,
-                                           {f"a{i}": (i,) for i in range(6)})}
+        first = {
+            o.value for o in pool.run(jobfunctions.process_id, {f"a{i}": (i,) for i in range(6)})
+        }
         kept_pool = pool._pool
         started = set(kept_pool._processes)
-        again = {o.value for o in pool.run(jobfunctions.process_id,
-                                           {f"b{i}": (i,) for i in range(6)})}
+        again = {
+            o.value for o in pool.run(jobfunctions.process_id, {f"b{i}": (i,) for i in range(6)})
+        }
         now = set(pool._pool._processes)
         assert 1 <= len(started) <= len(now) <= 2 and os.getpid() not in now
         assert first <= started

@@ -26,8 +26,9 @@ def test_laundered_evidence_fails_with_its_hint(lab, tmp_path):
     folder.mkdir()
     for name, (source, _) in found.items():
         (folder / f"{name}.py").write_text(source)
-    grades, _ = grade_folder(LABS[lab], folder, 2, None, "pool", LIMITS, progress=False,
-                             solutions=SOLUTIONS)
+    grades, _ = grade_folder(
+        LABS[lab], folder, 2, None, "pool", LIMITS, progress=False, solutions=SOLUTIONS
+    )
     by_student = {g.student: g.tasks for g in grades}
     assert sorted(by_student) == sorted(found)
     for name, (_, phrase) in found.items():
@@ -43,8 +44,9 @@ def test_no_lab_offers_a_way_to_read_what_was_drawn():
         offered = C.lab_specs(lab)
         for name in C.REFUSED:
             assert name not in offered, (lab, name)
-            assert C.refused_text(lab, name).startswith(f"{name} is not one of the OpenGL "
-                                                        f"calls this lab offers: ")
+            assert C.refused_text(lab, name).startswith(
+                f"{name} is not one of the OpenGL calls this lab offers: "
+            )
     assert "glCopyTexImage2D" not in C.lab_specs("spheremap")
     assert "glCopyTexImage2D" in C.lab_specs("lab20")
     assert "glUniform1i" in C.lab_specs("lab20") and "glUniform1i" not in C.lab_specs("cubemap")
@@ -54,8 +56,7 @@ def _reference(lab: str) -> np.ndarray:
     return Evidence.load(reference_folder(LABS[lab])).arrays["frame"]
 
 
-def _blend(frame: np.ndarray, box: tuple[int, int, int, int], colour, alpha: float
-           ) -> np.ndarray:
+def _blend(frame: np.ndarray, box: tuple[int, int, int, int], colour, alpha: float) -> np.ndarray:
     out = frame.astype(np.float64)
     x0, y0, x1, y1 = box
     out[y0:y1, x0:x1] = out[y0:y1, x0:x1] * (1 - alpha) + np.asarray(colour) * alpha
@@ -66,9 +67,11 @@ def _blend(frame: np.ndarray, box: tuple[int, int, int, int], colour, alpha: flo
 def test_a_faint_overlay_shows_in_patches_and_noise_does_not(lab):
     reference = _reference(lab)
     marked = reference
-    for box, colour in (((0, 30, 256, 54), (255, 255, 255)), ((20, 70, 36, 230),
-                                                               (255, 255, 255)),
-                        ((150, 130, 230, 210), (255, 0, 0))):
+    for box, colour in (
+        ((0, 30, 256, 54), (255, 255, 255)),
+        ((20, 70, 36, 230), (255, 255, 255)),
+        ((150, 130, 230, 210), (255, 0, 0)),
+    ):
         marked = _blend(marked, box, colour, 0.085)
     # under the per-pixel tolerance, as the issue found
     assert int(np.abs(marked.astype(int) - reference).max()) <= 24
@@ -91,7 +94,7 @@ def test_taint_follows_pixels():
     assert tracker.framebuffer_taint == ""
     tracker.taint("texture 3 holds uploaded pixels", (0, 0, 64, 64), (64, 64))
     assert tracker.framebuffer_taint
-    tracker.untaint((0, 0, 32, 64))                  # a scissored clear: half the frame
+    tracker.untaint((0, 0, 32, 64))  # a scissored clear: half the frame
     assert tracker.framebuffer_taint and tracker.taint_in((0, 0, 32, 64)) == ""
     assert tracker.taint_in((30, 0, 8, 8)) and tracker.taint_in((-5, -5, 1000, 1000))
     tracker.untaint((32, 0, 32, 64))
@@ -106,8 +109,17 @@ def test_one_file_for_every_variant_gets_a_refusal_for_each_student(tmp_path):
     folder.mkdir()
     for student in ("Ada_Lovelace", "Ben_Ng"):
         (folder / f"{student}.py").write_text(source)
-    grades, _ = grade_folder(LABS["lab20"], folder, 2, None, "pool", LIMITS, progress=False,
-                             key=b"a course key of the test, 32 bytes", solutions=SOLUTIONS)
+    grades, _ = grade_folder(
+        LABS["lab20"],
+        folder,
+        2,
+        None,
+        "pool",
+        LIMITS,
+        progress=False,
+        key=b"a course key of the test, 32 bytes",
+        solutions=SOLUTIONS,
+    )
     assert len({g.variant for g in grades}) == 2
     for grade in grades:
         hints = [hint for _, passed, hint in grade.tasks if not passed]

@@ -31,8 +31,9 @@ def pipe():
     """(the sandbox's write end, the checker's channel reading it)."""
     read_fd, write_fd = os.pipe()
     back_read, back_write = os.pipe()
-    channel = TrustedChannel(read_fd, back_write, PipeBudget(message_bytes=1 << 20,
-                                                             total_bytes=3 << 20))
+    channel = TrustedChannel(
+        read_fd, back_write, PipeBudget(message_bytes=1 << 20, total_bytes=3 << 20)
+    )
     yield write_fd, channel
     for fd in (write_fd, back_read):
         try:
@@ -54,8 +55,13 @@ def soon() -> float:
 def test_a_message_and_its_arrays_come_through(pipe):
     write_fd, channel = pipe
     data = np.arange(12, dtype=np.float32).reshape(3, 4)
-    os.write(write_fd, encode({"op": "gl", "fn": "glLoadMatrixf", "args": [{"$a": 0}]},
-                              [("f4", [3, 4], data.tobytes())]))
+    os.write(
+        write_fd,
+        encode(
+            {"op": "gl", "fn": "glLoadMatrixf", "args": [{"$a": 0}]},
+            [("f4", [3, 4], data.tobytes())],
+        ),
+    )
     header, arrays = channel.receive(soon())
     assert header["fn"] == "glLoadMatrixf" and np.array_equal(arrays[0], data)
     assert channel.budget.received == data.nbytes
@@ -64,8 +70,10 @@ def test_a_message_and_its_arrays_come_through(pipe):
 def test_a_1_gib_array_is_refused_on_its_promise(pipe):
     write_fd, channel = pipe
     size = 1 << 30
-    os.write(write_fd, raw({"op": "gl", "fn": "glTexImage2D", "line": 12,
-                            "arrays": [["u1", [size], size]]}))
+    os.write(
+        write_fd,
+        raw({"op": "gl", "fn": "glTexImage2D", "line": 12, "arrays": [["u1", [size], size]]}),
+    )
     started = time.perf_counter()
     with pytest.raises(PipeError, match=r"an upload of 1024 MiB \(glTexImage2D at line 12\)"):
         channel.receive(soon())
@@ -73,15 +81,18 @@ def test_a_1_gib_array_is_refused_on_its_promise(pipe):
     assert channel.budget.received == 0
 
 
-@pytest.mark.parametrize("header, words", [
-    ({"op": "gl", "arrays": [["O", [1], 8]]}, "malformed array"),
-    ({"op": "gl", "arrays": [["f4", [2, 2], 12]]}, "does not match its shape"),
-    ({"op": "gl", "arrays": [["u1", [-1], 0]]}, "malformed array"),
-    ({"op": "gl", "arrays": [["u1", [1], 1]] * 5}, "malformed list"),
-    ({"op": "gl", "arrays": "all of them"}, "malformed list"),
-    ({"fn": "glFlush"}, "without an operation"),
-    ([1, 2, 3], "without an operation"),
-])
+@pytest.mark.parametrize(
+    "header, words",
+    [
+        ({"op": "gl", "arrays": [["O", [1], 8]]}, "malformed array"),
+        ({"op": "gl", "arrays": [["f4", [2, 2], 12]]}, "does not match its shape"),
+        ({"op": "gl", "arrays": [["u1", [-1], 0]]}, "malformed array"),
+        ({"op": "gl", "arrays": [["u1", [1], 1]] * 5}, "malformed list"),
+        ({"op": "gl", "arrays": "all of them"}, "malformed list"),
+        ({"fn": "glFlush"}, "without an operation"),
+        ([1, 2, 3], "without an operation"),
+    ],
+)
 def test_malformed_messages_are_refused(pipe, header, words):
     write_fd, channel = pipe
     os.write(write_fd, raw(header))
@@ -118,13 +129,17 @@ def test_the_runs_budget_is_kept(pipe):
     write_fd, channel = pipe
     chunk = bytes(1 << 20)
     for _ in range(3):
-        writer = threading.Thread(target=os.write, args=(write_fd, encode(
-            {"op": "gl", "fn": "glTexSubImage2D"}, [("u1", [len(chunk)], chunk)])))
+        writer = threading.Thread(
+            target=os.write,
+            args=(
+                write_fd,
+                encode({"op": "gl", "fn": "glTexSubImage2D"}, [("u1", [len(chunk)], chunk)]),
+            ),
+        )
         writer.start()
         channel.receive(soon())
         writer.join()
-    os.write(write_fd, raw({"op": "gl", "fn": "glTexSubImage2D",
-                            "arrays": [["u1", [16], 16]]}))
+    os.write(write_fd, raw({"op": "gl", "fn": "glTexSubImage2D", "arrays": [["u1", [16], 16]]}))
     with pytest.raises(PipeError, match="more than 3 MiB of uploads in one run"):
         channel.receive(soon())
 
@@ -145,8 +160,10 @@ def test_the_student_side_reads_replies_back():
     student = Channel(to_student[0], from_student[1])
     checker = TrustedChannel(from_student[0], to_student[1], PipeBudget())
     try:
-        checker.send({"ok": True, "value": {"$a": 0, "as": "array"}},
-                     [("i4", [2, 2], np.arange(4, dtype=np.int32).tobytes())])
+        checker.send(
+            {"ok": True, "value": {"$a": 0, "as": "array"}},
+            [("i4", [2, 2], np.arange(4, dtype=np.int32).tobytes())],
+        )
         header, arrays = student.receive()
         assert header["ok"] and arrays[0][0] == "i4" and arrays[0][1] == [2, 2]
         student.send({"op": "enter", "function": "display"})

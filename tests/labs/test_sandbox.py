@@ -48,11 +48,11 @@ def test_a_clone_and_its_venv_two_folders_deep_check_a_lab(tmp_path):
     clone = tmp_path / "x" / "y" / "clone"
     clone.mkdir(parents=True)
     for folder in ("mirrorlab", "labs"):
-        shutil.copytree(REPO_DIR / folder, clone / folder,
-                        ignore=shutil.ignore_patterns("__pycache__"))
+        shutil.copytree(
+            REPO_DIR / folder, clone / folder, ignore=shutil.ignore_patterns("__pycache__")
+        )
     venv = clone / ".venv"
-    subprocess.run([sandbox.interpreter(), "-m", "venv", "--without-pip", str(venv)],
-                   check=True)
+    subprocess.run([sandbox.interpreter(), "-m", "venv", "--without-pip", str(venv)], check=True)
     site = next(venv.glob("lib/python3*/site-packages"))
     # the clone's mirrorlab, and the dependencies of this venv (no second download)
     (site / "clone.pth").write_text(f"{clone}\n{Path(np.__file__).parent.parent}\n")
@@ -60,21 +60,48 @@ def test_a_clone_and_its_venv_two_folders_deep_check_a_lab(tmp_path):
         parent.chmod(0o700)
     cache = tmp_path / "cache"
     done = subprocess.run(
-        [str(venv / "bin" / "python"), "-m", "mirrorlab.cli", "lab", "check", "lab20",
-         "labs/solutions/lab20_mirror.py", "--solutions", "labs/solutions", "--out",
-         str(tmp_path / "c.png"), "--timeout", "10"],
-        cwd=clone, capture_output=True, text=True,
-        env={**os.environ, "MIRRORLAB_CACHE": str(cache)})
+        [
+            str(venv / "bin" / "python"),
+            "-m",
+            "mirrorlab.cli",
+            "lab",
+            "check",
+            "lab20",
+            "labs/solutions/lab20_mirror.py",
+            "--solutions",
+            "labs/solutions",
+            "--out",
+            str(tmp_path / "c.png"),
+            "--timeout",
+            "10",
+        ],
+        cwd=clone,
+        capture_output=True,
+        text=True,
+        env={**os.environ, "MIRRORLAB_CACHE": str(cache)},
+    )
     assert done.returncode == 0, done.stdout + done.stderr
     assert "8/8 tasks passed" in done.stdout
-    found = subprocess.run([str(venv / "bin" / "python"), "-c",
-                            "import mirrorlab.labs.trusted.sandbox as s; print(s.__file__)"],
-                           cwd=tmp_path, capture_output=True, text=True, check=True)
+    found = subprocess.run(
+        [
+            str(venv / "bin" / "python"),
+            "-c",
+            "import mirrorlab.labs.trusted.sandbox as s; print(s.__file__)",
+        ],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     assert found.stdout.strip().startswith(str(clone))
     # what the sandbox built from this clone shows: nothing of the clone's path (its
     # site-packages and package folder, hidden, lie in the sandbox's own fresh /tmp)
-    probe = subprocess.run([str(venv / "bin" / "python"), "-c", LIST_SANDBOX, str(tmp_path)],
-                           cwd=tmp_path, capture_output=True, text=True)
+    probe = subprocess.run(
+        [str(venv / "bin" / "python"), "-c", LIST_SANDBOX, str(tmp_path)],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+    )
     assert probe.returncode == 0, probe.stderr
     assert str(clone) not in probe.stdout and "/x/y" not in probe.stdout, probe.stdout
 
@@ -96,8 +123,7 @@ sys.exit(code)
 """
 
 
-def test_a_folder_hidden_from_the_sandbox_is_made_only_where_the_host_shows_through(
-        tmp_path):
+def test_a_folder_hidden_from_the_sandbox_is_made_only_where_the_host_shows_through(tmp_path):
     """Hiding a folder mounts an empty one over it where a folder bound from the host would
     show it; within the sandbox's own fresh /tmp it shows nothing already, and a folder
     made there would give away the host's path."""
@@ -121,18 +147,26 @@ def test_a_sandbox_that_cannot_start_is_one_line_and_exit_2(tmp_path):
         pytest.fail("bubblewrap is needed (./dev setup installs it)")
     fake = tmp_path / "bin"
     fake.mkdir()
-    (fake / "bwrap").write_text("#!/bin/sh\n"
-                                'for last; do :; done\n'
-                                'if [ "$last" = true ]; then exit 0; fi\n'
-                                'echo "bwrap: Creating new namespace failed: Operation not '
-                                'permitted" >&2\nexit 1\n')
+    (fake / "bwrap").write_text(
+        "#!/bin/sh\n"
+        "for last; do :; done\n"
+        'if [ "$last" = true ]; then exit 0; fi\n'
+        'echo "bwrap: Creating new namespace failed: Operation not '
+        'permitted" >&2\nexit 1\n'
+    )
     (fake / "bwrap").chmod(0o755)
     start = tmp_path / "lab"
     done = mirrorlab_command("lab", "start", "lab20", str(start))
     assert done.returncode == 0, done.stderr
-    done = mirrorlab_command("lab", "check", "lab20", str(start / "starter.py"), "--out",
-                             str(tmp_path / "c.png"),
-                             env={"PATH": f"{fake}:{os.environ['PATH']}"})
+    done = mirrorlab_command(
+        "lab",
+        "check",
+        "lab20",
+        str(start / "starter.py"),
+        "--out",
+        str(tmp_path / "c.png"),
+        env={"PATH": f"{fake}:{os.environ['PATH']}"},
+    )
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1, done.stderr
     assert "the sandbox could not start" in lines[0] and "Operation not permitted" in lines[0]
@@ -166,10 +200,28 @@ def test_no_temporary_folder_is_left_or_world_writable(tmp_path, lab_environment
     watcher.start()
     try:
         env = {"TMPDIR": str(scratch)}
-        check = mirrorlab_command("lab", "check", "lab20", str(folder / "ok.py"), "--out",
-                                  str(tmp_path / "c.png"), env=env)
-        grade = mirrorlab_command("lab", "grade", "lab20", str(folder), "--jobs", "2",
-                                  "--timeout", "2", "--out-dir", str(tmp_path / "g"), env=env)
+        check = mirrorlab_command(
+            "lab",
+            "check",
+            "lab20",
+            str(folder / "ok.py"),
+            "--out",
+            str(tmp_path / "c.png"),
+            env=env,
+        )
+        grade = mirrorlab_command(
+            "lab",
+            "grade",
+            "lab20",
+            str(folder),
+            "--jobs",
+            "2",
+            "--timeout",
+            "2",
+            "--out-dir",
+            str(tmp_path / "g"),
+            env=env,
+        )
     finally:
         stop.set()
         watcher.join()
@@ -190,8 +242,7 @@ def test_user_fallback_cannot_write_outside_its_box(user_mode, tmp_path):
     target = tmp_path / "precious.txt"
     target.write_text("keep me")
     tmp_path.chmod(0o755)
-    code, _, stopped, stderr = run_python(
-        f"open({str(target)!r}, 'w').write('gone')", tmp_path)
+    code, _, stopped, stderr = run_python(f"open({str(target)!r}, 'w').write('gone')", tmp_path)
     assert code == 1 and stopped == "" and "PermissionError" in stderr
     assert target.read_text() == "keep me"
     code, _, _, stderr = run_python("open('mine.txt', 'w').write('ok'); print('ok')", tmp_path)
@@ -201,15 +252,18 @@ def test_user_fallback_cannot_write_outside_its_box(user_mode, tmp_path):
 def test_user_fallback_stops_a_fork_bomb_and_leaves_no_process(user_mode, tmp_path):
     code, _, stopped, _ = run_python(
         "import os\nwhile True:\n    try:\n        os.fork()\n    except OSError:\n        pass\n",
-        tmp_path)
+        tmp_path,
+    )
     assert code is None and stopped == "processes"
     assert uid_processes(sandbox.sandbox_uid()) == []
 
 
 def test_user_fallback_limits_memory_and_cpu(user_mode, tmp_path):
-    code, _, _, stderr = run_python("x = bytearray(8 << 30)", tmp_path,
-                                    Limits(cpu_seconds=3, seconds=60, memory_mb=512,
-                                           unsandboxed=True))
+    code, _, _, stderr = run_python(
+        "x = bytearray(8 << 30)",
+        tmp_path,
+        Limits(cpu_seconds=3, seconds=60, memory_mb=512, unsandboxed=True),
+    )
     assert code == 1 and "MemoryError" in stderr
     code, _, stopped, _ = run_python("while True: pass", tmp_path)
     assert code == -24 and stopped == ""  # SIGXCPU at the CPU-time limit
@@ -222,14 +276,32 @@ def test_the_checker_stays_small_while_a_submission_exhausts_its_memory(tmp_path
     hog.write_text("hog = []\nwhile True:\n    hog.append(bytes(256 << 20))\n")
     # VmHWM: this process's own peak resident memory (ru_maxrss would also count what the
     # forked pytest process held before exec)
-    script = ("import sys\nfrom mirrorlab.cli import main\n"
-              "code = main(sys.argv[1:])\n"
-              "status = open('/proc/self/status').read()\n"
-              "print('peak', status.split('VmHWM:')[1].split()[0])\n"
-              "sys.exit(code)\n")
-    done = subprocess.run([sys.executable, "-c", script, "lab", "check", "lab20", str(hog),
-                           "--out", str(tmp_path / "hog.png"), "--memory", "1024",
-                           "--timeout", "5"], capture_output=True, text=True)
+    script = (
+        "import sys\nfrom mirrorlab.cli import main\n"
+        "code = main(sys.argv[1:])\n"
+        "status = open('/proc/self/status').read()\n"
+        "print('peak', status.split('VmHWM:')[1].split()[0])\n"
+        "sys.exit(code)\n"
+    )
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            script,
+            "lab",
+            "check",
+            "lab20",
+            str(hog),
+            "--out",
+            str(tmp_path / "hog.png"),
+            "--memory",
+            "1024",
+            "--timeout",
+            "5",
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert done.returncode == 1, done.stderr
     assert "MemoryError" in done.stdout
     peak_kib = int(done.stdout.split("peak ")[1].split()[0])

@@ -42,8 +42,10 @@ def test_a_variant_follows_from_the_key_and_the_name_alone():
         for name, value in ada.values.items():
             assert value in OPTIONS[lab][name]
         # a class of 40 gets many different numbers, not one shared set
-        ids = {tuple(sorted(derive_variant(lab, KEY, f"student {i}").values.items()))
-               for i in range(40)}
+        ids = {
+            tuple(sorted(derive_variant(lab, KEY, f"student {i}").values.items()))
+            for i in range(40)
+        }
         assert len(ids) >= (10 if lab == "spheremap" else 25), lab
     assert student_key("Ada  Lovelace!") == "ada_lovelace"
 
@@ -51,10 +53,15 @@ def test_a_variant_follows_from_the_key_and_the_name_alone():
 def test_every_variant_renders_and_compiles():
     for lab, spec in LABS.items():
         text = (SOLUTIONS / f"{spec.folder}.py").read_text()
-        for variant in [default_variant(lab), *(derive_variant(lab, KEY, f"s{i}")
-                                                 for i in range(12))]:
-            for rendered in (handout(spec, variant), starter(spec, variant),
-                             solution_for(text, variant)):
+        for variant in [
+            default_variant(lab),
+            *(derive_variant(lab, KEY, f"s{i}") for i in range(12)),
+        ]:
+            for rendered in (
+                handout(spec, variant),
+                starter(spec, variant),
+                solution_for(text, variant),
+            ):
                 assert "{{" not in rendered and "}}" not in rendered
             compile(starter(spec, variant), "starter.py", "exec")
             compile(solution_for(text, variant), "solution.py", "exec")
@@ -72,10 +79,12 @@ def test_bad_keys_and_variant_files_are_one_line(tmp_path):
         read_key(short)
     path = tmp_path / "variant.json"
     good = derive_variant("lab20", KEY, "ada").plain()
-    for change, message in (({"lab": "cubemap"}, "not of lab20"),
-                            ({"values": {**good["values"], "mirror_x": -70}}, "mirror_x = -70"),
-                            ({"values": {"mirror_x": -7}}, "expected the values"),
-                            ({"id": "../../etc"}, "not a variant id")):
+    for change, message in (
+        ({"lab": "cubemap"}, "not of lab20"),
+        ({"values": {**good["values"], "mirror_x": -70}}, "mirror_x = -70"),
+        ({"values": {"mirror_x": -7}}, "expected the values"),
+        ({"id": "../../etc"}, "not a variant id"),
+    ):
         path.write_text(json.dumps({**good, **change}))
         with pytest.raises(VariantError, match=re.escape(message)):
             variant_from_file(path, "lab20")
@@ -90,16 +99,28 @@ def released(tmp_path_factory):
     base = tmp_path_factory.mktemp("released")
     (base / "class.txt").write_text("Ada Lovelace\nBen Ng\n\n# late enrolment\nCy Twombly\n")
     key = base / "course.key"
-    done = mirrorlab_command("lab", "release", "lab20", str(base / "out"), "--students",
-                             str(base / "class.txt"), "--key", str(key), "--jobs", "2",
-                             "--timeout", str(LIMITS.cpu_seconds))
+    done = mirrorlab_command(
+        "lab",
+        "release",
+        "lab20",
+        str(base / "out"),
+        "--students",
+        str(base / "class.txt"),
+        "--key",
+        str(key),
+        "--jobs",
+        "2",
+        "--timeout",
+        str(LIMITS.cpu_seconds),
+    )
     assert done.returncode == 0, done.stderr
     assert key.stat().st_mode & 0o777 == 0o600
     submissions = base / "submissions"
     submissions.mkdir()
     for student in ("Ada Lovelace", "Ben Ng"):
-        printed = mirrorlab_command("lab", "solution", "lab20", "--student", student, "--key",
-                                    str(key))
+        printed = mirrorlab_command(
+            "lab", "solution", "lab20", "--student", student, "--key", str(key)
+        )
         assert printed.returncode == 0, printed.stderr
         (submissions / f"{student.replace(' ', '_')}.py").write_text(printed.stdout)
     (submissions / "Cy_Twombly.py").write_text((submissions / "Ada_Lovelace.py").read_text())
@@ -119,8 +140,10 @@ def test_release_gives_each_student_their_own_numbers(released):
         assert (path / "starter.py").read_text() == starter(spec, variant)
         assert (path / "README.md").read_text() == handout(spec, variant)
         assert variant.id in (path / "starter.py").read_text()
-        assert sorted(p.name for p in (path / "reference").iterdir()) == ["arrays.npz",
-                                                                          "evidence.json"]
+        assert sorted(p.name for p in (path / "reference").iterdir()) == [
+            "arrays.npz",
+            "evidence.json",
+        ]
         seen.add(tuple(sorted(variant.values.items())))
     assert len(seen) == 3
 
@@ -128,10 +151,22 @@ def test_release_gives_each_student_their_own_numbers(released):
 def test_grading_with_the_key_passes_the_honest_and_fails_the_copy(released, tmp_path):
     base, key, submissions = released
     out = tmp_path / "grades"
-    done = mirrorlab_command("lab", "grade", "lab20", str(submissions), "--key", str(key),
-                             "--students", str(base / "class.txt"),
-                             "--out-dir", str(out), "--jobs", "2",
-                             "--timeout", str(LIMITS.cpu_seconds))
+    done = mirrorlab_command(
+        "lab",
+        "grade",
+        "lab20",
+        str(submissions),
+        "--key",
+        str(key),
+        "--students",
+        str(base / "class.txt"),
+        "--out-dir",
+        str(out),
+        "--jobs",
+        "2",
+        "--timeout",
+        str(LIMITS.cpu_seconds),
+    )
     assert done.returncode == 0, done.stderr
     book = {row["student"]: row for row in read_csv(out / "gradebook.csv")}
     assert book["Ada_Lovelace"]["score"] == book["Ben_Ng"]["score"] == "8"
@@ -139,8 +174,7 @@ def test_grading_with_the_key_passes_the_honest_and_fails_the_copy(released, tmp
     # --copies=flag (the default): the score as judged, the copy named in the gradebook
     assert int(book["Cy_Twombly"]["score"]) < 8
     assert book["Cy_Twombly"]["copy_of"] == "Ada_Lovelace"
-    assert book["Cy_Twombly"]["variant"] == derive_variant("lab20", read_key(key),
-                                                            "Cy Twombly").id
+    assert book["Cy_Twombly"]["variant"] == derive_variant("lab20", read_key(key), "Cy Twombly").id
     assert "copy: 'Cy_Twombly' carries the numbers of Ada_Lovelace" in done.stdout
     copied = [row for row in read_csv(out / "grades.csv") if row["student"] == "Cy_Twombly"]
     failed = {row["task"]: row["hint"] for row in copied if row["passed"] == "no"}
@@ -149,11 +183,19 @@ def test_grading_with_the_key_passes_the_honest_and_fails_the_copy(released, tmp
     report = (out / "report.html").read_text()
     assert "numbers of Ada_Lovelace" in report
     # the flag sits in the score's cell (the second column, on screen at any width)
-    score_cell = re.search(r'<tr data-student="Cy_Twombly"><td[^>]*>[^<]*</td>'
-                           r'(<td class="score".*?</td>)', report).group(1)
+    score_cell = re.search(
+        r'<tr data-student="Cy_Twombly"><td[^>]*>[^<]*</td>'
+        r'(<td class="score".*?</td>)',
+        report,
+    ).group(1)
     assert "copy: the numbers of Ada_Lovelace" in score_cell
-    page = html.unescape(re.sub(r"data:image/png;base64,[A-Za-z0-9+/=]+", "",
-                                (out / "feedback" / "Cy_Twombly.html").read_text()))
+    page = html.unescape(
+        re.sub(
+            r"data:image/png;base64,[A-Za-z0-9+/=]+",
+            "",
+            (out / "feedback" / "Cy_Twombly.html").read_text(),
+        )
+    )
     assert "another student's" in page and "Ada" not in page
 
 
@@ -164,16 +206,32 @@ def test_a_student_checks_against_their_own_released_reference(released):
     folder = base / "out" / "Ben_Ng"
     mine = folder / "mine.py"
     mine.write_text((submissions / "Ben_Ng.py").read_text())
-    done = mirrorlab_command("lab", "check", "lab20", str(mine), "--out",
-                             str(folder / "check.png"), "--timeout", str(LIMITS.cpu_seconds),
-                             env={"MIRRORLAB_SOLUTIONS": None, "MIRRORLAB_CACHE": str(base)})
+    done = mirrorlab_command(
+        "lab",
+        "check",
+        "lab20",
+        str(mine),
+        "--out",
+        str(folder / "check.png"),
+        "--timeout",
+        str(LIMITS.cpu_seconds),
+        env={"MIRRORLAB_SOLUTIONS": None, "MIRRORLAB_CACHE": str(base)},
+    )
     assert done.returncode == 0, done.stdout + done.stderr
     assert "8/8 tasks passed" in done.stdout
     copied = folder / "copied.py"
     copied.write_text((submissions / "Ada_Lovelace.py").read_text())
-    done = mirrorlab_command("lab", "check", "lab20", str(copied), "--out",
-                             str(folder / "check.png"), "--timeout", str(LIMITS.cpu_seconds),
-                             env={"MIRRORLAB_SOLUTIONS": None})
+    done = mirrorlab_command(
+        "lab",
+        "check",
+        "lab20",
+        str(copied),
+        "--out",
+        str(folder / "check.png"),
+        "--timeout",
+        str(LIMITS.cpu_seconds),
+        env={"MIRRORLAB_SOLUTIONS": None},
+    )
     assert done.returncode == 1 and "your mirror needs glOrtho(" in done.stdout
 
 
@@ -187,18 +245,36 @@ def test_copies_policy_and_names_off_the_class_list(released, tmp_path):
     (folder / "cy_twombly.py").write_text((submissions / "Ada_Lovelace.py").read_text())
     (folder / "Zed_Stranger.py").write_text((submissions / "Ben_Ng.py").read_text())
     out = tmp_path / "grades"
-    done = mirrorlab_command("lab", "grade", "lab20", str(folder), "--key", str(key),
-                             "--students", str(base / "class.txt"), "--copies", "zero",
-                             "--out-dir", str(out), "--timeout", str(LIMITS.cpu_seconds))
+    done = mirrorlab_command(
+        "lab",
+        "grade",
+        "lab20",
+        str(folder),
+        "--key",
+        str(key),
+        "--students",
+        str(base / "class.txt"),
+        "--copies",
+        "zero",
+        "--out-dir",
+        str(out),
+        "--timeout",
+        str(LIMITS.cpu_seconds),
+    )
     assert done.returncode == 0, done.stderr
-    assert f"not graded: 'Zed_Stranger' (Zed_Stranger.py) is not on the class list " \
-           f"{base / 'class.txt'}" in done.stdout.splitlines()
+    assert (
+        f"not graded: 'Zed_Stranger' (Zed_Stranger.py) is not on the class list "
+        f"{base / 'class.txt'}" in done.stdout.splitlines()
+    )
     assert "no submission: 'Ada Lovelace' of the class list" in done.stdout
     assert "graded 1 submissions" in done.stdout
     book = read_csv(out / "gradebook.csv")
     assert [row["student"] for row in book] == ["cy_twombly"]
-    assert (book[0]["score"], book[0]["percent"], book[0]["copy_of"]) == ("0", "0.0",
-                                                                          "Ada Lovelace")
+    assert (book[0]["score"], book[0]["percent"], book[0]["copy_of"]) == (
+        "0",
+        "0.0",
+        "Ada Lovelace",
+    )
     assert {row["student"] for row in read_csv(out / "grades.csv")} == {"cy_twombly"}
     assert not (out / "feedback" / "Zed_Stranger.html").exists()
     report = (out / "report.html").read_text()
@@ -215,9 +291,11 @@ def test_the_other_labs_variants_fail_a_copied_file(lab, tmp_path):
     for i in range(100):  # a student whose numbers change the answer
         variant = derive_variant(lab, KEY, f"student {i}")
         default = default_variant(lab)
-        if (lab == "spheremap" and (variant["shader_side"], variant["unit"]) != \
-                (default["shader_side"], default["unit"])) or (lab == "cubemap" and \
-                not variant.same_numbers(default)):
+        if (
+            lab == "spheremap"
+            and (variant["shader_side"], variant["unit"])
+            != (default["shader_side"], default["unit"])
+        ) or (lab == "cubemap" and not variant.same_numbers(default)):
             break
     student = variant.student
     (tmp_path / "key").write_bytes(KEY)
@@ -228,10 +306,24 @@ def test_the_other_labs_variants_fail_a_copied_file(lab, tmp_path):
     (folder / "default_copy.py").write_text(solution(lab))
     (tmp_path / "class.txt").write_text(f"{student}\ndefault copy\n")
     out = tmp_path / "grades"
-    done = mirrorlab_command("lab", "grade", lab, str(folder), "--key", str(tmp_path / "key"),
-                             "--students", str(tmp_path / "class.txt"), "--copies", "hold",
-                             "--out-dir", str(out), "--jobs", "2",
-                             "--timeout", str(LIMITS.cpu_seconds))
+    done = mirrorlab_command(
+        "lab",
+        "grade",
+        lab,
+        str(folder),
+        "--key",
+        str(tmp_path / "key"),
+        "--students",
+        str(tmp_path / "class.txt"),
+        "--copies",
+        "hold",
+        "--out-dir",
+        str(out),
+        "--jobs",
+        "2",
+        "--timeout",
+        str(LIMITS.cpu_seconds),
+    )
     assert done.returncode == 0, done.stderr
     rows = read_csv(out / "grades.csv")
     mine = [r for r in rows if r["student"] == name]
@@ -244,7 +336,10 @@ def test_the_other_labs_variants_fail_a_copied_file(lab, tmp_path):
         assert any("the lab" in r["hint"] or "another" in r["hint"] for r in theirs), theirs
         # --copies=hold: the gradebook flags the default variant's copy and books no score
         book = {row["student"]: row for row in read_csv(out / "gradebook.csv")}
-        assert (book["default_copy"]["copy_of"], book["default_copy"]["score"],
-                book["default_copy"]["percent"]) == ("default variant", "", "")
+        assert (
+            book["default_copy"]["copy_of"],
+            book["default_copy"]["score"],
+            book["default_copy"]["percent"],
+        ) == ("default variant", "", "")
         assert book[name]["copy_of"] == "" and book[name]["score"] == str(len(spec.tasks))
     assert len(spec.tasks) == len(theirs)

@@ -27,7 +27,7 @@ def test_image_error_scores_only_the_masked_pixels():
     error = accuracy.image_error(image, truth, mask)
     assert error.mae == pytest.approx(20 / 12)  # 4 pixels x 3 channels
     assert error.share_off == pytest.approx(0.25)
-    assert error.psnr == pytest.approx(10 * math.log10(255 ** 2 / (400 / 12)))
+    assert error.psnr == pytest.approx(10 * math.log10(255**2 / (400 / 12)))
     assert error.p95 == pytest.approx(np.percentile([20, 0, 0, 0], 95))
 
 
@@ -52,11 +52,14 @@ def test_identical_images_score_zero_and_an_empty_mask_scores_nothing():
 def test_a_viewpoint_with_no_reflector_pixels_is_said_so_never_zero_error():
     def row(technique, viewpoint, mae, pixels):
         nan = math.nan
-        return accuracy.SweepRow("s", technique, 0, viewpoint, mae, mae, nan, mae, 5.0,
-                                 nan, pixels)
+        return accuracy.SweepRow("s", technique, 0, viewpoint, mae, mae, nan, mae, 5.0, nan, pixels)
 
-    rows = [row("raytrace", "inside", math.nan, 0), row("cube", "inside", math.nan, 0),
-            row("cube", "outside", 2.0, 100), row("sphere", "inside", math.nan, 0)]
+    rows = [
+        row("raytrace", "inside", math.nan, 0),
+        row("cube", "inside", math.nan, 0),
+        row("cube", "outside", 2.0, 100),
+        row("sphere", "inside", math.nan, 0),
+    ]
     summary = {r.technique: r for r in accuracy.summarise(rows)}
     assert summary["cube"].mae == 2.0 and summary["cube"].worst_viewpoint == "outside"
     assert math.isnan(summary["sphere"].mae) and math.isnan(summary["raytrace"].mae)
@@ -84,7 +87,10 @@ def rows():
 def test_summary_averages_errors_and_takes_median_times_per_technique_and_size():
     summary = accuracy.summarise(rows())
     assert [(s.scene, s.technique, s.map_size) for s in summary] == [
-        ("lab", "ortho-copy", 64), ("lab", "stencil", 0), ("sphere-sky", "stencil", 0)]
+        ("lab", "ortho-copy", 64),
+        ("lab", "stencil", 0),
+        ("sphere-sky", "stencil", 0),
+    ]
     ortho, stencil, _ = summary
     assert ortho.mae == 3.0 and ortho.wall_ms == 6.0 and ortho.worst_viewpoint == "a"
     assert math.isnan(stencil.gpu_ms) and stencil.worst_viewpoint == "b"
@@ -98,15 +104,22 @@ def test_summary_averages_errors_and_takes_median_times_per_technique_and_size()
 
 def test_the_plot_draws_the_distance_search_over_its_steps_as_one_line():
     make = accuracy.SweepRow
-    sweep = [make("s", technique, size, "v", mae, 0.0, 30.0, 0.1, ms, ms)
-             for technique, size, mae, ms in (
-                 ("cube-live", 256, 14.0, 30.0), ("cube-live distance", 64, 5.0, 20.0),
-                 ("cube-live distance", 256, 4.0, 40.0), ("cube-live distance 16+2", 256,
-                                                           3.5, 60.0),
-                 ("cube-live distance 2+0", 256, 9.0, 33.0))]
+    sweep = [
+        make("s", technique, size, "v", mae, 0.0, 30.0, 0.1, ms, ms)
+        for technique, size, mae, ms in (
+            ("cube-live", 256, 14.0, 30.0),
+            ("cube-live distance", 64, 5.0, 20.0),
+            ("cube-live distance", 256, 4.0, 40.0),
+            ("cube-live distance 16+2", 256, 3.5, 60.0),
+            ("cube-live distance 2+0", 256, 9.0, 33.0),
+        )
+    ]
     series = accuracy._series(accuracy.summarise(sweep))
-    assert list(series) == ["cube-live", "cube-live distance",
-                            "cube-live distance by steps (map 256)"]
+    assert list(series) == [
+        "cube-live",
+        "cube-live distance",
+        "cube-live distance by steps (map 256)",
+    ]
     steps = series["cube-live distance by steps (map 256)"]
     assert [note for _, note in steps] == ["2+0", "8+2", "16+2"]
     assert [note for _, note in series["cube-live distance"]] == ["64", "256"]
@@ -139,7 +152,11 @@ def test_csv_round_trip_keeps_every_field():
     assert len(again) == len(rows())
     for before, after in zip(rows(), again, strict=True):
         assert (before.scene, before.technique, before.map_size, before.viewpoint) == (
-            after.scene, after.technique, after.map_size, after.viewpoint)
+            after.scene,
+            after.technique,
+            after.map_size,
+            after.viewpoint,
+        )
         for name in ("mae", "p95", "psnr", "share_off", "wall_ms", "gpu_ms"):
             a, b = getattr(before, name), getattr(after, name)
             assert (math.isnan(a) and math.isnan(b)) or a == b  # exact: shortest repr
@@ -169,9 +186,15 @@ def test_planar_configurations_cover_every_capture_mode_and_size_plus_stencil():
     mirror's footprint on screen, with each capture mode."""
     configs = accuracy.lab_techniques((64, 128))
     labels = [label for label, _ in configs]
-    assert labels == (["ortho-copy"] * 2 + ["ortho-copy footprint"] + ["ortho-fbo"] * 2
-                      + ["ortho-fbo footprint"] + ["reflected-copy"] * 2
-                      + ["reflected-fbo"] * 2 + ["stencil"])
+    assert labels == (
+        ["ortho-copy"] * 2
+        + ["ortho-copy footprint"]
+        + ["ortho-fbo"] * 2
+        + ["ortho-fbo footprint"]
+        + ["reflected-copy"] * 2
+        + ["reflected-fbo"] * 2
+        + ["stencil"]
+    )
     assert [o.get("env_size") for _, o in configs[:2]] == [64, 128]
     lab = load_scene("lab20")
     for label, options in configs:
@@ -185,8 +208,13 @@ def test_planar_configurations_cover_every_capture_mode_and_size_plus_stencil():
 def test_curved_configurations_stop_at_the_largest_map_the_sweep_bakes():
     configs = accuracy.curved_techniques((64, 2048))
     assert [label for label, _ in configs] == [
-        *technique_names("curved"), "cube-live distance", "cube-live distance 2+0",
-        "cube-live distance 4+1", "cube-live distance 16+2", "cube-live distance 32+4"]
+        *technique_names("curved"),
+        "cube-live distance",
+        "cube-live distance 2+0",
+        "cube-live distance 4+1",
+        "cube-live distance 16+2",
+        "cube-live distance 32+4",
+    ]
     assert all(o["map_size"] == 64 for _, o in configs)
     assert accuracy.ENVMAP_MAX_SIZE < 2048
     sphere = load_scene("chrome_sphere")
@@ -204,11 +232,18 @@ def test_the_live_cube_map_is_measured_with_each_proxy_and_each_step_count():
     proxies = (("box", "box:-4,-2,-4,4,4,4"), ("sphere", "sphere:3"))
     configs = accuracy.curved_techniques((64, 256, 512), proxies, ("4+1", "8+2"))
     labels = [(label, o["map_size"]) for label, o in configs if label.startswith("cube-live ")]
-    assert labels == [("cube-live box", 64), ("cube-live box", 256), ("cube-live box", 512),
-                      ("cube-live sphere", 64), ("cube-live sphere", 256),
-                      ("cube-live sphere", 512), ("cube-live distance", 64),
-                      ("cube-live distance", 256), ("cube-live distance", 512),
-                      ("cube-live distance 4+1", 256)]
+    assert labels == [
+        ("cube-live box", 64),
+        ("cube-live box", 256),
+        ("cube-live box", 512),
+        ("cube-live sphere", 64),
+        ("cube-live sphere", 256),
+        ("cube-live sphere", 512),
+        ("cube-live distance", 64),
+        ("cube-live distance", 256),
+        ("cube-live distance", 512),
+        ("cube-live distance 4+1", 256),
+    ]
     assert accuracy.search_map_size((64, 128)) == 128
     assert accuracy.search_map_size((512, 1024)) == 512
     room = load_scene("sphere_room")
@@ -218,7 +253,9 @@ def test_the_live_cube_map_is_measured_with_each_proxy_and_each_step_count():
 
 def test_proxies_are_the_box_around_the_objects_and_the_sphere_inside_it():
     assert accuracy.proxies_for(load_scene("sphere_room")) == (
-        ("box", "box:-4,-2,-4,4,4,4"), ("sphere", "sphere:3"))  # the room; 3 to the floor
+        ("box", "box:-4,-2,-4,4,4,4"),
+        ("sphere", "sphere:3"),
+    )  # the room; 3 to the floor
     box, sphere = accuracy.proxies_for(load_scene("chrome_sphere"))
     assert box[1].startswith("box:-2.81") and sphere == ("sphere", "sphere:2")
     bare = load_scene("chrome_sphere")
@@ -228,9 +265,10 @@ def test_proxies_are_the_box_around_the_objects_and_the_sphere_inside_it():
 
 def test_a_scene_gets_the_configurations_of_its_kinds_of_reflector():
     sizes = (64,)
-    labels = {name: [label for label, _ in accuracy.scene_techniques(load_scene(name), sizes,
-                                                                     steps=())]
-              for name in ("lab20", "chrome_sphere", "mirror_and_sphere", "no_mirror")}
+    labels = {
+        name: [label for label, _ in accuracy.scene_techniques(load_scene(name), sizes, steps=())]
+        for name in ("lab20", "chrome_sphere", "mirror_and_sphere", "no_mirror")
+    }
     assert labels["lab20"] == [label for label, _ in accuracy.lab_techniques(sizes)]
     assert labels["chrome_sphere"] == [*technique_names("curved"), "cube-live distance"]
     assert labels["mirror_and_sphere"] == labels["lab20"] + labels["chrome_sphere"]
@@ -251,8 +289,10 @@ def test_panels_of_the_sweep():
     # the sky alone is measured with the proxies of the sphere among its objects
     assert sky.proxies == objects.proxies == accuracy.proxies_for(load_scene("sphere"))
     assert room.scene == load_scene("sphere_room") and room.name == "sphere-room"
-    assert room.proxies == accuracy.proxies_for(room.scene) and (room.supersample,
-                                                                 room.inset) == (4, 1)
+    assert room.proxies == accuracy.proxies_for(room.scene) and (room.supersample, room.inset) == (
+        4,
+        1,
+    )
     cone = accuracy.file_panel(load_scene("cone"))
     assert (cone.supersample, cone.inset) == (4, 1)
     assert cone.viewpoints == {"camera": load_scene("cone").camera}
@@ -265,8 +305,10 @@ def test_the_report_is_remade_from_a_saved_csv_without_measuring(tmp_path):
     saved.write_text(accuracy.rows_to_csv(rows()))
     said: list[str] = []
     out = tmp_path / "report"
-    assert accuracy.run_command(accuracy.SweepSettings.quick(), "all", out, saved,
-                                say=said.append) == 0
+    assert (
+        accuracy.run_command(accuracy.SweepSettings.quick(), "all", out, saved, say=said.append)
+        == 0
+    )
     markdown = (out / "accuracy.md").read_text()
     assert "from saved.csv" in markdown and markdown.count("| ortho-copy | 64 |") == 1
     assert not (out / "accuracy.csv").exists()  # nothing measured, nothing re-written

@@ -34,7 +34,8 @@ SKY_CUBE = data_path("textures") / "sky_cube"
 LAUNCH = data_path("textures") / "launch.png"
 
 directions = st.tuples(*(st.floats(-1.0, 1.0, allow_nan=False),) * 3).filter(
-    lambda v: np.linalg.norm(v) > 1e-3)
+    lambda v: np.linalg.norm(v) > 1e-3
+)
 
 
 # --------------------------------------------------------------------------- the sky
@@ -60,8 +61,9 @@ def test_sky_has_its_features_where_they_were_put():
     assert sun.min() > 0.75  # near white
     assert high_sky[2] > high_sky[0] + 0.3  # blue
     assert ground[2] < 0.5  # earthy, not sky
-    assert np.abs(sky_environment(np.array([[1.0, 0.35, 0.2]]))[0]
-                  - (0.95, 0.15, 0.12)).max() < 0.02  # the red balloon
+    assert (
+        np.abs(sky_environment(np.array([[1.0, 0.35, 0.2]]))[0] - (0.95, 0.15, 0.12)).max() < 0.02
+    )  # the red balloon
 
 
 def test_sky_is_smooth_at_the_scale_of_a_pixel():
@@ -80,8 +82,7 @@ def test_sky_is_smooth_at_the_scale_of_a_pixel():
 def test_each_background_kind_becomes_its_environment():
     assert environment_of(Background(kind="sky")) is sky_environment
     plain = environment_of(Background(kind="color", color=(0.25, 0.5, 0.75)))
-    assert np.array_equal(plain(np.array([[1.0, 0, 0], [0, -1.0, 0]])),
-                          [[0.25, 0.5, 0.75]] * 2)
+    assert np.array_equal(plain(np.array([[1.0, 0, 0], [0, -1.0, 0]])), [[0.25, 0.5, 0.75]] * 2)
     faces = environment_of(Background(kind="cube_faces", path=SKY_CUBE))
     d = np.random.default_rng(3).normal(size=(300, 3))
     # Faces baked from the sky at 256 texels: the sky again, to within the bake's blur.
@@ -97,8 +98,10 @@ def test_image_sampler_hits_texel_centres_and_clamps_at_the_edges():
     sample = image_sampler(image)
     # Texel (column 2, image row 0) is at s = 2.5/3 and, row 0 being the top, t = 0.75.
     assert np.allclose(sample(np.array([2.5 / 3]), np.array([0.75])), image[0, 2] / 255.0)
-    assert np.allclose(sample(np.array([5.0, -5.0]), np.array([-1.0, 2.0])),
-                       [image[1, 2] / 255.0, image[0, 0] / 255.0])
+    assert np.allclose(
+        sample(np.array([5.0, -5.0]), np.array([-1.0, 2.0])),
+        [image[1, 2] / 255.0, image[0, 0] / 255.0],
+    )
     halfway = sample(np.array([1.0 / 3]), np.array([0.75]))  # between columns 0 and 1
     assert np.allclose(halfway, (image[0, 0] + image[0, 1]) / 2 / 255.0)
 
@@ -106,8 +109,7 @@ def test_image_sampler_hits_texel_centres_and_clamps_at_the_edges():
 def test_a_picture_used_as_a_sphere_map_bakes_back_into_itself():
     picture = np.random.default_rng(5).integers(0, 256, size=(64, 64, 3), dtype=np.uint8)
     # a smooth picture, so that bilinear resampling changes little
-    picture = np.asarray(Image.fromarray(picture).resize((8, 8)).resize(
-        (64, 64), Image.BILINEAR))
+    picture = np.asarray(Image.fromarray(picture).resize((8, 8)).resize((64, 64), Image.BILINEAR))
     view = math3d.look_at((1.0, 2.0, 5.0), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0))
     environment = sphere_image_environment(picture, view)
     baked = bake_sphere_map(environment, 64, view[:3, :3]).astype(int)
@@ -212,14 +214,18 @@ def test_moving_the_reflector_moves_its_centre_and_changes_what_captures_see():
     scene = load_scene("cone")
     cone = scene.reflector("cone")
     centre = cone.center()
-    lowered = scene.with_reflector("cone", transform=replace(
-        cone.transform, position=(0.0, 0.5, 0.0)))
+    lowered = scene.with_reflector(
+        "cone", transform=replace(cone.transform, position=(0.0, 0.5, 0.0))
+    )
     assert np.allclose(lowered.reflector("cone").center() - centre, (0.0, -0.5, 0.0))
     assert lowered.content_key() != scene.content_key()
     same = scene.with_reflector("cone", transform=replace(cone.transform))
     assert same == scene and same.content_key() == scene.content_key()
-    with pytest.raises(OptionError, match=r"--set: reflectors\[0\]\.position\[1\]: "
-                       r"expected a finite number, got nan"):
+    with pytest.raises(
+        OptionError,
+        match=r"--set: reflectors\[0\]\.position\[1\]: "
+        r"expected a finite number, got nan",
+    ):
         apply_options(scene, {"set": ["reflectors[0].position=[0.0, nan, 0.0]"]})
 
 
@@ -241,8 +247,13 @@ def test_sphere_scene_is_a_unit_chrome_sphere_among_five_objects_in_the_sky():
     assert scene.background == Background(kind="sky")
     (sphere,) = scene.reflectors
     assert sphere.mesh.name == "env_sphere.obj" and np.allclose(sphere.center(), 0.0)
-    assert [o.name for o in scene.objects] == ["pedestal", "red_block", "blue_ball",
-                                               "yellow_pillar", "green_block"]
+    assert [o.name for o in scene.objects] == [
+        "pedestal",
+        "red_block",
+        "blue_ball",
+        "yellow_pillar",
+        "green_block",
+    ]
     for item in scene.objects:  # each lies outside the sphere
         assert np.linalg.norm(item.transform.position) > 1.0, item.name
     bare = replace(scene, objects=())
@@ -250,17 +261,23 @@ def test_sphere_scene_is_a_unit_chrome_sphere_among_five_objects_in_the_sky():
 
 
 def test_methods_and_scene_names_are_checked_with_the_choices():
-    assert apply_options(load_scene("sphere"), {"method": "latlong"}).reflector(
-        "sphere").technique == "latlong"
+    assert (
+        apply_options(load_scene("sphere"), {"method": "latlong"}).reflector("sphere").technique
+        == "latlong"
+    )
     for name in ("sphere", "lab"):  # a misspelt name is named, whatever the reflector
         with pytest.raises(OptionError) as info:
             apply_options(load_scene(name), {"method": "cubemap"})
         assert str(info.value) == (
             "--method: reflectors[0].technique: expected one of ortho, reflected, stencil, "
             "sphere, sphere-vertex, sphere-texgen, cube, cube-live, latlong, normal, got "
-            "'cubemap' (did you mean 'cube'?)")
+            "'cubemap' (did you mean 'cube'?)"
+        )
     with pytest.raises(OptionError, match=r"--method: expected one of ortho, .* got 'cubemap'"):
         apply_options(load_scene("no_mirror"), {"method": "cubemap"})
-    with pytest.raises(SceneError, match=r"unknown scene; expected a \.toml file or one of "
-                       r"chrome_sphere, lab20"):
+    with pytest.raises(
+        SceneError,
+        match=r"unknown scene; expected a \.toml file or one of "
+        r"chrome_sphere, lab20",
+    ):
         load_scene("robot")

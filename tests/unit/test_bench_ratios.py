@@ -26,12 +26,15 @@ def scripted_frames(cost: float, bursts: frozenset[int] = frozenset()):
         calls[0] += 1
         slow = SPEEDS[max(timed_round, 0)] * (3.0 if timed_round in bursts else 1.0)
         return [cost * slow * (1 + 0.001 * i) for i in range(count)]
+
     return frames
 
 
 def test_rounds_are_kept_apart_and_every_variant_gets_its_frames():
-    variants = [Variant(name, scripted_frames(cost))
-                for name, cost in (("base", 1.0), ("double", 2.0), ("same", 1.0))]
+    variants = [
+        Variant(name, scripted_frames(cost))
+        for name, cost in (("base", 1.0), ("double", 2.0), ("same", 1.0))
+    ]
     interleave(variants, frames=15, warmup=2, block=5)
     for variant in variants:
         assert [len(block) for block in variant.blocks] == [5, 5, 5]

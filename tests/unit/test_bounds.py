@@ -18,14 +18,19 @@ from tests.scenekit import ball, block, transformed
 
 
 def every_point(scene: Scene, leave_out: str = "") -> np.ndarray:
-    points = [math3d.transform_points(part.model, load_mesh(part.mesh).positions)[:, :3]
-              for part in scene_parts(scene)]
+    points = [
+        math3d.transform_points(part.model, load_mesh(part.mesh).positions)[:, :3]
+        for part in scene_parts(scene)
+    ]
     for reflector in scene.reflectors:
         if reflector.name == leave_out:
             continue
         if isinstance(reflector, CurvedReflector):
-            points.append(math3d.transform_points(reflector.model_matrix(),
-                                                  load_mesh(reflector.mesh).positions)[:, :3])
+            points.append(
+                math3d.transform_points(
+                    reflector.model_matrix(), load_mesh(reflector.mesh).positions
+                )[:, :3]
+            )
         else:
             points.append(reflector.corner_array)
     return np.vstack(points)
@@ -47,8 +52,9 @@ def test_a_live_cube_maps_faces_clip_nothing_of_the_scene(name, scale):
 
 def test_a_ball_far_away_sets_the_reach():
     scene = load_scene("chrome_sphere")
-    far_away = replace(scene, reflectors=(*scene.reflectors,
-                                          ball("far", (0.0, 0.0, 400.0), 10.0, "cube")))
+    far_away = replace(
+        scene, reflectors=(*scene.reflectors, ball("far", (0.0, 0.0, 400.0), 10.0, "cube"))
+    )
     (live,) = [r for r in scene.reflectors if isinstance(r, CurvedReflector)]
     assert bounds.cube_depth_range(scene, live)[1] < 50
     assert bounds.cube_depth_range(far_away, live)[1] >= 410
@@ -60,8 +66,7 @@ def test_a_room_closes_its_middle_in_and_an_open_sky_does_not():
     room = load_scene("sphere_room")
     center = room.reflector("sphere").center()
     assert bounds.encloses(room, center, "sphere")
-    without_ceiling = replace(room, objects=tuple(o for o in room.objects
-                                                  if o.name != "ceiling"))
+    without_ceiling = replace(room, objects=tuple(o for o in room.objects if o.name != "ceiling"))
     assert not bounds.encloses(without_ceiling, center, "sphere")
     assert not bounds.encloses(room, (0.0, 1.0, 50.0))  # outside the room
     sky = load_scene("chrome_sphere")
@@ -75,8 +80,9 @@ def test_a_scene_without_objects_keeps_its_objects_arrays_when_its_mirrors_chang
     scene = replace(load_scene("lab20"), objects=())
     first = bounds.scene_index(scene).objects_part
     assert len(first) == 0
-    moved = replace(scene, reflectors=tuple(replace(r, name=r.name + "2")
-                                            for r in scene.reflectors))
+    moved = replace(
+        scene, reflectors=tuple(replace(r, name=r.name + "2") for r in scene.reflectors)
+    )
     assert bounds.scene_index(moved).objects_part is first
 
 
@@ -85,9 +91,10 @@ def test_scenes_drawn_in_turn_each_keep_their_index():
     worked out twice), however the turns are ordered."""
     cache = bounds._IndexCache()
     base = load_scene("lab20")
-    scenes = [replace(base, objects=(*base.objects,
-                                     block(f"b{i}", (i, 0.0, -5.0), 0.5, (1, 0, 0))))
-              for i in range(12)]
+    scenes = [
+        replace(base, objects=(*base.objects, block(f"b{i}", (i, 0.0, -5.0), 0.5, (1, 0, 0))))
+        for i in range(12)
+    ]
     first = [cache.index(scene) for scene in scenes]
     turns = list(zip(scenes, first, strict=True))
     for scene, index in [*turns, *reversed(turns)]:
@@ -100,8 +107,13 @@ def test_an_animation_holds_no_more_than_its_last_frames():
     would be 10 200 objects' bounds)."""
     cache = bounds._IndexCache()
     lab = load_scene("lab20")
-    base = replace(lab, objects=(*lab.objects, *(
-        block(f"b{i}", (0.1 * i, 0.0, -5.0), 0.05, (1, 0, 0)) for i in range(50))))
+    base = replace(
+        lab,
+        objects=(
+            *lab.objects,
+            *(block(f"b{i}", (0.1 * i, 0.0, -5.0), 0.05, (1, 0, 0)) for i in range(50)),
+        ),
+    )
     per_frame = len(base.objects) + len(base.reflectors)
     held = []
     for frame in range(200):

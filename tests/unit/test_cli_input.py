@@ -29,48 +29,75 @@ def test_bad_vectors_are_refused(text):
 
 def test_negative_vectors_may_follow_their_option_as_a_separate_word():
     assert join_negative_vectors(["render", "--target", "-4,1,-2", "--out", "a.png"]) == [
-        "render", "--target=-4,1,-2", "--out", "a.png"]
+        "render",
+        "--target=-4,1,-2",
+        "--out",
+        "a.png",
+    ]
     assert join_negative_vectors(["render", "--fovy", "-5"]) == ["render", "--fovy=-5"]
     assert join_negative_vectors(["render", "--out", "-4.png"]) == ["render", "--out", "-4.png"]
 
 
 def test_flags_override_the_scene_file():
-    args = build_parser().parse_args(join_negative_vectors(
-        ["render", "two_mirrors", "--camera", "-1,2,9", "--method", "stencil",
-         "--set", "max_bounces=3", "--set", "camera.fovy=40"]))
+    args = build_parser().parse_args(
+        join_negative_vectors(
+            [
+                "render",
+                "two_mirrors",
+                "--camera",
+                "-1,2,9",
+                "--method",
+                "stencil",
+                "--set",
+                "max_bounces=3",
+                "--set",
+                "camera.fovy=40",
+            ]
+        )
+    )
     scene = scene_from_args(args)
     base = load_scene("two_mirrors")
     assert scene.camera.eye == (-1.0, 2.0, 9.0) and scene.camera.fovy == 40.0
     assert scene.max_bounces == 3
     assert [r.technique for r in scene.reflectors] == ["stencil", "stencil"]
     assert scene.objects == base.objects
-    assert scene_from_args(build_parser().parse_args(["plan", "--scene", "cone"])) == \
-        load_scene("spheremap_cone")
+    assert scene_from_args(build_parser().parse_args(["plan", "--scene", "cone"])) == load_scene(
+        "spheremap_cone"
+    )
 
 
-@pytest.mark.parametrize("argv, words", [
-    (["render", "--angles", "1,2"], "--angles: expected 3 numbers"),
-    (["render", "--out", "picture.jpg"], "--out: expected a file name ending in .png"),
-    (["render", "--save-env", "env.bmp"], "--save-env"),
-    (["render", "--camera", "1,2,3", "--target", "1,2,3"],
-     "--target: camera.target: must differ from camera.eye"),
-    (["render", "--set", "camera.fvoy=3"], "--set: camera.fvoy: unknown key; did you mean "
-                                            "'fovy'?"),
-    (["render", "--method", "spheer"], "--method: expected one of ortho, reflected"),
-    (["render", "nosuch"], "nosuch: unknown scene; expected a .toml file or one of"),
-    (["render", "missing.toml"], "missing.toml: no such scene file"),
-    (["render", "lab", "--scene", "cone"], "--scene: give the scene once"),
-    (["render", "robot_wave", "--frame", "30"], "--frame: scene robot_wave has frames 0 to 23"),
-    (["render", "robot_wave", "--frames", "25"], "--frames: scene robot_wave has 24 frames"),
-    (["render", "--frame", "1", "--frames", "2"], "--frame and --frames: give one or the other"),
-    (["plan", "--frames", "0"], "--frames: expected a whole number from 1"),
-    (["plan", "--size", "10x0"], "--size: expected WIDTHxHEIGHT"),
-    (["bench", "speed", "--scale-size", "8"], "--scale-size: expected a whole number"),
-    (["bench", "accuracy", "--sizes", "64,x"], "--sizes: expected a whole number"),
-    (["demo", "--size", "big"], "--size"),
-])
-def test_main_reports_bad_input_in_one_line_with_exit_2(argv, words, capsys, tmp_path,
-                                                        monkeypatch):
+@pytest.mark.parametrize(
+    "argv, words",
+    [
+        (["render", "--angles", "1,2"], "--angles: expected 3 numbers"),
+        (["render", "--out", "picture.jpg"], "--out: expected a file name ending in .png"),
+        (["render", "--save-env", "env.bmp"], "--save-env"),
+        (
+            ["render", "--camera", "1,2,3", "--target", "1,2,3"],
+            "--target: camera.target: must differ from camera.eye",
+        ),
+        (
+            ["render", "--set", "camera.fvoy=3"],
+            "--set: camera.fvoy: unknown key; did you mean 'fovy'?",
+        ),
+        (["render", "--method", "spheer"], "--method: expected one of ortho, reflected"),
+        (["render", "nosuch"], "nosuch: unknown scene; expected a .toml file or one of"),
+        (["render", "missing.toml"], "missing.toml: no such scene file"),
+        (["render", "lab", "--scene", "cone"], "--scene: give the scene once"),
+        (["render", "robot_wave", "--frame", "30"], "--frame: scene robot_wave has frames 0 to 23"),
+        (["render", "robot_wave", "--frames", "25"], "--frames: scene robot_wave has 24 frames"),
+        (
+            ["render", "--frame", "1", "--frames", "2"],
+            "--frame and --frames: give one or the other",
+        ),
+        (["plan", "--frames", "0"], "--frames: expected a whole number from 1"),
+        (["plan", "--size", "10x0"], "--size: expected WIDTHxHEIGHT"),
+        (["bench", "speed", "--scale-size", "8"], "--scale-size: expected a whole number"),
+        (["bench", "accuracy", "--sizes", "64,x"], "--sizes: expected a whole number"),
+        (["demo", "--size", "big"], "--size"),
+    ],
+)
+def test_main_reports_bad_input_in_one_line_with_exit_2(argv, words, capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert main(argv) == 2
     err = capsys.readouterr().err.strip()
@@ -84,19 +111,23 @@ def test_a_bad_scene_file_is_named_with_its_key(capsys, tmp_path, monkeypatch):
     (tmp_path / "bad.toml").write_text("[camera]\nfvoy = 30\n")
     assert main(["plan", "bad.toml"]) == 2
     err = capsys.readouterr().err.strip()
-    assert err == ("mirrorlab plan: error: bad.toml: camera.fvoy: unknown key; did you mean "
-                   "'fovy'?")
+    assert err == (
+        "mirrorlab plan: error: bad.toml: camera.fvoy: unknown key; did you mean 'fovy'?"
+    )
 
 
 def test_plan_prints_each_frames_passes_as_json(capsys):
     assert main(["plan", "robot_wave", "--frames", "6", "--size", "64x64", "--json"]) == 0
     document = json.loads(capsys.readouterr().out)
     assert document["scene"] == "robot_wave" and document["size"] == [64, 64]
-    captured = [any(p["pass"] == "capture" and p["runs"] for p in frame["passes"])
-                for frame in document["frames"]]
+    captured = [
+        any(p["pass"] == "capture" and p["runs"] for p in frame["passes"])
+        for frame in document["frames"]
+    ]
     assert captured == [True, False, False, False, False, True]
     assert document["frames"][1]["draws"] == [
-        {"reflector": "mirror", "mode": "texture", "reason": "its capture"}]
+        {"reflector": "mirror", "mode": "texture", "reason": "its capture"}
+    ]
 
 
 def test_plan_without_the_plan_runs_every_pass(capsys):

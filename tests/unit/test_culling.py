@@ -30,9 +30,12 @@ def views(draw):
     target[2] -= 2.5  # never the eye itself
     view = math3d.look_at(eye, target, (0.0, 1.0, 0.0))
     if draw(st.booleans()):
-        projection = math3d.perspective(draw(st.sampled_from([5.0, 45.0, 120.0, 170.0])),
-                                        SIZE[0] / SIZE[1], draw(st.sampled_from([0.05, 1.0])),
-                                        draw(st.sampled_from([10.0, 100.0])))
+        projection = math3d.perspective(
+            draw(st.sampled_from([5.0, 45.0, 120.0, 170.0])),
+            SIZE[0] / SIZE[1],
+            draw(st.sampled_from([0.05, 1.0])),
+            draw(st.sampled_from([10.0, 100.0])),
+        )
     else:
         projection = math3d.ortho(-3.0, 3.0, -2.0, 2.0, 0.0, 20.0)
     clip = None
@@ -56,12 +59,11 @@ def inside(points: np.ndarray, matrix: np.ndarray, clip) -> np.ndarray:
 
 def samples_of_box(center, half, rng, count=200) -> np.ndarray:
     signs = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)])
-    return np.vstack([center + half * signs,
-                      center + half * rng.uniform(-1, 1, size=(count, 3))])
+    return np.vstack([center + half * signs, center + half * rng.uniform(-1, 1, size=(count, 3))])
 
 
 @settings(max_examples=150, deadline=None)
-@given(view=views(), seed=st.integers(0, 2 ** 16))
+@given(view=views(), seed=st.integers(0, 2**16))
 def test_a_culled_box_has_no_point_in_view(view, seed):
     matrix, clip = view
     rng = np.random.default_rng(seed)
@@ -74,7 +76,7 @@ def test_a_culled_box_has_no_point_in_view(view, seed):
 
 
 @settings(max_examples=100, deadline=None)
-@given(view=views(), seed=st.integers(0, 2 ** 16))
+@given(view=views(), seed=st.integers(0, 2**16))
 def test_a_box_culled_by_a_scissor_has_no_point_in_its_rectangle(view, seed):
     matrix, _ = view
     rng = np.random.default_rng(seed)
@@ -92,12 +94,13 @@ def test_a_box_culled_by_a_scissor_has_no_point_in_its_rectangle(view, seed):
         window = math3d.project_to_pixels(matrix, points[seen], *SIZE)
         # in GL window coordinates (y up): no seen point lies in the rectangle
         gx, gy = window[:, 0], SIZE[1] - window[:, 1]
-        assert not ((gx >= x) & (gx <= x + rectangle[2]) & (gy >= y)
-                    & (gy <= y + rectangle[3])).any()
+        assert not (
+            (gx >= x) & (gx <= x + rectangle[2]) & (gy >= y) & (gy <= y + rectangle[3])
+        ).any()
 
 
 @settings(max_examples=100, deadline=None)
-@given(view=views(), seed=st.integers(0, 2 ** 16))
+@given(view=views(), seed=st.integers(0, 2**16))
 def test_a_box_said_to_cover_no_pixel_spans_no_pixel_centre(view, seed):
     matrix, _ = view
     rng = np.random.default_rng(seed)
@@ -113,10 +116,14 @@ def test_a_box_said_to_cover_no_pixel_spans_no_pixel_centre(view, seed):
         gx = (clip[:, 0] / clip[:, 3] + 1) * SIZE[0] / 2
         gy = (clip[:, 1] / clip[:, 3] + 1) * SIZE[1] / 2
         # the sampled points' box holds no pixel centre (i + 0.5, j + 0.5) of the target
-        first_x, last_x = max(np.ceil(gx.min() - 0.5), 0), min(np.floor(gx.max() - 0.5),
-                                                                 SIZE[0] - 1)
-        first_y, last_y = max(np.ceil(gy.min() - 0.5), 0), min(np.floor(gy.max() - 0.5),
-                                                                 SIZE[1] - 1)
+        first_x, last_x = (
+            max(np.ceil(gx.min() - 0.5), 0),
+            min(np.floor(gx.max() - 0.5), SIZE[0] - 1),
+        )
+        first_y, last_y = (
+            max(np.ceil(gy.min() - 0.5), 0),
+            min(np.floor(gy.max() - 0.5), SIZE[1] - 1),
+        )
         assert first_x > last_x or first_y > last_y
 
 
@@ -125,8 +132,9 @@ SCISSORS = [(-1.0, 1.0, -1.0, 1.0), (-0.5, 0.25, -0.75, 0.875), (0.5, 0.625, -1.
 whole view first."""
 
 
-def reference_outside(corners: np.ndarray, matrix: np.ndarray, clip,
-                      orthographic: bool, sides=SCISSORS[0]) -> int:
+def reference_outside(
+    corners: np.ndarray, matrix: np.ndarray, clip, orthographic: bool, sides=SCISSORS[0]
+) -> int:
     """One quad's code, asked side by side as the one-reflector test did (exact
     comparisons)."""
     h = np.column_stack([corners, np.ones(4)])
@@ -136,15 +144,16 @@ def reference_outside(corners: np.ndarray, matrix: np.ndarray, clip,
     if not orthographic and np.all(w <= 0.0):
         return 2
     left, right, bottom, top = sides
-    for code, beyond in enumerate((x < left * w, x > right * w, y < bottom * w, y > top * w,
-                                   z < -w, z > w), start=3):
+    for code, beyond in enumerate(
+        (x < left * w, x > right * w, y < bottom * w, y > top * w, z < -w, z > w), start=3
+    ):
         if np.all(beyond):
             return code
     return 0
 
 
 @settings(max_examples=150, deadline=None)
-@given(view=views(), seed=st.integers(0, 2 ** 16), sides=st.sampled_from(SCISSORS))
+@given(view=views(), seed=st.integers(0, 2**16), sides=st.sampled_from(SCISSORS))
 def test_quads_outside_agrees_with_asking_each_quad_on_its_own(view, seed, sides):
     matrix, clip = view
     rng = np.random.default_rng(seed)
@@ -162,8 +171,7 @@ def _near_a_side(quad, matrix, clip, sides) -> bool:
     h = np.column_stack([quad, np.ones(4)])
     x, y, z, w = (h @ matrix.T).T
     left, right, bottom, top = sides
-    leads = np.stack([x - left * w, right * w - x, y - bottom * w, top * w - y, z + w,
-                      w - z])
+    leads = np.stack([x - left * w, right * w - x, y - bottom * w, top * w - y, z + w, w - z])
     near = np.any(np.abs(leads) <= 1e-8 * (np.abs(w) + np.abs(np.stack([x, x, y, y, z, z]))))
     if clip is not None:
         near |= bool(np.any(np.abs(h @ clip) <= 1e-8 * (np.abs(h) @ np.abs(clip))))
@@ -172,12 +180,14 @@ def _near_a_side(quad, matrix, clip, sides) -> bool:
 
 # a clip plane whose normal is not a unit vector: the sphere test once read its value as
 # a distance and culled spheres reaching just across it
-LONG_NORMAL_VIEW = (math3d.perspective(120.0, SIZE[0] / SIZE[1], 0.05, 10.0),
-                    np.array([1.0, 0.125, 1.001, 0.0]))
+LONG_NORMAL_VIEW = (
+    math3d.perspective(120.0, SIZE[0] / SIZE[1], 0.05, 10.0),
+    np.array([1.0, 0.125, 1.001, 0.0]),
+)
 
 
 @settings(max_examples=100, deadline=None)
-@given(view=views(), seed=st.integers(0, 2 ** 16))
+@given(view=views(), seed=st.integers(0, 2**16))
 @example(view=LONG_NORMAL_VIEW, seed=0)
 def test_a_culled_sphere_has_no_point_in_view(view, seed):
     matrix, clip = view

@@ -35,7 +35,7 @@ def test_every_page_is_in_the_navigation():
     listed = set(re.findall(r":\s*([a-z-]+\.md)\s*$", nav, flags=re.M))
     pages = {p.name for p in (REPO / "docs").glob("*.md")}
     generated = {"cli-reference.md", "changelog.md"}
-    assert listed == pages | generated, (listed ^ (pages | generated))
+    assert listed == pages | generated, listed ^ (pages | generated)
 
 
 def all_parsers(parser: argparse.ArgumentParser, prog: str = ""):
@@ -78,8 +78,11 @@ def test_docstring_roles_become_markdown_code():
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    text = ("Returns a :class:`~mirrorlab.frame.Frame`; see :func:`mirrorlab.render` and "
-            ":mod:`mirrorlab.options`. Make one::\n\n    r = Renderer()\n")
+    text = (
+        "Returns a :class:`~mirrorlab.frame.Frame`; see :func:`mirrorlab.render` and "
+        ":mod:`mirrorlab.options`. Make one::\n\n    r = Renderer()\n"
+    )
     assert module.markdown_of(text) == (
         "Returns a `Frame`; see `mirrorlab.render` and `mirrorlab.options`. Make one:\n\n"
-        "    r = Renderer()\n")
+        "    r = Renderer()\n"
+    )

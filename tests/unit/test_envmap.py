@@ -15,13 +15,16 @@ DTYPES = (np.float32, np.float64)
 # Any finite float: tiny, subnormal, zero of either sign, huge.
 any_float = st.floats(allow_nan=False, allow_infinity=False)
 moderate = st.floats(-1e3, 1e3, allow_nan=False)
-vector_batches = hnp.arrays(np.float64, st.tuples(st.integers(1, 16), st.just(3)),
-                            elements=any_float)
-moderate_batches = hnp.arrays(np.float64, st.tuples(st.integers(1, 16), st.just(3)),
-                              elements=moderate)
+vector_batches = hnp.arrays(
+    np.float64, st.tuples(st.integers(1, 16), st.just(3)), elements=any_float
+)
+moderate_batches = hnp.arrays(
+    np.float64, st.tuples(st.integers(1, 16), st.just(3)), elements=moderate
+)
 # Two batches of the same length, as one (n, 2, 3) array.
-moderate_pairs = hnp.arrays(np.float64, st.tuples(st.integers(1, 16), st.just(2), st.just(3)),
-                            elements=moderate)
+moderate_pairs = hnp.arrays(
+    np.float64, st.tuples(st.integers(1, 16), st.just(2), st.just(3)), elements=moderate
+)
 small_settings = settings(max_examples=60, deadline=None)
 
 
@@ -99,8 +102,9 @@ def test_reflect_is_an_involution_that_keeps_length(pairs):
     r = envmap.reflect(u, n)
     assert np.all(np.isfinite(r))
     scale = 1 + np.linalg.norm(u, axis=-1)
-    assert np.allclose(np.linalg.norm(r, axis=-1), np.linalg.norm(u, axis=-1),
-                       atol=1e-12 * scale.max())
+    assert np.allclose(
+        np.linalg.norm(r, axis=-1), np.linalg.norm(u, axis=-1), atol=1e-12 * scale.max()
+    )
     assert np.allclose(envmap.reflect(r, n), u, atol=1e-12 * scale.max())
     # The normal component flips, the tangential one stays.
     keep = np.linalg.norm(n, axis=-1) > 1e-6
@@ -147,7 +151,8 @@ def test_sphere_map_exactly_at_the_singular_direction_gives_the_fixed_rim_point(
 @pytest.mark.parametrize("offset", [1e-3, 1e-7, 1e-12, 1e-30, 1e-300])
 @pytest.mark.parametrize("angle_deg", [0, 37, 90, 180, 251, 315])
 def test_sphere_map_near_the_singular_direction_tends_to_the_rim_in_the_direction_of_rx_ry(
-        offset, angle_deg):
+    offset, angle_deg
+):
     a = np.radians(angle_deg)
     direction = np.array([np.cos(a), np.sin(a)])
     r = np.array([offset * direction[0], offset * direction[1], -1.0])
@@ -268,14 +273,15 @@ def test_texgen_is_sphere_map_of_the_reflected_eye_ray_with_normalised_normals(p
     lengths = np.linalg.norm(v, axis=-1, keepdims=True)
     u = np.where(lengths > 0, v / np.where(lengths > 0, lengths, 1), 0)
     r = envmap.reflect(u, n)
-    away = 1 + unit_rows(np.where(np.linalg.norm(r, axis=-1, keepdims=True) > 1e-6, r,
-                                  [0, 0, 1]))[:, 2] > 1e-6
+    away = (
+        1
+        + unit_rows(np.where(np.linalg.norm(r, axis=-1, keepdims=True) > 1e-6, r, [0, 0, 1]))[:, 2]
+        > 1e-6
+    )
     s0, t0 = envmap.sphere_map(r)
-    assert np.allclose(s[away], s0[away], atol=1e-9) and np.allclose(t[away], t0[away],
-                                                                      atol=1e-9)
+    assert np.allclose(s[away], s0[away], atol=1e-9) and np.allclose(t[away], t0[away], atol=1e-9)
     s2, t2 = envmap.sphere_map_texgen(v, n * k)  # GL_NORMALIZE semantics
-    assert np.allclose(s2[away], s[away], atol=1e-9) and np.allclose(t2[away], t[away],
-                                                                      atol=1e-9)
+    assert np.allclose(s2[away], s[away], atol=1e-9) and np.allclose(t2[away], t[away], atol=1e-9)
 
 
 # ---------------------------------------------------------------------------- inverse
@@ -298,15 +304,18 @@ def test_sphere_map_inverse_clamps_outside_the_disc_to_the_rim():
 
 
 @small_settings
-@given(hnp.arrays(np.float64, st.integers(1, 16), elements=st.floats(-3, 3)),
-       hnp.arrays(np.float64, st.integers(1, 16), elements=st.floats(-3, 3)))
+@given(
+    hnp.arrays(np.float64, st.integers(1, 16), elements=st.floats(-3, 3)),
+    hnp.arrays(np.float64, st.integers(1, 16), elements=st.floats(-3, 3)),
+)
 def test_sphere_map_inverse_is_always_unit(s, t):
     n = min(len(s), len(t))
     for dtype in DTYPES:
         r = envmap.sphere_map_inverse(s[:n].astype(dtype), t[:n].astype(dtype))
         assert r.dtype == dtype and r.shape == (n, 3)
-        assert np.allclose(np.linalg.norm(r.astype(np.float64), axis=-1), 1,
-                           atol=4 * np.finfo(dtype).eps)
+        assert np.allclose(
+            np.linalg.norm(r.astype(np.float64), axis=-1), 1, atol=4 * np.finfo(dtype).eps
+        )
 
 
 @settings(max_examples=40, deadline=None)
@@ -316,7 +325,7 @@ def test_sphere_map_round_trip_bound(v, log_gap):
     # Half of each batch is pushed towards the singular direction to exercise the bound.
     r = unit_rows(v)
     pole = np.array([0.0, 0.0, -1.0])
-    r = np.concatenate([r, unit_rows(pole + 10.0 ** log_gap * (r - pole))])
+    r = np.concatenate([r, unit_rows(pole + 10.0**log_gap * (r - pole))])
     for dtype in DTYPES:
         rd = r.astype(dtype)
         exact = rd.astype(np.float64)
@@ -340,24 +349,28 @@ def test_sphere_map_of_its_inverse_is_the_identity_inside_the_disc():
 # ---------------------------------------------------------------------------- cube map
 
 
-@pytest.mark.parametrize(("r", "face", "s", "t"), [
-    # One point per face through the spec's table: s = (sc/|ma| + 1)/2, t = (tc/|ma| + 1)/2.
-    ((2.0, 0.4, -0.8), 0, (0.4 + 1) / 2, (-0.2 + 1) / 2),    # +X: sc = -rz, tc = -ry
-    ((-2.0, 0.4, -0.8), 1, (-0.4 + 1) / 2, (-0.2 + 1) / 2),  # -X: sc = +rz, tc = -ry
-    ((0.4, 2.0, -0.8), 2, (0.2 + 1) / 2, (-0.4 + 1) / 2),    # +Y: sc = +rx, tc = +rz
-    ((0.4, -2.0, -0.8), 3, (0.2 + 1) / 2, (0.4 + 1) / 2),    # -Y: sc = +rx, tc = -rz
-    ((0.4, -0.8, 2.0), 4, (0.2 + 1) / 2, (0.4 + 1) / 2),     # +Z: sc = +rx, tc = -ry
-    ((0.4, -0.8, -2.0), 5, (-0.2 + 1) / 2, (0.4 + 1) / 2),   # -Z: sc = -rx, tc = -ry
-    # Shen's slide example lands on -Z; its printed (s, t) uses (rx, ry) directly, GL's
-    # table negates both for -Z.
-    ((-3.2, 5.1, -8.4), 5, (3.2 / 8.4 + 1) / 2, (-5.1 / 8.4 + 1) / 2),
-])
+@pytest.mark.parametrize(
+    ("r", "face", "s", "t"),
+    [
+        # One point per face through the spec's table: s = (sc/|ma| + 1)/2, t = (tc/|ma| + 1)/2.
+        ((2.0, 0.4, -0.8), 0, (0.4 + 1) / 2, (-0.2 + 1) / 2),  # +X: sc = -rz, tc = -ry
+        ((-2.0, 0.4, -0.8), 1, (-0.4 + 1) / 2, (-0.2 + 1) / 2),  # -X: sc = +rz, tc = -ry
+        ((0.4, 2.0, -0.8), 2, (0.2 + 1) / 2, (-0.4 + 1) / 2),  # +Y: sc = +rx, tc = +rz
+        ((0.4, -2.0, -0.8), 3, (0.2 + 1) / 2, (0.4 + 1) / 2),  # -Y: sc = +rx, tc = -rz
+        ((0.4, -0.8, 2.0), 4, (0.2 + 1) / 2, (0.4 + 1) / 2),  # +Z: sc = +rx, tc = -ry
+        ((0.4, -0.8, -2.0), 5, (-0.2 + 1) / 2, (0.4 + 1) / 2),  # -Z: sc = -rx, tc = -ry
+        # Shen's slide example lands on -Z; its printed (s, t) uses (rx, ry) directly, GL's
+        # table negates both for -Z.
+        ((-3.2, 5.1, -8.4), 5, (3.2 / 8.4 + 1) / 2, (-5.1 / 8.4 + 1) / 2),
+    ],
+)
 def test_cube_map_follows_the_spec_table(r, face, s, t):
     for dtype in DTYPES:
         f, s_got, t_got = envmap.cube_map(np.array(r, dtype))
         assert int(f) == face
         assert float(s_got) == pytest.approx(s, abs=1e-6) and float(t_got) == pytest.approx(
-            t, abs=1e-6)
+            t, abs=1e-6
+        )
 
 
 def test_cube_map_axes_hit_face_centres():
@@ -371,19 +384,22 @@ def test_cube_map_axes_hit_face_centres():
     assert face.tolist() == [0, 5] and np.all(s == 0.5) and np.all(t == 0.5)
 
 
-@pytest.mark.parametrize(("r", "face", "s", "t"), [
-    # Ties: Z before Y before X (Mesa llvmpipe's order); edges put s or t at 0 or 1.
-    ((1, 1, 0), 2, 1.0, 0.5),      # +X/+Y edge -> +Y, sc = rx = 1
-    ((1, -1, 0), 3, 1.0, 0.5),     # +X/-Y edge -> -Y
-    ((-1, 1, 0.3), 2, 0.0, 0.65),  # -X/+Y edge -> +Y
-    ((1, 0, 1), 4, 1.0, 0.5),      # +X/+Z edge -> +Z
-    ((0, 1, -1), 5, 0.5, 0.0),     # +Y/-Z edge -> -Z, tc = -ry = -1
-    ((0, -1, 1), 4, 0.5, 1.0),     # -Y/+Z edge -> +Z
-    ((1, 1, 1), 4, 1.0, 0.0),      # corner -> +Z
-    ((-1, -1, -1), 5, 1.0, 1.0),   # corner -> -Z
-    ((3, -3, 3), 4, 1.0, 1.0),     # corner, not unit
-    ((1, 1, 0.99999994), 2, 1.0, 0.99999997),  # X/Y tie just off the corner -> +Y
-])
+@pytest.mark.parametrize(
+    ("r", "face", "s", "t"),
+    [
+        # Ties: Z before Y before X (Mesa llvmpipe's order); edges put s or t at 0 or 1.
+        ((1, 1, 0), 2, 1.0, 0.5),  # +X/+Y edge -> +Y, sc = rx = 1
+        ((1, -1, 0), 3, 1.0, 0.5),  # +X/-Y edge -> -Y
+        ((-1, 1, 0.3), 2, 0.0, 0.65),  # -X/+Y edge -> +Y
+        ((1, 0, 1), 4, 1.0, 0.5),  # +X/+Z edge -> +Z
+        ((0, 1, -1), 5, 0.5, 0.0),  # +Y/-Z edge -> -Z, tc = -ry = -1
+        ((0, -1, 1), 4, 0.5, 1.0),  # -Y/+Z edge -> +Z
+        ((1, 1, 1), 4, 1.0, 0.0),  # corner -> +Z
+        ((-1, -1, -1), 5, 1.0, 1.0),  # corner -> -Z
+        ((3, -3, 3), 4, 1.0, 1.0),  # corner, not unit
+        ((1, 1, 0.99999994), 2, 1.0, 0.99999997),  # X/Y tie just off the corner -> +Y
+    ],
+)
 def test_cube_map_ties_edges_and_corners(r, face, s, t):
     f, s_got, t_got = envmap.cube_map(np.array(r, np.float64))
     assert int(f) == face
@@ -391,8 +407,7 @@ def test_cube_map_ties_edges_and_corners(r, face, s, t):
 
 
 def test_cube_map_of_zero_uses_the_sign_bit_of_rz():
-    zeros = np.array([[0.0, 0.0, 0.0], [-0.0, -0.0, 0.0], [0.0, 0.0, -0.0],
-                      [-0.0, -0.0, -0.0]])
+    zeros = np.array([[0.0, 0.0, 0.0], [-0.0, -0.0, 0.0], [0.0, 0.0, -0.0], [-0.0, -0.0, -0.0]])
     for dtype in DTYPES:
         face, s, t = envmap.cube_map(zeros.astype(dtype))
         assert face.tolist() == [4, 4, 5, 5]
@@ -424,8 +439,10 @@ def test_cube_map_always_names_a_face_and_in_range_coordinates(r):
 
 
 @small_settings
-@given(hnp.arrays(np.float64, (12, 3), elements=st.floats(-4, 4)),
-       st.sampled_from([2.0 ** -600, 2.0 ** -20, 8.0, 2.0 ** 600]))
+@given(
+    hnp.arrays(np.float64, (12, 3), elements=st.floats(-4, 4)),
+    st.sampled_from([2.0**-600, 2.0**-20, 8.0, 2.0**600]),
+)
 def test_cube_map_ties_follow_the_documented_rule_and_scale_freely(v, k):
     # Force ties by copying magnitudes between components.
     v = v.copy()
@@ -446,9 +463,11 @@ def test_cube_map_ties_follow_the_documented_rule_and_scale_freely(v, k):
 
 
 @small_settings
-@given(hnp.arrays(np.int64, 20, elements=st.integers(0, 5)),
-       hnp.arrays(np.float64, 20, elements=st.floats(1e-6, 1 - 1e-6)),
-       hnp.arrays(np.float64, 20, elements=st.floats(1e-6, 1 - 1e-6)))
+@given(
+    hnp.arrays(np.int64, 20, elements=st.integers(0, 5)),
+    hnp.arrays(np.float64, 20, elements=st.floats(1e-6, 1 - 1e-6)),
+    hnp.arrays(np.float64, 20, elements=st.floats(1e-6, 1 - 1e-6)),
+)
 def test_cube_face_direction_round_trips(face, s, t):
     r = envmap.cube_face_direction(face, s, t)
     assert np.allclose(np.linalg.norm(r, axis=-1), 1, atol=1e-15)
@@ -475,8 +494,9 @@ def test_cube_face_direction_edges_clip_and_bad_faces():
 
 
 def test_latlong_known_values():
-    r = np.array([[1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1],
-                  [1, 1, SQRT2]])
+    r = np.array(
+        [[1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1], [1, 1, SQRT2]]
+    )
     s, t = envmap.latlong_map(r)
     assert np.allclose(s, [0, 0.25, 0.5, 0.75, 0, 0, 0.125])
     assert np.allclose(t, [0.5, 0.5, 0.5, 0.5, 0, 1, 0.25])
@@ -484,8 +504,17 @@ def test_latlong_known_values():
 
 def test_latlong_poles_signed_zeros_and_zero():
     for dtype in DTYPES:
-        poles = np.array([[0.0, 0.0, 1.0], [-0.0, 0.0, 1.0], [0.0, -0.0, 1.0],
-                          [-0.0, -0.0, 1.0], [-0.0, -0.0, -1.0], [0.0, -0.0, -3.0]], dtype)
+        poles = np.array(
+            [
+                [0.0, 0.0, 1.0],
+                [-0.0, 0.0, 1.0],
+                [0.0, -0.0, 1.0],
+                [-0.0, -0.0, 1.0],
+                [-0.0, -0.0, -1.0],
+                [0.0, -0.0, -3.0],
+            ],
+            dtype,
+        )
         s, t = envmap.latlong_map(poles)
         assert np.all(s == 0)
         assert t.tolist() == [0, 0, 0, 0, 1, 1]
@@ -496,7 +525,7 @@ def test_latlong_poles_signed_zeros_and_zero():
 
 def test_latlong_rz_rounded_above_one_stays_finite():
     # Vectors that normalise with |rz| a rounding step above 1 would give NaN in arccos.
-    big = 1 + 2 ** -52
+    big = 1 + 2**-52
     r = np.array([[0, 0, big], [0, 0, -big], [1e-9, 0, big], [0, -1e-9, -big]])
     s, t = envmap.latlong_map(r)
     assert_st_in_range(s, t)
@@ -600,11 +629,17 @@ def test_normal_map_stays_inside_the_map(n, width, height):
 
 # ---------------------------------------------------------------------------- baking
 
-AXIS_COLOURS = np.array([
-    [1, 0, 0], [0, 1, 1],  # +X red, -X cyan
-    [0, 1, 0], [1, 0, 1],  # +Y green, -Y magenta
-    [0, 0, 1], [1, 1, 0],  # +Z blue, -Z yellow
-], float)
+AXIS_COLOURS = np.array(
+    [
+        [1, 0, 0],
+        [0, 1, 1],  # +X red, -X cyan
+        [0, 1, 0],
+        [1, 0, 1],  # +Y green, -Y magenta
+        [0, 0, 1],
+        [1, 1, 0],  # +Z blue, -Z yellow
+    ],
+    float,
+)
 
 
 def axis_env(directions: np.ndarray) -> np.ndarray:
@@ -647,8 +682,9 @@ def test_bake_cube_faces_row_order_top_is_t_equal_one():
     face, s, t = envmap.cube_map(r)
     gl_rows = faces[:, ::-1]
     texel = gl_rows[int(face), min(int(t * size), size - 1), min(int(s * size), size - 1)]
-    centre = envmap.cube_face_direction(face, (np.floor(s * size) + 0.5) / size,
-                                        (np.floor(t * size) + 0.5) / size)
+    centre = envmap.cube_face_direction(
+        face, (np.floor(s * size) + 0.5) / size, (np.floor(t * size) + 0.5) / size
+    )
     assert np.array_equal(texel, to_uint8(direction_env(centre)))
 
 

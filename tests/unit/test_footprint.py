@@ -109,8 +109,7 @@ def test_a_rolled_horizontal_strip_keeps_its_pixels():
         up = (np.sin(np.radians(roll)), np.cos(np.radians(roll)), 0.0)
         camera = Camera(eye=(0.0, 0.5, 8.0), target=(0.0, 0.0, 0.0), up=up, fovy=60.0)
         corners = np.array(quad((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), (0.0, 1.0, 0.0), 60.0, 0.5))
-        footprint = polygon_footprint(corners, camera.projection(1.0) @ camera.view(),
-                                      (128, 128))
+        footprint = polygon_footprint(corners, camera.projection(1.0) @ camera.view(), (128, 128))
         covered = quad_pixels(corners, camera, (128, 128))
         assert covered.sum() > 300
         assert_covers(footprint, covered)
@@ -171,18 +170,29 @@ def cameras(draw):
     fovy = draw(st.sampled_from([2.0, 10.0, 45.0, 90.0, 150.0, 178.0]))
     near = draw(st.sampled_from([0.01, 0.1, 1.0]))
     far = draw(st.sampled_from([3.0, 30.0, 300.0]))
-    return Camera(eye=tuple(eye), target=tuple(eye + look), up=tuple(up), fovy=fovy,
-                  near=near, far=max(far, near * 2))
+    return Camera(
+        eye=tuple(eye),
+        target=tuple(eye + look),
+        up=tuple(up),
+        fovy=fovy,
+        near=near,
+        far=max(far, near * 2),
+    )
 
 
 @settings(max_examples=150, deadline=None)
-@given(camera=cameras(), center=st.tuples(st.floats(-10, 10), st.floats(-5, 5),
-                                          st.floats(-10, 10)),
-       normal=st.tuples(unit, unit, unit), up=st.tuples(unit, unit, unit),
-       width=st.floats(0.05, 60.0), height=st.floats(0.05, 60.0),
-       aspect=st.sampled_from([(48, 36), (36, 48), (40, 40), (64, 16)]))
-def test_a_mirror_footprint_holds_every_pixel_it_covers(camera, center, normal, up, width,
-                                                        height, aspect):
+@given(
+    camera=cameras(),
+    center=st.tuples(st.floats(-10, 10), st.floats(-5, 5), st.floats(-10, 10)),
+    normal=st.tuples(unit, unit, unit),
+    up=st.tuples(unit, unit, unit),
+    width=st.floats(0.05, 60.0),
+    height=st.floats(0.05, 60.0),
+    aspect=st.sampled_from([(48, 36), (36, 48), (40, 40), (64, 16)]),
+)
+def test_a_mirror_footprint_holds_every_pixel_it_covers(
+    camera, center, normal, up, width, height, aspect
+):
     normal = np.array(normal)
     if np.linalg.norm(normal) < 0.1 or np.linalg.norm(np.cross(normal, up)) < 0.1:
         return
@@ -194,10 +204,12 @@ def test_a_mirror_footprint_holds_every_pixel_it_covers(camera, center, normal, 
 
 
 @settings(max_examples=150, deadline=None)
-@given(camera=cameras(), center=st.tuples(st.floats(-10, 10), st.floats(-5, 5),
-                                          st.floats(-10, 10)),
-       radius=st.floats(0.05, 8.0),
-       aspect=st.sampled_from([(48, 36), (36, 48), (40, 40), (64, 16)]))
+@given(
+    camera=cameras(),
+    center=st.tuples(st.floats(-10, 10), st.floats(-5, 5), st.floats(-10, 10)),
+    radius=st.floats(0.05, 8.0),
+    aspect=st.sampled_from([(48, 36), (36, 48), (40, 40), (64, 16)]),
+)
 def test_a_sphere_footprint_holds_every_pixel_it_covers(camera, center, radius, aspect):
     view = camera_view(camera, aspect)
     center = np.array(center)

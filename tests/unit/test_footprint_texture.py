@@ -33,8 +33,7 @@ def test_a_footprint_texture_is_the_glasss_pixel_rectangle_in_whole_steps():
     scene = footprint_lab()
     assert scene.reflector("mirror").texture_size == "footprint"
     (size,) = capture_sizes(scene, TextureState())
-    bounds = reflector_footprint(scene.reflector("mirror"),
-                                 camera_view(scene.camera, SIZE)).bounds
+    bounds = reflector_footprint(scene.reflector("mirror"), camera_view(scene.camera, SIZE)).bounds
     assert bounds is not None
     assert size[0] % FOOTPRINT_STEP == 0 and size[1] % FOOTPRINT_STEP == 0
     assert bounds[2] <= size[0] < bounds[2] + FOOTPRINT_STEP
@@ -63,12 +62,18 @@ def test_scene_files_and_options_take_footprint_for_ortho_only():
     assert from_document(scene_to_document(scene), lab.source) == scene  # it round-trips
     document["reflectors"][0]["technique"] = "reflected"
     document["reflectors"][0].pop("ortho", None)
-    with pytest.raises(SceneError, match=r'reflectors\[0\]\.texture_size: "footprint" '
-                       r"applies to technique 'ortho'.*not 'reflected'"):
+    with pytest.raises(
+        SceneError,
+        match=r'reflectors\[0\]\.texture_size: "footprint" '
+        r"applies to technique 'ortho'.*not 'reflected'",
+    ):
         from_document(document, lab.source)
     document["reflectors"][0].update(technique="ortho", texture_size="huge")
-    with pytest.raises(SceneError, match=r'reflectors\[0\]\.texture_size: expected a whole '
-                       r'number or "footprint", got \'huge\''):
+    with pytest.raises(
+        SceneError,
+        match=r"reflectors\[0\]\.texture_size: expected a whole "
+        r'number or "footprint", got \'huge\'',
+    ):
         from_document(document, lab.source)
     # --method drops a footprint size the new technique cannot take, keeps a number;
     # asked for both at once, the size is refused with the option's name

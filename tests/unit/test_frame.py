@@ -38,9 +38,15 @@ def test_the_png_holds_the_pixels(channels):
     assert np.array_equal(decoded(Frame(image)._repr_png_()), image)
 
 
-@pytest.mark.parametrize("array", [np.zeros((4, 4)), np.zeros((4, 4, 3), np.float32),
-                                   np.zeros((0, 4, 3), np.uint8), np.zeros((4, 4, 2),
-                                                                           np.uint8)])
+@pytest.mark.parametrize(
+    "array",
+    [
+        np.zeros((4, 4)),
+        np.zeros((4, 4, 3), np.float32),
+        np.zeros((0, 4, 3), np.uint8),
+        np.zeros((4, 4, 2), np.uint8),
+    ],
+)
 def test_what_is_no_picture_shows_as_an_array(array):
     from IPython.core.formatters import DisplayFormatter
 

@@ -41,9 +41,18 @@ def test_frame_bytes_grow_with_events_but_count_a_shared_state_once():
 
 
 def test_a_malformed_state_reference_reads_as_no_state(tmp_path):
-    plain = {"lab": "lab20", "frames": [{"events": [{"kind": "draw", "state": {"$state": 7}},
-                                                    {"kind": "draw", "state": {"$state": "x"}}]}],
-             "states": [{"viewport": 1}]}
+    plain = {
+        "lab": "lab20",
+        "frames": [
+            {
+                "events": [
+                    {"kind": "draw", "state": {"$state": 7}},
+                    {"kind": "draw", "state": {"$state": "x"}},
+                ]
+            }
+        ],
+        "states": [{"viewport": 1}],
+    }
     (tmp_path / "evidence.json").write_text(json.dumps(plain))
     Evidence("lab20").save(tmp_path / "empty")
     (tmp_path / "arrays.npz").write_bytes((tmp_path / "empty" / "arrays.npz").read_bytes())

@@ -20,9 +20,7 @@ def test_capture_view_matches_hand_derived_look_at():
 def test_capture_ortho_matches_glortho_formula():
     # glOrtho(-6, 2, -3, 5, 0, 15): scale 2/8 in x and y, -2/15 in z; offsets
     # -(r+l)/(r-l) = 0.5, -(t+b)/(t-b) = -0.25, -(f+n)/(f-n) = -1.
-    expected = np.array(
-        [[0.25, 0, 0, 0.5], [0, 0.25, 0, -0.25], [0, 0, -2 / 15, -1], [0, 0, 0, 1]]
-    )
+    expected = np.array([[0.25, 0, 0, 0.5], [0, 0.25, 0, -0.25], [0, 0, -2 / 15, -1], [0, 0, 0, 1]])
     assert np.allclose(math3d.ortho(-6, 2, -3, 5, 0, 15), expected)
 
 
@@ -35,8 +33,10 @@ def test_perspective_maps_near_and_far_planes_to_ndc_bounds():
     assert top[1] / top[3] == pytest.approx(1.0)
 
 
-@given(st.floats(-720, 720), st.tuples(finite, finite, finite).filter(
-    lambda a: np.linalg.norm(a) > 1e-3))
+@given(
+    st.floats(-720, 720),
+    st.tuples(finite, finite, finite).filter(lambda a: np.linalg.norm(a) > 1e-3),
+)
 def test_rotation_is_proper_and_fixes_its_axis(angle, axis):
     r = math3d.rotate(angle, axis)[:3, :3]
     assert np.allclose(r @ r.T, np.eye(3), atol=1e-9)
@@ -49,13 +49,16 @@ def test_rotation_is_right_handed():
     assert np.allclose(math3d.rotate(90, (0, 1, 0))[:3, 2], (1, 0, 0))
 
 
-@pytest.mark.parametrize("call", [
-    lambda: math3d.look_at((1, 2, 3), (1, 2, 3), (0, 1, 0)),
-    lambda: math3d.look_at((0, 5, 0), (0, 0, 0), (0, 1, 0)),
-    lambda: math3d.rotate(10, (0, 0, 0)),
-    lambda: math3d.ortho(1, 1, 0, 1, 0, 1),
-    lambda: math3d.perspective(45, 1, 0, 10),
-])
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda: math3d.look_at((1, 2, 3), (1, 2, 3), (0, 1, 0)),
+        lambda: math3d.look_at((0, 5, 0), (0, 0, 0), (0, 1, 0)),
+        lambda: math3d.rotate(10, (0, 0, 0)),
+        lambda: math3d.ortho(1, 1, 0, 1, 0, 1),
+        lambda: math3d.perspective(45, 1, 0, 10),
+    ],
+)
 def test_degenerate_inputs_raise_clear_errors(call):
     with pytest.raises(ValueError):
         call()
@@ -79,15 +82,16 @@ def test_reflection_matrix_mirrors_points_across_the_lab_mirror():
     np.testing.assert_allclose(reflect @ reflect, np.eye(4), atol=1e-12)
 
 
-@given(st.lists(st.floats(-1, 1), min_size=3, max_size=3).filter(
-    lambda v: np.linalg.norm(v) > 1e-3), st.floats(-10, 10))
+@given(
+    st.lists(st.floats(-1, 1), min_size=3, max_size=3).filter(lambda v: np.linalg.norm(v) > 1e-3),
+    st.floats(-10, 10),
+)
 def test_reflection_matrix_fixes_the_plane_and_flips_its_normal(normal, offset):
     plane = math3d.plane_through(np.asarray(normal) * offset, normal)
     reflect = math3d.reflection_matrix(plane)
     n = plane[:3]
     on_plane = -plane[3] * n
-    np.testing.assert_allclose(math3d.transform_points(reflect, on_plane)[:3], on_plane,
-                               atol=1e-9)
+    np.testing.assert_allclose(math3d.transform_points(reflect, on_plane)[:3], on_plane, atol=1e-9)
     np.testing.assert_allclose(reflect[:3, :3] @ n, -n, atol=1e-12)
 
 
@@ -126,12 +130,17 @@ FLIP_X = np.diag([-1.0, 1.0, 1.0, 1.0])
 
 
 @settings(max_examples=200, deadline=None)
-@given(normal=st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, -0.05)),
-       distance=st.floats(0.2, 20.0), flip=st.booleans(), shift=st.floats(-0.5, 0.5),
-       seed=st.integers(0, 2**31 - 1))
+@given(
+    normal=st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, -0.05)),
+    distance=st.floats(0.2, 20.0),
+    flip=st.booleans(),
+    shift=st.floats(-0.5, 0.5),
+    seed=st.integers(0, 2**31 - 1),
+)
 @example(normal=(-1.0, 0.0, -0.0625), distance=15.0, flip=False, shift=0.5, seed=0)  # no view
 def test_the_oblique_projection_keeps_everything_of_the_view_beyond_its_plane(
-        normal, distance, flip, shift, seed):
+    normal, distance, flip, shift, seed
+):
     """Lengyel's far plane goes through the view volume's corner opposite the new near
     plane, so nothing of the old volume beyond the plane is cut. The corner is picked in
     clip space: with x flipped (the world seen in a mirror) or an off-centre frustum the

@@ -14,10 +14,17 @@ MODELS = sorted((data_path("models")).glob("*.obj"))
 
 
 def test_every_model_file_is_tested_and_the_scenes_use_only_them():
-    used = {part.mesh.resolve() for name in ("lab20", "sphere", "cone", "mirror_and_sphere")
-            for part in scene_parts(load_scene(name))}
-    used |= {r.mesh.resolve() for name in ("sphere", "cone", "mirror_and_sphere")
-             for r in load_scene(name).reflectors if r.kind == "curved"}
+    used = {
+        part.mesh.resolve()
+        for name in ("lab20", "sphere", "cone", "mirror_and_sphere")
+        for part in scene_parts(load_scene(name))
+    }
+    used |= {
+        r.mesh.resolve()
+        for name in ("sphere", "cone", "mirror_and_sphere")
+        for r in load_scene(name).reflectors
+        if r.kind == "curved"
+    }
     assert used <= {m.resolve() for m in MODELS}
     assert len(MODELS) >= 9
 

@@ -70,8 +70,9 @@ def test_keyframes_move_and_turn_a_planar_mirror_and_its_corners_follow():
     assert np.allclose(turned.center, rest.center)
     assert np.allclose(turned.normal, (np.cos(angle), 0.0, np.sin(angle)))
     # a rigid turn: the same size and shape
-    edges = np.linalg.norm(np.diff(turned.corner_array, axis=0, append=turned.corner_array[:1]),
-                           axis=1)
+    edges = np.linalg.norm(
+        np.diff(turned.corner_array, axis=0, append=turned.corner_array[:1]), axis=1
+    )
     assert np.allclose(edges, 8.0)
     halfway = mirror_at(scene, 4)
     assert np.allclose(halfway.normal, (np.cos(angle / 2), 0.0, np.sin(angle / 2)))
@@ -86,9 +87,11 @@ def test_an_ortho_mirrors_camera_follows_it():
         assert np.allclose(forward / np.linalg.norm(forward), mirror.normal)
         assert np.allclose(mirror.texcoords(), [[0, 0], [0, 1], [1, 1], [1, 0]], atol=1e-9)
     document = TURNING.format(technique="ortho").replace(
-        'height = 8.0', 'height = 8.0\n[reflectors.ortho]\neye = [-7.0, 1.0, -2.0]\n'
-        'target = [0.0, 1.0, -2.0]\nup = [0.0, 1.0, 0.0]\n'
-        'extents = [-4.0, 4.0, -4.0, 4.0, 0.0, 15.0]')
+        "height = 8.0",
+        "height = 8.0\n[reflectors.ortho]\neye = [-7.0, 1.0, -2.0]\n"
+        "target = [0.0, 1.0, -2.0]\nup = [0.0, 1.0, 0.0]\n"
+        "extents = [-4.0, 4.0, -4.0, 4.0, 0.0, 15.0]",
+    )
     explicit = loads(document)
     moved = mirror_at(explicit, 5)
     assert moved.ortho is not None
@@ -107,8 +110,11 @@ def test_a_moving_mirror_scene_round_trips_at_every_frame():
 
 def test_a_planar_mirror_takes_no_scale_keyframe():
     with pytest.raises(SceneError, match=r"keyframes\[0\].reflectors.mirror.scale: a planar"):
-        loads(TURNING.format(technique="stencil").replace(
-            "position = [-7.0, 1.0, -40.0]", "scale = [2.0, 2.0, 2.0]"))
+        loads(
+            TURNING.format(technique="stencil").replace(
+                "position = [-7.0, 1.0, -40.0]", "scale = [2.0, 2.0, 2.0]"
+            )
+        )
 
 
 def test_the_plan_captures_a_moving_mirror_again_and_hides_it_out_of_view():

@@ -27,8 +27,11 @@ SKY_CUBE = data_path("textures") / "sky_cube"
 
 
 def changed_fields(before, after) -> set[str]:
-    return {name for name in before.__dataclass_fields__
-            if getattr(before, name) != getattr(after, name)}
+    return {
+        name
+        for name in before.__dataclass_fields__
+        if getattr(before, name) != getattr(after, name)
+    }
 
 
 def test_no_option_gives_the_scene_back():
@@ -37,11 +40,14 @@ def test_no_option_gives_the_scene_back():
     assert apply_options(lab, {"camera": None, "method": None}) is lab
 
 
-@pytest.mark.parametrize("name, value, field, expected", [
-    ("camera", (1.0, 2.0, 3.0), "eye", (1.0, 2.0, 3.0)),
-    ("target", (-1.0, 0.5, 0.0), "target", (-1.0, 0.5, 0.0)),
-    ("fovy", 30, "fovy", 30.0),
-])
+@pytest.mark.parametrize(
+    "name, value, field, expected",
+    [
+        ("camera", (1.0, 2.0, 3.0), "eye", (1.0, 2.0, 3.0)),
+        ("target", (-1.0, 0.5, 0.0), "target", (-1.0, 0.5, 0.0)),
+        ("fovy", 30, "fovy", 30.0),
+    ],
+)
 def test_camera_options_change_only_their_camera_field(name, value, field, expected):
     lab = load_scene("lab20")
     moved = apply_options(lab, {name: value})
@@ -70,8 +76,11 @@ def test_method_changes_the_reflectors_of_its_kind_only():
     assert latlong.reflector("mirror") == both.reflector("mirror")
     two = apply_options(load_scene("two_mirrors"), {"method": "ortho"})
     assert [r.technique for r in two.reflectors] == ["ortho", "ortho"]
-    with pytest.raises(OptionError, match=r"^--method: latlong is a technique for a curved "
-                       "reflector, and scene 'lab20' has none"):
+    with pytest.raises(
+        OptionError,
+        match=r"^--method: latlong is a technique for a curved "
+        "reflector, and scene 'lab20' has none",
+    ):
         apply_options(load_scene("lab20"), {"method": "latlong"})
 
 
@@ -91,8 +100,10 @@ def test_a_reflectors_source_is_kept_only_where_it_means_the_same():
     # A picture is no folder of cube faces, and latlong takes no source: baked instead.
     for method in ("cube", "latlong", "cube-live"):
         assert apply_options(cone, {"method": method}).reflector("cone").source is None
-    faces = apply_options(load_scene("sphere"), {"set": ['reflectors[0].technique="cube"',
-                                                         f'reflectors[0].source="{SKY_CUBE}"']})
+    faces = apply_options(
+        load_scene("sphere"),
+        {"set": ['reflectors[0].technique="cube"', f'reflectors[0].source="{SKY_CUBE}"']},
+    )
     assert faces.reflector("sphere").source == SKY_CUBE
     assert apply_options(faces, {"method": "sphere"}).reflector("sphere").source is None
     assert apply_options(faces, {"method": "cube"}).reflector("sphere").source == SKY_CUBE
@@ -101,12 +112,15 @@ def test_a_reflectors_source_is_kept_only_where_it_means_the_same():
 def test_parallax_sets_every_live_cube_map_in_any_form():
     sphere = apply_options(load_scene("sphere"), {"method": "cube-live"})
     room = load_scene("sphere_room")
-    forms = {"box:-3,-2,-3,3,3,3": BoxProxy((-3.0, -2.0, -3.0), (3.0, 3.0, 3.0)),
-             "sphere:4": SphereProxy(4.0), "distance": DistanceSearch(),
-             "distance:16": DistanceSearch(steps=16),
-             "distance:4+0": DistanceSearch(steps=4, secant=0),
-             # the API also takes the scene file's table
-             "table": DistanceSearch(steps=3, thickness=0.5)}
+    forms = {
+        "box:-3,-2,-3,3,3,3": BoxProxy((-3.0, -2.0, -3.0), (3.0, 3.0, 3.0)),
+        "sphere:4": SphereProxy(4.0),
+        "distance": DistanceSearch(),
+        "distance:16": DistanceSearch(steps=16),
+        "distance:4+0": DistanceSearch(steps=4, secant=0),
+        # the API also takes the scene file's table
+        "table": DistanceSearch(steps=3, thickness=0.5),
+    }
     for text, expected in forms.items():
         value = {"proxy": "distance", "steps": 3, "thickness": 0.5} if text == "table" else text
         assert apply_options(sphere, {"parallax": value}).reflector("sphere").parallax == expected
@@ -128,22 +142,44 @@ def test_leaving_cube_live_drops_the_parallax_correction():
     assert apply_options(room, {"method": "cube-live"}) == room
 
 
-@pytest.mark.parametrize(("scene", "text", "message"), [
-    ("sphere_room", "cone", "--parallax: expected one of none, box:X0,Y0,Z0,X1,Y1,Z1, "
-                            "sphere:RADIUS, distance[:STEPS[+SECANT]], got 'cone'"),
-    ("sphere_room", "box:1,2,3", "--parallax: expected 6 numbers X0,Y0,Z0,X1,Y1,Z1 after box:"),
-    ("sphere_room", "sphere:", "--parallax: expected 1 numbers RADIUS after sphere:"),
-    ("sphere_room", "distance:x", "--parallax: expected one of none"),
-    ("sphere_room", "sphere:-1", "--parallax: reflectors[0].parallax.radius: expected a number "
-                                 "greater than 0, got -1.0"),
-    ("sphere_room", "distance:99", "--parallax: reflectors[0].parallax.steps: expected a whole "
-                                   "number from 1 to 64, got 99"),
-    ("sphere_room", "box:2,2,2,3,3,3", "--parallax: reflectors[0].parallax: the reflector's "
-                                       "capture centre [0.5, 1.0, -0.8] is outside the box"),
-    ("chrome_sphere", "distance", "--parallax: scene 'chrome_sphere' has no cube-live "
-                                  "reflector (--method cube-live makes every curved"),
-    ("lab20", "distance", "--parallax: scene 'lab20' has no curved reflector"),
-])
+@pytest.mark.parametrize(
+    ("scene", "text", "message"),
+    [
+        (
+            "sphere_room",
+            "cone",
+            "--parallax: expected one of none, box:X0,Y0,Z0,X1,Y1,Z1, "
+            "sphere:RADIUS, distance[:STEPS[+SECANT]], got 'cone'",
+        ),
+        ("sphere_room", "box:1,2,3", "--parallax: expected 6 numbers X0,Y0,Z0,X1,Y1,Z1 after box:"),
+        ("sphere_room", "sphere:", "--parallax: expected 1 numbers RADIUS after sphere:"),
+        ("sphere_room", "distance:x", "--parallax: expected one of none"),
+        (
+            "sphere_room",
+            "sphere:-1",
+            "--parallax: reflectors[0].parallax.radius: expected a number greater than 0, got -1.0",
+        ),
+        (
+            "sphere_room",
+            "distance:99",
+            "--parallax: reflectors[0].parallax.steps: expected a whole "
+            "number from 1 to 64, got 99",
+        ),
+        (
+            "sphere_room",
+            "box:2,2,2,3,3,3",
+            "--parallax: reflectors[0].parallax: the reflector's "
+            "capture centre [0.5, 1.0, -0.8] is outside the box",
+        ),
+        (
+            "chrome_sphere",
+            "distance",
+            "--parallax: scene 'chrome_sphere' has no cube-live "
+            "reflector (--method cube-live makes every curved",
+        ),
+        ("lab20", "distance", "--parallax: scene 'lab20' has no curved reflector"),
+    ],
+)
 def test_a_bad_parallax_is_refused_naming_the_flag(scene, text, message):
     # the API takes the text as it is; the command line parses it first
     with pytest.raises(OptionError) as info:
@@ -159,18 +195,23 @@ def test_a_bad_parallax_is_refused_naming_the_flag(scene, text, message):
             apply_options(load_scene(scene), {"parallax": parsed})
 
 
-@pytest.mark.parametrize("name, value, field, expected", [
-    ("capture", "fbo", "capture", "fbo"),
-    ("env_size", 128, "texture_size", 128),
-])
+@pytest.mark.parametrize(
+    "name, value, field, expected",
+    [
+        ("capture", "fbo", "capture", "fbo"),
+        ("env_size", 128, "texture_size", 128),
+    ],
+)
 def test_planar_options_set_every_planar_mirror(name, value, field, expected):
     two = apply_options(load_scene("two_mirrors"), {name: value})
     assert [getattr(r, field) for r in two.reflectors] == [expected, expected]
     both = apply_options(load_scene("mirror_and_sphere"), {name: value})
     assert getattr(both.reflector("mirror"), field) == expected
     assert both.reflector("sphere") == load_scene("mirror_and_sphere").reflector("sphere")
-    with pytest.raises(OptionError, match=f"^--{name.replace('_', '-')}: scene "
-                       "'chrome_sphere' has no planar mirror"):
+    with pytest.raises(
+        OptionError,
+        match=f"^--{name.replace('_', '-')}: scene 'chrome_sphere' has no planar mirror",
+    ):
         apply_options(load_scene("sphere"), {name: value})
 
 
@@ -195,8 +236,16 @@ def test_set_changes_any_key_path_as_a_file_would():
     assert fovy.camera == replace(lab.camera, fovy=30.0)
     one = apply_options(lab, {"set": "camera.fovy=30"})  # one string from the API
     assert one == fovy
-    deep = apply_options(lab, {"set": ["camera.eye[1]=3", "objects[0].angles=[0, 0, 0]",
-                                       'reflectors[0].backing=[0.1, 0.2, 0.3]']})
+    deep = apply_options(
+        lab,
+        {
+            "set": [
+                "camera.eye[1]=3",
+                "objects[0].angles=[0, 0, 0]",
+                "reflectors[0].backing=[0.1, 0.2, 0.3]",
+            ]
+        },
+    )
     assert deep.camera.eye == (12.0, 3.0, 9.0)
     assert deep.robot.angles == (0.0, 0.0, 0.0)
     assert deep.reflector("mirror").backing == (0.1, 0.2, 0.3)
@@ -206,34 +255,58 @@ def test_set_changes_any_key_path_as_a_file_would():
     assert bare.name == "my_lab"
 
 
-@pytest.mark.parametrize("values, message", [
-    ({"camera": (1.0, 2.0, 3.0), "target": (1.0, 2.0, 3.0)},
-     "--target: camera.target: must differ from camera.eye, both are [1.0, 2.0, 3.0]"),
-    ({"fovy": 200}, "--fovy: camera.fovy: expected a number at most 179, got 200.0"),
-    ({"camera": "1,2,3"}, "--camera: camera.eye: expected an array, got the string '1,2,3'"),
-    ({"camera": (1.0, float("nan"), 3.0)},
-     "--camera: camera.eye[1]: expected a finite number, got nan"),
-    ({"capture": "fbx"}, "--capture: reflectors[0].capture: expected one of copy, fbo, "
-                         "got 'fbx' (did you mean 'fbo'?)"),
-    ({"env_size": 0}, "--env-size: reflectors[0].texture_size: expected a whole number "
-                      "from 1 to 4096, got 0"),
-    ({"max_bounces": 9}, "--max-bounces: max_bounces: expected a whole number from 0 to 6, "
-                         "got 9"),
-    ({"method": "spheer"}, "--method: reflectors[0].technique: expected one of ortho, "
-                           "reflected, stencil, sphere, sphere-vertex, sphere-texgen, cube, "
-                           "cube-live, latlong, normal, got 'spheer' (did you mean 'sphere'?)"),
-    ({"method": 5}, "--method: reflectors[0].technique: expected a string, got the number 5"),
-    ({"cube_faces": "/no/such/folder"},
-     "--cube-faces: '/no/such/folder' is not a folder of six cube faces"),
-    ({"set": ["camera.fvoy=30"]}, "--set: camera.fvoy: unknown key; did you mean 'fovy'?"),
-    ({"set": ["camera..eye=3"]}, "--set: expected a key path such as camera.eye or "
-                                 "reflectors[0].technique, got 'camera..eye'"),
-    ({"set": ['reflectors[3].technique="stencil"']},
-     "--set: reflectors[3].technique: no item [3] there"),
-    ({"set": ["name.x=3"]}, "--set: name.x: 'x' is not inside a table"),
-    ({"set": ["fovy"]}, "--set: expected KEY=VALUE (e.g. camera.fovy=30), got 'fovy'"),
-    ({"set": ["camera.eye=[1, 2]"]}, "--set: camera.eye: expected 3 numbers, got 2"),
-])
+@pytest.mark.parametrize(
+    "values, message",
+    [
+        (
+            {"camera": (1.0, 2.0, 3.0), "target": (1.0, 2.0, 3.0)},
+            "--target: camera.target: must differ from camera.eye, both are [1.0, 2.0, 3.0]",
+        ),
+        ({"fovy": 200}, "--fovy: camera.fovy: expected a number at most 179, got 200.0"),
+        ({"camera": "1,2,3"}, "--camera: camera.eye: expected an array, got the string '1,2,3'"),
+        (
+            {"camera": (1.0, float("nan"), 3.0)},
+            "--camera: camera.eye[1]: expected a finite number, got nan",
+        ),
+        (
+            {"capture": "fbx"},
+            "--capture: reflectors[0].capture: expected one of copy, fbo, "
+            "got 'fbx' (did you mean 'fbo'?)",
+        ),
+        (
+            {"env_size": 0},
+            "--env-size: reflectors[0].texture_size: expected a whole number from 1 to 4096, got 0",
+        ),
+        (
+            {"max_bounces": 9},
+            "--max-bounces: max_bounces: expected a whole number from 0 to 6, got 9",
+        ),
+        (
+            {"method": "spheer"},
+            "--method: reflectors[0].technique: expected one of ortho, "
+            "reflected, stencil, sphere, sphere-vertex, sphere-texgen, cube, "
+            "cube-live, latlong, normal, got 'spheer' (did you mean 'sphere'?)",
+        ),
+        ({"method": 5}, "--method: reflectors[0].technique: expected a string, got the number 5"),
+        (
+            {"cube_faces": "/no/such/folder"},
+            "--cube-faces: '/no/such/folder' is not a folder of six cube faces",
+        ),
+        ({"set": ["camera.fvoy=30"]}, "--set: camera.fvoy: unknown key; did you mean 'fovy'?"),
+        (
+            {"set": ["camera..eye=3"]},
+            "--set: expected a key path such as camera.eye or "
+            "reflectors[0].technique, got 'camera..eye'",
+        ),
+        (
+            {"set": ['reflectors[3].technique="stencil"']},
+            "--set: reflectors[3].technique: no item [3] there",
+        ),
+        ({"set": ["name.x=3"]}, "--set: name.x: 'x' is not inside a table"),
+        ({"set": ["fovy"]}, "--set: expected KEY=VALUE (e.g. camera.fovy=30), got 'fovy'"),
+        ({"set": ["camera.eye=[1, 2]"]}, "--set: camera.eye: expected 3 numbers, got 2"),
+    ],
+)
 def test_bad_values_are_refused_in_one_line_naming_the_flag(values, message):
     with pytest.raises(OptionError) as info:
         apply_options(load_scene("lab20"), values)
@@ -242,8 +315,11 @@ def test_bad_values_are_refused_in_one_line_naming_the_flag(values, message):
 
 
 def test_cube_faces_folder_lacking_a_face_is_named(tmp_path):
-    with pytest.raises(OptionError, match=r"^--cube-faces: background\.cube_faces: cube-face "
-                       r"folder .* lacks px\.png, nx\.png"):
+    with pytest.raises(
+        OptionError,
+        match=r"^--cube-faces: background\.cube_faces: cube-face "
+        r"folder .* lacks px\.png, nx\.png",
+    ):
         apply_options(load_scene("lab20"), {"cube_faces": str(tmp_path)})
 
 
@@ -255,18 +331,38 @@ def test_an_unknown_option_name_is_a_programming_error():
 def test_every_option_has_a_flag_and_parses_its_text():
     assert [o.flag for o in OPTIONS] == ["--" + o.name.replace("_", "-") for o in OPTIONS]
     lab = load_scene("lab20")
-    texts = {"camera": "1,2,3", "target": "-4,1,-2", "fovy": "30", "angles": "0,10,20",
-             "method": "stencil", "capture": "fbo", "env_size": "128", "max_bounces": "2",
-             "cube_faces": str(SKY_CUBE), "set": "camera.near=0.5"}
+    texts = {
+        "camera": "1,2,3",
+        "target": "-4,1,-2",
+        "fovy": "30",
+        "angles": "0,10,20",
+        "method": "stencil",
+        "capture": "fbo",
+        "env_size": "128",
+        "max_bounces": "2",
+        "cube_faces": str(SKY_CUBE),
+        "set": "camera.near=0.5",
+    }
     for name, option in OPTION_NAMES.items():
         if name in ("map_size", "parallax"):
             continue
         value = option.parse(option.flag, texts[name])
         assert apply_options(lab, {name: value}) != lab, name
-    assert apply_options(load_scene("sphere"), {"map_size": OPTION_NAMES["map_size"].parse(
-        "--map-size", "64")}).reflector("sphere").map_size == 64
-    live = apply_options(load_scene("sphere"), {"method": "cube-live", "parallax": OPTION_NAMES[
-        "parallax"].parse("--parallax", "sphere:4")})
+    assert (
+        apply_options(
+            load_scene("sphere"), {"map_size": OPTION_NAMES["map_size"].parse("--map-size", "64")}
+        )
+        .reflector("sphere")
+        .map_size
+        == 64
+    )
+    live = apply_options(
+        load_scene("sphere"),
+        {
+            "method": "cube-live",
+            "parallax": OPTION_NAMES["parallax"].parse("--parallax", "sphere:4"),
+        },
+    )
     assert live.reflector("sphere").parallax == SphereProxy(4.0)
 
 
@@ -289,8 +385,7 @@ def test_parse_size_floats_and_counts():
     assert check_size((32, 16.0)) == (32, 16) and check_size("8x4") == (8, 4)
 
 
-@pytest.mark.parametrize("size", [(0, 10), (10,), "ten", (True, 4), (8.5, 4), (9000, 10),
-                                  None])
+@pytest.mark.parametrize("size", [(0, 10), (10,), "ten", (True, 4), (8.5, 4), (9000, 10), None])
 def test_check_size_refuses_what_is_not_two_whole_numbers_in_range(size):
     with pytest.raises(OptionError, match=r"^size: expected"):
         check_size(size)
@@ -298,8 +393,11 @@ def test_check_size_refuses_what_is_not_two_whole_numbers_in_range(size):
 
 @pytest.mark.parametrize("text", ["-1", "1.5", "x", "", "100001"])
 def test_parse_count_refuses_what_is_not_a_whole_number_in_range(text):
-    with pytest.raises(OptionError, match=r"^--frames: expected a whole number from 1 to "
-                       r"100000"):
+    with pytest.raises(
+        OptionError,
+        match=r"^--frames: expected a whole number from 1 to "
+        r"100000",
+    ):
         parse_count("--frames", text, 1, 100_000)
 
 
@@ -335,19 +433,25 @@ def test_set_changes_a_mirror_given_by_centre_normal_and_size(tmp_path, capsys):
     assert np.allclose(np.ptp(corners, axis=0), (0.0, 6.0, 12.0))
     assert np.allclose(wider.center, (-7.0, 1.0, -2.0))
     assert np.allclose(wider.normal, (1.0, 0.0, 0.0))
-    moved = apply_options(scene, {"set": ("reflectors[0].center=[-6, 2, 0]",
-                                          "reflectors[0].height=2")}).reflector("mirror")
+    moved = apply_options(
+        scene, {"set": ("reflectors[0].center=[-6, 2, 0]", "reflectors[0].height=2")}
+    ).reflector("mirror")
     assert np.allclose(moved.center, (-6.0, 2.0, 0.0))
     assert np.allclose(np.ptp(moved.corner_array, axis=0), (0.0, 2.0, 8.0))
     turned = apply_options(scene, {"set": "reflectors[0].normal=[1, 0, 1]"}).reflector("mirror")
     assert np.allclose(turned.normal, np.array([1.0, 0.0, 1.0]) / np.sqrt(2))
     # corners then replace the whole form
-    given = apply_options(scene, {"set": ("reflectors[0].width=12",
-                                          "reflectors[0].corners=[[0,0,0],[0,1,0],[0,1,1],"
-                                          "[0,0,1]]")}).reflector("mirror")
+    given = apply_options(
+        scene,
+        {
+            "set": (
+                "reflectors[0].width=12",
+                "reflectors[0].corners=[[0,0,0],[0,1,0],[0,1,1],[0,0,1]]",
+            )
+        },
+    ).reflector("mirror")
     assert np.allclose(given.corner_array[2], (0.0, 1.0, 1.0))
-    assert main(["plan", str(path), "--set", "reflectors[0].width=12", "--frames",
-                 "1"]) == 0
+    assert main(["plan", str(path), "--set", "reflectors[0].width=12", "--frames", "1"]) == 0
     capsys.readouterr()
     # the shipped lab's mirror is given by corners: a rectangle, so it takes width too
     lab = apply_options(load_scene("lab20"), {"set": "reflectors[0].width=4"})
@@ -357,9 +461,12 @@ def test_set_changes_a_mirror_given_by_centre_normal_and_size(tmp_path, capsys):
 def test_set_refuses_a_size_for_a_mirror_whose_corners_are_no_rectangle(tmp_path):
     from mirrorlab.scene.loader import loads
 
-    scene = loads(CENTERED_MIRROR.replace(
-        'center = [-7.0, 1.0, -2.0]\nnormal = [1.0, 0.0, 0.0]\nwidth = 8.0\nheight = 6.0\n'
-        'up = [0.0, 1.0, 0.0]',
-        'corners = [[-7, -3, -6], [-7, 5, -5], [-7, 5, 2], [-7, -3, 2]]'))
+    scene = loads(
+        CENTERED_MIRROR.replace(
+            "center = [-7.0, 1.0, -2.0]\nnormal = [1.0, 0.0, 0.0]\nwidth = 8.0\nheight = 6.0\n"
+            "up = [0.0, 1.0, 0.0]",
+            "corners = [[-7, -3, -6], [-7, 5, -5], [-7, 5, 2], [-7, -3, 2]]",
+        )
+    )
     with pytest.raises(OptionError, match=r"--set: reflectors\[0\].width: .*no rectangle"):
         apply_options(scene, {"set": "reflectors[0].width=12"})

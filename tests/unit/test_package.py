@@ -15,9 +15,15 @@ import mirrorlab
 
 REPO = Path(__file__).resolve().parents[2]
 
+
 def run_cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "mirrorlab", *args], capture_output=True,
-                          text=True, cwd=cwd, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-m", "mirrorlab", *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=120,
+    )
 
 
 def test_one_version_from_the_metadata():
@@ -52,8 +58,9 @@ def test_dask_is_an_extra_not_a_dependency():
     requires = meta.get_all("Requires-Dist") or []
     plain = [r for r in requires if "extra ==" not in r]
     assert not any(r.startswith(("dask", "distributed")) for r in plain), plain
-    assert any(r.startswith("dask[distributed]") and 'extra == "dask"' in r
-               for r in requires), requires
+    assert any(r.startswith("dask[distributed]") and 'extra == "dask"' in r for r in requires), (
+        requires
+    )
     assert "dask" in (meta.get_all("Provides-Extra") or [])
 
 
@@ -63,13 +70,20 @@ def test_the_api_takes_everything_after_the_scene_by_keyword():
 
     from mirrorlab import api
 
-    for function in (api.render, api.raytrace, api.Renderer.render, api.Renderer.frames,
-                     api.Renderer.plan):
+    for function in (
+        api.render,
+        api.raytrace,
+        api.Renderer.render,
+        api.Renderer.frames,
+        api.Renderer.plan,
+    ):
         parameters = list(inspect.signature(function).parameters.values())
         if parameters[0].name == "self":
             parameters = parameters[1:]
         assert parameters[0].name == "scene", function
         kinds = {p.name: p.kind for p in parameters[1:]}
-        assert all(kind in (inspect.Parameter.KEYWORD_ONLY, inspect.Parameter.VAR_KEYWORD)
-                   for kind in kinds.values()), (function.__qualname__, kinds)
+        assert all(
+            kind in (inspect.Parameter.KEYWORD_ONLY, inspect.Parameter.VAR_KEYWORD)
+            for kind in kinds.values()
+        ), (function.__qualname__, kinds)
         assert {"size"} <= set(kinds), function

@@ -18,10 +18,12 @@ CENTER = np.array([0.5, 1.0, -0.8])
 
 any_float = st.floats(-1e30, 1e30, allow_nan=False, allow_infinity=False)
 moderate = st.floats(-10.0, 10.0, allow_nan=False, allow_infinity=False)
-extreme_batches = hnp.arrays(np.float64, st.tuples(st.integers(1, 12), st.just(3)),
-                             elements=any_float)
-moderate_batches = hnp.arrays(np.float64, st.tuples(st.integers(1, 12), st.just(3)),
-                              elements=moderate)
+extreme_batches = hnp.arrays(
+    np.float64, st.tuples(st.integers(1, 12), st.just(3)), elements=any_float
+)
+moderate_batches = hnp.arrays(
+    np.float64, st.tuples(st.integers(1, 12), st.just(3)), elements=moderate
+)
 # a direction with components exactly 0, subnormal, tiny or ordinary
 components = st.sampled_from([0.0, -0.0, 5e-324, -1e-310, 1e-21, 1e-20, 1e-7, 0.3, -1.0, 2.0])
 special_directions = st.tuples(components, components, components).map(np.array)
@@ -63,12 +65,15 @@ def test_box_lookup_falls_back_to_the_plain_direction():
     for low, high in (([-1, 0, -1], [1, 0, 1]), ([1, -1, -1], [-1, 1, 1])):
         flat = parallax.box_lookup([0.0, 0.0, 0.0], r, [0.1, 0.0, 0.0], low, high)
         assert np.allclose(flat, r, rtol=0, atol=1e-15)
-    assert np.array_equal(parallax.box_lookup(CENTER, [0.0, 0.0, 0.0], CENTER, BOX_MIN,
-                                              BOX_MAX), [0.0, 0.0, 0.0])
+    assert np.array_equal(
+        parallax.box_lookup(CENTER, [0.0, 0.0, 0.0], CENTER, BOX_MIN, BOX_MAX), [0.0, 0.0, 0.0]
+    )
 
 
-@pytest.mark.parametrize("r", [(1.0, 0.0, 0.0), (0.0, -1.0, 0.0), (0.0, 0.0, 1.0),
-                               (1.0, 1e-30, -0.0), (1.0, 5e-324, 0.0)])
+@pytest.mark.parametrize(
+    "r",
+    [(1.0, 0.0, 0.0), (0.0, -1.0, 0.0), (0.0, 0.0, 1.0), (1.0, 1e-30, -0.0), (1.0, 5e-324, 0.0)],
+)
 def test_box_lookup_parallel_to_faces_exits_through_the_face_ahead(r):
     origin = np.array([1.0, 2.0, -3.0])
     look = parallax.box_lookup(origin, r, CENTER, BOX_MIN, BOX_MAX)
@@ -97,7 +102,7 @@ def test_box_hit_lies_on_the_box_and_on_the_ray(origins, centers, directions, sp
     n = min(len(origins), len(centers), len(directions))
     origin = np.clip(origins[:n] * 0.4, BOX_MIN, BOX_MAX)  # inside, faces included
     center = np.clip(centers[:n] * 0.4, BOX_MIN + 0.5, BOX_MAX - 0.5)
-    direction = np.vstack([directions[:n - 1], special])  # one with zeros, subnormals
+    direction = np.vstack([directions[: n - 1], special])  # one with zeros, subnormals
     look = parallax.box_lookup(origin, direction, center, BOX_MIN, BOX_MAX)
     assert_unit_or_zero(look)
     moving = np.max(np.abs(direction), axis=-1) > 0
@@ -108,8 +113,9 @@ def test_box_hit_lies_on_the_box_and_on_the_ray(origins, centers, directions, sp
     tangential = along - np.sum(along * r, axis=-1, keepdims=True) * r
     assert np.all(np.linalg.norm(tangential, axis=-1)[moving] < 1e-8)
     assert np.all(np.sum(along * r, axis=-1)[moving] > -1e-9)
-    on_face = np.isclose(seen, BOX_MIN, rtol=0, atol=1e-9) | np.isclose(seen, BOX_MAX, rtol=0,
-                                                                         atol=1e-9)
+    on_face = np.isclose(seen, BOX_MIN, rtol=0, atol=1e-9) | np.isclose(
+        seen, BOX_MAX, rtol=0, atol=1e-9
+    )
     assert np.all(on_face.any(axis=-1)[moving])
 
 
@@ -121,18 +127,21 @@ def test_sphere_lookup_known_values_and_fall_backs():
     look = parallax.sphere_lookup([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.0], 2.0)
     assert np.allclose(look, [0.5, np.sqrt(3) / 2, 0.0], atol=1e-15)
     # Straight out along the radius: the lookup is the plain one.
-    assert np.allclose(parallax.sphere_lookup([1.0, 0, 0], [1.0, 0, 0], [0.0, 0, 0], 2.0),
-                       [1.0, 0.0, 0.0])
+    assert np.allclose(
+        parallax.sphere_lookup([1.0, 0, 0], [1.0, 0, 0], [0.0, 0, 0], 2.0), [1.0, 0.0, 0.0]
+    )
     # Back through the centre: out on the far side, the same direction.
-    assert np.allclose(parallax.sphere_lookup([1.0, 0, 0], [-1.0, 0, 0], [0.0, 0, 0], 2.0),
-                       [-1.0, 0.0, 0.0])
+    assert np.allclose(
+        parallax.sphere_lookup([1.0, 0, 0], [-1.0, 0, 0], [0.0, 0, 0], 2.0), [-1.0, 0.0, 0.0]
+    )
     r = unit([0.3, 0.4, -0.5])
     assert np.array_equal(parallax.sphere_lookup([3.0, 0, 0], r, [0.0, 0, 0], 2.0), r)
     for radius in (0.0, -1.0):
         assert np.array_equal(parallax.sphere_lookup([0.1, 0, 0], r, [0.0, 0, 0], radius), r)
     # On the sphere moving outwards: it leaves at once.
-    assert np.allclose(parallax.sphere_lookup([0, 2.0, 0], unit([1, 1, 0]), [0.0, 0, 0], 2.0),
-                       [0.0, 1.0, 0.0])
+    assert np.allclose(
+        parallax.sphere_lookup([0, 2.0, 0], unit([1, 1, 0]), [0.0, 0, 0], 2.0), [0.0, 1.0, 0.0]
+    )
 
 
 @few
@@ -171,22 +180,23 @@ def room_rays(count: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
     rng = np.random.default_rng(seed)
     normal = unit(rng.normal(size=(count, 3)))
     direction = unit(rng.normal(size=(count, 3)))
-    direction = np.where(np.sum(direction * normal, -1, keepdims=True) < 0, -direction,
-                         direction)
+    direction = np.where(np.sum(direction * normal, -1, keepdims=True) < 0, -direction, direction)
     return CENTER + normal, direction
 
 
-@pytest.mark.parametrize(("steps", "secant", "p99_degrees"),
-                         [(2, 0, 5.0), (8, 0, 0.6), (8, 2, 0.01), (16, 3, 1e-4),
-                          (32, 6, 5e-6)])
+@pytest.mark.parametrize(
+    ("steps", "secant", "p99_degrees"),
+    [(2, 0, 5.0), (8, 0, 0.6), (8, 2, 0.01), (16, 3, 1e-4), (32, 6, 5e-6)],
+)
 def test_distance_search_in_a_box_room_converges_on_the_box_proxy(steps, secant, p99_degrees):
     # The capture of an empty box room holds the box's own distances, so searching them
     # must find the box proxy's answer; the error shrinks with the steps. Measured p99:
     # 3.4, 0.41, 0.0052, 3.8e-5, 1.5e-6 degrees.
     origin, direction = room_rays(4000, 7)
     room = parallax.box_distance(CENTER, BOX_MIN, BOX_MAX)
-    look, background = parallax.distance_lookup(origin, direction, CENTER, room, steps, secant,
-                                                thickness=0.1)
+    look, background = parallax.distance_lookup(
+        origin, direction, CENTER, room, steps, secant, thickness=0.1
+    )
     box = parallax.box_lookup(origin, direction, CENTER, BOX_MIN, BOX_MAX)
     degrees = np.degrees(np.arccos(np.clip(np.sum(look * box, axis=-1), -1, 1)))
     assert not background.any()
@@ -205,9 +215,11 @@ def test_distance_search_falls_back_and_leaves_for_the_background():
     outside = origin + 20.0
     look, background = parallax.distance_lookup(outside, direction, CENTER, room)
     assert np.allclose(look, direction) and not background.any()
+
     # an empty world: every ray leaves for the background, along its own direction
     def nothing(directions):
         return np.zeros(len(directions))
+
     look, background = parallax.distance_lookup(origin, direction, CENTER, nothing)
     assert np.allclose(look, direction) and background.all()
     with pytest.raises(ValueError, match="steps"):
@@ -229,18 +241,21 @@ def test_distance_search_passes_behind_an_object_it_does_not_meet():
         return np.where((d[:, 0] > 0) & (y < 1.0), d[:, 0] / 3.0, 0.0)
 
     over = np.array([0.0, 1.5, 0.0])
-    look, background = parallax.distance_lookup(over, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0], ledge,
-                                                steps=16, secant=4)
+    look, background = parallax.distance_lookup(
+        over, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0], ledge, steps=16, secant=4
+    )
     assert background and np.allclose(look, [1.0, 0.0, 0.0])
     # with a thickness that takes every crossing for a hit, or with no secant steps to
     # judge by, the ledge is "hit"
     for secant, thickness in ((4, 1.0), (0, 0.1)):
-        look, background = parallax.distance_lookup(over, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0],
-                                                    ledge, 16, secant, thickness)
+        look, background = parallax.distance_lookup(
+            over, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0], ledge, 16, secant, thickness
+        )
         assert not background
     under = np.array([0.0, 0.5, 0.0])  # this one meets the wall at (3, 0.5, 0)
-    look, background = parallax.distance_lookup(under, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0],
-                                                ledge, steps=16, secant=4)
+    look, background = parallax.distance_lookup(
+        under, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0], ledge, steps=16, secant=4
+    )
     assert not background and np.allclose(look, unit([3.0, 0.5, 0.0]), atol=1e-6)
 
 
@@ -250,8 +265,7 @@ def post_and_wall(directions):
     with np.errstate(divide="ignore", invalid="ignore"):
         z = 2.0 * d[:, 2] / d[:, 0]
     ahead = d[:, 0] > 0
-    return np.where(ahead & (np.abs(z) < 0.2), d[:, 0] / 2.0, np.where(ahead, d[:, 0] / 8.0,
-                                                                       0.0))
+    return np.where(ahead & (np.abs(z) < 0.2), d[:, 0] / 2.0, np.where(ahead, d[:, 0] / 8.0, 0.0))
 
 
 @pytest.mark.parametrize("steps", [4, 6, 8, 10, 12])
@@ -261,15 +275,17 @@ def test_distance_search_finds_the_wall_behind_a_post_it_passed_behind(steps, mo
     # within one linear step: only the smaller steps see it come out.
     origin, direction = np.array([0.0, 0.0, -1.0]), unit([1.0, 0.0, 0.3])
     wall = unit([8.0, 0.0, 1.4])
-    look, background = parallax.distance_lookup(origin, direction, np.zeros(3),
-                                                post_and_wall, steps, 2, 0.1, enclosed=True)
+    look, background = parallax.distance_lookup(
+        origin, direction, np.zeros(3), post_and_wall, steps, 2, 0.1, enclosed=True
+    )
     assert not background
     assert np.degrees(np.arccos(np.clip(look @ wall, -1, 1))) < 1e-3
     missed = 0
     monkeypatch.setattr(parallax, "REFINE_STEPS", 1)
     for count in (4, 6, 10, 12):
-        look, _ = parallax.distance_lookup(origin, direction, np.zeros(3), post_and_wall,
-                                           count, 2, 0.1, enclosed=True)
+        look, _ = parallax.distance_lookup(
+            origin, direction, np.zeros(3), post_and_wall, count, 2, 0.1, enclosed=True
+        )
         missed += np.degrees(np.arccos(np.clip(look @ wall, -1, 1))) > 1.0
     assert missed == 4  # without them every one of these falls back
 
@@ -287,16 +303,24 @@ def test_with_no_surface_found_a_closed_room_falls_back_to_the_plain_lookup():
 
     over = np.array([0.0, 1.5, 0.0])
     for enclosed in (True, False):
-        look, background = parallax.distance_lookup(over, [1.0, 0.0, 0.0], np.zeros(3),
-                                                    ledge_and_wall, 8, 2, enclosed=enclosed)
+        look, background = parallax.distance_lookup(
+            over, [1.0, 0.0, 0.0], np.zeros(3), ledge_and_wall, 8, 2, enclosed=enclosed
+        )
         assert np.allclose(look, [1.0, 0.0, 0.0]) and background == (not enclosed)
 
 
 @few
-@given(extreme_batches, extreme_batches, st.integers(1, 9), st.integers(0, 4),
-       st.floats(1e-3, 1.0), st.integers(0, 2**32 - 1))
-def test_distance_search_is_finite_for_any_finite_input_and_field(origin, direction, steps,
-                                                                  secant, thickness, seed):
+@given(
+    extreme_batches,
+    extreme_batches,
+    st.integers(1, 9),
+    st.integers(0, 4),
+    st.floats(1e-3, 1.0),
+    st.integers(0, 2**32 - 1),
+)
+def test_distance_search_is_finite_for_any_finite_input_and_field(
+    origin, direction, steps, secant, thickness, seed
+):
     # A rough field: each direction's inverse distance is noise (zeros included).
     rng = np.random.default_rng(seed)
     table = rng.random((6, 4, 4)) * (rng.random((6, 4, 4)) > 0.3) * 10.0
@@ -305,8 +329,9 @@ def test_distance_search_is_finite_for_any_finite_input_and_field(origin, direct
         return parallax.nearest_cube_texel(table, directions)
 
     n = min(len(origin), len(direction))
-    look, background = parallax.distance_lookup(origin[:n], direction[:n], CENTER * 0.0,
-                                                noisy, steps, secant, thickness)
+    look, background = parallax.distance_lookup(
+        origin[:n], direction[:n], CENTER * 0.0, noisy, steps, secant, thickness
+    )
     assert_unit_or_zero(look)
     assert background.dtype == bool and background.shape == (n,)
 
@@ -314,10 +339,19 @@ def test_distance_search_is_finite_for_any_finite_input_and_field(origin, direct
 def test_float32_stays_float32():
     r32 = np.array([[0.3, 0.4, -0.5]], np.float32)
     o32 = np.array([[1.0, 0.0, 0.0]], np.float32)
-    assert parallax.box_lookup(o32, r32, np.zeros(3, np.float32), BOX_MIN.astype(np.float32),
-                               BOX_MAX.astype(np.float32)).dtype == np.float32
-    assert parallax.sphere_lookup(o32, r32, np.zeros(3, np.float32),
-                                  np.float32(3)).dtype == np.float32
+    assert (
+        parallax.box_lookup(
+            o32,
+            r32,
+            np.zeros(3, np.float32),
+            BOX_MIN.astype(np.float32),
+            BOX_MAX.astype(np.float32),
+        ).dtype
+        == np.float32
+    )
+    assert (
+        parallax.sphere_lookup(o32, r32, np.zeros(3, np.float32), np.float32(3)).dtype == np.float32
+    )
 
 
 # ---------------------------------------------------------------------------- depths
@@ -332,16 +366,17 @@ def test_inverse_distance_from_depth_inverts_the_capture_projection():
     clip = projection @ np.append(eye_point, 1.0)
     depth = (clip[2] / clip[3] + 1) / 2
     assert parallax.inverse_distance_from_depth(depth, direction, near, far) == pytest.approx(
-        1 / 5.0, rel=1e-9)
+        1 / 5.0, rel=1e-9
+    )
     assert parallax.inverse_distance_from_depth(1.0, direction, near, far) == 0.0
 
 
 def test_nearest_cube_texel_reads_the_texel_a_direction_falls_in():
     size = 4
     table = np.arange(6 * size * size, dtype=np.float64).reshape(6, size, size)
-    faces, rows, columns = np.meshgrid(np.arange(6), np.arange(size), np.arange(size),
-                                       indexing="ij")
+    faces, rows, columns = np.meshgrid(
+        np.arange(6), np.arange(size), np.arange(size), indexing="ij"
+    )
     # row 0 at the top: t = 1 - (row + 0.5) / size
-    directions = envmap.cube_face_direction(faces, (columns + 0.5) / size,
-                                            1 - (rows + 0.5) / size)
+    directions = envmap.cube_face_direction(faces, (columns + 0.5) / size, 1 - (rows + 0.5) / size)
     assert np.array_equal(parallax.nearest_cube_texel(table, directions), table)

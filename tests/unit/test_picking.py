@@ -13,8 +13,11 @@ from mirrorlab.app.picking import framebuffer_pixel, pick_reflector, pixel_ray
 
 def project(scene, point, size):
     camera = scene.camera
-    x, y, _ = math3d.project_to_pixels(camera.projection(size[0] / size[1]) @ camera.view(),
-                                       np.asarray(point, dtype=np.float64), *size)
+    x, y, _ = math3d.project_to_pixels(
+        camera.projection(size[0] / size[1]) @ camera.view(),
+        np.asarray(point, dtype=np.float64),
+        *size,
+    )
     return float(x), float(y)
 
 
@@ -56,5 +59,4 @@ def test_window_coordinates_become_framebuffer_pixels_on_a_high_dpi_screen():
     scene = mirrorlab.load_scene("mirror_and_sphere")
     sphere = project(scene, scene.reflector("sphere").center(), (800, 600))
     cursor = (sphere[0] / 2, sphere[1] / 2)
-    assert pick_reflector(scene, (800, 600),
-                          framebuffer_pixel(cursor, (400, 300), (800, 600))) == 1
+    assert pick_reflector(scene, (800, 600), framebuffer_pixel(cursor, (400, 300), (800, 600))) == 1

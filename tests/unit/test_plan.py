@@ -76,20 +76,23 @@ def test_a_scene_without_reflectors_is_one_camera_pass():
 
 
 @pytest.mark.parametrize("technique", ["ortho", "reflected", "stencil"])
-@pytest.mark.parametrize("camera, mode, words", [
-    # In front of the glass, looking along +z past its side.
-    (Camera(eye=(0.0, 1.0, -2.0), target=(0.0, 1.0, 10.0)), "hidden", "out of view"),
-    # Behind the glass (x < -7), looking at the robot: only the back shows.
-    (Camera(eye=(-12.0, 2.0, -2.0), target=(0.0, 0.0, 0.0)), "back", "seen from behind"),
-    # In the mirror's plane: edge-on.
-    (Camera(eye=(-7.0, 2.0, 10.0), target=(-7.0, 1.0, -2.0)), "back", "edge-on"),
-    # In front of the glass with the glass behind the viewer.
-    (Camera(eye=(0.0, 1.0, 0.0), target=(10.0, 1.0, 0.0)), "hidden", "behind the viewer"),
-])
-def test_no_capture_for_a_mirror_out_of_view_facing_away_or_behind(technique, camera, mode,
-                                                                    words):
+@pytest.mark.parametrize(
+    "camera, mode, words",
+    [
+        # In front of the glass, looking along +z past its side.
+        (Camera(eye=(0.0, 1.0, -2.0), target=(0.0, 1.0, 10.0)), "hidden", "out of view"),
+        # Behind the glass (x < -7), looking at the robot: only the back shows.
+        (Camera(eye=(-12.0, 2.0, -2.0), target=(0.0, 0.0, 0.0)), "back", "seen from behind"),
+        # In the mirror's plane: edge-on.
+        (Camera(eye=(-7.0, 2.0, 10.0), target=(-7.0, 1.0, -2.0)), "back", "edge-on"),
+        # In front of the glass with the glass behind the viewer.
+        (Camera(eye=(0.0, 1.0, 0.0), target=(10.0, 1.0, 0.0)), "hidden", "behind the viewer"),
+    ],
+)
+def test_no_capture_for_a_mirror_out_of_view_facing_away_or_behind(technique, camera, mode, words):
     scene = with_camera(load_scene("lab20"), camera).with_reflector(
-        "mirror", technique=technique, ortho=None)
+        "mirror", technique=technique, ortho=None
+    )
     plan = run(scene, TextureState())
     assert captures(plan) == []
     assert [p.name for p in plan.passes] == ["camera"]
@@ -152,7 +155,8 @@ def test_robot_wave_captures_in_the_first_frame_and_whenever_a_joint_moves():
 
 def test_reflected_capture_runs_again_when_the_viewer_moves():
     scene = with_camera(load_scene("lab20"), FRONT).with_reflector(
-        "mirror", technique="reflected", ortho=None)
+        "mirror", technique="reflected", ortho=None
+    )
     state = TextureState()
     assert ran_captures(run(scene, state)) == [("mirror", 1)]
     (same,) = captures(run(scene, state))
@@ -175,7 +179,8 @@ def test_live_cube_map_follows_the_objects_not_the_viewer():
     assert not reused.runs and "nothing it shows changed" in reused.reason
     block = viewer_moved.object("red_block")
     moved = viewer_moved.with_object(
-        "red_block", transform=replace(block.transform, position=(2.3, 0.1, 0.9)))
+        "red_block", transform=replace(block.transform, position=(2.3, 0.1, 0.9))
+    )
     (again,) = captures(run(moved, state))
     assert again.runs and "scene changed" in again.reason
 
@@ -186,16 +191,16 @@ def test_a_live_cube_map_is_not_captured_again_for_a_change_in_how_it_is_read():
     room = load_scene("sphere_room")
     state = TextureState()
     assert ran_captures(run(room, state)) == [("sphere", 1)]
-    smaller = room.with_reflector("sphere", parallax=BoxProxy((-2.0, -1.0, -2.0),
-                                                              (2.0, 3.0, 2.0)))
+    smaller = room.with_reflector("sphere", parallax=BoxProxy((-2.0, -1.0, -2.0), (2.0, 3.0, 2.0)))
     (kept,) = captures(run(smaller, state))
     assert not kept.runs and "nothing it shows changed" in kept.reason
     searched = room.with_reflector("sphere", parallax=DistanceSearch())
     assert ran_captures(run(searched, state)) == [("sphere", 1)]
     finer = room.with_reflector("sphere", parallax=DistanceSearch(steps=16, secant=4))
     assert ran_captures(run(finer, state)) == []
-    moved = finer.with_object("floor", transform=replace(
-        finer.object("floor").transform, position=(0.0, -1.9, 0.0)))
+    moved = finer.with_object(
+        "floor", transform=replace(finer.object("floor").transform, position=(0.0, -1.9, 0.0))
+    )
     assert ran_captures(run(moved, state)) == [("sphere", 1)]
 
 
@@ -204,14 +209,21 @@ def test_another_reflectors_proxy_is_part_of_what_a_capture_shows():
     # and lookup, so a change of the sphere's box is a change the ball's capture shows;
     # the sphere's captures show the ball, in which the sphere is plain, and are kept.
     room = load_scene("sphere_room")
-    ball = replace(room.reflector("sphere"), name="ball", parallax=None,
-                   transform=Transform(position=(-0.7, 0.3, 0.6), scale=(0.35, 0.35, 0.35)))
+    ball = replace(
+        room.reflector("sphere"),
+        name="ball",
+        parallax=None,
+        transform=Transform(position=(-0.7, 0.3, 0.6), scale=(0.35, 0.35, 0.35)),
+    )
     scene = replace(room, reflectors=(*room.reflectors, ball), max_bounces=2)
     state = TextureState()
-    assert sorted(ran_captures(run(scene, state))) == [("ball", 1), ("ball", 2),
-                                                        ("sphere", 1), ("sphere", 2)]
-    resized = scene.with_reflector("sphere", parallax=BoxProxy((-3.0, -2.0, -3.0),
-                                                               (3.0, 3.0, 3.0)))
+    assert sorted(ran_captures(run(scene, state))) == [
+        ("ball", 1),
+        ("ball", 2),
+        ("sphere", 1),
+        ("sphere", 2),
+    ]
+    resized = scene.with_reflector("sphere", parallax=BoxProxy((-3.0, -2.0, -3.0), (3.0, 3.0, 3.0)))
     assert ran_captures(run(resized, state)) == [("ball", 2)]
     # another kind of correction draws the sphere with another shader: all of it again
     other = scene.with_reflector("sphere", parallax=SphereProxy(3.0))
@@ -249,8 +261,10 @@ def test_the_lossy_small_reflector_rule_is_off_unless_asked_for():
     assert f"{area:.1f} pixels" in draw.reason and "under 16" in draw.reason
     assert "lossy" in draw.reason
     # Seen large enough, the rule changes nothing.
-    assert draw_of(run(load_scene("lab20"), TextureState(), tiny_pixels=16).top,
-                   "mirror").mode == "texture"
+    assert (
+        draw_of(run(load_scene("lab20"), TextureState(), tiny_pixels=16).top, "mirror").mode
+        == "texture"
+    )
 
 
 # --------------------------------------------------------------------------- bounces
@@ -302,15 +316,15 @@ def test_mirror_and_sphere_see_each_other():
     (inner_capture,) = [p for p in ran if p.reflector == "sphere" and p.bounce == 1]
     assert inner.slot == inner_capture.slot != draw_of(plan.top, "sphere").slot
     # ...in which the mirror, at bounce 0, is plain.
-    assert {draw_of(v, "mirror").mode for v in inner_capture.views} <= {"plain", "hidden",
-                                                                        "back"}
+    assert {draw_of(v, "mirror").mode for v in inner_capture.views} <= {"plain", "hidden", "back"}
     # The sphere's six faces see the mirror where it faces them, with bounce-1 captures.
     face_draws = [draw_of(v, "mirror") for v in top_sphere[0].views]
     assert len(face_draws) == 6 and any(d.mode == "texture" for d in face_draws)
     for draw in face_draws:
         if draw.mode == "texture":
-            (made,) = [p for p in ran if p.reflector == "mirror" and p.bounce == 1
-                       and p.slot == draw.slot]
+            (made,) = [
+                p for p in ran if p.reflector == "mirror" and p.bounce == 1 and p.slot == draw.slot
+            ]
             assert made.for_view.startswith("sphere cube")
     # Nothing moves: the next frame runs only the camera pass.
     assert [p.name for p in run(scene, state).ran] == ["camera"]
@@ -332,8 +346,9 @@ def test_each_capture_key_gets_its_own_slot_within_a_frame():
 def test_without_the_plan_every_capture_runs_every_frame():
     # From the middle of the room both mirrors show; each mirror's capture sees the other
     # only through its full (unclipped) view, which the planner leaves out.
-    scene = with_camera(load_scene("two_mirrors"),
-                        Camera(eye=(0.0, 3.0, 12.0), target=(0.0, 1.0, -2.0), fovy=70.0))
+    scene = with_camera(
+        load_scene("two_mirrors"), Camera(eye=(0.0, 3.0, 12.0), target=(0.0, 1.0, -2.0), fovy=70.0)
+    )
     planned_state, state = TextureState(), TextureState()
     planned = run(scene, planned_state)
     assert sorted(ran_captures(planned)) == [("east", 2), ("west", 2)]
@@ -341,15 +356,15 @@ def test_without_the_plan_every_capture_runs_every_frame():
     for _ in range(2):
         plan = run(scene, state, use_plan=False)
         assert plan.skipped == []
-        assert sorted(ran_captures(plan)) == [("east", 1), ("east", 2), ("west", 1),
-                                              ("west", 2)]
+        assert sorted(ran_captures(plan)) == [("east", 1), ("east", 2), ("west", 1), ("west", 2)]
         assert all("every pass runs" in p.reason for p in plan.ran if p.reflector)
     # The lab's mirror behind the viewer, and one of a few pixels, are captured too.
     away = with_camera(load_scene("lab20"), Camera(eye=(0.0, 1.0, 0.0), target=(10.0, 1.0, 0.0)))
     assert ran_captures(run(away, TextureState())) == []
     assert ran_captures(run(away, TextureState(), use_plan=False)) == [("mirror", 1)]
-    far = with_camera(load_scene("lab20"),
-                      Camera(eye=(300.0, 1.0, -2.0), target=LAB_CENTER, far=1000.0))
+    far = with_camera(
+        load_scene("lab20"), Camera(eye=(300.0, 1.0, -2.0), target=LAB_CENTER, far=1000.0)
+    )
     assert ran_captures(run(far, TextureState(), use_plan=False)) == [("mirror", 1)]
 
 
@@ -385,9 +400,16 @@ def test_a_reflector_never_appears_in_its_own_capture(name, use_plan):
     scene = load_scene(name)
     variants = [scene]
     if any(r.kind == "planar" for r in scene.reflectors):
-        variants.append(replace(scene, reflectors=tuple(
-            replace(r, technique="stencil", ortho=None) if r.kind == "planar" else r
-            for r in scene.reflectors), max_bounces=3))
+        variants.append(
+            replace(
+                scene,
+                reflectors=tuple(
+                    replace(r, technique="stencil", ortho=None) if r.kind == "planar" else r
+                    for r in scene.reflectors
+                ),
+                max_bounces=3,
+            )
+        )
     for variant in variants:
         plan = run(variant, TextureState(), use_plan=use_plan)
         checked = 0
@@ -398,15 +420,15 @@ def test_a_reflector_never_appears_in_its_own_capture(name, use_plan):
             assert view.excluded == owner
             assert owner not in {d.reflector.name for d in view.draws}
             checked += 1
-        has_capture = any(p.views for p in plan.passes) or any(
-            d.nested for d in plan.top.draws)
+        has_capture = any(p.views for p in plan.passes) or any(d.nested for d in plan.top.draws)
         assert checked > 0 or not has_capture
 
 
 def test_stencil_mirrors_nest_as_deep_as_the_bounces_go():
     scene = load_scene("two_mirrors")
-    stencil = replace(scene, reflectors=tuple(replace(r, technique="stencil")
-                                              for r in scene.reflectors))
+    stencil = replace(
+        scene, reflectors=tuple(replace(r, technique="stencil") for r in scene.reflectors)
+    )
     plan = run(stencil, TextureState())
     assert captures(plan) == []
     draw = draw_of(plan.top, "west")
@@ -423,8 +445,9 @@ def test_a_moved_curved_reflector_is_captured_again_from_its_new_centre():
     state = TextureState()
     run(scene, state)
     sphere = scene.reflector("sphere")
-    moved = scene.with_reflector("sphere", transform=Transform(
-        position=(-2.0, 2.5, 0.0), scale=sphere.transform.scale))
+    moved = scene.with_reflector(
+        "sphere", transform=Transform(position=(-2.0, 2.5, 0.0), scale=sphere.transform.scale)
+    )
     plan = run(moved, state)
     assert ("sphere", 2) in ran_captures(plan)
     (capture,) = [p for p in plan.ran if p.reflector == "sphere" and p.bounce == 2]
@@ -438,9 +461,16 @@ def test_a_still_camera_has_one_read_only_view_and_a_moved_one_a_new_view():
     scene = load_scene("lab20")
     view = camera_view(scene.camera, (64, 48))
     assert camera_view(scene.camera, [64, 48]) is view
-    for array in (view.view, view.projection, view.view_projection, view.cull_planes,
-                  view.origin, view.relative_view, view.relative_view_projection,
-                  view.forward):
+    for array in (
+        view.view,
+        view.projection,
+        view.view_projection,
+        view.cull_planes,
+        view.origin,
+        view.relative_view,
+        view.relative_view_projection,
+        view.forward,
+    ):
         with pytest.raises(ValueError, match="read-only"):
             array[0] += 1.0
     moved = replace(scene.camera, eye=(scene.camera.eye[0] + 1e-9, *scene.camera.eye[1:]))
@@ -472,8 +502,12 @@ def test_a_still_viewers_mirror_views_are_worked_out_once_and_a_moved_mirror_ane
     with pytest.raises(ValueError, match="read-only"):
         view.cull_test()[0, 0] = 1.0
     mirror = lab.reflector("mirror")
-    moved = lab.with_reflector("mirror", corners=tuple(  # a quarter unit off its plane
-        tuple(corner) for corner in mirror.corner_array + 0.25 * mirror.normal))
+    moved = lab.with_reflector(
+        "mirror",
+        corners=tuple(  # a quarter unit off its plane
+            tuple(corner) for corner in mirror.corner_array + 0.25 * mirror.normal
+        ),
+    )
     other = mirror_view(moved)
     assert other is not view and other.draw_key != view.draw_key
     views._reflected_capture_view.cache_clear()
@@ -486,8 +520,13 @@ def test_a_still_viewers_mirror_views_are_worked_out_once_and_a_moved_mirror_ane
 
 def test_views_too_magnified_to_round_still_have_keys_of_their_own():
     def magnified(scale: float) -> View:
-        return View(view=np.eye(4), projection=np.diag([scale, scale, -1.0, 1.0]),
-                    size=(8, 8), eye=None, label="thin")
+        return View(
+            view=np.eye(4),
+            projection=np.diag([scale, scale, -1.0, 1.0]),
+            size=(8, 8),
+            eye=None,
+            label="thin",
+        )
 
     with np.errstate(all="raise"):
         keys = [magnified(scale).key for scale in (1e300, 2e300, 1e300)]
@@ -497,8 +536,19 @@ def test_views_too_magnified_to_round_still_have_keys_of_their_own():
 # --------------------------------------------------------------------------- plan memo
 
 MEMO_SCENES = ("lab20", "two_mirrors", "mirror_and_sphere", "chrome_sphere", "no_mirror")
-MEMO_STEPS = ("pose", "pose", "pose", "still", "camera", "bounces", "method", "size",
-              "no-plan", "cleared", "back")
+MEMO_STEPS = (
+    "pose",
+    "pose",
+    "pose",
+    "still",
+    "camera",
+    "bounces",
+    "method",
+    "size",
+    "no-plan",
+    "cleared",
+    "back",
+)
 
 
 def _memo_step(step: str, scene: Scene, first: Scene, data) -> Scene:
@@ -511,8 +561,7 @@ def _memo_step(step: str, scene: Scene, first: Scene, data) -> Scene:
     if step == "pose" and scene.objects:
         item = scene.objects[0]
         position = tuple(data.draw(st.floats(-3, 3)) for _ in range(3))
-        return scene.with_object(item.name, transform=replace(item.transform,
-                                                              position=position))
+        return scene.with_object(item.name, transform=replace(item.transform, position=position))
     if step == "camera":
         return replace(scene, camera=data.draw(st.sampled_from([FRONT, ELSEWHERE])))
     if step == "bounces":
@@ -535,9 +584,11 @@ def test_the_plan_memo_plans_what_the_planner_plans_on_generated_sequences():
     from mirrorlab.plan import PlanMemo
 
     @settings(max_examples=60, deadline=None, derandomize=True)
-    @given(name=st.sampled_from(MEMO_SCENES),
-           steps=st.lists(st.sampled_from(MEMO_STEPS), min_size=3, max_size=12),
-           data=st.data())
+    @given(
+        name=st.sampled_from(MEMO_SCENES),
+        steps=st.lists(st.sampled_from(MEMO_STEPS), min_size=3, max_size=12),
+        data=st.data(),
+    )
     def check(name, steps, data):
         first = load_scene(name)
         memo, state = PlanMemo(), TextureState()
@@ -572,9 +623,11 @@ def test_the_plan_memo_plans_an_animated_robots_frames_once():
     from mirrorlab.options import apply_options
     from mirrorlab.plan import PlanMemo
 
-    for method, reused in (("ortho", [False, False, True, True, True, True]),
-                           ("reflected", [False, False, True, True, True, False]),
-                           ("stencil", [False, True, True, True, True, False])):
+    for method, reused in (
+        ("ortho", [False, False, True, True, True, True]),
+        ("reflected", [False, False, True, True, True, False]),
+        ("stencil", [False, True, True, True, True, False]),
+    ):
         scene = apply_options(load_scene("lab20"), {"method": method})
         memo, state = PlanMemo(), TextureState()
         base, lower, upper = scene.robot.angles
@@ -593,8 +646,10 @@ def test_the_plan_memo_plans_an_animated_robots_frames_once():
         assert seen == reused, method  # ortho looks at no object's place: reused
 
 
-@pytest.mark.parametrize("name", ["lab20", "two_mirrors", "mirror_and_sphere",
-                                  "chrome_sphere", "sphere_room", "robot_wave"])
+@pytest.mark.parametrize(
+    "name",
+    ["lab20", "two_mirrors", "mirror_and_sphere", "chrome_sphere", "sphere_room", "robot_wave"],
+)
 @pytest.mark.parametrize("method", [None, "reflected", "stencil"])
 def test_the_plan_memo_plans_a_still_scene_once_whatever_its_reflectors(name, method):
     """A scene standing still (the same objects) is planned from the third frame on as the

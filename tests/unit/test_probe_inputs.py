@@ -46,7 +46,7 @@ def test_slip_names_the_formula_values_follow():
     for function, formulas in ((f, probe.FORMULAS[f]()) for f in probe.FORMULAS):
         for name, predicted in formulas.items():
             values = np.zeros((predicted.shape[0], 4))
-            values[:, :predicted.shape[1]] = predicted
+            values[:, : predicted.shape[1]] = predicted
             expected = "right" if name in probe.RIGHT[function] else name
             assert probe.slip(function, values) == expected
     assert probe.slip("reflect_eye", None) == ""

@@ -31,9 +31,14 @@ def quad(corners, color=(1.0, 1.0, 1.0), **extra) -> RaySurface:
     corners = np.asarray(corners, dtype=np.float64)
     normal = np.cross(corners[1] - corners[0], corners[2] - corners[0])
     normal /= np.linalg.norm(normal)
-    return RaySurface(vertices=corners, normals=np.tile(normal, (4, 1)),
-                      uvs=np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]]),
-                      faces=np.array([[0, 1, 2], [0, 2, 3]]), color=color, **extra)
+    return RaySurface(
+        vertices=corners,
+        normals=np.tile(normal, (4, 1)),
+        uvs=np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]]),
+        faces=np.array([[0, 1, 2], [0, 2, 3]]),
+        color=color,
+        **extra,
+    )
 
 
 FLOOR = [(-5, 0, 5), (5, 0, 5), (5, 0, -5), (-5, 0, -5)]  # faces +y
@@ -44,8 +49,7 @@ MIRROR = [(-1, -1, 2), (-1, 1, 2), (1, 1, 2), (1, -1, 2)]  # at z = 2, faces -z
 def test_a_lit_floor_has_the_rasterisers_lambert_colour():
     floor = quad(FLOOR, color=(0.5, 0.25, 1.0))
     light = np.array([0.0, 1.0, 1.0]) / np.sqrt(2.0)
-    scene = RayScene([floor], [(light * 3.0, (0.7, 0.7, 0.7))], ambient=0.3,
-                     background=(0, 0, 0))
+    scene = RayScene([floor], [(light * 3.0, (0.7, 0.7, 0.7))], ambient=0.3, background=(0, 0, 0))
     colors, on_mirror = scene.trace(np.array([[0.0, 3.0, 0.0]]), np.array([[0.0, -1.0, 0.0]]))
     expected = np.array([0.5, 0.25, 1.0]) * (0.3 + 0.7 * light[1])
     np.testing.assert_allclose(colors[0], np.clip(expected, 0, 1), atol=1e-9)
@@ -54,8 +58,11 @@ def test_a_lit_floor_has_the_rasterisers_lambert_colour():
 
 def test_lights_add_up_in_their_colours_and_light_from_behind_adds_nothing():
     floor = quad(FLOOR, color=(1.0, 1.0, 1.0))
-    lights = [((0, 1, 0), (0.2, 0.0, 0.0)), ((0, 1, 1), (0.0, 0.4, 0.0)),
-              ((0, -1, 0), (0.0, 0.0, 0.9))]  # the last shines on the floor's back
+    lights = [
+        ((0, 1, 0), (0.2, 0.0, 0.0)),
+        ((0, 1, 1), (0.0, 0.4, 0.0)),
+        ((0, -1, 0), (0.0, 0.0, 0.9)),
+    ]  # the last shines on the floor's back
     scene = RayScene([floor], lights, ambient=0.1, background=(0, 0, 0))
     colors, _ = scene.trace(np.array([[0.0, 3.0, 0.0]]), np.array([[0.0, -1.0, 0.0]]))
     np.testing.assert_allclose(colors[0], (0.1 + 0.2, 0.1 + 0.4 / np.sqrt(2), 0.1), atol=1e-9)
@@ -102,13 +109,15 @@ def test_no_bounces_left_means_the_mirror_is_a_plain_lit_surface():
     assert on_mirror[0]
     np.testing.assert_allclose(scene.trace(origin, ahead, bounces=1)[0][0], (0, 0.5, 0))
     # Two facing mirrors: each bounce goes one reflection further.
-    back = quad([(-1, -1, -1), (1, -1, -1), (1, 1, -1), (-1, 1, -1)], color=(0.0, 0.0, 1.0),
-                reflective=True)  # at z = -1, facing +z
+    back = quad(
+        [(-1, -1, -1), (1, -1, -1), (1, 1, -1), (-1, 1, -1)], color=(0.0, 0.0, 1.0), reflective=True
+    )  # at z = -1, facing +z
     pair = RayScene([mirror, back], light, 0.5, background=(1.0, 0, 0))
     first = pair.trace(origin, ahead, bounces=1)[0][0]
     np.testing.assert_allclose(first, (0.0, 0.0, 0.5))  # back's plain colour, unlit by -z
-    np.testing.assert_allclose(pair.trace(origin, ahead, bounces=2)[0][0],
-                               np.array([0.5, 0.25, 0.75]) * 0.7, atol=1e-9)
+    np.testing.assert_allclose(
+        pair.trace(origin, ahead, bounces=2)[0][0], np.array([0.5, 0.25, 0.75]) * 0.7, atol=1e-9
+    )
 
 
 def test_render_puts_a_centred_quad_in_the_middle_of_the_image():
@@ -144,8 +153,9 @@ def test_mip_levels_are_box_averages_and_lod_blends_between_them():
     uv = np.array([[0.5, 0.5]])
     np.testing.assert_allclose(chain.sample(uv, np.array([2.0])), [[50 / 255] * 3])
     half = chain.sample(uv, np.array([1.5]))
-    np.testing.assert_allclose(half, 0.5 * (chain.sample(uv, np.array([1.0]))
-                                            + chain.sample(uv, np.array([2.0]))))
+    np.testing.assert_allclose(
+        half, 0.5 * (chain.sample(uv, np.array([1.0])) + chain.sample(uv, np.array([2.0])))
+    )
 
 
 def test_an_empty_scene_is_refused():

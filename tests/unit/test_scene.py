@@ -50,8 +50,9 @@ def test_robot_at_zero_angles_stacks_straight_up():
     assert np.allclose(point(g["base"]), (0, -2, 0))
     assert np.allclose(point(g["lower_arm"]), (0, -2, 0))
     assert np.allclose(point(g["upper_arm"]), (0, 2, 0))  # lower arm is 4 long
-    assert np.allclose(hand_center(RobotObject(angles=(0, 0, 0))),
-                       np.array((0, 2, 0)) + HAND_OFFSET)
+    assert np.allclose(
+        hand_center(RobotObject(angles=(0, 0, 0))), np.array((0, 2, 0)) + HAND_OFFSET
+    )
 
 
 def test_robot_world_matrices_for_given_angles_by_hand():
@@ -73,8 +74,9 @@ def test_upper_arm_angle_bends_only_the_upper_arm():
 
 
 def test_the_robots_transform_places_the_whole_arm():
-    placed = RobotObject(angles=(0, 0, 0), transform=Transform(position=(1.0, 0.0, -3.5),
-                                                               rotation=(0, 90, 0)))
+    placed = RobotObject(
+        angles=(0, 0, 0), transform=Transform(position=(1.0, 0.0, -3.5), rotation=(0, 90, 0))
+    )
     base = hand_center(RobotObject(angles=(0, 0, 0)))
     # Turned 90 degrees about y: the hand's +z offset becomes +x, then moved.
     expected = np.array([base[2], base[1], -base[0]]) + np.array([1.0, 0.0, -3.5])
@@ -119,11 +121,19 @@ def test_the_lab_scene_draws_the_robots_parts_and_the_frame():
     lab = load_scene("lab20")
     parts = scene_parts(lab)
     assert [p.name for p in parts] == [
-        "robot.base", "robot.shoulder", "robot.lower_arm", "robot.elbow", "robot.upper_arm",
-        "robot.hand", "mirror_frame"]
+        "robot.base",
+        "robot.shoulder",
+        "robot.lower_arm",
+        "robot.elbow",
+        "robot.upper_arm",
+        "robot.hand",
+        "mirror_frame",
+    ]
     graph = robot_graph(lab.robot)
-    assert all(graph[name].angle == angle for name, angle in
-               zip(JOINT_NAMES, (-35.0, 30.0, -75.0), strict=True))
+    assert all(
+        graph[name].angle == angle
+        for name, angle in zip(JOINT_NAMES, (-35.0, 30.0, -75.0), strict=True)
+    )
     (base,) = [p for p in parts if p.name == "robot.base"]
     assert base.texture is not None and base.texture.name == "metal.png"
     (hand,) = [p for p in parts if p.name == "robot.hand"]
@@ -133,13 +143,18 @@ def test_the_lab_scene_draws_the_robots_parts_and_the_frame():
 angle = st.floats(-720.0, 720.0, allow_nan=False)
 
 
-@given(st.tuples(angle, angle, angle), st.tuples(*[st.floats(-1e4, 1e4)] * 3),
-       st.tuples(angle, angle, angle), st.tuples(*[st.floats(0.01, 100.0)] * 3))
+@given(
+    st.tuples(angle, angle, angle),
+    st.tuples(*[st.floats(-1e4, 1e4)] * 3),
+    st.tuples(angle, angle, angle),
+    st.tuples(*[st.floats(0.01, 100.0)] * 3),
+)
 def test_the_robots_parts_are_its_graphs_to_the_last_bit(angles, position, rotation, scale):
     """The parts drawn for a pose (worked out without building a graph) are those of the
     robot's scene graph: names, meshes, looks, and every matrix bit for bit."""
-    robot = RobotObject(angles=angles,
-                        transform=Transform(position=position, rotation=rotation, scale=scale))
+    robot = RobotObject(
+        angles=angles, transform=Transform(position=position, rotation=rotation, scale=scale)
+    )
     graph = robot_graph(robot)
     nodes = [node for node in graph.nodes() if node.mesh]
     parts = robot_parts(robot)
@@ -232,21 +247,25 @@ def test_mirror_image_point_helper_is_consistent_with_texcoords():
 
 def test_transform_scales_then_turns_x_y_z_then_moves():
     transform = Transform(position=(1, 2, 3), rotation=(90, 0, 0), scale=(2, 2, 2))
-    assert np.allclose(math3d.transform_points(transform.matrix(), np.array([0, 1, 0.0]))[:3],
-                       (1, 2, 5))
+    assert np.allclose(
+        math3d.transform_points(transform.matrix(), np.array([0, 1, 0.0]))[:3], (1, 2, 5)
+    )
     turned = Transform(rotation=(90, 90, 0))  # x first: y -> z, then y: z -> x
-    assert np.allclose(math3d.transform_points(turned.matrix(), np.array([0, 1, 0.0]))[:3],
-                       (1, 0, 0))
+    assert np.allclose(
+        math3d.transform_points(turned.matrix(), np.array([0, 1, 0.0]))[:3], (1, 0, 0)
+    )
 
 
 def test_camera_matrices_and_their_refusals():
     camera = Camera(eye=(0, 0, 5), target=(0, 0, 0), fovy=90, near=1, far=10)
     assert np.allclose(camera.view(), math3d.look_at((0, 0, 5), (0, 0, 0), (0, 1, 0)))
     # The clipping near plane lies NEAR_MARGIN of near before near (see test_near_plane).
-    assert np.allclose(camera.projection(2.0),
-                       math3d.perspective(90, 2.0, 1 - NEAR_MARGIN, 10), rtol=0, atol=1e-15)
-    assert not np.allclose(camera.projection(2.0), math3d.perspective(90, 2.0, 1, 10),
-                           rtol=0, atol=1e-6)
+    assert np.allclose(
+        camera.projection(2.0), math3d.perspective(90, 2.0, 1 - NEAR_MARGIN, 10), rtol=0, atol=1e-15
+    )
+    assert not np.allclose(
+        camera.projection(2.0), math3d.perspective(90, 2.0, 1, 10), rtol=0, atol=1e-6
+    )
     with pytest.raises(ValueError):
         Camera(eye=(1, 1, 1), target=(1, 1, 1)).view()
 
@@ -259,8 +278,11 @@ def test_scene_look_ups_and_changes_make_new_scenes():
     with pytest.raises(KeyError, match="no reflector 'glass'; reflectors are mirror"):
         lab.reflector("glass")
     red = lab.with_reflector("mirror", color=(1.0, 0.0, 0.0))
-    assert red.reflector("mirror").color == (1.0, 0.0, 0.0) and lab.reflector(
-        "mirror").color != (1.0, 0.0, 0.0)
+    assert red.reflector("mirror").color == (1.0, 0.0, 0.0) and lab.reflector("mirror").color != (
+        1.0,
+        0.0,
+        0.0,
+    )
     assert red.content_key() != lab.content_key()
     assert replace(lab, camera=Camera()).content_key() == lab.content_key()
     assert lab.frame_count == 1 and lab.at_frame(7) is lab

@@ -19,14 +19,26 @@ from mirrorlab.scene.loader import SceneError, load_scene, loads
 from mirrorlab.techniques import Technique, register, technique, technique_names, unregister
 
 PROBE_MIRROR = Technique(
-    "probe-mirror", "planar", "a test's planar technique: the reflected camera again",
-    texture="viewer", pass_class="mirrorlab.passes.reflected:ReflectedMirror",
-    capture_camera="reflected")
+    "probe-mirror",
+    "planar",
+    "a test's planar technique: the reflected camera again",
+    texture="viewer",
+    pass_class="mirrorlab.passes.reflected:ReflectedMirror",
+    capture_camera="reflected",
+)
 PROBE_MAP = Technique(
-    "probe-map", "curved", "a test's curved technique: a live cube map again",
-    texture="fixed", pass_class="mirrorlab.passes.cube_live:LiveCubeMapped",
-    vertex_shader="envmap.vert", fragment_shader="envmap_cube.frag",
-    sampler="cube_map_texture", capture_camera="cube", view_ray=True, parallax=True)
+    "probe-map",
+    "curved",
+    "a test's curved technique: a live cube map again",
+    texture="fixed",
+    pass_class="mirrorlab.passes.cube_live:LiveCubeMapped",
+    vertex_shader="envmap.vert",
+    fragment_shader="envmap_cube.frag",
+    sampler="cube_map_texture",
+    capture_camera="cube",
+    view_ray=True,
+    parallax=True,
+)
 
 
 def grey_frame(scene, size, progress=False):
@@ -35,8 +47,9 @@ def grey_frame(scene, size, progress=False):
     return np.full((size[1], size[0], 3), 128, dtype=np.uint8)
 
 
-PROBE_FRAME = Technique("probe-frame", "frame", "a flat grey frame (a test's)",
-                        draw_frame=f"{__name__}:grey_frame")
+PROBE_FRAME = Technique(
+    "probe-frame", "frame", "a flat grey frame (a test's)", draw_frame=f"{__name__}:grey_frame"
+)
 
 
 @contextlib.contextmanager
@@ -115,8 +128,21 @@ def test_a_technique_registered_here_is_planned(capsys):
         plan = plan_frame(sphere, (64, 64), TextureState())
         (capture,) = [p for p in plan.ran if p.name == "capture"]
         assert capture.technique == "probe-map" and len(capture.views) == 6
-        assert main(["plan", "chrome_sphere", "--method", "probe-map", "--frames", "1",
-                     "--size", "32x32"]) == 0
+        assert (
+            main(
+                [
+                    "plan",
+                    "chrome_sphere",
+                    "--method",
+                    "probe-map",
+                    "--frames",
+                    "1",
+                    "--size",
+                    "32x32",
+                ]
+            )
+            == 0
+        )
         assert "capture sphere (probe-map" in capsys.readouterr().out
 
 
@@ -137,8 +163,15 @@ def test_a_frame_technique_is_a_method_like_the_ray_tracer():
 
 def test_every_list_comes_from_the_registry():
     assert technique_names("planar") == ("ortho", "reflected", "stencil")
-    assert set(technique_names("curved")) == {"sphere", "sphere-vertex", "sphere-texgen",
-                                              "cube", "cube-live", "latlong", "normal"}
+    assert set(technique_names("curved")) == {
+        "sphere",
+        "sphere-vertex",
+        "sphere-texgen",
+        "cube",
+        "cube-live",
+        "latlong",
+        "normal",
+    }
     with registered(replace(PROBE_MIRROR, name="probe-two")):
         assert technique_names("planar")[-1] == "probe-two"
     with pytest.raises(ValueError, match="already registered"):
@@ -149,11 +182,14 @@ def test_every_list_comes_from_the_registry():
 
 def test_the_lists_hold_under_python_O():
     # No import-time asserts keep lists in step: -O (which drops asserts) changes nothing.
-    code = ("from mirrorlab.techniques import technique_names as t; "
-            "from mirrorlab.scene.loader import load_scene; "
-            "s = load_scene('mirror_and_sphere'); print(len(t()), s.reflectors[0].technique)")
-    out = subprocess.run([sys.executable, "-O", "-c", code], capture_output=True, text=True,
-                         check=True).stdout.split()
+    code = (
+        "from mirrorlab.techniques import technique_names as t; "
+        "from mirrorlab.scene.loader import load_scene; "
+        "s = load_scene('mirror_and_sphere'); print(len(t()), s.reflectors[0].technique)"
+    )
+    out = subprocess.run(
+        [sys.executable, "-O", "-c", code], capture_output=True, text=True, check=True
+    ).stdout.split()
     assert out == [str(len(technique_names())), "reflected"]
 
 

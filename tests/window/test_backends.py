@@ -59,8 +59,9 @@ def _display() -> str:
 def test_without_egl_render_writes_the_default_frame_in_a_hidden_window(tmp_path):
     egl = mirrorlab("render", "--out", str(tmp_path / "egl.png"), DISPLAY=_display())
     assert egl.returncode == 0, egl.stderr
-    done = mirrorlab("render", "--out", str(tmp_path / "hidden.png"), prefix=hide_egl(),
-                     DISPLAY=_display())
+    done = mirrorlab(
+        "render", "--out", str(tmp_path / "hidden.png"), prefix=hide_egl(), DISPLAY=_display()
+    )
     assert done.returncode == 0, done.stderr
     assert done.stdout.startswith(f"wrote {tmp_path / 'hidden.png'} (512x512, lab20")
     hidden = png(tmp_path / "hidden.png")
@@ -79,16 +80,24 @@ def test_a_display_does_not_take_egl_away_unless_forced():
 
 def test_a_forced_hidden_window_renders_the_same_frames_as_egl(tmp_path):
     for name, backend in (("egl", "egl"), ("hidden", "hidden-window")):
-        done = mirrorlab("render", "mirror_and_sphere", "--size", "96x64", "--out",
-                         str(tmp_path / f"{name}.png"), DISPLAY=_display(),
-                         MIRRORLAB_GL_BACKEND=backend)
+        done = mirrorlab(
+            "render",
+            "mirror_and_sphere",
+            "--size",
+            "96x64",
+            "--out",
+            str(tmp_path / f"{name}.png"),
+            DISPLAY=_display(),
+            MIRRORLAB_GL_BACKEND=backend,
+        )
         assert done.returncode == 0, done.stderr
     assert np.array_equal(png(tmp_path / "egl.png"), png(tmp_path / "hidden.png"))
 
 
 def test_the_core_variable_gives_a_core_forward_compatible_hidden_window():
     backend, core, platform, mask, flags, legacy = probe(
-        MIRRORLAB_GL_BACKEND="hidden-window", MIRRORLAB_GL_CORE="1")
+        MIRRORLAB_GL_BACKEND="hidden-window", MIRRORLAB_GL_CORE="1"
+    )
     assert (backend, core, platform) == ("hidden-window", "True", "glx")
     assert int(mask) & CORE_PROFILE_BIT and not int(mask) & COMPATIBILITY_PROFILE_BIT
     assert int(flags) & FORWARD_COMPATIBLE_BIT
@@ -114,9 +123,11 @@ def test_opengl_imported_first_on_x11_renders_in_a_hidden_window():
     # PyOpenGL binds to GLX on X11 when nothing chose first: the chooser takes a hidden
     # window on that platform rather than refusing (without a display it still refuses:
     # tests/gl/test_opengl_first.py)
-    code = ("import OpenGL.GL\nimport mirrorlab\n"
-            "from mirrorlab.gl.context import loaded_platform\n"
-            "print(mirrorlab.render(size=(24, 16)).shape, loaded_platform())")
+    code = (
+        "import OpenGL.GL\nimport mirrorlab\n"
+        "from mirrorlab.gl.context import loaded_platform\n"
+        "print(mirrorlab.render(size=(24, 16)).shape, loaded_platform())"
+    )
     done = python(code, DISPLAY=_display())
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "(16, 24, 3) glx"

@@ -41,6 +41,7 @@ WIDTH, HEIGHT = 320, 240
 
 def shows(d, window, text: str) -> np.ndarray:
     """The window's pixels once its title shows ``text``, read while no new frame came."""
+
     def read():
         before = title(window)
         if text not in before:
@@ -61,8 +62,14 @@ def headless(scene, orbit: Orbit, size=(WIDTH, HEIGHT), **options) -> np.ndarray
 
 
 def same_picture(name: str, window_frame: np.ndarray, expected: np.ndarray) -> None:
-    assert_images_close(name, window_frame, expected, channel_tolerance=8,
-                        min_fraction_within=0.99, max_mean_abs=1.0)
+    assert_images_close(
+        name,
+        window_frame,
+        expected,
+        channel_tolerance=8,
+        min_fraction_within=0.99,
+        max_mean_abs=1.0,
+    )
 
 
 def changed_pixels(a: np.ndarray, b: np.ndarray) -> int:
@@ -77,8 +84,12 @@ def eye_text(orbit: Orbit) -> str:
 def pixel_of(scene, point, orbit: Orbit) -> tuple[int, int]:
     scene = mirrorlab.load_scene(scene)
     camera = replace(scene.camera, eye=orbit.eye(), target=orbit.target)
-    x, y, _ = math3d.project_to_pixels(camera.projection(WIDTH / HEIGHT) @ camera.view(),
-                                       np.asarray(point, dtype=np.float64), WIDTH, HEIGHT)
+    x, y, _ = math3d.project_to_pixels(
+        camera.projection(WIDTH / HEIGHT) @ camera.view(),
+        np.asarray(point, dtype=np.float64),
+        WIDTH,
+        HEIGHT,
+    )
     return int(x), int(y)
 
 
@@ -157,8 +168,9 @@ def test_every_control_of_the_lab_demo(xdisplay, lab_demo, tmp_path):
     press(d, window, "2")
     after = shows(d, window, "mirror: reflected")
     assert changed_pixels(before, after) > 50
-    same_picture("demo_technique", after, headless("lab20", orbit, angles=angles,
-                                                   method="reflected"))
+    same_picture(
+        "demo_technique", after, headless("lab20", orbit, angles=angles, method="reflected")
+    )
     before = after
 
     # H shows the help over the frame, and hides it again.
@@ -181,8 +193,9 @@ def test_every_control_of_the_lab_demo(xdisplay, lab_demo, tmp_path):
 
     # S saves a screenshot: the picture in the window.
     press(d, window, "s")
-    saved = lab_demo.output_after(len(lab_demo.out), r"^saved .*demo-lab20-001\.png$",
-                                  "the screenshot")
+    saved = lab_demo.output_after(
+        len(lab_demo.out), r"^saved .*demo-lab20-001\.png$", "the screenshot"
+    )
     path = tmp_path / "demo-lab20-001.png"
     assert saved and path.is_file()
     with Image.open(path) as image:
@@ -213,8 +226,11 @@ def test_number_keys_and_inset_follow_the_reflector_under_the_mouse(xdisplay):
         press(d, window, "4")  # the fourth curved technique: a static cube map
         after = shows(d, window, "sphere: cube -")
         assert changed_pixels(before, after) > 20
-        same_picture("demo_sphere_cube", after, headless(
-            "mirror_and_sphere", orbit, set=['reflectors[1].technique="cube"']))
+        same_picture(
+            "demo_sphere_cube",
+            after,
+            headless("mirror_and_sphere", orbit, set=['reflectors[1].technique="cube"']),
+        )
         # The inset shows the sphere's cube map: six faces along the bottom.
         count = frame_number(window)
         press(d, window, "e")
@@ -239,9 +255,24 @@ def test_number_keys_and_inset_follow_the_reflector_under_the_mouse(xdisplay):
 def test_demo_screenshot_matches_the_headless_render(tmp_path, method):
     shot = tmp_path / "demo.png"
     result = subprocess.run(
-        [sys.executable, "-m", "mirrorlab.cli", "demo", "--size", f"{WIDTH}x{HEIGHT}",
-         "--method", method, "--max-frames", "3", "--screenshot", str(shot)],
-        capture_output=True, text=True, timeout=2 * GIVE_UP_S)
+        [
+            sys.executable,
+            "-m",
+            "mirrorlab.cli",
+            "demo",
+            "--size",
+            f"{WIDTH}x{HEIGHT}",
+            "--method",
+            method,
+            "--max-frames",
+            "3",
+            "--screenshot",
+            str(shot),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=2 * GIVE_UP_S,
+    )
     assert result.returncode == 0, result.stderr
     window_frame = np.asarray(Image.open(shot).convert("RGB"))
     headless_frame = mirrorlab.render("lab20", size=(WIDTH, HEIGHT), method=method)

@@ -19,9 +19,12 @@ WIDTH, HEIGHT = 256, 256
 
 @pytest.fixture
 def cone_demo():
-    proc = subprocess.Popen([sys.executable, "-m", "mirrorlab.cli", "demo", "cone", "--size",
-                             f"{WIDTH}x{HEIGHT}"], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "mirrorlab.cli", "demo", "cone", "--size", f"{WIDTH}x{HEIGHT}"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     yield proc
     if proc.poll() is None:
         proc.kill()
@@ -43,20 +46,32 @@ def test_cone_demo_moves_the_cone_and_its_reflection_changes(xdisplay, cone_demo
     except AssertionError:
         save_failure("cone_demo_first", screen=screenshot(xdisplay, window), headless=headless)
         raise
-    assert_images_close("cone_demo_vs_headless", first, headless, channel_tolerance=8,
-                        min_fraction_within=0.99, max_mean_abs=1.0)
+    assert_images_close(
+        "cone_demo_vs_headless",
+        first,
+        headless,
+        channel_tolerance=8,
+        min_fraction_within=0.99,
+        max_mean_abs=1.0,
+    )
     for height in ("0.75", "0.50", "0.25", "0.00"):  # one key at a time, as a user would
         press(xdisplay, window, "Down")
         try:
-            wait_for(lambda h=height: f"height {h}" in title(window) or None,
-                     f"the cone to move down to {height}")
+            wait_for(
+                lambda h=height: f"height {h}" in title(window) or None,
+                f"the cone to move down to {height}",
+            )
         except AssertionError:
             raise AssertionError(f"title is {title(window)!r}") from None
-    lowered = mirrorlab.render("cone", size=(WIDTH, HEIGHT),
-                               set=["reflectors[0].position=[0.0, 0.0, 0.0]"])
+    lowered = mirrorlab.render(
+        "cone", size=(WIDTH, HEIGHT), set=["reflectors[0].position=[0.0, 0.0, 0.0]"]
+    )
     second = wait_for(
-        lambda: (lambda img: img if np.abs(img.astype(int) - lowered.astype(int)).mean() < 2
-                 else None)(screenshot(xdisplay, window)), "the frame with the cone lowered")
+        lambda: (
+            lambda img: img if np.abs(img.astype(int) - lowered.astype(int)).mean() < 2 else None
+        )(screenshot(xdisplay, window)),
+        "the frame with the cone lowered",
+    )
     changed = np.abs(second.astype(int) - first.astype(int)).max(axis=-1) > 24
     assert changed.sum() > 500, "the frame barely changed after Down"
     press(xdisplay, window, "Escape")

@@ -21,8 +21,13 @@ SOLUTION = REPO_DIR / "labs" / "solutions" / "lab20_mirror.py"
 
 def lab_run(*args: str) -> subprocess.CompletedProcess:
     env = {**os.environ, "PYOPENGL_PLATFORM": "glx"}
-    return subprocess.run([sys.executable, "-m", "mirrorlab.cli", "lab", "run", *args],
-                          capture_output=True, text=True, env=env, timeout=300)
+    return subprocess.run(
+        [sys.executable, "-m", "mirrorlab.cli", "lab", "run", *args],
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=300,
+    )
 
 
 def error_lines(done: subprocess.CompletedProcess) -> list[str]:
@@ -37,12 +42,14 @@ def error_lines(done: subprocess.CompletedProcess) -> list[str]:
 
 def test_lab_run_shows_the_solution_as_the_check_sees_it(tmp_path):
     shot = tmp_path / "window.png"
-    done = lab_run("lab20", str(SOLUTION), "--size", "256x256", "--max-frames", "3",
-                   "--screenshot", str(shot))
+    done = lab_run(
+        "lab20", str(SOLUTION), "--size", "256x256", "--max-frames", "3", "--screenshot", str(shot)
+    )
     assert done.returncode == 0, done.stderr
     limits = Limits(cpu_seconds=5, seconds=60, unsandboxed=not sandboxed())
-    evidence = run_job("lab20", SOLUTION.read_bytes(), "solution.py",
-                       default_variant("lab20"), limits, (256, 256))
+    evidence = run_job(
+        "lab20", SOLUTION.read_bytes(), "solution.py", default_variant("lab20"), limits, (256, 256)
+    )
     assert evidence.status == "ok", evidence.detail
     frame = evidence.arrays["frame"]
     window = load_picture(shot)
@@ -54,14 +61,17 @@ def test_lab_run_names_the_task_and_line_of_an_error(tmp_path):
     source = SOLUTION.read_text().replace("gluLookAt(MIRROR_X, 0, 0,", "gluLookAt(MIRROR_X, 0,")
     broken = tmp_path / "broken.py"
     broken.write_text(source)
-    line = next(i for i, text in enumerate(source.splitlines(), 1)
-                if text.strip().startswith("gluLookAt("))
+    line = next(
+        i for i, text in enumerate(source.splitlines(), 1) if text.strip().startswith("gluLookAt(")
+    )
     done = lab_run("lab20", str(broken), "--max-frames", "2")
     assert done.returncode == 1
     lines = error_lines(done)
     assert len(lines) == 1, done.stderr
-    assert ("in create_mirror() (task 1 (capture_camera): the capture's orthographic "
-            f"projection and camera), line {line}") in lines[0] and "TypeError" in lines[0]
+    assert (
+        "in create_mirror() (task 1 (capture_camera): the capture's orthographic "
+        f"projection and camera), line {line}"
+    ) in lines[0] and "TypeError" in lines[0]
 
 
 def test_lab_run_keeps_the_file_in_its_sandbox(tmp_path):

@@ -27,10 +27,12 @@ except GLContextError as exc:
 
 
 def test_a_window_works_after_opengl_was_imported_first():
-    env = {k: v for k, v in os.environ.items() if k not in ("PYOPENGL_PLATFORM",
-                                                             "XDG_SESSION_TYPE")}
-    done = subprocess.run([sys.executable, "-c", CODE], capture_output=True, text=True,
-                          timeout=120, env=env)
+    env = {
+        k: v for k, v in os.environ.items() if k not in ("PYOPENGL_PLATFORM", "XDG_SESSION_TYPE")
+    }
+    done = subprocess.run(
+        [sys.executable, "-c", CODE], capture_output=True, text=True, timeout=120, env=env
+    )
     assert done.returncode == 0, done.stderr
     backend, renderer, message = done.stdout.strip().splitlines()
     assert backend == "window hidden-window"

@@ -30,8 +30,13 @@ def gl_objects(demo: Demo, d, window) -> int:
     count = len(demo.out)
     press(d, window, "p")
     lines = demo.output_after(count, r"^live GL objects: \d+$", "the printed plan")
-    return int(next(re.match(r"^live GL objects: (\d+)$", line).group(1)  # type: ignore[union-attr]
-                    for line in lines if line.startswith("live GL objects")))
+    return int(
+        next(
+            re.match(r"^live GL objects: (\d+)$", line).group(1)  # type: ignore[union-attr]
+            for line in lines
+            if line.startswith("live GL objects")
+        )
+    )
 
 
 def test_a_hundred_resizes(xdisplay):
@@ -48,8 +53,9 @@ def test_a_hundred_resizes(xdisplay):
         settled(d, window, drawn, "a frame at the final size")
         before = gl_objects(demo, d, window)
         rng = np.random.default_rng(12)
-        for index, (width, height) in enumerate(zip(rng.integers(64, 700, 100),
-                                                    rng.integers(48, 560, 100), strict=True)):
+        for index, (width, height) in enumerate(
+            zip(rng.integers(64, 700, 100), rng.integers(48, 560, 100), strict=True)
+        ):
             window.configure(width=int(width), height=int(height))
             if index % 10 == 9:
                 d.sync()  # let some frames be drawn between the bursts
@@ -65,8 +71,14 @@ def test_a_hundred_resizes(xdisplay):
             return image if close.mean() >= 0.99 else None
 
         last = wait_for(final_frame, "the frame drawn at the final size")
-        assert_images_close("resize_last", last, expected, channel_tolerance=8,
-                            min_fraction_within=0.99, max_mean_abs=1.0)
+        assert_images_close(
+            "resize_last",
+            last,
+            expected,
+            channel_tolerance=8,
+            min_fraction_within=0.99,
+            max_mean_abs=1.0,
+        )
         assert gl_objects(demo, d, window) == before
         press(d, window, "Escape")
         assert demo.finish() == 0, demo.err

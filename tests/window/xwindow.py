@@ -38,8 +38,11 @@ def find_window(d, prefix: str, timeout: float = GIVE_UP_S):
                 name = window.get_wm_name()
                 if isinstance(name, bytes):
                     name = name.decode(errors="replace")
-                if (name and name.startswith(prefix)
-                        and window.get_attributes().map_state == X.IsViewable):
+                if (
+                    name
+                    and name.startswith(prefix)
+                    and window.get_attributes().map_state == X.IsViewable
+                ):
                     return window
                 stack.extend(window.query_tree().children)
             except error.BadWindow:  # destroyed since its parent listed it
@@ -71,11 +74,17 @@ def screenshot(d, window) -> np.ndarray:
         geometry = window.get_geometry()
         origin = root.translate_coords(window, 0, 0)
         screen = root.get_geometry()
-        on_screen = (origin.x >= 0 and origin.y >= 0
-                     and origin.x + geometry.width <= screen.width
-                     and origin.y + geometry.height <= screen.height)
-        raw = (window.get_image(0, 0, geometry.width, geometry.height, X.ZPixmap, 0xFFFFFFFF)
-               if viewable and on_screen else None)
+        on_screen = (
+            origin.x >= 0
+            and origin.y >= 0
+            and origin.x + geometry.width <= screen.width
+            and origin.y + geometry.height <= screen.height
+        )
+        raw = (
+            window.get_image(0, 0, geometry.width, geometry.height, X.ZPixmap, 0xFFFFFFFF)
+            if viewable and on_screen
+            else None
+        )
     finally:
         d.ungrab_server()
         d.flush()
@@ -99,6 +108,7 @@ def wait_for(condition, what: str, timeout: float = GIVE_UP_S):
 def settled(d, window, after: int, what: str = "a new frame") -> np.ndarray:
     """The window's pixels once the demo has drawn a frame numbered above ``after`` and
     drawn nothing more while they were read (its title is set after each swap)."""
+
     def read():
         before = frame_number(window)
         if before <= after:
@@ -153,8 +163,12 @@ def drag(d, window, start: tuple[int, int], end: tuple[int, int], steps: int = 5
     xtest.fake_input(d, X.ButtonPress, 1)
     d.sync()
     for step in range(1, steps + 1):
-        move_pointer(d, window, round(start[0] + (end[0] - start[0]) * step / steps),
-                     round(start[1] + (end[1] - start[1]) * step / steps))
+        move_pointer(
+            d,
+            window,
+            round(start[0] + (end[0] - start[0]) * step / steps),
+            round(start[1] + (end[1] - start[1]) * step / steps),
+        )
     xtest.fake_input(d, X.ButtonRelease, 1)
     d.sync()
 
@@ -178,12 +192,17 @@ class Demo:
     def __init__(self, *args: str, cwd: Path | None = None) -> None:
         self.process = subprocess.Popen(
             [sys.executable, "-m", "mirrorlab.cli", "demo", "--debug", *args],
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=cwd)
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            cwd=cwd,
+        )
         self.out: list[str] = []
         self.err: list[str] = []
-        self._readers = [threading.Thread(target=self._read, args=(stream, into), daemon=True)
-                         for stream, into in ((self.process.stdout, self.out),
-                                              (self.process.stderr, self.err))]
+        self._readers = [
+            threading.Thread(target=self._read, args=(stream, into), daemon=True)
+            for stream, into in ((self.process.stdout, self.out), (self.process.stderr, self.err))
+        ]
         for reader in self._readers:
             reader.start()
 
@@ -194,8 +213,14 @@ class Demo:
 
     def output_after(self, count: int, pattern: str, what: str) -> list[str]:
         """Stdout lines after the first ``count``, once one of them matches ``pattern``."""
-        return wait_for(lambda: self.out[count:] if any(re.search(pattern, line) for line in
-                                                        self.out[count:]) else None, what)
+        return wait_for(
+            lambda: (
+                self.out[count:]
+                if any(re.search(pattern, line) for line in self.out[count:])
+                else None
+            ),
+            what,
+        )
 
     def finish(self) -> int:
         code = self.process.wait(timeout=GIVE_UP_S)

@@ -23,8 +23,10 @@ def content_path(*parts: str) -> Path:
     """The packaged file or folder ``mirrorlab/labs/content/<parts...>`` on disk."""
     root = files(__name__)
     if not isinstance(root, Path):
-        raise RuntimeError(f"mirrorlab's lab content is not on the file system ({root}); "
-                           f"install mirrorlab as a wheel or from a source folder")
+        raise RuntimeError(
+            f"mirrorlab's lab content is not on the file system ({root}); "
+            f"install mirrorlab as a wheel or from a source folder"
+        )
     return root.joinpath(*parts)
 
 
@@ -38,26 +40,37 @@ def _point(values: tuple[float, ...]) -> str:
 
 def values(variant: Variant) -> dict[str, str]:
     """The text each ``{{name}}`` mark of a lab's templates takes for ``variant``."""
-    found = {"variant_line": "the lab's own numbers (variant default)" if variant.is_default
-             else f"{variant.id}, made for {variant.student}"}
+    found = {
+        "variant_line": "the lab's own numbers (variant default)"
+        if variant.is_default
+        else f"{variant.id}, made for {variant.student}"
+    }
     if variant.lab == "lab20":
         g = lab20_geometry(variant)
         corners = [_point(c) for c in g["corners"]]
         found.update({key: _number(g[key]) for key in ("x", "y0", "y1", "z0", "z1")})
-        found.update(width=_number(g["z1"] - g["z0"]), height=_number(g["y1"] - g["y0"]),
-                     corners=", ".join(corners),
-                     corners_and=", ".join(corners[:3]) + " and " + corners[3],
-                     corner0=corners[0], corner2=corners[2], eye=_point(g["eye"]),
-                     ortho=", ".join(_number(v) for v in g["extents"]))
+        found.update(
+            width=_number(g["z1"] - g["z0"]),
+            height=_number(g["y1"] - g["y0"]),
+            corners=", ".join(corners),
+            corners_and=", ".join(corners[:3]) + " and " + corners[3],
+            corner0=corners[0],
+            corner2=corners[2],
+            eye=_point(g["eye"]),
+            ortho=", ".join(_number(v) for v in g["extents"]),
+        )
     elif variant.lab == "spheremap":
         left = variant["shader_side"] == "left"
         shader = "the shader's cone here: lab.draw_cone_shader(SPHERE_MAP_GLSL, launch)"
         texgen = "the texgen cone here: draw_cone_texgen()"
-        found.update(shader_side=variant["shader_side"],
-                     texgen_side="right" if left else "left", unit=str(variant["unit"]),
-                     unit_name=f"GL_TEXTURE{variant['unit']}",
-                     left_cone=shader if left else texgen,
-                     right_cone=texgen if left else shader)
+        found.update(
+            shader_side=variant["shader_side"],
+            texgen_side="right" if left else "left",
+            unit=str(variant["unit"]),
+            unit_name=f"GL_TEXTURE{variant['unit']}",
+            left_cone=shader if left else texgen,
+            right_cone=texgen if left else shader,
+        )
     else:
         found.update(center=_point(cube_center(variant)))
     return found
@@ -66,6 +79,7 @@ def values(variant: Variant) -> dict[str, str]:
 def render(text: str, values: dict[str, str]) -> str:
     """``text`` with each ``{{name}}`` replaced by ``values[name]``; KeyError naming a
     mark ``values`` lacks."""
+
     def replace(match: re.Match[str]) -> str:
         if match.group(1) not in values:
             raise KeyError(f"template mark {{{{{match.group(1)}}}}} has no value")
@@ -97,8 +111,10 @@ def solution_block(variant: Variant) -> str:
     if variant.lab == "lab20":
         g = lab20_geometry(variant)
         n = _number
-        return (f"MIRROR_X = {n(g['x'])}\nY0, Y1 = {n(g['y0'])}, {n(g['y1'])}\n"
-                f"Z0, Z1 = {n(g['z0'])}, {n(g['z1'])}\n")
+        return (
+            f"MIRROR_X = {n(g['x'])}\nY0, Y1 = {n(g['y0'])}, {n(g['y1'])}\n"
+            f"Z0, Z1 = {n(g['z0'])}, {n(g['z1'])}\n"
+        )
     if variant.lab == "spheremap":
         return f'SHADER_SIDE = "{variant["shader_side"]}"\nUNIT = {variant["unit"]}\n'
     return f"CENTER = {_point(cube_center(variant))}\n"
@@ -108,7 +124,5 @@ def solution_for(text: str, variant: Variant) -> str:
     """A solution's ``text`` with its variant block holding ``variant``'s numbers;
     ValueError when it has no such block."""
     if not BLOCK.search(text):
-        raise ValueError("the solution has no '# --- variant' ... '# --- end of variant' "
-                         "block")
-    return BLOCK.sub(lambda m: m.group(1) + solution_block(variant) + m.group(3), text,
-                     count=1)
+        raise ValueError("the solution has no '# --- variant' ... '# --- end of variant' block")
+    return BLOCK.sub(lambda m: m.group(1) + solution_block(variant) + m.group(3), text, count=1)

@@ -31,8 +31,9 @@ class RobotGraph:
 
     def __getitem__(self, name: str) -> Node:
         if name not in self._nodes:
-            raise KeyError(f"the robot has no node {name!r}; its nodes are "
-                           f"{', '.join(self._nodes)}")
+            raise KeyError(
+                f"the robot has no node {name!r}; its nodes are {', '.join(self._nodes)}"
+            )
         return self._nodes[name]
 
     def nodes(self):
@@ -87,11 +88,14 @@ class Lab20(_Lab):
         current projection and modelview matrices. Never the mirror."""
         robot = robot if robot is not None else self.robot
         if robot is None:
-            raise LabSetupError("draw_scene: there is no scene graph yet; "
-                                "build_scene_graph() makes it with lab.robot_graph()")
+            raise LabSetupError(
+                "draw_scene: there is no scene graph yet; "
+                "build_scene_graph() makes it with lab.robot_graph()"
+            )
         if not isinstance(robot, RobotGraph):
-            raise LabSetupError(f"draw_scene: expected the graph lab.robot_graph() made, "
-                                f"got {type(robot).__name__}")
+            raise LabSetupError(
+                f"draw_scene: expected the graph lab.robot_graph() made, got {type(robot).__name__}"
+            )
         self._call("draw_scene", ["j"], {"textures": robot.textures()})
 
     def set_viewer(self) -> None:
@@ -105,8 +109,11 @@ class SphereMapLab(_Lab):
 
     def set_viewer(self, aspect: float | None = None) -> None:
         """The viewer's projection (for ``aspect``, default the frame's) and camera."""
-        self._call("set_viewer", ["j"], None if aspect is None else
-                   _number(aspect, "f", "lab.set_viewer(aspect)"))
+        self._call(
+            "set_viewer",
+            ["j"],
+            None if aspect is None else _number(aspect, "f", "lab.set_viewer(aspect)"),
+        )
 
     def draw_backdrop(self) -> None:
         """The launch picture on its board behind the cone."""
@@ -153,8 +160,9 @@ def build_kit(remote: Remote, description: dict) -> ModuleType:
     def opener(name: str):
         def open_lab() -> _Lab:
             if name != lab:
-                raise LabSetupError(f"this file is run as the {lab} lab, but it asks for "
-                                    f"kit.{name}()")
+                raise LabSetupError(
+                    f"this file is run as the {lab} lab, but it asks for kit.{name}()"
+                )
             return session
 
         open_lab.__name__ = name
@@ -162,7 +170,10 @@ def build_kit(remote: Remote, description: dict) -> ModuleType:
 
     for name in LAB_CLASSES:
         setattr(module, name, opener(name))
-    for name, value in (("LabSetupError", LabSetupError),
-                        ("StudentShaderError", StudentShaderError), ("ENV_UNIT", 1)):
+    for name, value in (
+        ("LabSetupError", LabSetupError),
+        ("StudentShaderError", StudentShaderError),
+        ("ENV_UNIT", 1),
+    ):
         setattr(module, name, value)
     return module

@@ -20,12 +20,15 @@ except ImportError:  # pragma: no cover - depends on the sandbox
 class GLError(Exception):
     """An OpenGL error, as PyOpenGL's ``OpenGL.error.GLError`` reports it."""
 
-    def __init__(self, err: int = 0, description: str = "", baseOperation: str = "",
-                 cArguments: tuple = ()) -> None:
+    def __init__(
+        self, err: int = 0, description: str = "", baseOperation: str = "", cArguments: tuple = ()
+    ) -> None:
         self.err, self.description = err, description
         self.baseOperation, self.cArguments = baseOperation, cArguments
-        super().__init__(f"GLError(err = {err}, description = {description!r}, "
-                         f"baseOperation = {baseOperation}, cArguments = {cArguments})")
+        super().__init__(
+            f"GLError(err = {err}, description = {description!r}, "
+            f"baseOperation = {baseOperation}, cArguments = {cArguments})"
+        )
 
 
 class LabSetupError(RuntimeError):
@@ -42,9 +45,13 @@ class StudentShaderError(LabSetupError):
 
 
 ERRORS: dict[str, type[BaseException]] = {
-    "GLError": GLError, "TypeError": TypeError, "ValueError": ValueError,
-    "LabSetupError": LabSetupError, "StudentShaderError": StudentShaderError,
-    "NotImplementedError": NotImplementedError, "IndexError": IndexError,
+    "GLError": GLError,
+    "TypeError": TypeError,
+    "ValueError": ValueError,
+    "LabSetupError": LabSetupError,
+    "StudentShaderError": StudentShaderError,
+    "NotImplementedError": NotImplementedError,
+    "IndexError": IndexError,
 }
 
 
@@ -61,8 +68,9 @@ def flatten(value: Any, what: str) -> list:
     try:
         items = list(value)
     except TypeError:
-        raise TypeError(f"{what}: expected a number or a sequence of numbers, got "
-                        f"{type(value).__name__}") from None
+        raise TypeError(
+            f"{what}: expected a number or a sequence of numbers, got {type(value).__name__}"
+        ) from None
     out: list = []
     for item in items:
         scalar = _scalar(item)
@@ -98,14 +106,18 @@ def _number(value: Any, kind: str, what: str) -> int | float:
             return float(value)
         if kind == "b":
             return int(bool(value))
-        return int(value.__index__() if hasattr(value, "__index__") else value) \
-            if not isinstance(value, float) else _integral(value, what)
+        return (
+            int(value.__index__() if hasattr(value, "__index__") else value)
+            if not isinstance(value, float)
+            else _integral(value, what)
+        )
     except OverflowError:
         raise ValueError(f"{what}: {_short(value)} is out of range for a GL number") from None
     except (TypeError, ValueError):
         expected = "a number" if kind == "f" else "an integer"
-        raise TypeError(f"{what}: expected {expected}, got {type(value).__name__} "
-                        f"{_short(value)}") from None
+        raise TypeError(
+            f"{what}: expected {expected}, got {type(value).__name__} {_short(value)}"
+        ) from None
 
 
 def _integral(value: float, what: str) -> int:
@@ -134,14 +146,26 @@ def _pixels(value: Any, type_code: str, what: str) -> tuple[str, list[int], byte
         return "u1", [len(data)], data
     if isinstance(value, list | tuple):
         numbers = flatten(value, what)
-        packed = array.array({"u1": "B", "i1": "b", "u2": "H", "i2": "h", "u4": "I",
-                              "i4": "i", "f4": "f", "f8": "d"}[type_code], numbers)
+        packed = array.array(
+            {
+                "u1": "B",
+                "i1": "b",
+                "u2": "H",
+                "i2": "h",
+                "u4": "I",
+                "i4": "i",
+                "f4": "f",
+                "f8": "d",
+            }[type_code],
+            numbers,
+        )
         return type_code, [len(numbers)], packed.tobytes()
     try:
         data = bytes(memoryview(value).cast("B"))
     except TypeError:
-        raise TypeError(f"{what}: expected bytes, an array or None, got "
-                        f"{type(value).__name__}") from None
+        raise TypeError(
+            f"{what}: expected bytes, an array or None, got {type(value).__name__}"
+        ) from None
     return "u1", [len(data)], data
 
 
@@ -203,11 +227,16 @@ class Remote:
         if not reply.get("ok"):
             error = ERRORS.get(reply.get("type", ""), RuntimeError)
             if error is GLError:
-                raise GLError(reply.get("err", 0), reply.get("message", ""), name,
-                              tuple(a for a in packed if not isinstance(a, dict)))
+                raise GLError(
+                    reply.get("err", 0),
+                    reply.get("message", ""),
+                    name,
+                    tuple(a for a in packed if not isinstance(a, dict)),
+                )
             if error is StudentShaderError:
-                raise StudentShaderError(reply.get("message", ""), reply.get("variable", ""),
-                                         reply.get("shader_line", 0))
+                raise StudentShaderError(
+                    reply.get("message", ""), reply.get("variable", ""), reply.get("shader_line", 0)
+                )
             raise error(reply.get("message", ""))
         return decode(reply.get("value"), payloads)
 
@@ -220,10 +249,21 @@ def decode(value: Any, payloads: list[tuple[str, list[int], bytes]]) -> Any:
             return data
         if numpy is not None:
             return numpy.frombuffer(data, dtype=dtype).reshape(shape).copy()
-        items: list[Any] = array.array({"u1": "B", "i1": "b", "u2": "H", "i2": "h", "u4": "I",
-                                        "i4": "i", "f4": "f", "f8": "d"}[dtype], data).tolist()
+        items: list[Any] = array.array(
+            {
+                "u1": "B",
+                "i1": "b",
+                "u2": "H",
+                "i2": "h",
+                "u4": "I",
+                "i4": "i",
+                "f4": "f",
+                "f8": "d",
+            }[dtype],
+            data,
+        ).tolist()
         for size in reversed(shape[1:]):
-            items = [items[i:i + size] for i in range(0, len(items), size)]
+            items = [items[i : i + size] for i in range(0, len(items), size)]
         return items
     if isinstance(value, list):
         return [decode(v, payloads) for v in value]

@@ -37,8 +37,9 @@ class Run:
 
     def error(self, function: str, kind: str, message: str, line: int = 0) -> None:
         if not any(e["function"] == function for e in self.errors):
-            self.errors.append({"function": function, "kind": kind,
-                                "message": message[:300], "line": int(line)})
+            self.errors.append(
+                {"function": function, "kind": kind, "message": message[:300], "line": int(line)}
+            )
 
     def exception(self, function: str, exc: BaseException) -> None:
         line = 0
@@ -78,10 +79,14 @@ class Run:
         for name in self.functions:
             original = namespace.get(name)
             if not callable(original):
-                problem = ("is missing" if original is None else
-                           f"is a {type(original).__name__}, not a function")
-                self.error(name, "missing", f"{name}() {problem}: define def {name}(): as in "
-                           f"the starter")
+                problem = (
+                    "is missing"
+                    if original is None
+                    else f"is a {type(original).__name__}, not a function"
+                )
+                self.error(
+                    name, "missing", f"{name}() {problem}: define def {name}(): as in the starter"
+                )
 
                 def missing(*args: Any, _name: str = name, **kwargs: Any) -> None:
                     self.channel.send({"op": "enter", "function": _name, "line": 0})
@@ -91,8 +96,9 @@ class Run:
                 namespace[name] = missing
                 continue
 
-            def wrapper(*args: Any, _name: str = name, _original: Any = original,
-                        **kwargs: Any) -> Any:
+            def wrapper(
+                *args: Any, _name: str = name, _original: Any = original, **kwargs: Any
+            ) -> Any:
                 caller = sys._getframe(1)
                 line = caller.f_lineno if caller.f_code.co_filename == self.path else 0
                 self.channel.send({"op": "enter", "function": _name, "line": line})
@@ -133,8 +139,7 @@ def main(argv: list[str]) -> int:
     package.__path__, labs.__path__ = [], []
     package.__dict__["labs"] = labs
     labs.__dict__["kit"] = kit
-    install({**modules, "mirrorlab": package, "mirrorlab.labs": labs,
-             "mirrorlab.labs.kit": kit})
+    install({**modules, "mirrorlab": package, "mirrorlab.labs": labs, "mirrorlab.labs.kit": kit})
     run = Run(channel, path, list(description["functions"]))
     channel.send({"op": "ready"})
     namespace: dict[str, Any] | None = None

@@ -21,9 +21,14 @@ from mirrorlab.gl.opengl import GL
 
 GL_INVALID_ENUM, GL_INVALID_VALUE, GL_INVALID_OPERATION = 0x0500, 0x0501, 0x0502
 GL_OUT_OF_MEMORY = 0x0505
-ERROR_NAMES = {GL_INVALID_ENUM: "invalid enumerant", GL_INVALID_VALUE: "invalid value",
-               GL_INVALID_OPERATION: "invalid operation", 0x0503: "stack overflow",
-               0x0504: "stack underflow", GL_OUT_OF_MEMORY: "out of memory"}
+ERROR_NAMES = {
+    GL_INVALID_ENUM: "invalid enumerant",
+    GL_INVALID_VALUE: "invalid value",
+    GL_INVALID_OPERATION: "invalid operation",
+    0x0503: "stack overflow",
+    0x0504: "stack underflow",
+    GL_OUT_OF_MEMORY: "out of memory",
+}
 
 
 class CallError(Exception):
@@ -73,8 +78,11 @@ def real(lo: float = -1e9, hi: float = 1e9) -> Check:
         if type(value) not in (int, float):
             raise CallError("TypeError", f"{what}: expected a number")
         if type(value) is int and not -(1 << 64) < value < 1 << 64:
-            raise CallError("ValueError", f"{what} = {shown(value)} is out of range: the "
-                            f"labs take numbers from {lo:g} to {hi:g}")
+            raise CallError(
+                "ValueError",
+                f"{what} = {shown(value)} is out of range: the "
+                f"labs take numbers from {lo:g} to {hi:g}",
+            )
         value = float(value)
         if not math.isfinite(value):
             raise CallError("ValueError", f"{what} is {value}: the labs take finite numbers")
@@ -91,8 +99,9 @@ def one_of(allowed: frozenset[int]) -> Check:
             raise CallError("TypeError", f"{what}: expected a GL enum (an integer)")
         if value not in allowed:
             number = f"{value:#x}" if -(1 << 64) < value < 1 << 64 else shown(value)
-            raise gl_error(GL_INVALID_ENUM, f"{what} = {number} is not one the labs' "
-                           f"OpenGL takes here")
+            raise gl_error(
+                GL_INVALID_ENUM, f"{what} = {number} is not one the labs' OpenGL takes here"
+            )
         return value
 
     return check
@@ -103,15 +112,17 @@ def bits(allowed: int) -> Check:
         if type(value) is not int:
             raise CallError("TypeError", f"{what}: expected GL bits (an integer)")
         if value & ~allowed or value < 0:
-            raise gl_error(GL_INVALID_VALUE, f"{what} = {shown(value)} has bits the labs do "
-                           f"not take")
+            raise gl_error(
+                GL_INVALID_VALUE, f"{what} = {shown(value)} has bits the labs do not take"
+            )
         return value
 
     return check
 
 
-def vector(lengths: tuple[int, ...], lo: float = -1e9, hi: float = 1e9,
-           integral: bool = False) -> Check:
+def vector(
+    lengths: tuple[int, ...], lo: float = -1e9, hi: float = 1e9, integral: bool = False
+) -> Check:
     """A list of ``lengths`` numbers from ``lo`` to ``hi`` (integers with ``integral``)."""
     number = integer(int(lo), int(hi)) if integral else real(lo, hi)
 
@@ -141,8 +152,10 @@ def text(limit: int) -> Check:
         if not isinstance(value, str):
             raise CallError("TypeError", f"{what}: expected a string")
         if len(value) > limit:
-            raise CallError("ValueError", f"{what}: a string of {len(value)} characters; the "
-                            f"labs take {limit} at most")
+            raise CallError(
+                "ValueError",
+                f"{what}: a string of {len(value)} characters; the labs take {limit} at most",
+            )
         return value
 
     return check
@@ -154,88 +167,230 @@ def anything(value: Any, what: str) -> Any:
 
 def pixels(value: Any, what: str) -> Any:
     """None, or an array of the message (``{"$a": i}``; :mod:`.executor` resolves it)."""
-    if value is None or (isinstance(value, dict) and set(value) == {"$a"}
-                         and type(value["$a"]) is int):
+    if value is None or (
+        isinstance(value, dict) and set(value) == {"$a"} and type(value["$a"]) is int
+    ):
         return value
     raise CallError("TypeError", f"{what}: expected pixel data or None")
 
 
 # -------------------------------------------------------------------------------- enums
 MATRIX_MODES = enums("GL_MODELVIEW", "GL_PROJECTION", "GL_TEXTURE")
-CAPS = enums("GL_DEPTH_TEST", "GL_CULL_FACE", "GL_BLEND", "GL_SCISSOR_TEST",
-             "GL_STENCIL_TEST", "GL_TEXTURE_2D", "GL_TEXTURE_CUBE_MAP",
-             "GL_TEXTURE_CUBE_MAP_SEAMLESS", "GL_TEXTURE_GEN_S", "GL_TEXTURE_GEN_T",
-             "GL_TEXTURE_GEN_R", "GL_TEXTURE_GEN_Q", "GL_NORMALIZE", "GL_RESCALE_NORMAL",
-             "GL_LIGHTING", "GL_LIGHT0", "GL_LIGHT1", "GL_COLOR_MATERIAL",
-             "GL_POLYGON_OFFSET_FILL", "GL_LINE_SMOOTH", "GL_POINT_SMOOTH", "GL_MULTISAMPLE",
-             "GL_DITHER", "GL_ALPHA_TEST", "GL_FOG")
-BEGIN_MODES = enums("GL_POINTS", "GL_LINES", "GL_LINE_STRIP", "GL_LINE_LOOP", "GL_TRIANGLES",
-                    "GL_TRIANGLE_STRIP", "GL_TRIANGLE_FAN", "GL_QUADS", "GL_QUAD_STRIP",
-                    "GL_POLYGON")
-CLEAR_BITS = int(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT | GL.GL_STENCIL_BUFFER_BIT
-                 | GL.GL_ACCUM_BUFFER_BIT)
+CAPS = enums(
+    "GL_DEPTH_TEST",
+    "GL_CULL_FACE",
+    "GL_BLEND",
+    "GL_SCISSOR_TEST",
+    "GL_STENCIL_TEST",
+    "GL_TEXTURE_2D",
+    "GL_TEXTURE_CUBE_MAP",
+    "GL_TEXTURE_CUBE_MAP_SEAMLESS",
+    "GL_TEXTURE_GEN_S",
+    "GL_TEXTURE_GEN_T",
+    "GL_TEXTURE_GEN_R",
+    "GL_TEXTURE_GEN_Q",
+    "GL_NORMALIZE",
+    "GL_RESCALE_NORMAL",
+    "GL_LIGHTING",
+    "GL_LIGHT0",
+    "GL_LIGHT1",
+    "GL_COLOR_MATERIAL",
+    "GL_POLYGON_OFFSET_FILL",
+    "GL_LINE_SMOOTH",
+    "GL_POINT_SMOOTH",
+    "GL_MULTISAMPLE",
+    "GL_DITHER",
+    "GL_ALPHA_TEST",
+    "GL_FOG",
+)
+BEGIN_MODES = enums(
+    "GL_POINTS",
+    "GL_LINES",
+    "GL_LINE_STRIP",
+    "GL_LINE_LOOP",
+    "GL_TRIANGLES",
+    "GL_TRIANGLE_STRIP",
+    "GL_TRIANGLE_FAN",
+    "GL_QUADS",
+    "GL_QUAD_STRIP",
+    "GL_POLYGON",
+)
+CLEAR_BITS = int(
+    GL.GL_COLOR_BUFFER_BIT
+    | GL.GL_DEPTH_BUFFER_BIT
+    | GL.GL_STENCIL_BUFFER_BIT
+    | GL.GL_ACCUM_BUFFER_BIT
+)
 BIND_TARGETS = enums("GL_TEXTURE_2D", "GL_TEXTURE_CUBE_MAP")
-IMAGE_TARGETS = enums("GL_TEXTURE_2D", *(f"GL_TEXTURE_CUBE_MAP_{s}_{a}" for s in
-                                         ("POSITIVE", "NEGATIVE") for a in "XYZ"))
-TEX_PARAMS = enums("GL_TEXTURE_MIN_FILTER", "GL_TEXTURE_MAG_FILTER", "GL_TEXTURE_WRAP_S",
-                   "GL_TEXTURE_WRAP_T", "GL_TEXTURE_WRAP_R", "GL_TEXTURE_BASE_LEVEL",
-                   "GL_TEXTURE_MAX_LEVEL", "GL_TEXTURE_MIN_LOD", "GL_TEXTURE_MAX_LOD",
-                   "GL_TEXTURE_LOD_BIAS", "GL_GENERATE_MIPMAP")
-TEX_PARAM_VALUES = enums("GL_NEAREST", "GL_LINEAR", "GL_NEAREST_MIPMAP_NEAREST",
-                         "GL_LINEAR_MIPMAP_NEAREST", "GL_NEAREST_MIPMAP_LINEAR",
-                         "GL_LINEAR_MIPMAP_LINEAR", "GL_CLAMP", "GL_CLAMP_TO_EDGE",
-                         "GL_CLAMP_TO_BORDER", "GL_REPEAT", "GL_MIRRORED_REPEAT")
+IMAGE_TARGETS = enums(
+    "GL_TEXTURE_2D",
+    *(f"GL_TEXTURE_CUBE_MAP_{s}_{a}" for s in ("POSITIVE", "NEGATIVE") for a in "XYZ"),
+)
+TEX_PARAMS = enums(
+    "GL_TEXTURE_MIN_FILTER",
+    "GL_TEXTURE_MAG_FILTER",
+    "GL_TEXTURE_WRAP_S",
+    "GL_TEXTURE_WRAP_T",
+    "GL_TEXTURE_WRAP_R",
+    "GL_TEXTURE_BASE_LEVEL",
+    "GL_TEXTURE_MAX_LEVEL",
+    "GL_TEXTURE_MIN_LOD",
+    "GL_TEXTURE_MAX_LOD",
+    "GL_TEXTURE_LOD_BIAS",
+    "GL_GENERATE_MIPMAP",
+)
+TEX_PARAM_VALUES = enums(
+    "GL_NEAREST",
+    "GL_LINEAR",
+    "GL_NEAREST_MIPMAP_NEAREST",
+    "GL_LINEAR_MIPMAP_NEAREST",
+    "GL_NEAREST_MIPMAP_LINEAR",
+    "GL_LINEAR_MIPMAP_LINEAR",
+    "GL_CLAMP",
+    "GL_CLAMP_TO_EDGE",
+    "GL_CLAMP_TO_BORDER",
+    "GL_REPEAT",
+    "GL_MIRRORED_REPEAT",
+)
 TEX_PARAM_VECTORS = enums("GL_TEXTURE_BORDER_COLOR")
-PIXEL_FORMATS = {int(getattr(GL, name)): channels for name, channels in (
-    ("GL_RGB", 3), ("GL_RGBA", 4), ("GL_BGR", 3), ("GL_BGRA", 4), ("GL_RED", 1),
-    ("GL_GREEN", 1), ("GL_BLUE", 1), ("GL_ALPHA", 1), ("GL_LUMINANCE", 1),
-    ("GL_LUMINANCE_ALPHA", 2), ("GL_DEPTH_COMPONENT", 1))}
-PIXEL_TYPES = {int(getattr(GL, name)): (size, code) for name, size, code in (
-    ("GL_UNSIGNED_BYTE", 1, "u1"), ("GL_BYTE", 1, "i1"), ("GL_UNSIGNED_SHORT", 2, "u2"),
-    ("GL_SHORT", 2, "i2"), ("GL_UNSIGNED_INT", 4, "u4"), ("GL_INT", 4, "i4"),
-    ("GL_FLOAT", 4, "f4"))}
+PIXEL_FORMATS = {
+    int(getattr(GL, name)): channels
+    for name, channels in (
+        ("GL_RGB", 3),
+        ("GL_RGBA", 4),
+        ("GL_BGR", 3),
+        ("GL_BGRA", 4),
+        ("GL_RED", 1),
+        ("GL_GREEN", 1),
+        ("GL_BLUE", 1),
+        ("GL_ALPHA", 1),
+        ("GL_LUMINANCE", 1),
+        ("GL_LUMINANCE_ALPHA", 2),
+        ("GL_DEPTH_COMPONENT", 1),
+    )
+}
+PIXEL_TYPES = {
+    int(getattr(GL, name)): (size, code)
+    for name, size, code in (
+        ("GL_UNSIGNED_BYTE", 1, "u1"),
+        ("GL_BYTE", 1, "i1"),
+        ("GL_UNSIGNED_SHORT", 2, "u2"),
+        ("GL_SHORT", 2, "i2"),
+        ("GL_UNSIGNED_INT", 4, "u4"),
+        ("GL_INT", 4, "i4"),
+        ("GL_FLOAT", 4, "f4"),
+    )
+}
 INTERNAL_FORMATS = frozenset({1, 2, 3, 4}) | enums(
-    "GL_RGB", "GL_RGBA", "GL_RGB8", "GL_RGBA8", "GL_RGB16", "GL_RGBA16", "GL_RGB16F",
-    "GL_RGBA16F", "GL_RGB32F", "GL_RGBA32F", "GL_R8", "GL_RG8", "GL_RED", "GL_LUMINANCE",
-    "GL_LUMINANCE8", "GL_ALPHA", "GL_LUMINANCE_ALPHA", "GL_SRGB8", "GL_SRGB8_ALPHA8",
-    "GL_DEPTH_COMPONENT", "GL_DEPTH_COMPONENT16", "GL_DEPTH_COMPONENT24")
+    "GL_RGB",
+    "GL_RGBA",
+    "GL_RGB8",
+    "GL_RGBA8",
+    "GL_RGB16",
+    "GL_RGBA16",
+    "GL_RGB16F",
+    "GL_RGBA16F",
+    "GL_RGB32F",
+    "GL_RGBA32F",
+    "GL_R8",
+    "GL_RG8",
+    "GL_RED",
+    "GL_LUMINANCE",
+    "GL_LUMINANCE8",
+    "GL_ALPHA",
+    "GL_LUMINANCE_ALPHA",
+    "GL_SRGB8",
+    "GL_SRGB8_ALPHA8",
+    "GL_DEPTH_COMPONENT",
+    "GL_DEPTH_COMPONENT16",
+    "GL_DEPTH_COMPONENT24",
+)
 TEXGEN_COORDS = enums("GL_S", "GL_T", "GL_R", "GL_Q")
-TEXGEN_MODES = enums("GL_EYE_LINEAR", "GL_OBJECT_LINEAR", "GL_SPHERE_MAP", "GL_NORMAL_MAP",
-                     "GL_REFLECTION_MAP")
+TEXGEN_MODES = enums(
+    "GL_EYE_LINEAR", "GL_OBJECT_LINEAR", "GL_SPHERE_MAP", "GL_NORMAL_MAP", "GL_REFLECTION_MAP"
+)
 TEXGEN_PLANES = enums("GL_EYE_PLANE", "GL_OBJECT_PLANE")
 TEXENV_MODES = enums("GL_MODULATE", "GL_REPLACE", "GL_DECAL", "GL_BLEND", "GL_ADD")
 UNITS = frozenset(int(GL.GL_TEXTURE0) + i for i in range(8))
-DEPTH_FUNCS = enums("GL_NEVER", "GL_LESS", "GL_EQUAL", "GL_LEQUAL", "GL_GREATER",
-                    "GL_NOTEQUAL", "GL_GEQUAL", "GL_ALWAYS")
-BLEND_FACTORS = enums("GL_ZERO", "GL_ONE", "GL_SRC_COLOR", "GL_ONE_MINUS_SRC_COLOR",
-                      "GL_SRC_ALPHA", "GL_ONE_MINUS_SRC_ALPHA", "GL_DST_ALPHA",
-                      "GL_ONE_MINUS_DST_ALPHA", "GL_DST_COLOR", "GL_ONE_MINUS_DST_COLOR")
+DEPTH_FUNCS = enums(
+    "GL_NEVER",
+    "GL_LESS",
+    "GL_EQUAL",
+    "GL_LEQUAL",
+    "GL_GREATER",
+    "GL_NOTEQUAL",
+    "GL_GEQUAL",
+    "GL_ALWAYS",
+)
+BLEND_FACTORS = enums(
+    "GL_ZERO",
+    "GL_ONE",
+    "GL_SRC_COLOR",
+    "GL_ONE_MINUS_SRC_COLOR",
+    "GL_SRC_ALPHA",
+    "GL_ONE_MINUS_SRC_ALPHA",
+    "GL_DST_ALPHA",
+    "GL_ONE_MINUS_DST_ALPHA",
+    "GL_DST_COLOR",
+    "GL_ONE_MINUS_DST_COLOR",
+)
 FACES = enums("GL_FRONT", "GL_BACK", "GL_FRONT_AND_BACK")
 WINDINGS = enums("GL_CW", "GL_CCW")
 POLYGON_MODES = enums("GL_POINT", "GL_LINE", "GL_FILL")
 SHADE_MODELS = enums("GL_FLAT", "GL_SMOOTH")
-HINT_TARGETS = enums("GL_PERSPECTIVE_CORRECTION_HINT", "GL_LINE_SMOOTH_HINT",
-                     "GL_POINT_SMOOTH_HINT", "GL_POLYGON_SMOOTH_HINT", "GL_FOG_HINT",
-                     "GL_GENERATE_MIPMAP_HINT")
+HINT_TARGETS = enums(
+    "GL_PERSPECTIVE_CORRECTION_HINT",
+    "GL_LINE_SMOOTH_HINT",
+    "GL_POINT_SMOOTH_HINT",
+    "GL_POLYGON_SMOOTH_HINT",
+    "GL_FOG_HINT",
+    "GL_GENERATE_MIPMAP_HINT",
+)
 HINT_MODES = enums("GL_FASTEST", "GL_NICEST", "GL_DONT_CARE")
 STORE_PARAMS = enums("GL_UNPACK_ALIGNMENT", "GL_PACK_ALIGNMENT")
 STRINGS = enums("GL_VENDOR", "GL_RENDERER", "GL_VERSION", "GL_SHADING_LANGUAGE_VERSION")
 LEVEL_PARAMS = enums("GL_TEXTURE_WIDTH", "GL_TEXTURE_HEIGHT", "GL_TEXTURE_INTERNAL_FORMAT")
 
-QUERY_SIZES = {int(getattr(GL, name)): size for name, size in (
-    ("GL_VIEWPORT", 4), ("GL_SCISSOR_BOX", 4), ("GL_COLOR_CLEAR_VALUE", 4),
-    ("GL_DEPTH_CLEAR_VALUE", 1), ("GL_MATRIX_MODE", 1), ("GL_MODELVIEW_MATRIX", 16),
-    ("GL_PROJECTION_MATRIX", 16), ("GL_TEXTURE_MATRIX", 16), ("GL_ACTIVE_TEXTURE", 1),
-    ("GL_TEXTURE_BINDING_2D", 1), ("GL_TEXTURE_BINDING_CUBE_MAP", 1),
-    ("GL_CURRENT_PROGRAM", 1), ("GL_MAX_TEXTURE_SIZE", 1), ("GL_MAX_TEXTURE_UNITS", 1),
-    ("GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS", 1), ("GL_CURRENT_COLOR", 4),
-    ("GL_CURRENT_TEXTURE_COORDS", 4), ("GL_MODELVIEW_STACK_DEPTH", 1),
-    ("GL_PROJECTION_STACK_DEPTH", 1), ("GL_DEPTH_FUNC", 1), ("GL_CULL_FACE_MODE", 1),
-    ("GL_FRONT_FACE", 1), ("GL_PACK_ALIGNMENT", 1), ("GL_UNPACK_ALIGNMENT", 1),
-    ("GL_MAX_VIEWPORT_DIMS", 2), ("GL_DEPTH_RANGE", 2), ("GL_DEPTH_WRITEMASK", 1),
-    ("GL_COLOR_WRITEMASK", 4), ("GL_POLYGON_MODE", 2), ("GL_SHADE_MODEL", 1),
-    ("GL_LINE_WIDTH", 1), ("GL_POINT_SIZE", 1), ("GL_BLEND_SRC", 1), ("GL_BLEND_DST", 1),
-    ("GL_MAX_CUBE_MAP_TEXTURE_SIZE", 1))} | {cap: 1 for cap in CAPS}
+QUERY_SIZES = {
+    int(getattr(GL, name)): size
+    for name, size in (
+        ("GL_VIEWPORT", 4),
+        ("GL_SCISSOR_BOX", 4),
+        ("GL_COLOR_CLEAR_VALUE", 4),
+        ("GL_DEPTH_CLEAR_VALUE", 1),
+        ("GL_MATRIX_MODE", 1),
+        ("GL_MODELVIEW_MATRIX", 16),
+        ("GL_PROJECTION_MATRIX", 16),
+        ("GL_TEXTURE_MATRIX", 16),
+        ("GL_ACTIVE_TEXTURE", 1),
+        ("GL_TEXTURE_BINDING_2D", 1),
+        ("GL_TEXTURE_BINDING_CUBE_MAP", 1),
+        ("GL_CURRENT_PROGRAM", 1),
+        ("GL_MAX_TEXTURE_SIZE", 1),
+        ("GL_MAX_TEXTURE_UNITS", 1),
+        ("GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS", 1),
+        ("GL_CURRENT_COLOR", 4),
+        ("GL_CURRENT_TEXTURE_COORDS", 4),
+        ("GL_MODELVIEW_STACK_DEPTH", 1),
+        ("GL_PROJECTION_STACK_DEPTH", 1),
+        ("GL_DEPTH_FUNC", 1),
+        ("GL_CULL_FACE_MODE", 1),
+        ("GL_FRONT_FACE", 1),
+        ("GL_PACK_ALIGNMENT", 1),
+        ("GL_UNPACK_ALIGNMENT", 1),
+        ("GL_MAX_VIEWPORT_DIMS", 2),
+        ("GL_DEPTH_RANGE", 2),
+        ("GL_DEPTH_WRITEMASK", 1),
+        ("GL_COLOR_WRITEMASK", 4),
+        ("GL_POLYGON_MODE", 2),
+        ("GL_SHADE_MODEL", 1),
+        ("GL_LINE_WIDTH", 1),
+        ("GL_POINT_SIZE", 1),
+        ("GL_BLEND_SRC", 1),
+        ("GL_BLEND_DST", 1),
+        ("GL_MAX_CUBE_MAP_TEXTURE_SIZE", 1),
+    )
+} | {cap: 1 for cap in CAPS}
 
 SIDE = 1024
 """The largest texture side, viewport and copy the labs accept."""
@@ -257,9 +412,14 @@ def spec(kinds: str, *checks: Check, handler: str = "", in_begin: bool = False) 
     return Spec(tuple(kinds.split()) if kinds else (), checks, handler, in_begin)
 
 
-TYPE_RANGES = {"b": (-(1 << 7), (1 << 7) - 1), "s": (-(1 << 15), (1 << 15) - 1),
-               "i": (-(1 << 31), (1 << 31) - 1), "ub": (0, (1 << 8) - 1),
-               "us": (0, (1 << 16) - 1), "ui": (0, (1 << 32) - 1)}
+TYPE_RANGES = {
+    "b": (-(1 << 7), (1 << 7) - 1),
+    "s": (-(1 << 15), (1 << 15) - 1),
+    "i": (-(1 << 31), (1 << 31) - 1),
+    "ub": (0, (1 << 8) - 1),
+    "us": (0, (1 << 16) - 1),
+    "ui": (0, (1 << 32) - 1),
+}
 """The integer types of GL's call forms (the suffix of ``glVertex3s``, ``glColor3ub``)
 and the values each holds."""
 FORM = re.compile(r"(?P<n>[1-4])?(?P<type>ub|us|ui|b|s|i|f|d)(?P<v>v?)$")
@@ -272,8 +432,15 @@ def form_type(name: str) -> str:
     return match.group("type") if match else ""
 
 
-def immediate(base: str, sizes: tuple[int, ...], types: Any, handler: str,
-              lo: float = -1e9, hi: float = 1e9, unit: bool = False) -> dict[str, Spec]:
+def immediate(
+    base: str,
+    sizes: tuple[int, ...],
+    types: Any,
+    handler: str,
+    lo: float = -1e9,
+    hi: float = 1e9,
+    unit: bool = False,
+) -> dict[str, Spec]:
     """Every form of an immediate-mode call: ``base`` + size + type (+ ``v``), each
     argument checked by its type (integers in the type's range, finite numbers in
     ``lo``..``hi``); ``unit``: a texture unit first (glMultiTexCoord)."""
@@ -287,12 +454,19 @@ def immediate(base: str, sizes: tuple[int, ...], types: Any, handler: str,
             code = "i" if integral else "f"
             first, first_check = ("i ", (one_of(UNITS),)) if unit else ("", ())
             found[f"{base}{count}{kind}"] = spec(
-                first + " ".join(code * size), *first_check, *[check] * size,
-                handler=handler, in_begin=True)
+                first + " ".join(code * size),
+                *first_check,
+                *[check] * size,
+                handler=handler,
+                in_begin=True,
+            )
             found[f"{base}{count}{kind}v"] = spec(
-                first + ("n" if integral else "v"), *first_check,
+                first + ("n" if integral else "v"),
+                *first_check,
                 vector((size,), low, high, integral),
-                handler=handler or "vector_call", in_begin=True)
+                handler=handler or "vector_call",
+                in_begin=True,
+            )
     return found
 
 
@@ -311,17 +485,22 @@ GL_SPECS: dict[str, Spec] = {
     **{f"glTranslate{t}": spec("f f f", *[NUMBER] * 3, handler="matrix_op") for t in "fd"},
     **{f"glScale{t}": spec("f f f", *[NUMBER] * 3, handler="matrix_op") for t in "fd"},
     **{f"glRotate{t}": spec("f f f f", *[NUMBER] * 4, handler="matrix_op") for t in "fd"},
-    **{f"gl{op}Matrix{t}": spec("v", vector((16,)), handler="matrix_op")
-       for op in ("Load", "Mult", "LoadTranspose", "MultTranspose") for t in "fd"},
+    **{
+        f"gl{op}Matrix{t}": spec("v", vector((16,)), handler="matrix_op")
+        for op in ("Load", "Mult", "LoadTranspose", "MultTranspose")
+        for t in "fd"
+    },
     # the frame
     "glViewport": spec("i i i i", SIDE_INT, SIDE_INT, SIZE_INT, SIZE_INT, handler="viewport"),
     "glScissor": spec("i i i i", SIDE_INT, SIDE_INT, SIZE_INT, SIZE_INT),
     "glClear": spec("i", bits(CLEAR_BITS), handler="clear"),
     "glClearColor": spec("f f f f", *[UNIT_RANGE] * 4, handler="clear_color"),
-    "glClearDepth": spec("f", UNIT_RANGE), "glClearDepthf": spec("f", UNIT_RANGE),
+    "glClearDepth": spec("f", UNIT_RANGE),
+    "glClearDepthf": spec("f", UNIT_RANGE),
     "glDepthRange": spec("f f", UNIT_RANGE, UNIT_RANGE),
     "glDepthRangef": spec("f f", UNIT_RANGE, UNIT_RANGE),
-    "glFlush": spec(""), "glFinish": spec(""),
+    "glFlush": spec(""),
+    "glFinish": spec(""),
     "glEnable": spec("i", one_of(CAPS), handler="enable"),
     "glDisable": spec("i", one_of(CAPS), handler="enable"),
     "glDepthFunc": spec("i", one_of(DEPTH_FUNCS)),
@@ -344,8 +523,9 @@ GL_SPECS: dict[str, Spec] = {
     **immediate("glVertex", (2, 3, 4), "sifd", "vertex"),
     **immediate("glTexCoord", (1, 2, 3, 4), "sifd", "texcoord"),
     **immediate("glMultiTexCoord", (1, 2, 3, 4), "sifd", "texcoord", unit=True),
-    **immediate("glColor", (3, 4), ("b", "s", "i", "f", "d", "ub", "us", "ui"), "color",
-                lo=-1e3, hi=1e3),
+    **immediate(
+        "glColor", (3, 4), ("b", "s", "i", "f", "d", "ub", "us", "ui"), "color", lo=-1e3, hi=1e3
+    ),
     **immediate("glNormal3", (3,), "bsifd", ""),
     # textures
     "glGenTextures": spec("i", integer(0, 64), handler="gen_textures"),
@@ -353,127 +533,304 @@ GL_SPECS: dict[str, Spec] = {
     "glIsTexture": spec("i", ANY_INT, handler="is_texture"),
     "glBindTexture": spec("i i", one_of(BIND_TARGETS), ANY_INT, handler="bind_texture"),
     "glActiveTexture": spec("i", one_of(UNITS), handler="active_texture"),
-    "glTexImage2D": spec("i i i i i i i i p", one_of(IMAGE_TARGETS), LEVEL,
-                         one_of(INTERNAL_FORMATS), SIZE_INT, SIZE_INT, integer(0, 1),
-                         one_of(frozenset(PIXEL_FORMATS)), one_of(frozenset(PIXEL_TYPES)),
-                         pixels, handler="tex_image"),
-    "glTexSubImage2D": spec("i i i i i i i i p", one_of(IMAGE_TARGETS), LEVEL, SIZE_INT,
-                            SIZE_INT, SIZE_INT, SIZE_INT, one_of(frozenset(PIXEL_FORMATS)),
-                            one_of(frozenset(PIXEL_TYPES)), pixels, handler="tex_sub_image"),
-    "glCopyTexImage2D": spec("i i i i i i i i", one_of(IMAGE_TARGETS), LEVEL,
-                             one_of(INTERNAL_FORMATS), SIDE_INT, SIDE_INT, SIZE_INT, SIZE_INT,
-                             integer(0, 1), handler="copy_tex_image"),
-    "glCopyTexSubImage2D": spec("i i i i i i i i", one_of(IMAGE_TARGETS), LEVEL, SIZE_INT,
-                                SIZE_INT, SIDE_INT, SIDE_INT, SIZE_INT, SIZE_INT,
-                                handler="copy_tex_image"),
-    "glTexParameteri": spec("i i i", one_of(BIND_TARGETS), one_of(TEX_PARAMS),
-                            integer(-1000, 1 << 16), handler="tex_parameter"),
-    "glTexParameterf": spec("i i f", one_of(BIND_TARGETS), one_of(TEX_PARAMS),
-                            real(-1000, 1 << 16), handler="tex_parameter"),
-    "glTexParameterfv": spec("i i v", one_of(BIND_TARGETS), one_of(TEX_PARAM_VECTORS),
-                             vector((4,)), handler="tex_parameter"),
-    "glTexParameteriv": spec("i i n", one_of(BIND_TARGETS), one_of(TEX_PARAM_VECTORS),
-                             vector((4,), *TYPE_RANGES["i"], integral=True),
-                             handler="tex_parameter"),
+    "glTexImage2D": spec(
+        "i i i i i i i i p",
+        one_of(IMAGE_TARGETS),
+        LEVEL,
+        one_of(INTERNAL_FORMATS),
+        SIZE_INT,
+        SIZE_INT,
+        integer(0, 1),
+        one_of(frozenset(PIXEL_FORMATS)),
+        one_of(frozenset(PIXEL_TYPES)),
+        pixels,
+        handler="tex_image",
+    ),
+    "glTexSubImage2D": spec(
+        "i i i i i i i i p",
+        one_of(IMAGE_TARGETS),
+        LEVEL,
+        SIZE_INT,
+        SIZE_INT,
+        SIZE_INT,
+        SIZE_INT,
+        one_of(frozenset(PIXEL_FORMATS)),
+        one_of(frozenset(PIXEL_TYPES)),
+        pixels,
+        handler="tex_sub_image",
+    ),
+    "glCopyTexImage2D": spec(
+        "i i i i i i i i",
+        one_of(IMAGE_TARGETS),
+        LEVEL,
+        one_of(INTERNAL_FORMATS),
+        SIDE_INT,
+        SIDE_INT,
+        SIZE_INT,
+        SIZE_INT,
+        integer(0, 1),
+        handler="copy_tex_image",
+    ),
+    "glCopyTexSubImage2D": spec(
+        "i i i i i i i i",
+        one_of(IMAGE_TARGETS),
+        LEVEL,
+        SIZE_INT,
+        SIZE_INT,
+        SIDE_INT,
+        SIDE_INT,
+        SIZE_INT,
+        SIZE_INT,
+        handler="copy_tex_image",
+    ),
+    "glTexParameteri": spec(
+        "i i i",
+        one_of(BIND_TARGETS),
+        one_of(TEX_PARAMS),
+        integer(-1000, 1 << 16),
+        handler="tex_parameter",
+    ),
+    "glTexParameterf": spec(
+        "i i f",
+        one_of(BIND_TARGETS),
+        one_of(TEX_PARAMS),
+        real(-1000, 1 << 16),
+        handler="tex_parameter",
+    ),
+    "glTexParameterfv": spec(
+        "i i v",
+        one_of(BIND_TARGETS),
+        one_of(TEX_PARAM_VECTORS),
+        vector((4,)),
+        handler="tex_parameter",
+    ),
+    "glTexParameteriv": spec(
+        "i i n",
+        one_of(BIND_TARGETS),
+        one_of(TEX_PARAM_VECTORS),
+        vector((4,), *TYPE_RANGES["i"], integral=True),
+        handler="tex_parameter",
+    ),
     "glGenerateMipmap": spec("i", one_of(BIND_TARGETS), handler="generate_mipmap"),
-    "glTexEnvi": spec("i i i", one_of(enums("GL_TEXTURE_ENV")),
-                      one_of(enums("GL_TEXTURE_ENV_MODE")), one_of(TEXENV_MODES)),
-    "glTexEnvf": spec("i i f", one_of(enums("GL_TEXTURE_ENV")),
-                      one_of(enums("GL_TEXTURE_ENV_MODE")), real(0, 1 << 16),
-                      handler="texenv_f"),
-    "glTexEnviv": spec("i i n", one_of(enums("GL_TEXTURE_ENV")),
-                       one_of(enums("GL_TEXTURE_ENV_MODE")), vector((1,), 0, 1 << 16, True),
-                       handler="texenv_f"),
-    "glTexEnvfv": spec("i i v", one_of(enums("GL_TEXTURE_ENV")),
-                       one_of(enums("GL_TEXTURE_ENV_MODE")), vector((1,), 0, 1 << 16),
-                       handler="texenv_f"),
-    "glTexGeni": spec("i i i", one_of(TEXGEN_COORDS), one_of(enums("GL_TEXTURE_GEN_MODE")),
-                      one_of(TEXGEN_MODES), handler="texgen"),
-    **{f"glTexGen{t}": spec("i i f", one_of(TEXGEN_COORDS),
-                            one_of(enums("GL_TEXTURE_GEN_MODE")), real(0, 1 << 16),
-                            handler="texgen") for t in "fd"},
-    **{f"glTexGen{t}v": spec("i i v", one_of(TEXGEN_COORDS), one_of(TEXGEN_PLANES),
-                             vector((4,)), handler="vector_call") for t in "fd"},
-    "glTexGeniv": spec("i i n", one_of(TEXGEN_COORDS), one_of(TEXGEN_PLANES),
-                       vector((4,), *TYPE_RANGES["i"], integral=True), handler="vector_call"),
+    "glTexEnvi": spec(
+        "i i i",
+        one_of(enums("GL_TEXTURE_ENV")),
+        one_of(enums("GL_TEXTURE_ENV_MODE")),
+        one_of(TEXENV_MODES),
+    ),
+    "glTexEnvf": spec(
+        "i i f",
+        one_of(enums("GL_TEXTURE_ENV")),
+        one_of(enums("GL_TEXTURE_ENV_MODE")),
+        real(0, 1 << 16),
+        handler="texenv_f",
+    ),
+    "glTexEnviv": spec(
+        "i i n",
+        one_of(enums("GL_TEXTURE_ENV")),
+        one_of(enums("GL_TEXTURE_ENV_MODE")),
+        vector((1,), 0, 1 << 16, True),
+        handler="texenv_f",
+    ),
+    "glTexEnvfv": spec(
+        "i i v",
+        one_of(enums("GL_TEXTURE_ENV")),
+        one_of(enums("GL_TEXTURE_ENV_MODE")),
+        vector((1,), 0, 1 << 16),
+        handler="texenv_f",
+    ),
+    "glTexGeni": spec(
+        "i i i",
+        one_of(TEXGEN_COORDS),
+        one_of(enums("GL_TEXTURE_GEN_MODE")),
+        one_of(TEXGEN_MODES),
+        handler="texgen",
+    ),
+    **{
+        f"glTexGen{t}": spec(
+            "i i f",
+            one_of(TEXGEN_COORDS),
+            one_of(enums("GL_TEXTURE_GEN_MODE")),
+            real(0, 1 << 16),
+            handler="texgen",
+        )
+        for t in "fd"
+    },
+    **{
+        f"glTexGen{t}v": spec(
+            "i i v",
+            one_of(TEXGEN_COORDS),
+            one_of(TEXGEN_PLANES),
+            vector((4,)),
+            handler="vector_call",
+        )
+        for t in "fd"
+    },
+    "glTexGeniv": spec(
+        "i i n",
+        one_of(TEXGEN_COORDS),
+        one_of(TEXGEN_PLANES),
+        vector((4,), *TYPE_RANGES["i"], integral=True),
+        handler="vector_call",
+    ),
     # programs: only the lab's
     "glUseProgram": spec("i", ANY_INT, handler="use_program"),
     "glGetUniformLocation": spec("i s", ANY_INT, text(128), handler="uniform_location"),
-    **{f"glUniform{n}{t}": spec("i " + " ".join(t * n), integer(-1, 1 << 16),
-                                *[integer() if t == "i" else NUMBER] * n, handler="uniform")
-       for n in (1, 2, 3, 4) for t in "if"},
-    **{f"glUniform{n}ui": spec("i " + " ".join("i" * n), integer(-1, 1 << 16),
-                               *[integer(*TYPE_RANGES["ui"])] * n, handler="uniform")
-       for n in (1, 2, 3, 4)},
-    **{f"glUniform{n}{t}v": spec("i i " + ("v" if t == "f" else "n"), integer(-1, 1 << 16),
-                                 integer(0, 64),
-                                 vector(tuple(range(0, 64 * n + 1)),
-                                        TYPE_RANGES.get(t, (-1e9, 1e9))[0],
-                                        TYPE_RANGES.get(t, (-1e9, 1e9))[1],
-                                        integral=t != "f"), handler="uniform_vector")
-       for n in (1, 2, 3, 4) for t in ("i", "f", "ui")},
-    **{f"glUniformMatrix{n}fv": spec("i i b v", integer(-1, 1 << 16), integer(0, 16),
-                                     integer(0, 1), vector(tuple(range(0, 16 * n * n + 1))),
-                                     handler="uniform_matrix") for n in (2, 3, 4)},
+    **{
+        f"glUniform{n}{t}": spec(
+            "i " + " ".join(t * n),
+            integer(-1, 1 << 16),
+            *[integer() if t == "i" else NUMBER] * n,
+            handler="uniform",
+        )
+        for n in (1, 2, 3, 4)
+        for t in "if"
+    },
+    **{
+        f"glUniform{n}ui": spec(
+            "i " + " ".join("i" * n),
+            integer(-1, 1 << 16),
+            *[integer(*TYPE_RANGES["ui"])] * n,
+            handler="uniform",
+        )
+        for n in (1, 2, 3, 4)
+    },
+    **{
+        f"glUniform{n}{t}v": spec(
+            "i i " + ("v" if t == "f" else "n"),
+            integer(-1, 1 << 16),
+            integer(0, 64),
+            vector(
+                tuple(range(0, 64 * n + 1)),
+                TYPE_RANGES.get(t, (-1e9, 1e9))[0],
+                TYPE_RANGES.get(t, (-1e9, 1e9))[1],
+                integral=t != "f",
+            ),
+            handler="uniform_vector",
+        )
+        for n in (1, 2, 3, 4)
+        for t in ("i", "f", "ui")
+    },
+    **{
+        f"glUniformMatrix{n}fv": spec(
+            "i i b v",
+            integer(-1, 1 << 16),
+            integer(0, 16),
+            integer(0, 1),
+            vector(tuple(range(0, 16 * n * n + 1))),
+            handler="uniform_matrix",
+        )
+        for n in (2, 3, 4)
+    },
     # queries
     "glGetError": spec("", handler="get_error"),
-    **{name: spec("i", one_of(frozenset(QUERY_SIZES)), handler="get")
-       for name in ("glGetIntegerv", "glGetFloatv", "glGetDoublev", "glGetBooleanv")},
+    **{
+        name: spec("i", one_of(frozenset(QUERY_SIZES)), handler="get")
+        for name in ("glGetIntegerv", "glGetFloatv", "glGetDoublev", "glGetBooleanv")
+    },
     "glIsEnabled": spec("i", one_of(CAPS), handler="is_enabled"),
     "glGetString": spec("i", one_of(STRINGS), handler="get_string"),
-    "glGetTexParameteriv": spec("i i", one_of(BIND_TARGETS), one_of(TEX_PARAMS),
-                                handler="get_tex_parameter"),
-    "glGetTexParameterfv": spec("i i", one_of(BIND_TARGETS), one_of(TEX_PARAMS),
-                                handler="get_tex_parameter"),
-    **{f"glGetTexLevelParameter{t}v": spec("i i i", one_of(IMAGE_TARGETS), LEVEL,
-                                           one_of(LEVEL_PARAMS), handler="get_level_parameter")
-       for t in "if"},
-    **{f"glGetTexGen{t}v": spec("i i", one_of(TEXGEN_COORDS),
-                                one_of(enums("GL_TEXTURE_GEN_MODE")), handler="get_texgen")
-       for t in "ifd"},
+    "glGetTexParameteriv": spec(
+        "i i", one_of(BIND_TARGETS), one_of(TEX_PARAMS), handler="get_tex_parameter"
+    ),
+    "glGetTexParameterfv": spec(
+        "i i", one_of(BIND_TARGETS), one_of(TEX_PARAMS), handler="get_tex_parameter"
+    ),
+    **{
+        f"glGetTexLevelParameter{t}v": spec(
+            "i i i",
+            one_of(IMAGE_TARGETS),
+            LEVEL,
+            one_of(LEVEL_PARAMS),
+            handler="get_level_parameter",
+        )
+        for t in "if"
+    },
+    **{
+        f"glGetTexGen{t}v": spec(
+            "i i", one_of(TEXGEN_COORDS), one_of(enums("GL_TEXTURE_GEN_MODE")), handler="get_texgen"
+        )
+        for t in "ifd"
+    },
 }
 
 GLU_SPECS: dict[str, Spec] = {
     "gluLookAt": spec("f f f f f f f f f", *[NUMBER] * 9, handler="matrix_op"),
-    "gluPerspective": spec("f f f f", real(-1e4, 1e4), NUMBER, NUMBER, NUMBER,
-                           handler="matrix_op"),
+    "gluPerspective": spec("f f f f", real(-1e4, 1e4), NUMBER, NUMBER, NUMBER, handler="matrix_op"),
     "gluOrtho2D": spec("f f f f", *[NUMBER] * 4, handler="matrix_op"),
 }
 
 # ------------------------------------------------------------ what each lab leaves out
 _READS = "the labs never read back what was drawn (the checker looks at the frame itself)"
 REFUSED: dict[str, str] = {
-    **{name: _READS for name in ("glReadPixels", "glReadnPixels", "glReadBuffer",
-                                 "glCopyPixels", "glDrawPixels", "glBlitFramebuffer")},
-    **{name: "no lab reads a texture back" for name in (
-        "glGetTexImage", "glGetnTexImage", "glGetTextureImage", "glGetTextureSubImage",
-        "glGetCompressedTexImage")},
-    **{name: "no lab uses feedback or selection mode" for name in (
-        "glRenderMode", "glFeedbackBuffer", "glSelectBuffer", "glPassThrough",
-        "glInitNames", "glPushName", "glLoadName")},
-    **{name: "no lab queries what was drawn" for name in (
-        "glBeginQuery", "glEndQuery", "glGenQueries", "glGetQueryObjectiv",
-        "glGetQueryObjectuiv", "glGetQueryObjecti64v", "glGetQueryObjectui64v",
-        "glGetQueryiv", "glBeginConditionalRender")},
+    **{
+        name: _READS
+        for name in (
+            "glReadPixels",
+            "glReadnPixels",
+            "glReadBuffer",
+            "glCopyPixels",
+            "glDrawPixels",
+            "glBlitFramebuffer",
+        )
+    },
+    **{
+        name: "no lab reads a texture back"
+        for name in (
+            "glGetTexImage",
+            "glGetnTexImage",
+            "glGetTextureImage",
+            "glGetTextureSubImage",
+            "glGetCompressedTexImage",
+        )
+    },
+    **{
+        name: "no lab uses feedback or selection mode"
+        for name in (
+            "glRenderMode",
+            "glFeedbackBuffer",
+            "glSelectBuffer",
+            "glPassThrough",
+            "glInitNames",
+            "glPushName",
+            "glLoadName",
+        )
+    },
+    **{
+        name: "no lab queries what was drawn"
+        for name in (
+            "glBeginQuery",
+            "glEndQuery",
+            "glGenQueries",
+            "glGetQueryObjectiv",
+            "glGetQueryObjectuiv",
+            "glGetQueryObjecti64v",
+            "glGetQueryObjectui64v",
+            "glGetQueryiv",
+            "glBeginConditionalRender",
+        )
+    },
 }
 """Calls no lab offers, with why, for the refusal the student reads: every way to learn
 what the trusted side drew (pixels, textures, feedback, selection, queries)."""
 
 # Each family whole, every form the allow-list has (glTexGend, glUniform1ui...), so that
 # a form added to GL_SPECS is left out with its family.
-_UNIFORMS = tuple(name for name in GL_SPECS
-                  if name.startswith(("glUniform", "glGetUniformLocation")))
+_UNIFORMS = tuple(
+    name for name in GL_SPECS if name.startswith(("glUniform", "glGetUniformLocation"))
+)
 _COPIES = ("glCopyTexImage2D", "glCopyTexSubImage2D")
 _TEXGEN = tuple(name for name in GL_SPECS if name.startswith(("glTexGen", "glGetTexGen")))
 LEFT_OUT: dict[str, dict[str, str]] = {
     "lab20": {name: "lab 20 makes no texture coordinates by texgen" for name in _TEXGEN},
-    "spheremap": {**{name: "the sphere-map lab captures nothing" for name in _COPIES},
-                  **{name: "the sphere-map lab gives no program with uniforms to set"
-                     for name in _UNIFORMS}},
-    "cubemap": {**{name: "the cube-map lab gives no program with uniforms to set"
-                   for name in _UNIFORMS},
-                **{name: "the cube-map lab's shader makes the lookup; no texgen"
-                   for name in _TEXGEN}},
+    "spheremap": {
+        **{name: "the sphere-map lab captures nothing" for name in _COPIES},
+        **{name: "the sphere-map lab gives no program with uniforms to set" for name in _UNIFORMS},
+    },
+    "cubemap": {
+        **{name: "the cube-map lab gives no program with uniforms to set" for name in _UNIFORMS},
+        **{name: "the cube-map lab's shader makes the lookup; no texgen" for name in _TEXGEN},
+    },
 }
 """Calls of :data:`GL_SPECS` a lab's handout does not need, by lab, with why."""
 
@@ -496,12 +853,16 @@ def refusal(lab: str, name: str) -> str:
 def refused_text(lab: str, name: str) -> str:
     """The one line a student reads when calling ``name``, which ``lab`` does not offer."""
     why = refusal(lab, name)
-    return f"{name} is not one of the OpenGL calls this lab offers" + (f": {why}" if why
-                                                                      else "")
+    return f"{name} is not one of the OpenGL calls this lab offers" + (f": {why}" if why else "")
 
 
-MATRIX_REPLACES = {"glLoadIdentity", "glLoadMatrixf", "glLoadMatrixd", "glLoadTransposeMatrixf",
-                   "glLoadTransposeMatrixd"}
+MATRIX_REPLACES = {
+    "glLoadIdentity",
+    "glLoadMatrixf",
+    "glLoadMatrixd",
+    "glLoadTransposeMatrixf",
+    "glLoadTransposeMatrixd",
+}
 
 
 def offered(specs: dict[str, Spec]) -> dict[str, list[str]]:
@@ -515,7 +876,10 @@ def check_arguments(name: str, call: Spec, args: Any) -> list[Any]:
         raise CallError("TypeError", f"{name}: malformed arguments")
     required = sum(not k.endswith("?") for k in call.kinds)
     if not required <= len(args) <= len(call.kinds):
-        raise CallError("TypeError", f"{name}() takes {len(call.kinds)} arguments "
-                        f"({len(args)} given)")
-    return [check(value, f"{name}() argument {i + 1}")
-            for i, (check, value) in enumerate(zip(call.checks, args, strict=False))]
+        raise CallError(
+            "TypeError", f"{name}() takes {len(call.kinds)} arguments ({len(args)} given)"
+        )
+    return [
+        check(value, f"{name}() argument {i + 1}")
+        for i, (check, value) in enumerate(zip(call.checks, args, strict=False))
+    ]

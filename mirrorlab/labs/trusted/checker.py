@@ -85,8 +85,9 @@ def solutions_dir(given: str | Path | None) -> Path | None:
     folder = Path(value)
     if not folder.is_dir():
         option = "--solutions" if given is not None else "MIRRORLAB_SOLUTIONS"
-        raise ValueError(f"{option}: {str(folder)!r} is not a folder (the repository's "
-                         f"labs/solutions/)")
+        raise ValueError(
+            f"{option}: {str(folder)!r} is not a folder (the repository's labs/solutions/)"
+        )
     return folder
 
 
@@ -111,11 +112,20 @@ def code_digest() -> str:
 
     root = Path(labs_package.__file__).parent
     digest = hashlib.sha256()
-    for path in sorted([*root.glob("*.py"), *root.glob("student/*.py"),
-                        *root.glob("trusted/*.py")]):
+    for path in sorted(
+        [*root.glob("*.py"), *root.glob("student/*.py"), *root.glob("trusted/*.py")]
+    ):
         digest.update(path.read_bytes())
-    for name in ("kit_scene.vert", "kit_scene.frag", "kit_texture.vert", "kit_texture.frag",
-                 "kit_sphere.vert", "kit_sphere.frag", "kit_cube.vert", "kit_cube.frag"):
+    for name in (
+        "kit_scene.vert",
+        "kit_scene.frag",
+        "kit_texture.vert",
+        "kit_texture.frag",
+        "kit_sphere.vert",
+        "kit_sphere.frag",
+        "kit_cube.vert",
+        "kit_cube.frag",
+    ):
         digest.update(shader_source(name).encode())
     for folder in ("models", "textures"):
         for path in sorted(data_path(folder).glob("*")):
@@ -133,42 +143,62 @@ def trim_reference(evidence: Evidence) -> Evidence:
         events.append({k: v for k, v in event.items() if k not in ("state", "vertices")})
         if event.get("picture"):
             keep.add(event["picture"])
-    return Evidence(evidence.lab, evidence.status, evidence.detail,
-                    frames=[{"events": events}], state=dict(evidence.state),
-                    arrays={k: v for k, v in evidence.arrays.items() if k in keep},
-                    variant=evidence.variant)
+    return Evidence(
+        evidence.lab,
+        evidence.status,
+        evidence.detail,
+        frames=[{"events": events}],
+        state=dict(evidence.state),
+        arrays={k: v for k, v in evidence.arrays.items() if k in keep},
+        variant=evidence.variant,
+    )
 
 
-def make_reference(spec: LabSpec, variant: Variant, solution: str, limits: Limits,
-                   size: tuple[int, int], keep: bool = False) -> Evidence:
+def make_reference(
+    spec: LabSpec,
+    variant: Variant,
+    solution: str,
+    limits: Limits,
+    size: tuple[int, int],
+    keep: bool = False,
+) -> Evidence:
     """The evidence of ``solution`` (the teacher's, with ``variant``'s numbers) run like any
     submission; CheckError when it does not run cleanly."""
     from mirrorlab.labs.content import solution_for
 
     text = solution_for(solution, variant)
-    evidence = run_job(spec.name, text.encode(), "solution.py", variant, limits, size,
-                       keep=keep)
+    evidence = run_job(spec.name, text.encode(), "solution.py", variant, limits, size, keep=keep)
     if evidence.status != "ok":
-        raise CheckError(f"the reference solution of {spec.name} did not run: "
-                         f"{evidence.detail}")
+        raise CheckError(f"the reference solution of {spec.name} did not run: {evidence.detail}")
     problems = evidence.errors or evidence.call_errors
     if problems:
         problem = problems[0]
-        raise CheckError(f"the reference solution of {spec.name} raised at line "
-                         f"{problem.get('line', 0)}: {problem.get('message', '')}")
+        raise CheckError(
+            f"the reference solution of {spec.name} raised at line "
+            f"{problem.get('line', 0)}: {problem.get('message', '')}"
+        )
     return trim_reference(evidence)
 
 
-def reference_evidence(spec: LabSpec, variant: Variant, solutions: Path | None,
-                       limits: Limits = DEFAULT_LIMITS, size: tuple[int, int] = CHECK_SIZE,
-                       released: Path | None = None, keep: bool = False) -> Evidence:
+def reference_evidence(
+    spec: LabSpec,
+    variant: Variant,
+    solutions: Path | None,
+    limits: Limits = DEFAULT_LIMITS,
+    size: tuple[int, int] = CHECK_SIZE,
+    released: Path | None = None,
+    keep: bool = False,
+) -> Evidence:
     """The reference evidence for ``variant``: made from the teacher's ``solutions`` when
     given (cached), else shipped in the package (the default variant) or in a released
     folder (``released``); CheckError when there is none."""
     if solutions is not None:
         solution = solution_source(spec, solutions)
-        digest = hashlib.sha256(repr((spec.name, size, sorted(variant.values.items()),
-                                      solution, code_digest())).encode()).hexdigest()[:24]
+        digest = hashlib.sha256(
+            repr(
+                (spec.name, size, sorted(variant.values.items()), solution, code_digest())
+            ).encode()
+        ).hexdigest()[:24]
         folder = cache_dir() / "lab-references" / f"{spec.name}-{variant.id}-{digest}"
         try:
             return Evidence.load(folder)
@@ -193,18 +223,29 @@ def reference_evidence(spec: LabSpec, variant: Variant, solutions: Path | None,
         from mirrorlab.labs.content import reference_folder
 
         if size != CHECK_SIZE:
-            raise CheckError(f"the shipped reference is {CHECK_SIZE[0]}x{CHECK_SIZE[1]}; give "
-                             f"--solutions to check at another size")
+            raise CheckError(
+                f"the shipped reference is {CHECK_SIZE[0]}x{CHECK_SIZE[1]}; give "
+                f"--solutions to check at another size"
+            )
         return Evidence.load(reference_folder(spec))
-    raise CheckError(f"no reference for variant {variant.id} of {spec.name}: its released "
-                     f"folder's {REFERENCE_FOLDER}/ is missing; give --solutions DIR (the "
-                     f"teacher's labs/solutions)")
+    raise CheckError(
+        f"no reference for variant {variant.id} of {spec.name}: its released "
+        f"folder's {REFERENCE_FOLDER}/ is missing; give --solutions DIR (the "
+        f"teacher's labs/solutions)"
+    )
 
 
-def check_submission(spec: LabSpec, source: bytes, reference: Evidence, context: Context,
-                     student: str = "", file_name: str = "submission.py",
-                     limits: Limits = DEFAULT_LIMITS, size: tuple[int, int] = CHECK_SIZE,
-                     keep: bool = False) -> CheckResult:
+def check_submission(
+    spec: LabSpec,
+    source: bytes,
+    reference: Evidence,
+    context: Context,
+    student: str = "",
+    file_name: str = "submission.py",
+    limits: Limits = DEFAULT_LIMITS,
+    size: tuple[int, int] = CHECK_SIZE,
+    keep: bool = False,
+) -> CheckResult:
     """Run ``source`` in the sandbox through the trusted checker (with ``keep``, this
     process's kept checker process) and judge it against ``reference`` for
     ``context.variant``."""
@@ -214,11 +255,19 @@ def check_submission(spec: LabSpec, source: bytes, reference: Evidence, context:
     try:
         results = module.judge(spec, evidence, reference, context)
     except Exception as exc:  # a judge's own fault: every task fails, saying so
-        results = [TaskResult(task, False, f"its run could not be judged "
-                              f"({type(exc).__name__}: {exc})") for task in spec.tasks]
-    return CheckResult(student or Path(file_name).stem, results, evidence.status,
-                       evidence.detail, time.perf_counter() - started,
-                       module.check_picture(evidence, reference), context.variant.id)
+        results = [
+            TaskResult(task, False, f"its run could not be judged ({type(exc).__name__}: {exc})")
+            for task in spec.tasks
+        ]
+    return CheckResult(
+        student or Path(file_name).stem,
+        results,
+        evidence.status,
+        evidence.detail,
+        time.perf_counter() - started,
+        module.check_picture(evidence, reference),
+        context.variant.id,
+    )
 
 
 def report_lines(spec: LabSpec, check: CheckResult) -> list[str]:
@@ -227,8 +276,9 @@ def report_lines(spec: LabSpec, check: CheckResult) -> list[str]:
     lines = [f"{spec.title}: {check.student}{variant}"]
     for result in check.results:
         mark = "pass" if result.passed else "FAIL"
-        lines.append(f"  [{mark}] {result.task.name}: {result.task.title}, in "
-                     f"{result.task.function}()")
+        lines.append(
+            f"  [{mark}] {result.task.name}: {result.task.title}, in {result.task.function}()"
+        )
         if result.hint:
             lines.append(f"         {'note' if result.passed else 'hint'}: {result.hint}")
     lines.append(f"{check.score}/{len(check.results)} tasks passed")
@@ -255,20 +305,28 @@ def folder_file(spec: LabSpec, folder: Path) -> Path:
         raise FileNotFoundError(
             f"FILE: {str(folder)!r} holds no {LAB_FILE} (the file lab start puts in a lab's "
             f"folder): give the file to check, mirrorlab lab check {spec.name} FILE, or run "
-            f"it in your lab's folder")
+            f"it in your lab's folder"
+        )
     try:
         text = path.read_text(errors="replace")
     except OSError as exc:
         raise FileNotFoundError(f"FILE: cannot read {str(path)!r}: {exc.strerror}") from None
     labs = set(re.findall(r"\bkit\.(\w+)\(", text)) & set(LABS)
     if labs and spec.name not in labs:
-        raise FileNotFoundError(f"FILE: {str(path)!r} is a file of the {sorted(labs)[0]} lab "
-                                f"(kit.{sorted(labs)[0]}()), not of {spec.name}")
+        raise FileNotFoundError(
+            f"FILE: {str(path)!r} is a file of the {sorted(labs)[0]} lab "
+            f"(kit.{sorted(labs)[0]}()), not of {spec.name}"
+        )
     return path
 
 
-def run_check(lab: str, file: str | None, out: Path | None, limits: Limits,
-              solutions: str | Path | None = None) -> int:
+def run_check(
+    lab: str,
+    file: str | None,
+    out: Path | None,
+    limits: Limits,
+    solutions: str | Path | None = None,
+) -> int:
     """``mirrorlab lab check``: print the verdicts, write the picture; 0 only when every
     task passed. Without ``file``, the lab file of the current folder (:func:`folder_file`)
     is checked. The report's first line names the file checked."""
@@ -286,8 +344,9 @@ def run_check(lab: str, file: str | None, out: Path | None, limits: Limits,
     if not sandboxed():
         print(f"mirrorlab lab check: {unsandboxed_note()}", file=sys.stderr)
     reference = reference_evidence(spec, variant, folder, limits, released=released)
-    check = check_submission(spec, source, reference, Context(variant), str(path), path.name,
-                             limits)
+    check = check_submission(
+        spec, source, reference, Context(variant), str(path), path.name, limits
+    )
     print("\n".join(report_lines(spec, check)))
     write_png_atomic(out, check.picture)
     print(f"picture (student | reference | difference): {out}")

@@ -23,21 +23,36 @@ from __future__ import annotations
 
 import re
 
-ATTRIBUTES = {"gl_Vertex": (0, "vec4"), "gl_Normal": (1, "vec3"), "gl_Color": (3, "vec4"),
-              **{f"gl_MultiTexCoord{i}": (4 + i, "vec4") for i in range(8)}}
+ATTRIBUTES = {
+    "gl_Vertex": (0, "vec4"),
+    "gl_Normal": (1, "vec3"),
+    "gl_Color": (3, "vec4"),
+    **{f"gl_MultiTexCoord{i}": (4 + i, "vec4") for i in range(8)},
+}
 """Vertex-stage built-in attributes: generic location and type."""
 MATRICES = {
-    "gl_ModelViewMatrix": "mat4", "gl_ProjectionMatrix": "mat4",
-    "gl_ModelViewProjectionMatrix": "mat4", "gl_NormalMatrix": "mat3",
-    **{f"gl_{base}{suffix}": "mat4"
-       for base in ("ModelViewMatrix", "ProjectionMatrix", "ModelViewProjectionMatrix")
-       for suffix in ("Inverse", "Transpose", "InverseTranspose")},
+    "gl_ModelViewMatrix": "mat4",
+    "gl_ProjectionMatrix": "mat4",
+    "gl_ModelViewProjectionMatrix": "mat4",
+    "gl_NormalMatrix": "mat3",
+    **{
+        f"gl_{base}{suffix}": "mat4"
+        for base in ("ModelViewMatrix", "ProjectionMatrix", "ModelViewProjectionMatrix")
+        for suffix in ("Inverse", "Transpose", "InverseTranspose")
+    },
 }
 """Built-in uniform matrices (``gl_TextureMatrix`` is an array of 8, handled apart)."""
-FUNCTIONS = {"texture2D": "texture", "textureCube": "texture", "texture2DProj": "textureProj",
-             "texture2DLod": "textureLod", "textureCubeLod": "textureLod",
-             "texture2DProjLod": "textureProjLod", "texture1D": "texture",
-             "texture3D": "texture", "shadow2D": "texture"}
+FUNCTIONS = {
+    "texture2D": "texture",
+    "textureCube": "texture",
+    "texture2DProj": "textureProj",
+    "texture2DLod": "textureLod",
+    "textureCubeLod": "textureLod",
+    "texture2DProjLod": "textureProjLod",
+    "texture1D": "texture",
+    "texture3D": "texture",
+    "shadow2D": "texture",
+}
 PREFIX = "ml_"
 TRANSLATED_STATE = frozenset({PREFIX + name[3:] for name in MATRICES} | {PREFIX + "TextureMatrix"})
 """The uniforms the built-in matrices become: GL's own state, which a student's function

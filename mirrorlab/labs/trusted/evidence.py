@@ -52,8 +52,12 @@ class Evidence:
         """The uint8 picture ``name``, or None when missing or not ``(h, w, 3)`` (or
         ``shape``)."""
         value = self.arrays.get(name)
-        if not isinstance(value, np.ndarray) or value.dtype != np.uint8 or value.ndim != 3 \
-                or value.shape[-1] != 3:
+        if (
+            not isinstance(value, np.ndarray)
+            or value.dtype != np.uint8
+            or value.ndim != 3
+            or value.shape[-1] != 3
+        ):
             return None
         if shape is not None and value.shape != shape:
             return None
@@ -61,8 +65,7 @@ class Evidence:
 
     def floats(self, name: str, shape: tuple[int, ...]) -> np.ndarray | None:
         value = self.arrays.get(name)
-        if not isinstance(value, np.ndarray) or value.shape != shape \
-                or value.dtype.kind != "f":
+        if not isinstance(value, np.ndarray) or value.shape != shape or value.dtype.kind != "f":
             return None
         return value.astype(np.float64)
 
@@ -72,7 +75,7 @@ class Evidence:
         return lines[line - 1].strip()[:200] if 0 < line <= len(lines) else ""
 
     def at(self, line: int) -> str:
-        """"line N (code)" for a hint, or '' for line 0."""
+        """ "line N (code)" for a hint, or '' for line 0."""
         if not line:
             return ""
         code = self.line_text(line)
@@ -82,15 +85,21 @@ class Evidence:
     def last_frame(self) -> list[dict[str, Any]]:
         return self.frames[-1]["events"] if self.frames else []
 
-    def events(self, kind: str, frame: int | None = -1, who: str | None = None,
-               within: str | None = None) -> list[dict[str, Any]]:
+    def events(
+        self, kind: str, frame: int | None = -1, who: str | None = None, within: str | None = None
+    ) -> list[dict[str, Any]]:
         """Events of ``kind`` in frame ``frame`` (-1: the last; None: the set-up), drawn by
         ``who``, while lab function ``within`` ran."""
-        source = self.setup if frame is None else (self.frames[frame]["events"]
-                                                   if self.frames else [])
-        return [e for e in source if e.get("kind") == kind
-                and (who is None or e.get("who") == who)
-                and (within is None or within in (e.get("steps") or []))]
+        source = (
+            self.setup if frame is None else (self.frames[frame]["events"] if self.frames else [])
+        )
+        return [
+            e
+            for e in source
+            if e.get("kind") == kind
+            and (who is None or e.get("who") == who)
+            and (within is None or within in (e.get("steps") or []))
+        ]
 
     def all_events(self, kind: str, who: str | None = None) -> list[dict[str, Any]]:
         found = [e for e in self.setup if e.get("kind") == kind]
@@ -101,14 +110,18 @@ class Evidence:
     def called(self, function: str, frame: int | None = -1) -> bool:
         """Whether lab function ``function`` ran in frame ``frame`` (None: any time)."""
         if frame is None:
-            return any(e.get("kind") == "enter" and e.get("function") == function
-                       for e in [*self.setup, *(x for f in self.frames for x in f["events"])])
-        return any(e.get("kind") == "enter" and e.get("function") == function
-                   for e in (self.frames[frame]["events"] if self.frames else []))
+            return any(
+                e.get("kind") == "enter" and e.get("function") == function
+                for e in [*self.setup, *(x for f in self.frames for x in f["events"])]
+            )
+        return any(
+            e.get("kind") == "enter" and e.get("function") == function
+            for e in (self.frames[frame]["events"] if self.frames else [])
+        )
 
     def raised_in(self, frame: int = -1) -> str:
         """The function whose error stopped frame ``frame`` (the innermost), or ''."""
-        for event in (self.frames[frame]["events"] if self.frames else []):
+        for event in self.frames[frame]["events"] if self.frames else []:
             if event.get("kind") == "leave" and event.get("raised"):
                 return str(event.get("function", ""))
         return ""
@@ -121,9 +134,20 @@ class Evidence:
         """``folder/evidence.json`` and ``folder/arrays.npz`` (zip-compressed, or not when
         it is read back at once)."""
         folder.mkdir(parents=True, exist_ok=True)
-        plain = {key: getattr(self, key) for key in (
-            "lab", "status", "detail", "errors", "call_errors", "textures", "state",
-            "variant", "source")}
+        plain = {
+            key: getattr(self, key)
+            for key in (
+                "lab",
+                "status",
+                "detail",
+                "errors",
+                "call_errors",
+                "textures",
+                "state",
+                "variant",
+                "source",
+            )
+        }
         # events that share a state snapshot (the state did not change between them)
         # refer to one copy of it in "states"
         states: list[dict[str, Any]] = []
@@ -142,8 +166,9 @@ class Evidence:
             return out
 
         plain["setup"] = packed(self.setup)
-        plain["frames"] = [{**frame, "events": packed(frame.get("events", []))}
-                           for frame in self.frames]
+        plain["frames"] = [
+            {**frame, "events": packed(frame.get("events", []))} for frame in self.frames
+        ]
         plain["states"] = states
         with open(folder / "evidence.json", "w") as stream:  # streamed, never whole
             json.dump(plain, stream, default=_plain)
@@ -174,20 +199,31 @@ class Evidence:
         if not isinstance(plain, dict) or not isinstance(plain.get("lab"), str):
             raise ValueError(f"unreadable evidence in {folder}")
         evidence = cls(plain["lab"], arrays=arrays)
-        for key in ("status", "detail", "errors", "call_errors", "frames", "setup",
-                    "textures", "state", "variant", "source"):
+        for key in (
+            "status",
+            "detail",
+            "errors",
+            "call_errors",
+            "frames",
+            "setup",
+            "textures",
+            "state",
+            "variant",
+            "source",
+        ):
             if key in plain and isinstance(plain[key], type(getattr(evidence, key))):
                 setattr(evidence, key, plain[key])
         states = plain.get("states")
         states = states if isinstance(states, list) else []
-        for events in [evidence.setup, *(f.get("events") for f in evidence.frames
-                                         if isinstance(f, dict))]:
+        for events in [
+            evidence.setup,
+            *(f.get("events") for f in evidence.frames if isinstance(f, dict)),
+        ]:
             for event in events if isinstance(events, list) else []:
                 ref = event.get("state") if isinstance(event, dict) else None
                 if isinstance(ref, dict) and set(ref) == {"$state"}:
                     i = ref["$state"]
-                    event["state"] = states[i] if type(i) is int and 0 <= i < len(states) \
-                        else {}
+                    event["state"] = states[i] if type(i) is int and 0 <= i < len(states) else {}
         return evidence
 
 

@@ -63,8 +63,12 @@ def execute(job: dict[str, Any]) -> Evidence:
 
     spec = find_lab(job["lab"])
     size = (int(job["size"][0]), int(job["size"][1]))
-    variant = Variant(spec.name, dict(job["variant"]["values"]), job["variant"]["id"],
-                      job["variant"].get("student", ""))
+    variant = Variant(
+        spec.name,
+        dict(job["variant"]["values"]),
+        job["variant"]["id"],
+        job["variant"].get("student", ""),
+    )
     limits = Limits(**job["limits"])
     source = Path(job["file"]).read_bytes()
     context = offscreen_context()
@@ -72,8 +76,15 @@ def execute(job: dict[str, Any]) -> Evidence:
         target = Framebuffer(context.resources, *size)
         target.bind()
         session = open_session(spec.name, size, variant)
-        with LabRun(spec, session, source, job["name"], limits,
-                    registry=context.resources, owner=job.get("owner")) as run:
+        with LabRun(
+            spec,
+            session,
+            source,
+            job["name"],
+            limits,
+            registry=context.resources,
+            owner=job.get("owner"),
+        ) as run:
             evidence = run.check()
     finally:
         context.release()
@@ -118,8 +129,12 @@ def main(argv: list[str]) -> int:
     return run_one(Path(argv[0]))
 
 
-def child_options(memory_mb: int, cpu_seconds: int | None = None, cores: bool = True,
-                  die_with_parent: bool = False) -> dict[str, Any]:
+def child_options(
+    memory_mb: int,
+    cpu_seconds: int | None = None,
+    cores: bool = True,
+    die_with_parent: bool = False,
+) -> dict[str, Any]:
     """Popen's arguments that limit a trusted helper process (the checker's GL process, the
     GLSL check's): where the system has ``resource``, its address space (``memory_mb``), its
     CPU seconds (``cpu_seconds``, None: no limit) and, without ``cores``, no core file; with
@@ -178,8 +193,11 @@ class CheckerProcess:
     def __init__(self) -> None:
         self.process = subprocess.Popen(
             [sys.executable, "-m", "mirrorlab.labs.trusted.execute", "--serve"],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=gl_process_environment(),
-            **child_options(MEMORY_MB, die_with_parent=True))
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            env=gl_process_environment(),
+            **child_options(MEMORY_MB, die_with_parent=True),
+        )
         assert self.process.stdout is not None
         self.reply_read = self.process.stdout.fileno()
         self.jobs = 0
@@ -231,8 +249,15 @@ def kept_process() -> CheckerProcess:
     return _kept
 
 
-def run_job(lab: str, source: bytes, file_name: str, variant: Variant, limits: Limits,
-            size: tuple[int, int], keep: bool = False) -> Evidence:
+def run_job(
+    lab: str,
+    source: bytes,
+    file_name: str,
+    variant: Variant,
+    limits: Limits,
+    size: tuple[int, int],
+    keep: bool = False,
+) -> Evidence:
     """Run ``source`` (the student's file, called ``file_name``) through ``lab`` for
     ``variant`` in a checker process of its own (with ``keep``, this process's kept one:
     see :class:`CheckerProcess`), which is stopped if it outlives the run's own limits;
@@ -246,9 +271,16 @@ def run_job(lab: str, source: bytes, file_name: str, variant: Variant, limits: L
         (base / "source.py").write_bytes(source)
         out = base / "out"
         out.mkdir()
-        job = {"lab": lab, "file": str(base / "source.py"), "name": file_name,
-               "variant": variant.plain(), "size": list(size), "out": str(out),
-               "owner": os.getpid(), "limits": dataclasses.asdict(limits)}
+        job = {
+            "lab": lab,
+            "file": str(base / "source.py"),
+            "name": file_name,
+            "variant": variant.plain(),
+            "size": list(size),
+            "out": str(out),
+            "owner": os.getpid(),
+            "limits": dataclasses.asdict(limits),
+        }
         job_file = base / "job.json"
         job_file.write_text(json.dumps(job))
         deadline = limits.seconds + 60
@@ -259,21 +291,32 @@ def run_job(lab: str, source: bytes, file_name: str, variant: Variant, limits: L
             try:
                 done = subprocess.run(
                     [sys.executable, "-m", "mirrorlab.labs.trusted.execute", str(job_file)],
-                    capture_output=True, text=True, env=gl_process_environment(), timeout=deadline,
-                    **child_options(MEMORY_MB, die_with_parent=True))
+                    capture_output=True,
+                    text=True,
+                    env=gl_process_environment(),
+                    timeout=deadline,
+                    **child_options(MEMORY_MB, die_with_parent=True),
+                )
                 code, stderr = done.returncode, done.stderr
             except subprocess.TimeoutExpired:
                 code = None
         if code is None:
-            return Evidence(lab, "timeout", f"stopped after {deadline:g} s: the calls took "
-                            f"too long to draw", variant=variant.plain())
+            return Evidence(
+                lab,
+                "timeout",
+                f"stopped after {deadline:g} s: the calls took too long to draw",
+                variant=variant.plain(),
+            )
         if code == EXIT_SANDBOX:
             raise SandboxError((out / "sandbox_error.txt").read_text().strip())
         if code != 0:
             failure = out / "checker_error.txt"
             lines = [line for line in stderr.strip().splitlines() if line.strip()]
-            last = failure.read_text().strip() if failure.is_file() else \
-                (lines[-1] if lines else f"exit status {code}")
+            last = (
+                failure.read_text().strip()
+                if failure.is_file()
+                else (lines[-1] if lines else f"exit status {code}")
+            )
             if code < 0:
                 last = f"it died ({-code}); {last}"
             raise CheckerError(f"the checker's OpenGL process failed: {last[:300]}")

@@ -134,8 +134,7 @@ class Executor:
         self.kit_calls: dict[str, Callable[[list[Any]], Any]] = self._kit_calls()
         self.gl_specs = C.lab_specs(session.name)
         tracker = self.tracker
-        tracker.clear_color.value = tuple(float(v) for v in GL.glGetFloatv(
-            GL.GL_COLOR_CLEAR_VALUE))
+        tracker.clear_color.value = tuple(float(v) for v in GL.glGetFloatv(GL.GL_COLOR_CLEAR_VALUE))
         tracker.viewport.value = [int(v) for v in GL.glGetIntegerv(GL.GL_VIEWPORT)]
 
     # ------------------------------------------------------------------ the message
@@ -154,8 +153,10 @@ class Executor:
         function = header.get("function")
         self.calls += 1
         if self.calls > self.limits.calls:
-            raise Stop(f"stopped after {self.limits.calls} calls and notes in one run (the "
-                       f"labs make a few hundred): a loop that never ends?")
+            raise Stop(
+                f"stopped after {self.limits.calls} calls and notes in one run (the "
+                f"labs make a few hundred): a loop that never ends?"
+            )
         if function not in functions:
             return
         steps = self.tracker.steps
@@ -165,8 +166,11 @@ class Executor:
         if self.tracker.primitive is not None:
             return  # no queries between glBegin and glEnd; the next call will say so
         projection, modelview = current_matrices()
-        seen = {"projection": projection.tolist(), "modelview": modelview.tolist(),
-                "state": self.tracker.snapshot()}
+        seen = {
+            "projection": projection.tolist(),
+            "modelview": modelview.tolist(),
+            "state": self.tracker.snapshot(),
+        }
         if header["op"] == "enter":
             if len(steps) < 32:
                 steps.append(function)
@@ -183,13 +187,14 @@ class Executor:
         self.calls += 1
         self.frame_calls += 1
         if self.calls > self.limits.calls:
-            raise Stop(f"stopped after {self.limits.calls} calls in one run (the labs make a "
-                       f"few hundred): a loop that never ends?")
+            raise Stop(
+                f"stopped after {self.limits.calls} calls in one run (the labs make a "
+                f"few hundred): a loop that never ends?"
+            )
         if self.frame_calls > self.limits.frame_calls and self.tracker.frames:
             raise Stop(f"stopped: more than {self.limits.frame_calls} calls in one frame")
         if not isinstance(name, str) or not name.isidentifier() or len(name) > 64:
-            return self.error(CallError("TypeError", "a call without a name the labs know"),
-                              "?")
+            return self.error(CallError("TypeError", "a call without a name the labs know"), "?")
         started = time.perf_counter()
         try:
             if op == "kit":
@@ -202,15 +207,25 @@ class Executor:
             self._drain()
             return self.error(gl_error(int(exc.err)), name)
         except StudentShaderError as exc:
-            return ({"ok": False, "type": "StudentShaderError", "message": str(exc),
-                     "variable": exc.variable, "shader_line": exc.line}, [])
+            return (
+                {
+                    "ok": False,
+                    "type": "StudentShaderError",
+                    "message": str(exc),
+                    "variable": exc.variable,
+                    "shader_line": exc.line,
+                },
+                [],
+            )
         except LabSetupError as exc:
             return self.error(CallError("LabSetupError", str(exc)), name)
         finally:
             self.gl_seconds += time.perf_counter() - started
             if self.gl_seconds > self.limits.gl_seconds:
-                raise Stop(f"stopped: the calls took more than {self.limits.gl_seconds:g} s "
-                           f"of the checker's time")
+                raise Stop(
+                    f"stopped: the calls took more than {self.limits.gl_seconds:g} s "
+                    f"of the checker's time"
+                )
             self.bounded()
         return self.reply(value)
 
@@ -219,17 +234,25 @@ class Executor:
         tracker, cap = self.tracker, self.limits.frame_evidence
         if tracker.frame_bytes > cap:
             where = f"frame {len(tracker.frames)}" if tracker.frames else "the set-up"
-            raise Stop(f"stopped: {where} made more than {cap >> 20} MiB of evidence "
-                       f"({len(tracker.events)} draws, matrices and other steps; the labs "
-                       f"make a few dozen a frame)")
+            raise Stop(
+                f"stopped: {where} made more than {cap >> 20} MiB of evidence "
+                f"({len(tracker.events)} draws, matrices and other steps; the labs "
+                f"make a few dozen a frame)"
+            )
 
     def error(self, exc: CallError, name: str) -> Reply:
         if exc.kind == "GLError" and "(" not in exc.message:
             exc = gl_error(exc.err, broken_precondition(name, exc.err))
         if len(self.call_errors) < 200:
-            self.call_errors.append({"fn": name, "line": self.tracker.line,
-                                     "function": self.tracker.function, "kind": exc.kind,
-                                     "message": exc.message[:300]})
+            self.call_errors.append(
+                {
+                    "fn": name,
+                    "line": self.tracker.line,
+                    "function": self.tracker.function,
+                    "kind": exc.kind,
+                    "message": exc.message[:300],
+                }
+            )
         return {"ok": False, "type": exc.kind, "message": exc.message, "err": exc.err}, []
 
     def reply(self, value: Any) -> Reply:
@@ -241,8 +264,9 @@ class Executor:
                 return {"$a": len(payloads) - 1, "as": "bytes"}
             if isinstance(item, np.ndarray):
                 array = np.ascontiguousarray(item)
-                payloads.append((array.dtype.str.lstrip("<>|="), list(array.shape),
-                                 array.tobytes()))
+                payloads.append(
+                    (array.dtype.str.lstrip("<>|="), list(array.shape), array.tobytes())
+                )
                 return {"$a": len(payloads) - 1, "as": "array"}
             if isinstance(item, list | tuple):
                 return [encode(i) for i in item]
@@ -292,10 +316,14 @@ class Executor:
     def _not_in_setup(self, name: str) -> None:
         """LabSetupError when ``name`` draws or captures before the first frame."""
         if not self.tracker.frames:
-            where = f"{self.tracker.function}()" if self.tracker.function else \
-                "the file's top level"
-            raise CallError("LabSetupError", f"{name} in {where}: the lab draws only in "
-                            f"display(); set-up makes textures and state, and draws nothing")
+            where = (
+                f"{self.tracker.function}()" if self.tracker.function else "the file's top level"
+            )
+            raise CallError(
+                "LabSetupError",
+                f"{name} in {where}: the lab draws only in "
+                f"display(); set-up makes textures and state, and draws nothing",
+            )
 
     def _function(self, name: str) -> Callable[..., Any]:
         return getattr(legacy.emulated() or (GLU if name.startswith("glu") else GL), name)
@@ -303,9 +331,16 @@ class Executor:
     @staticmethod
     def _array(name: str, values: list[float]) -> np.ndarray:
         """``values`` (checked against the form's range) as the array the form takes."""
-        dtype = {"f": np.float32, "d": np.float64, "b": np.int8, "s": np.int16,
-                 "i": np.int32, "ub": np.uint8, "us": np.uint16, "ui": np.uint32}.get(
-            C.form_type(name), np.float32)
+        dtype = {
+            "f": np.float32,
+            "d": np.float64,
+            "b": np.int8,
+            "s": np.int16,
+            "i": np.int32,
+            "ub": np.uint8,
+            "us": np.uint16,
+            "ui": np.uint32,
+        }.get(C.form_type(name), np.float32)
         return np.asarray(values, dtype=dtype)
 
     def matrix_mode(self, name: str, args: list[Any], arrays: Any) -> None:
@@ -321,8 +356,13 @@ class Executor:
             function(*args)
         self.ok()
         self.tracker.matrix_op(name, args, replaces=name in C.MATRIX_REPLACES)
-        self.tracker.event("matrix", op=name, mode=self.tracker.matrix_mode.value,
-                           mode_line=self.tracker.matrix_mode.line, args=args)
+        self.tracker.event(
+            "matrix",
+            op=name,
+            mode=self.tracker.matrix_mode.value,
+            mode_line=self.tracker.matrix_mode.line,
+            args=args,
+        )
 
     def push_matrix(self, name: str, args: list[Any], arrays: Any) -> None:
         legacy.gl().glPushMatrix()
@@ -349,17 +389,24 @@ class Executor:
         self.ok()
         tracker = self.tracker
         scissor = tracker.is_enabled(int(GL.GL_SCISSOR_TEST))
-        tracker.event("clear", mask=args[0], color=tracker.clear_color.plain(),
-                      scissor=scissor, viewport=tracker.viewport.plain())
+        tracker.event(
+            "clear",
+            mask=args[0],
+            color=tracker.clear_color.plain(),
+            scissor=scissor,
+            viewport=tracker.viewport.plain(),
+        )
         if args[0] & GL.GL_COLOR_BUFFER_BIT and all(self._colour_mask()[:3]):
-            box = self._scissor_box() if scissor else \
-                (0, 0, self.session.width, self.session.height)
+            box = (
+                self._scissor_box() if scissor else (0, 0, self.session.width, self.session.height)
+            )
             tracker.untaint(box)
 
     @staticmethod
     def _colour_mask() -> list[bool]:
-        return [bool(v) for v in np.asarray(GL.glGetBooleanv(GL.GL_COLOR_WRITEMASK))
-                .reshape(-1)[:4]]
+        return [
+            bool(v) for v in np.asarray(GL.glGetBooleanv(GL.GL_COLOR_WRITEMASK)).reshape(-1)[:4]
+        ]
 
     @staticmethod
     def _scissor_on() -> bool:
@@ -367,8 +414,9 @@ class Executor:
 
     @staticmethod
     def _scissor_box() -> tuple[int, int, int, int]:
-        x, y, w, h = (int(v) for v in np.asarray(GL.glGetIntegerv(GL.GL_SCISSOR_BOX))
-                      .reshape(-1)[:4])
+        x, y, w, h = (
+            int(v) for v in np.asarray(GL.glGetIntegerv(GL.GL_SCISSOR_BOX)).reshape(-1)[:4]
+        )
         return x, y, w, h
 
     def _draw_box(self) -> tuple[int, int, int, int] | None:
@@ -376,8 +424,7 @@ class Executor:
         when the colour mask writes no colour."""
         if not any(self._colour_mask()[:3]):
             return None
-        x, y, w, h = (int(v) for v in np.asarray(GL.glGetIntegerv(GL.GL_VIEWPORT))
-                      .reshape(-1)[:4])
+        x, y, w, h = (int(v) for v in np.asarray(GL.glGetIntegerv(GL.GL_VIEWPORT)).reshape(-1)[:4])
         if self._scissor_on():
             sx, sy, sw, sh = self._scissor_box()
             x0, y0 = max(x, sx), max(y, sy)
@@ -414,8 +461,11 @@ class Executor:
         legacy.gl().glEnd()
         self.tracker.primitive = None
         self.ok()
-        extra: dict[str, Any] = {"mode": primitive.mode, "begin_line": primitive.line,
-                                 "vertices": primitive.vertices}
+        extra: dict[str, Any] = {
+            "mode": primitive.mode,
+            "begin_line": primitive.line,
+            "vertices": primitive.vertices,
+        }
         program = self.tracker.program.value
         if program and program in self.session.programs():
             extra["sampler"] = self._sampler(program)
@@ -435,9 +485,13 @@ class Executor:
         self.tracker.primitive = None
         self._drain()
         function = primitive.function or self.tracker.function or "<file>"
-        return {"function": function, "kind": "GLError", "line": primitive.line,
-                "message": f"{function}() returned inside glBegin (line "
-                           f"{primitive.line}): call glEnd() before it returns"}
+        return {
+            "function": function,
+            "kind": "GLError",
+            "line": primitive.line,
+            "message": f"{function}() returned inside glBegin (line "
+            f"{primitive.line}): call glEnd() before it returns",
+        }
 
     def _sampler(self, program: int) -> int:
         location = getattr(self.session, "texSampler", -1)
@@ -452,18 +506,22 @@ class Executor:
         self.frame_vertices += 1
         if self.frame_vertices > self.limits.frame_vertices:
             where = "in one frame" if self.tracker.frames else "before the first frame"
-            raise Stop(f"stopped: more than {self.limits.frame_vertices} vertices {where} "
-                       f"(the labs draw a handful with glVertex)")
+            raise Stop(
+                f"stopped: more than {self.limits.frame_vertices} vertices {where} "
+                f"(the labs draw a handful with glVertex)"
+            )
         if name.endswith("v"):
             getattr(legacy.gl(), name)(self._array(name, values))
         else:
             getattr(legacy.gl(), name)(*values)
         primitive = self.tracker.primitive
         if primitive is not None:
-            position = [*values, *(0.0, 1.0)[len(values) - 2:]][:4] if len(values) < 4 \
-                else list(values)
-            primitive.vertices.append((position, [list(t) for t in self.tracker.texcoords],
-                                       list(self.tracker.color)))
+            position = (
+                [*values, *(0.0, 1.0)[len(values) - 2 :]][:4] if len(values) < 4 else list(values)
+            )
+            primitive.vertices.append(
+                (position, [list(t) for t in self.tracker.texcoords], list(self.tracker.color))
+            )
 
     def texcoord(self, name: str, args: list[Any], arrays: Any) -> None:
         unit = 0
@@ -481,7 +539,7 @@ class Executor:
         else:
             getattr(legacy.gl(), name)(*args)
         if unit < 4:
-            self.tracker.texcoords[unit] = [*values, *(0.0, 0.0, 1.0)[len(values) - 1:]][:4]
+            self.tracker.texcoords[unit] = [*values, *(0.0, 0.0, 1.0)[len(values) - 1 :]][:4]
 
     def color(self, name: str, args: list[Any], arrays: Any) -> None:
         values = args[0] if name.endswith("v") else args
@@ -503,8 +561,11 @@ class Executor:
         texture = self.tracker.texture_bound(_bind_target(target))
         if texture is None:
             unit = self.tracker.active_unit.value
-            raise gl_error(C.GL_INVALID_OPERATION, f"{name}: no texture of this file is "
-                           f"bound to that target on {_unit_name(unit)} (glBindTexture first)")
+            raise gl_error(
+                C.GL_INVALID_OPERATION,
+                f"{name}: no texture of this file is "
+                f"bound to that target on {_unit_name(unit)} (glBindTexture first)",
+            )
         return texture
 
     def _room(self, texture: Texture, key: tuple[int, int], nbytes: int) -> None:
@@ -513,8 +574,10 @@ class Executor:
         if old is not None:
             used -= old.width * old.height * 4
         if used + nbytes > self.limits.texture_bytes:
-            raise gl_error(C.GL_OUT_OF_MEMORY, f"the textures would hold more than "
-                           f"{self.limits.texture_bytes >> 20} MiB")
+            raise gl_error(
+                C.GL_OUT_OF_MEMORY,
+                f"the textures would hold more than {self.limits.texture_bytes >> 20} MiB",
+            )
 
     def gen_textures(self, name: str, args: list[Any], arrays: Any) -> Any:
         count = args[0]
@@ -530,11 +593,10 @@ class Executor:
         return made[0] if count == 1 else made
 
     def delete_textures(self, name: str, args: list[Any], arrays: Any) -> None:
-        doomed = args[1][:args[0][0]] if len(args) == 2 and args[0] else args[-1]
+        doomed = args[1][: args[0][0]] if len(args) == 2 and args[0] else args[-1]
         for texture in doomed:
             if texture and texture not in self.owned:
-                raise gl_error(C.GL_INVALID_VALUE, f"texture {texture} was not made by this "
-                               f"file")
+                raise gl_error(C.GL_INVALID_VALUE, f"texture {texture} was not made by this file")
         doomed = [t for t in doomed if t]
         if doomed:
             GL.glDeleteTextures(np.asarray(doomed, dtype=np.uint32))
@@ -552,8 +614,9 @@ class Executor:
     def bind_texture(self, name: str, args: list[Any], arrays: Any) -> None:
         target, texture = args
         if texture and texture not in self.owned:
-            raise gl_error(C.GL_INVALID_VALUE, f"texture {texture} was not made by this file's "
-                           f"glGenTextures")
+            raise gl_error(
+                C.GL_INVALID_VALUE, f"texture {texture} was not made by this file's glGenTextures"
+            )
         GL.glBindTexture(target, texture)
         self.ok()
         tracker = self.tracker
@@ -566,8 +629,16 @@ class Executor:
         self.ok()
         self.tracker.active_unit = self.tracker.setting(args[0] - int(GL.GL_TEXTURE0))
 
-    def _pixel_data(self, name: str, data: Any, arrays: list[np.ndarray], width: int,
-                    height: int, fmt: int, kind: int) -> np.ndarray | None:
+    def _pixel_data(
+        self,
+        name: str,
+        data: Any,
+        arrays: list[np.ndarray],
+        width: int,
+        height: int,
+        fmt: int,
+        kind: int,
+    ) -> np.ndarray | None:
         """The student's pixels, exactly as many bytes as GL will read (GL reads rows
         padded to GL_UNPACK_ALIGNMENT); CallError when they are fewer."""
         if data is None:
@@ -581,9 +652,12 @@ class Executor:
         row = -(-width * pixel // alignment) * alignment
         needed = row * max(height - 1, 0) + width * pixel if width and height else 0
         if raw.size < needed:
-            raise gl_error(C.GL_INVALID_OPERATION, f"{name}: the data holds {raw.size} bytes, "
-                           f"and GL would read {needed} ({width}x{height}, alignment "
-                           f"{alignment})")
+            raise gl_error(
+                C.GL_INVALID_OPERATION,
+                f"{name}: the data holds {raw.size} bytes, "
+                f"and GL would read {needed} ({width}x{height}, alignment "
+                f"{alignment})",
+            )
         return np.ascontiguousarray(raw[:needed])
 
     def tex_image(self, name: str, args: list[Any], arrays: list[np.ndarray]) -> None:
@@ -592,17 +666,37 @@ class Executor:
         pixels = self._pixel_data(name, data, arrays, width, height, fmt, kind)
         key = (_face(target), level)
         self._room(texture, key, width * height * 4)
-        (legacy.emulated() or RAW).glTexImage2D(target, level, internalformat, width, height,
-                                                border, fmt, kind, pixels)
+        (legacy.emulated() or RAW).glTexImage2D(
+            target, level, internalformat, width, height, border, fmt, kind, pixels
+        )
         self.ok()
         tainted = pixels is not None and bool(pixels.any())
-        self._write(texture, key, Image(width, height, internalformat,
-                                        "upload" if pixels is not None else "blank",
-                                        self.tracker.line, self.tracker.function,
-                                        len(self.tracker.frames) - 1, tainted))
-        self.tracker.event("upload", fn=name, target=target, level=level, width=width,
-                           height=height, data=pixels is not None, tainted=tainted,
-                           texture=texture.name, unit=self.tracker.active_unit.value)
+        self._write(
+            texture,
+            key,
+            Image(
+                width,
+                height,
+                internalformat,
+                "upload" if pixels is not None else "blank",
+                self.tracker.line,
+                self.tracker.function,
+                len(self.tracker.frames) - 1,
+                tainted,
+            ),
+        )
+        self.tracker.event(
+            "upload",
+            fn=name,
+            target=target,
+            level=level,
+            width=width,
+            height=height,
+            data=pixels is not None,
+            tainted=tainted,
+            texture=texture.name,
+            unit=self.tracker.active_unit.value,
+        )
 
     def tex_sub_image(self, name: str, args: list[Any], arrays: list[np.ndarray]) -> None:
         target, level, x, y, width, height, fmt, kind, data = args
@@ -618,9 +712,18 @@ class Executor:
             image.tainted = image.tainted or tainted
             image.source, image.line = "upload", self.tracker.line
         self._written(texture, level)
-        self.tracker.event("upload", fn=name, target=target, level=level, width=width,
-                           height=height, data=True, tainted=tainted, texture=texture.name,
-                           unit=self.tracker.active_unit.value)
+        self.tracker.event(
+            "upload",
+            fn=name,
+            target=target,
+            level=level,
+            width=width,
+            height=height,
+            data=True,
+            tainted=tainted,
+            texture=texture.name,
+            unit=self.tracker.active_unit.value,
+        )
 
     def _write(self, texture: Texture, key: tuple[int, int], image: Image) -> None:
         texture.images[key] = image
@@ -655,9 +758,20 @@ class Executor:
         taint = self.tracker.taint_in((x, y, width, height))
         key = (_face(target), level)
         if name == "glCopyTexImage2D":
-            self._write(texture, key, Image(width, height, internalformat, "copy",
-                                            self.tracker.line, self.tracker.function,
-                                            frame, bool(taint)))
+            self._write(
+                texture,
+                key,
+                Image(
+                    width,
+                    height,
+                    internalformat,
+                    "copy",
+                    self.tracker.line,
+                    self.tracker.function,
+                    frame,
+                    bool(taint),
+                ),
+            )
         else:
             image = texture.images.get(key)
             if image is not None:
@@ -665,13 +779,25 @@ class Executor:
                 image.source, image.line = "copy", self.tracker.line
             self._written(texture, level)
         tracker = self.tracker
-        tracker.event("copy", fn=name, target=target, level=level, x=x, y=y, width=width,
-                      height=height, offset=list(offset), internalformat=internalformat,
-                      texture=texture.name, unit=tracker.active_unit.value,
-                      unit_line=tracker.active_unit.line,
-                      binding_line=tracker.bindings[(tracker.active_unit.value,
-                                                     _bind_target(target))].line,
-                      taint=taint, picture=picture, viewport=tracker.viewport.plain())
+        tracker.event(
+            "copy",
+            fn=name,
+            target=target,
+            level=level,
+            x=x,
+            y=y,
+            width=width,
+            height=height,
+            offset=list(offset),
+            internalformat=internalformat,
+            texture=texture.name,
+            unit=tracker.active_unit.value,
+            unit_line=tracker.active_unit.line,
+            binding_line=tracker.bindings[(tracker.active_unit.value, _bind_target(target))].line,
+            taint=taint,
+            picture=picture,
+            viewport=tracker.viewport.plain(),
+        )
 
     def session_frame(self) -> np.ndarray:
         """The target's colour now, ``(h, w, 3)`` uint8, row 0 at the top."""
@@ -685,19 +811,26 @@ class Executor:
     def tex_parameter(self, name: str, args: list[Any], arrays: Any) -> None:
         target, pname, value = args
         texture = self._texture(target, name)
-        enum_params = {int(GL.GL_TEXTURE_MIN_FILTER), int(GL.GL_TEXTURE_MAG_FILTER),
-                       int(GL.GL_TEXTURE_WRAP_S), int(GL.GL_TEXTURE_WRAP_T),
-                       int(GL.GL_TEXTURE_WRAP_R)}
+        enum_params = {
+            int(GL.GL_TEXTURE_MIN_FILTER),
+            int(GL.GL_TEXTURE_MAG_FILTER),
+            int(GL.GL_TEXTURE_WRAP_S),
+            int(GL.GL_TEXTURE_WRAP_T),
+            int(GL.GL_TEXTURE_WRAP_R),
+        }
         if pname in enum_params:
             if value not in C.TEX_PARAM_VALUES:
-                raise gl_error(C.GL_INVALID_ENUM, f"{name}: {value!r} is not a filter or a "
-                               f"wrap mode")
+                raise gl_error(
+                    C.GL_INVALID_ENUM, f"{name}: {value!r} is not a filter or a wrap mode"
+                )
             legacy.gl().glTexParameteri(target, pname, int(value))
         elif isinstance(value, list):
             getattr(GL, name)(target, pname, self._array(name, value))
-        elif name == "glTexParameteri" or pname in (int(GL.GL_TEXTURE_BASE_LEVEL),
-                                                    int(GL.GL_TEXTURE_MAX_LEVEL),
-                                                    int(GL.GL_GENERATE_MIPMAP)):
+        elif name == "glTexParameteri" or pname in (
+            int(GL.GL_TEXTURE_BASE_LEVEL),
+            int(GL.GL_TEXTURE_MAX_LEVEL),
+            int(GL.GL_GENERATE_MIPMAP),
+        ):
             legacy.gl().glTexParameteri(target, pname, int(value))
         else:
             legacy.gl().glTexParameterf(target, pname, float(value))
@@ -718,12 +851,19 @@ class Executor:
             width, height, level = image.width, image.height, 0
             while width > 1 or height > 1:
                 width, height, level = max(width // 2, 1), max(height // 2, 1), level + 1
-                texture.images[(face, level)] = Image(width, height, image.internalformat,
-                                                      "mipmap", self.tracker.line,
-                                                      self.tracker.function, frame,
-                                                      image.tainted)
-        self.tracker.event("mipmap", target=args[0], texture=texture.name,
-                           unit=self.tracker.active_unit.value)
+                texture.images[(face, level)] = Image(
+                    width,
+                    height,
+                    image.internalformat,
+                    "mipmap",
+                    self.tracker.line,
+                    self.tracker.function,
+                    frame,
+                    image.tainted,
+                )
+        self.tracker.event(
+            "mipmap", target=args[0], texture=texture.name, unit=self.tracker.active_unit.value
+        )
 
     def texenv_f(self, name: str, args: list[Any], arrays: Any) -> None:
         value = args[2][0] if isinstance(args[2], list) else args[2]  # glTexEnv{if}v
@@ -745,8 +885,10 @@ class Executor:
     # ------------------------------------------------------------------ programs
     def _program(self, program: int, name: str) -> None:
         if program not in self.session.programs():
-            raise gl_error(C.GL_INVALID_VALUE, f"{name}: program {program} is not one the lab "
-                           f"gives (lab.textureShader)")
+            raise gl_error(
+                C.GL_INVALID_VALUE,
+                f"{name}: program {program} is not one the lab gives (lab.textureShader)",
+            )
 
     def use_program(self, name: str, args: list[Any], arrays: Any) -> None:
         if args[0]:
@@ -767,16 +909,25 @@ class Executor:
         """The precondition a uniform call broke, named (GL says only 'invalid operation'
         or 'invalid value')."""
         if not self.tracker.program.value:
-            raise gl_error(C.GL_INVALID_OPERATION, f"{name} with no program in use: call "
-                           f"glUseProgram(program) before setting its uniforms")
+            raise gl_error(
+                C.GL_INVALID_OPERATION,
+                f"{name} with no program in use: call "
+                f"glUseProgram(program) before setting its uniforms",
+            )
         first = int(GL.GL_TEXTURE0)
-        if name == "glUniform1i" and args[0] >= 0 and \
-                args[0] == getattr(self.session, "texSampler", -2) and \
-                first <= args[1] < first + 32:
+        if (
+            name == "glUniform1i"
+            and args[0] >= 0
+            and args[0] == getattr(self.session, "texSampler", -2)
+            and first <= args[1] < first + 32
+        ):
             unit = args[1] - first
-            raise gl_error(C.GL_INVALID_VALUE, f"glUniform1i: {args[1]} is the enum "
-                           f"GL_TEXTURE{unit}; a sampler takes the unit's number: "
-                           f"glUniform1i(location, {unit})")
+            raise gl_error(
+                C.GL_INVALID_VALUE,
+                f"glUniform1i: {args[1]} is the enum "
+                f"GL_TEXTURE{unit}; a sampler takes the unit's number: "
+                f"glUniform1i(location, {unit})",
+            )
 
     def uniform(self, name: str, args: list[Any], arrays: Any) -> None:
         self._uniform_preconditions(name, args)
@@ -790,8 +941,10 @@ class Executor:
         location, count, values = args
         size = int(name[len("glUniform")])
         if len(values) != count * size:
-            raise gl_error(C.GL_INVALID_VALUE, f"{name}: {count} values need {count * size} "
-                           f"numbers, got {len(values)}")
+            raise gl_error(
+                C.GL_INVALID_VALUE,
+                f"{name}: {count} values need {count * size} numbers, got {len(values)}",
+            )
         getattr(GL, name)(location, count, self._array(name, values))
         self.ok()
 
@@ -800,8 +953,10 @@ class Executor:
         location, count, transpose, values = args
         size = int(name[len("glUniformMatrix")])
         if len(values) != count * size * size:
-            raise gl_error(C.GL_INVALID_VALUE, f"{name}: {count} matrices need "
-                           f"{count * size * size} numbers, got {len(values)}")
+            raise gl_error(
+                C.GL_INVALID_VALUE,
+                f"{name}: {count} matrices need {count * size * size} numbers, got {len(values)}",
+            )
         getattr(GL, name)(location, count, transpose, np.asarray(values, dtype=np.float32))
         self.ok()
 
@@ -812,14 +967,18 @@ class Executor:
     def get(self, name: str, args: list[Any], arrays: Any) -> Any:
         pname = args[0]
         size = C.QUERY_SIZES[pname]
-        kind = name[len("glGet"):-1]
-        dtype = {"Integer": np.int32, "Float": np.float32, "Double": np.float64,
-                 "Boolean": np.uint8}[kind]
+        kind = name[len("glGet") : -1]
+        dtype = {
+            "Integer": np.int32,
+            "Float": np.float32,
+            "Double": np.float64,
+            "Boolean": np.uint8,
+        }[kind]
         buffer = np.zeros(16, dtype=dtype)
         emulation = legacy.emulated()
         if emulation is not None and emulation.answers(pname):
             found = emulation.get(pname)
-            buffer[:found.size] = found.astype(dtype)
+            buffer[: found.size] = found.astype(dtype)
         else:
             getattr(RAW, name)(pname, buffer)
         self.ok()
@@ -861,16 +1020,23 @@ class Executor:
     def _kit_calls(self) -> dict[str, Callable[[list[Any]], Any]]:
         lab = self.session.name
         found: dict[str, Callable[[list[Any]], Any]] = {
-            "load_picture_texture": self.kit_load_picture}
+            "load_picture_texture": self.kit_load_picture
+        }
         if lab == "lab20":
             found.update(draw_scene=self.kit_draw_robot, set_viewer=self.kit_set_viewer)
         elif lab == "spheremap":
-            found.update(set_viewer=self.kit_set_viewer, draw_backdrop=self.kit_backdrop,
-                         draw_cone_shader=self.kit_cone_shader,
-                         draw_cone_fixed_function=self.kit_cone_texgen)
+            found.update(
+                set_viewer=self.kit_set_viewer,
+                draw_backdrop=self.kit_backdrop,
+                draw_cone_shader=self.kit_cone_shader,
+                draw_cone_fixed_function=self.kit_cone_texgen,
+            )
         else:
-            found.update(set_viewer=self.kit_set_viewer, draw_scene=self.kit_draw_objects,
-                         draw_sphere=self.kit_sphere)
+            found.update(
+                set_viewer=self.kit_set_viewer,
+                draw_scene=self.kit_draw_objects,
+                draw_sphere=self.kit_sphere,
+            )
         return found
 
     def kit_call(self, name: str, args: Any) -> Any:
@@ -885,8 +1051,9 @@ class Executor:
 
     def _owned(self, value: Any, what: str, target: int) -> int:
         if type(value) is not int or (value and value not in self.owned):
-            raise LabSetupError(f"{what}: {C.shown(value)} is not a texture this file made "
-                                f"with glGenTextures")
+            raise LabSetupError(
+                f"{what}: {C.shown(value)} is not a texture this file made with glGenTextures"
+            )
         texture = self.tracker.textures.get(value)
         if texture is not None and texture.target and texture.target != target:
             kind = "a cube map" if texture.target == GL_TEXTURE_CUBE_MAP else "a 2D texture"
@@ -903,14 +1070,22 @@ class Executor:
         tracker.matrix_mode = tracker.setting(GL_MODELVIEW)
         self.ok()
 
-    def record_draw(self, who: str, draw: Callable[[], Any] | None, taint: str,
-                    **extra: Any) -> Any:
+    def record_draw(
+        self, who: str, draw: Callable[[], Any] | None, taint: str, **extra: Any
+    ) -> Any:
         tracker = self.tracker
         projection, modelview = current_matrices()
         viewport = [int(v) for v in np.asarray(GL.glGetIntegerv(GL.GL_VIEWPORT))]
-        tracker.event("draw", who=who, projection=projection.tolist(),
-                      modelview=modelview.tolist(), viewport=viewport,
-                      state=tracker.snapshot(), taint=taint, **extra)
+        tracker.event(
+            "draw",
+            who=who,
+            projection=projection.tolist(),
+            modelview=modelview.tolist(),
+            viewport=viewport,
+            state=tracker.snapshot(),
+            taint=taint,
+            **extra,
+        )
         box = self._draw_box() if taint else None
         result = draw() if draw is not None else None
         if taint and box is not None:
@@ -924,22 +1099,36 @@ class Executor:
         if not texture:
             raise LabSetupError("lab.load_picture_texture: texture 0 is no texture")
         if args[1] not in PICTURES:
-            raise LabSetupError(f"lab.load_picture_texture: no picture {args[1][:40]!r}; "
-                                f"the lab has {', '.join(PICTURES)}")
+            raise LabSetupError(
+                f"lab.load_picture_texture: no picture {args[1][:40]!r}; "
+                f"the lab has {', '.join(PICTURES)}"
+            )
         self.session.load_picture_texture(texture, args[1])
         self.ok()
         tracker = self.tracker
         record = tracker.textures[texture]
         record.target = GL_TEXTURE_2D
         record.picture = args[1]
-        self._write(record, (0, 0), Image(0, 0, int(GL.GL_RGB8), f"picture:{args[1]}",
-                                          tracker.line, tracker.function,
-                                          len(tracker.frames) - 1))
+        self._write(
+            record,
+            (0, 0),
+            Image(
+                0,
+                0,
+                int(GL.GL_RGB8),
+                f"picture:{args[1]}",
+                tracker.line,
+                tracker.function,
+                len(tracker.frames) - 1,
+            ),
+        )
         record.mipmaps, record.mipmaps_fresh = tracker.setting(True), True
-        for pname, value in ((GL.GL_TEXTURE_MIN_FILTER, GL.GL_LINEAR_MIPMAP_LINEAR),
-                             (GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR),
-                             (GL.GL_TEXTURE_WRAP_S, GL.GL_REPEAT),
-                             (GL.GL_TEXTURE_WRAP_T, GL.GL_REPEAT)):
+        for pname, value in (
+            (GL.GL_TEXTURE_MIN_FILTER, GL.GL_LINEAR_MIPMAP_LINEAR),
+            (GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR),
+            (GL.GL_TEXTURE_WRAP_S, GL.GL_REPEAT),
+            (GL.GL_TEXTURE_WRAP_T, GL.GL_REPEAT),
+        ):
             record.params[int(pname)] = tracker.setting(int(value))
         tracker.active_unit = tracker.setting(0)
         tracker.bindings[(0, GL_TEXTURE_2D)] = tracker.setting(texture)
@@ -976,15 +1165,19 @@ class Executor:
                 continue
             if value is None or isinstance(value, dict):
                 textures[node] = None
-                shown[node] = None if value is None else \
-                    {"other": str(value.get("other", ""))[:40]}
+                shown[node] = None if value is None else {"other": str(value.get("other", ""))[:40]}
             else:
-                textures[node] = self._owned(value, f"robot[{node!r}].texture",
-                                             GL_TEXTURE_2D) or None
+                textures[node] = (
+                    self._owned(value, f"robot[{node!r}].texture", GL_TEXTURE_2D) or None
+                )
                 shown[node] = textures[node]
         used = [t for t in textures.values() if t]
-        bound = self.record_draw("draw_scene", lambda: self.lab.draw_scene(textures),
-                                 self._taint_of(used), textures=shown)
+        bound = self.record_draw(
+            "draw_scene",
+            lambda: self.lab.draw_scene(textures),
+            self._taint_of(used),
+            textures=shown,
+        )
         self._after_kit_draw(bound)
 
     def kit_draw_objects(self, args: list[Any]) -> None:
@@ -997,11 +1190,12 @@ class Executor:
 
     def _glsl(self, value: Any, variable: str) -> str:
         if not isinstance(value, str):
-            raise LabSetupError(f"{variable} must be a string of GLSL, got "
-                                f"{type(value).__name__}")
+            raise LabSetupError(f"{variable} must be a string of GLSL, got {type(value).__name__}")
         if len(value) > self.limits.glsl_chars:
-            raise LabSetupError(f"{variable} holds {len(value)} characters; the labs take "
-                                f"{self.limits.glsl_chars} at most")
+            raise LabSetupError(
+                f"{variable} holds {len(value)} characters; the labs take "
+                f"{self.limits.glsl_chars} at most"
+            )
         self.glsl[variable] = value
         return value
 
@@ -1010,9 +1204,12 @@ class Executor:
             raise LabSetupError("lab.draw_cone_shader(glsl, texture)")
         glsl = self._glsl(args[0], "SPHERE_MAP_GLSL")
         texture = self._owned(args[1], "lab.draw_cone_shader", GL_TEXTURE_2D)
-        self.record_draw("draw_cone_shader", lambda: self.lab.draw_cone_shader(
-            glsl, texture, 0, self.limits.programs), self._taint_of([texture]),
-            texture=texture)
+        self.record_draw(
+            "draw_cone_shader",
+            lambda: self.lab.draw_cone_shader(glsl, texture, 0, self.limits.programs),
+            self._taint_of([texture]),
+            texture=texture,
+        )
         tracker = self.tracker
         tracker.bindings[(1, GL_TEXTURE_2D)] = tracker.setting(texture)
         self._after_kit_draw([])
@@ -1027,16 +1224,22 @@ class Executor:
             "unit": unit,
             "gen_s": bool(FF.glIsEnabled(GL.GL_TEXTURE_GEN_S)),
             "gen_t": bool(FF.glIsEnabled(GL.GL_TEXTURE_GEN_T)),
-            "mode_s": int(np.asarray(FF.glGetTexGeniv(GL.GL_S, GL.GL_TEXTURE_GEN_MODE))
-                          .reshape(-1)[0]),
-            "mode_t": int(np.asarray(FF.glGetTexGeniv(GL.GL_T, GL.GL_TEXTURE_GEN_MODE))
-                          .reshape(-1)[0]),
+            "mode_s": int(
+                np.asarray(FF.glGetTexGeniv(GL.GL_S, GL.GL_TEXTURE_GEN_MODE)).reshape(-1)[0]
+            ),
+            "mode_t": int(
+                np.asarray(FF.glGetTexGeniv(GL.GL_T, GL.GL_TEXTURE_GEN_MODE)).reshape(-1)[0]
+            ),
             "texture": int(GL.glGetIntegerv(GL.GL_TEXTURE_BINDING_2D)),
         }
         GL.glActiveTexture(previous)
         texture = self.tracker.bound(GL_TEXTURE_2D, unit)
-        self.record_draw("draw_cone_fixed_function", self.lab.draw_cone_fixed_function,
-                         self._taint_of([texture]), seen=seen)
+        self.record_draw(
+            "draw_cone_fixed_function",
+            self.lab.draw_cone_fixed_function,
+            self._taint_of([texture]),
+            seen=seen,
+        )
         self.ok()
 
     def kit_sphere(self, args: list[Any]) -> None:
@@ -1050,8 +1253,12 @@ class Executor:
             extra["sampling"] = {str(k): v.plain() for k, v in record.params.items()}
             extra["mipmaps_fresh"] = record.mipmaps_fresh
             extra["mipmaps"] = record.mipmaps.plain() if record.mipmaps else None
-        self.record_draw("draw_sphere", lambda: self.lab.draw_sphere(
-            glsl, texture, 0, self.limits.programs), self._taint_of([texture]), **extra)
+        self.record_draw(
+            "draw_sphere",
+            lambda: self.lab.draw_sphere(glsl, texture, 0, self.limits.programs),
+            self._taint_of([texture]),
+            **extra,
+        )
         tracker = self.tracker
         tracker.bindings[(1, GL_TEXTURE_CUBE_MAP)] = tracker.setting(texture)
         self._after_kit_draw([])

@@ -46,23 +46,29 @@ def precompile(vertex: str, fragment: str, student: str, variable: str) -> None:
         raise StudentShaderError(variable, *failed)
 
 
-def _compile_alone(vertex: str, fragment: str, student: str, variable: str
-                   ) -> tuple[int, str] | None:
+def _compile_alone(
+    vertex: str, fragment: str, student: str, variable: str
+) -> tuple[int, str] | None:
     """None when the texts compile and link in a process of their own, within the
     limits; else the error's line (0: none) and message."""
-    job = json.dumps({"vertex": vertex, "fragment": fragment, "student": student,
-                      "variable": variable})
+    job = json.dumps(
+        {"vertex": vertex, "fragment": fragment, "student": student, "variable": variable}
+    )
     from mirrorlab.labs.trusted.execute import child_options, gl_process_environment
 
     # the checker's own GL backend; compiling needs no rasteriser threads
     environment = {**gl_process_environment(), "LP_NUM_THREADS": "1"}
-    limits = (f"your shader could not be compiled within the limits ({SECONDS:g} s, "
-              f"{MEMORY_MB} MB)")
+    limits = f"your shader could not be compiled within the limits ({SECONDS:g} s, {MEMORY_MB} MB)"
     try:
-        done = subprocess.run([sys.executable, "-m", "mirrorlab.labs.trusted.glslcheck"],
-                              input=job, capture_output=True, text=True, timeout=SECONDS,
-                              env=environment,
-                              **child_options(MEMORY_MB, CPU_SECONDS, cores=False))
+        done = subprocess.run(
+            [sys.executable, "-m", "mirrorlab.labs.trusted.glslcheck"],
+            input=job,
+            capture_output=True,
+            text=True,
+            timeout=SECONDS,
+            env=environment,
+            **child_options(MEMORY_MB, CPU_SECONDS, cores=False),
+        )
     except subprocess.TimeoutExpired:
         return 0, limits
     answer = _answer(done.stdout)

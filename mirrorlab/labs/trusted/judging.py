@@ -54,18 +54,24 @@ class Context:
     carries instead of its own, for the teacher's report."""
 
     def differing_others(self) -> dict[str, Variant]:
-        return {name: v for name, v in self.others.items()
-                if not v.same_numbers(self.variant)}
+        return {name: v for name, v in self.others.items() if not v.same_numbers(self.variant)}
 
 
 Verdicts = dict[str, tuple[bool, str]]
 
 
-GL_ERROR_NAMES = {1280: "GL_INVALID_ENUM", 1281: "GL_INVALID_VALUE",
-                  1282: "GL_INVALID_OPERATION", 1283: "GL_STACK_OVERFLOW",
-                  1284: "GL_STACK_UNDERFLOW", 1285: "GL_OUT_OF_MEMORY"}
-GL_ERROR = re.compile(r"GLError: GLError\(err = (\d+), description = (['\"])(.*?)\2"
-                      r"(?:, baseOperation = (\w*))?")
+GL_ERROR_NAMES = {
+    1280: "GL_INVALID_ENUM",
+    1281: "GL_INVALID_VALUE",
+    1282: "GL_INVALID_OPERATION",
+    1283: "GL_STACK_OVERFLOW",
+    1284: "GL_STACK_UNDERFLOW",
+    1285: "GL_OUT_OF_MEMORY",
+}
+GL_ERROR = re.compile(
+    r"GLError: GLError\(err = (\d+), description = (['\"])(.*?)\2"
+    r"(?:, baseOperation = (\w*))?"
+)
 
 
 def plain_message(message: str) -> str:
@@ -125,15 +131,15 @@ def errors_for(evidence: Evidence, task: Task, glsl_functions: tuple[str, ...] =
 
 
 def stopped_hint(evidence: Evidence, judged: str) -> str:
-    """"not judged: ..." when an error in a function other than ``judged`` stopped the
+    """ "not judged: ..." when an error in a function other than ``judged`` stopped the
     last frame, else ''."""
     stopped = evidence.raised_in()
-    return f"not judged: the frame stopped at {stopped}()" if stopped and \
-        stopped != judged else ""
+    return f"not judged: the frame stopped at {stopped}()" if stopped and stopped != judged else ""
 
 
-def results(spec: LabSpec, student: Evidence, verdicts: Verdicts,
-            glsl_functions: tuple[str, ...] = ()) -> list[TaskResult]:
+def results(
+    spec: LabSpec, student: Evidence, verdicts: Verdicts, glsl_functions: tuple[str, ...] = ()
+) -> list[TaskResult]:
     """Task results from ``verdicts`` (task id -> (passed, hint)): a run that did not end
     well fails every task with its one line; an error of a task's function takes over its
     verdict; a failed task whose function never finished in a frame that an error stopped
@@ -147,11 +153,18 @@ def results(spec: LabSpec, student: Evidence, verdicts: Verdicts,
         error = errors_for(student, task, glsl_functions)
         if error:
             passed, hint = False, error
-        elif not passed and stopped and stopped != task.function and \
-                task.function in spec.functions and task.function not in spec.setup and \
-                not finished(student, task.function):
-            hint = (f"not judged: the frame stopped at {stopped}() before {task.function}() "
-                    f"finished; fix that error first")
+        elif (
+            not passed
+            and stopped
+            and stopped != task.function
+            and task.function in spec.functions
+            and task.function not in spec.setup
+            and not finished(student, task.function)
+        ):
+            hint = (
+                f"not judged: the frame stopped at {stopped}() before {task.function}() "
+                f"finished; fix that error first"
+            )
         elif not passed and stopped and stopped == task.function:
             own = next((e for e in student.errors if e.get("function") == stopped), None)
             if own is not None:
@@ -162,13 +175,16 @@ def results(spec: LabSpec, student: Evidence, verdicts: Verdicts,
 
 def finished(student: Evidence, function: str) -> bool:
     """Whether ``function`` ran to its end in the last frame."""
-    return any(e.get("kind") == "leave" and e.get("function") == function and
-               not e.get("raised") for e in student.last_frame)
+    return any(
+        e.get("kind") == "leave" and e.get("function") == function and not e.get("raised")
+        for e in student.last_frame
+    )
 
 
 # ------------------------------------------------------------------------ pictures
-def share_within(a: np.ndarray, b: np.ndarray, tolerance: int,
-                 mask: np.ndarray | None = None) -> float:
+def share_within(
+    a: np.ndarray, b: np.ndarray, tolerance: int, mask: np.ndarray | None = None
+) -> float:
     """The share of pixels (in ``mask``) whose every channel of ``a`` and ``b`` (uint8 or
     0-255 floats) is within ``tolerance``."""
     diff = np.abs(np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64)).max(-1)
@@ -186,17 +202,15 @@ def _nearest(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     best = np.full((height, width), 255, dtype=np.int16)
     for dy in range(3):
         for dx in range(3):
-            shifted = padded[dy:dy + height, dx:dx + width]
+            shifted = padded[dy : dy + height, dx : dx + width]
             best = np.minimum(best, np.abs(a16 - shifted).max(-1))
     return best
 
 
-def differing(student: np.ndarray, reference: np.ndarray,
-              tolerance: int = TOLERANCE) -> np.ndarray:
+def differing(student: np.ndarray, reference: np.ndarray, tolerance: int = TOLERANCE) -> np.ndarray:
     """The pixels where ``student`` and ``reference`` (``(h, w, 3)`` uint8, one size)
     differ (see :data:`TOLERANCE`), ``(h, w)`` bool."""
-    return (_nearest(student, reference) > tolerance) | (_nearest(reference, student) >
-                                                         tolerance)
+    return (_nearest(student, reference) > tolerance) | (_nearest(reference, student) > tolerance)
 
 
 def _spread(image: np.ndarray, pick: Any) -> np.ndarray:
@@ -207,7 +221,7 @@ def _spread(image: np.ndarray, pick: Any) -> np.ndarray:
     out = image.copy()
     for dy in range(3):
         for dx in range(3):
-            out = pick(out, padded[dy:dy + height, dx:dx + width])
+            out = pick(out, padded[dy : dy + height, dx : dx + width])
     return out
 
 
@@ -219,27 +233,31 @@ def _neighbours(mask: np.ndarray) -> np.ndarray:
     for dy in range(3):
         for dx in range(3):
             if dy != 1 or dx != 1:
-                count += padded[dy:dy + height, dx:dx + width]
+                count += padded[dy : dy + height, dx : dx + width]
     return count
 
 
-def faint_patches(student: np.ndarray, reference: np.ndarray,
-                  faint: int = FAINT) -> np.ndarray:
+def faint_patches(student: np.ndarray, reference: np.ndarray, faint: int = FAINT) -> np.ndarray:
     """The pixels of ``student`` offset from ``reference`` (``(h, w, 3)`` uint8) in patches
     of one sign (see :data:`FAINT`), ``(h, w)`` bool."""
     a, b = student.astype(np.int16), reference.astype(np.int16)
     brighter = np.asarray((a - _spread(b, np.maximum) >= faint).any(-1))
     darker = np.asarray((_spread(b, np.minimum) - a >= faint).any(-1))
-    return (brighter & (_neighbours(brighter) >= PATCH_NEIGHBOURS)) | \
-        (darker & (_neighbours(darker) >= PATCH_NEIGHBOURS))
+    return (brighter & (_neighbours(brighter) >= PATCH_NEIGHBOURS)) | (
+        darker & (_neighbours(darker) >= PATCH_NEIGHBOURS)
+    )
 
 
 def allowed_pixels(shape: tuple[int, ...]) -> int:
     return max(ALLOWED_MIN, int(ALLOWED_SHARE * shape[0] * shape[1]))
 
 
-def triangles_mask(clip: list[np.ndarray], triangles: list[tuple[int, int, int]],
-                   size: tuple[int, int], grow: float = 2.0) -> np.ndarray:
+def triangles_mask(
+    clip: list[np.ndarray],
+    triangles: list[tuple[int, int, int]],
+    size: tuple[int, int],
+    grow: float = 2.0,
+) -> np.ndarray:
     """The pixels of a ``size`` (w, h) frame covered by ``triangles`` of points in clip
     coordinates (``(4,)`` each; points behind the eye are left out), ``grow`` pixels
     wider, ``(h, w)`` bool."""
@@ -259,14 +277,16 @@ def triangles_mask(clip: list[np.ndarray], triangles: list[tuple[int, int, int]]
         if len(corners) < 3:
             continue
         inside = np.ones_like(mask)
-        area = ((corners[1][0] - corners[0][0]) * (corners[2][1] - corners[0][1])
-                - (corners[1][1] - corners[0][1]) * (corners[2][0] - corners[0][0]))
+        area = (corners[1][0] - corners[0][0]) * (corners[2][1] - corners[0][1]) - (
+            corners[1][1] - corners[0][1]
+        ) * (corners[2][0] - corners[0][0])
         if abs(area) < 1e-9:
             continue
         sign = 1.0 if area > 0 else -1.0
         for (x0, y0), (x1, y1) in zip(corners, corners[1:] + corners[:1], strict=True):
-            inside &= sign * ((x1 - x0) * (yy - y0) - (y1 - y0) * (xx - x0)) >= \
-                -grow * np.hypot(x1 - x0, y1 - y0)
+            inside &= sign * ((x1 - x0) * (yy - y0) - (y1 - y0) * (xx - x0)) >= -grow * np.hypot(
+                x1 - x0, y1 - y0
+            )
         mask |= inside
     return mask
 
@@ -289,9 +309,14 @@ def same_picture(student: np.ndarray | None, reference: np.ndarray | None) -> bo
     return int(differing(student, reference).sum()) <= allowed_pixels(student.shape)
 
 
-def judge_frame(verdicts: Verdicts, student: Evidence, reference: Evidence,
-                regions: dict[str, np.ndarray | None], frame_task: str,
-                owner: dict[str, tuple[str, str]]) -> Verdicts:
+def judge_frame(
+    verdicts: Verdicts,
+    student: Evidence,
+    reference: Evidence,
+    regions: dict[str, np.ndarray | None],
+    frame_task: str,
+    owner: dict[str, tuple[str, str]],
+) -> Verdicts:
     """The final frame compared with the reference frame as a whole, after the per-task
     verdicts: pixels that differ beyond :data:`TOLERANCE` and pixels offset faintly in
     patches (:func:`faint_patches`) both count. A frame that differs in more pixels than
@@ -305,8 +330,11 @@ def judge_frame(verdicts: Verdicts, student: Evidence, reference: Evidence,
     verdicts = dict(verdicts)
     taint = student.state.get("frame_taint")
     if taint:
-        verdicts[frame_task] = (False, f"the frame shows pixels this file uploaded ({taint}): "
-                                       f"a lab's pictures must be drawn by its calls")
+        verdicts[frame_task] = (
+            False,
+            f"the frame shows pixels this file uploaded ({taint}): "
+            f"a lab's pictures must be drawn by its calls",
+        )
         return verdicts
     patches = faint_patches(frame, ref)
     mask = differing(frame, ref) | patches
@@ -326,24 +354,36 @@ def judge_frame(verdicts: Verdicts, student: Evidence, reference: Evidence,
         return verdicts
     for name, (task, what) in owner.items():
         region = regions.get(name)
-        if region is not None and verdicts.get(task, (False, ""))[0] and \
-                int((left & region).sum()) * 2 >= count:
-            verdicts[task] = (False, f"{what} differs from the reference in "
-                                     f"{int((left & region).sum())} pixels, "
-                                     f"{where(left & region)} (see the picture)")
+        if (
+            region is not None
+            and verdicts.get(task, (False, ""))[0]
+            and int((left & region).sum()) * 2 >= count
+        ):
+            verdicts[task] = (
+                False,
+                f"{what} differs from the reference in "
+                f"{int((left & region).sum())} pixels, "
+                f"{where(left & region)} (see the picture)",
+            )
             return verdicts
     passed, hint = verdicts.get(frame_task, (True, ""))
     faint = int((left & patches).sum())
-    what = f" ({faint} of them by a faint offset in patches: an overlay?)" \
-        if faint * 2 >= count else ""
-    message = (f"the frame differs from the reference in {count} pixels{what} (see the "
-               f"picture), {where(left)}")
+    what = (
+        f" ({faint} of them by a faint offset in patches: an overlay?)"
+        if faint * 2 >= count
+        else ""
+    )
+    message = (
+        f"the frame differs from the reference in {count} pixels{what} (see the "
+        f"picture), {where(left)}"
+    )
     verdicts[frame_task] = (False, f"{hint}; {message}" if not passed and hint else message)
     return verdicts
 
 
-def difference_picture(student: np.ndarray, reference: np.ndarray,
-                       marked: bool = False) -> np.ndarray:
+def difference_picture(
+    student: np.ndarray, reference: np.ndarray, marked: bool = False
+) -> np.ndarray:
     """``|student - reference|`` amplified four times, ``(h, w, 3)`` uint8; with ``marked``
     the pixels that differ as a whole-picture comparison counts them (beyond the tolerance,
     or in faint patches) are red."""
@@ -368,8 +408,9 @@ HEADER = 16
 """Pixels above the picture's cells for their titles."""
 
 
-def picture(rows: list[tuple[np.ndarray | None, np.ndarray | None]],
-            size: tuple[int, int]) -> np.ndarray:
+def picture(
+    rows: list[tuple[np.ndarray | None, np.ndarray | None]], size: tuple[int, int]
+) -> np.ndarray:
     """Rows of student | reference | difference, each cell ``size`` (h, w), separated by
     4 px, under a line of titles; in the first row (the frame) the differing pixels are
     red."""
@@ -377,8 +418,7 @@ def picture(rows: list[tuple[np.ndarray | None, np.ndarray | None]],
 
     h, w = size
     gap = 4
-    out = np.full((HEADER + len(rows) * (h + gap) - gap, 3 * w + 2 * gap, 3), 255,
-                  dtype=np.uint8)
+    out = np.full((HEADER + len(rows) * (h + gap) - gap, 3 * w + 2 * gap, 3), 255, dtype=np.uint8)
     titles = Image.fromarray(out[:HEADER])
     draw = ImageDraw.Draw(titles)
     for j, title in enumerate(("student", "reference", "difference x4 (red: differs)")):
@@ -387,24 +427,30 @@ def picture(rows: list[tuple[np.ndarray | None, np.ndarray | None]],
     for i, (student, reference) in enumerate(rows):
         ok_s = student is not None and student.shape == (h, w, 3)
         ok_r = reference is not None and reference.shape == (h, w, 3)
-        cells = [student if ok_s else blank((h, w)), reference if ok_r else blank((h, w)),
-                 difference_picture(student, reference, marked=i == 0)  # type: ignore[arg-type]
-                 if ok_s and ok_r else blank((h, w))]
+        cells = [
+            student if ok_s else blank((h, w)),
+            reference if ok_r else blank((h, w)),
+            difference_picture(student, reference, marked=i == 0)  # type: ignore[arg-type]
+            if ok_s and ok_r
+            else blank((h, w)),
+        ]
         for j, cell in enumerate(cells):
             y, x = HEADER + i * (h + gap), j * (w + gap)
-            out[y:y + h, x:x + w] = cell  # type: ignore[assignment]
+            out[y : y + h, x : x + w] = cell  # type: ignore[assignment]
     return out
 
 
 # ---------------------------------------------------------------- the calls, for hints
 def fmt(values: Any) -> str:
     """Numbers as a person writes them: ``-6, 2, -3``."""
-    return ", ".join(f"{v:g}" for v in np.round(np.asarray(values, dtype=np.float64), 3)
-                     .reshape(-1) + 0.0)
+    return ", ".join(
+        f"{v:g}" for v in np.round(np.asarray(values, dtype=np.float64), 3).reshape(-1) + 0.0
+    )
 
 
-def wrong_clear_colour(clear: dict[str, Any], background: tuple[float, ...],
-                       student: Evidence) -> str:
+def wrong_clear_colour(
+    clear: dict[str, Any], background: tuple[float, ...], student: Evidence
+) -> str:
     """'(r, g, b) (glClearColor at line N)' when a ``clear`` event cleared to another colour
     than ``background``, else ''."""
     color = clear.get("color", {})
@@ -448,10 +494,12 @@ def misplaced_calls(student: Evidence, within: str, wanted: dict[str, int]) -> s
         if target is not None and target != mode:
             set_by = event.get("mode_line", 0)
             since = f", set at line {set_by}" if set_by else ""
-            return (f"{event['op']} at {student.at(event['line'])} was applied to the "
-                    f"{MATRIX_NAMES.get(mode, '?')[3:].lower()} matrix (the matrix mode was "
-                    f"{MATRIX_NAMES.get(mode, '?')}{since}): call "
-                    f"glMatrixMode({MATRIX_NAMES[target]}) before it")
+            return (
+                f"{event['op']} at {student.at(event['line'])} was applied to the "
+                f"{MATRIX_NAMES.get(mode, '?')[3:].lower()} matrix (the matrix mode was "
+                f"{MATRIX_NAMES.get(mode, '?')}{since}): call "
+                f"glMatrixMode({MATRIX_NAMES[target]}) before it"
+            )
     return ""
 
 
@@ -459,25 +507,40 @@ def stacked_ops(event: dict[str, Any], student: Evidence, mode: int, first: str)
     """A hint when, at ``event``, the ``mode`` matrix was not started afresh before the
     call ``first`` (it multiplied onto what an earlier call left)."""
     ops = matrix_ops(event, mode)
-    starts = ("glLoadIdentity", "glLoadMatrixf", "glLoadMatrixd", "glLoadTransposeMatrixf",
-              "glLoadTransposeMatrixd")
+    starts = (
+        "glLoadIdentity",
+        "glLoadMatrixf",
+        "glLoadMatrixd",
+        "glLoadTransposeMatrixf",
+        "glLoadTransposeMatrixd",
+    )
     names = [o["op"] for o in ops]
     if first not in names:
         return ""
-    before = ops[:names.index(first)]
+    before = ops[: names.index(first)]
     if any(o["op"] in starts for o in before):
         return ""
     if before:
         earlier = before[0]
-        what = "the viewer's matrix (lab.set_viewer)" if earlier["op"] == "lab.set_viewer" \
+        what = (
+            "the viewer's matrix (lab.set_viewer)"
+            if earlier["op"] == "lab.set_viewer"
             else f"{earlier['op']} at line {earlier['line']}"
-        return (f"{first} at {student.at(ops[names.index(first)]['line'])} multiplied onto "
-                f"{what}: call glLoadIdentity() before it")
+        )
+        return (
+            f"{first} at {student.at(ops[names.index(first)]['line'])} multiplied onto "
+            f"{what}: call glLoadIdentity() before it"
+        )
     return ""
 
 
-def viewer_camera(student: Evidence, draw: dict[str, Any], lab: Any,
-                  aspect: float | None = None, what: str = "the scene") -> tuple[bool, str]:
+def viewer_camera(
+    student: Evidence,
+    draw: dict[str, Any],
+    lab: Any,
+    aspect: float | None = None,
+    what: str = "the scene",
+) -> tuple[bool, str]:
     """A hint when ``draw`` (the camera pass's) was not drawn with the viewer's matrices
     and over the whole frame (or the part ``aspect`` says)."""
     state = draw.get("state") or {}
@@ -487,8 +550,10 @@ def viewer_camera(student: Evidence, draw: dict[str, Any], lab: Any,
     if aspect is None and viewport != [0, 0, size[0], size[1]]:
         line = (state.get("viewport") or {}).get("line", 0)
         by = f" (glViewport at {student.at(line)})" if line else ""
-        return False, (f"{what} is drawn in glViewport({fmt(viewport)}){by}; the frame is "
-                       f"{size[0]} x {size[1]}: glViewport(0, 0, WIDTH, HEIGHT)")
+        return False, (
+            f"{what} is drawn in glViewport({fmt(viewport)}){by}; the frame is "
+            f"{size[0]} x {size[1]}: glViewport(0, 0, WIDTH, HEIGHT)"
+        )
     projection, modelview = matrix(draw.get("projection")), matrix(draw.get("modelview"))
     want_p, want_v = lab.viewer_for(size, aspect)
     if projection is None or modelview is None:
@@ -497,14 +562,21 @@ def viewer_camera(student: Evidence, draw: dict[str, Any], lab: Any,
         call = "lab.set_viewer()" if aspect is None else "lab.set_viewer(aspect)"
         if np.allclose(modelview, want_v, atol=1e-4) and projection[3, 2] != 0:
             shown, wanted = (p[1, 1] / p[0, 0] for p in (projection, want_p))
-            fovy, want_fovy = (float(np.degrees(2 * np.arctan(1 / p[1, 1])))
-                               for p in (projection, want_p))
+            fovy, want_fovy = (
+                float(np.degrees(2 * np.arctan(1 / p[1, 1]))) for p in (projection, want_p)
+            )
             if abs(shown - wanted) > 1e-3:
-                return False, (f"{what} is drawn with a projection of aspect {shown:.2f}; "
-                               f"this view needs {wanted:.2f}: {call} with it")
+                return False, (
+                    f"{what} is drawn with a projection of aspect {shown:.2f}; "
+                    f"this view needs {wanted:.2f}: {call} with it"
+                )
             if abs(fovy - want_fovy) > 0.05:
-                return False, (f"{what} is drawn with a field of view of {fovy:.0f} degrees; "
-                               f"the viewer's is {want_fovy:.0f}: {call}")
-        return False, (f"{what} is not drawn from the viewer: its projection and camera are "
-                       f"not {call}'s (set it just before drawing)")
+                return False, (
+                    f"{what} is drawn with a field of view of {fovy:.0f} degrees; "
+                    f"the viewer's is {want_fovy:.0f}: {call}"
+                )
+        return False, (
+            f"{what} is not drawn from the viewer: its projection and camera are "
+            f"not {call}'s (set it just before drawing)"
+        )
     return True, ""

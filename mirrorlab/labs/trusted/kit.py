@@ -51,8 +51,9 @@ def _gl():
     return GL
 
 
-def compile_program(vertex: str, fragment: str, student: str | None = None,
-                    variable: str = "") -> int:
+def compile_program(
+    vertex: str, fragment: str, student: str | None = None, variable: str = ""
+) -> int:
     """A linked program from package shader files (``#include`` expanded). ``student``
     GLSL is compiled alone, as a shader object of its own (its own preprocessor: no macro
     of it reaches the kit's code), of the stage whose file has the :data:`STUDENT_MARK`
@@ -75,8 +76,11 @@ def compile_program(vertex: str, fragment: str, student: str | None = None,
             shaders.append(_compiled(kind, source, f"kit shader {name}", variable))
             if student is not None and STUDENT_MARK in source:
                 student_shaders.append(student_shader(kind, source, student, variable))
-        program = _linked([*shaders, *student_shaders], f"{vertex}+{fragment}",
-                          variable if student is not None else "")
+        program = _linked(
+            [*shaders, *student_shaders],
+            f"{vertex}+{fragment}",
+            variable if student is not None else "",
+        )
         if student_shaders:
             try:
                 _only_arguments(expand_includes(fragment), student_shaders, variable)
@@ -94,8 +98,9 @@ def student_interface(kit_source: str) -> tuple[str, list[tuple[str, str, str]]]
     has none) and the prototypes after its :data:`STUDENT_MARK` line, ``(result type,
     name, parameters)`` each, the interface the student's functions are linked through."""
     before, _, after = kit_source.partition(STUDENT_MARK)
-    version = next((line for line in before.splitlines()
-                    if line.strip().startswith("#version")), "")
+    version = next(
+        (line for line in before.splitlines() if line.strip().startswith("#version")), ""
+    )
     return version, PROTOTYPE.findall(after.split("\n\n")[0])
 
 
@@ -142,18 +147,26 @@ def _linked(shaders: list[int], what: str, variable: str) -> int:
         GL.glDeleteProgram(program)
         if variable:
             first = log.splitlines()[0] if log else "link failed"
-            raise StudentShaderError(variable, 0, f"it does not link to the lab's shader "
-                                     f"({first})")
+            raise StudentShaderError(variable, 0, f"it does not link to the lab's shader ({first})")
         raise LabSetupError(f"kit program {what} did not link: {log}")
     return int(program)
 
 
 PROTOTYPE = re.compile(r"^\s*(\w+)\s+(\w+)\s*\(([^)]*)\)\s*;", re.MULTILINE)
-STUB_ARGUMENTS = {"float": "gl_FragCoord.x", "int": "int(gl_FragCoord.x)",
-                  "vec2": "gl_FragCoord.xy", "vec3": "gl_FragCoord.xyz",
-                  "vec4": "gl_FragCoord"}
-STUB_RESULTS = {"float": "{}", "int": "float({})", "vec2": "dot({}, vec2(1.0))",
-                "vec3": "dot({}, vec3(1.0))", "vec4": "dot({}, vec4(1.0))"}
+STUB_ARGUMENTS = {
+    "float": "gl_FragCoord.x",
+    "int": "int(gl_FragCoord.x)",
+    "vec2": "gl_FragCoord.xy",
+    "vec3": "gl_FragCoord.xyz",
+    "vec4": "gl_FragCoord",
+}
+STUB_RESULTS = {
+    "float": "{}",
+    "int": "float({})",
+    "vec2": "dot({}, vec2(1.0))",
+    "vec3": "dot({}, vec3(1.0))",
+    "vec4": "dot({}, vec4(1.0))",
+}
 
 
 def _only_arguments(kit_source: str, student_shaders: list[int], variable: str) -> None:
@@ -169,8 +182,10 @@ def _only_arguments(kit_source: str, student_shaders: list[int], variable: str) 
         args = [STUB_ARGUMENTS[p.split()[-2]] for p in params.split(",") if p.strip()]
         calls.append(STUB_RESULTS[result].format(f"{name}({', '.join(args)})"))
     declared = "".join(f"{r} {n}({p});\n" for r, n, p in prototypes)
-    stub = (f"{version_line}\n{declared}out vec4 mirrorlab_stub_out;\nvoid main() {{\n"
-            f"    mirrorlab_stub_out = vec4({' + '.join(calls) or '0.0'});\n}}\n")
+    stub = (
+        f"{version_line}\n{declared}out vec4 mirrorlab_stub_out;\nvoid main() {{\n"
+        f"    mirrorlab_stub_out = vec4({' + '.join(calls) or '0.0'});\n}}\n"
+    )
     main = _compiled(GL.GL_FRAGMENT_SHADER, stub, "the kit's stub", variable)
     program = GL.glCreateProgram()
     try:
@@ -179,8 +194,11 @@ def _only_arguments(kit_source: str, student_shaders: list[int], variable: str) 
         GL.glLinkProgram(program)
         if not GL.glGetProgramiv(program, GL.GL_LINK_STATUS):
             log = _text(GL.glGetProgramInfoLog(program))
-            raise StudentShaderError(variable, 0, f"it does not link on its own "
-                                     f"({(log.splitlines() or ['link failed'])[0]})")
+            raise StudentShaderError(
+                variable,
+                0,
+                f"it does not link on its own ({(log.splitlines() or ['link failed'])[0]})",
+            )
         names = []
         for index in range(int(GL.glGetProgramiv(program, GL.GL_ACTIVE_UNIFORMS))):
             name = _text(GL.glGetActiveUniform(program, index)[0])
@@ -190,8 +208,12 @@ def _only_arguments(kit_source: str, student_shaders: list[int], variable: str) 
                 names.append(name)
         if names or GL.glGetProgramiv(program, GL.GL_ACTIVE_UNIFORM_BLOCKS):
             shown = ", ".join(names) or "a uniform block"
-            raise StudentShaderError(variable, 0, f"it reads uniforms ({shown[:80]}); the "
-                                     f"lab's functions take what they need as arguments")
+            raise StudentShaderError(
+                variable,
+                0,
+                f"it reads uniforms ({shown[:80]}); the "
+                f"lab's functions take what they need as arguments",
+            )
     finally:
         GL.glDeleteProgram(program)
         GL.glDeleteShader(main)
@@ -250,8 +272,10 @@ def mesh_arrays(name: str) -> tuple[np.ndarray, np.ndarray]:
     from mirrorlab.scene.mesh import load_mesh
 
     data = load_mesh(model_file(name))
-    return (np.ascontiguousarray(data.interleaved(), dtype=np.float32),
-            np.ascontiguousarray(data.indices.reshape(-1), dtype=np.uint32))
+    return (
+        np.ascontiguousarray(data.interleaved(), dtype=np.float32),
+        np.ascontiguousarray(data.indices.reshape(-1), dtype=np.uint32),
+    )
 
 
 @lru_cache(maxsize=8)
@@ -268,8 +292,17 @@ def upload_picture(texture_id: int, image: np.ndarray) -> None:
     GL = _gl()
     GL.glBindTexture(GL.GL_TEXTURE_2D, int(texture_id))
     GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
-    GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB8, image.shape[1], image.shape[0], 0,
-                    GL.GL_RGB, GL.GL_UNSIGNED_BYTE, np.ascontiguousarray(image[::-1]))
+    GL.glTexImage2D(
+        GL.GL_TEXTURE_2D,
+        0,
+        GL.GL_RGB8,
+        image.shape[1],
+        image.shape[0],
+        0,
+        GL.GL_RGB,
+        GL.GL_UNSIGNED_BYTE,
+        np.ascontiguousarray(image[::-1]),
+    )
     GL.glGenerateMipmap(GL.GL_TEXTURE_2D)
     GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_LINEAR_MIPMAP_LINEAR)
     GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR)
@@ -321,15 +354,23 @@ def texture_parameters(texture_id: int, target: int | None = None) -> dict[str, 
     otherwise) and its level sizes."""
     GL = _gl()
     target = GL.GL_TEXTURE_2D if target is None else target
-    binding = (GL.GL_TEXTURE_BINDING_2D if target == GL.GL_TEXTURE_2D
-               else GL.GL_TEXTURE_BINDING_CUBE_MAP)
+    binding = (
+        GL.GL_TEXTURE_BINDING_2D if target == GL.GL_TEXTURE_2D else GL.GL_TEXTURE_BINDING_CUBE_MAP
+    )
     image_target = target if target == GL.GL_TEXTURE_2D else GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X
     previous = int(GL.glGetIntegerv(binding))
     GL.glBindTexture(target, int(texture_id))
-    values = {key: legacy.tex_parameter(target, getattr(GL, key))
-              for key in ("GL_TEXTURE_MIN_FILTER", "GL_TEXTURE_MAG_FILTER",
-                          "GL_TEXTURE_WRAP_S", "GL_TEXTURE_WRAP_T", "GL_TEXTURE_MAX_LEVEL",
-                          "GL_TEXTURE_BASE_LEVEL")}
+    values = {
+        key: legacy.tex_parameter(target, getattr(GL, key))
+        for key in (
+            "GL_TEXTURE_MIN_FILTER",
+            "GL_TEXTURE_MAG_FILTER",
+            "GL_TEXTURE_WRAP_S",
+            "GL_TEXTURE_WRAP_T",
+            "GL_TEXTURE_MAX_LEVEL",
+            "GL_TEXTURE_BASE_LEVEL",
+        )
+    }
     for level, key in ((0, "width"), (1, "level1_width")):
         values[key] = int(GL.glGetTexLevelParameteriv(image_target, level, GL.GL_TEXTURE_WIDTH))
     values["height"] = int(GL.glGetTexLevelParameteriv(image_target, 0, GL.GL_TEXTURE_HEIGHT))
@@ -375,17 +416,16 @@ class LabBase:
             self._meshes[name] = _Mesh(name)
         return self._meshes[name]
 
-    def student_program(self, vertex: str, fragment: str, glsl: str, variable: str,
-                        limit: int) -> int:
+    def student_program(
+        self, vertex: str, fragment: str, glsl: str, variable: str, limit: int
+    ) -> int:
         """The kit's program around the student's GLSL ``glsl`` (compiled once per text;
         at most ``limit`` texts a run)."""
         if not isinstance(glsl, str):
-            raise LabSetupError(f"{variable} must be a string of GLSL, got "
-                                f"{type(glsl).__name__}")
+            raise LabSetupError(f"{variable} must be a string of GLSL, got {type(glsl).__name__}")
         if glsl not in self._programs:
             if len(self._programs) >= limit:
-                raise LabSetupError(f"more than {limit} different {variable} strings in one "
-                                    f"run")
+                raise LabSetupError(f"more than {limit} different {variable} strings in one run")
             from mirrorlab.labs.trusted.glslcheck import precompile
 
             precompile(vertex, fragment, glsl, variable)  # where a bomb costs the file only
@@ -432,13 +472,16 @@ class LabBase:
         return bound
 
     @classmethod
-    def viewer_for(cls, size: tuple[int, int], aspect: float | None = None
-                   ) -> tuple[np.ndarray, np.ndarray]:
+    def viewer_for(
+        cls, size: tuple[int, int], aspect: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """The viewer's (projection, view), row-major ``(4, 4)``, for a ``size`` (w, h)
         frame (or ``aspect``)."""
         aspect = aspect if aspect is not None else size[0] / size[1]
-        return (math3d.perspective(cls.FOVY, aspect, cls.NEAR, cls.FAR),
-                math3d.look_at(cls.EYE, cls.TARGET, (0.0, 1.0, 0.0)))
+        return (
+            math3d.perspective(cls.FOVY, aspect, cls.NEAR, cls.FAR),
+            math3d.look_at(cls.EYE, cls.TARGET, (0.0, 1.0, 0.0)),
+        )
 
     def viewer_matrices(self, aspect: float | None = None) -> tuple[np.ndarray, np.ndarray]:
         return self.viewer_for((self.width, self.height), aspect)
@@ -468,14 +511,19 @@ class Lab20(LabBase):
         self.textureShader = compile_program("kit_texture.vert", "kit_texture.frag")
         self.texSampler = uniform(self.textureShader, "texSampler")
         self.graph = SceneGraph(build_robot())
-        for joint, angle in zip(("base", "lower_arm", "upper_arm"), self.geometry["angles"],
-                                strict=True):
+        for joint, angle in zip(
+            ("base", "lower_arm", "upper_arm"), self.geometry["angles"], strict=True
+        ):
             self.graph.set_angle(joint, angle)
         _gl().glClearColor(*self.BACKGROUND, 1.0)
 
     def student_values(self) -> dict[str, Any]:
-        return {**super().student_values(), "textureShader": self.textureShader,
-                "texSampler": self.texSampler, "robot_nodes": list(self.NODES)}
+        return {
+            **super().student_values(),
+            "textureShader": self.textureShader,
+            "texSampler": self.texSampler,
+            "robot_nodes": list(self.NODES),
+        }
 
     def programs(self) -> set[int]:
         return {self.textureShader}
@@ -484,8 +532,9 @@ class Lab20(LabBase):
         """The mirror frame's model: the shipped 8.6 x 8.6 frame (8 x 8 glass and a 0.3
         border) scaled to the variant's mirror, just behind its plane."""
         g = self.geometry
-        scale = np.diag([1.0, (g["y1"] - g["y0"] + 0.6) / 8.6, (g["z1"] - g["z0"] + 0.6) / 8.6,
-                         1.0])
+        scale = np.diag(
+            [1.0, (g["y1"] - g["y0"] + 0.6) / 8.6, (g["z1"] - g["z0"] + 0.6) / 8.6, 1.0]
+        )
         return math3d.translate((g["x"] - 0.175, g["y0"] - 0.3, (g["z0"] + g["z1"]) / 2)) @ scale
 
     def draw_scene(self, textures: dict[str, int | None]) -> list[int]:
@@ -494,8 +543,7 @@ class Lab20(LabBase):
         parts = []
         for node in self.graph.nodes():
             if node.mesh:
-                parts.append((node.mesh, node.world_matrix(), node.color,
-                              textures.get(node.name)))
+                parts.append((node.mesh, node.world_matrix(), node.color, textures.get(node.name)))
         parts.append(("mirror_frame", self.frame_model(), (0.35, 0.27, 0.2), None))
         return self.draw_parts(parts)
 
@@ -513,24 +561,27 @@ class SphereMapLab(LabBase):
     def __init__(self, size: tuple[int, int], variant: Variant) -> None:
         super().__init__(size, variant)
         self.cone_model = math3d.translate((0.0, 1.0, 0.0)) @ math3d.rotate(
-            float(variant["tilt"]), (1.0, 0.0, 0.0))
+            float(variant["tilt"]), (1.0, 0.0, 0.0)
+        )
         self.texgen_unit = int(variant["unit"])
         self.backdrop_texture = int(_gl().glGenTextures(1))
         self.load_picture_texture(self.backdrop_texture, "launch")
 
     def draw_backdrop(self) -> list[int]:
         """The launch picture on its board behind the cone, lit, under the current matrices."""
-        return self.draw_parts([("backdrop", self.BACKDROP_MODEL, (1.0, 1.0, 1.0),
-                                 self.backdrop_texture)], light_world=(0.0, 0.0, 1.0))
+        return self.draw_parts(
+            [("backdrop", self.BACKDROP_MODEL, (1.0, 1.0, 1.0), self.backdrop_texture)],
+            light_world=(0.0, 0.0, 1.0),
+        )
 
-    def draw_cone_shader(self, glsl: str, texture: int, mode: int = 0, limit: int = 16
-                         ) -> None:
+    def draw_cone_shader(self, glsl: str, texture: int, mode: int = 0, limit: int = 16) -> None:
         """The cone drawn by the kit's shader calling the student's ``reflect_eye`` and
         ``sphere_map_st`` (from ``glsl``), sampling ``texture`` on unit 1, under the
         current matrices. (``mode`` 1-4 write check values instead of colours.)"""
         GL = _gl()
-        program = self.student_program("kit_sphere.vert", "kit_sphere.frag", glsl,
-                                       "SPHERE_MAP_GLSL", limit)
+        program = self.student_program(
+            "kit_sphere.vert", "kit_sphere.frag", glsl, "SPHERE_MAP_GLSL", limit
+        )
         previous = int(GL.glGetIntegerv(GL.GL_CURRENT_PROGRAM))
         GL.glUseProgram(program)
         GL.glUniform1i(uniform(program, "sphere_map"), ENV_UNIT)
@@ -593,9 +644,14 @@ class SphereMapLab(LabBase):
         GL.glBindVertexArray(0)
         GL.glBindBuffer(GL.GL_ARRAY_BUFFER, mesh.vbo)
         GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, mesh.ebo)
-        for array in (GL.GL_COLOR_ARRAY, GL.GL_TEXTURE_COORD_ARRAY, GL.GL_INDEX_ARRAY,
-                      GL.GL_EDGE_FLAG_ARRAY, GL.GL_FOG_COORD_ARRAY,
-                      GL.GL_SECONDARY_COLOR_ARRAY):
+        for array in (
+            GL.GL_COLOR_ARRAY,
+            GL.GL_TEXTURE_COORD_ARRAY,
+            GL.GL_INDEX_ARRAY,
+            GL.GL_EDGE_FLAG_ARRAY,
+            GL.GL_FOG_COORD_ARRAY,
+            GL.GL_SECONDARY_COLOR_ARRAY,
+        ):
             GL.glDisableClientState(array)
         GL.glEnableClientState(GL.GL_VERTEX_ARRAY)
         GL.glVertexPointer(3, GL.GL_FLOAT, 32, GL.GLvoidp(0))
@@ -619,13 +675,25 @@ class CubeMapLab(LabBase):
     BACKGROUND = (0.55, 0.7, 0.9)
     OBJECTS = (
         ("base", math3d.translate((0.0, -1.25, 0.0)), (1.0, 1.0, 1.0), "metal"),
-        ("hand", math3d.translate((2.1, 0.1, 0.9)) @ math3d.rotate(30.0, (0, 1, 0)),
-         (0.9, 0.12, 0.1), None),
+        (
+            "hand",
+            math3d.translate((2.1, 0.1, 0.9)) @ math3d.rotate(30.0, (0, 1, 0)),
+            (0.9, 0.12, 0.1),
+            None,
+        ),
         ("joint", math3d.translate((-1.9, 0.9, 1.3)), (0.15, 0.35, 0.95), None),
-        ("lower_arm", math3d.translate((0.6, -1.25, -2.6)) @ math3d.rotate(20.0, (0, 1, 0)),
-         (0.95, 0.75, 0.15), None),
-        ("upper_arm", math3d.translate((-2.4, -1.25, -1.0)) @ math3d.rotate(-35.0, (0, 1, 0)),
-         (0.2, 0.75, 0.3), None),
+        (
+            "lower_arm",
+            math3d.translate((0.6, -1.25, -2.6)) @ math3d.rotate(20.0, (0, 1, 0)),
+            (0.95, 0.75, 0.15),
+            None,
+        ),
+        (
+            "upper_arm",
+            math3d.translate((-2.4, -1.25, -1.0)) @ math3d.rotate(-35.0, (0, 1, 0)),
+            (0.2, 0.75, 0.3),
+            None,
+        ),
         ("backdrop", math3d.translate((0.0, 0.0, -9.0)), (0.85, 0.85, 0.85), "launch"),
     )
 
@@ -651,15 +719,15 @@ class CubeMapLab(LabBase):
             parts.append((mesh, model, color, self._textures.get(texture or "")))
         return self.draw_parts(parts, light_world=(0.45, 0.55, 0.7))
 
-    def draw_sphere(self, glsl: str, cube_texture: int, mode: int = 0, limit: int = 16
-                    ) -> None:
+    def draw_sphere(self, glsl: str, cube_texture: int, mode: int = 0, limit: int = 16) -> None:
         """The chrome sphere at the variant's centre, drawn by the kit's shader: it reflects
         the eye ray in world space, asks the student's ``cube_face`` and ``cube_face_st``
         (from ``glsl``) where that lands, and samples ``cube_texture`` (a cube map, on
         unit 1) there. (``mode`` 1-2 write check values instead of colours.)"""
         GL = _gl()
-        program = self.student_program("kit_cube.vert", "kit_cube.frag", glsl,
-                                       "CUBE_MAP_GLSL", limit)
+        program = self.student_program(
+            "kit_cube.vert", "kit_cube.frag", glsl, "CUBE_MAP_GLSL", limit
+        )
         projection, modelview = current_matrices()
         eye = -modelview[:3, :3].T @ modelview[:3, 3]
         previous = int(GL.glGetIntegerv(GL.GL_CURRENT_PROGRAM))
@@ -668,8 +736,12 @@ class CubeMapLab(LabBase):
         GL.glUniform1i(uniform(program, "mode"), int(mode))
         GL.glUniform3f(uniform(program, "eye_world"), *(float(v) for v in eye))
         GL.glUniform3f(uniform(program, "center"), *(float(v) for v in self.center))
-        GL.glUniformMatrix4fv(uniform(program, "view_projection"), 1, GL.GL_TRUE,
-                              (projection @ modelview).astype(np.float32))
+        GL.glUniformMatrix4fv(
+            uniform(program, "view_projection"),
+            1,
+            GL.GL_TRUE,
+            (projection @ modelview).astype(np.float32),
+        )
         GL.glActiveTexture(GL.GL_TEXTURE0 + ENV_UNIT)
         GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, int(cube_texture))
         GL.glActiveTexture(GL.GL_TEXTURE0)

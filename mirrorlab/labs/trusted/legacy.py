@@ -48,15 +48,29 @@ GL_GENERATE_MIPMAP = 0x8191
 GL_CLAMP, GL_CLAMP_TO_BORDER = 0x2900, 0x812D
 UNIT_CAPS = (GL_TEXTURE_2D, GL_TEXTURE_CUBE_MAP, *GL_TEXTURE_GEN)
 """Legacy switches that belong to the active texture unit."""
-GLOBAL_CAPS = (GL_NORMALIZE, GL_RESCALE_NORMAL, GL_LIGHTING, GL_LIGHT0, GL_LIGHT1,
-               GL_COLOR_MATERIAL, GL_ALPHA_TEST, GL_FOG, GL_POINT_SMOOTH)
+GLOBAL_CAPS = (
+    GL_NORMALIZE,
+    GL_RESCALE_NORMAL,
+    GL_LIGHTING,
+    GL_LIGHT0,
+    GL_LIGHT1,
+    GL_COLOR_MATERIAL,
+    GL_ALPHA_TEST,
+    GL_FOG,
+    GL_POINT_SMOOTH,
+)
 STACK_DEPTHS = {GL_MODELVIEW: 32, GL_PROJECTION: 32, GL_TEXTURE: 10}
 """Mesa's own limits (GL_MAX_*_STACK_DEPTH), so overflow errors come where they did."""
 UNITS = 8
 """Texture units the fixed pipeline has (GL_MAX_TEXTURE_UNITS)."""
 ENV_MODES = {GL_MODULATE: 0, GL_REPLACE: 1, GL_DECAL: 2, GL_BLEND: 3, GL_ADD: 4}
-GEN_MODES = {GL_EYE_LINEAR: 1, GL_OBJECT_LINEAR: 2, GL_SPHERE_MAP: 3, GL_NORMAL_MAP: 4,
-             GL_REFLECTION_MAP: 5}
+GEN_MODES = {
+    GL_EYE_LINEAR: 1,
+    GL_OBJECT_LINEAR: 2,
+    GL_SPHERE_MAP: 3,
+    GL_NORMAL_MAP: 4,
+    GL_REFLECTION_MAP: 5,
+}
 SPARE_UNIT = 8
 """Unit 8 + i takes the fixed shader's sampler of unit i that is not used (a program may
 not point two kinds of sampler at one unit)."""
@@ -195,7 +209,10 @@ UNITS
     }
     frag_color = color;
 }
-""".replace("UNITS", "".join(f"""    if ({unit} < units && unit_mode[{unit}].x != 0) {{
+""".replace(
+    "UNITS",
+    "".join(
+        f"""    if ({unit} < units && unit_mode[{unit}].x != 0) {{
         st = coord[{unit}].xy / coord[{unit}].w;
         st = vec2(unit_clamp[{unit}].x ? clamp(st.x, 0.0, 1.0) : st.x,
                   unit_clamp[{unit}].y ? clamp(st.y, 0.0, 1.0) : st.y);
@@ -203,7 +220,10 @@ UNITS
                                      : texture(texture_2d[{unit}], st);
         color = environment(color, s, unit_mode[{unit}].y, unit_alpha[{unit}]);
     }}
-""" for unit in range(8)))
+"""
+        for unit in range(8)
+    ),
+)
 """Sampler arrays take constant indices only: one block per unit."""
 
 
@@ -231,14 +251,18 @@ def has_compatibility() -> bool:
     GL = _gl()
     text = GL.glGetString(GL.GL_VERSION) or b""
     parts = text.decode(errors="replace").split(" ")[0].split(".")
-    version = (int(parts[0]), int(parts[1])) if len(parts) > 1 and parts[0].isdigit() \
-        and parts[1].isdigit() else (0, 0)
+    version = (
+        (int(parts[0]), int(parts[1]))
+        if len(parts) > 1 and parts[0].isdigit() and parts[1].isdigit()
+        else (0, 0)
+    )
     if version < (3, 1):
         return True
     if version == (3, 1):
         count = int(GL.glGetIntegerv(GL.GL_NUM_EXTENSIONS))
-        return any(GL.glGetStringi(GL.GL_EXTENSIONS, i) == b"GL_ARB_compatibility"
-                   for i in range(count))
+        return any(
+            GL.glGetStringi(GL.GL_EXTENSIONS, i) == b"GL_ARB_compatibility" for i in range(count)
+        )
     mask = int(np.asarray(GL.glGetIntegerv(GL.GL_CONTEXT_PROFILE_MASK)).reshape(-1)[0])
     return bool(mask & GL.GL_CONTEXT_COMPATIBILITY_PROFILE_BIT)
 
@@ -257,8 +281,10 @@ def current_matrices() -> tuple[np.ndarray, np.ndarray]:
     """The (projection, modelview) matrices now, ``(4, 4)`` float64 each, row-major: the
     emulated stacks' tops, or the context's own."""
     if _active is not None:
-        return (_active.top(GL_PROJECTION).astype(np.float64),
-                _active.top(GL_MODELVIEW).astype(np.float64))
+        return (
+            _active.top(GL_PROJECTION).astype(np.float64),
+            _active.top(GL_MODELVIEW).astype(np.float64),
+        )
     GL = _gl()
     projection = np.asarray(GL.glGetDoublev(GL.GL_PROJECTION_MATRIX), dtype=np.float64)
     modelview = np.asarray(GL.glGetDoublev(GL.GL_MODELVIEW_MATRIX), dtype=np.float64)
@@ -292,8 +318,11 @@ def load_matrix_uniforms(program: int) -> None:
     GL = _gl()
     projection, modelview = current_matrices()
     combined = multiply(projection.astype(F), modelview.astype(F)).astype(np.float64)
-    values = {"ml_ModelViewMatrix": modelview, "ml_ProjectionMatrix": projection,
-              "ml_ModelViewProjectionMatrix": combined}
+    values = {
+        "ml_ModelViewMatrix": modelview,
+        "ml_ProjectionMatrix": projection,
+        "ml_ModelViewProjectionMatrix": combined,
+    }
     for name, matrix in list(values.items()):
         inverse = _inverse(matrix)
         values[name + "Inverse"] = inverse
@@ -305,8 +334,7 @@ def load_matrix_uniforms(program: int) -> None:
             GL.glUniformMatrix4fv(location, 1, GL.GL_TRUE, matrix.astype(np.float32))
     location = int(GL.glGetUniformLocation(program, "ml_NormalMatrix"))
     if location >= 0:
-        GL.glUniformMatrix3fv(location, 1, GL.GL_TRUE,
-                              normal_matrix(modelview).astype(np.float32))
+        GL.glUniformMatrix3fv(location, 1, GL.GL_TRUE, normal_matrix(modelview).astype(np.float32))
     location = int(GL.glGetUniformLocation(program, "ml_TextureMatrix"))
     if location >= 0:
         textures = np.stack([texture_matrix(unit) for unit in range(UNITS)])
@@ -335,8 +363,10 @@ F = np.float32
 def multiply(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``a @ b`` of two float32 ``(4, 4)`` matrices, each entry summed left to right."""
     a, b = a.astype(F), b.astype(F)
-    return (((a[:, 0:1] * b[0:1, :] + a[:, 1:2] * b[1:2, :]) + a[:, 2:3] * b[2:3, :])
-            + a[:, 3:4] * b[3:4, :]).astype(F)
+    return (
+        ((a[:, 0:1] * b[0:1, :] + a[:, 1:2] * b[1:2, :]) + a[:, 2:3] * b[2:3, :])
+        + a[:, 3:4] * b[3:4, :]
+    ).astype(F)
 
 
 def translation(x: float, y: float, z: float) -> np.ndarray:
@@ -370,14 +400,17 @@ def rotation(angle: float, ax: float, ay: float, az: float) -> np.ndarray | None
     x, y, z = x / magnitude, y / magnitude, z / magnitude
     one_c = F(1) - c
     xs, ys, zs = x * s, y * s, z * s
-    m[:3, :3] = [[one_c * (x * x) + c, one_c * (x * y) - zs, one_c * (z * x) + ys],
-                 [one_c * (x * y) + zs, one_c * (y * y) + c, one_c * (y * z) - xs],
-                 [one_c * (z * x) - ys, one_c * (y * z) + xs, one_c * (z * z) + c]]
+    m[:3, :3] = [
+        [one_c * (x * x) + c, one_c * (x * y) - zs, one_c * (z * x) + ys],
+        [one_c * (x * y) + zs, one_c * (y * y) + c, one_c * (y * z) - xs],
+        [one_c * (z * x) - ys, one_c * (y * z) + xs, one_c * (z * z) + c],
+    ]
     return m
 
 
-def ortho(left: float, right: float, bottom: float, top: float, near: float,
-          far: float) -> np.ndarray | None:
+def ortho(
+    left: float, right: float, bottom: float, top: float, near: float, far: float
+) -> np.ndarray | None:
     """glOrtho's matrix (None where GL gives GL_INVALID_VALUE)."""
     if left == right or bottom == top or near == far:
         return None
@@ -389,8 +422,9 @@ def ortho(left: float, right: float, bottom: float, top: float, near: float,
     return m
 
 
-def frustum(left: float, right: float, bottom: float, top: float, near: float,
-            far: float) -> np.ndarray | None:
+def frustum(
+    left: float, right: float, bottom: float, top: float, near: float, far: float
+) -> np.ndarray | None:
     """glFrustum's matrix (None where GL gives GL_INVALID_VALUE)."""
     if near <= 0 or far <= 0 or left == right or bottom == top or near == far:
         return None
@@ -419,18 +453,24 @@ def perspective(fovy: float, aspect: float, near: float, far: float) -> np.ndarr
     return m.astype(F)
 
 
-def look_at(eye: tuple[float, float, float], center: tuple[float, float, float],
-            up: tuple[float, float, float]) -> np.ndarray:
+def look_at(
+    eye: tuple[float, float, float],
+    center: tuple[float, float, float],
+    up: tuple[float, float, float],
+) -> np.ndarray:
     """gluLookAt's rotation, by its man page, in float as GLU makes it (GLU leaves a zero
     vector unnormalised); GLU then multiplies by the translation by -eye, a product of its
     own (float products do not associate)."""
+
     def unit(v: np.ndarray) -> np.ndarray:
         length = F(math.sqrt(float(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])))
         return v / length if length != 0 else v
 
     def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                         a[0] * b[1] - a[1] * b[0]], dtype=F)
+        return np.array(
+            [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]],
+            dtype=F,
+        )
 
     forward = unit(np.array([center[i] - eye[i] for i in range(3)], dtype=F))
     side = unit(cross(forward, np.array(up, dtype=F)))
@@ -507,8 +547,7 @@ class FixedFunction:
     @staticmethod
     def unit() -> int:
         GL = _gl()
-        return int(np.asarray(GL.glGetIntegerv(GL.GL_ACTIVE_TEXTURE)).reshape(-1)[0]) - \
-            GL_TEXTURE0
+        return int(np.asarray(GL.glGetIntegerv(GL.GL_ACTIVE_TEXTURE)).reshape(-1)[0]) - GL_TEXTURE0
 
     def _stack(self, mode: int, unit: int | None = None) -> list[np.ndarray]:
         key = (mode, (self.unit() if unit is None else unit) if mode == GL_TEXTURE else 0)
@@ -600,8 +639,18 @@ class FixedFunction:
 
     glRotated = glRotatef
 
-    def gluLookAt(self, ex: float, ey: float, ez: float, cx: float, cy: float, cz: float,
-                  ux: float, uy: float, uz: float) -> None:
+    def gluLookAt(
+        self,
+        ex: float,
+        ey: float,
+        ez: float,
+        cx: float,
+        cy: float,
+        cz: float,
+        ux: float,
+        uy: float,
+        uz: float,
+    ) -> None:
         self._apply(look_at((ex, ey, ez), (cx, cy, cz), (ux, uy, uz)))
         self._apply(translation(-ex, -ey, -ez))
 
@@ -685,9 +734,9 @@ class FixedFunction:
         index = coord - GL_S
         if not 0 <= index < 4 or pname != GL_TEXTURE_GEN_MODE or mode not in GEN_MODES:
             raise gl_error(GL_INVALID_ENUM)
-        if (mode == GL_SPHERE_MAP and index > 1) or (mode in (GL_NORMAL_MAP,
-                                                               GL_REFLECTION_MAP)
-                                                      and index > 2):
+        if (mode == GL_SPHERE_MAP and index > 1) or (
+            mode in (GL_NORMAL_MAP, GL_REFLECTION_MAP) and index > 2
+        ):
             raise gl_error(GL_INVALID_ENUM)
         self.gen_modes[(self.unit(), index)] = int(mode)
 
@@ -706,8 +755,7 @@ class FixedFunction:
         index = coord - GL_S
         if not 0 <= index < 4 or pname != GL_TEXTURE_GEN_MODE:
             raise gl_error(GL_INVALID_ENUM)
-        return np.array([self.gen_modes.get((self.unit(), index), GL_EYE_LINEAR)],
-                        dtype=np.int32)
+        return np.array([self.gen_modes.get((self.unit(), index), GL_EYE_LINEAR)], dtype=np.int32)
 
     def plane(self, unit: int, index: int, pname: int) -> np.ndarray:
         found = self.planes.get((unit, index, pname))
@@ -720,8 +768,9 @@ class FixedFunction:
 
     def _bound(self, target: int) -> int:
         GL = _gl()
-        binding = GL.GL_TEXTURE_BINDING_2D if target == GL_TEXTURE_2D else \
-            GL.GL_TEXTURE_BINDING_CUBE_MAP
+        binding = (
+            GL.GL_TEXTURE_BINDING_2D if target == GL_TEXTURE_2D else GL.GL_TEXTURE_BINDING_CUBE_MAP
+        )
         return int(np.asarray(GL.glGetIntegerv(binding)).reshape(-1)[0])
 
     def glTexParameteri(self, target: int, pname: int, value: Any) -> None:
@@ -743,17 +792,45 @@ class FixedFunction:
         else:
             _gl().glTexParameterf(target, pname, value)
 
-    def glTexImage2D(self, target: int, level: int, internalformat: int, width: int,
-                     height: int, border: int, fmt: int, kind: int, pixels: Any) -> None:
+    def glTexImage2D(
+        self,
+        target: int,
+        level: int,
+        internalformat: int,
+        width: int,
+        height: int,
+        border: int,
+        fmt: int,
+        kind: int,
+        pixels: Any,
+    ) -> None:
         from OpenGL.raw.GL.VERSION import GL_1_0 as RAW
 
         internal, swizzle = CORE_FORMATS.get(internalformat, (internalformat, None))
-        RAW.glTexImage2D(target, level, internal, width, height, border,
-                         PIXEL_FORMATS.get(fmt, fmt), kind, pixels)
+        RAW.glTexImage2D(
+            target,
+            level,
+            internal,
+            width,
+            height,
+            border,
+            PIXEL_FORMATS.get(fmt, fmt),
+            kind,
+            pixels,
+        )
         self._swizzle(target, swizzle)
 
-    def glCopyTexImage2D(self, target: int, level: int, internalformat: int, x: int, y: int,
-                         width: int, height: int, border: int) -> None:
+    def glCopyTexImage2D(
+        self,
+        target: int,
+        level: int,
+        internalformat: int,
+        x: int,
+        y: int,
+        width: int,
+        height: int,
+        border: int,
+    ) -> None:
         internal, swizzle = CORE_FORMATS.get(internalformat, (internalformat, None))
         _gl().glCopyTexImage2D(target, level, internal, x, y, width, height, border)
         self._swizzle(target, swizzle)
@@ -777,27 +854,45 @@ class FixedFunction:
     # ---------------------------------------------------------------- queries
     def answers(self, pname: int) -> bool:
         GL = _gl()
-        return pname in (GL.GL_MODELVIEW_MATRIX, GL.GL_PROJECTION_MATRIX,
-                         GL.GL_TEXTURE_MATRIX, GL.GL_MATRIX_MODE, GL.GL_CURRENT_COLOR,
-                         GL.GL_CURRENT_TEXTURE_COORDS, GL.GL_MODELVIEW_STACK_DEPTH,
-                         GL.GL_PROJECTION_STACK_DEPTH, GL.GL_SHADE_MODEL,
-                         GL.GL_MAX_TEXTURE_UNITS, GL.GL_LINE_WIDTH) \
-            or pname in UNIT_CAPS or pname in GLOBAL_CAPS
+        return (
+            pname
+            in (
+                GL.GL_MODELVIEW_MATRIX,
+                GL.GL_PROJECTION_MATRIX,
+                GL.GL_TEXTURE_MATRIX,
+                GL.GL_MATRIX_MODE,
+                GL.GL_CURRENT_COLOR,
+                GL.GL_CURRENT_TEXTURE_COORDS,
+                GL.GL_MODELVIEW_STACK_DEPTH,
+                GL.GL_PROJECTION_STACK_DEPTH,
+                GL.GL_SHADE_MODEL,
+                GL.GL_MAX_TEXTURE_UNITS,
+                GL.GL_LINE_WIDTH,
+            )
+            or pname in UNIT_CAPS
+            or pname in GLOBAL_CAPS
+        )
 
     def get(self, pname: int) -> np.ndarray:
         """The value of a legacy query ``pname`` (:meth:`answers`), as floats."""
         GL = _gl()
-        matrices = {GL.GL_MODELVIEW_MATRIX: GL_MODELVIEW, GL.GL_PROJECTION_MATRIX:
-                    GL_PROJECTION, GL.GL_TEXTURE_MATRIX: GL_TEXTURE}
+        matrices = {
+            GL.GL_MODELVIEW_MATRIX: GL_MODELVIEW,
+            GL.GL_PROJECTION_MATRIX: GL_PROJECTION,
+            GL.GL_TEXTURE_MATRIX: GL_TEXTURE,
+        }
         if pname in matrices:
             return self.top(matrices[pname]).T.reshape(-1).copy()
         values: Any = {
-            GL.GL_MATRIX_MODE: [self.mode], GL.GL_CURRENT_COLOR: self.color,
-            GL.GL_CURRENT_TEXTURE_COORDS: self.texcoords[self.unit()] if self.unit() < UNITS
+            GL.GL_MATRIX_MODE: [self.mode],
+            GL.GL_CURRENT_COLOR: self.color,
+            GL.GL_CURRENT_TEXTURE_COORDS: self.texcoords[self.unit()]
+            if self.unit() < UNITS
             else [0.0, 0.0, 0.0, 1.0],
             GL.GL_MODELVIEW_STACK_DEPTH: [len(self._stack(GL_MODELVIEW))],
             GL.GL_PROJECTION_STACK_DEPTH: [len(self._stack(GL_PROJECTION))],
-            GL.GL_SHADE_MODEL: [self.shade], GL.GL_MAX_TEXTURE_UNITS: [UNITS],
+            GL.GL_SHADE_MODEL: [self.shade],
+            GL.GL_MAX_TEXTURE_UNITS: [UNITS],
             GL.GL_LINE_WIDTH: [self.line_width],
         }.get(pname)
         if values is None:
@@ -813,17 +908,19 @@ class FixedFunction:
 
     def _vertex(self, values: Any) -> None:
         values = [float(v) for v in np.asarray(values, dtype=np.float64).reshape(-1)]
-        position = (values + [0.0, 0.0, 1.0][len(values) - 1:])[:4] if len(values) < 4 \
-            else values[:4]
+        position = (
+            (values + [0.0, 0.0, 1.0][len(values) - 1 :])[:4] if len(values) < 4 else values[:4]
+        )
         if self.begun is None:
             return  # outside glBegin/glEnd a vertex does nothing
-        self.vertices.append(np.concatenate([position, self.normal, self.color,
-                                             self.texcoords.reshape(-1)]))
+        self.vertices.append(
+            np.concatenate([position, self.normal, self.color, self.texcoords.reshape(-1)])
+        )
 
     def texcoord(self, unit: int, values: Any) -> None:
         values = [float(v) for v in np.asarray(values, dtype=np.float64).reshape(-1)]
         if 0 <= unit < UNITS:
-            self.texcoords[unit] = (values + [0.0, 0.0, 1.0][len(values) - 1:])[:4]
+            self.texcoords[unit] = (values + [0.0, 0.0, 1.0][len(values) - 1 :])[:4]
 
     def glEnd(self) -> None:
         if self.begun is None:
@@ -844,19 +941,21 @@ class FixedFunction:
             data = data[order] if order.size else data[:0]
         if not len(data):
             return
-        previous_vao = int(np.asarray(GL.glGetIntegerv(GL.GL_VERTEX_ARRAY_BINDING))
-                           .reshape(-1)[0])
+        previous_vao = int(np.asarray(GL.glGetIntegerv(GL.GL_VERTEX_ARRAY_BINDING)).reshape(-1)[0])
         GL.glBindVertexArray(self.vao)
         GL.glBindBuffer(GL.GL_ARRAY_BUFFER, self.vbo)
-        GL.glBufferData(GL.GL_ARRAY_BUFFER, data.nbytes, np.ascontiguousarray(data),
-                        GL.GL_STREAM_DRAW)
+        GL.glBufferData(
+            GL.GL_ARRAY_BUFFER, data.nbytes, np.ascontiguousarray(data), GL.GL_STREAM_DRAW
+        )
         stride = FLOATS * 4
-        layout = [(POSITION, 4, 0), (NORMAL, 3, 4), (COLOR, 4, 7)] + \
-            [(TEXCOORD0 + i, 4, 11 + 4 * i) for i in range(UNITS)]
+        layout = [(POSITION, 4, 0), (NORMAL, 3, 4), (COLOR, 4, 7)] + [
+            (TEXCOORD0 + i, 4, 11 + 4 * i) for i in range(UNITS)
+        ]
         for location, size, offset in layout:
             GL.glEnableVertexAttribArray(location)
-            GL.glVertexAttribPointer(location, size, GL.GL_FLOAT, GL.GL_FALSE, stride,
-                                     GL.GLvoidp(offset * 4))
+            GL.glVertexAttribPointer(
+                location, size, GL.GL_FLOAT, GL.GL_FALSE, stride, GL.GLvoidp(offset * 4)
+            )
         self._with_program(lambda: GL.glDrawArrays(mode, 0, len(data)))
         GL.glBindBuffer(GL.GL_ARRAY_BUFFER, 0)
         GL.glBindVertexArray(previous_vao)
@@ -866,16 +965,16 @@ class FixedFunction:
         triangles) in the fixed pipeline, the current colour and texture coordinates for
         every vertex."""
         GL = _gl()
-        previous_vao = int(np.asarray(GL.glGetIntegerv(GL.GL_VERTEX_ARRAY_BINDING))
-                           .reshape(-1)[0])
+        previous_vao = int(np.asarray(GL.glGetIntegerv(GL.GL_VERTEX_ARRAY_BINDING)).reshape(-1)[0])
         GL.glBindVertexArray(vao)
         for location in [COLOR] + [TEXCOORD0 + i for i in range(UNITS)]:
             GL.glDisableVertexAttribArray(location)
         GL.glVertexAttrib4f(COLOR, *(float(v) for v in self.color))
         for i in range(UNITS):
             GL.glVertexAttrib4f(TEXCOORD0 + i, *(float(v) for v in self.texcoords[i]))
-        self._with_program(lambda: GL.glDrawElements(GL.GL_TRIANGLES, count,
-                                                     GL.GL_UNSIGNED_INT, None))
+        self._with_program(
+            lambda: GL.glDrawElements(GL.GL_TRIANGLES, count, GL.GL_UNSIGNED_INT, None)
+        )
         GL.glBindVertexArray(previous_vao)
 
     def _with_program(self, draw: Any) -> None:
@@ -895,8 +994,7 @@ class FixedFunction:
     def _uniform(self, name: str) -> int:
         location = self.locations.get(name)
         if location is None:
-            location = self.locations[name] = int(_gl().glGetUniformLocation(self.program,
-                                                                            name))
+            location = self.locations[name] = int(_gl().glGetUniformLocation(self.program, name))
         return location
 
     def _fixed_uniforms(self) -> None:
@@ -904,12 +1002,19 @@ class FixedFunction:
         u = self._uniform
         modelview = self.top(GL_MODELVIEW)
         GL.glUniformMatrix4fv(u("modelview"), 1, GL.GL_TRUE, modelview.astype(np.float32))
-        GL.glUniformMatrix4fv(u("modelview_projection"), 1, GL.GL_TRUE,
-                              multiply(self.top(GL_PROJECTION), modelview))
-        GL.glUniformMatrix3fv(u("normal_matrix"), 1, GL.GL_TRUE,
-                              normal_matrix(modelview.astype(np.float64)).astype(np.float32))
-        GL.glUniform1i(u("normalize_normals"), int(self.enabled(GL_NORMALIZE)
-                                                   or self.enabled(GL_RESCALE_NORMAL)))
+        GL.glUniformMatrix4fv(
+            u("modelview_projection"), 1, GL.GL_TRUE, multiply(self.top(GL_PROJECTION), modelview)
+        )
+        GL.glUniformMatrix3fv(
+            u("normal_matrix"),
+            1,
+            GL.GL_TRUE,
+            normal_matrix(modelview.astype(np.float64)).astype(np.float32),
+        )
+        GL.glUniform1i(
+            u("normalize_normals"),
+            int(self.enabled(GL_NORMALIZE) or self.enabled(GL_RESCALE_NORMAL)),
+        )
         GL.glUniform1i(u("lighting"), int(self.enabled(GL_LIGHTING)))
         GL.glUniform1i(u("light0"), int(self.enabled(GL_LIGHT0)))
         GL.glUniform1i(u("color_material"), int(self.enabled(GL_COLOR_MATERIAL)))
@@ -918,8 +1023,7 @@ class FixedFunction:
         GL.glUniform1i(u("flat_shading"), int(self.shade == GL_FLAT))
         GL.glUniform1i(u("fog"), int(self.enabled(GL_FOG)))
         matrices = np.stack([self.top(GL_TEXTURE, unit) for unit in range(UNITS)])
-        GL.glUniformMatrix4fv(u("texture_matrix"), UNITS, GL.GL_TRUE,
-                              matrices.astype(np.float32))
+        GL.glUniformMatrix4fv(u("texture_matrix"), UNITS, GL.GL_TRUE, matrices.astype(np.float32))
         modes = np.zeros((UNITS, 4), dtype=np.int32)
         unit_modes = np.zeros((UNITS, 2), dtype=np.int32)
         alpha = np.zeros(UNITS, dtype=np.int32)
@@ -931,8 +1035,7 @@ class FixedFunction:
         for unit in range(UNITS):
             for index in range(4):
                 if self.enabled(GL_TEXTURE_GEN[index], unit):
-                    modes[unit, index] = GEN_MODES[self.gen_modes.get((unit, index),
-                                                                      GL_EYE_LINEAR)]
+                    modes[unit, index] = GEN_MODES[self.gen_modes.get((unit, index), GL_EYE_LINEAR)]
                 objects[unit * 4 + index] = self.plane(unit, index, GL_OBJECT_PLANE)
                 eyes[unit * 4 + index] = self.plane(unit, index, GL_EYE_PLANE)
             cube = self.enabled(GL_TEXTURE_CUBE_MAP, unit)
@@ -944,11 +1047,14 @@ class FixedFunction:
             unit_modes[unit] = (kind, ENV_MODES[self.env.get(unit, GL_MODULATE)])
             if kind:
                 units = unit + 1
-                alpha[unit] = int(_has_alpha(GL_TEXTURE_CUBE_MAP_POSITIVE_X if cube
-                                             else GL_TEXTURE_2D))
+                alpha[unit] = int(
+                    _has_alpha(GL_TEXTURE_CUBE_MAP_POSITIVE_X if cube else GL_TEXTURE_2D)
+                )
                 if not cube:
-                    clamps[unit] = [tex_parameter(GL_TEXTURE_2D, wrap) == GL_CLAMP
-                                    for wrap in (GL.GL_TEXTURE_WRAP_S, GL.GL_TEXTURE_WRAP_T)]
+                    clamps[unit] = [
+                        tex_parameter(GL_TEXTURE_2D, wrap) == GL_CLAMP
+                        for wrap in (GL.GL_TEXTURE_WRAP_S, GL.GL_TEXTURE_WRAP_T)
+                    ]
             # a 2D and a cube sampler may not share a unit: the unused one takes a spare
             GL.glUniform1i(u(f"texture_2d[{unit}]"), SPARE_UNIT + unit if cube else unit)
             GL.glUniform1i(u(f"texture_cube[{unit}]"), unit if cube else SPARE_UNIT + unit)
@@ -965,9 +1071,13 @@ class FixedFunction:
 GL_TEXTURE_CUBE_MAP_POSITIVE_X = 0x8515
 _R, _G, _ZERO, _ONE = 0x1903, 0x1904, 0, 1
 CORE_FORMATS: dict[int, tuple[int, tuple[int, int, int, int] | None]] = {
-    1: (0x8229, (_R, _R, _R, _ONE)), 2: (0x822B, (_R, _R, _R, _G)), 3: (0x1907, None),
-    4: (0x1908, None), 0x1909: (0x8229, (_R, _R, _R, _ONE)),
-    0x8040: (0x8229, (_R, _R, _R, _ONE)), 0x190A: (0x822B, (_R, _R, _R, _G)),
+    1: (0x8229, (_R, _R, _R, _ONE)),
+    2: (0x822B, (_R, _R, _R, _G)),
+    3: (0x1907, None),
+    4: (0x1908, None),
+    0x1909: (0x8229, (_R, _R, _R, _ONE)),
+    0x8040: (0x8229, (_R, _R, _R, _ONE)),
+    0x190A: (0x822B, (_R, _R, _R, _G)),
     0x1906: (0x8229, (_ZERO, _ZERO, _ZERO, _R)),
 }
 """Legacy internal formats (1-4, GL_LUMINANCE, GL_LUMINANCE8, GL_LUMINANCE_ALPHA,
@@ -1011,8 +1121,11 @@ def _immediate_call(name: str) -> Any:
 
 
 for _name in GL_SPECS:
-    if _name.startswith(("glVertex", "glTexCoord", "glMultiTexCoord", "glColor", "glNormal"))\
-            and form_type(_name) and not hasattr(FixedFunction, _name):
+    if (
+        _name.startswith(("glVertex", "glTexCoord", "glMultiTexCoord", "glColor", "glNormal"))
+        and form_type(_name)
+        and not hasattr(FixedFunction, _name)
+    ):
         setattr(FixedFunction, _name, _immediate_call(_name))
 
 
@@ -1024,8 +1137,11 @@ def _complete(target: int) -> bool:
     (of each face), and every level down to 1 x 1 (or GL_TEXTURE_MAX_LEVEL) when its
     minifying filter wants mipmaps."""
     GL = _gl()
-    faces = [GL_TEXTURE_2D] if target == GL_TEXTURE_2D else \
-        [GL_TEXTURE_CUBE_MAP_POSITIVE_X + i for i in range(6)]
+    faces = (
+        [GL_TEXTURE_2D]
+        if target == GL_TEXTURE_2D
+        else [GL_TEXTURE_CUBE_MAP_POSITIVE_X + i for i in range(6)]
+    )
 
     def size(face: int, level: int) -> tuple[int, int]:
         value = np.zeros(1, dtype=np.int32)
@@ -1035,8 +1151,7 @@ def _complete(target: int) -> bool:
         return width, int(value[0])
 
     width, height = size(faces[0], 0)
-    if width == 0 or height == 0 or any(size(face, 0) != (width, height)
-                                        for face in faces[1:]):
+    if width == 0 or height == 0 or any(size(face, 0) != (width, height) for face in faces[1:]):
         return False
     if tex_parameter(target, GL.GL_TEXTURE_MIN_FILTER) not in MIPMAP_FILTERS:
         return True
@@ -1072,4 +1187,3 @@ def _compile(vertex: str, fragment: str) -> int:
         log = GL.glGetProgramInfoLog(program).decode(errors="replace").strip()
         raise RuntimeError(f"the fixed pipeline's shader did not link: {log}")
     return int(program)
-

@@ -126,8 +126,8 @@ class TrustedChannel:
             chunk = os.read(self.read_fd, min(len(view), 1 << 20))
             if not chunk:
                 raise PipeClosed("the sandbox closed the pipe")
-            view[:len(chunk)] = chunk
-            view = view[len(chunk):]
+            view[: len(chunk)] = chunk
+            view = view[len(chunk) :]
 
     def _fill(self, deadline: float) -> None:
         """Read what the sandbox has sent (at most 64 KiB) into the read-ahead buffer."""
@@ -149,8 +149,10 @@ class TrustedChannel:
         self._read_into(length_bytes, deadline)
         (length,) = LENGTH.unpack(length_bytes)
         if length > MAX_HEADER:
-            raise PipeError(f"a message of {_mib(length)} without its arrays; the labs accept "
-                            f"{MAX_HEADER >> 10} KiB")
+            raise PipeError(
+                f"a message of {_mib(length)} without its arrays; the labs accept "
+                f"{MAX_HEADER >> 10} KiB"
+            )
         head = bytearray(length)
         self._read_into(head, deadline)
         try:
@@ -174,11 +176,16 @@ class TrustedChannel:
             raise PipeError(f"a message with a malformed list of arrays{where}")
         checked, total = [], 0
         for entry in declared:
-            if not (isinstance(entry, list) and len(entry) == 3
-                    and isinstance(entry[0], str) and entry[0] in DTYPES
-                    and isinstance(entry[1], list) and len(entry[1]) <= 4
-                    and all(type(d) is int and 0 <= d < 1 << 31 for d in entry[1])
-                    and type(entry[2]) is int):
+            if not (
+                isinstance(entry, list)
+                and len(entry) == 3
+                and isinstance(entry[0], str)
+                and entry[0] in DTYPES
+                and isinstance(entry[1], list)
+                and len(entry[1]) <= 4
+                and all(type(d) is int and 0 <= d < 1 << 31 for d in entry[1])
+                and type(entry[2]) is int
+            ):
                 raise PipeError(f"a malformed array{where}")
             dtype, shape, nbytes = entry
             if nbytes != math.prod(shape) * DTYPES[dtype]:
@@ -186,11 +193,14 @@ class TrustedChannel:
             total += nbytes
             checked.append((dtype, tuple(shape), nbytes))
         if total > self.budget.message_bytes:
-            raise PipeError(f"an upload of {_mib(total)}{where}; the labs accept "
-                            f"{_mib(self.budget.message_bytes)} at once")
+            raise PipeError(
+                f"an upload of {_mib(total)}{where}; the labs accept "
+                f"{_mib(self.budget.message_bytes)} at once"
+            )
         if self.budget.received + total > self.budget.total_bytes:
-            raise PipeError(f"more than {_mib(self.budget.total_bytes)} of uploads in one "
-                            f"run{where}")
+            raise PipeError(
+                f"more than {_mib(self.budget.total_bytes)} of uploads in one run{where}"
+            )
         return checked
 
 

@@ -109,14 +109,15 @@ CALLS = {
 }
 """How the probe's main calls each function (a, b: the inputs as vec4)."""
 
-LAB_FUNCTIONS = {"spheremap": ("reflect_eye", "sphere_map_st"),
-                 "cubemap": ("cube_face", "cube_face_st")}
+LAB_FUNCTIONS = {
+    "spheremap": ("reflect_eye", "sphere_map_st"),
+    "cubemap": ("cube_face", "cube_face_st"),
+}
 """The functions the probe evaluates, per lab."""
 
 
 # ------------------------------------------------------------------ formulas and slips
-def _hoff(r: np.ndarray, plus: float = 1.0, two: float = 2.0, half: float = 0.5
-          ) -> np.ndarray:
+def _hoff(r: np.ndarray, plus: float = 1.0, two: float = 2.0, half: float = 0.5) -> np.ndarray:
     m = two * np.sqrt(r[:, 0] ** 2 + r[:, 1] ** 2 + (r[:, 2] + plus) ** 2)
     return np.stack([r[:, 0] / m + half, r[:, 1] / m + half], -1)
 
@@ -148,8 +149,13 @@ def reflect_formulas(u: np.ndarray, n: np.ndarray) -> dict[str, np.ndarray]:
     d = (u * n).sum(-1, keepdims=True)
     right = reflect(u, n)
     return {
-        "right": right, "sign": -right, "no_two": u - d * n, "plus": u + 2 * d * n,
-        "unreflected": u, "normal": n, "clamped": u - 2 * np.maximum(d, 0.0) * n,
+        "right": right,
+        "sign": -right,
+        "no_two": u - d * n,
+        "plus": u + 2 * d * n,
+        "unreflected": u,
+        "normal": n,
+        "clamped": u - 2 * np.maximum(d, 0.0) * n,
         "abs_dot": u - 2 * np.abs(d) * n,
     }
 
@@ -164,11 +170,16 @@ def cube_formulas(r: np.ndarray, face: np.ndarray) -> dict[str, np.ndarray]:
     major = np.abs(signed)
     sc_tc = (2 * right - 1) * major
     return {
-        "right": right, "swap": right[:, ::-1], "flip_s": right * [-1, 1] + [1, 0],
-        "flip_t": right * [1, -1] + [0, 1], "undivided": (sc_tc + 1) / 2,
+        "right": right,
+        "swap": right[:, ::-1],
+        "flip_s": right * [-1, 1] + [1, 0],
+        "flip_t": right * [1, -1] + [0, 1],
+        "undivided": (sc_tc + 1) / 2,
         "length": (sc_tc / np.linalg.norm(r, axis=-1, keepdims=True) + 1) / 2,
-        "no_shift": sc_tc / major, "no_scale": sc_tc / major + 1,
-        "signed_major": (sc_tc / signed + 1) / 2, "zero": np.zeros_like(right),
+        "no_shift": sc_tc / major,
+        "no_scale": sc_tc / major + 1,
+        "signed_major": (sc_tc / signed + 1) / 2,
+        "zero": np.zeros_like(right),
     }
 
 
@@ -178,8 +189,11 @@ def face_formulas(r: np.ndarray) -> dict[str, np.ndarray]:
     right = cube_map(r)[0].astype(np.float64)
     axis = np.argmax(r, axis=-1)
     signed = 2 * axis + (np.take_along_axis(r, axis[:, None], -1)[:, 0] < 0)
-    return {"right": right[:, None], "signed": signed[:, None].astype(np.float64),
-            "opposite": (right.astype(np.int64) ^ 1)[:, None].astype(np.float64)}
+    return {
+        "right": right[:, None],
+        "signed": signed[:, None].astype(np.float64),
+        "opposite": (right.astype(np.int64) ^ 1)[:, None].astype(np.float64),
+    }
 
 
 FORMULAS: dict[str, Callable[[], dict[str, np.ndarray]]] = {
@@ -190,8 +204,12 @@ FORMULAS: dict[str, Callable[[], dict[str, np.ndarray]]] = {
 }
 """Per function, its right formula and its known slips on the probe's inputs."""
 
-RIGHT = {"reflect_eye": ("right",), "sphere_map_st": ("right", "normalised"),
-         "cube_face": ("right",), "cube_face_st": ("right",)}
+RIGHT = {
+    "reflect_eye": ("right",),
+    "sphere_map_st": ("right", "normalised"),
+    "cube_face": ("right",),
+    "cube_face_st": ("right",),
+}
 """The formulas that are the function, not a slip of it."""
 
 
@@ -221,8 +239,10 @@ def slip_per_face(values: np.ndarray | None) -> dict[int, str]:
     wrong = {}
     for face in range(6):
         on = CUBE_FACE == face
-        found = next((name for name, predicted in formulas.items()
-                      if _matches(values[on], predicted[on])), "")
+        found = next(
+            (name for name, predicted in formulas.items() if _matches(values[on], predicted[on])),
+            "",
+        )
         if found != "right":
             wrong[face] = found
     return wrong
@@ -239,20 +259,25 @@ void main() {
 
 def probe_fragment(version: str, prototypes: str, calls: list[str]) -> str:
     """The probe's main: ``calls[i]`` when ``mirrorlab_probe_call`` is i."""
-    branches = "\n".join(f"    {'else ' if i else ''}if (mirrorlab_probe_call == {i}) "
-                         f"mirrorlab_probe_out = {call};" for i, call in enumerate(calls))
-    return (f"{version}\n{prototypes}"
-            "uniform sampler2D mirrorlab_probe_a;\nuniform sampler2D mirrorlab_probe_b;\n"
-            "uniform int mirrorlab_probe_call;\n"
-            "layout(location = 0) out vec4 mirrorlab_probe_out;\n"
-            "void main() {\n    ivec2 at = ivec2(gl_FragCoord.xy);\n"
-            "    vec4 a = texelFetch(mirrorlab_probe_a, at, 0);\n"
-            "    vec4 b = texelFetch(mirrorlab_probe_b, at, 0);\n"
-            f"    mirrorlab_probe_out = vec4(0.0);\n{branches}\n}}\n")
+    branches = "\n".join(
+        f"    {'else ' if i else ''}if (mirrorlab_probe_call == {i}) mirrorlab_probe_out = {call};"
+        for i, call in enumerate(calls)
+    )
+    return (
+        f"{version}\n{prototypes}"
+        "uniform sampler2D mirrorlab_probe_a;\nuniform sampler2D mirrorlab_probe_b;\n"
+        "uniform int mirrorlab_probe_call;\n"
+        "layout(location = 0) out vec4 mirrorlab_probe_out;\n"
+        "void main() {\n    ivec2 at = ivec2(gl_FragCoord.xy);\n"
+        "    vec4 a = texelFetch(mirrorlab_probe_a, at, 0);\n"
+        "    vec4 b = texelFetch(mirrorlab_probe_b, at, 0);\n"
+        f"    mirrorlab_probe_out = vec4(0.0);\n{branches}\n}}\n"
+    )
 
 
-def run_probe(kit_fragment: str, glsl: str, functions: tuple[str, ...], registry
-              ) -> dict[str, np.ndarray]:
+def run_probe(
+    kit_fragment: str, glsl: str, functions: tuple[str, ...], registry
+) -> dict[str, np.ndarray]:
     """Each of ``functions`` of the student's ``glsl`` evaluated on its :data:`INPUTS`:
     ``{function: (n, 4) float32}``. ``kit_fragment`` is the kit's fragment shader file that
     the student's GLSL is linked to (its prototypes are the interface). Raises LabSetupError
@@ -275,17 +300,30 @@ def run_probe(kit_fragment: str, glsl: str, functions: tuple[str, ...], registry
     vao = 0
     target = None
     try:
-        shaders.append(kit._compiled(GL.GL_VERTEX_SHADER, PROBE_VERTEX, "the probe's vertex "
-                                     "shader", "probe"))
-        shaders.append(kit._compiled(GL.GL_FRAGMENT_SHADER, probe_fragment(
-            version, prototypes, [CALLS[f] for f in functions]), "the probe's main", "probe"))
+        shaders.append(
+            kit._compiled(GL.GL_VERTEX_SHADER, PROBE_VERTEX, "the probe's vertex shader", "probe")
+        )
+        shaders.append(
+            kit._compiled(
+                GL.GL_FRAGMENT_SHADER,
+                probe_fragment(version, prototypes, [CALLS[f] for f in functions]),
+                "the probe's main",
+                "probe",
+            )
+        )
         program = kit._linked(shaders, "probe", "probe")
         count = max(INPUTS[f][0].shape[0] for f in functions)
         target = FloatFramebuffer(registry, count, 1)
         target.bind()
         GL.glViewport(0, 0, count, 1)
-        for cap in (GL.GL_SCISSOR_TEST, GL.GL_BLEND, GL.GL_DEPTH_TEST, GL.GL_CULL_FACE,
-                    GL.GL_STENCIL_TEST, GL.GL_RASTERIZER_DISCARD):
+        for cap in (
+            GL.GL_SCISSOR_TEST,
+            GL.GL_BLEND,
+            GL.GL_DEPTH_TEST,
+            GL.GL_CULL_FACE,
+            GL.GL_STENCIL_TEST,
+            GL.GL_RASTERIZER_DISCARD,
+        ):
             GL.glDisable(cap)
         GL.glColorMask(1, 1, 1, 1)
         GL.glUseProgram(program)
@@ -299,19 +337,20 @@ def run_probe(kit_fragment: str, glsl: str, functions: tuple[str, ...], registry
         for index, function in enumerate(functions):
             for unit, array in enumerate(INPUTS[function]):
                 rgba = np.zeros((1, count, 4), dtype=np.float32)
-                rgba[0, :array.shape[0], :3] = array
+                rgba[0, : array.shape[0], :3] = array
                 GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
                 GL.glBindTexture(GL.GL_TEXTURE_2D, textures[unit])
                 GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 4)
-                GL.glTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGBA32F, count, 1, 0, GL.GL_RGBA,
-                                GL.GL_FLOAT, rgba)
+                GL.glTexImage2D(
+                    GL.GL_TEXTURE_2D, 0, GL.GL_RGBA32F, count, 1, 0, GL.GL_RGBA, GL.GL_FLOAT, rgba
+                )
                 GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_NEAREST)
                 GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_NEAREST)
             GL.glUniform1i(GL.glGetUniformLocation(program, "mirrorlab_probe_call"), index)
             GL.glClearColor(0.0, 0.0, 0.0, 0.0)
             GL.glClear(GL.GL_COLOR_BUFFER_BIT)
             GL.glDrawArrays(GL.GL_TRIANGLES, 0, 3)
-            values = target.read_rgba()[0, :INPUTS[function][0].shape[0]]
+            values = target.read_rgba()[0, : INPUTS[function][0].shape[0]]
             results[function] = values.astype(np.float32)
         return results
     finally:

@@ -36,8 +36,10 @@ from mirrorlab.labs.trusted.variants import (
 def _given(spec: LabSpec, variant: Variant) -> dict[str, bytes]:
     from mirrorlab.labs.content import handout, starter
 
-    return {"README.md": handout(spec, variant).encode(),
-            "starter.py": starter(spec, variant).encode()}
+    return {
+        "README.md": handout(spec, variant).encode(),
+        "starter.py": starter(spec, variant).encode(),
+    }
 
 
 def run_start(lab: str, folder: Path) -> int:
@@ -49,13 +51,17 @@ def run_start(lab: str, folder: Path) -> int:
     files = _given(spec, default_variant(spec.name))
     for name in files:
         if (folder / name).exists():
-            raise ValueError(f"DIR: {str(folder)!r} already holds {name}; give a new or empty "
-                             f"folder (nothing was written)")
+            raise ValueError(
+                f"DIR: {str(folder)!r} already holds {name}; give a new or empty "
+                f"folder (nothing was written)"
+            )
     with Outputs() as outputs:
         for name, data in files.items():
             outputs.add(folder / name, data)
-    print(f"wrote {folder / 'README.md'} (the handout) and {folder / 'starter.py'}; check "
-          f"it with: mirrorlab lab check {spec.name} {folder / 'starter.py'}")
+    print(
+        f"wrote {folder / 'README.md'} (the handout) and {folder / 'starter.py'}; check "
+        f"it with: mirrorlab lab check {spec.name} {folder / 'starter.py'}"
+    )
     return 0
 
 
@@ -74,11 +80,14 @@ def read_students(path: Path) -> list[str]:
             continue
         key = student_key(name)
         if not key:
-            raise ValueError(f"--students: line {number} of {path.name}, {name!r}, has no "
-                             f"letters or digits")
+            raise ValueError(
+                f"--students: line {number} of {path.name}, {name!r}, has no letters or digits"
+            )
         if key in seen:
-            raise ValueError(f"--students: {name!r} (line {number}) and {seen[key]!r} are the "
-                             f"same student to mirrorlab; give each a distinct name")
+            raise ValueError(
+                f"--students: {name!r} (line {number}) and {seen[key]!r} are the "
+                f"same student to mirrorlab; give each a distinct name"
+            )
         seen[key] = name
         names.append(name)
     if not names:
@@ -94,8 +103,11 @@ def course_key(path: Path) -> bytes:
         descriptor = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
         with os.fdopen(descriptor, "wb") as stream:
             stream.write(key + b"\n")
-        print(f"made a new course key in {path}: keep it (grading needs it) and keep it "
-              f"from the students", file=sys.stderr)
+        print(
+            f"made a new course key in {path}: keep it (grading needs it) and keep it "
+            f"from the students",
+            file=sys.stderr,
+        )
     return read_key(path)
 
 
@@ -109,12 +121,20 @@ def _reference_job(lab: str, variant: dict, solution: str, limits: Limits) -> di
     evidence = _reference_from_text(spec, _variant(variant), solution, limits)
     with tempfile.TemporaryDirectory(prefix="mirrorlab-release-") as folder:
         evidence.save(Path(folder))
-        return {name: (Path(folder) / name).read_bytes()
-                for name in ("evidence.json", "arrays.npz")}
+        return {
+            name: (Path(folder) / name).read_bytes() for name in ("evidence.json", "arrays.npz")
+        }
 
 
-def run_release(lab: str, out: Path, students_file: Path, key_file: Path,
-                solutions: str | Path | None, jobs: int, limits: Limits) -> int:
+def run_release(
+    lab: str,
+    out: Path,
+    students_file: Path,
+    key_file: Path,
+    solutions: str | Path | None,
+    jobs: int,
+    limits: Limits,
+) -> int:
     """``mirrorlab lab release LAB OUT --students FILE --key KEYFILE``: one folder per
     student under OUT (all written, or none)."""
     from mirrorlab.jobs import open_executor
@@ -125,16 +145,20 @@ def run_release(lab: str, out: Path, students_file: Path, key_file: Path,
     students = read_students(students_file)
     folder = solutions_dir(solutions)
     if folder is None:
-        raise ValueError("--solutions: releasing needs the teacher's solutions, to make each "
-                         "student's reference for their lab check at home: give --solutions "
-                         "DIR (labs/solutions of the repository) or set MIRRORLAB_SOLUTIONS")
+        raise ValueError(
+            "--solutions: releasing needs the teacher's solutions, to make each "
+            "student's reference for their lab check at home: give --solutions "
+            "DIR (labs/solutions of the repository) or set MIRRORLAB_SOLUTIONS"
+        )
     solution = solution_source(spec, folder)
     if out.exists() and not out.is_dir():
         raise ValueError(f"OUT: {str(out)!r} is a file, expected a folder")
     taken = [safe_name(s) for s in students if (out / safe_name(s)).exists()]
     if taken:
-        raise ValueError(f"OUT: {str(out / taken[0])!r} exists already; release into a new "
-                         f"folder (nothing was written)")
+        raise ValueError(
+            f"OUT: {str(out / taken[0])!r} exists already; release into a new "
+            f"folder (nothing was written)"
+        )
     key = course_key(key_file)
     variants = {s: derive_variant(spec.name, key, s) for s in students}
     work = {s: (spec.name, v.plain(), solution, limits) for s, v in variants.items()}
@@ -142,8 +166,9 @@ def run_release(lab: str, out: Path, students_file: Path, key_file: Path,
     with open_executor(jobs) as executor:
         for outcome in executor.run(_reference_job, work):
             if outcome.error is not None:
-                raise VariantError(f"the reference of {outcome.key!r}'s variant could not be "
-                                   f"made: {outcome.error}")
+                raise VariantError(
+                    f"the reference of {outcome.key!r}'s variant could not be made: {outcome.error}"
+                )
             references[outcome.key] = outcome.value
     with Outputs() as outputs:
         for student, variant in variants.items():
@@ -153,8 +178,10 @@ def run_release(lab: str, out: Path, students_file: Path, key_file: Path,
             outputs.add(base / "variant.json", json.dumps(variant.plain(), indent=2).encode())
             for name, data in references[student].items():
                 outputs.add(base / "reference" / name, data)
-    print(f"released {spec.name} to {len(students)} students in {out}: each folder holds the "
-          f"handout (README.md), starter.py, variant.json and reference/ of its variant")
+    print(
+        f"released {spec.name} to {len(students)} students in {out}: each folder holds the "
+        f"handout (README.md), starter.py, variant.json and reference/ of its variant"
+    )
     return 0
 
 
@@ -169,9 +196,11 @@ def run_solution(lab: str, student: str, key_file: Path, solutions: str | Path |
         raise ValueError(f"--student: {student!r} has no letters or digits")
     folder = solutions_dir(solutions)
     if folder is None:
-        raise ValueError("--solutions: the solutions are not in the mirrorlab package; give "
-                         "--solutions DIR (labs/solutions of the repository) or set "
-                         "MIRRORLAB_SOLUTIONS")
+        raise ValueError(
+            "--solutions: the solutions are not in the mirrorlab package; give "
+            "--solutions DIR (labs/solutions of the repository) or set "
+            "MIRRORLAB_SOLUTIONS"
+        )
     key = read_key(key_file)
     variant = derive_variant(spec.name, key, student)
     sys.stdout.write(solution_for(solution_source(spec, folder), variant))

@@ -81,19 +81,29 @@ window.addEventListener('load', () => {
 """
 
 
-def report_html(spec: LabSpec, grades: list, engine: str, seconds: float,
-                copies: str = "flag", unlisted: list[str] | None = None,
-                missing: list[str] | None = None) -> str:
+def report_html(
+    spec: LabSpec,
+    grades: list,
+    engine: str,
+    seconds: float,
+    copies: str = "flag",
+    unlisted: list[str] | None = None,
+    missing: list[str] | None = None,
+) -> str:
     """The page for ``grades`` (:class:`mirrorlab.labs.grading.Grade`, in any order), copies
     scored by the policy ``copies``; ``unlisted``: submissions not on the class list (not
     graded), ``missing``: the class list's names with no submission."""
     from mirrorlab.labs.trusted.grading import safe_name
 
     tasks = spec.tasks
-    head = ['<th data-key="student">student</th>', '<th data-key="score">score</th>',
-            '<th data-key="picture">student | reference | difference</th>']
-    head += [f'<th data-key="{t.id}" title="{escape(t.title)}">{escape(t.name)}</th>'
-             for t in tasks]
+    head = [
+        '<th data-key="student">student</th>',
+        '<th data-key="score">score</th>',
+        '<th data-key="picture">student | reference | difference</th>',
+    ]
+    head += [
+        f'<th data-key="{t.id}" title="{escape(t.title)}">{escape(t.name)}</th>' for t in tasks
+    ]
     head += ['<th data-key="variant">variant</th>', '<th data-key="seconds">seconds</th>']
     rows = []
     for grade in sorted(grades, key=lambda g: g.student):
@@ -103,37 +113,50 @@ def report_html(spec: LabSpec, grades: list, engine: str, seconds: float,
         if grade.copied_from:
             booked = grade.booked(copies)
             scored = "no score (held)" if booked is None else f"scored {booked}"
-            copy = (f'<span class="copy">copy: the numbers of {escape(grade.copy_of())}; '
-                    f'{scored} (--copies={escape(copies)})</span>')
-        cells = [f'<td class="student">{escape(grade.student)}</td>',
-                 f'<td class="score" data-sort="{grade.score}">{grade.score}/{len(tasks)}'
-                 f'{copy}</td>',
-                 f'<td class="picture" data-sort="{grade.score}"><a href="{escape(picture)}">'
-                 f'<img class="thumb" src="{escape(picture)}" alt="{escape(grade.student)}">'
-                 f'</a></td>']
+            copy = (
+                f'<span class="copy">copy: the numbers of {escape(grade.copy_of())}; '
+                f"{scored} (--copies={escape(copies)})</span>"
+            )
+        cells = [
+            f'<td class="student">{escape(grade.student)}</td>',
+            f'<td class="score" data-sort="{grade.score}">{grade.score}/{len(tasks)}{copy}</td>',
+            f'<td class="picture" data-sort="{grade.score}"><a href="{escape(picture)}">'
+            f'<img class="thumb" src="{escape(picture)}" alt="{escape(grade.student)}">'
+            f"</a></td>",
+        ]
         for task in tasks:
             passed, hint = verdicts.get(task.id, (False, "not checked"))
             word = "pass" if passed else "FAIL"
             note = f'<div class="hint">{escape(hint)}</div>' if hint else ""
-            cells.append(f'<td class="task {"pass" if passed else "fail"}" '
-                         f'data-sort="{int(passed)}">{word}{note}</td>')
+            cells.append(
+                f'<td class="task {"pass" if passed else "fail"}" '
+                f'data-sort="{int(passed)}">{word}{note}</td>'
+            )
         if grade.copied_from:
-            cells.append(f'<td class="variant copied">{escape(grade.variant)}<br>numbers of '
-                         f'{escape(grade.copied_from)}</td>')
+            cells.append(
+                f'<td class="variant copied">{escape(grade.variant)}<br>numbers of '
+                f"{escape(grade.copied_from)}</td>"
+            )
         else:
             cells.append(f'<td class="variant">{escape(grade.variant)}</td>')
         cells.append(f'<td class="seconds">{grade.seconds:.2f}</td>')
         rows.append(f'<tr data-student="{escape(grade.student)}">{"".join(cells)}</tr>')
     full = sum(g.score == len(tasks) for g in grades)
-    caption = (f"{len(grades)} submissions, {full} passing every task; graded in "
-               f"{seconds:.1f} s on {escape(engine)}. Click a column's header to sort.")
+    caption = (
+        f"{len(grades)} submissions, {full} passing every task; graded in "
+        f"{seconds:.1f} s on {escape(engine)}. Click a column's header to sort."
+    )
     notes = []
     if unlisted:
-        notes.append('<p id="unlisted">Not graded, not on the class list: '
-                     f'{", ".join(f"<b>{escape(n)}</b>" for n in unlisted)}</p>')
+        notes.append(
+            '<p id="unlisted">Not graded, not on the class list: '
+            f"{', '.join(f'<b>{escape(n)}</b>' for n in unlisted)}</p>"
+        )
     if missing:
-        notes.append('<p id="missing">On the class list, no submission: '
-                     f'{", ".join(escape(n) for n in missing)}</p>')
+        notes.append(
+            '<p id="missing">On the class list, no submission: '
+            f"{', '.join(escape(n) for n in missing)}</p>"
+        )
     return f"""<!DOCTYPE html>
 <html lang="en">
 <head>
@@ -174,8 +197,9 @@ def feedback_html(spec: LabSpec, grade) -> str:
         title = f"{task.name}: {task.title}, in {task.function}()" if task else task_id
         word = "pass" if passed else "FAIL"
         note = f'<div class="hint">{escape(hint)}</div>' if hint else ""
-        items.append(f'<li class="{"pass" if passed else "fail"}"><b>{word}</b> '
-                     f'{escape(title)}{note}</li>')
+        items.append(
+            f'<li class="{"pass" if passed else "fail"}"><b>{word}</b> {escape(title)}{note}</li>'
+        )
     image = base64.b64encode(grade.picture_png).decode()
     variant = "" if grade.variant == "default" else f" (variant {escape(grade.variant)})"
     return f"""<!DOCTYPE html>

@@ -71,8 +71,10 @@ never draws them (the GLSL of the labs' shaders)."""
 BOX_FILE = "student.py"
 """The student's file in its box (whatever it was called: never the box's own
 stdout.txt or stderr.txt)."""
-BOOT = ("import sys; sys.path[:0] = [{packages!r}]; sys.path.append({site!r}); "
-        "from labstudent.runner import main; sys.exit(main(sys.argv[1:]))")
+BOOT = (
+    "import sys; sys.path[:0] = [{packages!r}]; sys.path.append({site!r}); "
+    "from labstudent.runner import main; sys.exit(main(sys.argv[1:]))"
+)
 
 
 @lru_cache(maxsize=4)
@@ -93,8 +95,11 @@ def gl_names(lab: str) -> dict[str, Any]:
         names[f"{key}_constants"], names[f"{key}_functions"] = constants, functions
     offered = C.lab_specs(lab)
     names["gl_offered"] = C.offered(offered)
-    names["gl_refused"] = {name: C.refused_text(lab, name) for name in names["gl_functions"]
-                           if name not in offered and C.refusal(lab, name)}
+    names["gl_refused"] = {
+        name: C.refused_text(lab, name)
+        for name in names["gl_functions"]
+        if name not in offered and C.refusal(lab, name)
+    }
     names["glu_offered"] = C.offered(C.GLU_SPECS)
     names["pixel_types"] = {str(k): code for k, (_, code) in C.PIXEL_TYPES.items()}
     return names
@@ -127,18 +132,27 @@ class LabRun:
     ``session``; use as a context manager, then :meth:`check` (or drive it yourself with
     :meth:`load`, :meth:`call` and :meth:`finish`)."""
 
-    def __init__(self, spec: LabSpec, session: LabBase, source: bytes, file_name: str,
-                 limits: Limits, run_limits: RunLimits | None = None,
-                 budget: PipeBudget | None = None, registry: Any = None,
-                 owner: int | None = None) -> None:
+    def __init__(
+        self,
+        spec: LabSpec,
+        session: LabBase,
+        source: bytes,
+        file_name: str,
+        limits: Limits,
+        run_limits: RunLimits | None = None,
+        budget: PipeBudget | None = None,
+        registry: Any = None,
+        owner: int | None = None,
+    ) -> None:
         self.spec, self.session, self.limits = spec, session, limits
         self.owner = owner
         self.registry = registry
         self.executor = Executor(session, run_limits or RunLimits())
         self.budget = budget or PipeBudget()
         text = source.decode("utf-8", errors="replace")
-        self.evidence = Evidence(spec.name, variant=session.variant.plain(),
-                                 source=text[:256 << 10])
+        self.evidence = Evidence(
+            spec.name, variant=session.variant.plain(), source=text[: 256 << 10]
+        )
         self.evidence.frames = self.executor.tracker.frames
         self.evidence.setup = self.executor.tracker.setup_events
         self.source, self.file_name = source, file_name
@@ -182,8 +196,11 @@ class LabRun:
             python, packages, site = user_interpreter(), str(self.box / "pkg"), ""
             if mode == "none":
                 python, site = interpreter(), _offer_numpy(self.box / "site")
-            shutil.copytree(STUDENT_PACKAGE, self.box / "pkg" / "labstudent",
-                            ignore=shutil.ignore_patterns("__pycache__"))
+            shutil.copytree(
+                STUDENT_PACKAGE,
+                self.box / "pkg" / "labstudent",
+                ignore=shutil.ignore_patterns("__pycache__"),
+            )
             path = str(student)
         argv = [str(python), "-I", "-S", "-B", "-c", BOOT.format(packages=packages, site=site)]
         self.sandbox = Sandboxed(argv, self.box, self.limits, pipe=True, owner=self.owner)
@@ -195,10 +212,15 @@ class LabRun:
         process.stdin.close()
         self.channel = TrustedChannel(read_fd, write_fd, self.budget)
         self.deadline = time.monotonic() + self.limits.seconds
-        description = {"op": "session", "lab": self.spec.name, "file": path,
-                       "functions": list(self.spec.functions),
-                       "declared": list(DECLARED[self.spec.name]),
-                       "kit": self.session.student_values(), **gl_names(self.spec.name)}
+        description = {
+            "op": "session",
+            "lab": self.spec.name,
+            "file": path,
+            "functions": list(self.spec.functions),
+            "declared": list(DECLARED[self.spec.name]),
+            "kit": self.session.student_values(),
+            **gl_names(self.spec.name),
+        }
         try:
             self.channel.send(description)
             header, _ = self.channel.receive(self.deadline)
@@ -213,13 +235,14 @@ class LabRun:
         assert self.sandbox is not None and self.box is not None
         code, _, stopped = self.sandbox.wait(timeout=10)
         stderr = tail(self.box / "stderr.txt")
-        last = next((line for line in reversed(stderr.strip().splitlines()) if line.strip()),
-                    "")
+        last = next((line for line in reversed(stderr.strip().splitlines()) if line.strip()), "")
         if stopped:
             self.end(*self._classify(code, stopped))
             return
-        raise SandboxError(f"the sandbox could not start the lab's runner "
-                           f"({sandbox_mode()} mode, exit status {code}): {last[:200]}")
+        raise SandboxError(
+            f"the sandbox could not start the lab's runner "
+            f"({sandbox_mode()} mode, exit status {code}): {last[:200]}"
+        )
 
     # ---------------------------------------------------------------- ending
     def end(self, status: str, detail: str) -> None:
@@ -232,27 +255,32 @@ class LabRun:
     def _classify(self, code: int | None, stopped: str) -> tuple[str, str]:
         limits = self.limits
         if stopped == "wall":
-            return "timeout", (f"stopped after {limits.seconds:g} s of waiting (the wall-clock "
-                               f"limit)")
+            return "timeout", (
+                f"stopped after {limits.seconds:g} s of waiting (the wall-clock limit)"
+            )
         if stopped == "processes":
             from mirrorlab.labs.trusted.sandbox import MAX_PROCESSES
 
-            return "processes", (f"stopped when it started more than {MAX_PROCESSES} "
-                                 f"processes (a fork bomb?)")
+            return "processes", (
+                f"stopped when it started more than {MAX_PROCESSES} processes (a fork bomb?)"
+            )
         cpu = getattr(signal, "SIGXCPU", None)  # POSIX: the CPU-time limit's signal
         if cpu is not None and code in (-cpu, 128 + cpu):
-            return "timeout", (f"stopped at the CPU-time limit of {limits.cpu_seconds} s "
-                               f"(an endless loop?)")
+            return "timeout", (
+                f"stopped at the CPU-time limit of {limits.cpu_seconds} s (an endless loop?)"
+            )
         assert self.box is not None
         stderr = tail(self.box / "stderr.txt")
         if "MemoryError" in stderr or "Cannot allocate memory" in stderr:
             return "memory", f"stopped at the memory limit of {limits.memory_mb} MB"
-        died = -code if code is not None and code < 0 else (
-            code - 128 if code is not None and code > 128 else 0)
+        died = (
+            -code
+            if code is not None and code < 0
+            else (code - 128 if code is not None and code > 128 else 0)
+        )
         if died:
             return "crashed", f"the program died ({_signal_name(died)})"
-        last = next((line for line in reversed(stderr.strip().splitlines()) if line.strip()),
-                    "")
+        last = next((line for line in reversed(stderr.strip().splitlines()) if line.strip()), "")
         detail = f"the program ended (exit status {code}) before the lab's run was over"
         return "crashed", detail + (f": {last.strip()[:200]}" if last else "")
 
@@ -309,12 +337,16 @@ class LabRun:
                 continue
             line = error.get("line")
             line = line if type(line) is int and 0 <= line < 1 << 20 else 0
-            record = {"function": str(error.get("function", ""))[:40],
-                      "kind": str(error.get("kind", ""))[:20],
-                      "message": " ".join(str(error.get("message", "")).split())[:300],
-                      "line": line, "code": self.evidence.line_text(line)}
+            record = {
+                "function": str(error.get("function", ""))[:40],
+                "kind": str(error.get("kind", ""))[:20],
+                "message": " ".join(str(error.get("message", "")).split())[:300],
+                "line": line,
+                "code": self.evidence.line_text(line),
+            }
             if record["function"] in ("<file>", *self.spec.functions) and not any(
-                    e["function"] == record["function"] for e in self.evidence.errors):
+                e["function"] == record["function"] for e in self.evidence.errors
+            ):
                 self.evidence.errors.append(record)
         declared = header.get("declared")
         for name in DECLARED[self.spec.name]:
@@ -378,8 +410,10 @@ class LabRun:
         """The lab's own observations, made here after the student's run."""
         reset_state()
         observers: dict[type, Callable[[], None]] = {
-            Lab20: self._observe_lab20, SphereMapLab: self._observe_spheremap,
-            CubeMapLab: self._observe_cubemap}
+            Lab20: self._observe_lab20,
+            SphereMapLab: self._observe_spheremap,
+            CubeMapLab: self._observe_cubemap,
+        }
         observers[type(self.session)]()
         reset_state()
 
@@ -397,8 +431,9 @@ class LabRun:
         if metal and GL.glIsTexture(metal):
             now = read_texture_2d(metal)
             original = picture("metal")
-            evidence.state["metal_intact"] = bool(now.shape == original.shape
-                                                  and np.array_equal(now, original))
+            evidence.state["metal_intact"] = bool(
+                now.shape == original.shape and np.array_equal(now, original)
+            )
 
     def _observe_spheremap(self) -> None:
         session = self.session
@@ -406,14 +441,18 @@ class LabRun:
         tracker = self.executor.tracker
         self.evidence.state["backdrop_texture"] = session.backdrop_texture
         self.evidence.state["launch"] = next(
-            (t.name for t in tracker.textures.values() if t.picture == "launch"), 0)
+            (t.name for t in tracker.textures.values() if t.picture == "launch"), 0
+        )
         # the GLSL the cone was drawn with, else the file's SPHERE_MAP_GLSL
-        glsl = self.executor.glsl.get("SPHERE_MAP_GLSL") or \
-            self.declared.get("SPHERE_MAP_GLSL")
+        glsl = self.executor.glsl.get("SPHERE_MAP_GLSL") or self.declared.get("SPHERE_MAP_GLSL")
         if glsl is not None:
-            self._values(lambda mode: session.draw_cone_shader(
-                glsl, session.backdrop_texture, mode, limit=64),
-                {"r": 1, "u": 2, "n": 3, "st": 4}, "reflect_eye")
+            self._values(
+                lambda mode: session.draw_cone_shader(
+                    glsl, session.backdrop_texture, mode, limit=64
+                ),
+                {"r": 1, "u": 2, "n": 3, "st": 4},
+                "reflect_eye",
+            )
             self._probe("kit_sphere.frag", glsl, "spheremap")
 
     def _observe_cubemap(self) -> None:
@@ -421,9 +460,13 @@ class LabRun:
         assert isinstance(session, CubeMapLab)
         evidence, tracker = self.evidence, self.executor.tracker
         draws = evidence.events("draw", who="draw_sphere", within="display")
-        cube = int(draws[-1]["texture"]) if draws else next(
-            (t.name for t in tracker.textures.values() if t.target == GL_TEXTURE_CUBE_MAP),
-            0)
+        cube = (
+            int(draws[-1]["texture"])
+            if draws
+            else next(
+                (t.name for t in tracker.textures.values() if t.target == GL_TEXTURE_CUBE_MAP), 0
+            )
+        )
         evidence.state["cube_texture"] = cube
         if cube and GL.glIsTexture(cube):
             faces = read_cube_faces(cube)
@@ -431,8 +474,11 @@ class LabRun:
                 evidence.arrays["cube_faces"] = faces
         glsl = self.executor.glsl.get("CUBE_MAP_GLSL") or self.declared.get("CUBE_MAP_GLSL")
         if glsl is not None:
-            self._values(lambda mode: session.draw_sphere(glsl, cube, mode, limit=64),
-                         {"face_st": 1, "r": 2}, "cube_face")
+            self._values(
+                lambda mode: session.draw_sphere(glsl, cube, mode, limit=64),
+                {"face_st": 1, "r": 2},
+                "cube_face",
+            )
             self._probe("kit_cube.frag", glsl, "cubemap")
 
     def _probe(self, kit_fragment: str, glsl: str, lab: str) -> None:
@@ -451,8 +497,7 @@ class LabRun:
         for function, values in found.items():
             self.evidence.arrays[f"probe_{function}"] = values
 
-    def _values(self, draw: Callable[[int], None], modes: dict[str, int], function: str
-                ) -> None:
+    def _values(self, draw: Callable[[int], None], modes: dict[str, int], function: str) -> None:
         """Draw with each check ``mode`` of the kit's shader into a float target and keep
         the values (``values_<name>``, ``(h, w, 3)`` float32) and the coverage mask."""
         from mirrorlab.gl.resources import FloatFramebuffer
@@ -469,8 +514,10 @@ class LabRun:
                 try:
                     draw(mode)
                 except LabSetupError as exc:
-                    self.evidence.state["values_error"] = {"function": function,
-                                                           "message": str(exc)[:300]}
+                    self.evidence.state["values_error"] = {
+                        "function": function,
+                        "message": str(exc)[:300],
+                    }
                     return
                 rgba = target.read_rgba()
                 self.evidence.arrays[f"values_{name}"] = rgba[..., :3].astype(np.float32)
@@ -495,8 +542,11 @@ def find_environment(evidence: Evidence, session: LabBase, pictures: set[int]) -
         if int(event["texture"]) not in pictures:
             return int(event["texture"])
     for event in evidence.events("upload", frame=None):
-        if not event.get("data") and (event.get("width"), event.get("height")) == \
-                (session.width, session.height) and int(event["texture"]) not in pictures:
+        if (
+            not event.get("data")
+            and (event.get("width"), event.get("height")) == (session.width, session.height)
+            and int(event["texture"]) not in pictures
+        ):
             return int(event["texture"])
     return 0
 
@@ -506,8 +556,16 @@ def reset_state() -> None:
     and reading."""
     GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, GL.glGetIntegerv(GL.GL_FRAMEBUFFER_BINDING))
     FF = legacy.gl()  # the legacy switches are the emulation's on a core context
-    for cap in (GL.GL_SCISSOR_TEST, GL.GL_BLEND, GL.GL_CULL_FACE, GL.GL_STENCIL_TEST,
-                GL.GL_ALPHA_TEST, GL.GL_LIGHTING, GL.GL_FOG, GL.GL_POLYGON_OFFSET_FILL):
+    for cap in (
+        GL.GL_SCISSOR_TEST,
+        GL.GL_BLEND,
+        GL.GL_CULL_FACE,
+        GL.GL_STENCIL_TEST,
+        GL.GL_ALPHA_TEST,
+        GL.GL_LIGHTING,
+        GL.GL_FOG,
+        GL.GL_POLYGON_OFFSET_FILL,
+    ):
         FF.glDisable(cap)
     GL.glColorMask(1, 1, 1, 1)
     GL.glDepthMask(1)
@@ -517,8 +575,14 @@ def reset_state() -> None:
     GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 4)
     for unit in range(8):
         GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
-        for cap in (GL.GL_TEXTURE_2D, GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_GEN_S,
-                    GL.GL_TEXTURE_GEN_T, GL.GL_TEXTURE_GEN_R, GL.GL_TEXTURE_GEN_Q):
+        for cap in (
+            GL.GL_TEXTURE_2D,
+            GL.GL_TEXTURE_CUBE_MAP,
+            GL.GL_TEXTURE_GEN_S,
+            GL.GL_TEXTURE_GEN_T,
+            GL.GL_TEXTURE_GEN_R,
+            GL.GL_TEXTURE_GEN_Q,
+        ):
             FF.glDisable(cap)
     GL.glActiveTexture(GL.GL_TEXTURE0)
     GL.glUseProgram(0)

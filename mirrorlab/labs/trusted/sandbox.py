@@ -94,9 +94,22 @@ def _bwrap_works() -> bool:
     if bwrap is None:
         return False
     try:
-        done = subprocess.run([bwrap, "--ro-bind", "/", "/", "--dev", "/dev", "--unshare-pid",
-                               "--unshare-net", "--die-with-parent", "true"],
-                              capture_output=True, timeout=30)
+        done = subprocess.run(
+            [
+                bwrap,
+                "--ro-bind",
+                "/",
+                "/",
+                "--dev",
+                "/dev",
+                "--unshare-pid",
+                "--unshare-net",
+                "--die-with-parent",
+                "true",
+            ],
+            capture_output=True,
+            timeout=30,
+        )
     except (OSError, subprocess.TimeoutExpired):
         return False
     return done.returncode == 0
@@ -137,33 +150,44 @@ def _missing() -> tuple[str, str]:
     if wanted in ("user", "none") and sandbox_mode() == wanted:
         return f"MIRRORLAB_SANDBOX={wanted} turns the sandbox off", "unset it"
     if not sys.platform.startswith("linux"):
-        return (f"bubblewrap, the sandbox, exists only on Linux (this is {sys.platform})",
-                "grade on a Linux machine with bubblewrap (apt-get install bubblewrap)")
+        return (
+            f"bubblewrap, the sandbox, exists only on Linux (this is {sys.platform})",
+            "grade on a Linux machine with bubblewrap (apt-get install bubblewrap)",
+        )
     if shutil.which("bwrap"):
-        return ("bubblewrap cannot make a sandbox here (are user namespaces disabled?)",
-                "allow unprivileged user namespaces (sysctl kernel.unprivileged_userns_clone=1)")
-    return ("no sandbox: bubblewrap is not installed",
-            "install it (Debian/Ubuntu: apt-get install bubblewrap; Fedora: dnf install "
-            "bubblewrap)")
+        return (
+            "bubblewrap cannot make a sandbox here (are user namespaces disabled?)",
+            "allow unprivileged user namespaces (sysctl kernel.unprivileged_userns_clone=1)",
+        )
+    return (
+        "no sandbox: bubblewrap is not installed",
+        "install it (Debian/Ubuntu: apt-get install bubblewrap; Fedora: dnf install bubblewrap)",
+    )
 
 
 def missing_sandbox() -> str:
     """One line: why there is no sandbox here and how to get one (or take the risk)."""
     why, get = _missing()
-    return (f"{why}; {get}, or give {UNSANDBOXED_FLAG} to run every submission as a "
-            f"process of yours, able to read and write what you can")
+    return (
+        f"{why}; {get}, or give {UNSANDBOXED_FLAG} to run every submission as a "
+        f"process of yours, able to read and write what you can"
+    )
 
 
 def unsandboxed_how() -> str:
     """How a file runs here without a sandbox (the ``user`` or ``none`` mode)."""
-    return {"user": "as a user id of its own, the file system in its view",
-            "none": "as you, in a process of its own"}.get(sandbox_mode(), "sandboxed")
+    return {
+        "user": "as a user id of its own, the file system in its view",
+        "none": "as you, in a process of its own",
+    }.get(sandbox_mode(), "sandboxed")
 
 
 def unsandboxed_note() -> str:
     """One line for a student's own check run without a sandbox."""
-    return (f"note: not sandboxed ({_missing()[0]}): the file runs {unsandboxed_how()}; "
-            f"fine for your own file")
+    return (
+        f"note: not sandboxed ({_missing()[0]}): the file runs {unsandboxed_how()}; "
+        f"fine for your own file"
+    )
 
 
 def sandbox_uid(owner: int | None = None) -> int:
@@ -192,8 +216,7 @@ class _Root:
     def reachable(self, path: Path) -> bool:
         """Whether ``path`` shows the host's folder in the sandbox (a fresh file system
         shows none: what lies below its top must be made or bound)."""
-        return path in self.made or any(_within(path, b) for b in self.bound
-                                        if b not in self.fresh)
+        return path in self.made or any(_within(path, b) for b in self.bound if b not in self.fresh)
 
     def parents(self, destination: Path) -> None:
         """Every folder above ``destination`` made anew, mode 0755 (bwrap would make them
@@ -203,37 +226,41 @@ class _Root:
                 self.arguments += ["--perms", "0755", "--dir", str(parent)]
                 self.made.add(parent)
 
-    def bind(self, source: Path, destination: Path | None = None, writable: bool = False
-             ) -> None:
+    def bind(self, source: Path, destination: Path | None = None, writable: bool = False) -> None:
         destination = destination or source
         if destination != source or not self.reachable(destination):
             self.parents(destination)
-            self.arguments += ["--bind" if writable else "--ro-bind", str(source),
-                               str(destination)]
+            self.arguments += ["--bind" if writable else "--ro-bind", str(source), str(destination)]
             self.bound.append(destination)
 
     def hide(self, folder: Path) -> None:
         """An empty folder in place of ``folder`` where the sandbox would see it: within
         a folder bound from the host (a fresh file system such as its /tmp shows none of
         the host's, and a folder made there would only give away the host's path)."""
-        if folder.is_dir() and any(_within(folder, b) for b in self.bound
-                                   if b not in self.fresh):
+        if folder.is_dir() and any(_within(folder, b) for b in self.bound if b not in self.fresh):
             self.arguments += ["--tmpfs", str(folder)]
 
 
 def _site_folders() -> list[Path]:
     """Folders of installed packages the sandbox may otherwise see."""
-    found = {Path(p).resolve() for p in sys.path if p and Path(p).name in
-             ("site-packages", "dist-packages")}
+    found = {
+        Path(p).resolve()
+        for p in sys.path
+        if p and Path(p).name in ("site-packages", "dist-packages")
+    }
     for key in ("purelib", "platlib"):
         for scheme_vars in ({}, {"base": sys.base_prefix, "platbase": sys.base_prefix}):
             try:
                 found.add(Path(sysconfig.get_path(key, vars=scheme_vars)).resolve())
             except (KeyError, ValueError):
                 continue
-    found.update(Path(p) for p in ("/usr/lib/python3/dist-packages",
-                                   f"/usr/local/lib/python3.{sys.version_info.minor}"
-                                   f"/dist-packages"))
+    found.update(
+        Path(p)
+        for p in (
+            "/usr/lib/python3/dist-packages",
+            f"/usr/local/lib/python3.{sys.version_info.minor}/dist-packages",
+        )
+    )
     return sorted(found)
 
 
@@ -261,9 +288,19 @@ def bwrap_arguments(box: Path) -> list[str]:
             root.made.add(path)
         elif path.is_dir():
             root.bind(path)
-    root.arguments += ["--ro-bind-try", "/etc/ld.so.cache", "/etc/ld.so.cache",
-                       "--proc", "/proc", "--dev", "/dev", "--size", str(64 << 20),
-                       "--tmpfs", "/tmp"]
+    root.arguments += [
+        "--ro-bind-try",
+        "/etc/ld.so.cache",
+        "/etc/ld.so.cache",
+        "--proc",
+        "/proc",
+        "--dev",
+        "/dev",
+        "--size",
+        str(64 << 20),
+        "--tmpfs",
+        "/tmp",
+    ]
     root.made.update(Path(p) for p in ("/etc", "/etc/ld.so.cache", "/proc", "/dev", "/tmp"))
     root.bound += [Path("/tmp")]
     root.fresh += [Path("/tmp")]
@@ -283,13 +320,20 @@ def bwrap_arguments(box: Path) -> list[str]:
 
 
 def _environment(home: str) -> dict[str, str]:
-    return {"PATH": "/usr/bin:/bin", "LANG": "C.UTF-8", "HOME": home, "TMPDIR": "/tmp",
-            "PYTHONDONTWRITEBYTECODE": "1", "PYTHONNOUSERSITE": "1",
-            "PYTHONHASHSEED": "0"}
+    return {
+        "PATH": "/usr/bin:/bin",
+        "LANG": "C.UTF-8",
+        "HOME": home,
+        "TMPDIR": "/tmp",
+        "PYTHONDONTWRITEBYTECODE": "1",
+        "PYTHONNOUSERSITE": "1",
+        "PYTHONHASHSEED": "0",
+    }
 
 
-def _limit(limits: Limits, drop_to: int | None, processes: bool = True
-           ) -> Callable[[], None] | None:
+def _limit(
+    limits: Limits, drop_to: int | None, processes: bool = True
+) -> Callable[[], None] | None:
     """What the child runs before the program on POSIX: the limits of ``resource`` that
     this system has (RLIMIT_NPROC only with ``processes``: it counts every process of the
     user), then the drop to user ``drop_to``, then on Linux its death with this process
@@ -308,9 +352,13 @@ def _limit(limits: Limits, drop_to: int | None, processes: bool = True
     if resource is None and drop_to is None and prctl is None:
         return None
     memory, files = limits.memory_mb << 20, limits.file_mb << 20
-    wanted = [("RLIMIT_CPU", limits.cpu_seconds, limits.cpu_seconds + 1),
-              ("RLIMIT_AS", memory, memory), ("RLIMIT_FSIZE", files, files),
-              ("RLIMIT_NOFILE", 256, 256), ("RLIMIT_CORE", 0, 0)]
+    wanted = [
+        ("RLIMIT_CPU", limits.cpu_seconds, limits.cpu_seconds + 1),
+        ("RLIMIT_AS", memory, memory),
+        ("RLIMIT_FSIZE", files, files),
+        ("RLIMIT_NOFILE", 256, 256),
+        ("RLIMIT_CORE", 0, 0),
+    ]
     if processes:
         wanted.append(("RLIMIT_NPROC", limits.processes, limits.processes))
 
@@ -366,8 +414,9 @@ def _kill_uid(uid: int) -> None:
 
 def _others_may_run(path: Path) -> bool:
     try:
-        return all(os.stat(p).st_mode & 0o001 for p in path.parents) and \
-            bool(os.stat(path).st_mode & 0o001)
+        return all(os.stat(p).st_mode & 0o001 for p in path.parents) and bool(
+            os.stat(path).st_mode & 0o001
+        )
     except OSError:
         return False
 
@@ -377,8 +426,10 @@ def user_interpreter() -> Path:
     for candidate in (interpreter(), Path("/usr/bin/python3")):
         if candidate.is_file() and _others_may_run(candidate):
             return candidate
-    raise SandboxError("no Python interpreter that another user may run: install Debian's "
-                       "python3, or bubblewrap (Debian package 'bubblewrap')")
+    raise SandboxError(
+        "no Python interpreter that another user may run: install Debian's "
+        "python3, or bubblewrap (Debian package 'bubblewrap')"
+    )
 
 
 class Sandboxed:
@@ -389,8 +440,14 @@ class Sandboxed:
     run at the wall-clock limit or when it starts too many processes; :meth:`wait` ends it
     and says why."""
 
-    def __init__(self, argv: list[str], box: Path, limits: Limits, pipe: bool = False,
-                 owner: int | None = None) -> None:
+    def __init__(
+        self,
+        argv: list[str],
+        box: Path,
+        limits: Limits,
+        pipe: bool = False,
+        owner: int | None = None,
+    ) -> None:
         mode = sandbox_mode()
         if mode != "bwrap" and not limits.unsandboxed:
             raise SandboxError(missing_sandbox())
@@ -403,15 +460,33 @@ class Sandboxed:
                 os.chown(path, self.uid, self.uid)
         if mode == "bwrap":
             env = _environment(SANDBOX_BOX)
-            command = [*bwrap_arguments(self.box), "--unshare-ipc", "--unshare-pid",
-                       "--unshare-net", "--unshare-uts", "--unshare-cgroup-try",
-                       "--die-with-parent", "--new-session", "--clearenv"]
+            command = [
+                *bwrap_arguments(self.box),
+                "--unshare-ipc",
+                "--unshare-pid",
+                "--unshare-net",
+                "--unshare-uts",
+                "--unshare-cgroup-try",
+                "--die-with-parent",
+                "--new-session",
+                "--clearenv",
+            ]
             for key, value in env.items():
                 command += ["--setenv", key, value]
             if root:
-                command += ["--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID", "--",
-                            "setpriv", f"--reuid={self.uid}", f"--regid={self.uid}",
-                            "--clear-groups", "--inh-caps=-all", "--bounding-set=-all"]
+                command += [
+                    "--cap-add",
+                    "CAP_SETUID",
+                    "--cap-add",
+                    "CAP_SETGID",
+                    "--",
+                    "setpriv",
+                    f"--reuid={self.uid}",
+                    f"--regid={self.uid}",
+                    "--clear-groups",
+                    "--inh-caps=-all",
+                    "--bounding-set=-all",
+                ]
             else:
                 command += ["--unshare-user", "--"]
             command += argv
@@ -423,9 +498,11 @@ class Sandboxed:
         else:
             env = _environment(str(self.box))
             if sys.platform == "win32":  # what Python and Windows need to start at all
-                env = {**env, "PATH": os.environ.get("PATH", ""),
-                       **{k: os.environ[k] for k in ("SYSTEMROOT", "TEMP", "TMP")
-                          if k in os.environ}}
+                env = {
+                    **env,
+                    "PATH": os.environ.get("PATH", ""),
+                    **{k: os.environ[k] for k in ("SYSTEMROOT", "TEMP", "TMP") if k in os.environ},
+                }
             command = argv
             preexec = _limit(limits, None, processes=False)
         self.started = time.perf_counter()
@@ -437,12 +514,19 @@ class Sandboxed:
             group = {"creationflags": subprocess.CREATE_NEW_PROCESS_GROUP}
         else:
             group = {"start_new_session": True, "preexec_fn": preexec}
-        with open(self.box / "stderr.txt", "wb") as err, \
-                open(os.devnull if pipe else self.box / "stdout.txt", "wb") as out:
+        with (
+            open(self.box / "stderr.txt", "wb") as err,
+            open(os.devnull if pipe else self.box / "stdout.txt", "wb") as out,
+        ):
             self.process = subprocess.Popen(
-                command, stdin=subprocess.PIPE if pipe else subprocess.DEVNULL,
-                stdout=subprocess.PIPE if pipe else out, stderr=err, cwd=self.box, env=env,
-                **group)
+                command,
+                stdin=subprocess.PIPE if pipe else subprocess.DEVNULL,
+                stdout=subprocess.PIPE if pipe else out,
+                stderr=err,
+                cwd=self.box,
+                env=env,
+                **group,
+            )
         self._watchdog = threading.Thread(target=self._watch, daemon=True)
         self._watchdog.start()
 
@@ -465,8 +549,11 @@ class Sandboxed:
             if hasattr(os, "killpg"):
                 os.killpg(self.process.pid, signal.SIGKILL)
             else:  # Windows: the process and what it started
-                subprocess.run(["taskkill", "/F", "/T", "/PID", str(self.process.pid)],
-                               capture_output=True, timeout=30)
+                subprocess.run(
+                    ["taskkill", "/F", "/T", "/PID", str(self.process.pid)],
+                    capture_output=True,
+                    timeout=30,
+                )
                 self.process.kill()
         except (OSError, subprocess.TimeoutExpired):
             pass
@@ -510,7 +597,7 @@ STALE_PREFIXES = (BOX_PREFIX, "mirrorlab-check-")
 def _stale(folder: Path, prefix: str) -> bool:
     """Whether a folder was left by a process that has died (a killed worker)."""
     try:
-        pid = int(folder.name[len(prefix):].split("-")[0])
+        pid = int(folder.name[len(prefix) :].split("-")[0])
     except ValueError:
         return False
     return pid != os.getpid() and not _alive(pid)

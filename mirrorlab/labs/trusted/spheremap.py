@@ -32,8 +32,13 @@ from mirrorlab.labs.trusted.kit import SphereMapLab
 from mirrorlab.labs.trusted.probe import INPUTS, slip
 
 GL_SPHERE_MAP = 0x2402
-MODE_NAMES = {0x2400: "GL_EYE_LINEAR", 0x2401: "GL_OBJECT_LINEAR", 0x2402: "GL_SPHERE_MAP",
-              0x8511: "GL_NORMAL_MAP", 0x8512: "GL_REFLECTION_MAP"}
+MODE_NAMES = {
+    0x2400: "GL_EYE_LINEAR",
+    0x2401: "GL_OBJECT_LINEAR",
+    0x2402: "GL_SPHERE_MAP",
+    0x8511: "GL_NORMAL_MAP",
+    0x8512: "GL_REFLECTION_MAP",
+}
 GLSL_FUNCTIONS = ("reflect_eye", "sphere_map_st")
 
 
@@ -50,20 +55,22 @@ def _best(values: np.ndarray, candidates: dict[str, np.ndarray], tolerance: floa
     return ""
 
 
-def _cone_values(student: Evidence, key: str, function: str,
-                 width: int = 3) -> tuple[np.ndarray, np.ndarray, np.ndarray] | str:
+def _cone_values(
+    student: Evidence, key: str, function: str, width: int = 3
+) -> tuple[np.ndarray, np.ndarray, np.ndarray] | str:
     """The values ``key`` the student's ``function`` gave on the cone's pixels
     ``(pixels, width)``, with the view direction u and normal n there ``(pixels, 3)``; or
     the hint when there are none, or when they are not all finite."""
     problem = student.state.get("values_error")
     if isinstance(problem, dict):
         return str(problem.get("message", ""))
-    if "SPHERE_MAP_GLSL" not in (student.state.get("declared") or []) and \
-            "values_mask" not in student.arrays:
+    if (
+        "SPHERE_MAP_GLSL" not in (student.state.get("declared") or [])
+        and "values_mask" not in student.arrays
+    ):
         return "SPHERE_MAP_GLSL is missing: keep the string of GLSL the starter has"
     mask = student.arrays.get("values_mask")
-    if not isinstance(mask, np.ndarray) or mask.dtype != bool or mask.ndim != 2 or \
-            mask.sum() < 50:
+    if not isinstance(mask, np.ndarray) or mask.dtype != bool or mask.ndim != 2 or mask.sum() < 50:
         return "the cone could not be drawn with SPHERE_MAP_GLSL"
     shape = (*mask.shape, 3)
     values, u, n = (student.floats(f"values_{name}", shape) for name in (key, "u", "n"))
@@ -78,8 +85,7 @@ def _cone_values(student: Evidence, key: str, function: str,
 def _probed(student: Evidence, function: str) -> str:
     """The slip the value probe finds in the student's ``function`` (:func:`.probe.slip`):
     'right', a slip's name, or '' (none known, or no probe values)."""
-    return slip(function, student.floats(f"probe_{function}",
-                                         (INPUTS[function][0].shape[0], 4)))
+    return slip(function, student.floats(f"probe_{function}", (INPUTS[function][0].shape[0], 4)))
 
 
 def judge_reflection(student: Evidence) -> tuple[bool, str]:
@@ -88,23 +94,29 @@ def judge_reflection(student: Evidence) -> tuple[bool, str]:
         return False, cone
     r, u, n = cone
     right = u - 2 * (u * n).sum(-1, keepdims=True) * n
-    if _best(r, {"right": right, "normalised": right / np.maximum(
-            np.linalg.norm(right, axis=-1, keepdims=True), 1e-9)}, 2e-3):
+    if _best(
+        r,
+        {
+            "right": right,
+            "normalised": right / np.maximum(np.linalg.norm(right, axis=-1, keepdims=True), 1e-9),
+        },
+        2e-3,
+    ):
         return True, ""
     # the slip is named by the probe's values, on inputs with n.u of both signs: a
     # clamped dot product is r = u on the cone only, as is r = u itself
     hints = {
         "sign": "r points the wrong way (it is -r): the reflection is u - 2 (n.u) n, with u "
-                "the direction from the eye to the point",
+        "the direction from the eye to the point",
         "no_two": "the factor 2 is missing: r = u - 2 (n.u) n",
         "plus": "the sign of the 2 (n.u) n term: r = u - 2 (n.u) n",
         "unreflected": "reflect_eye returns u unchanged: reflect it about n, u - 2 (n.u) n",
         "normal": "reflect_eye returns the normal: r = u - 2 (n.u) n",
         "clamped": "dot(n, u) is clamped (clamp or max): on the cone u points at the "
-                   "surface, so n.u is negative, the clamp makes it 0 and r = u; use "
-                   "dot(n, u) as it is: r = u - 2 (n.u) n",
+        "surface, so n.u is negative, the clamp makes it 0 and r = u; use "
+        "dot(n, u) as it is: r = u - 2 (n.u) n",
         "abs_dot": "abs(dot(n, u)): on the cone n.u is negative and its sign matters; use "
-                   "dot(n, u) as it is: r = u - 2 (n.u) n",
+        "dot(n, u) as it is: r = u - 2 (n.u) n",
     }
     found = _probed(student, "reflect_eye")
     if found in hints:
@@ -112,8 +124,10 @@ def judge_reflection(student: Evidence) -> tuple[bool, str]:
     return False, "reflect_eye's r differs from u - 2 (n.u) n on the cone"
 
 
-PLUS_ONE = re.compile(r"\bz\s*\+\s*1\b|\b1(\.0*)?\s*\+\s*\w+\.z\b|"
-                      r"vec3\(\s*0(\.0*)?\s*,\s*0(\.0*)?\s*,\s*1(\.0*)?\s*\)")
+PLUS_ONE = re.compile(
+    r"\bz\s*\+\s*1\b|\b1(\.0*)?\s*\+\s*\w+\.z\b|"
+    r"vec3\(\s*0(\.0*)?\s*,\s*0(\.0*)?\s*,\s*1(\.0*)?\s*\)"
+)
 """The + 1 on r.z (or r + (0, 0, 1), the viewer's direction), written."""
 
 
@@ -130,14 +144,14 @@ def judge_coordinates(student: Evidence) -> tuple[bool, str]:
         "flip_t": "t upside down: t = r.y / m + 1/2",
         "flip_s": "s mirrored: s = r.x / m + 1/2",
         "no_plus_one": "m must use (r.z + 1): m = 2 sqrt(r.x^2 + r.y^2 + (r.z + 1)^2), the "
-                       "normal of the mirror ball halfway between r and the viewer",
+        "normal of the mirror ball halfway between r and the viewer",
         "unnormalised": "the halfway vector (r.x, r.y, r.z + 1) is not normalised: s and t "
-                        "are its x and y over its length, m = 2 sqrt(r.x^2 + r.y^2 + "
-                        "(r.z + 1)^2)",
+        "are its x and y over its length, m = 2 sqrt(r.x^2 + r.y^2 + "
+        "(r.z + 1)^2)",
         "minus_one": "the sign of the 1 in m: m = 2 sqrt(r.x^2 + r.y^2 + (r.z + 1)^2), the "
-                     "halfway vector between r and the viewer at +z",
+        "halfway vector between r and the viewer at +z",
         "no_two": "the factor 2 in m is missing: m = 2 sqrt(r.x^2 + r.y^2 + (r.z + 1)^2), or "
-                  "s and t leave [0, 1]",
+        "s and t leave [0, 1]",
         "no_half": "the + 1/2 is missing: s and t must lie in [0, 1], centre (1/2, 1/2)",
     }
     # the slip is named by the probe's values, on reflection vectors of several lengths:
@@ -150,8 +164,10 @@ def judge_coordinates(student: Evidence) -> tuple[bool, str]:
     # - r normalised first, then its halfway vector left unnormalised, is the very function
     #   of r that m without the + 1 is (rx / 2|r| + 1/2 for any r).
     if found == "no_half" and INTEGER_HALF.search(body):
-        return False, ("1/2 in GLSL is integer division, 0, so the + 1/2 adds nothing: write "
-                       "0.5 (s = r.x / m + 0.5, t = r.y / m + 0.5)")
+        return False, (
+            "1/2 in GLSL is integer division, 0, so the + 1/2 adds nothing: write "
+            "0.5 (s = r.x / m + 0.5, t = r.y / m + 0.5)"
+        )
     if found == "no_plus_one" and PLUS_ONE.search(body):
         found = "unnormalised"
     if found in hints:
@@ -172,8 +188,7 @@ def _units(event: dict[str, Any]) -> dict[int, dict[str, Any]]:
 def judge_texgen_setup(student: Evidence, unit: int) -> tuple[bool, str]:
     draw = _texgen_draw(student)
     if draw is None:
-        return False, ("not judged: the texgen cone was never drawn, see "
-                       f"{_task('texgen_draw')}")
+        return False, (f"not judged: the texgen cone was never drawn, see {_task('texgen_draw')}")
     seen, units = draw.get("seen") or {}, _units(draw)
     hints = []
     for coordinate in ("s", "t"):
@@ -182,30 +197,39 @@ def judge_texgen_setup(student: Evidence, unit: int) -> tuple[bool, str]:
             continue
         name, upper = MODE_NAMES.get(mode, str(mode)), coordinate.upper()
         call = f"glTexGeni(GL_{upper}, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)"
-        elsewhere = [(u, e[f"texgen_{coordinate}"]) for u, e in units.items() if u != unit
-                     and (e.get(f"texgen_{coordinate}") or {}).get("value") == GL_SPHERE_MAP]
+        elsewhere = [
+            (u, e[f"texgen_{coordinate}"])
+            for u, e in units.items()
+            if u != unit and (e.get(f"texgen_{coordinate}") or {}).get("value") == GL_SPHERE_MAP
+        ]
         own = units.get(unit, {}).get(f"texgen_{coordinate}")
         if elsewhere:
             other, setting = elsewhere[0]
-            hints.append(f"{call} at {student.at(setting.get('line', 0))} set texgen for unit "
-                         f"{other} (GL_TEXTURE{other} was active then); the cone's texture "
-                         f"coordinates come from unit {unit}: call glActiveTexture("
-                         f"GL_TEXTURE{unit}) before it")
+            hints.append(
+                f"{call} at {student.at(setting.get('line', 0))} set texgen for unit "
+                f"{other} (GL_TEXTURE{other} was active then); the cone's texture "
+                f"coordinates come from unit {unit}: call glActiveTexture("
+                f"GL_TEXTURE{unit}) before it"
+            )
         elif own is not None:
-            hints.append(f"texgen for {coordinate} is {name} ({student.at(own.get('line', 0))}):"
-                         f" {call}")
+            hints.append(
+                f"texgen for {coordinate} is {name} ({student.at(own.get('line', 0))}): {call}"
+            )
         else:
             active = f", with GL_TEXTURE{unit} active," if unit else ""
-            hints.append(f"texgen for {coordinate} is {name} (GL's default): {call}{active} in "
-                         f"setup_texgen()")
+            hints.append(
+                f"texgen for {coordinate} is {name} (GL's default): {call}{active} in "
+                f"setup_texgen()"
+            )
     return (not hints), "; ".join(hints)
 
 
 def judge_texgen_draw(student: Evidence, unit: int) -> tuple[bool, str]:
     draw = _texgen_draw(student)
     if draw is None:
-        return False, ("draw_cone_texgen() never draws the cone: call "
-                       "lab.draw_cone_fixed_function() there")
+        return False, (
+            "draw_cone_texgen() never draws the cone: call lab.draw_cone_fixed_function() there"
+        )
     seen, units = draw.get("seen") or {}, _units(draw)
     hints = []
     moved: list[tuple[str, int, int]] = []
@@ -217,39 +241,59 @@ def judge_texgen_draw(student: Evidence, unit: int) -> tuple[bool, str]:
         if elsewhere:
             moved.append((coordinate, elsewhere[0][0], elsewhere[0][1].get("line", 0)))
         else:
-            hints.append(f"texgen for {coordinate} is off while the cone is drawn: "
-                         f"glEnable({cap}) first")
+            hints.append(
+                f"texgen for {coordinate} is off while the cone is drawn: glEnable({cap}) first"
+            )
     if moved:
         other, line = moved[0][1], moved[0][2]
         which = " and ".join(c for c, _, _ in moved)
-        hints.insert(0, f"texgen for {which} is switched on for unit {other} (glEnable at "
-                        f"{student.at(line)}, with GL_TEXTURE{other} active), but the cone is "
-                        f"textured from unit {unit}: glActiveTexture(GL_TEXTURE{unit}) before "
-                        f"glEnable(GL_TEXTURE_GEN_S) and (GL_TEXTURE_GEN_T)")
+        hints.insert(
+            0,
+            f"texgen for {which} is switched on for unit {other} (glEnable at "
+            f"{student.at(line)}, with GL_TEXTURE{other} active), but the cone is "
+            f"textured from unit {unit}: glActiveTexture(GL_TEXTURE{unit}) before "
+            f"glEnable(GL_TEXTURE_GEN_S) and (GL_TEXTURE_GEN_T)",
+        )
     pictures = {student.state.get("launch"), student.state.get("backdrop_texture")} - {None, 0}
     if seen.get("texture") not in pictures:
         launch = student.state.get("launch")
-        bound = [(u, e["2d"]) for u, e in units.items() if (e.get("2d") or {}).get("value")
-                 == launch and launch]
+        bound = [
+            (u, e["2d"])
+            for u, e in units.items()
+            if (e.get("2d") or {}).get("value") == launch and launch
+        ]
         if bound:
             other, setting = bound[0]
-            hints.append(f"the launch picture is bound on unit {other} ("
-                         f"{student.at(setting.get('line', 0))}), but the cone is textured "
-                         f"from unit {unit}: glActiveTexture(GL_TEXTURE{unit}) before "
-                         f"glBindTexture")
+            hints.append(
+                f"the launch picture is bound on unit {other} ("
+                f"{student.at(setting.get('line', 0))}), but the cone is textured "
+                f"from unit {unit}: glActiveTexture(GL_TEXTURE{unit}) before "
+                f"glBindTexture"
+            )
         else:
-            hints.append(f"the launch picture is not bound on texture unit {unit} when the cone "
-                         f"is drawn (glActiveTexture(GL_TEXTURE{unit}); glBindTexture("
-                         f"GL_TEXTURE_2D, launch))")
-    leaves = [e for e in student.last_frame if e.get("kind") == "leave"
-              and e.get("function") == "draw_cone_texgen"]
+            hints.append(
+                f"the launch picture is not bound on texture unit {unit} when the cone "
+                f"is drawn (glActiveTexture(GL_TEXTURE{unit}); glBindTexture("
+                f"GL_TEXTURE_2D, launch))"
+            )
+    leaves = [
+        e
+        for e in student.last_frame
+        if e.get("kind") == "leave" and e.get("function") == "draw_cone_texgen"
+    ]
     if leaves:
-        left_on = [(u, cap, e[cap]) for u, e in _units(leaves[-1]).items()
-                   for cap in ("GL_TEXTURE_GEN_S", "GL_TEXTURE_GEN_T") if cap in e]
+        left_on = [
+            (u, cap, e[cap])
+            for u, e in _units(leaves[-1]).items()
+            for cap in ("GL_TEXTURE_GEN_S", "GL_TEXTURE_GEN_T")
+            if cap in e
+        ]
         if left_on:
-            hints.append("texgen left on after the cone: glDisable(GL_TEXTURE_GEN_S) and "
-                         "(GL_TEXTURE_GEN_T) once it is drawn, or everything drawn later in "
-                         "the fixed-function pipeline gets sphere-map coordinates too")
+            hints.append(
+                "texgen left on after the cone: glDisable(GL_TEXTURE_GEN_S) and "
+                "(GL_TEXTURE_GEN_T) once it is drawn, or everything drawn later in "
+                "the fixed-function pipeline gets sphere-map coordinates too"
+            )
     return (not hints), "; ".join(hints)
 
 
@@ -259,8 +303,9 @@ def _halves(width: int, shader_side: str) -> tuple[slice, slice]:
     return (left, right) if shader_side == "left" else (right, left)
 
 
-def judge_side_by_side(student: Evidence, reference: Evidence, verdicts: Verdicts,
-                       shader_side: str) -> tuple[bool, str]:
+def judge_side_by_side(
+    student: Evidence, reference: Evidence, verdicts: Verdicts, shader_side: str
+) -> tuple[bool, str]:
     if hint := stopped_hint(student, "display"):
         return False, hint
     frame, ref = student.image("frame"), reference.image("frame")
@@ -274,31 +319,42 @@ def judge_side_by_side(student: Evidence, reference: Evidence, verdicts: Verdict
     if shader_ok and texgen_ok:
         return True, ""
     half = width // 2
-    if same_picture(frame[:, :half], ref[:, half:2 * half]) and \
-            same_picture(frame[:, half:2 * half], ref[:, :half]):
-        return False, (f"the halves are swapped: your variant puts the shader's cone on the "
-                       f"{shader_side}, texgen's on the {texgen_side}")
+    if same_picture(frame[:, :half], ref[:, half : 2 * half]) and same_picture(
+        frame[:, half : 2 * half], ref[:, :half]
+    ):
+        return False, (
+            f"the halves are swapped: your variant puts the shader's cone on the "
+            f"{shader_side}, texgen's on the {texgen_side}"
+        )
     drawn = {e.get("who"): e for e in student.events("draw", within="display")}
     hints = []
-    for who, side, what in (("draw_cone_shader", shader_side, "the shader's cone"),
-                            ("draw_cone_fixed_function", texgen_side, "the texgen cone")):
+    for who, side, what in (
+        ("draw_cone_shader", shader_side, "the shader's cone"),
+        ("draw_cone_fixed_function", texgen_side, "the texgen cone"),
+    ):
         event = drawn.get(who)
         if event is None:
-            call = ("lab.draw_cone_shader(SPHERE_MAP_GLSL, launch)" if who == "draw_cone_shader"
-                    else "draw_cone_texgen()")
+            call = (
+                "lab.draw_cone_shader(SPHERE_MAP_GLSL, launch)"
+                if who == "draw_cone_shader"
+                else "draw_cone_texgen()"
+            )
             hints.append(f"{what} is not drawn: {call} in the {side} viewport")
             continue
         viewport = event.get("viewport") or [0, 0, 0, 0]
         in_left = viewport[0] < half
         if (side == "left") != in_left:
-            hints.append(f"{what} is drawn in the {'left' if in_left else 'right'} half; your "
-                         f"variant puts it on the {side}")
+            hints.append(
+                f"{what} is drawn in the {'left' if in_left else 'right'} half; your "
+                f"variant puts it on the {side}"
+            )
     if hints:
         return False, "; ".join(hints)
     halves = {"left": half / ref.shape[0], "right": (width - half) / ref.shape[0]}
-    for who, side, ok, what in (("draw_cone_shader", shader_side, shader_ok, "the shader's cone"),
-                                ("draw_cone_fixed_function", texgen_side, texgen_ok,
-                                 "the texgen cone")):
+    for who, side, ok, what in (
+        ("draw_cone_shader", shader_side, shader_ok, "the shader's cone"),
+        ("draw_cone_fixed_function", texgen_side, texgen_ok, "the texgen cone"),
+    ):
         if not ok:
             good, hint = viewer_camera(student, drawn[who], SphereMapLab, halves[side], what)
             if not good:
@@ -310,20 +366,25 @@ def judge_side_by_side(student: Evidence, reference: Evidence, verdicts: Verdict
             hints.append(f"the {shader_side} half is judged once tasks 1 and 2 pass")
         else:
             mask = differing(frame[:, shader_cols], ref[:, shader_cols])
-            hints.append(f"the {shader_side} half (the shader's cone) differs from the "
-                         f"reference in {int(mask.sum())} pixels")
+            hints.append(
+                f"the {shader_side} half (the shader's cone) differs from the "
+                f"reference in {int(mask.sum())} pixels"
+            )
     if not texgen_ok:
         if not (verdicts["texgen_setup"][0] and verdicts["texgen_draw"][0]):
             hints.append(f"the {texgen_side} half is judged once tasks 3 and 4 pass")
         else:
             mask = differing(frame[:, texgen_cols], ref[:, texgen_cols])
-            hints.append(f"the {texgen_side} half (the texgen cone) differs from the "
-                         f"reference in {int(mask.sum())} pixels, {where(mask)}")
+            hints.append(
+                f"the {texgen_side} half (the texgen cone) differs from the "
+                f"reference in {int(mask.sum())} pixels, {where(mask)}"
+            )
     return False, "; ".join(hints)
 
 
-def judge(spec: LabSpec, student: Evidence, reference: Evidence, context: Context
-          ) -> list[TaskResult]:
+def judge(
+    spec: LabSpec, student: Evidence, reference: Evidence, context: Context
+) -> list[TaskResult]:
     variant = context.variant
     unit, side = int(variant["unit"]), str(variant["shader_side"])
     verdicts: Verdicts = {
@@ -335,14 +396,21 @@ def judge(spec: LabSpec, student: Evidence, reference: Evidence, context: Contex
     verdicts["side_by_side"] = judge_side_by_side(student, reference, verdicts, side)
     observed = _observed(student)
     for name, other in context.differing_others().items():
-        if observed is not None and observed != (side, unit) and \
-                observed == (other["shader_side"], int(other["unit"])):
+        if (
+            observed is not None
+            and observed != (side, unit)
+            and observed == (other["shader_side"], int(other["unit"]))
+        ):
             context.matched = name
-            verdicts["side_by_side"] = (False, (
-                f"this file is made for {'the lab' if name == 'default' else 'another'}'s "
-                f"variant (the shader's cone on the {other['shader_side']}, texgen on unit "
-                f"{other['unit']}), not yours: shader's cone on the {side}, texgen on unit "
-                f"{unit}"))
+            verdicts["side_by_side"] = (
+                False,
+                (
+                    f"this file is made for {'the lab' if name == 'default' else 'another'}'s "
+                    f"variant (the shader's cone on the {other['shader_side']}, texgen on unit "
+                    f"{other['unit']}), not yours: shader's cone on the {side}, texgen on unit "
+                    f"{unit}"
+                ),
+            )
             break
     frame = reference.image("frame")
     regions: dict[str, np.ndarray | None] = {}
@@ -352,8 +420,13 @@ def judge(spec: LabSpec, student: Evidence, reference: Evidence, context: Contex
         shader, texgen = np.zeros((height, width), bool), np.zeros((height, width), bool)
         shader[:, shader_cols] = True
         texgen[:, texgen_cols] = True
-        regions = {"reflection": shader, "sphere_coordinates": shader, "texgen_setup": texgen,
-                   "texgen_draw": texgen, "side_by_side": None}
+        regions = {
+            "reflection": shader,
+            "sphere_coordinates": shader,
+            "texgen_setup": texgen,
+            "texgen_draw": texgen,
+            "side_by_side": None,
+        }
     verdicts = judge_frame(verdicts, student, reference, regions, "side_by_side", {})
     return results(spec, student, verdicts, GLSL_FUNCTIONS)
 

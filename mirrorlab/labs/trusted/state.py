@@ -24,9 +24,14 @@ import numpy as np
 GL_MODELVIEW, GL_PROJECTION, GL_TEXTURE = 0x1700, 0x1701, 0x1702
 GL_TEXTURE_2D, GL_TEXTURE_CUBE_MAP = 0x0DE1, 0x8513
 CUBE_FACES = tuple(range(0x8515, 0x851B))
-UNIT_CAPS = {0x0DE1: "GL_TEXTURE_2D", 0x8513: "GL_TEXTURE_CUBE_MAP", 0x0C60: "GL_TEXTURE_GEN_S",
-             0x0C61: "GL_TEXTURE_GEN_T", 0x0C62: "GL_TEXTURE_GEN_R",
-             0x0C63: "GL_TEXTURE_GEN_Q"}
+UNIT_CAPS = {
+    0x0DE1: "GL_TEXTURE_2D",
+    0x8513: "GL_TEXTURE_CUBE_MAP",
+    0x0C60: "GL_TEXTURE_GEN_S",
+    0x0C61: "GL_TEXTURE_GEN_T",
+    0x0C62: "GL_TEXTURE_GEN_R",
+    0x0C63: "GL_TEXTURE_GEN_Q",
+}
 """Switches that belong to the active texture unit."""
 TEXGEN_COORDS = {0x2000: "s", 0x2001: "t", 0x2002: "r", 0x2003: "q"}
 UNITS = 8
@@ -82,19 +87,37 @@ class Texture:
         return any(image.tainted for image in self.images.values())
 
     def nbytes(self) -> int:
-        return sum(i.width * i.height * texel_bytes(i.internalformat)
-                   for i in self.images.values())
+        return sum(i.width * i.height * texel_bytes(i.internalformat) for i in self.images.values())
 
     def plain(self) -> dict[str, Any]:
-        return {"name": self.name, "target": self.target, "picture": self.picture,
-                "images": [[f, lv, im.plain()] for (f, lv), im in sorted(self.images.items())],
-                "params": {str(k): v.plain() for k, v in self.params.items()},
-                "mipmaps": self.mipmaps.plain() if self.mipmaps else None,
-                "mipmaps_fresh": self.mipmaps_fresh, "tainted": self.tainted}
+        return {
+            "name": self.name,
+            "target": self.target,
+            "picture": self.picture,
+            "images": [[f, lv, im.plain()] for (f, lv), im in sorted(self.images.items())],
+            "params": {str(k): v.plain() for k, v in self.params.items()},
+            "mipmaps": self.mipmaps.plain() if self.mipmaps else None,
+            "mipmaps_fresh": self.mipmaps_fresh,
+            "tainted": self.tainted,
+        }
 
 
-TEXEL_BYTES = {0x8058: 4, 0x1907: 4, 0x1908: 4, 0x8051: 4, 3: 4, 4: 4, 1: 4, 2: 4,
-               0x881A: 8, 0x881B: 8, 0x8814: 16, 0x8815: 16, 0x805B: 8, 0x8054: 8}
+TEXEL_BYTES = {
+    0x8058: 4,
+    0x1907: 4,
+    0x1908: 4,
+    0x8051: 4,
+    3: 4,
+    4: 4,
+    1: 4,
+    2: 4,
+    0x881A: 8,
+    0x881B: 8,
+    0x8814: 16,
+    0x8815: 16,
+    0x805B: 8,
+    0x8054: 8,
+}
 
 
 def texel_bytes(internalformat: int) -> int:
@@ -110,8 +133,7 @@ class Primitive:
     mode: int
     line: int
     function: str
-    vertices: list[tuple[list[float], list[list[float]], list[float]]] = field(
-        default_factory=list)
+    vertices: list[tuple[list[float], list[list[float]], list[float]]] = field(default_factory=list)
 
 
 class Tracker:
@@ -119,8 +141,11 @@ class Tracker:
 
     def __init__(self) -> None:
         self.matrix_mode = Setting(GL_MODELVIEW)
-        self.matrix_ops: dict[int, list[dict[str, Any]]] = {GL_MODELVIEW: [],
-                                                            GL_PROJECTION: [], GL_TEXTURE: []}
+        self.matrix_ops: dict[int, list[dict[str, Any]]] = {
+            GL_MODELVIEW: [],
+            GL_PROJECTION: [],
+            GL_TEXTURE: [],
+        }
         self.matrix_stacks: dict[int, list[list[dict[str, Any]]]] = {}
         self.viewport: Setting = Setting(None)
         self.clear_color = Setting((0.0, 0.0, 0.0, 0.0))
@@ -162,8 +187,13 @@ class Tracker:
         return self.frames[-1]["events"] if self.frames else self.setup_events
 
     def event(self, kind: str, **values: Any) -> dict[str, Any]:
-        record = {"kind": kind, "line": self.line, "function": self.function,
-                  "steps": list(self.steps), **values}
+        record = {
+            "kind": kind,
+            "line": self.line,
+            "function": self.function,
+            "steps": list(self.steps),
+            **values,
+        }
         state = values.get("state")
         shared = state is not None and state is self._counted
         plain = {k: v for k, v in record.items() if k != "state" or not shared}
@@ -181,15 +211,15 @@ class Tracker:
     @property
     def framebuffer_taint(self) -> str:
         """Why the framebuffer holds uploaded pixels ('' when no pixel does)."""
-        return self.taint_why if self.taint_mask is not None and self.taint_mask.any() \
-            else ""
+        return self.taint_why if self.taint_mask is not None and self.taint_mask.any() else ""
 
     @staticmethod
-    def _rows(box: tuple[int, int, int, int], shape: tuple[int, ...]
-              ) -> tuple[slice, slice]:
+    def _rows(box: tuple[int, int, int, int], shape: tuple[int, ...]) -> tuple[slice, slice]:
         x, y, width, height = box
-        return (slice(max(y, 0), max(min(y + height, shape[0]), 0)),
-                slice(max(x, 0), max(min(x + width, shape[1]), 0)))
+        return (
+            slice(max(y, 0), max(min(y + height, shape[0]), 0)),
+            slice(max(x, 0), max(min(x + width, shape[1]), 0)),
+        )
 
     def taint(self, why: str, box: tuple[int, int, int, int], size: tuple[int, int]) -> None:
         """The pixels of ``box`` (x, y, width, height in window coordinates) of a ``size``
@@ -220,8 +250,7 @@ class Tracker:
         return int(setting.value) if setting else 0
 
     def is_enabled(self, cap: int, unit: int | None = None) -> bool:
-        key = (cap, (self.active_unit.value if unit is None else unit)
-               if cap in UNIT_CAPS else -1)
+        key = (cap, (self.active_unit.value if unit is None else unit) if cap in UNIT_CAPS else -1)
         setting = self.enabled.get(key)
         return bool(setting and setting.value)
 
@@ -234,8 +263,15 @@ class Tracker:
         if replaces:
             ops.clear()
         if len(ops) < 64:
-            ops.append({"op": name, "args": args, "line": self.line,
-                        "function": self.function, "mode": self.matrix_mode.value})
+            ops.append(
+                {
+                    "op": name,
+                    "args": args,
+                    "line": self.line,
+                    "function": self.function,
+                    "mode": self.matrix_mode.value,
+                }
+            )
 
     def texture_bound(self, target: int) -> Texture | None:
         """The student's texture bound to ``target`` (its binding target, GL_TEXTURE_2D or
@@ -270,11 +306,16 @@ class Tracker:
             if entry:
                 units[str(unit)] = entry
         enabled = {str(cap): s.plain() for (cap, unit), s in self.enabled.items() if unit == -1}
-        snapshot = {"matrix_mode": self.matrix_mode.plain(), "viewport": self.viewport.plain(),
-                    "clear_color": self.clear_color.plain(),
-                    "active_unit": self.active_unit.plain(), "program": self.program.plain(),
-                    "units": units, "enabled": enabled,
-                    "matrix_ops": {str(k): list(v) for k, v in self.matrix_ops.items()}}
+        snapshot = {
+            "matrix_mode": self.matrix_mode.plain(),
+            "viewport": self.viewport.plain(),
+            "clear_color": self.clear_color.plain(),
+            "active_unit": self.active_unit.plain(),
+            "program": self.program.plain(),
+            "units": units,
+            "enabled": enabled,
+            "matrix_ops": {str(k): list(v) for k, v in self.matrix_ops.items()},
+        }
         if snapshot != self._snapshot:
             self._snapshot = snapshot
         return self._snapshot  # the same object while the state is the same: shared

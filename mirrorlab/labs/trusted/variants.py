@@ -42,8 +42,16 @@ OPTIONS: dict[str, dict[str, tuple]] = {
 }
 
 DEFAULTS: dict[str, dict[str, Any]] = {
-    "lab20": {"mirror_x": -7.0, "y0": -3.0, "height": 8.0, "z0": -6.0, "width": 8.0,
-              "base_angle": -35.0, "lower_angle": 30.0, "upper_angle": -75.0},
+    "lab20": {
+        "mirror_x": -7.0,
+        "y0": -3.0,
+        "height": 8.0,
+        "z0": -6.0,
+        "width": 8.0,
+        "base_angle": -35.0,
+        "lower_angle": 30.0,
+        "upper_angle": -75.0,
+    },
     "spheremap": {"shader_side": "left", "unit": 0, "tilt": 50.0},
     "cubemap": {"center_x": 0.0, "center_y": 0.0, "center_z": 0.0},
 }
@@ -74,8 +82,12 @@ class Variant:
         return self.values[key]
 
     def plain(self) -> dict[str, Any]:
-        return {"lab": self.lab, "id": self.id, "student": self.student,
-                "values": dict(self.values)}
+        return {
+            "lab": self.lab,
+            "id": self.id,
+            "student": self.student,
+            "values": dict(self.values),
+        }
 
     def same_numbers(self, other: Variant) -> bool:
         return self.lab == other.lab and self.values == other.values
@@ -93,12 +105,14 @@ def student_key(student: str) -> str:
 
 def derive_variant(lab: str, key: bytes, student: str) -> Variant:
     """The variant of ``student`` for ``lab`` under the course ``key``."""
-    digest = hmac.new(key, f"mirrorlab variant\0{lab}\0{student_key(student)}".encode(),
-                      hashlib.sha256).digest()
+    digest = hmac.new(
+        key, f"mirrorlab variant\0{lab}\0{student_key(student)}".encode(), hashlib.sha256
+    ).digest()
     values = {}
     for index, (name, choices) in enumerate(OPTIONS[lab].items()):
-        values[name] = choices[int.from_bytes(digest[2 * index:2 * index + 2], "big")
-                               % len(choices)]
+        values[name] = choices[
+            int.from_bytes(digest[2 * index : 2 * index + 2], "big") % len(choices)
+        ]
     return Variant(lab, values, digest.hex()[:8], student)
 
 
@@ -109,8 +123,10 @@ def read_key(path: Path) -> bytes:
     except OSError as exc:
         raise VariantError(f"--key: cannot read {str(path)!r}: {exc.strerror}") from None
     if len(key.strip()) < KEY_BYTES:
-        raise VariantError(f"--key: {str(path)!r} holds {len(key.strip())} bytes; a course "
-                           f"key needs at least {KEY_BYTES} (mirrorlab lab release makes one)")
+        raise VariantError(
+            f"--key: {str(path)!r} holds {len(key.strip())} bytes; a course "
+            f"key needs at least {KEY_BYTES} (mirrorlab lab release makes one)"
+        )
     return key.strip()
 
 
@@ -129,8 +145,10 @@ def variant_from_file(path: Path, lab: str) -> Variant:
         raise VariantError(f"{path}: expected the values {', '.join(OPTIONS[lab])}")
     for name, value in values.items():
         if value not in OPTIONS[lab][name]:
-            raise VariantError(f"{path}: {name} = {value!r} is not one of "
-                               f"{', '.join(map(str, OPTIONS[lab][name]))}")
+            raise VariantError(
+                f"{path}: {name} = {value!r} is not one of "
+                f"{', '.join(map(str, OPTIONS[lab][name]))}"
+            )
     ident = str(data.get("id", ""))
     if not re.fullmatch(r"default|[0-9a-f]{8}", ident):
         raise VariantError(f"{path}: id {ident!r} is not a variant id")
@@ -145,10 +163,17 @@ def lab20_geometry(variant: Variant) -> dict[str, Any]:
     v = variant.values
     x, y0, z0 = v["mirror_x"], v["y0"], v["z0"]
     y1, z1 = y0 + v["height"], z0 + v["width"]
-    return {"x": x, "y0": y0, "y1": y1, "z0": z0, "z1": z1,
-            "corners": ((x, y0, z0), (x, y1, z0), (x, y1, z1), (x, y0, z1)),
-            "extents": (z0, z1, y0, y1, 0.0, 15.0), "eye": (x, 0.0, 0.0),
-            "angles": (v["base_angle"], v["lower_angle"], v["upper_angle"])}
+    return {
+        "x": x,
+        "y0": y0,
+        "y1": y1,
+        "z0": z0,
+        "z1": z1,
+        "corners": ((x, y0, z0), (x, y1, z0), (x, y1, z1), (x, y0, z1)),
+        "extents": (z0, z1, y0, y1, 0.0, 15.0),
+        "eye": (x, 0.0, 0.0),
+        "angles": (v["base_angle"], v["lower_angle"], v["upper_angle"]),
+    }
 
 
 def cube_center(variant: Variant) -> tuple[float, float, float]:

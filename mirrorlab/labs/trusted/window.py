@@ -33,8 +33,14 @@ def format_error(spec: LabSpec, error: dict[str, Any]) -> str:
     return f"{where}{line}{code} -> {error.get('message', '')}"
 
 
-def run_window(lab: str, file: str | None, size: tuple[int, int], max_frames: int,
-               screenshot: Path | None, solutions: Any = None) -> int:
+def run_window(
+    lab: str,
+    file: str | None,
+    size: tuple[int, int],
+    max_frames: int,
+    screenshot: Path | None,
+    solutions: Any = None,
+) -> int:
     """Run the file (default: the lab's starter) in a window; 0 when it ran without error."""
     from mirrorlab.gl.context import prepare, window_context
 
@@ -67,9 +73,16 @@ def run_window(lab: str, file: str | None, size: tuple[int, int], max_frames: in
         width, height = context.framebuffer_size()
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
         session = open_session(spec.name, (width, height), variant)
-        run = LabRun(spec, session, source, name, WINDOW_LIMITS,
-                     RunLimits(calls=1 << 62, gl_seconds=1e12),
-                     PipeBudget(total_bytes=1 << 40), registry=context.resources)
+        run = LabRun(
+            spec,
+            session,
+            source,
+            name,
+            WINDOW_LIMITS,
+            RunLimits(calls=1 << 62, gl_seconds=1e12),
+            PipeBudget(total_bytes=1 << 40),
+            registry=context.resources,
+        )
         last = None
         try:
             run.start()

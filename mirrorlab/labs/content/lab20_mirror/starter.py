@@ -14,10 +14,10 @@ from OpenGL.GLU import gluLookAt  # noqa: F401
 
 from mirrorlab.labs import kit
 
-lab = kit.lab20()                    # the context, the shaders, the robot and the viewer
+lab = kit.lab20()  # the context, the shaders, the robot and the viewer
 WIDTH, HEIGHT = lab.width, lab.height
 
-ENVIRONMENT, METAL = 0, 1            # indices into tex_ids
+ENVIRONMENT, METAL = 0, 1  # indices into tex_ids
 tex_ids = [0, 0]
 robot = None
 
@@ -76,4 +76,3 @@ def display():
     lab.set_viewer()
     lab.draw_scene(robot)
     # TODO 8: and the mirror here
-

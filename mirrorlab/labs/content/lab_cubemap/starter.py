@@ -12,9 +12,9 @@ from OpenGL.GLU import gluLookAt, gluPerspective  # noqa: F401
 
 from mirrorlab.labs import kit
 
-lab = kit.cubemap()                   # the context, the objects, the sphere and the viewer
+lab = kit.cubemap()  # the context, the objects, the sphere and the viewer
 WIDTH, HEIGHT = lab.width, lab.height
-FACE_SIZE = 128                       # texels on a side of each face
+FACE_SIZE = 128  # texels on a side of each face
 cube_texture = 0
 
 CUBE_MAP_GLSL = """
@@ -42,8 +42,17 @@ def create_cube_texture():
     glActiveTexture(GL_TEXTURE1)
     glBindTexture(GL_TEXTURE_CUBE_MAP, cube_texture)
     for face in range(6):
-        glTexImage2D(GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL_RGB, FACE_SIZE, FACE_SIZE, 0,
-                     GL_RGB, GL_UNSIGNED_BYTE, None)
+        glTexImage2D(
+            GL_TEXTURE_CUBE_MAP_POSITIVE_X + face,
+            0,
+            GL_RGB,
+            FACE_SIZE,
+            FACE_SIZE,
+            0,
+            GL_RGB,
+            GL_UNSIGNED_BYTE,
+            None,
+        )
     glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR)
     glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MAG_FILTER, GL_LINEAR)
     for wrap in (GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R):

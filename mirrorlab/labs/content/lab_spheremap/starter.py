@@ -11,9 +11,9 @@ from OpenGL.GL import *  # noqa: F403
 
 from mirrorlab.labs import kit
 
-lab = kit.spheremap()                 # the context, the cone, the backdrop and the viewer
+lab = kit.spheremap()  # the context, the cone, the backdrop and the viewer
 WIDTH, HEIGHT = lab.width, lab.height
-launch = 0                            # the launch picture's texture
+launch = 0  # the launch picture's texture
 
 SPHERE_MAP_GLSL = """
 // TODO 1: the reflection of the view direction u about the unit normal n (eye space;
