@@ -4,11 +4,51 @@ as if it had run."""
 
 from __future__ import annotations
 
+import argparse
 import json
 from collections.abc import Callable
 
+from mirrorlab.commands.arguments import (
+    TINY_HELP,
+    add_scene_arguments,
+    scene_from_args,
+    tiny_pixels_of,
+)
+from mirrorlab.options import parse_count, parse_size
 from mirrorlab.plan import TINY_PIXELS, FramePlan, TextureState, plan_frame
 from mirrorlab.scene.model import Scene
+
+NAME = "plan"
+
+
+def add_parser(commands: argparse._SubParsersAction) -> None:
+    """The ``plan`` command's arguments, as a subcommand of ``commands``."""
+    plan = commands.add_parser(NAME, help="print the passes each frame would run, and why")
+    add_scene_arguments(plan)
+    plan.add_argument("--size", default="512x512", help="WIDTHxHEIGHT (default %(default)s)")
+    plan.add_argument(
+        "--frames",
+        metavar="N",
+        default="2",
+        help="frames to plan (default %(default)s; later frames reuse what earlier ones captured)",
+    )
+    plan.add_argument("--json", action="store_true", help="print the plans as JSON")
+    plan.add_argument("--no-plan", action="store_true", help="plan every pass to run")
+    plan.add_argument("--tiny-pixels", metavar="N", help=TINY_HELP)
+
+
+def run(args: argparse.Namespace) -> int:
+    """``mirrorlab plan``: the arguments checked, then the plans printed."""
+    size = parse_size("--size", args.size)
+    frames = parse_count("--frames", args.frames, 1, 10_000)
+    return print_plans(
+        scene_from_args(args),
+        size,
+        frames,
+        args.json,
+        not args.no_plan,
+        tiny_pixels=tiny_pixels_of(args),
+    )
 
 
 def plan_frames(
@@ -47,7 +87,7 @@ def plan_document(plans: list[FramePlan]) -> list[dict]:
     ]
 
 
-def run_plan(
+def print_plans(
     scene: Scene,
     size: tuple[int, int],
     frames: int,
@@ -56,6 +96,9 @@ def run_plan(
     say: Callable[[str], None] = print,
     tiny_pixels: float = TINY_PIXELS,
 ) -> int:
+    """Say (print) the plans of frames 0 .. ``frames`` - 1 of ``scene`` at ``size``: each
+    frame's passes run and skipped with their reasons, or with ``as_json`` one JSON
+    document; returns the exit status, 0."""
     plans = plan_frames(scene, size, frames, use_plan, tiny_pixels)
     if as_json:
         say(

@@ -1,21 +1,223 @@
-"""``mirrorlab render`` without ``--out-dir``: one picture (the last of the frames drawn),
-with what the planner ran and saved. With ``--out-dir`` the frames are a batch: see
-:mod:`mirrorlab.batch`."""
+"""``mirrorlab render``: its arguments, and without ``--out-dir`` its work: one picture
+(the last of the frames drawn), with what the planner ran and saved. With ``--out-dir``
+the frames are a batch: see :mod:`mirrorlab.batch`."""
 
 from __future__ import annotations
 
+import argparse
 import time
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
-from mirrorlab.files import Outputs
+from mirrorlab.commands.arguments import (
+    DEBUG_HELP,
+    TINY_HELP,
+    UsageError,
+    add_executor_arguments,
+    add_scene_arguments,
+    scene_from_args,
+    tiny_pixels_of,
+)
+from mirrorlab.files import Outputs, check_folder, check_output
+from mirrorlab.options import parse_count, parse_size
 from mirrorlab.plan import TINY_PIXELS
 from mirrorlab.scene.model import Scene
 
+NAME = "render"
 
-def run_render(
+
+def add_parser(commands: argparse._SubParsersAction) -> None:
+    """The ``render`` command's arguments, as a subcommand of ``commands``."""
+    render = commands.add_parser(NAME, help="render a scene headless to a PNG")
+    add_scene_arguments(render)
+    render.add_argument("--out", help="output PNG (default out/SCENE.png)")
+    render.add_argument("--size", default="512x512", help="WIDTHxHEIGHT (default %(default)s)")
+    render.add_argument("--frame", metavar="N", help="the animation frame to render (default 0)")
+    render.add_argument(
+        "--frames", metavar="N", help="render frames 0 to N-1 (the last is written to --out)"
+    )
+    render.add_argument(
+        "--out-dir",
+        metavar="DIR",
+        help="a batch: write every frame as "
+        "DIR/SCENE_NNNN.png, each as soon as it is drawn; a rerun skips the "
+        "frames already written whole",
+    )
+    add_executor_arguments(
+        render,
+        jobs="with --out-dir: frames drawn by J processes at once, each keeping one OpenGL context",
+        scheduler="with --out-dir: draw the frames on",
+    )
+    render.add_argument(
+        "--gif", metavar="PATH", help="with --out-dir: also write the frames as an animated GIF"
+    )
+    render.add_argument(
+        "--webp",
+        metavar="PATH",
+        help="with --out-dir: also write the frames as an animated WebP (lossless)",
+    )
+    render.add_argument(
+        "--fps",
+        metavar="N",
+        default="12",
+        help="frames a second of --gif and --webp (default %(default)s)",
+    )
+    render.add_argument(
+        "--stats",
+        action="store_true",
+        help="print the passes each frame "
+        "ran and skipped, the time planning saved against --no-plan, and "
+        "how many pixels the two frames differ in",
+    )
+    render.add_argument(
+        "--no-plan", action="store_true", help="run every pass of every frame (for comparison)"
+    )
+    render.add_argument("--tiny-pixels", metavar="N", help=TINY_HELP)
+    render.add_argument(
+        "--save-env",
+        metavar="PATH",
+        help="also write the first planar mirror's capture texture as a PNG",
+    )
+    from mirrorlab.techniques import techniques
+
+    for entry in techniques("frame"):  # --raytrace: the whole frame by another renderer
+        render.add_argument(
+            f"--{entry.name}",
+            dest="frame_techniques",
+            action="append_const",
+            const=entry.name,
+            help=f"draw {entry.summary} (--method {entry.name} says the same)",
+        )
+    render.add_argument("--debug", action="store_true", help=DEBUG_HELP)
+
+
+def run(args: argparse.Namespace) -> int:
+    """``mirrorlab render``: every argument checked (and every output path) before any
+    drawing; one picture, or with ``--out-dir`` a batch."""
+    size = parse_size("--size", args.size)
+    jobs = parse_count("--jobs", args.jobs, 1, 1024)
+    fps = parse_count("--fps", args.fps, 1, 100)
+    out = check_output("--out", args.out) if args.out else None
+    save_env = check_output("--save-env", args.save_env) if args.save_env else None
+    out_dir = check_folder("--out-dir", args.out_dir) if args.out_dir else None
+    animations = [
+        (kind, check_output(f"--{kind}", path, f".{kind}"))
+        for kind, path in (("gif", args.gif), ("webp", args.webp))
+        if path
+    ]
+    if out_dir is None:
+        batch_only = [
+            ("--jobs", jobs > 1),
+            ("--scheduler", args.scheduler),
+            *((f"--{kind}", True) for kind, _ in animations),
+        ]
+        for option, given in batch_only:
+            if given:
+                raise UsageError(f"{option}: works on a batch of frames; give --out-dir DIR too")
+    else:
+        for option, given in (("--stats", args.stats), ("--save-env", save_env)):
+            if given:
+                raise UsageError(
+                    f"{option}: measures frames in one renderer; give it without --out-dir"
+                )
+    frame_technique = frame_technique_of(args)
+    scene = scene_from_args(args)
+    if out is None and out_dir is None:
+        out = check_output("--out", Path("out") / f"{scene.name}.png", make_folder=True)
+    frames = frame_list(args, scene)
+    outputs = ([("--out", out)] if out else []) + ([("--save-env", save_env)] if save_env else [])
+    outputs += [(f"--{kind}", path) for kind, path in animations]
+    if out_dir is not None:
+        from mirrorlab.batch import frame_name
+
+        outputs += [("--out-dir", frame_name(out_dir, scene, f)) for f in frames]
+    check_distinct(outputs)
+    if out_dir is not None:
+        from mirrorlab.batch import FrameJob, run_batch
+
+        return run_batch(
+            FrameJob(
+                scene,
+                size,
+                not args.no_plan,
+                frame_technique,
+                args.debug,
+                tiny_pixels=tiny_pixels_of(args),
+            ),
+            frames,
+            out_dir,
+            jobs,
+            args.scheduler,
+            args.engine,
+            out,
+            animations,
+            fps,
+        )
+    assert out is not None
+    return render_frames(
+        scene,
+        size,
+        out,
+        frames,
+        args.stats,
+        not args.no_plan,
+        save_env,
+        frame_technique,
+        debug=args.debug,
+        tiny_pixels=tiny_pixels_of(args),
+    )
+
+
+def frame_technique_of(args: argparse.Namespace) -> str | None:
+    """The technique drawing the whole frame (``--raytrace``, or ``--method`` naming one),
+    taken out of the scene options; None for OpenGL."""
+    from mirrorlab.techniques import frame_technique
+
+    named = list(dict.fromkeys(args.frame_techniques or []))
+    if frame_technique(args.option_method) is not None:
+        named.append(args.option_method)
+        args.option_method = None
+    named = list(dict.fromkeys(named))
+    if len(named) > 1:
+        raise UsageError(f"--{named[1]}: the frame is drawn by one of {', '.join(named)}, not all")
+    return named[0] if named else None
+
+
+def check_distinct(outputs: list[tuple[str, Path]]) -> None:
+    """UsageError when two of a command's outputs are one file: one would silently
+    replace the other (``--out a.png --save-env a.png``)."""
+    seen: dict[Path, str] = {}
+    for option, path in outputs:
+        key = path.resolve()
+        if key in seen:
+            raise UsageError(
+                f"{option}: {path} is also the file of {seen[key]}; give each output its own file"
+            )
+        seen[key] = option
+
+
+def frame_list(args: argparse.Namespace, scene: Scene) -> list[int]:
+    """The frames ``--frame`` or ``--frames`` name, checked against the scene's animation."""
+    if args.frame is not None and args.frames is not None:
+        raise UsageError("--frame and --frames: give one or the other")
+    if args.frames is not None:
+        count = parse_count("--frames", args.frames, 1, 100_000)
+        if scene.animation is not None and count > scene.frame_count:
+            raise UsageError(
+                f"--frames: scene {scene.name} has {scene.frame_count} frames, got {count}"
+            )
+        return list(range(count))
+    frame = parse_count("--frame", args.frame, 0, 100_000) if args.frame is not None else 0
+    if frame >= scene.frame_count and scene.animation is not None:
+        raise UsageError(
+            f"--frame: scene {scene.name} has frames 0 to {scene.frame_count - 1}, got {frame}"
+        )
+    return [frame]
+
+
+def render_frames(
     scene: Scene,
     size: tuple[int, int],
     out: Path,

@@ -5,7 +5,8 @@ import json
 
 import pytest
 
-from mirrorlab.cli import build_parser, join_negative_vectors, main, scene_from_args
+from mirrorlab.cli import build_parser, join_negative_vectors, main
+from mirrorlab.commands.arguments import scene_from_args
 from mirrorlab.options import OptionError, parse_floats, parse_size
 from mirrorlab.scene.loader import load_scene
 

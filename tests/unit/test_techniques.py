@@ -12,7 +12,8 @@ from dataclasses import replace
 import pytest
 
 from mirrorlab import techniques as registry
-from mirrorlab.cli import build_parser, main, scene_from_args
+from mirrorlab.cli import build_parser, main
+from mirrorlab.commands.arguments import scene_from_args
 from mirrorlab.options import OptionError, apply_options, split_frame_technique
 from mirrorlab.plan import TextureState, plan_frame
 from mirrorlab.scene.loader import SceneError, load_scene, loads
