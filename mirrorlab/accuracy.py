@@ -667,7 +667,7 @@ def rows_to_csv(rows: Sequence[SweepRow]) -> str:
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow([f.name for f in fields(SweepRow)])
     for row in rows:
-        writer.writerow([_plain(v) for v in asdict(row).values()])
+        writer.writerow([_csv_cell(v) for v in asdict(row).values()])
     return buffer.getvalue()
 
 
@@ -702,7 +702,10 @@ def rows_from_csv(text: str) -> list[SweepRow]:
     return rows
 
 
-def _plain(value) -> str:
+def _csv_cell(value: object) -> str:
+    """A sweep row's value as CSV text: ``inf`` for an infinite float, an empty cell for
+    NaN (nothing measured), ``repr`` for other floats (read back exactly), ``str`` for the
+    rest."""
     if isinstance(value, float):
         return "inf" if math.isinf(value) else ("" if math.isnan(value) else repr(value))
     return str(value)

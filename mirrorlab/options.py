@@ -161,7 +161,7 @@ def _vec3(names: str) -> Callable[[str, str], tuple[float, ...]]:
 
 def _set_camera(field: str) -> Callable[[dict, Any, str], None]:
     def apply(document: dict, value: Any, flag: str) -> None:
-        document.setdefault("camera", {})[field] = _plain(value)
+        document.setdefault("camera", {})[field] = _toml_floats(value)
 
     return apply
 
@@ -171,7 +171,7 @@ def _apply_angles(document: dict, value: Any, flag: str) -> None:
     if not robots:
         raise OptionError(flag, f"scene {document.get('name')!r} has no robot to pose")
     for robot in robots:
-        robot["angles"] = _plain(value)
+        robot["angles"] = _toml_floats(value)
 
 
 def _entry(name: Any) -> Technique | None:
@@ -325,7 +325,7 @@ def _apply_parallax(document: dict, value: Any, flag: str) -> None:
 
 def _plain_table(value: Any) -> Any:
     """A table from the API as TOML values: numpy arrays and tuples become lists, and whole
-    numbers stay whole (``steps``), unlike :func:`_plain`."""
+    numbers stay whole (``steps``), unlike :func:`_toml_floats`."""
     if isinstance(value, Mapping):
         return {str(k): _plain_table(v) for k, v in value.items()}
     if hasattr(value, "tolist"):
@@ -614,11 +614,13 @@ def set_key(document: dict, key: str, value: Any, flag: str = "--set") -> None:
         raise OptionError(flag, f"{key}: {last!r} is not inside a table")
 
 
-def _plain(value: Any) -> Any:
+def _toml_floats(value: Any) -> Any:
+    """A number or vector from the API or a flag as a TOML value: numpy arrays, tuples and
+    lists become lists, and every number a float."""
     if hasattr(value, "tolist"):  # numpy arrays and scalars
         value = value.tolist()
     if isinstance(value, tuple | list):
-        return [_plain(v) for v in value]
+        return [_toml_floats(v) for v in value]
     if isinstance(value, int | float) and not isinstance(value, bool):
         return float(value)
     return value

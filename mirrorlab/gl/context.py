@@ -265,11 +265,6 @@ def loaded_platform() -> str | None:
     return {"win32": "nt"}.get(name, name) or None
 
 
-def current_platform() -> str | None:
-    """The PyOpenGL platform this process uses or will use (``'egl'``, ``'glx'``, ...)."""
-    return loaded_platform() or os.environ.get("PYOPENGL_PLATFORM")
-
-
 def use_platform(name: Platform) -> None:
     """Choose PyOpenGL's platform for this process, before OpenGL is first imported; when
     OpenGL is imported already, check that it is bound to ``name``.

@@ -33,6 +33,7 @@ from mirrorlab.scene.animation import (
     PLANAR_FIELDS,
     REFLECTOR_FIELDS,
 )
+from mirrorlab.scene.backgrounds import CUBE_FACE_FILES
 from mirrorlab.scene.model import (
     CAPTURE_MODES,
     DEFAULT_BACKING,
@@ -138,7 +139,6 @@ _PARALLAX_KEYS = {
 """The keys of each proxy in a ``parallax`` table, besides ``proxy``."""
 _ORTHO_KEYS = ("eye", "target", "up", "extents")
 _KEYFRAME_KEYS = ("frame", "camera", "objects", "reflectors")
-CUBE_FACE_FILES = ("px", "nx", "py", "ny", "pz", "nz")
 
 
 class SceneError(ValueError):
@@ -346,7 +346,7 @@ def scene_to_document(scene: Scene, base: Path | None = None) -> dict[str, Any]:
             for group in ("camera", "objects", "reflectors"):
                 values = getattr(key, group)
                 if values:
-                    entry[group] = _plain(values)
+                    entry[group] = _tuples_as_lists(values)
             keyframes.append(entry)
         document["animation"] = {"frames": scene.animation.frames, "keyframes": keyframes}
     return document
@@ -392,11 +392,12 @@ def _transform_document(transform: Transform) -> dict[str, Any]:
     }
 
 
-def _plain(value):
+def _tuples_as_lists(value: Any) -> Any:
+    """``value`` with every mapping a dict and every tuple a list, as TOML writes them."""
     if isinstance(value, Mapping):
-        return {k: _plain(v) for k, v in value.items()}
+        return {k: _tuples_as_lists(v) for k, v in value.items()}
     if isinstance(value, tuple | list):
-        return [_plain(v) for v in value]
+        return [_tuples_as_lists(v) for v in value]
     return value
 
 
