@@ -1,9 +1,13 @@
 """The layering rules that can be checked by importing, each in a fresh interpreter."""
 
+import ast
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
+
+import mirrorlab
 
 GL_PACKAGES = ("OpenGL", "glfw")
 
@@ -66,3 +70,34 @@ def test_gl_modules_choose_egl_before_opengl_loads():
         "assert os.environ['PYOPENGL_PLATFORM'] == 'egl'"
     )
     assert "OpenGL.GL" in loaded
+
+
+COMMAND_LINE_MODULES = ("argparse", "mirrorlab.cli", "mirrorlab.commands")
+"""What knows a command line: the argument parser and mirrorlab's own command modules."""
+
+
+def imported_names(path: Path) -> set[str]:
+    """Every module ``path`` imports, at its top or inside a function (absolute names)."""
+    names: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module is not None:
+            names.add(node.module)
+            names.update(f"{node.module}.{alias.name}" for alias in node.names)
+    return names
+
+
+def test_nothing_below_the_command_line_knows_one():
+    package = Path(mirrorlab.__file__).parent
+    above = {package / "cli.py", package / "__main__.py", *(package / "commands").rglob("*.py")}
+    offenders = {
+        str(path.relative_to(package)): sorted(
+            name
+            for name in imported_names(path)
+            if any(name == m or name.startswith(m + ".") for m in COMMAND_LINE_MODULES)
+        )
+        for path in sorted(package.rglob("*.py"))
+        if path not in above
+    }
+    assert {path: names for path, names in offenders.items() if names} == {}
