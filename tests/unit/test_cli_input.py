@@ -2,10 +2,12 @@
 exit status 2, and nothing written."""
 
 import json
+import pkgutil
 
 import pytest
 
-from mirrorlab.cli import build_parser, join_negative_vectors, main
+from mirrorlab import commands
+from mirrorlab.cli import COMMANDS, build_parser, join_negative_vectors, main
 from mirrorlab.commands.arguments import scene_from_args
 from mirrorlab.options import OptionError, parse_floats, parse_size
 from mirrorlab.scene.loader import load_scene
@@ -136,3 +138,13 @@ def test_plan_without_the_plan_runs_every_pass(capsys):
     out = capsys.readouterr().out
     assert out.count("run  capture mirror") == 2 and "skip " not in out
     assert out.count("2 passes run, 0 skipped") == 2
+
+
+def test_every_command_module_is_a_command_of_the_parser():
+    """A module in mirrorlab/commands/ (besides the shared arguments) is a command: its
+    NAME is its module's, and the parser lists it, in COMMANDS' order."""
+    modules = {m.name for m in pkgutil.iter_modules(commands.__path__)} - {"arguments"}
+    assert {command.__name__.rsplit(".", 1)[1] for command in COMMANDS} == modules
+    assert all(command.__name__.endswith("." + command.NAME) for command in COMMANDS)
+    subparsers = next(a for a in build_parser()._actions if a.dest == "command")
+    assert list(subparsers.choices) == [command.NAME for command in COMMANDS]
