@@ -1,7 +1,8 @@
-"""Generate the package data under mirrorlab/data/: the robot's part meshes (models/*.obj)
-and the METAL texture (textures/metal.png), and the environment-mapping assets: the
-reflective cone and sphere, the backdrop quad, the unit panel the room's walls are made
-of, and the rocket-launch picture (textures/launch.png).
+"""Generate the shipped meshes and pictures in the repository's top-level models/ and
+textures/ folders (package data: the wheel carries them in mirrorlab/data/): the robot's
+part meshes (models/*.obj) and the METAL texture (textures/metal.png), and the
+environment-mapping assets: the reflective cone and sphere, the backdrop quad, the unit
+panel the room's walls are made of, and the rocket-launch picture (textures/launch.png).
 
 Run from the repository root: ``python tools/make_assets.py``. The outputs are
 committed; this script is how they were made, so they can be re-made or changed.
@@ -20,7 +21,6 @@ import trimesh
 from PIL import Image
 
 ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT / "mirrorlab" / "data"
 
 
 def box(size: tuple[float, float, float], y0: float = 0.0):
@@ -277,7 +277,7 @@ def wall_texture(size: int = 256) -> np.ndarray:
 
 
 def main() -> None:
-    models = DATA / "models"
+    models = ROOT / "models"
     models.mkdir(exist_ok=True)
     write_obj(models / "base.obj", cylinder(2.0, 1.0, 48), "robot base: textured cylinder")
     write_obj(models / "lower_arm.obj", box((0.8, 4.0, 0.8)), "robot lower arm")
@@ -301,7 +301,7 @@ def main() -> None:
         quad(1.0, 1.0),
         "unit square facing +z: a room's walls, floor and ceiling, placed and scaled",
     )
-    textures = DATA / "textures"
+    textures = ROOT / "textures"
     textures.mkdir(exist_ok=True)
     Image.fromarray(metal_texture()).save(textures / "metal.png")
     print("wrote textures/metal.png")

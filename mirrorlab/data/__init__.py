@@ -1,7 +1,10 @@
 """The files mirrorlab ships: scenes (``scenes/*.toml``), meshes (``models/*.obj``) and
-pictures (``textures/``), package data found through :mod:`importlib.resources`, the same
-way from a wheel, an editable install and a checkout. A scene file's own paths stay
-relative to that file (``../models/base.obj``)."""
+pictures (``textures/``). In a checkout they are the repository's top-level folders
+``scenes/``, ``models/`` and ``textures/``; pyproject.toml maps them into this package as
+``mirrorlab.data.scenes``, ``mirrorlab.data.models`` and ``mirrorlab.data.textures``, so
+a wheel holds them in ``mirrorlab/data/`` and an editable install finds them where they
+are. Either way they are found through :mod:`importlib.resources` and sit side by side,
+so a scene file's own paths stay relative to that file (``../models/base.obj``)."""
 
 from __future__ import annotations
 
@@ -9,14 +12,20 @@ from functools import lru_cache
 from importlib.resources import files
 from pathlib import Path
 
+DATA_FOLDERS = ("scenes", "models", "textures")
+"""The shipped folders, each the package ``mirrorlab.data.<folder>``."""
+
 
 @lru_cache(maxsize=256)
-def data_path(*parts: str) -> Path:
-    """The shipped file or folder ``mirrorlab/data/<parts...>`` as a path on disk, e.g.
-    ``data_path("models", "base.obj")``. It need not exist (callers check); RuntimeError
-    when mirrorlab runs from a zip archive, which it does not support. (Remembered: a
-    scene graph asks for its meshes whenever it is posed.)"""
-    root = files(__name__)
+def data_path(folder: str, *parts: str) -> Path:
+    """The shipped file or folder ``<folder>/<parts...>`` (``folder`` one of
+    :data:`DATA_FOLDERS`) as a path on disk, e.g. ``data_path("models", "base.obj")``. It
+    need not exist (callers check); ValueError for another folder; RuntimeError when
+    mirrorlab runs from a zip archive, which it does not support. (Remembered: a scene
+    graph asks for its meshes whenever it is posed.)"""
+    if folder not in DATA_FOLDERS:
+        raise ValueError(f"no shipped folder {folder!r}; expected one of {DATA_FOLDERS}")
+    root = files(f"{__name__}.{folder}")
     if not isinstance(root, Path):
         raise RuntimeError(
             f"mirrorlab's data is not on the file system ({root}); install "
@@ -40,4 +49,4 @@ def texture_file(name: str) -> Path:
     return data_path("textures", f"{name}.png")
 
 
-__all__ = ["data_path", "model_file", "scenes_dir", "texture_file"]
+__all__ = ["DATA_FOLDERS", "data_path", "model_file", "scenes_dir", "texture_file"]

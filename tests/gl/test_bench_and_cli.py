@@ -363,7 +363,7 @@ def rolled_faces(folder):
 
 def test_a_cube_map_from_six_images_draws_what_the_baked_cube_draws(tmp_path, monkeypatch):
     """The shipped faces are the baked sky, so the two static cubes must agree exactly."""
-    monkeypatch.chdir(data_path())
+    monkeypatch.chdir(data_path("textures").parent)
     from_files, baked, rolled = (tmp_path / f"{n}.png" for n in ("files", "baked", "rolled"))
     common = ["--method", "cube", "--size", "96x96"]
     assert (

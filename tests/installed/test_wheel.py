@@ -13,7 +13,7 @@ from PIL import Image
 
 from tests.installed.conftest import REPO, Installed
 
-SHIPPED_SCENES = sorted(p.stem for p in (REPO / "mirrorlab" / "data" / "scenes").glob("*.toml"))
+SHIPPED_SCENES = sorted(p.stem for p in (REPO / "scenes").glob("*.toml"))
 GOLDEN_LAB = REPO / "tests" / "gl" / "golden" / "lab_default_128.png"
 
 

@@ -1,14 +1,20 @@
 """The documentation's own promises that a build cannot see: the README stays a front door,
 every page is in the site's navigation, and the command-line reference is made from the
-parser, every command and option of it. (./dev test builds the site with --strict, which
-fails on a broken link, anchor or API reference.)"""
+parser, every command and option of it, and the built site works opened from disk: every
+link in it lands on a file, not a folder. (./dev test builds the site with --strict,
+which fails on a broken link, anchor or API reference.)"""
 
 from __future__ import annotations
 
 import argparse
 import importlib.util
+import os
 import re
+import subprocess
+import sys
+from html.parser import HTMLParser
 from pathlib import Path
+from urllib.parse import unquote, urlsplit
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -86,3 +92,63 @@ def test_docstring_roles_become_markdown_code():
         "Returns a `Frame`; see `mirrorlab.render` and `mirrorlab.options`. Make one:\n\n"
         "    r = Renderer()\n"
     )
+
+
+class _PageLinks(HTMLParser):
+    """The ``href`` and ``src`` values and the element ids of one HTML page."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.links: list[str] = []
+        self.ids: set[str] = set()
+
+    def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
+        for key, value in attrs:
+            if key in ("href", "src") and value:
+                self.links.append(value)
+            elif key == "id" and value:
+                self.ids.add(value)
+
+
+def read_page(path: Path) -> _PageLinks:
+    page = _PageLinks()
+    page.feed(path.read_text(encoding="utf-8"))
+    return page
+
+
+def test_the_built_site_works_opened_from_disk(tmp_path):
+    """Built as a reader gets it, every link of every page (the generated ones too) goes to
+    a file that exists, and to an id on that page when it names one: opened from file://,
+    a link to a folder would show a folder listing. (404.html is for a web server only:
+    its links start at the server's root.)"""
+    config = (REPO / "mkdocs.yml").read_text()
+    assert re.search(r"^use_directory_urls: false$", config, flags=re.M)
+    site = tmp_path / "site"
+    env = {**os.environ, "NO_MKDOCS_2_WARNING": "1", "DISABLE_MKDOCS_2_WARNING": "true"}
+    done = subprocess.run(
+        [sys.executable, "-m", "mkdocs", "build", "--quiet", "--site-dir", str(site)],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=env,
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    pages = {path: read_page(path) for path in site.rglob("*.html") if path.name != "404.html"}
+    assert len(pages) >= 20
+    broken, checked = [], 0
+    for path, page in pages.items():
+        for link in page.links:
+            parts = urlsplit(link)
+            if parts.scheme or parts.netloc or (not parts.path and not parts.fragment):
+                continue
+            target = (path.parent / unquote(parts.path)).resolve() if parts.path else path
+            checked += 1
+            if not target.is_file():
+                broken.append(f"{path.relative_to(site)}: {link} (no such file)")
+            elif parts.fragment and target.suffix == ".html":
+                ids = pages[target].ids if target in pages else read_page(target).ids
+                if unquote(parts.fragment) not in ids:
+                    broken.append(f"{path.relative_to(site)}: {link} (no such id)")
+    assert checked > 500
+    assert not broken, "\n".join(broken[:40])

@@ -7,11 +7,15 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
+import tomllib
 from importlib.metadata import metadata, version
 from importlib.resources import files
 from pathlib import Path
 
+import pytest
+
 import mirrorlab
+from mirrorlab.data import DATA_FOLDERS, data_path
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -51,6 +55,27 @@ def test_licence_classifiers_and_typed_marker():
     assert "Typing :: Typed" in classifiers
     assert any(c.startswith("Programming Language :: Python :: 3.1") for c in classifiers)
     assert files("mirrorlab").joinpath("py.typed").is_file()
+
+
+def test_every_package_is_built_and_the_data_folders_sit_at_the_top():
+    """pyproject.toml lists the packages: every folder of mirrorlab/ with an __init__.py,
+    and the top-level scenes/, models/ and textures/ mapped into mirrorlab.data, which the
+    editable install finds where they are (the wheel's side: tests/installed)."""
+    setuptools = tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["setuptools"]
+    in_package = {
+        ".".join(init.parent.relative_to(REPO).parts)
+        for init in (REPO / "mirrorlab").rglob("__init__.py")
+    }
+    mapped = {f"mirrorlab.data.{folder}": folder for folder in DATA_FOLDERS}
+    assert setuptools["package-dir"] == mapped
+    assert sorted(setuptools["packages"]) == sorted(in_package | set(mapped))
+    for folder in DATA_FOLDERS:
+        assert (REPO / folder / "__init__.py").is_file(), folder
+        assert not (REPO / "mirrorlab" / "data" / folder).exists(), folder
+        assert data_path(folder) == REPO / folder
+    assert data_path("models", "base.obj").is_file()
+    with pytest.raises(ValueError, match="no shipped folder 'data'"):
+        data_path("data")
 
 
 def test_dask_is_an_extra_not_a_dependency():
