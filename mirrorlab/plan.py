@@ -907,7 +907,3 @@ def screen_area(reflector: Reflector, view: View) -> float:
     """At most how many pixels ``reflector`` covers in ``view`` (its footprint's
     :attr:`~mirrorlab.footprint.Footprint.pixels`)."""
     return reflector_footprint(reflector, view).pixels
-
-
-def describe_steps(plan: FramePlan) -> list[str]:
-    return plan.describe()

@@ -28,7 +28,8 @@ from mirrorlab.passes.base import (
     gl_state,
     restore_state,
 )
-from mirrorlab.passes.scene_draw import DrawPath, SceneDrawer
+from mirrorlab.passes.draw_path import DrawPath
+from mirrorlab.passes.scene_draw import SceneDrawer
 from mirrorlab.passes.sky import SkyPass
 from mirrorlab.plan import (
     TINY_PIXELS,
