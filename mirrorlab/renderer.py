@@ -17,6 +17,7 @@ from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
 
 from mirrorlab.bounds import ObjectArrays, scene_index
+from mirrorlab.draw_path import DrawPath
 from mirrorlab.gl.context import ResourceRegistry, gl_pass, gl_version, require_gl_version
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.record import CallRecorder, for_replay, known_state, replay
@@ -28,7 +29,6 @@ from mirrorlab.passes.base import (
     gl_state,
     restore_state,
 )
-from mirrorlab.passes.draw_path import DrawPath
 from mirrorlab.passes.scene_draw import SceneDrawer
 from mirrorlab.passes.sky import SkyPass
 from mirrorlab.plan import (
