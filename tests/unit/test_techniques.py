@@ -24,7 +24,7 @@ PROBE_MIRROR = Technique(
     "a test's planar technique: the reflected camera again",
     texture="viewer",
     pass_class="mirrorlab.passes.reflected:ReflectedMirror",
-    capture_camera="reflected",
+    capture_camera="mirrorlab.captures:reflected_camera",
 )
 PROBE_MAP = Technique(
     "probe-map",
@@ -35,7 +35,7 @@ PROBE_MAP = Technique(
     vertex_shader="envmap.vert",
     fragment_shader="envmap_cube.frag",
     sampler="cube_map_texture",
-    capture_camera="cube",
+    capture_camera="mirrorlab.captures:cube_camera",
     view_ray=True,
     parallax=True,
 )
