@@ -67,8 +67,8 @@ def test_a_recorded_frames_arrays_stay_as_they_were_and_its_replays_are_fresh_fr
 ):
     first = scene_for(name)
     assert [r.technique for r in first.reflectors] == [name, name]
-    eye = np.asarray(first.camera.eye)
-    moved = replace(first, camera=replace(first.camera, eye=tuple(eye + (-0.2, 0.2, -0.4))))
+    x, y, z = first.camera.eye
+    moved = replace(first, camera=replace(first.camera, eye=(x - 0.2, y + 0.2, z - 0.4)))
     renderer = SceneRenderer(registry)
     reference = SceneRenderer(registry)  # draws into a new target every frame: never replays
     target = Framebuffer(registry, *SIZE)
