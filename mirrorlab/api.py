@@ -10,14 +10,9 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from mirrorlab.draw_path import DRAW_PATHS, DrawPath
 from mirrorlab.frame import Frame
-from mirrorlab.options import (
-    DRAW_PATHS,
-    DrawPath,
-    apply_options,
-    check_size,
-    split_frame_technique,
-)
+from mirrorlab.options import apply_options, check_size, split_frame_technique
 from mirrorlab.plan import TINY_PIXELS
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import Scene

@@ -294,11 +294,6 @@ class SceneIndex:
     def sphere_radii(self) -> np.ndarray:
         return self.reflectors_part.sphere_radii
 
-    @property
-    def box_names(self) -> tuple[str, ...]:
-        """The owner of every box of :meth:`boxes`: "" for a part, else a reflector's name."""
-        return ("",) * len(self.objects_part) + tuple(r.name for r in self.reflectors)
-
     def boxes(self) -> tuple[np.ndarray, np.ndarray]:
         """Every part's box, then every reflector's: low and high ``(n + m, 3)``."""
         return self._boxes
@@ -475,13 +470,6 @@ def scene_index(scene: Scene) -> SceneIndex:
 def reflector_index(reflectors: tuple[Reflector, ...]) -> SceneIndex:
     """A :class:`SceneIndex` of ``reflectors`` alone (not kept)."""
     return SceneIndex(_CACHE.object_arrays(()), _CACHE.reflector_arrays(reflectors))
-
-
-def scene_boxes(scene: Scene) -> tuple[tuple[str, np.ndarray, np.ndarray], ...]:
-    """``(reflector name or "", min (3,), max (3,))`` of every object part and reflector."""
-    index = scene_index(scene)
-    low, high = index.boxes()
-    return tuple(zip(index.box_names, low, high, strict=True))
 
 
 def scene_sphere(scene: Scene) -> tuple[np.ndarray, float]:

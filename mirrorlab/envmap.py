@@ -43,7 +43,7 @@ EnvFunction = Callable[[np.ndarray], np.ndarray]
 """A world-space environment: unit directions ``(n, 3)`` float64 -> colours ``(n, 3)`` in
 [0, 1]."""
 
-CUBE_FACES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
+CUBE_FACE_NAMES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
 """Face names in GL order: face ``k`` is ``GL_TEXTURE_CUBE_MAP_POSITIVE_X + k``."""
 
 

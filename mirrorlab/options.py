@@ -15,7 +15,7 @@ import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
@@ -31,11 +31,6 @@ from mirrorlab.techniques import (
 
 MAX_SIZE = 8192
 """Largest render or window side accepted, in pixels."""
-
-DrawPath = Literal["auto", "packed", "per-draw"]
-DRAW_PATHS: tuple[DrawPath, ...] = ("auto", "packed", "per-draw")
-"""How a drawer draws a view's parts: ``auto`` picks ``packed`` where the context offers
-it, else ``per-draw``."""
 
 
 class OptionError(ValueError):

@@ -5,7 +5,15 @@ textures hold now, and returns the frame's ordered passes, each with its reason:
 captures first (a capture's own sub-captures before it), then the camera pass. For every
 view it also says how each reflector is drawn there (:class:`ReflectorDraw`): not at
 all (out of view, facing away), as a plain surface (bounces used up), with its map, with
-a capture, or, for a stencil mirror, as the world seen through it.
+a capture, or, for a technique that draws inline (the stencil mirror), with the plan of
+the world seen through it, drawn in place.
+
+Where a technique's cameras are comes from its registry entry
+(:attr:`mirrorlab.techniques.Technique.capture_camera`): a :data:`CaptureCamera`
+function, given the reflector, the view it is seen in and what the planner offers
+(:class:`CaptureContext`), returns the cameras (:class:`CaptureCameras`). The planner
+plans a capture pass over them, or, for an inline technique, nests the first camera's
+plan in the draw; it knows no technique by name.
 
 The plan is lossless: a pass is skipped, and a reflector left undrawn, only where that
 cannot change a pixel. Whether a reflector can show in a view is decided from its
@@ -27,9 +35,10 @@ from __future__ import annotations
 
 import functools
 from collections import OrderedDict
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import Literal, NamedTuple
+from typing import Literal, NamedTuple, Protocol
 
 import numpy as np
 
@@ -45,16 +54,7 @@ from mirrorlab.scene.model import (
     Scene,
 )
 from mirrorlab.techniques import technique
-from mirrorlab.views import (
-    View,
-    camera_view,
-    cube_face_views,
-    is_orthographic,
-    mirrored_eye,
-    ortho_capture_view,
-    reflected_capture_view,
-    stencil_view,
-)
+from mirrorlab.views import View, camera_view, is_orthographic
 
 TINY_PIXELS = 0.0
 """The default of the lossy small-reflector rule: off. Given a positive number, a
@@ -62,10 +62,15 @@ reflector whose footprint may cover fewer pixels than that is drawn plain, with 
 capture, which changes those pixels (16 saves the captures of reflectors seen from very
 far away)."""
 
-DrawMode = Literal["hidden", "back", "plain", "map", "texture", "stencil"]
+DrawMode = Literal["hidden", "back", "plain", "map", "texture", "inline"]
 """``hidden``: not drawn (out of view); ``back``: only a planar mirror's backing shows;
 ``plain``: a lit surface; ``map``: with its map; ``texture``: with its capture;
-``stencil``: the world seen through it, drawn in place."""
+``inline``: the world seen through it (its ``nested`` plan), drawn in place. The last
+three are the technique's own draw (:attr:`ReflectorDraw.own`), which its registry
+entry places before or after the view's objects."""
+OWN_MODES = ("map", "texture", "inline")
+"""The modes of :data:`DrawMode` in which a reflector is drawn by its technique's own
+draw, not as a surface like any other."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -160,10 +165,11 @@ class PlannedPass:
 @dataclass(frozen=True)
 class ReflectorDraw:
     """How ``reflector`` is drawn in one view: ``mode`` (see :data:`DrawMode`), the
-    texture ``slot`` it samples, the capture ``source`` view (a reflected capture's
-    camera, for its projective lookup), for a stencil mirror the ``nested`` plan of the
-    world seen through it, and the ``reason``; ``footprint`` where it can show in the
-    view (:mod:`mirrorlab.footprint`; None where it was not needed)."""
+    texture ``slot`` it samples, the capture ``source`` view (its technique's first
+    capture camera: a reflected capture's, for its projective lookup), for an inline
+    draw the ``nested`` plan of the world seen through it, and the ``reason``;
+    ``footprint`` where it can show in the view (:mod:`mirrorlab.footprint`; None where
+    it was not needed)."""
 
     reflector: Reflector
     mode: DrawMode
@@ -173,9 +179,79 @@ class ReflectorDraw:
     nested: ViewPlan | None = None
     footprint: Footprint | None = field(default=None, compare=False, repr=False)
 
+    @property
+    def own(self) -> bool:
+        """Whether the technique's own draw runs (its map, its capture or its nested view:
+        :data:`OWN_MODES`), which its registry entry orders
+        (:attr:`~mirrorlab.techniques.Technique.draws_after_objects`); a plain surface, a
+        backing or nothing is drawn as any surface is."""
+        return self.mode in OWN_MODES
+
 
 Rectangle = tuple[int, int, int, int]
 """``(x, y, width, height)`` in GL window pixels (from the bottom left), for glScissor."""
+
+
+class CaptureCameras(NamedTuple):
+    """Where a technique looks from, for one reflector seen in one view (what a
+    :data:`CaptureCamera` gives).
+
+    ``cameras``: the views it draws, in order (one for a planar capture or an inline
+    draw, six cube faces, ...); ``scissors``: for each, the part of its target whose
+    pixels are ever read (None: all of it); ``where``: what of the cameras the texture
+    depends on besides what the scene shows (hashable: a viewer-following camera's
+    :attr:`~mirrorlab.views.View.key`, a fixed camera's texture size), part of the
+    texture's key, so a capture is reused while it is the same (an inline draw makes no
+    texture: None); ``content``: what the capture shows (None: the scene's
+    :attr:`CaptureContext.content`)."""
+
+    cameras: tuple[View, ...]
+    scissors: tuple[Rectangle | None, ...]
+    where: Hashable
+    content: ContentKey | None = None
+
+
+class CaptureContext(Protocol):
+    """What the planner offers a technique's :data:`CaptureCamera`. A camera function
+    learns where the scene's objects are only through :meth:`reach` and
+    :meth:`depth_range`, which tell the planner that its plan depends on that (a plan
+    that does not is reused for the next pose of the objects,
+    :class:`PlanMemo`)."""
+
+    use_plan: bool
+    """False with ``--no-plan``: every pass runs and nothing is scissored."""
+    content: ContentKey
+    """What the scene shows (its capture content)."""
+
+    def texture_size(
+        self, reflector: PlanarReflector, view: View, footprint: Footprint | None
+    ) -> tuple[int, int]:
+        """The (width, height) of a planar reflector's capture texture seen in ``view``."""
+        ...
+
+    def reach(self, eye: np.ndarray) -> float:
+        """How far from ``eye`` ``(3,)`` the scene extends (world units)."""
+        ...
+
+    def depth_range(self, reflector: CurvedReflector) -> tuple[float, float]:
+        """Near and far clip distances of cameras at ``reflector``'s capture centre that
+        see the whole scene but the reflector (world units)."""
+        ...
+
+    def own_content(self, reflector: CurvedReflector) -> ContentKey:
+        """What a capture of ``reflector`` shows, its own lookup's settings left out."""
+        ...
+
+
+CaptureCamera = Callable[
+    [Reflector, View, Footprint | None, Rectangle | None, CaptureContext],
+    CaptureCameras | None,
+]
+"""A technique's capture camera (its registry entry's ``capture_camera``):
+``(reflector, view, footprint, scissor, context) -> CaptureCameras or None``, for
+``reflector`` seen in ``view`` (``footprint``: where it shows there, None when not
+worked out; ``scissor``: the part of ``view`` whose pixels matter, None: all). None
+when it has no camera from there (the reflector is drawn plain). Numpy only."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -491,23 +567,6 @@ class _Planner:
                     f"capture",
                     footprint=footprint,
                 )
-        if entry.draws_inline:
-            assert isinstance(reflector, PlanarReflector)
-            far = self.reach(view, reflector) if view.eye is not None else None
-            glass = (footprint or reflector_footprint(reflector, view)).bounds
-            inner = scissor
-            if glass is not None and self.use_plan:
-                inner = intersect(scissor, glass)
-            nested = self.plan_view(
-                stencil_view(view, reflector, far), bounce - 1, reflector.name, inner
-            )
-            return ReflectorDraw(
-                reflector,
-                "stencil",
-                "the mirrored world, drawn in place",
-                nested=nested,
-                footprint=footprint,
-            )
         if entry.texture == "static":
             return ReflectorDraw(reflector, "map", "its static map", footprint=footprint)
         if entry.texture == "baked":
@@ -516,11 +575,22 @@ class _Planner:
             return ReflectorDraw(
                 reflector, "map", "its sphere map for this view", slot=slot, footprint=footprint
             )
-        slot, source = self.capture(reflector, view, bounce, footprint)
-        if source is None:
+        found = entry.capture_function()(reflector, view, footprint, scissor, self)
+        if found is None:
             return ReflectorDraw(
                 reflector, "plain", "no capture camera from here", footprint=footprint
             )
+        source = found.cameras[0]
+        if entry.draws_inline:
+            nested = self.plan_view(source, bounce - 1, reflector.name, found.scissors[0])
+            return ReflectorDraw(
+                reflector,
+                "inline",
+                "the world seen in it, drawn in place",
+                nested=nested,
+                footprint=footprint,
+            )
+        slot = self.capture(reflector, view, bounce, found, entry.texture)
         return ReflectorDraw(
             reflector, "texture", "its capture", slot=slot, source=source, footprint=footprint
         )
@@ -571,57 +641,40 @@ class _Planner:
         )
         return slot
 
-    def reach(self, view: View, reflector: PlanarReflector) -> float:
-        """How far the world seen in ``reflector`` from ``view`` extends: reflections see
-        the whole scene, whatever the camera's far plane (the truth's definition)."""
-        eye = mirrored_eye(view, reflector)
-        if eye is None:
-            return 0.0  # orthographic: no eye to measure from (not used)
+    def reach(self, eye: np.ndarray) -> float:
+        """How far from ``eye`` ``(3,)`` the scene extends (:func:`bounds.reach`):
+        reflections see the whole scene, whatever the camera's far plane (the truth's
+        definition). The plan then depends on it."""
         self.reach_used = True
         return bounds.reach(self.scene, eye)
 
+    def depth_range(self, reflector: CurvedReflector) -> tuple[float, float]:
+        """Near and far clip distances of cameras at ``reflector``'s capture centre
+        (:func:`bounds.cube_depth_range`). The plan then depends on where the objects
+        are."""
+        self.geometry = True
+        return bounds.cube_depth_range(self.scene, reflector)
+
     def capture(
-        self, reflector: Reflector, view: View, bounce: int, footprint: Footprint | None = None
-    ) -> tuple[int, View | None]:
-        """Plan the capture ``reflector`` (seen in ``view`` with ``footprint``) needs at
-        ``bounce``; its slot and the capture's (first) camera, None when it has none."""
-        entry = technique(reflector.technique)
-        scissors: list[Rectangle | None]
-        if entry.capture_camera in ("reflected", "ortho"):
-            assert isinstance(reflector, PlanarReflector)
-            texture_size = self.texture_size(reflector, view, footprint)
-            if entry.capture_camera == "reflected":
-                camera = reflected_capture_view(
-                    view,
-                    reflector,
-                    texture_size,
-                    self.reach(view, reflector) if view.eye is not None else None,
-                )
-                if camera is None:
-                    return 0, None
-                cameras = [camera]
-                # only the glass is ever sampled: the rest of the capture need not be drawn
-                scissors = [glass_scissor(reflector, camera) if self.use_plan else None]
-                key: tuple = ("viewer", bounce, camera.key, self.content)
-            else:
-                cameras = [ortho_capture_view(reflector, texture_size)]
-                scissors = [None]
-                key = ("fixed", bounce, texture_size, self.content)
-        elif entry.capture_camera == "cube":
-            assert isinstance(reflector, CurvedReflector)
-            self.geometry = True
-            cameras = cube_face_views(reflector, bounds.cube_depth_range(self.scene, reflector))
-            scissors = [None] * len(cameras)
-            key = ("fixed", bounce, (reflector.map_size,), self.own_content(reflector))
-        else:
-            raise ValueError(
-                f"technique {entry.name!r} has a texture of kind "
-                f"{entry.texture!r} but no capture camera"
-            )
+        self,
+        reflector: Reflector,
+        view: View,
+        bounce: int,
+        found: CaptureCameras,
+        texture: str | None,
+    ) -> int:
+        """Plan the capture of ``reflector`` (seen in ``view``) at ``bounce`` from the
+        cameras ``found`` (its technique's, whose texture is of kind ``texture``); its
+        slot."""
+        key = (
+            texture,
+            bounce,
+            found.where,
+            self.content if found.content is None else found.content,
+        )
         slot, held = self.slot_for(reflector.name, key)
-        source = cameras[0]
         if held and (reflector.name, key) in self.planned:
-            return slot, source  # already captured earlier in this frame
+            return slot  # already captured earlier in this frame
         if held:
             self.add(
                 PlannedPass(
@@ -636,10 +689,10 @@ class _Planner:
                     key,
                 )
             )
-            return slot, source
+            return slot
         plans = tuple(
             self.plan_view(camera, bounce - 1, reflector.name, scissor)
-            for camera, scissor in zip(cameras, scissors, strict=True)
+            for camera, scissor in zip(found.cameras, found.scissors, strict=True)
         )
         reason = (
             "every pass runs (--no-plan)"
@@ -660,7 +713,7 @@ class _Planner:
                 plans,
             )
         )
-        return slot, source
+        return slot
 
     def texture_size(
         self, reflector: PlanarReflector, view: View, footprint: Footprint | None
@@ -907,7 +960,3 @@ def screen_area(reflector: Reflector, view: View) -> float:
     """At most how many pixels ``reflector`` covers in ``view`` (its footprint's
     :attr:`~mirrorlab.footprint.Footprint.pixels`)."""
     return reflector_footprint(reflector, view).pixels
-
-
-def describe_steps(plan: FramePlan) -> list[str]:
-    return plan.describe()

@@ -16,11 +16,14 @@ from collections.abc import Iterator
 from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
 
+import numpy as np
+
 from mirrorlab.bounds import ObjectArrays, scene_index
+from mirrorlab.draw_path import DrawPath
 from mirrorlab.gl.context import ResourceRegistry, gl_pass, gl_version, require_gl_version
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.record import CallRecorder, for_replay, known_state, replay
-from mirrorlab.gl.resources import RenderTarget
+from mirrorlab.gl.resources import RenderTarget, Texture2D, TextureCube
 from mirrorlab.passes.base import (
     ReflectorPass,
     SharedResources,
@@ -28,13 +31,14 @@ from mirrorlab.passes.base import (
     gl_state,
     restore_state,
 )
-from mirrorlab.passes.scene_draw import DrawPath, SceneDrawer
+from mirrorlab.passes.scene_draw import SceneDrawer
 from mirrorlab.passes.sky import SkyPass
 from mirrorlab.plan import (
     TINY_PIXELS,
     FramePlan,
     PlanMemo,
     Rectangle,
+    ReflectorDraw,
     TextureState,
     ViewPlan,
     plan_frame,
@@ -97,11 +101,27 @@ class RecordedFrame:
     calls: list
     stats: FrameStats
 
+    def arrays(self) -> list[np.ndarray]:
+        """Every numpy array its recorded calls hold (as arguments, however nested): what
+        the replay rule (:class:`~mirrorlab.passes.base.ReflectorPass`) says must not
+        change while the frame is kept."""
+        found: list[np.ndarray] = []
+        pending: list[object] = list(self.calls)
+        while pending:
+            item = pending.pop()
+            if isinstance(item, np.ndarray):
+                found.append(item)
+            elif isinstance(item, (tuple, list)):
+                pending.extend(item)
+            elif isinstance(item, dict):
+                pending.extend(item.values())
+        return found
+
 
 def _drawn_views(plan: FramePlan) -> Iterator[tuple[View, Rectangle | None]]:
     """Each view (with its scissor) the frame of ``plan`` draws the scene's objects in:
-    the captures' cameras, the camera's view, and the worlds seen in stencil mirrors in
-    any of them."""
+    the captures' cameras, the camera's view, and the views nested in any of them (the
+    worlds seen in stencil mirrors)."""
     pending = [
         view for step in plan.passes if step.runs and step.name != "camera" for view in step.views
     ]
@@ -109,11 +129,7 @@ def _drawn_views(plan: FramePlan) -> Iterator[tuple[View, Rectangle | None]]:
     while pending:
         view_plan = pending.pop()
         yield view_plan.view, view_plan.scissor
-        pending += [
-            draw.nested
-            for draw in view_plan.shown
-            if draw.mode == "stencil" and draw.nested is not None
-        ]
+        pending += [draw.nested for draw in view_plan.shown if draw.nested is not None]
 
 
 def _pass_key(reflector: Reflector, background: Background) -> tuple:
@@ -430,11 +446,12 @@ class SceneRenderer:
         # The reflectors before the objects: an object's pixels behind a mirror then fail
         # the depth test before they are shaded, not after (the camera pass of the lab
         # scene took a sixth less). Opaque surfaces under GL_LESS give the same pixels in
-        # any order, but for a depth tie between a reflector and an object. A stencil
-        # mirror comes last: it marks only what the objects leave showing.
+        # any order, but for a depth tie between a reflector and an object. A technique
+        # whose entry says so draws after them (a stencil mirror marks only what the
+        # objects leave showing).
         later = []
         for draw in plan.shown:
-            if draw.mode == "stencil":
+            if draw.own and technique(draw.reflector.technique).draws_after_objects:
                 later.append(draw)
                 continue
             draws += self._pass(draw.reflector).draw(draw, view, self, target, stencil_level)
@@ -468,6 +485,19 @@ class SceneRenderer:
         self.state.clear()
         self.memo.clear()
         self._home = None
+
+    @property
+    def recorded_frame(self) -> RecordedFrame | None:
+        """The frame the next one may be drawn again from (None: none is kept)."""
+        return self._recorded
+
+    def shown_texture(self, draw: ReflectorDraw) -> Texture2D | TextureCube | None:
+        """The texture the last frame's ``draw`` sampled (its pass's
+        :meth:`~mirrorlab.passes.base.ReflectorPass.shown_texture`), for a viewer to look
+        at; None where it sampled none. Looking changes nothing: the frame is still
+        replayed."""
+        held = self._passes.get(draw.reflector.name)
+        return None if held is None else held[1].shown_texture(draw)
 
     def pass_for(self, name: str) -> ReflectorPass:
         """The pass of the current scene's reflector ``name`` (for checks and the demo).

@@ -8,9 +8,24 @@ the scene, so a command line can list the names cheaply; the renderer imports a
 technique's pass module only when a scene uses it.
 
 A new technique is one pass module in :mod:`mirrorlab.passes` with a class that follows
-:class:`mirrorlab.passes.base.ReflectorPass` (update its texture, draw, release), its
-shaders, a numpy reference (:mod:`mirrorlab.envmap`, :mod:`mirrorlab.views`) and one
-:func:`register` call (the shipped ones are registered below).
+:class:`mirrorlab.passes.base.ReflectorPass` (update its texture, draw, say which texture
+it shows, release), its shaders, a numpy reference (:mod:`mirrorlab.envmap`,
+:mod:`mirrorlab.views`), its capture camera when it shows the scene (a
+:data:`mirrorlab.plan.CaptureCamera` function: the shipped ones are in
+:mod:`mirrorlab.captures`) and one :func:`register` call (the shipped ones are registered
+below). Its entry says all the planner and the renderer need: its cameras come from its
+``capture_camera``, whether its view nests in the draw (an ``inline`` texture) or is
+captured into a texture from its ``texture`` kind, and whether it draws before or after
+the view's objects from ``draws_after_objects``. Neither the planner nor the renderer
+names a technique.
+
+The replay rule: a frame planned as the last one was is drawn again from the last
+frame's recorded GL calls (:class:`mirrorlab.renderer.RecordedFrame`), which hold the
+arguments as they were given. So a pass must not change an array it handed GL in a
+recorded frame afterwards, while that frame may be replayed: hand GL fresh or read-only
+arrays (a buffer the GL fills, or the renderer fills before a replay, is the exception:
+the replay then draws what it holds). ``tests/gl/test_pass_contract.py`` checks this
+for every registered technique.
 """
 
 from __future__ import annotations
@@ -18,7 +33,10 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
+
+if TYPE_CHECKING:
+    from mirrorlab.plan import CaptureCamera
 
 TechniqueKind = Literal["planar", "curved", "frame"]
 """``planar``: a flat mirror's technique; ``curved``: an environment-mapped mesh's;
@@ -37,9 +55,8 @@ TextureKind = Literal["static", "baked", "fixed", "viewer", "inline"]
 - ``inline``: no texture: the reflection is drawn straight into the view (stencil).
 """
 
-CaptureCamera = Literal["ortho", "reflected", "cube"]
-"""Where a capturing technique's camera is (:mod:`mirrorlab.views`): the mirror's own
-orthographic camera, the viewer's mirror image, or six faces from the reflector's centre."""
+CAMERA_TEXTURES = ("fixed", "viewer", "inline")
+"""The texture kinds that show the scene, whose techniques need a ``capture_camera``."""
 
 
 @dataclass(frozen=True)
@@ -52,8 +69,13 @@ class Technique:
     (frame techniques: ``function(scene, size, progress) -> (h, w, 3) uint8``);
     ``vertex_shader``, ``fragment_shader`` and ``sampler`` (the uniform its map is bound
     to) of its program; ``constants``: int uniforms its pass sets before each draw (a
-    program may be shared by several techniques); ``capture_camera`` (see
-    :data:`CaptureCamera`) for a capturing technique; ``source`` what a reflector's
+    program may be shared by several techniques); ``capture_camera``, for a technique
+    whose texture shows the scene (:data:`CAMERA_TEXTURES`), as ``module:function``: its
+    :data:`mirrorlab.plan.CaptureCamera` (the planner captures its cameras into the
+    texture, or, ``inline``, nests the first one's plan in the draw);
+    ``draws_after_objects``: its own draw (its map, capture or nested view) comes after
+    the view's objects, not before them as by default (the stencil mirror marks only the
+    glass the objects leave showing); ``source`` what a reflector's
     ``source`` key names for it (a ``picture`` used as its map, a folder of six cube
     ``faces``; None: it takes none); ``view_ray``: its
     lookup follows the world-space view ray (``eye_world``, ``view_direction``);
@@ -72,7 +94,8 @@ class Technique:
     fragment_shader: str = ""
     sampler: str = ""
     constants: tuple[tuple[str, int], ...] = ()
-    capture_camera: CaptureCamera | None = None
+    capture_camera: str = ""
+    draws_after_objects: bool = False
     source: Literal["picture", "faces"] | None = None
     view_ray: bool = False
     map_size_uniform: bool = False
@@ -81,13 +104,9 @@ class Technique:
     gl_version: tuple[int, int] = (3, 3)
 
     @property
-    def captures_scene(self) -> bool:
-        """True when its texture shows the scene (and so other reflectors, one bounce less)."""
-        return self.texture in ("fixed", "viewer", "inline")
-
-    @property
     def draws_inline(self) -> bool:
-        """True when its reflection is drawn straight into the view (no texture)."""
+        """True when its reflection is drawn straight into the view (no texture): its
+        camera's view plan nests in its draw."""
         return self.texture == "inline"
 
     def load(self) -> type:
@@ -97,6 +116,10 @@ class Technique:
     def frame_function(self) -> Callable[..., Any]:
         """A frame technique's drawing function (imports its module)."""
         return _load(self.draw_frame, f"technique {self.name!r}'s draw_frame")
+
+    def capture_function(self) -> CaptureCamera:
+        """Its capture camera (imports its module)."""
+        return _load(self.capture_camera, f"technique {self.name!r}'s capture_camera")
 
 
 def _load(spec: str, what: str) -> Any:
@@ -122,6 +145,10 @@ def register(entry: Technique) -> Technique:
             raise ValueError(f"frame technique {entry.name!r} needs a draw_frame")
     elif entry.texture is None or not entry.pass_class:
         raise ValueError(f"technique {entry.name!r} needs a texture kind and a pass_class")
+    elif entry.texture in CAMERA_TEXTURES and not entry.capture_camera:
+        raise ValueError(
+            f"technique {entry.name!r} shows the scene ({entry.texture}): it needs a capture_camera"
+        )
     _REGISTRY[entry.name] = entry
     return entry
 
@@ -175,7 +202,7 @@ for _entry in (
         "the lab: an orthographic capture from the mirror, copied into a texture",
         texture="fixed",
         pass_class="mirrorlab.passes.ortho:OrthoMirror",
-        capture_camera="ortho",
+        capture_camera="mirrorlab.captures:ortho_camera",
         own_camera=True,
     ),
     Technique(
@@ -184,7 +211,7 @@ for _entry in (
         "the viewer's mirror image renders the scene, sampled projectively",
         texture="viewer",
         pass_class="mirrorlab.passes.reflected:ReflectedMirror",
-        capture_camera="reflected",
+        capture_camera="mirrorlab.captures:reflected_camera",
     ),
     Technique(
         "stencil",
@@ -192,6 +219,8 @@ for _entry in (
         "the mirrored scene drawn straight into the frame through a stencil mask",
         texture="inline",
         pass_class="mirrorlab.passes.stencil:StencilMirror",
+        capture_camera="mirrorlab.captures:stencil_camera",
+        draws_after_objects=True,
     ),
     Technique(
         "sphere",
@@ -243,7 +272,7 @@ for _entry in (
         vertex_shader="envmap.vert",
         fragment_shader="envmap_cube.frag",
         sampler="cube_map_texture",
-        capture_camera="cube",
+        capture_camera="mirrorlab.captures:cube_camera",
         view_ray=True,
         parallax=True,
     ),

@@ -16,13 +16,14 @@ from functools import cached_property
 import numpy as np
 
 from mirrorlab import culling, math3d
+from mirrorlab.envmap import CUBE_FACE_NAMES
 from mirrorlab.scene.model import Camera, CurvedReflector, OrthoCapture, PlanarReflector
 
 _FLIP_X = np.diag([-1.0, 1.0, 1.0, 1.0])
 _BIAS = np.array([[0.5, 0, 0, 0.5], [0, 0.5, 0, 0.5], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0]])
 """Clip space [-1, 1] to texture space [0, 1]."""
 
-CUBE_FACES = (
+CUBE_FACE_AXES = (
     # (look direction, up) per face in GL order +X, -X, +Y, -Y, +Z, -Z: with these, the
     # target's x and y run along the face's s and t as the cube-map spec's table has them
     # (+X: s along -z, t along -y; ...), so a copy of the target is the face as it is.
@@ -33,7 +34,6 @@ CUBE_FACES = (
     ((0.0, 0.0, 1.0), (0.0, -1.0, 0.0)),
     ((0.0, 0.0, -1.0), (0.0, -1.0, 0.0)),
 )
-CUBE_FACE_NAMES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
 CULL_TESTS_KEPT = 8
 """Scissors whose culling test (:meth:`View.cull_test`) a view keeps."""
 
@@ -397,7 +397,7 @@ def cube_face_views(reflector: CurvedReflector, depth_range: tuple[float, float]
     projection = math3d.perspective(90.0, 1.0, near, far)
     size = (reflector.map_size, reflector.map_size)
     views = []
-    for name, (direction, up) in zip(CUBE_FACE_NAMES, CUBE_FACES, strict=True):
+    for name, (direction, up) in zip(CUBE_FACE_NAMES, CUBE_FACE_AXES, strict=True):
         view = math3d.look_at(center, center + np.asarray(direction), up)
         views.append(
             View(

@@ -364,7 +364,8 @@ class DemoApp:
                 (d for d in stats.plan.top.draws if d.reflector.name == reflector.name), None
             )
             label = f"{reflector.name} ({reflector.technique})"
-            if draw is None or draw.mode not in ("texture", "map"):
+            texture = None if draw is None else self.renderer.shown_texture(draw)
+            if texture is None:
                 inline = technique(reflector.technique).draws_inline
                 why = (
                     "drawn straight into the frame"
@@ -372,13 +373,6 @@ class DemoApp:
                     else (draw.reason if draw is not None else "not drawn")
                 )
                 label += f": no texture ({why})"
-            else:
-                held = self.renderer.pass_for(reflector.name)
-                texture = (
-                    held.captures.texture(draw.slot)
-                    if hasattr(held, "captures")
-                    else held.map_for(draw)  # type: ignore[attr-defined]
-                )
         width, height = size
         if isinstance(texture, TextureCube):
             face = min((width - 2 * margin) / 6 - 2, height / 4)

@@ -27,6 +27,7 @@ from mirrorlab.scene.mesh import MeshData, TextureSource, load_mesh, texture_pic
 
 if TYPE_CHECKING:
     from mirrorlab.gl.resources import RenderTarget
+    from mirrorlab.passes.scene_draw import SceneDrawer
     from mirrorlab.plan import PlannedPass, Rectangle, ReflectorDraw, ViewPlan
     from mirrorlab.scene.model import Light, Reflector, Scene
     from mirrorlab.views import View
@@ -267,9 +268,11 @@ def restore_state(state: dict[str, object]) -> None:
 
 class ViewDrawer(Protocol):
     """What a pass may ask of the renderer: draw a planned view into a target, at a stencil
-    level, and the scene being drawn."""
+    level; the scene being drawn; the GL objects passes share; and the scene drawer, which
+    draws a reflector as a plain lit surface (:meth:`SceneDrawer.draw_plain`)."""
 
     shared: SharedResources
+    drawer: SceneDrawer
 
     @property
     def scene(self) -> Scene: ...
@@ -286,7 +289,17 @@ class ViewDrawer(Protocol):
 class ReflectorPass(Protocol):
     """A reflector's technique: made for one reflector (its geometry may move between
     frames, so each call gets the current one through ``step`` or ``draw``), it keeps
-    the reflector's textures up to date and draws the reflector into a view."""
+    the reflector's textures up to date and draws the reflector into a view. It is made
+    as ``cls(shared, reflector, background)`` from its registry entry's ``pass_class``;
+    where its cameras are and when it draws come from that entry too
+    (:mod:`mirrorlab.techniques`), not from the pass.
+
+    The replay rule: the GL calls of a frame may be recorded and made again, with the
+    arguments they were given, for the frames after it that are planned the same way
+    (:class:`mirrorlab.renderer.RecordedFrame`). So an array a pass hands GL must not
+    change afterwards while that frame is kept: hand GL fresh or read-only arrays. A
+    replayed frame is then the frame the pass would draw anew, pixel for pixel.
+    """
 
     def update(
         self,
@@ -310,6 +323,12 @@ class ReflectorPass(Protocol):
     ) -> int:
         """Draw the reflector into the bound ``target`` as ``draw`` says; returns the number
         of draw calls."""
+        ...
+
+    def shown_texture(self, draw: ReflectorDraw) -> Texture2D | TextureCube | None:
+        """The texture ``draw`` (one of this pass's draws in the last frame) samples: its
+        capture or its map, for a viewer to look at; None where it samples none (a plain
+        surface, its backing, an inline draw)."""
         ...
 
     def release(self) -> None:

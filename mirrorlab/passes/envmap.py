@@ -82,6 +82,10 @@ class CurvedPass:
     def map_for(self, draw: ReflectorDraw) -> Texture2D | TextureCube:  # pragma: no cover
         raise NotImplementedError
 
+    def shown_texture(self, draw: ReflectorDraw) -> Texture2D | TextureCube | None:
+        """The map a ``map`` or ``texture`` draw samples (None for a plain one)."""
+        return self.map_for(draw) if draw.own else None
+
     def draw(
         self,
         draw: ReflectorDraw,
@@ -93,9 +97,7 @@ class CurvedPass:
         reflector = draw.reflector
         assert isinstance(reflector, CurvedReflector)
         if draw.mode == "plain":
-            return renderer.drawer.draw_plain(  # type: ignore[attr-defined]
-                renderer.scene, reflector, view
-            )
+            return renderer.drawer.draw_plain(renderer.scene, reflector, view)
         return self.draw_mapped(reflector, view, self.map_for(draw), draw)
 
     def lookup_uniforms(

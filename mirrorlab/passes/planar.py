@@ -130,11 +130,15 @@ class PlanarPass:
         if draw.mode == "back":
             return self.draw_backing(view)
         if draw.mode == "plain":
-            drawer = renderer.drawer  # type: ignore[attr-defined]
-            return drawer.draw_plain(
+            return renderer.drawer.draw_plain(
                 renderer.scene, draw.reflector, view, self.quad, mirror_model(self.reflector)
             ) + self.draw_backing(view)
         return self.draw_own(draw, view, renderer, target, stencil_level)
+
+    def shown_texture(self, draw: ReflectorDraw) -> Texture2D | None:
+        """None: a planar pass samples no texture but its capture's
+        (:class:`CapturingMirror`)."""
+        return None
 
     def draw_own(
         self,
@@ -173,6 +177,10 @@ class CapturingMirror(PlanarPass):
     ) -> int:
         (plan,) = step.views
         return self.captures.capture(step.slot, plan, renderer, frame_target)
+
+    def shown_texture(self, draw: ReflectorDraw) -> Texture2D | None:
+        """The capture a ``texture`` draw samples (None for any other draw)."""
+        return self.captures.texture(draw.slot) if draw.mode == "texture" else None
 
 
 class CaptureTextures:

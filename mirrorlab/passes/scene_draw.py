@@ -42,10 +42,10 @@ import numpy as np
 
 from mirrorlab import culling, math3d
 from mirrorlab.bounds import ObjectArrays, SceneIndex, scene_index
+from mirrorlab.draw_path import DRAW_PATHS, DrawPath
 from mirrorlab.gl.context import gl_version, has_multi_draw
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Buffer, Program
-from mirrorlab.options import DRAW_PATHS, DrawPath
 from mirrorlab.passes.base import SharedResources, light_uniforms, set_view_uniforms
 from mirrorlab.plan import Rectangle
 from mirrorlab.scene.mesh import TextureSource

@@ -15,8 +15,10 @@ from mirrorlab.views import View
 
 
 class StencilMirror(PlanarPass):
-    """The ``stencil`` technique, drawn after everything else in its view (its target
-    needs a stencil buffer; mirrorlab's have 8 bits):
+    """The ``stencil`` technique, drawn after the objects of its view (its registry entry's
+    ``draws_after_objects``), its world's plan nested in the draw (its capture camera,
+    :func:`mirrorlab.captures.stencil_camera`); its target needs a stencil buffer
+    (mirrorlab's have 8 bits):
 
     1. where the stencil holds this view's level k, the glass's visible front raises it
        to k + 1 (no colour, no depth);

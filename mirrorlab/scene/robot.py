@@ -24,8 +24,6 @@ from mirrorlab.scene.model import MeshObject, RobotObject, Scene, SceneObject
 JOINT_NAMES = ("base", "lower_arm", "upper_arm")
 """Joint nodes in the order of an ``angles`` triple: base about y, the arms about their z."""
 
-DEFAULT_ANGLES = (-35.0, 30.0, -75.0)
-
 HAND_COLOR = (0.92, 0.08, 0.08)
 LOWER_ARM_COLOR = (0.95, 0.62, 0.12)
 UPPER_ARM_COLOR = (0.15, 0.42, 0.95)

@@ -219,7 +219,7 @@ def test_a_view_draws_its_reflectors_before_the_objects_and_stencil_mirrors_afte
     assert camera.count("objects") == 1, events
     before, after = camera[: camera.index("objects")], camera[camera.index("objects") + 1 :]
     assert before or after, events  # the view shows a reflector
-    assert "stencil" not in before and set(after) <= {"stencil"}, events
+    assert "inline" not in before and set(after) <= {"inline"}, events
     assert bool(after) == (method == "stencil"), events
 
 

@@ -663,7 +663,7 @@ def test_bake_cube_faces_puts_each_axis_on_its_face():
     faces = envmap.bake_cube_faces(axis_env, 8)
     assert faces.shape == (6, 8, 8, 3) and faces.dtype == np.uint8
     for k in range(6):
-        assert np.all(faces[k] == to_uint8(AXIS_COLOURS[k])), envmap.CUBE_FACES[k]
+        assert np.all(faces[k] == to_uint8(AXIS_COLOURS[k])), envmap.CUBE_FACE_NAMES[k]
 
 
 def test_bake_cube_faces_row_order_top_is_t_equal_one():

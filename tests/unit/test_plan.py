@@ -433,9 +433,9 @@ def test_stencil_mirrors_nest_as_deep_as_the_bounces_go():
     assert captures(plan) == []
     draw = draw_of(plan.top, "west")
     depth = 0
-    while draw is not None and draw.mode == "stencil":
+    while draw is not None and draw.mode == "inline":
         depth += 1
-        others = [d for d in draw.nested.draws if d.mode == "stencil"]
+        others = [d for d in draw.nested.draws if d.mode == "inline"]
         draw = others[0] if others else None
     assert depth == scene.max_bounces
 

@@ -25,7 +25,7 @@ PROBE_MIRROR = Technique(
     "a test's planar technique: the reflected camera again",
     texture="viewer",
     pass_class="mirrorlab.passes.reflected:ReflectedMirror",
-    capture_camera="reflected",
+    capture_camera="mirrorlab.captures:reflected_camera",
 )
 PROBE_MAP = Technique(
     "probe-map",
@@ -36,7 +36,7 @@ PROBE_MAP = Technique(
     vertex_shader="envmap.vert",
     fragment_shader="envmap_cube.frag",
     sampler="cube_map_texture",
-    capture_camera="cube",
+    capture_camera="mirrorlab.captures:cube_camera",
     view_ray=True,
     parallax=True,
 )
@@ -147,6 +147,39 @@ def test_a_technique_registered_here_is_planned(capsys):
         assert "capture sphere (probe-map" in capsys.readouterr().out
 
 
+def world_from_above(reflector, view, footprint, scissor, context):
+    """A test's inline capture camera: the world seen from above, whatever the viewer."""
+    from mirrorlab.plan import CaptureCameras
+    from mirrorlab.scene.model import Camera
+    from mirrorlab.views import camera_view
+
+    above = Camera(eye=(0.0, 20.0, 0.0), target=(0.0, 0.0, 0.0), up=(0.0, 0.0, -1.0))
+    return CaptureCameras((camera_view(above, view.size, "from above"),), ((1, 2, 3, 4),), None)
+
+
+PROBE_INLINE = Technique(
+    "probe-inline",
+    "planar",
+    "a test's inline technique: the world from above, drawn in place",
+    texture="inline",
+    pass_class="mirrorlab.passes.stencil:StencilMirror",
+    capture_camera=f"{__name__}:world_from_above",
+    draws_after_objects=True,
+)
+
+
+def test_an_inline_technique_nests_the_view_its_capture_camera_gives():
+    with registered(PROBE_INLINE):
+        scene = loads(MIRROR_SCENE.replace('"probe-mirror"', '"probe-inline"'))
+        plan = plan_frame(scene, (64, 64), TextureState())
+        assert [p.name for p in plan.passes] == ["camera"]
+        (mirror,) = plan.top.draws
+        assert mirror.mode == "inline" and mirror.own and mirror.nested is not None
+        assert mirror.nested.view.label == "from above"
+        assert mirror.nested.scissor == (1, 2, 3, 4)
+        assert mirror.nested.excluded == "mirror"
+
+
 def test_a_frame_technique_is_a_method_like_the_ray_tracer():
     with registered(PROBE_FRAME):
         entry, rest = split_frame_technique({"method": "probe-frame", "camera": (1, 2, 3)})
@@ -194,16 +227,19 @@ def test_the_lists_hold_under_python_O():
     assert out == [str(len(technique_names())), "reflected"]
 
 
-def test_passes_do_not_dispatch_on_technique_names():
-    """The passes read their technique's registry flags; no pass module compares a
-    technique's name (an entry like another, with another name, must draw alike)."""
+def test_passes_planner_and_renderer_do_not_dispatch_on_technique_names():
+    """The passes read their technique's registry flags, the planner its capture camera
+    and texture kind, the renderer its draw order; none of them compares a technique's
+    name (an entry like another, with another name, must draw alike)."""
     import ast
     import pathlib
 
     import mirrorlab.passes
 
     names = set(technique_names())
-    for path in pathlib.Path(mirrorlab.passes.__file__).parent.glob("*.py"):
+    package = pathlib.Path(mirrorlab.passes.__file__).parent.parent
+    paths = [*(package / "passes").glob("*.py"), package / "plan.py", package / "renderer.py"]
+    for path in paths:
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.Compare):
                 constants = [c.value for c in ast.walk(node) if isinstance(c, ast.Constant)]

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from mirrorlab import math3d
-from mirrorlab.envmap import cube_map
+from mirrorlab.envmap import CUBE_FACE_NAMES, cube_map
 from mirrorlab.labs import LabSpec, task_name
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.judging import (
@@ -36,7 +36,7 @@ from mirrorlab.labs.trusted.judging import (
 from mirrorlab.labs.trusted.kit import CubeMapLab
 from mirrorlab.labs.trusted.probe import INPUTS, slip, slip_per_face
 from mirrorlab.labs.trusted.variants import cube_center
-from mirrorlab.views import CUBE_FACE_NAMES, CUBE_FACES
+from mirrorlab.views import CUBE_FACE_AXES
 
 GLSL_FUNCTIONS = ("cube_face", "cube_face_st")
 CUBE_INPUTS = INPUTS["cube_face_st"][0].shape[0]
@@ -178,7 +178,7 @@ def _near_far(projection: np.ndarray) -> tuple[float, float]:
 
 
 def _expected(face: int, center: tuple[float, float, float]) -> np.ndarray:
-    forward, up = CUBE_FACES[face]
+    forward, up = CUBE_FACE_AXES[face]
     eye = np.asarray(center, dtype=np.float64)
     return math3d.look_at(tuple(eye), tuple(eye + np.asarray(forward)), up)
 
@@ -274,15 +274,15 @@ def judge_cameras(
                 f"centre ({fmt(center)})"
             )
         forward, up = -rotation[2], rotation[1]
-        want_forward = np.asarray(CUBE_FACES[i][0], dtype=float)
+        want_forward = np.asarray(CUBE_FACE_AXES[i][0], dtype=float)
         if np.dot(forward, want_forward) < 0.999:
-            match = [j for j, (d, _) in enumerate(CUBE_FACES) if np.dot(forward, d) > 0.999]
+            match = [j for j, (d, _) in enumerate(CUBE_FACE_AXES) if np.dot(forward, d) > 0.999]
             seen = CUBE_FACE_NAMES[match[0]] if match else "an odd direction"
             return False, (
                 f"faces in the wrong order: capture {i} looks towards {seen}, but "
                 f"{FACE_TARGETS[i]} is the {CUBE_FACE_NAMES[i]} face"
             )
-        want_up = np.asarray(CUBE_FACES[i][1], dtype=float)
+        want_up = np.asarray(CUBE_FACE_AXES[i][1], dtype=float)
         if np.dot(up, want_up) < 0.999:
             return False, (
                 f"the {CUBE_FACE_NAMES[i]} face's camera has up ({fmt(up)}); cube-map "
