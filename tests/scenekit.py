@@ -29,7 +29,7 @@ BOX_MESH = data_path("models") / "hand.obj"
 PANEL_MESH = data_path("models") / "panel.obj"
 
 
-def _vec3(values: Iterable[float]) -> Vec3:
+def vec3(values: Iterable[float]) -> Vec3:
     """Three floats from any three numbers."""
     x, y, z = (float(v) for v in values)
     return (x, y, z)
@@ -65,7 +65,7 @@ def transformed(scene: Scene, scale: float = 1.0, offset=(0.0, 0.0, 0.0)) -> Sce
                 transform=replace(
                     transform,
                     position=point(transform.position),
-                    scale=_vec3(float(s) * scale for s in transform.scale),
+                    scale=vec3(float(s) * scale for s in transform.scale),
                 ),
             )
         )
@@ -106,7 +106,7 @@ def transformed(scene: Scene, scale: float = 1.0, offset=(0.0, 0.0, 0.0)) -> Sce
                 transform=replace(
                     transform,
                     position=point(transform.position),
-                    scale=_vec3(float(s) * scale for s in transform.scale),
+                    scale=vec3(float(s) * scale for s in transform.scale),
                 ),
             )
         )
@@ -155,7 +155,7 @@ def ball(name: str, center, radius: float, technique: str, **fields) -> CurvedRe
         name=name,
         mesh=SPHERE_MESH,
         technique=technique,
-        transform=Transform(position=_vec3(center), scale=(radius, radius, radius)),
+        transform=Transform(position=vec3(center), scale=(radius, radius, radius)),
         **fields,
     )
 
@@ -166,15 +166,15 @@ def block(name: str, center, size: float, color) -> MeshObject:
         name=name,
         mesh=BOX_MESH,
         color=color,
-        transform=Transform(position=_vec3(center), scale=(size, size, size)),
+        transform=Transform(position=vec3(center), scale=(size, size, size)),
     )
 
 
 def looking(eye, target, up=(0.0, 1.0, 0.0), **fields) -> Camera:
     return Camera(
-        eye=_vec3(eye),
-        target=_vec3(target),
-        up=_vec3(up),
+        eye=vec3(eye),
+        target=vec3(target),
+        up=vec3(up),
         **fields,
     )
 
