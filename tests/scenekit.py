@@ -197,3 +197,10 @@ def scene_robot(scene: Scene) -> RobotObject:
     """``scene``'s robot, checked to be there."""
     assert scene.robot is not None, f"scene {scene.name!r} has no robot"
     return scene.robot
+
+
+def mesh_object(scene: Scene, name: str) -> MeshObject:
+    """``scene``'s object ``name``, checked to be a mesh (not the robot)."""
+    item = scene.object(name)
+    assert isinstance(item, MeshObject), f"{name!r} is not a mesh object"
+    return item
