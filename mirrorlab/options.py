@@ -75,8 +75,8 @@ def parse_size(option: str, text: str) -> tuple[int, int]:
 
 
 def check_size(size: Sequence[float] | str, option: str = "size") -> tuple[int, int]:
-    """A (width, height) pair of whole numbers (ints or whole floats) from 1 to :data:`MAX_SIZE` (or its
-    ``'WxH'`` text); OptionError naming ``option`` otherwise."""
+    """A (width, height) pair of whole numbers (ints or whole floats) from 1 to
+    :data:`MAX_SIZE` (or its ``'WxH'`` text); OptionError naming ``option`` otherwise."""
     if isinstance(size, str):
         return parse_size(option, size)
     try:
