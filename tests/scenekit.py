@@ -1,5 +1,6 @@
-"""Scenes made for tests from other scenes: the same scene moved or scaled as a whole, and
-small builders for the kinds of scene the plan and the truth are checked on."""
+"""Scenes made for tests from other scenes: the same scene moved or scaled as a whole,
+small builders for the kinds of scene the plan and the truth are checked on, and look-ups
+that check a scene's reflector, object or robot is there and of the kind a test needs."""
 
 from __future__ import annotations
 
