@@ -63,8 +63,8 @@ from mirrorlab.gl.resources import Framebuffer
 from mirrorlab.renderer import SceneRenderer
 from mirrorlab.scene.backgrounds import load_picture
 from mirrorlab.scene.loader import load_scene
-from mirrorlab.scene.mesh import load_mesh
-from mirrorlab.scene.model import Camera, Scene
+from mirrorlab.scene.mesh import TextureSource, load_mesh
+from mirrorlab.scene.model import Camera, PlanarReflector, Scene
 from mirrorlab.scene.robot import scene_parts
 
 VERTEX_SHADER = """#version 330
@@ -209,7 +209,9 @@ class MinimalRenderer:
 
     def __init__(self, scene: Scene, width: int, height: int) -> None:
         self.scene = scene
-        self.mirror = scene.reflector("mirror")
+        mirror = scene.reflector("mirror")
+        assert isinstance(mirror, PlanarReflector), "the minimal renderer draws a flat mirror"
+        self.mirror = mirror
         self.width, self.height = width, height
         self.draw_calls = 0  # glDrawElements calls in the last frame
         self.triangles = 0  # triangles submitted in the last frame
@@ -238,7 +240,7 @@ class MinimalRenderer:
             raise RuntimeError("minimal framebuffer is incomplete")
 
         self.meshes: dict[Path, tuple[int, int]] = {}  # mesh file -> (vao, index count)
-        self.textures: dict[Path, int] = {}
+        self.textures: dict[TextureSource, int] = {}
         self.buffers: list[int] = []
         for part in scene_parts(scene):
             if part.mesh not in self.meshes:
@@ -247,6 +249,7 @@ class MinimalRenderer:
                 self.meshes[part.mesh] = (vao, int(data.indices.size))
                 self.buffers += buffers
             if part.texture and part.texture not in self.textures:
+                assert isinstance(part.texture, Path), "the minimal renderer reads picture files"
                 pixels = load_picture(part.texture)
                 self.textures[part.texture] = make_texture(
                     pixels.shape[1], pixels.shape[0], np.ascontiguousarray(pixels[::-1])
@@ -366,7 +369,7 @@ class Variant:
 
     key: str
     label: str
-    draw: Callable[[], None]
+    draw: Callable[[], object]  # what it returns is not used
     read: Callable[[], np.ndarray]
     last_frame: Callable[[], tuple[int, int]]  # checks the last frame: (draw calls, triangles)
     draw_calls: int = 0

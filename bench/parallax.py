@@ -30,9 +30,10 @@ from mirrorlab.gl.opengl import GL
 from mirrorlab.options import apply_options
 from mirrorlab.raytrace import trace_scene
 from mirrorlab.scene.loader import load_scene
+from mirrorlab.scene.model import Scene
 
 
-def variants(scene, map_size: int) -> dict[str, object]:
+def variants(scene: Scene, map_size: int) -> dict[str, Scene]:
     """The scene configured with each correction, by label."""
     corrections = [("cube-live", "none")]
     corrections += [(f"cube-live {label}", text) for label, text in proxies_for(scene)]

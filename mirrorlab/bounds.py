@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from mirrorlab import culling, math3d
 from mirrorlab.math3d import read_only
@@ -539,7 +540,7 @@ def _fibonacci_directions(count: int) -> np.ndarray:
     return directions
 
 
-def encloses(scene: Scene, point: np.ndarray, leave_out: str = "") -> bool:
+def encloses(scene: Scene, point: ArrayLike, leave_out: str = "") -> bool:
     """Whether the boxes of the scene's object parts and reflectors (but ``leave_out``)
     close ``point`` in: a ray from it in each of :data:`ENCLOSURE_RAYS` directions meets
     one (a room's walls do; objects under an open sky do not). A live cube map's

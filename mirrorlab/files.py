@@ -151,7 +151,7 @@ class Outputs:
         else:
             self.discard()
 
-    def add(self, path: Path, data: bytes) -> None:
+    def add(self, path: str | Path, data: bytes) -> None:
         path = Path(path)
         if any(path.resolve() == done.resolve() for done, _ in self._staged):
             raise OutputError(

@@ -25,7 +25,7 @@ import concurrent.futures
 import uuid
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Self
 
 from mirrorlab.errors import MissingExtraError
 
@@ -54,7 +54,7 @@ class Executor:
     engine = "serial"
     workers = 1
 
-    def __enter__(self) -> Executor:
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -69,9 +69,9 @@ def parse_size(option: str, text: str) -> tuple[int, int]:
     raise OptionError(option, f"expected WIDTHxHEIGHT with each from 1 to {MAX_SIZE}, got {text!r}")
 
 
-def check_size(size: Sequence[int] | str, option: str = "size") -> tuple[int, int]:
-    """A (width, height) pair of whole numbers from 1 to :data:`MAX_SIZE` (or its
-    ``'WxH'`` text); OptionError naming ``option`` otherwise."""
+def check_size(size: Sequence[float] | str, option: str = "size") -> tuple[int, int]:
+    """A (width, height) pair of whole numbers (ints or whole floats) from 1 to
+    :data:`MAX_SIZE` (or its ``'WxH'`` text); OptionError naming ``option`` otherwise."""
     if isinstance(size, str):
         return parse_size(option, size)
     try:

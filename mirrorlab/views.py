@@ -10,6 +10,7 @@ view) and an optional world-space ``clip_plane``. Numpy only.
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -226,7 +227,7 @@ def _camera_matrices(camera: Camera, aspect: float) -> tuple[np.ndarray, np.ndar
     return matrices
 
 
-def camera_view(camera: Camera, size: tuple[int, int], label: str = "camera") -> View:
+def camera_view(camera: Camera, size: Sequence[int], label: str = "camera") -> View:
     """The viewer's view of a ``size`` (width, height) target: the same :class:`View`
     object for the same camera, size and label (read-only, with what it works out
     kept), so a still camera's view is worked out once, not every frame."""

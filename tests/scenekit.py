@@ -1,8 +1,10 @@
-"""Scenes made for tests from other scenes: the same scene moved or scaled as a whole, and
-small builders for the kinds of scene the plan and the truth are checked on."""
+"""Scenes made for tests from other scenes: the same scene moved or scaled as a whole,
+small builders for the kinds of scene the plan and the truth are checked on, and look-ups
+that check a scene's reflector, object or robot is there and of the kind a test needs."""
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import replace
 
 import numpy as np
@@ -15,14 +17,23 @@ from mirrorlab.scene.model import (
     MeshObject,
     OrthoCapture,
     PlanarReflector,
+    Reflector,
+    RobotObject,
     Scene,
     SphereProxy,
     Transform,
+    Vec3,
 )
 
 SPHERE_MESH = data_path("models") / "env_sphere.obj"
 BOX_MESH = data_path("models") / "hand.obj"
 PANEL_MESH = data_path("models") / "panel.obj"
+
+
+def vec3(values: Iterable[float]) -> Vec3:
+    """Three floats from any three numbers."""
+    x, y, z = (float(v) for v in values)
+    return (x, y, z)
 
 
 def _affine(point, scale: float, offset) -> tuple[float, float, float]:
@@ -55,11 +66,11 @@ def transformed(scene: Scene, scale: float = 1.0, offset=(0.0, 0.0, 0.0)) -> Sce
                 transform=replace(
                     transform,
                     position=point(transform.position),
-                    scale=tuple(float(s) * scale for s in transform.scale),
+                    scale=vec3(float(s) * scale for s in transform.scale),
                 ),
             )
         )
-    reflectors = []
+    reflectors: list[Reflector] = []
     for reflector in scene.reflectors:
         if isinstance(reflector, PlanarReflector):
             ortho = reflector.ortho
@@ -96,7 +107,7 @@ def transformed(scene: Scene, scale: float = 1.0, offset=(0.0, 0.0, 0.0)) -> Sce
                 transform=replace(
                     transform,
                     position=point(transform.position),
-                    scale=tuple(float(s) * scale for s in transform.scale),
+                    scale=vec3(float(s) * scale for s in transform.scale),
                 ),
             )
         )
@@ -145,9 +156,7 @@ def ball(name: str, center, radius: float, technique: str, **fields) -> CurvedRe
         name=name,
         mesh=SPHERE_MESH,
         technique=technique,
-        transform=Transform(
-            position=tuple(float(v) for v in center), scale=(radius, radius, radius)
-        ),
+        transform=Transform(position=vec3(center), scale=(radius, radius, radius)),
         **fields,
     )
 
@@ -158,14 +167,41 @@ def block(name: str, center, size: float, color) -> MeshObject:
         name=name,
         mesh=BOX_MESH,
         color=color,
-        transform=Transform(position=tuple(float(v) for v in center), scale=(size, size, size)),
+        transform=Transform(position=vec3(center), scale=(size, size, size)),
     )
 
 
 def looking(eye, target, up=(0.0, 1.0, 0.0), **fields) -> Camera:
     return Camera(
-        eye=tuple(float(v) for v in eye),
-        target=tuple(float(v) for v in target),
-        up=tuple(float(v) for v in up),
+        eye=vec3(eye),
+        target=vec3(target),
+        up=vec3(up),
         **fields,
     )
+
+
+def planar_reflector(scene: Scene, name: str) -> PlanarReflector:
+    """``scene``'s reflector ``name``, checked to be a flat mirror."""
+    reflector = scene.reflector(name)
+    assert isinstance(reflector, PlanarReflector), f"{name!r} is not a planar mirror"
+    return reflector
+
+
+def curved_reflector(scene: Scene, name: str) -> CurvedReflector:
+    """``scene``'s reflector ``name``, checked to be a curved reflector."""
+    reflector = scene.reflector(name)
+    assert isinstance(reflector, CurvedReflector), f"{name!r} is not a curved reflector"
+    return reflector
+
+
+def scene_robot(scene: Scene) -> RobotObject:
+    """``scene``'s robot, checked to be there."""
+    assert scene.robot is not None, f"scene {scene.name!r} has no robot"
+    return scene.robot
+
+
+def mesh_object(scene: Scene, name: str) -> MeshObject:
+    """``scene``'s object ``name``, checked to be a mesh (not the robot)."""
+    item = scene.object(name)
+    assert isinstance(item, MeshObject), f"{name!r} is not a mesh object"
+    return item

@@ -17,6 +17,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from mirrorlab import load_scene, math3d  # noqa: E402
+from tests.scenekit import curved_reflector  # noqa: E402
 from tests.window.xwindow import (  # noqa: E402
     Demo,
     find_window,
@@ -60,7 +61,7 @@ def main() -> int:
     camera = scene.camera
     x, y, _ = math3d.project_to_pixels(
         camera.projection(SIZE[0] / SIZE[1]) @ camera.view(),
-        np.asarray(scene.reflector("sphere").center()),
+        np.asarray(curved_reflector(scene, "sphere").center()),
         *SIZE,
     )
     picture("mirror_and_sphere", ["e"], (int(x), int(y)), docs / "demo-inset.png")

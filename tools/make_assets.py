@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import trimesh
+from numpy.typing import ArrayLike
 from PIL import Image
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -27,7 +28,9 @@ def box(size: tuple[float, float, float], y0: float = 0.0):
     """Box centred on the y axis from y0 to y0+size[1], one UV square per face."""
     sx, sy, sz = (s / 2 for s in size)
     cy = y0 + sy
-    positions, normals, uvs, faces = [], [], [], []
+    positions: list[ArrayLike] = []
+    normals: list[ArrayLike] = []
+    uvs, faces = [], []
     for axis in range(3):
         for sign in (1.0, -1.0):
             n = np.zeros(3)
@@ -53,7 +56,9 @@ def box(size: tuple[float, float, float], y0: float = 0.0):
 
 def cylinder(radius: float, height: float, segments: int):
     """Capped cylinder on the y axis from y=-height to y=0, cylindrical UVs on the side."""
-    positions, normals, uvs, faces = [], [], [], []
+    positions: list[ArrayLike] = []
+    normals: list[ArrayLike] = []
+    uvs, faces = [], []
     angles = np.linspace(0.0, 2.0 * np.pi, segments + 1)
     for i, a in enumerate(angles):  # side: a seam column duplicated at a = 2 pi
         n = np.array([np.cos(a), 0.0, -np.sin(a)])

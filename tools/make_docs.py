@@ -18,6 +18,7 @@ import math
 import sys
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from PIL import Image, ImageDraw
@@ -26,6 +27,7 @@ import mirrorlab
 from mirrorlab.accuracy import erode
 from mirrorlab.options import apply_options
 from mirrorlab.raytrace import trace_scene
+from mirrorlab.scene.model import CurvedReflector
 from mirrorlab.techniques import technique_names
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
@@ -152,7 +154,7 @@ def main(pictures: list[str]) -> None:
 def methods_picture(renderer) -> None:
     angle = math.radians(-30)  # 16 units out, 30 degrees off the normal, a little above
     eye = (-7 + 16 * math.cos(angle), 1.0 + 4.8, -2 + 16 * math.sin(angle))
-    view = {"camera": eye, "target": (-7.0, 1.0, -2.0)}
+    view: dict[str, Any] = {"camera": eye, "target": (-7.0, 1.0, -2.0)}
     methods = [
         labelled(renderer.render("lab20", method=m, **view), m) for m in technique_names("planar")
     ]
@@ -173,7 +175,9 @@ def envmaps_picture(renderer) -> None:
 
 def cone_picture(renderer) -> None:
     cone = apply_options(mirrorlab.load_scene("spheremap_cone"), {"method": "sphere-texgen"})
-    placed = cone.reflector("cone").transform
+    placed_cone = cone.reflector("cone")
+    assert isinstance(placed_cone, CurvedReflector)
+    placed = placed_cone.transform
     cones = []
     for height in (1.0, -1.0):
         moved = cone.with_reflector(

@@ -54,11 +54,11 @@ def main() -> None:
     shipped.mkdir(parents=True, exist_ok=True)
     with offscreen_context() as context:
         for sequence in sequences():
-            renderer = SceneRenderer(context.resources)
+            scene_renderer = SceneRenderer(context.resources)
             try:
-                image = draw_sequence(renderer, sequence)
+                image = draw_sequence(scene_renderer, sequence)
             finally:
-                renderer.release()
+                scene_renderer.release()
             path = shipped / sequence.path.name
             write_png_atomic(path, image)
             print(f"wrote {path} ({len(sequence.frames)} frames)")

@@ -4,6 +4,7 @@ keyframes set. Numpy only."""
 from __future__ import annotations
 
 import itertools
+from collections.abc import Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
@@ -26,7 +27,7 @@ Value = float | tuple[float, ...]
 """An animated value: a number (``fovy``) or a vector (``eye``, ``position``...)."""
 
 
-def interpolate(keys: list[tuple[int, Value]], frame: int) -> Value:
+def interpolate(keys: Sequence[tuple[int, Value]], frame: int) -> Value:
     """The value at ``frame`` from ``(frame, value)`` pairs sorted by frame: linear between
     the two around it, held before the first and after the last. The values of one track
     are all floats or all tuples of floats of one length."""

@@ -60,7 +60,7 @@ def test_bad_executor_options_of_the_sweep(capsys, tmp_path):
         (["--jobs", "0"], "--jobs: expected a whole number from 1"),
         (["--engine", "threads"], "--engine"),
     ):
-        code = None
+        code: int | str | None = None
         try:
             code = main(["bench", "accuracy", "--quick", "--out-dir", str(tmp_path / "x"), *extra])
         except SystemExit as stop:  # argparse refuses a choice itself, with its usage

@@ -187,6 +187,7 @@ def test_the_planner_reuses_captures_inside_a_worker():
         skipped = []
         for frame in range(6):
             renderer.render("robot_wave", frame=frame)
+            assert renderer.last_stats is not None
             skipped.append(bool(renderer.last_stats.skipped))
     assert skipped == [False, True, True, True, True, False]
 
@@ -224,6 +225,7 @@ def test_a_killed_batch_resumes_to_the_same_files(tmp_path):
         if process.poll() is None:
             os.killpg(process.pid, signal.SIGKILL)
             process.wait()
+    assert process.stdout is not None and process.stderr is not None
     process.stdout.close()
     process.stderr.close()
     written = [p for p in frames_in(out_dir) if is_whole_frame(p, (512, 512))]
@@ -314,10 +316,11 @@ def test_a_still_scene_is_one_frame_and_animations_hold_every_frame(tmp_path):
 
 def shown_frames(path: Path, milliseconds: int) -> list[np.ndarray]:
     """The pictures an animation shows, one per ``milliseconds`` of its frames' times."""
-    from PIL import Image
+    from PIL import GifImagePlugin, Image, WebPImagePlugin
 
     shown = []
     with Image.open(path) as animation:
+        assert isinstance(animation, GifImagePlugin.GifImageFile | WebPImagePlugin.WebPImageFile)
         for index in range(animation.n_frames):
             animation.seek(index)
             picture = np.asarray(animation.convert("RGB"))  # loads it, and its duration

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import sys
+from typing import Any
 
 from tests import MACOS_CONTEXT
 
@@ -74,7 +75,7 @@ def main(out: str) -> None:
     with HeadlessContext(debug=True) as context:
         mask = int(GL.glGetIntegerv(GL.GL_CONTEXT_PROFILE_MASK))
         flags = int(GL.glGetIntegerv(GL.GL_CONTEXT_FLAGS))
-        frames = {}
+        frames: dict[str, Any] = {}  # name: (h, w, 3) uint8 frames side by side
         renderer = SceneRenderer(context.resources)
         info = {
             "version": list(gl_version()),

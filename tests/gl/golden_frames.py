@@ -15,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -22,6 +23,7 @@ import mirrorlab
 from mirrorlab.data import scenes_dir
 from mirrorlab.options import apply_options
 from mirrorlab.scene.model import Scene
+from tests.scenekit import vec3
 
 SIZE = (96, 96)
 """Width, height of every frame."""
@@ -35,7 +37,7 @@ def orbited(scene: Scene, degrees: float) -> Scene:
     angle = np.radians(degrees)
     x, y, z = eye - target
     turned = (x * np.cos(angle) - z * np.sin(angle), y, x * np.sin(angle) + z * np.cos(angle))
-    eye_tuple = tuple(float(v) for v in target + np.asarray(turned))
+    eye_tuple = vec3(target + np.asarray(turned))
     return replace(scene, camera=replace(camera, eye=eye_tuple))
 
 
@@ -50,7 +52,7 @@ def still_sequence(scene: Scene) -> list[Scene]:
         moved = turned.with_angles((base + 25.0, lower, upper))
     elif turned.objects:
         first = turned.objects[0]
-        position = tuple(
+        position = vec3(
             float(v) + d for v, d in zip(first.transform.position, (0.3, 0.2, -0.2), strict=True)
         )
         moved = turned.with_object(
@@ -74,7 +76,7 @@ class Sequence:
         return FOLDER / f"{self.name}.png"
 
 
-TECHNIQUE_VARIANTS = (
+TECHNIQUE_VARIANTS: tuple[tuple[str, dict[str, Any]], ...] = (
     ("lab20", {"method": "reflected"}),
     ("lab20", {"method": "stencil"}),
     ("lab20", {"capture": "fbo"}),

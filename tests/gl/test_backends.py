@@ -90,7 +90,7 @@ def png(path) -> np.ndarray:
 
 
 def probe(**env: str) -> list[str]:
-    done = python(PROBE, **env)
+    done = python(PROBE, (), **env)
     assert done.returncode == 0, done.stderr
     return done.stdout.split()
 

@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 import pytest
+from numpy.typing import ArrayLike
 
 from mirrorlab import envmap, math3d
 from mirrorlab.gl.opengl import GL
@@ -105,7 +106,8 @@ def random_directions(rng, count: int) -> np.ndarray:
 
 def texgen_cases(rng) -> tuple[np.ndarray, np.ndarray]:
     """Eye-space vertices and normals ``(n, 3)``: random plus structured cases."""
-    vertices, normals = [], []
+    vertices: list[ArrayLike] = []
+    normals: list[ArrayLike] = []
     # Random positions at several distances, random normals of random length.
     for scale in (1e-3, 0.5, 3.0, 40.0):
         v = random_directions(rng, 100) * scale * rng.uniform(0.5, 1, (100, 1))
@@ -204,14 +206,14 @@ def test_sphere_map_texgen_matches_mesa_under_a_modelview_with_gl_normalize(regi
 def test_sphere_map_texgen_matches_mesa_close_to_the_singular_direction(registry):
     # u = (0, 0, -1) and normals tilted to within a hair of edge-on: r approaches
     # (0, 0, -1) from many azimuths, so (s, t) approaches the rim all round.
-    vertices, normals = [], []
+    vertex_rows, normal_rows = [], []
     for tilt in (1e-1, 1e-2, 1e-3):
         for azimuth in np.linspace(0, 2 * np.pi, 12, endpoint=False):
             n = np.array([np.cos(azimuth), np.sin(azimuth), tilt])
-            vertices.append([0.0, 0.0, -3.0])
-            normals.append(n / np.linalg.norm(n))
-    vertices = np.array(vertices, np.float32)
-    normals = np.array(normals, np.float32)
+            vertex_rows.append([0.0, 0.0, -3.0])
+            normal_rows.append(n / np.linalg.norm(n))
+    vertices = np.array(vertex_rows, np.float32)
+    normals = np.array(normal_rows, np.float32)
     v64, n64 = vertices.astype(np.float64), normals.astype(np.float64)
     r = envmap.reflect(v64 / np.linalg.norm(v64, axis=1, keepdims=True), n64)
     mesa = mesa_texgen(registry, vertices, normals)

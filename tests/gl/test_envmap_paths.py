@@ -42,6 +42,7 @@ from tests.gl.envmap_frames import assert_close_to_truth, region_error
 from tests.gl.envmap_frames import render as render_frame
 from tests.gl.frames import draw
 from tests.imagecheck import save_failure
+from tests.scenekit import curved_reflector
 
 ENVMAP_METHODS = technique_names("curved")
 SIZE = 192
@@ -82,7 +83,7 @@ def sphere_scene(
 def cone_scene(height: float = 1.0) -> Scene:
     """The textbook's cone with its base at (0, ``height``, 0)."""
     scene = load_scene("spheremap_cone")
-    cone = scene.reflector("cone")
+    cone = curved_reflector(scene, "cone")
     return scene.with_reflector(
         "cone", transform=replace(cone.transform, position=(0.0, height, 0.0))
     )
@@ -149,7 +150,7 @@ def rim_camera() -> Camera:
 def vertex_on_axis_camera() -> Camera:
     """Puts a mesh vertex of the sphere exactly on the optical axis with the view ray
     perpendicular to its normal: there r = u - 2 (n.u) n is (0, 0, -1) to rounding."""
-    reflector = load_scene("chrome_sphere").reflector("sphere")
+    reflector = curved_reflector(load_scene("chrome_sphere"), "sphere")
     data = load_mesh(reflector.mesh)
     assert np.allclose(reflector.model_matrix(), np.eye(4))  # mesh frame = world frame
     vertex = data.positions[7].astype(np.float64)
@@ -209,7 +210,7 @@ def test_live_cube_of_an_empty_scene_is_the_static_cube(scene_renderer):
     _, mask = traced("sphere-empty", None, SIZE)
     mean, share = region_error(live, static, mask)
     assert mean < 1.0 and share < 0.01, (mean, share)
-    baked = background_faces(scene.background, scene.reflector("sphere").map_size)
+    baked = background_faces(scene.background, curved_reflector(scene, "sphere").map_size)
     for face in range(6):
         assert np.abs(captured[face] - baked[face].astype(int)).mean() < 2.0, f"face {face}"
 
@@ -395,7 +396,7 @@ def test_live_capture_reruns_only_when_the_scene_changes(scene_renderer):
     assert "capture:sphere" in stats.ran
     _, stats = draw(scene_renderer, replace(scene, camera=CLOSE_UP), size)  # viewer moved only
     assert "capture:sphere" not in stats.ran and "capture:sphere" in stats.skipped
-    sphere = scene.reflector("sphere")
+    sphere = curved_reflector(scene, "sphere")
     moved = scene.with_reflector(
         "sphere", transform=replace(sphere.transform, position=(0.0, 0.3, 0.0))
     )

@@ -44,6 +44,7 @@ from mirrorlab.views import (
     stencil_view,
 )
 from tests.gl.envmap_frames import assert_close_to_truth, drawn_mode, region_error, render
+from tests.scenekit import curved_reflector, planar_reflector
 
 SIZE = 192
 SUPERSAMPLE = 4
@@ -60,7 +61,9 @@ def lab_with_ball(method: str, max_bounces: int = 2) -> Scene:
     front of the mirror. Two bounces, so the ball in the mirror's capture has its map."""
     lab = load_scene("lab20")
     sky = load_scene("chrome_sphere")
-    ball = replace(sky.reflector("sphere"), name="ball", technique=method, transform=BALL_AT)
+    ball = replace(
+        curved_reflector(sky, "sphere"), name="ball", technique=method, transform=BALL_AT
+    )
     return replace(
         lab, background=sky.background, reflectors=(*lab.reflectors, ball), max_bounces=max_bounces
     )
@@ -74,7 +77,7 @@ def ball_alone(method: str) -> Scene:
 
 def ortho_view() -> View:
     """The lab mirror's orthographic capture camera."""
-    return ortho_capture_view(load_scene("lab20").reflector("mirror"), (SIZE, SIZE))
+    return ortho_capture_view(planar_reflector(load_scene("lab20"), "mirror"), (SIZE, SIZE))
 
 
 @cache
@@ -114,7 +117,7 @@ def sphere_in_sky(method: str) -> Scene:
 
 def capture_view() -> View:
     """The ``reflected`` mirror's capture camera for :data:`INTO_THE_MIRROR`."""
-    mirror = mirror_scene("reflected", "cube").reflector("mirror")
+    mirror = planar_reflector(mirror_scene("reflected", "cube"), "mirror")
     view = reflected_capture_view(camera_view(INTO_THE_MIRROR, (SIZE, SIZE)), mirror)
     assert view is not None
     return view
@@ -127,10 +130,13 @@ def traced_mirror():
     mirror)."""
     scene = mirror_scene("stencil", "cube")
     whole = trace_scene(scene, (SIZE, SIZE), supersample=SUPERSAMPLE)
+    assert whole.reflector is not None
     glass = erode(whole.reflector == 0, 1)  # reflectors[0] is the mirror
     # the unfolded world: rays from the mirrored eye through each pixel (the stencil
     # view's matrices), with only the sphere and the sky
-    mirrored = stencil_view(camera_view(INTO_THE_MIRROR, (SIZE, SIZE)), scene.reflector("mirror"))
+    mirrored = stencil_view(
+        camera_view(INTO_THE_MIRROR, (SIZE, SIZE)), planar_reflector(scene, "mirror")
+    )
     through = trace_scene(
         sphere_in_sky("cube"),
         (SIZE, SIZE),
@@ -227,7 +233,7 @@ def test_sphere_map_in_an_orthographic_view_is_the_normal_lookup(scene_renderer)
         output=OUTPUT_COORDINATES,
         view=ortho_view(),
     )
-    half_texel = 0.5 / ball_alone("normal").reflector("ball").map_size
+    half_texel = 0.5 / curved_reflector(ball_alone("normal"), "ball").map_size
     gap = np.abs(sphere[mask][:, :2] - (normal[mask][:, :2] + half_texel))
     assert gap.max() < 1e-5, f"sphere map and normal lookup differ by up to {gap.max():.4f}"
 
@@ -357,7 +363,7 @@ def test_stencil_mirror_keeps_its_sky_whatever_technique_drew_before(scene_rende
     technique; bound 1.0/255 and 1.5 %."""
     whole, _, _, rest = traced_mirror()
     assert rest.sum() > 20000
-    errors = {}
+    errors: dict[str, list[tuple[float, float]]] = {}
     for method in (*technique_names("curved"), *technique_names("curved")):
         image, _ = render(scene_renderer, mirror_scene("stencil", method), SIZE)
         errors.setdefault(method, []).append(region_error(image, whole, rest))

@@ -11,6 +11,7 @@ import pytest
 
 import mirrorlab
 from mirrorlab.api import raytrace
+from mirrorlab.scene.model import MeshObject
 from tests.imagecheck import assert_images_close
 
 SIZE = (96, 96)
@@ -112,7 +113,8 @@ def quadrant_means(image: np.ndarray) -> dict[str, np.ndarray]:
 def test_a_glb_texture_is_used_when_the_scene_gives_none(tmp_path, renderer):
     glb = write_quad_glb(tmp_path / "textured.glb", texture=quadrant_picture())
     scene = mirrorlab.load_scene(scene_file(tmp_path, glb))
-    assert scene.objects[0].color is None and scene.objects[0].texture is None
+    quad = scene.objects[0]
+    assert isinstance(quad, MeshObject) and quad.color is None and quad.texture is None
     drawn = renderer.render(scene)
     traced = raytrace(scene, size=SIZE)
     for image in (drawn, traced):
@@ -154,4 +156,5 @@ def test_a_scene_without_colour_saves_without_one(tmp_path):
     assert "color" not in scene.to_toml().split("[[objects]]")[1]
     again = tmp_path / "again.toml"
     again.write_text(scene.to_toml())
-    assert mirrorlab.load_scene(again).objects[0].color is None
+    quad = mirrorlab.load_scene(again).objects[0]
+    assert isinstance(quad, MeshObject) and quad.color is None

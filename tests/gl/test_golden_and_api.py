@@ -7,6 +7,7 @@ from __future__ import annotations
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -76,7 +77,7 @@ def test_default_frame_matches_the_golden_image():
 
 # Scenes in an order that makes one renderer switch techniques, reflectors and
 # backgrounds, and come back to a scene it drew before.
-SEQUENCE = [
+SEQUENCE: list[tuple[str, int, dict[str, Any]]] = [
     ("lab20", 0, {}),
     ("chrome_sphere", 0, {}),
     ("lab20", 0, {"method": "stencil"}),
@@ -150,7 +151,11 @@ def test_the_renderer_draws_the_same_frames_by_either_draw_path():
 def test_two_renderers_in_turn_each_draw_in_their_own_context():
     """Each frame makes its renderer's context current (when another one is), so two
     renderers used in turn on one thread draw what each draws alone."""
-    scenes = [("lab20", {}), ("mirror_and_sphere", {}), ("lab20", {"method": "stencil"})]
+    scenes: list[tuple[str, dict[str, Any]]] = [
+        ("lab20", {}),
+        ("mirror_and_sphere", {}),
+        ("lab20", {"method": "stencil"}),
+    ]
     sizes = ((48, 40), (40, 56))  # GL names alike in both contexts: the sizes tell them apart
     expected = {}
     for size in sizes:
@@ -188,7 +193,12 @@ def test_the_renderer_reads_its_own_contexts_gl_state_once(monkeypatch):
     with mirrorlab.Renderer(size=(64, 48)) as fresh:
         expected = [fresh.render(posed) for posed in poses]
     reads = []
-    monkeypatch.setattr(mirrorlab.renderer, "gl_state", lambda: reads.append(1) or gl_state())
+
+    def counted_gl_state():
+        reads.append(1)
+        return gl_state()
+
+    monkeypatch.setattr(mirrorlab.renderer, "gl_state", counted_gl_state)
     with mirrorlab.Renderer(size=(64, 48)) as renderer:
         home = None
         for number, posed in enumerate(poses):
@@ -199,6 +209,7 @@ def test_the_renderer_reads_its_own_contexts_gl_state_once(monkeypatch):
             home = home or gl_state()
             assert gl_state() == home, f"frame {number} left another state"
             assert_image_close(image, expected[number], tolerance=0, name=f"own_context_{number}")
+        assert renderer.last_stats is not None
         assert renderer.last_stats.ran == ["camera"]  # still frames at the end
     assert len(reads) == 1
 

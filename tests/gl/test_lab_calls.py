@@ -272,10 +272,16 @@ ROBOT = st.builds(
     ),
 )
 """lab.draw_scene's robot, its nodes' textures fuzzed."""
-GLSL = [
-    re.search(r'_GLSL = """(.*?)"""', solution(lab), re.S).group(1)
-    for lab in ("spheremap", "cubemap")
-]
+
+
+def solution_glsl(lab: str) -> str:
+    """The GLSL of ``lab``'s solution (its ``..._GLSL`` string)."""
+    found = re.search(r'_GLSL = """(.*?)"""', solution(lab), re.S)
+    assert found is not None
+    return found.group(1)
+
+
+GLSL = [solution_glsl(lab) for lab in ("spheremap", "cubemap")]
 """The labs' honest GLSL (each compiled once a process), for the kit's shader calls."""
 JSON = st.recursive(
     st.one_of(

@@ -6,13 +6,15 @@ ends the run with one line; the lab's own objects are out of reach."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Framebuffer
 from mirrorlab.labs.trusted.executor import Executor, RunLimits, Stop
-from mirrorlab.labs.trusted.kit import open_session
+from mirrorlab.labs.trusted.kit import Lab20, SphereMapLab, open_session
 from mirrorlab.labs.trusted.variants import default_variant
 
 SIZE = (64, 64)
@@ -50,7 +52,7 @@ def test_a_call_runs_and_its_line_is_noted(context):
 
 def test_calls_are_refused_before_they_run(context):
     ex = executor()
-    cases = [
+    cases: list[tuple[tuple[Any, ...], str, str]] = [
         (("glDrawPixels", 1, 1, 0, 0, None), "NotImplementedError", "not one of the OpenGL"),
         (("glMatrixMode", 12345), "GLError", "invalid enumerant"),
         (("glOrtho", -6, 2, -3, 5, 0), "TypeError", "takes 6 arguments"),
@@ -154,6 +156,7 @@ def test_a_frame_drawn_with_uploaded_pixels_is_tainted_and_copies_carry_it(conte
 
 def test_the_labs_own_objects_are_out_of_reach(context):
     ex = executor("spheremap")
+    assert isinstance(ex.session, SphereMapLab)
     backdrop = ex.session.backdrop_texture
     for name, args in (
         ("glBindTexture", (int(GL.GL_TEXTURE_2D), backdrop)),
@@ -312,6 +315,7 @@ def test_nothing_reads_back_and_set_up_draws_nothing(context):
 
 def test_gl_errors_name_the_precondition(context):
     ex = executor()
+    assert isinstance(ex.session, Lab20)
     reply, _ = call(ex, "glUniform1i", ex.session.texSampler, 1)
     assert reply["type"] == "GLError" and "call glUseProgram(program) before" in reply["message"]
     call(ex, "glUseProgram", ex.session.textureShader)

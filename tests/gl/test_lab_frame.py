@@ -19,6 +19,7 @@ from mirrorlab.gl.context import check_gl_errors
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Framebuffer
 from mirrorlab.passes.base import apply_view_state
+from mirrorlab.passes.planar import CapturingMirror
 from mirrorlab.renderer import SceneRenderer
 from mirrorlab.scene.model import Camera, OrthoCapture, PlanarReflector, RobotObject, Scene
 from mirrorlab.scene.robot import hand_center, scene_parts
@@ -68,7 +69,9 @@ def capture_texture(renderer: SceneRenderer, stats) -> np.ndarray:
     """The capture texture the last frame's camera view drew the mirror with."""
     (mirror_draw,) = stats.plan.top.draws
     assert mirror_draw.mode == "texture", mirror_draw
-    return renderer.pass_for("mirror").captures.texture(mirror_draw.slot).read()
+    mirror_pass = renderer.pass_for("mirror")
+    assert isinstance(mirror_pass, CapturingMirror)
+    return mirror_pass.captures.texture(mirror_draw.slot).read()
 
 
 def texcoord_at(mirror: PlanarReflector, point: np.ndarray) -> tuple[float, float]:

@@ -35,7 +35,9 @@ MACROS = (
 
 def glsl(lab: str) -> str:
     variable = LABS[lab][0]
-    return re.search(rf'{variable} = """(.*?)"""', solution(lab), re.S).group(1)
+    found = re.search(rf'{variable} = """(.*?)"""', solution(lab), re.S)
+    assert found is not None
+    return found.group(1)
 
 
 def values(registry, lab: str, text: str) -> np.ndarray:

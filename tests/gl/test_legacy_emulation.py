@@ -120,8 +120,10 @@ def test_a_mirror_on_the_near_plane_lands_where_mesa_puts_it():
     """Lab 20's quad in its own capture: eye z exactly 0 with glOrtho(..., 0, 15), clip z
     exactly -1 in float32, as Mesa's float arithmetic gives it (a double product would put
     it just outside and clip the quad)."""
+    projection = ortho(-6, 2, -3, 5, 0, 15)
+    assert projection is not None
     mvp = multiply(
-        multiply(ortho(-6, 2, -3, 5, 0, 15), look_at((-7, 0, 0), (0, 0, 0), (0, 1, 0))),
+        multiply(projection, look_at((-7, 0, 0), (0, 0, 0), (0, 1, 0))),
         translation(7, 0, 0),
     )
     corner = np.array([-7, -3, -6, 1], dtype=np.float32)

@@ -28,6 +28,7 @@ from mirrorlab.scene.robot import hand_center
 from mirrorlab.views import camera_view, reflected_capture_view
 from tests.gl.frames import draw
 from tests.imagecheck import assert_region_close, red_dominant, save_failure, share_within
+from tests.scenekit import vec3
 
 SIZE = 160
 MIRROR_CENTER = np.array([-7.0, 1.0, -2.0])
@@ -39,9 +40,7 @@ def viewer_at(degrees: float, distance: float, fovy: float = 45.0, height: float
     about the vertical towards +z), looking at the centre."""
     angle = math.radians(degrees)
     eye = MIRROR_CENTER + distance * np.array([math.cos(angle), height, math.sin(angle)])
-    return Camera(
-        eye=tuple(float(v) for v in eye), target=tuple(float(v) for v in MIRROR_CENTER), fovy=fovy
-    )
+    return Camera(eye=vec3(eye), target=vec3(MIRROR_CENTER), fovy=fovy)
 
 
 def lab(camera: Camera | None = None, angles=None) -> Scene:
@@ -117,7 +116,7 @@ def test_ortho_is_right_head_on_from_afar_and_wrong_at_sixty_degrees(scene_rende
     assert within < 0.95, f"ortho at 60 deg should visibly differ, but {within:.1%} agree"
 
 
-def mirror_point_of_pixel(camera: Camera, xy: np.ndarray, size: int) -> np.ndarray:
+def mirror_point_of_pixel(camera: Camera, xy: tuple[float, float], size: int) -> np.ndarray:
     """Where the viewing ray through pixel ``xy`` (x right, y down) meets the plane x = -7."""
     inverse = np.linalg.inv(camera.projection(1.0) @ camera.view())
     ndc = np.array([xy[0] / size * 2 - 1, 1 - xy[1] / size * 2])

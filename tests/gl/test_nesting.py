@@ -24,7 +24,7 @@ from mirrorlab.raytrace import RayScene, trace_scene
 from mirrorlab.scene.model import Camera, Scene
 from tests.gl.frames import draw
 from tests.imagecheck import save_failure
-from tests.scenekit import ball
+from tests.scenekit import ball, planar_reflector
 
 SIZE = (128, 128)
 PLANAR = ("stencil", "reflected", "ortho")
@@ -84,8 +84,8 @@ def share_on_reflectors(renderer, scene: Scene, label: str) -> float:
 def facing_mirrors(west: str, east: str, far: float) -> Scene:
     scene = mirrorlab.load_scene("two_mirrors")
     reflectors = (
-        replace(scene.reflector("west"), technique=west, ortho=None),
-        replace(scene.reflector("east"), technique=east, ortho=None),
+        replace(planar_reflector(scene, "west"), technique=west, ortho=None),
+        replace(planar_reflector(scene, "east"), technique=east, ortho=None),
     )
     return replace(scene, camera=replace(ROOM_VIEW, far=far), reflectors=reflectors, max_bounces=3)
 
@@ -127,6 +127,7 @@ def test_mirrors_facing_each_other_with_a_curved_reflector_between(scene_rendere
         scene = replace(scene, reflectors=(*scene.reflectors, chrome))
         image = draw(scene_renderer, scene, SIZE)[0]
         truth = trace_scene(scene, SIZE)
+        assert truth.reflector is not None
         planar = truth.reflective_mask & (truth.reflector < 2)
         assert planar.sum() > 1000 and (truth.reflector == 2).sum() > 200
         worst = np.abs(image.astype(int) - truth.to_uint8().astype(int)).max(axis=-1)

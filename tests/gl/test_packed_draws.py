@@ -11,6 +11,7 @@ import os
 import subprocess
 import sys
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -27,7 +28,7 @@ from mirrorlab.passes.scene_draw import indirect_commands, texture_runs
 from mirrorlab.renderer import SceneRenderer
 from mirrorlab.scene.model import MeshObject, Transform
 from tests.gl.frames import draw
-from tests.scenekit import mirror
+from tests.scenekit import mirror, scene_robot, vec3
 
 SIZE = (96, 96)
 BOX = data_path("models") / "hand.obj"
@@ -49,7 +50,7 @@ def behind_the_camera(scene, count: int, kind: str):
                 name=f"box{i}",
                 mesh=BOX,
                 color=(0.8, 0.3, 0.2),
-                transform=Transform(position=tuple(map(float, p)), scale=(0.3, 0.3, 0.3)),
+                transform=Transform(position=vec3(p), scale=(0.3, 0.3, 0.3)),
             )
             for i, p in enumerate(points)
         )
@@ -75,11 +76,12 @@ def test_things_behind_the_camera_cost_no_draw_and_leave_the_frame_as_it_was(sce
 def test_a_still_frame_replays_and_a_moving_one_records_anew(scene_renderer, monkeypatch):
     uploads = []
     original = Buffer.upload
-    monkeypatch.setattr(
-        Buffer,
-        "upload",
-        lambda self, target, data: (uploads.append(len(data)), original(self, target, data))[1],
-    )
+
+    def counted_upload(self, target, data):
+        uploads.append(len(data))
+        return original(self, target, data)
+
+    monkeypatch.setattr(Buffer, "upload", counted_upload)
     scene = lab_reflected()
     first, _ = draw(scene_renderer, scene, SIZE)
     assert uploads, "the first frame records its views"
@@ -101,13 +103,14 @@ def test_a_new_pose_keeps_the_layout_of_its_parts_and_draws_as_a_fresh_renderer(
     and every frame is a fresh renderer's, pixel for pixel."""
     made = []
     original = scene_draw.indirect_commands
-    monkeypatch.setattr(
-        scene_draw,
-        "indirect_commands",
-        lambda table, visible: (made.append(len(visible)), original(table, visible))[1],
-    )
+
+    def counted_indirect_commands(table, visible):
+        made.append(len(visible))
+        return original(table, visible)
+
+    monkeypatch.setattr(scene_draw, "indirect_commands", counted_indirect_commands)
     scene = lab_reflected()
-    base, shoulder, elbow = scene.robot.angles
+    base, shoulder, elbow = scene_robot(scene).angles
     frames = [
         (elbow, 45.0),
         (elbow + 3.0, 45.0),
@@ -145,30 +148,26 @@ def test_a_frames_views_are_recorded_before_its_first_draw(scene_renderer, monke
     events = []
     record = scene_draw.SceneDrawer._record
     draw_recorded = scene_draw.SceneDrawer._draw_recorded
-    monkeypatch.setattr(
-        scene_draw.SceneDrawer,
-        "_record",
-        lambda self, index, view, *rest: (
-            events.append(("record", view.label)),
-            record(self, index, view, *rest),
-        )[1],
-    )
-    monkeypatch.setattr(
-        scene_draw.SceneDrawer,
-        "_draw_recorded",
-        lambda self, scene, view, *a: (
-            events.append(("draw", view.label)),
-            draw_recorded(self, scene, view, *a),
-        )[1],
-    )
+
+    def noted_record(self, index, view, *rest):
+        events.append(("record", view.label))
+        return record(self, index, view, *rest)
+
+    def noted_draw_recorded(self, scene, view, *a):
+        events.append(("draw", view.label))
+        return draw_recorded(self, scene, view, *a)
+
+    monkeypatch.setattr(scene_draw.SceneDrawer, "_record", noted_record)
+    monkeypatch.setattr(scene_draw.SceneDrawer, "_draw_recorded", noted_draw_recorded)
     upload = Buffer.upload
-    monkeypatch.setattr(
-        Buffer,
-        "upload",
-        lambda self, target, data: (events.append(("upload", "")), upload(self, target, data))[1],
-    )
+
+    def noted_upload(self, target, data):
+        events.append(("upload", ""))
+        return upload(self, target, data)
+
+    monkeypatch.setattr(Buffer, "upload", noted_upload)
     scene = apply_options(mirrorlab.load_scene("lab20"), {"method": method})
-    base, shoulder, elbow = scene.robot.angles
+    base, shoulder, elbow = scene_robot(scene).angles
     draw(scene_renderer, scene.with_angles((base, shoulder, elbow + 7.0)), SIZE)
     drawn = [label for kind, label in events if kind == "draw"]
     assert len(drawn) == 2, events  # the mirror's world and the camera's view
@@ -194,23 +193,19 @@ def test_a_view_draws_its_reflectors_before_the_objects_and_stencil_mirrors_afte
     events = []
     for owner in (PlanarPass, CurvedPass):
         original = owner.draw
-        monkeypatch.setattr(
-            owner,
-            "draw",
-            lambda self, step, view, *rest, _o=original: (
-                events.append((step.mode, view.label)),
-                _o(self, step, view, *rest),
-            )[1],
-        )
+
+        def noted_pass_draw(self, step, view, *rest, _o=original):
+            events.append((step.mode, view.label))
+            return _o(self, step, view, *rest)
+
+        monkeypatch.setattr(owner, "draw", noted_pass_draw)
     objects = scene_draw.SceneDrawer.draw
-    monkeypatch.setattr(
-        scene_draw.SceneDrawer,
-        "draw",
-        lambda self, scene, view, *a, **k: (
-            events.append(("objects", view.label)),
-            objects(self, scene, view, *a, **k),
-        )[1],
-    )
+
+    def noted_objects(self, scene, view, *a, **k):
+        events.append(("objects", view.label))
+        return objects(self, scene, view, *a, **k)
+
+    monkeypatch.setattr(scene_draw.SceneDrawer, "draw", noted_objects)
     scene = mirrorlab.load_scene(scene_name)
     if method is not None:
         scene = apply_options(scene, {"method": method})
@@ -240,7 +235,7 @@ def test_a_thousand_boxes_of_one_mesh_are_one_command(scene_renderer, registry):
             name=f"box{i}",
             mesh=BOX,
             color=(0.8, 0.3, 0.2),
-            transform=Transform(position=tuple(map(float, p)), scale=(0.1, 0.1, 0.1)),
+            transform=Transform(position=vec3(p), scale=(0.1, 0.1, 0.1)),
         )
         for i, p in enumerate(spots)
     )
@@ -300,9 +295,9 @@ def test_few_and_many_parts_make_the_same_commands(parts, seed):
     ranges = np.array([(10 * m, 3 + m, 100 * m) for _, m in parts], dtype=np.int64)
     table = PartTable(
         np.zeros((count, 2, 4, 4)),
-        tuple(f"t{t}" if t >= 0 else None for t, _ in parts),
+        tuple(Path(f"t{t}") if t >= 0 else None for t, _ in parts),
         np.array([t for t, _ in parts], dtype=np.int64),
-        ("t0", "t1", "t2"),
+        (Path("t0"), Path("t1"), Path("t2")),
         ranges,
         np.array([m for _, m in parts], dtype=np.int64),
     )
@@ -327,9 +322,12 @@ def test_a_still_frame_is_replayed_into_the_same_target_from_the_same_state(
     target = Framebuffer(registry, *SIZE)
     worked = []
     original = SceneRenderer._run
-    monkeypatch.setattr(
-        SceneRenderer, "_run", lambda self, *a, **k: (worked.append(1), original(self, *a, **k))[1]
-    )
+
+    def counted_run(self, *a, **k):
+        worked.append(1)
+        return original(self, *a, **k)
+
+    monkeypatch.setattr(SceneRenderer, "_run", counted_run)
     scene = mirrorlab.load_scene("lab20")
     images = []
     for _ in range(5):

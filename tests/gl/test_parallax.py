@@ -44,11 +44,12 @@ from mirrorlab.scene.model import (
 from mirrorlab.views import View
 from tests.gl.envmap_frames import assert_close_to_truth, region_error, render
 from tests.imagecheck import save_failure
+from tests.scenekit import curved_reflector, mesh_object
 
 SIZE = 96
 ROOM_SIZE = 128
 MAP = 64
-PANEL = load_scene("sphere_room").object("floor").mesh
+PANEL = mesh_object(load_scene("sphere_room"), "floor").mesh
 
 
 def sphere_scene(correction: str, map_size: int = MAP) -> Scene:
@@ -210,7 +211,7 @@ def panel_scene(correction: str) -> tuple[Scene, View]:
     at the capture centre."""
     scene = sphere_scene(correction)
     panel = replace(
-        scene.reflector("sphere"),
+        curved_reflector(scene, "sphere"),
         mesh=PANEL,
         transform=Transform(position=(0.0, 0.2, 0.0), scale=(1.6, 1.6, 1.0)),
     )
@@ -262,7 +263,7 @@ def test_box_proxy_in_a_room_matches_the_ray_tracer(scene_renderer):
     # 10/255 (box proxy and distance search alike; where two walls meet), the plain live
     # cube map 29.6 %, the sphere proxy 17.5 %.
     room = load_scene("sphere_room")
-    assert isinstance(room.reflector("sphere").parallax, BoxProxy)
+    assert isinstance(curved_reflector(room, "sphere").parallax, BoxProxy)
     truth = trace_scene(room, (ROOM_SIZE, ROOM_SIZE), supersample=4)
     expected, mask = truth.to_uint8(), erode(truth.reflective_mask, 1)
     assert mask.sum() > 5000
@@ -314,7 +315,7 @@ def test_the_distance_search_in_a_closed_room_matches_its_numpy_reference(scene_
     # to the plain lookup (not the background, which a closed room never shows).
     rng = np.random.default_rng(21)
     base = apply_options(cluttered_room(), {"parallax": "distance", "map_size": MAP})
-    assert encloses(base, base.reflector("sphere").center(), "sphere")
+    assert encloses(base, curved_reflector(base, "sphere").center(), "sphere")
     for _ in range(2):
         eye = np.array([rng.uniform(-1.5, 2.5), rng.uniform(0.0, 2.5), rng.uniform(1.5, 3.2)])
         scene = replace(
@@ -365,7 +366,7 @@ def test_the_distance_search_keeps_a_near_ball_whole_under_the_sky(scene_rendere
     open sky still leave for the background (the plain lookup would show a ghost of
     whatever stands in their direction from the centre: MAE 12.3)."""
     scene = apply_options(near_ball_sky(), {"method": "cube-live", "parallax": "distance"})
-    assert not encloses(scene, scene.reflector("sphere").center(), "sphere")
+    assert not encloses(scene, curved_reflector(scene, "sphere").center(), "sphere")
     truth = trace_scene(scene, (160, 160), supersample=4)
     expected, mask = truth.to_uint8(), erode(truth.reflective_mask, 1)
     image, _ = render(scene_renderer, scene, 160)

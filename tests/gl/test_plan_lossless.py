@@ -33,6 +33,7 @@ from mirrorlab.scene.model import (
     PlanarReflector,
     RobotObject,
     Scene,
+    SceneObject,
     SphereProxy,
     Transform,
 )
@@ -130,7 +131,10 @@ def scenes(draw):
         angles=(draw(st.floats(-90, 90)), 30.0, -60.0),
         transform=Transform(position=tuple(near_the_edge(draw, camera, aspect))),
     )
-    objects = (robot, block("block", near_the_edge(draw, camera, aspect), 2.0, (0.2, 0.8, 0.3)))
+    objects: tuple[SceneObject, ...] = (
+        robot,
+        block("block", near_the_edge(draw, camera, aspect), 2.0, (0.2, 0.8, 0.3)),
+    )
     for i in range(draw(st.integers(0, 6))):  # small things near the edges, some specks
         side = draw(st.sampled_from([0.003, 0.03, 0.3]))
         turn = tuple(draw(st.floats(-180, 180)) for _ in range(3))

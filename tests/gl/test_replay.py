@@ -9,6 +9,7 @@ replays draws, pixel for pixel, planned as the planner plans it, on both draw pa
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 import pytest
@@ -17,7 +18,7 @@ from hypothesis import strategies as st
 
 import mirrorlab
 from mirrorlab.gl.resources import Framebuffer
-from mirrorlab.options import apply_options
+from mirrorlab.options import DrawPath, apply_options
 from mirrorlab.plan import TextureState, plan_frame
 from mirrorlab.renderer import SceneRenderer
 from mirrorlab.scene.model import Transform
@@ -61,7 +62,7 @@ class Drawer:
     """Draws a sequence two ways: ``renderer`` into one target for each size (so frames
     replay), ``reference`` into a new target every frame (so none does)."""
 
-    def __init__(self, registry, draw_path: str) -> None:
+    def __init__(self, registry, draw_path: DrawPath) -> None:
         self.renderer = SceneRenderer(registry, draw_path=draw_path)
         self.reference = SceneRenderer(registry, draw_path=draw_path)
         self.targets = {size: Framebuffer(registry, *size) for size in SIZES}
@@ -91,6 +92,7 @@ class Drawer:
         assert [p.key for p in stats.plan.passes] == [p.key for p in expected_plan.passes]
         # a replay may draw parts that left a view (clipped away)
         reference = self.reference.last_frame
+        assert reference is not None
         assert stats.parts_drawn >= reference.parts_drawn, label
         if stats.parts_drawn == reference.parts_drawn:
             assert stats.draw_calls == reference.draw_calls, label
@@ -210,6 +212,8 @@ def test_a_pose_is_replayed_only_where_the_calls_draw_every_part_that_may_show(r
             scene = scene.with_object("robot", transform=Transform(position=(0.0, 0.0, 4.0)))
             drawer.frame(scene, SIZES[0], "half out of view")
             assert drawer.replays == replays + 1
+            assert drawer.renderer.last_frame is not None
+            assert drawer.reference.last_frame is not None
             assert drawer.renderer.last_frame.parts_drawn > (
                 drawer.reference.last_frame.parts_drawn
             )
@@ -343,7 +347,7 @@ def test_a_replay_takes_the_state_it_starts_from_as_known_but_the_framebuffers()
     from mirrorlab.gl.record import known_state, without_repeats
     from mirrorlab.passes.base import gl_state
 
-    found = gl_state()
+    found: dict[str, Any] = gl_state()
     calls = [
         _call("glEnable" if found["GL_DEPTH_TEST"] else "glDisable", GL.GL_DEPTH_TEST),
         _call("glViewport", *found["GL_VIEWPORT"]),

@@ -17,6 +17,7 @@ from mirrorlab.raytrace import trace_scene
 from mirrorlab.scene.model import Scene
 from tests.gl.frames import draw
 from tests.imagecheck import save_failure
+from tests.scenekit import curved_reflector, vec3
 
 SCENE_FILES = sorted(p.stem for p in scenes_dir().glob("*.toml"))
 SIZE = (128, 128)
@@ -36,9 +37,7 @@ def orbit(scene: Scene, frame: int) -> Scene:
         offset[1],
         offset[0] * np.sin(angle) + offset[2] * np.cos(angle),
     )
-    posed = replace(
-        posed, camera=replace(camera, eye=tuple(float(v) for v in target + np.asarray(turned)))
-    )
+    posed = replace(posed, camera=replace(camera, eye=vec3(target + np.asarray(turned))))
     if scene.animation is None and posed.robot is not None and frame >= 2:
         base, lower, upper = posed.robot.angles
         posed = posed.with_angles((base + 6.0 * frame, lower, upper))
@@ -105,12 +104,12 @@ def test_two_facing_mirrors_capture_mirror_in_mirror_at_two_bounces(scene_render
     assert captures == [("east", 1, "west seen from camera"), ("west", 2, "camera")]
     assert draw(scene_renderer, scene, SIZE)[1].ran == ["camera"]
     deeper = replace(scene, max_bounces=3)
-    captures = [
+    deeper_captures = [
         (p.reflector, p.bounce)
         for p in draw(scene_renderer, deeper, SIZE)[1].plan.ran
         if p.name == "capture"
     ]
-    assert captures == [("west", 1), ("east", 2), ("west", 3)]
+    assert deeper_captures == [("west", 1), ("east", 2), ("west", 3)]
 
 
 def test_a_live_cube_is_captured_again_when_an_object_moves_not_the_camera(scene_renderer):
@@ -333,7 +332,7 @@ def test_two_reflectors_sharing_a_program_each_keep_their_technique(scene_render
 
     scene = mirrorlab.load_scene("chrome_sphere")
     left = replace(
-        scene.reflector("sphere"),
+        curved_reflector(scene, "sphere"),
         name="left",
         technique="sphere",
         transform=Transform(position=(-1.1, 0.0, 0.0), scale=(0.8, 0.8, 0.8)),

@@ -50,7 +50,12 @@ def test_frames_drawn_again_into_one_target_are_replayed_as_the_golden_frames(
     frames are the golden frames, and frames were replayed."""
     replays = []
     replay = scene_renderer._replay
-    scene_renderer._replay = lambda *args: replays.append(replay(*args)) or replays[-1]
+
+    def counted_replay(*args):
+        replays.append(replay(*args))
+        return replays[-1]
+
+    scene_renderer._replay = counted_replay
     target = Framebuffer(registry, *SIZE)
     try:
         animated = sequence.frames[0][0].animation is not None

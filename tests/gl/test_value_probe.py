@@ -20,7 +20,9 @@ VARIABLE = {"spheremap": "SPHERE_MAP_GLSL", "cubemap": "CUBE_MAP_GLSL"}
 
 
 def glsl(lab: str) -> str:
-    return re.search(rf'{VARIABLE[lab]} = """(.*?)"""', solution(lab), re.S).group(1)
+    found = re.search(rf'{VARIABLE[lab]} = """(.*?)"""', solution(lab), re.S)
+    assert found is not None
+    return found.group(1)
 
 
 def run(registry, lab: str, text: str) -> dict[str, np.ndarray]:

@@ -14,6 +14,7 @@ import socket
 import subprocess
 import sys
 import tempfile
+from collections.abc import Mapping
 from pathlib import Path
 
 import pytest
@@ -67,7 +68,7 @@ def lab_environment(tmp_path_factory):
 
 
 def mirrorlab_command(
-    *args: str, cwd: Path | None = None, env: dict[str, str | None] | None = None
+    *args: str, cwd: Path | None = None, env: Mapping[str, str | None] | None = None
 ) -> subprocess.CompletedProcess:
     """``mirrorlab ARGS`` as a process of its own (``env``: changes, None removes)."""
     environment = dict(os.environ)

@@ -218,7 +218,9 @@ def test_report_opens_in_chromium_with_every_row_and_picture(graded, classroom, 
     html = dom.stdout
     students = re.findall(r'<tr data-student="([^"]+)"', html)
     assert sorted(students) == sorted(expected)
-    body = re.search(r"<body[^>]*>", html).group(0)
+    found = re.search(r"<body[^>]*>", html)
+    assert found is not None
+    body = found.group(0)
     assert f'data-images-loaded="{len(expected)}"' in body
     assert 'data-images-broken="0"' in body
     # sorted by score, highest first, as the address asked

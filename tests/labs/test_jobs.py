@@ -95,10 +95,12 @@ def test_a_pool_keeps_its_workers_from_the_first_run_to_close():
             o.value for o in pool.run(jobfunctions.process_id, {f"a{i}": (i,) for i in range(6)})
         }
         kept_pool = pool._pool
+        assert kept_pool is not None
         started = set(kept_pool._processes)
         again = {
             o.value for o in pool.run(jobfunctions.process_id, {f"b{i}": (i,) for i in range(6)})
         }
+        assert pool._pool is not None
         now = set(pool._pool._processes)
         assert 1 <= len(started) <= len(now) <= 2 and os.getpid() not in now
         assert first <= started

@@ -183,11 +183,13 @@ def test_grading_with_the_key_passes_the_honest_and_fails_the_copy(released, tmp
     report = (out / "report.html").read_text()
     assert "numbers of Ada_Lovelace" in report
     # the flag sits in the score's cell (the second column, on screen at any width)
-    score_cell = re.search(
+    found = re.search(
         r'<tr data-student="Cy_Twombly"><td[^>]*>[^<]*</td>'
         r'(<td class="score".*?</td>)',
         report,
-    ).group(1)
+    )
+    assert found is not None
+    score_cell = found.group(1)
     assert "copy: the numbers of Ada_Lovelace" in score_cell
     page = html.unescape(
         re.sub(

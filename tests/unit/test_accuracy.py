@@ -15,6 +15,7 @@ from mirrorlab.options import apply_options
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import BoxProxy, DistanceSearch
 from mirrorlab.techniques import technique_names
+from tests.scenekit import curved_reflector, planar_reflector
 
 
 def test_image_error_scores_only_the_masked_pixels():
@@ -139,7 +140,7 @@ def test_without_matplotlib_no_plot_is_written(tmp_path, monkeypatch):
 
 
 def test_the_viewpoints_look_at_the_mirror_from_its_front():
-    mirror = load_scene("lab20").reflector("mirror")
+    mirror = planar_reflector(load_scene("lab20"), "mirror")
     for name, camera in accuracy.lab_viewpoints().items():
         assert camera.eye[0] > -7.0, name
         assert camera.target == (-7.0, 1.0, -2.0)
@@ -198,7 +199,7 @@ def test_planar_configurations_cover_every_capture_mode_and_size_plus_stencil():
     assert [o.get("env_size") for _, o in configs[:2]] == [64, 128]
     lab = load_scene("lab20")
     for label, options in configs:
-        mirror = apply_options(lab, options).reflector("mirror")
+        mirror = planar_reflector(apply_options(lab, options), "mirror")
         assert mirror.technique == label.split("-")[0]
         if label != "stencil":
             assert mirror.capture == options["capture"]
@@ -219,7 +220,7 @@ def test_curved_configurations_stop_at_the_largest_map_the_sweep_bakes():
     assert accuracy.ENVMAP_MAX_SIZE < 2048
     sphere = load_scene("chrome_sphere")
     for label, options in configs:
-        reflector = apply_options(sphere, options).reflector("sphere")
+        reflector = curved_reflector(apply_options(sphere, options), "sphere")
         assert reflector.technique == label.split()[0]
         if label == "cube-live":  # the plain live cube map has no correction
             assert reflector.parallax is None
@@ -248,7 +249,9 @@ def test_the_live_cube_map_is_measured_with_each_proxy_and_each_step_count():
     assert accuracy.search_map_size((512, 1024)) == 512
     room = load_scene("sphere_room")
     boxed = apply_options(room, dict(configs[-10][1]))
-    assert boxed.reflector("sphere").parallax == BoxProxy((-4.0, -2.0, -4.0), (4.0, 4.0, 4.0))
+    assert curved_reflector(boxed, "sphere").parallax == BoxProxy(
+        (-4.0, -2.0, -4.0), (4.0, 4.0, 4.0)
+    )
 
 
 def test_proxies_are_the_box_around_the_objects_and_the_sphere_inside_it():
@@ -278,6 +281,7 @@ def test_a_scene_gets_the_configurations_of_its_kinds_of_reflector():
 def test_panels_of_the_sweep():
     quick = accuracy.SweepSettings.quick()
     lab = accuracy.lab_panel(quick)
+    assert quick.viewpoints is not None
     assert list(lab.viewpoints) == list(quick.viewpoints)
     assert lab.scene == load_scene("lab20") and lab.supersample == 1
     with pytest.raises(ValueError, match="unknown viewpoint 'nowhere'"):

@@ -29,6 +29,7 @@ from mirrorlab.scene.backgrounds import (
 )
 from mirrorlab.scene.loader import SceneError, load_scene
 from mirrorlab.scene.model import Background, CurvedReflector, MeshObject
+from tests.scenekit import curved_reflector
 
 SKY_CUBE = data_path("textures") / "sky_cube"
 LAUNCH = data_path("textures") / "launch.png"
@@ -109,7 +110,9 @@ def test_image_sampler_hits_texel_centres_and_clamps_at_the_edges():
 def test_a_picture_used_as_a_sphere_map_bakes_back_into_itself():
     picture = np.random.default_rng(5).integers(0, 256, size=(64, 64, 3), dtype=np.uint8)
     # a smooth picture, so that bilinear resampling changes little
-    picture = np.asarray(Image.fromarray(picture).resize((8, 8)).resize((64, 64), Image.BILINEAR))
+    picture = np.asarray(
+        Image.fromarray(picture).resize((8, 8)).resize((64, 64), Image.Resampling.BILINEAR)
+    )
     view = math3d.look_at((1.0, 2.0, 5.0), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0))
     environment = sphere_image_environment(picture, view)
     baked = bake_sphere_map(environment, 64, view[:3, :3]).astype(int)
@@ -177,6 +180,7 @@ def test_cone_surroundings_make_the_launch_picture_its_own_sphere_map():
     assert background.kind == "sphere_map" and background.path == LAUNCH.resolve()
     picture = load_picture(LAUNCH).astype(int)
     size = picture.shape[0]
+    assert background.sphere_map_camera is not None
     rotation = background.sphere_map_camera.view()[:3, :3]
     baked = bake_sphere_map(environment_of(background), size, rotation).astype(int)
     t, s = np.mgrid[0:size, 0:size]
@@ -203,7 +207,7 @@ def test_cone_scene_has_the_backdrop_and_the_cone_as_its_reflector():
 
 
 def test_cone_points_at_the_viewer_and_up():
-    model = load_scene("cone").reflector("cone").model_matrix()
+    model = curved_reflector(load_scene("cone"), "cone").model_matrix()
     apex = math3d.transform_points(model, np.array([0.0, 2.4, 0.0]))[:3]
     base = math3d.transform_points(model, np.zeros(3))[:3]
     axis = (apex - base) / np.linalg.norm(apex - base)
@@ -212,12 +216,12 @@ def test_cone_points_at_the_viewer_and_up():
 
 def test_moving_the_reflector_moves_its_centre_and_changes_what_captures_see():
     scene = load_scene("cone")
-    cone = scene.reflector("cone")
+    cone = curved_reflector(scene, "cone")
     centre = cone.center()
     lowered = scene.with_reflector(
         "cone", transform=replace(cone.transform, position=(0.0, 0.5, 0.0))
     )
-    assert np.allclose(lowered.reflector("cone").center() - centre, (0.0, -0.5, 0.0))
+    assert np.allclose(curved_reflector(lowered, "cone").center() - centre, (0.0, -0.5, 0.0))
     assert lowered.content_key() != scene.content_key()
     same = scene.with_reflector("cone", transform=replace(cone.transform))
     assert same == scene and same.content_key() == scene.content_key()
@@ -234,6 +238,7 @@ def test_sphere_map_inverse_and_the_cone_agree_on_what_is_behind_the_viewer():
     # (0, 0, -1), which for the cone's viewer is world -z (the backdrop's side)
     rim = sphere_map_inverse(np.array([1.0]), np.array([0.5]))[0]
     camera = load_scene("cone").background.sphere_map_camera
+    assert camera is not None
     world = camera.view()[:3, :3].T @ rim
     assert world[2] < -0.99
 
@@ -246,6 +251,7 @@ def test_sphere_scene_is_a_unit_chrome_sphere_among_five_objects_in_the_sky():
     assert scene == load_scene("chrome_sphere")
     assert scene.background == Background(kind="sky")
     (sphere,) = scene.reflectors
+    assert isinstance(sphere, CurvedReflector)
     assert sphere.mesh.name == "env_sphere.obj" and np.allclose(sphere.center(), 0.0)
     assert [o.name for o in scene.objects] == [
         "pedestal",

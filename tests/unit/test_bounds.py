@@ -14,7 +14,7 @@ from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.mesh import load_mesh
 from mirrorlab.scene.model import CurvedReflector, Scene
 from mirrorlab.scene.robot import scene_parts
-from tests.scenekit import ball, block, transformed
+from tests.scenekit import ball, block, curved_reflector, transformed
 
 
 def every_point(scene: Scene, leave_out: str = "") -> np.ndarray:
@@ -64,13 +64,13 @@ def test_a_ball_far_away_sets_the_reach():
 
 def test_a_room_closes_its_middle_in_and_an_open_sky_does_not():
     room = load_scene("sphere_room")
-    center = room.reflector("sphere").center()
+    center = curved_reflector(room, "sphere").center()
     assert bounds.encloses(room, center, "sphere")
     without_ceiling = replace(room, objects=tuple(o for o in room.objects if o.name != "ceiling"))
     assert not bounds.encloses(without_ceiling, center, "sphere")
     assert not bounds.encloses(room, (0.0, 1.0, 50.0))  # outside the room
     sky = load_scene("chrome_sphere")
-    assert not bounds.encloses(sky, sky.reflector("sphere").center(), "sphere")
+    assert not bounds.encloses(sky, curved_reflector(sky, "sphere").center(), "sphere")
     assert not bounds.encloses(Scene(name="empty"), np.zeros(3))
 
 

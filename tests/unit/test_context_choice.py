@@ -17,10 +17,15 @@ from mirrorlab.gl.context import (
 
 
 def offscreen(
-    system: str, *, egl: bool = True, display: bool = True, bound: str | None = None, **environ: str
+    system: str,
+    *,
+    egl: bool = True,
+    display: bool = True,
+    bound: str | None = None,
+    environ: dict[str, str] | None = None,
 ) -> Choice:
     return choose_backend(
-        "offscreen", system, egl=egl, display=display, environ=environ, bound=bound
+        "offscreen", system, egl=egl, display=display, environ=environ or {}, bound=bound
     )
 
 
@@ -98,7 +103,7 @@ def test_a_window_on_linux_needs_a_display():
     ],
 )
 def test_the_backend_variable_forces_the_offscreen_backend(forced, egl, display, backend):
-    choice = offscreen("linux", egl=egl, display=display, **{BACKEND_VARIABLE: forced})
+    choice = offscreen("linux", egl=egl, display=display, environ={BACKEND_VARIABLE: forced})
     assert choice.backend == backend
     assert choice.platform == ("egl" if backend == "egl" else "glx")
 
@@ -119,7 +124,7 @@ def test_a_keyword_overrides_the_variable():
 @pytest.mark.parametrize("value", ["glx", "window", "osmesa", "1", "hidden_window"])
 def test_an_unknown_backend_is_one_line_naming_the_variable_and_the_values(value):
     with pytest.raises(GLContextError) as caught:
-        offscreen("linux", **{BACKEND_VARIABLE: value})
+        offscreen("linux", environ={BACKEND_VARIABLE: value})
     assert str(caught.value) == (
         f"MIRRORLAB_GL_BACKEND={value!r} is not a backend; expected one of auto, egl, hidden-window"
     )
@@ -131,7 +136,7 @@ def test_an_unknown_backend_is_one_line_naming_the_variable_and_the_values(value
 @pytest.mark.parametrize("system", ["win32", "darwin"])
 def test_egl_forced_where_there_is_none_says_so(system):
     with pytest.raises(GLContextError) as caught:
-        offscreen(system, **{BACKEND_VARIABLE: "egl"})
+        offscreen(system, environ={BACKEND_VARIABLE: "egl"})
     assert str(caught.value) == (
         f"MIRRORLAB_GL_BACKEND=egl: EGL is used on Linux only, "
         f"not on {system}; unset it or set it to hidden-window"
@@ -140,7 +145,7 @@ def test_egl_forced_where_there_is_none_says_so(system):
 
 def test_a_hidden_window_forced_without_a_display_says_what_to_do():
     with pytest.raises(GLContextError) as caught:
-        offscreen("linux", display=False, **{BACKEND_VARIABLE: "hidden-window"})
+        offscreen("linux", display=False, environ={BACKEND_VARIABLE: "hidden-window"})
     assert str(caught.value) == (
         "MIRRORLAB_GL_BACKEND=hidden-window needs a display "
         "(DISPLAY is not set); run under 'xvfb-run -a', or unset "
@@ -151,7 +156,7 @@ def test_a_hidden_window_forced_without_a_display_says_what_to_do():
 @pytest.mark.parametrize("value, core", [("1", True), ("0", False), ("", False)])
 @pytest.mark.parametrize("system", ["linux", "win32"])
 def test_the_core_variable_asks_for_a_core_context(system, value, core):
-    assert offscreen(system, **{CORE_VARIABLE: value}).core is core
+    assert offscreen(system, environ={CORE_VARIABLE: value}).core is core
     window = choose_backend(
         "window", system, egl=True, display=True, environ={CORE_VARIABLE: value}
     )
@@ -160,7 +165,7 @@ def test_the_core_variable_asks_for_a_core_context(system, value, core):
 
 @pytest.mark.parametrize("value", ["", "0", "1"])
 def test_macos_always_asks_for_a_core_context(value):
-    assert offscreen("darwin", **{CORE_VARIABLE: value}).core
+    assert offscreen("darwin", environ={CORE_VARIABLE: value}).core
     assert choose_backend(
         "offscreen", "darwin", egl=False, display=True, environ={}, core=False
     ).core
@@ -169,7 +174,7 @@ def test_macos_always_asks_for_a_core_context(value):
 @pytest.mark.parametrize("value", ["yes", "true", "2", "core"])
 def test_an_unknown_core_value_is_one_line(value):
     with pytest.raises(GLContextError) as caught:
-        offscreen("linux", **{CORE_VARIABLE: value})
+        offscreen("linux", environ={CORE_VARIABLE: value})
     assert str(caught.value) == (
         f"MIRRORLAB_GL_CORE={value!r} is not allowed; expected 1 "
         f"(ask for an OpenGL 4.1 core context) or 0"

@@ -141,8 +141,8 @@ def test_sphere_map_matches_the_textbook_formula_away_from_the_singular_point(v)
 
 @pytest.mark.parametrize("dtype", DTYPES)
 def test_sphere_map_exactly_at_the_singular_direction_gives_the_fixed_rim_point(dtype):
-    for r in ([0, 0, -1], [0.0, -0.0, -1], [-0.0, -0.0, -5], [0, 0, -1e-30]):
-        r = np.array(r, dtype=dtype)
+    for values in ([0, 0, -1], [0.0, -0.0, -1], [-0.0, -0.0, -5], [0, 0, -1e-30]):
+        r = np.array(values, dtype=dtype)
         s, t = envmap.sphere_map(r)
         assert (float(s), float(t)) == (1.0, 0.5)
         assert np.asarray(s).dtype == dtype
@@ -739,7 +739,7 @@ def test_bake_validation():
     with pytest.raises(ValueError):
         envmap.bake_cube_faces(axis_env, 0)
     with pytest.raises(ValueError):
-        envmap.bake_latlong(axis_env, 8, 2.5)
+        envmap.bake_latlong(axis_env, 8, 2.5)  # type: ignore[arg-type]  # not whole, on purpose
     with pytest.raises(ValueError):
         envmap.bake_sphere_map(axis_env, 8, np.eye(4))
     with pytest.raises(ValueError):

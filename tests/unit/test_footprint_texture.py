@@ -13,6 +13,7 @@ from mirrorlab.plan import TextureState, plan_frame, reflector_footprint
 from mirrorlab.scene.loader import SceneError, from_document, load_scene, scene_to_document
 from mirrorlab.scene.model import FOOTPRINT_STEP, Camera
 from mirrorlab.views import camera_view
+from tests.scenekit import planar_reflector
 
 SIZE = (160, 120)
 
@@ -58,7 +59,7 @@ def test_scene_files_and_options_take_footprint_for_ortho_only():
     document = scene_to_document(lab)
     document["reflectors"][0]["texture_size"] = "footprint"
     scene = from_document(document, lab.source)
-    assert scene.reflector("mirror").texture_size == "footprint"
+    assert planar_reflector(scene, "mirror").texture_size == "footprint"
     assert from_document(scene_to_document(scene), lab.source) == scene  # it round-trips
     document["reflectors"][0]["technique"] = "reflected"
     document["reflectors"][0].pop("ortho", None)
@@ -79,12 +80,12 @@ def test_scene_files_and_options_take_footprint_for_ortho_only():
     # asked for both at once, the size is refused with the option's name
     footprinted = footprint_lab()
     switched = apply_options(footprinted, {"method": "reflected"})
-    assert switched.reflector("mirror").texture_size is None
+    assert planar_reflector(switched, "mirror").texture_size is None
     kept = apply_options(footprinted, {"method": "ortho"})
-    assert kept.reflector("mirror").texture_size == "footprint"
+    assert planar_reflector(kept, "mirror").texture_size == "footprint"
     with pytest.raises(OptionError, match=r"--env-size.*applies to technique 'ortho'"):
         footprint_lab(method="reflected")
     numbered = apply_options(load_scene("lab20"), {"env_size": 64, "method": "reflected"})
-    assert numbered.reflector("mirror").texture_size == 64
+    assert planar_reflector(numbered, "mirror").texture_size == 64
     with pytest.raises(OptionError, match="--env-size"):
         apply_options(load_scene("lab20"), {"env_size": "tiny"})

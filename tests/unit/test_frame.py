@@ -35,7 +35,9 @@ def test_ipython_displays_a_frame_as_its_png():
 @pytest.mark.parametrize("channels", [3, 4])
 def test_the_png_holds_the_pixels(channels):
     image = picture(channels=channels)
-    assert np.array_equal(decoded(Frame(image)._repr_png_()), image)
+    png = Frame(image)._repr_png_()
+    assert png is not None
+    assert np.array_equal(decoded(png), image)
 
 
 @pytest.mark.parametrize(

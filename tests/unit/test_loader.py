@@ -11,7 +11,7 @@ import shutil
 import tomllib
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pytest
@@ -47,6 +47,7 @@ from mirrorlab.scene.model import (
     Scene,
     SphereProxy,
     Transform,
+    Vec3,
 )
 from mirrorlab.techniques import technique_names
 from tests import REPO_DIR
@@ -98,12 +99,14 @@ def test_shipped_names_and_aliases():
 def test_the_lab_file_has_exactly_the_labs_numbers():
     lab = load_scene("lab20")
     (mirror,) = lab.reflectors
+    assert isinstance(mirror, PlanarReflector) and mirror.ortho is not None
     assert mirror.technique == "ortho" and mirror.capture == "copy"
     assert mirror.texture_size is None  # the capture is the size of the frame
     assert [list(c) for c in mirror.corners] == LAB_CORNERS
     assert mirror.ortho.eye == (-7.0, 0.0, 0.0) and mirror.ortho.target == (0.0, 0.0, 0.0)
     assert mirror.ortho.up == (0.0, 1.0, 0.0)
     assert mirror.ortho.extents == (-6.0, 2.0, -3.0, 5.0, 0.0, 15.0)
+    assert lab.robot is not None
     assert lab.robot.angles == (-35.0, 30.0, -75.0) and lab.max_bounces == 1
 
 
@@ -116,6 +119,7 @@ def test_defaults_fill_what_a_file_leaves_out(tmp_path):
     mirror = loads(f'[[reflectors]]\ntechnique = "stencil"\ncorners = {LAB_CORNERS}\n').reflector(
         "mirror"
     )
+    assert isinstance(mirror, PlanarReflector)
     assert mirror.capture == "copy" and mirror.ortho is None and mirror.texture_size is None
     robot = loads("[[objects]]\nangles = [1, 2, 3]\n").objects[0]
     assert robot == RobotObject(angles=(1.0, 2.0, 3.0))
@@ -127,6 +131,7 @@ def test_a_mirror_from_centre_normal_width_and_height():
         "normal = [2, 0, 0]\nwidth = 8\nheight = 8\n"
     )
     mirror = scene.reflector("mirror")
+    assert isinstance(mirror, PlanarReflector)
     assert np.allclose(mirror.normal, (1, 0, 0)) and np.allclose(mirror.center, (-7, 1, -2))
     # Counter-clockwise from the front, starting at the bottom left: the lab's corners.
     assert np.allclose(mirror.corners, LAB_CORNERS)
@@ -134,12 +139,14 @@ def test_a_mirror_from_centre_normal_width_and_height():
         '[[reflectors]]\ntechnique = "ortho"\ncenter = [0, 0, 0]\n'
         "normal = [0, 1, 0]\nwidth = 2\nheight = 4\nup = [0, 0, -1]\n"
     )
-    corners = tilted.reflector("mirror").corner_array
-    assert np.allclose(tilted.reflector("mirror").normal, (0, 1, 0))
+    tilted_mirror = tilted.reflector("mirror")
+    assert isinstance(tilted_mirror, PlanarReflector)
+    corners = tilted_mirror.corner_array
+    assert np.allclose(tilted_mirror.normal, (0, 1, 0))
     assert np.allclose(corners[1] - corners[0], (0, 0, -4))  # height along up
     # width along normal x up: the right of a capture camera looking out of the glass
     assert np.allclose(corners[3] - corners[0], (-2, 0, 0))
-    assert np.allclose(tilted.reflector("mirror").texcoords(), [(0, 0), (0, 1), (1, 1), (1, 0)])
+    assert np.allclose(tilted_mirror.texcoords(), [(0, 0), (0, 1), (1, 1), (1, 0)])
 
 
 def test_file_names_are_relative_to_the_scene_file(tmp_path):
@@ -149,6 +156,7 @@ def test_file_names_are_relative_to_the_scene_file(tmp_path):
     path = tmp_path / "scenes" / "mine.toml"
     path.write_text('[[objects]]\nmesh = "../assets/thing.obj"\n')
     (thing,) = load_scene(path).objects
+    assert isinstance(thing, MeshObject)
     assert thing.name == "thing" and thing.mesh == (tmp_path / "assets" / "thing.obj").resolve()
     assert 'mesh = "../assets/thing.obj"' in dumps(load_scene(path))
 
@@ -161,7 +169,11 @@ def test_a_scene_without_a_file_round_trips_from_the_working_folder(tmp_path, mo
         objects=(MeshObject("m", (tmp_path / "here.obj").resolve()),),
         lights=(),
         reflectors=(
-            PlanarReflector("glass", tuple(tuple(c) for c in LAB_CORNERS), technique="stencil"),
+            PlanarReflector(
+                "glass",
+                cast(tuple[Vec3, Vec3, Vec3, Vec3], tuple(tuple(c) for c in LAB_CORNERS)),
+                technique="stencil",
+            ),
         ),
     )
     text = dumps(scene)
@@ -501,7 +513,9 @@ def test_a_scene_built_in_python_round_trips():
 
 def test_each_parallax_correction_reads_and_round_trips():
     room = load_scene("sphere_room")
-    assert room.reflector("sphere").parallax == BoxProxy((-4.0, -2.0, -4.0), (4.0, 4.0, 4.0))
+    sphere = room.reflector("sphere")
+    assert isinstance(sphere, CurvedReflector)
+    assert sphere.parallax == BoxProxy((-4.0, -2.0, -4.0), (4.0, 4.0, 4.0))
     for parallax in (
         BoxProxy((-4.0, -2.0, -4.0), (4.0, 4.0, 4.0)),
         SphereProxy(2.5),
@@ -513,7 +527,8 @@ def test_each_parallax_correction_reads_and_round_trips():
         assert loads(scene.to_toml(), room.source) == scene
     table = {"proxy": "distance", "steps": 4}
     document = {"reflectors": [{"technique": "cube-live", "mesh": MESH, "parallax": table}]}
-    assert from_document(document).reflectors[0].parallax == DistanceSearch(steps=4)
+    (searched,) = from_document(document).reflectors
+    assert isinstance(searched, CurvedReflector) and searched.parallax == DistanceSearch(steps=4)
 
 
 # --------------------------------------------------------------------------- bad input
@@ -616,7 +631,7 @@ def test_wrong_types_are_named_with_what_was_expected(tmp_path):
     ]
     for path, value, key, words in cases:
         document = base_document()
-        node = document
+        node: Any = document
         for step in path[:-1]:
             node = node[step]
         node[path[-1]] = value
@@ -1385,9 +1400,10 @@ def test_fuzz_cut_and_spliced_scene_text_raises_only_scene_errors(source, data):
 
 
 def test_a_document_that_is_not_a_table_is_refused():
+    value: object
     for value in ([], "scene", 3, None):
         with pytest.raises(SceneError, match="expected a table"):
-            from_document(value)
+            from_document(value)  # type: ignore[arg-type]  # not a table, on purpose
     assert replace(from_document({}), name="x") == Scene("x")
 
 

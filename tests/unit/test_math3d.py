@@ -41,7 +41,9 @@ def test_rotation_is_proper_and_fixes_its_axis(angle, axis):
     r = math3d.rotate(angle, axis)[:3, :3]
     assert np.allclose(r @ r.T, np.eye(3), atol=1e-9)
     assert np.linalg.det(r) == pytest.approx(1.0)
-    assert np.allclose(r @ np.asarray(axis), axis, atol=1e-9 * max(1, np.linalg.norm(axis)))
+    assert np.allclose(
+        r @ np.asarray(axis), axis, atol=1e-9 * max(1.0, float(np.linalg.norm(axis)))
+    )
 
 
 def test_rotation_is_right_handed():

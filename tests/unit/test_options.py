@@ -22,6 +22,7 @@ from mirrorlab.options import (
 )
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import BoxProxy, DistanceSearch, SphereProxy
+from tests.scenekit import curved_reflector, planar_reflector, scene_robot
 
 SKY_CUBE = data_path("textures") / "sky_cube"
 
@@ -60,7 +61,7 @@ def test_camera_options_change_only_their_camera_field(name, value, field, expec
 def test_angles_pose_every_robot_and_nothing_else():
     lab = load_scene("lab20")
     posed = apply_options(lab, {"angles": (10.0, -20.0, 30.0)})
-    assert posed.robot.angles == (10.0, -20.0, 30.0)
+    assert scene_robot(posed).angles == (10.0, -20.0, 30.0)
     assert posed == lab.with_angles((10.0, -20.0, 30.0))
     with pytest.raises(OptionError, match=r"^--angles: scene 'spheremap_cone' has no robot"):
         apply_options(load_scene("cone"), {"angles": (1.0, 2.0, 3.0)})
@@ -86,27 +87,27 @@ def test_method_changes_the_reflectors_of_its_kind_only():
 
 def test_leaving_ortho_drops_the_labs_capture_camera():
     lab = load_scene("lab20")
-    assert lab.reflector("mirror").ortho is not None
-    reflected = apply_options(lab, {"method": "reflected"}).reflector("mirror")
+    assert planar_reflector(lab, "mirror").ortho is not None
+    reflected = planar_reflector(apply_options(lab, {"method": "reflected"}), "mirror")
     assert reflected.technique == "reflected" and reflected.ortho is None
     assert apply_options(lab, {"method": "ortho"}) == lab
 
 
 def test_a_reflectors_source_is_kept_only_where_it_means_the_same():
     cone = load_scene("cone")
-    picture = cone.reflector("cone").source
-    assert apply_options(cone, {"method": "sphere"}).reflector("cone").source == picture
-    assert apply_options(cone, {"method": "normal"}).reflector("cone").source == picture
+    picture = curved_reflector(cone, "cone").source
+    assert curved_reflector(apply_options(cone, {"method": "sphere"}), "cone").source == picture
+    assert curved_reflector(apply_options(cone, {"method": "normal"}), "cone").source == picture
     # A picture is no folder of cube faces, and latlong takes no source: baked instead.
     for method in ("cube", "latlong", "cube-live"):
-        assert apply_options(cone, {"method": method}).reflector("cone").source is None
+        assert curved_reflector(apply_options(cone, {"method": method}), "cone").source is None
     faces = apply_options(
         load_scene("sphere"),
         {"set": ['reflectors[0].technique="cube"', f'reflectors[0].source="{SKY_CUBE}"']},
     )
-    assert faces.reflector("sphere").source == SKY_CUBE
-    assert apply_options(faces, {"method": "sphere"}).reflector("sphere").source is None
-    assert apply_options(faces, {"method": "cube"}).reflector("sphere").source == SKY_CUBE
+    assert curved_reflector(faces, "sphere").source == SKY_CUBE
+    assert curved_reflector(apply_options(faces, {"method": "sphere"}), "sphere").source is None
+    assert curved_reflector(apply_options(faces, {"method": "cube"}), "sphere").source == SKY_CUBE
 
 
 def test_parallax_sets_every_live_cube_map_in_any_form():
@@ -123,12 +124,15 @@ def test_parallax_sets_every_live_cube_map_in_any_form():
     }
     for text, expected in forms.items():
         value = {"proxy": "distance", "steps": 3, "thickness": 0.5} if text == "table" else text
-        assert apply_options(sphere, {"parallax": value}).reflector("sphere").parallax == expected
+        assert (
+            curved_reflector(apply_options(sphere, {"parallax": value}), "sphere").parallax
+            == expected
+        )
     # given before --method in the API, it still applies after it
     both = apply_options(load_scene("sphere"), {"parallax": "sphere:2", "method": "cube-live"})
-    assert both.reflector("sphere").parallax == SphereProxy(2.0)
+    assert curved_reflector(both, "sphere").parallax == SphereProxy(2.0)
     off = apply_options(room, {"parallax": "none"})
-    assert off.reflector("sphere").parallax is None
+    assert curved_reflector(off, "sphere").parallax is None
     assert changed_fields(room.reflector("sphere"), off.reflector("sphere")) == {"parallax"}
     # the planar mirror of a mixed scene is left alone
     mixed = apply_options(load_scene("mirror_and_sphere"), {"parallax": "distance"})
@@ -138,7 +142,7 @@ def test_parallax_sets_every_live_cube_map_in_any_form():
 def test_leaving_cube_live_drops_the_parallax_correction():
     room = load_scene("sphere_room")
     for method in ("cube", "sphere", "latlong"):
-        assert apply_options(room, {"method": method}).reflector("sphere").parallax is None
+        assert curved_reflector(apply_options(room, {"method": method}), "sphere").parallax is None
     assert apply_options(room, {"method": "cube-live"}) == room
 
 
@@ -217,7 +221,7 @@ def test_planar_options_set_every_planar_mirror(name, value, field, expected):
 
 def test_map_size_sets_curved_reflectors_only():
     both = apply_options(load_scene("mirror_and_sphere"), {"map_size": 64})
-    assert both.reflector("sphere").map_size == 64
+    assert curved_reflector(both, "sphere").map_size == 64
     assert both.reflector("mirror") == load_scene("mirror_and_sphere").reflector("mirror")
     with pytest.raises(OptionError, match=r"^--map-size: scene 'lab20' has no curved reflector"):
         apply_options(load_scene("lab20"), {"map_size": 64})
@@ -247,8 +251,8 @@ def test_set_changes_any_key_path_as_a_file_would():
         },
     )
     assert deep.camera.eye == (12.0, 3.0, 9.0)
-    assert deep.robot.angles == (0.0, 0.0, 0.0)
-    assert deep.reflector("mirror").backing == (0.1, 0.2, 0.3)
+    assert scene_robot(deep).angles == (0.0, 0.0, 0.0)
+    assert planar_reflector(deep, "mirror").backing == (0.1, 0.2, 0.3)
     parsed = apply_options(lab, {"set": (("max_bounces", 2), ("description", "x"))})
     assert (parsed.max_bounces, parsed.description) == (2, "x")
     bare = apply_options(lab, {"set": ["name=my_lab"]})  # a bare word is a string
@@ -349,11 +353,13 @@ def test_every_option_has_a_flag_and_parses_its_text():
         value = option.parse(option.flag, texts[name])
         assert apply_options(lab, {name: value}) != lab, name
     assert (
-        apply_options(
-            load_scene("sphere"), {"map_size": OPTION_NAMES["map_size"].parse("--map-size", "64")}
-        )
-        .reflector("sphere")
-        .map_size
+        curved_reflector(
+            apply_options(
+                load_scene("sphere"),
+                {"map_size": OPTION_NAMES["map_size"].parse("--map-size", "64")},
+            ),
+            "sphere",
+        ).map_size
         == 64
     )
     live = apply_options(
@@ -363,7 +369,7 @@ def test_every_option_has_a_flag_and_parses_its_text():
             "parallax": OPTION_NAMES["parallax"].parse("--parallax", "sphere:4"),
         },
     )
-    assert live.reflector("sphere").parallax == SphereProxy(4.0)
+    assert curved_reflector(live, "sphere").parallax == SphereProxy(4.0)
 
 
 def test_set_key_walks_into_nested_tables_and_arrays():
@@ -428,34 +434,44 @@ def test_set_changes_a_mirror_given_by_centre_normal_and_size(tmp_path, capsys):
     path = tmp_path / "centred.toml"
     path.write_text(CENTERED_MIRROR)
     scene = load_scene(path)
-    wider = apply_options(scene, {"set": "reflectors[0].width=12"}).reflector("mirror")
+    wider = planar_reflector(apply_options(scene, {"set": "reflectors[0].width=12"}), "mirror")
     corners = wider.corner_array
     assert np.allclose(np.ptp(corners, axis=0), (0.0, 6.0, 12.0))
     assert np.allclose(wider.center, (-7.0, 1.0, -2.0))
     assert np.allclose(wider.normal, (1.0, 0.0, 0.0))
-    moved = apply_options(
-        scene, {"set": ("reflectors[0].center=[-6, 2, 0]", "reflectors[0].height=2")}
-    ).reflector("mirror")
+    moved = planar_reflector(
+        apply_options(
+            scene, {"set": ("reflectors[0].center=[-6, 2, 0]", "reflectors[0].height=2")}
+        ),
+        "mirror",
+    )
     assert np.allclose(moved.center, (-6.0, 2.0, 0.0))
     assert np.allclose(np.ptp(moved.corner_array, axis=0), (0.0, 2.0, 8.0))
-    turned = apply_options(scene, {"set": "reflectors[0].normal=[1, 0, 1]"}).reflector("mirror")
+    turned = planar_reflector(
+        apply_options(scene, {"set": "reflectors[0].normal=[1, 0, 1]"}), "mirror"
+    )
     assert np.allclose(turned.normal, np.array([1.0, 0.0, 1.0]) / np.sqrt(2))
     # corners then replace the whole form
-    given = apply_options(
-        scene,
-        {
-            "set": (
-                "reflectors[0].width=12",
-                "reflectors[0].corners=[[0,0,0],[0,1,0],[0,1,1],[0,0,1]]",
-            )
-        },
-    ).reflector("mirror")
+    given = planar_reflector(
+        apply_options(
+            scene,
+            {
+                "set": (
+                    "reflectors[0].width=12",
+                    "reflectors[0].corners=[[0,0,0],[0,1,0],[0,1,1],[0,0,1]]",
+                )
+            },
+        ),
+        "mirror",
+    )
     assert np.allclose(given.corner_array[2], (0.0, 1.0, 1.0))
     assert main(["plan", str(path), "--set", "reflectors[0].width=12", "--frames", "1"]) == 0
     capsys.readouterr()
     # the shipped lab's mirror is given by corners: a rectangle, so it takes width too
     lab = apply_options(load_scene("lab20"), {"set": "reflectors[0].width=4"})
-    assert np.allclose(np.ptp(lab.reflector("mirror").corner_array, axis=0), (0.0, 8.0, 4.0))
+    assert np.allclose(
+        np.ptp(planar_reflector(lab, "mirror").corner_array, axis=0), (0.0, 8.0, 4.0)
+    )
 
 
 def test_set_refuses_a_size_for_a_mirror_whose_corners_are_no_rectangle(tmp_path):

@@ -9,6 +9,7 @@ import pytest
 import mirrorlab
 from mirrorlab import math3d
 from mirrorlab.app.picking import framebuffer_pixel, pick_reflector, pixel_ray
+from tests.scenekit import curved_reflector, planar_reflector
 
 
 def project(scene, point, size):
@@ -33,7 +34,7 @@ def test_the_ray_through_a_pixel_passes_through_what_projects_there():
 @pytest.mark.parametrize("size", [(320, 240), (100, 300)])
 def test_picks_the_nearest_reflector_under_the_pixel(size):
     scene = mirrorlab.load_scene("mirror_and_sphere")
-    mirror, sphere = scene.reflector("mirror"), scene.reflector("sphere")
+    mirror, sphere = planar_reflector(scene, "mirror"), curved_reflector(scene, "sphere")
     # The sphere stands in front of the mirror's middle: it wins there.
     assert pick_reflector(scene, size, project(scene, sphere.center(), size)) == 1
     corner = mirror.corner_array[0] * 0.9 + mirror.center * 0.1
@@ -57,6 +58,8 @@ def test_window_coordinates_become_framebuffer_pixels_on_a_high_dpi_screen():
     assert framebuffer_pixel((5.0, 5.0), (0, 0), (0, 0)) is None
     # The same point of the scene is picked either way.
     scene = mirrorlab.load_scene("mirror_and_sphere")
-    sphere = project(scene, scene.reflector("sphere").center(), (800, 600))
+    sphere = project(scene, curved_reflector(scene, "sphere").center(), (800, 600))
     cursor = (sphere[0] / 2, sphere[1] / 2)
-    assert pick_reflector(scene, (800, 600), framebuffer_pixel(cursor, (400, 300), (800, 600))) == 1
+    pixel = framebuffer_pixel(cursor, (400, 300), (800, 600))
+    assert pixel is not None
+    assert pick_reflector(scene, (800, 600), pixel) == 1

@@ -28,6 +28,7 @@ from mirrorlab.scene.model import (
     Transform,
 )
 from mirrorlab.views import View, camera_view
+from tests.scenekit import curved_reflector, planar_reflector, scene_robot
 
 SIZE = (64, 64)
 LAB_CENTER = (-7.0, 1.0, -2.0)
@@ -210,7 +211,7 @@ def test_another_reflectors_proxy_is_part_of_what_a_capture_shows():
     # the sphere's captures show the ball, in which the sphere is plain, and are kept.
     room = load_scene("sphere_room")
     ball = replace(
-        room.reflector("sphere"),
+        curved_reflector(room, "sphere"),
         name="ball",
         parallax=None,
         transform=Transform(position=(-0.7, 0.3, 0.6), scale=(0.35, 0.35, 0.35)),
@@ -382,7 +383,7 @@ def test_without_the_plan_a_mirror_with_no_capture_camera_is_drawn_plain():
 
 def view_plans(plan: FramePlan):
     """Every view plan of a frame with the reflector it was made for (None: the camera)."""
-    pending = [(plan.top, None)]
+    pending: list[tuple[ViewPlan, str | None]] = [(plan.top, None)]
     for step in plan.passes:
         pending += [(view, step.reflector) for view in step.views]
     while pending:
@@ -444,7 +445,7 @@ def test_a_moved_curved_reflector_is_captured_again_from_its_new_centre():
     scene = load_scene("mirror_and_sphere")
     state = TextureState()
     run(scene, state)
-    sphere = scene.reflector("sphere")
+    sphere = curved_reflector(scene, "sphere")
     moved = scene.with_reflector(
         "sphere", transform=Transform(position=(-2.0, 2.5, 0.0), scale=sphere.transform.scale)
     )
@@ -452,7 +453,7 @@ def test_a_moved_curved_reflector_is_captured_again_from_its_new_centre():
     assert ("sphere", 2) in ran_captures(plan)
     (capture,) = [p for p in plan.ran if p.reflector == "sphere" and p.bounce == 2]
     assert all(v.view.eye is not None for v in capture.views)
-    assert all(abs(v.view.eye[1] - 2.5) < 1e-9 for v in capture.views)
+    assert all(v.view.eye is not None and abs(v.view.eye[1] - 2.5) < 1e-9 for v in capture.views)
 
 
 def test_a_still_camera_has_one_read_only_view_and_a_moved_one_a_new_view():
@@ -494,14 +495,18 @@ def test_a_still_viewers_mirror_views_are_worked_out_once_and_a_moved_mirror_ane
     def mirror_view(scene: Scene) -> View:
         plan = plan_frame(scene, SIZE, TextureState())
         (draw,) = plan.top.shown
-        return draw.nested.view if method == "stencil" else draw.source
+        if method == "stencil":
+            assert draw.nested is not None
+            return draw.nested.view
+        assert draw.source is not None
+        return draw.source
 
     view = mirror_view(lab)
-    base, shoulder, elbow = lab.robot.angles
+    base, shoulder, elbow = scene_robot(lab).angles
     assert mirror_view(lab.with_angles((base, shoulder + 20.0, elbow))) is view
     with pytest.raises(ValueError, match="read-only"):
         view.cull_test()[0, 0] = 1.0
-    mirror = lab.reflector("mirror")
+    mirror = planar_reflector(lab, "mirror")
     moved = lab.with_reflector(
         "mirror",
         corners=tuple(  # a quarter unit off its plane
@@ -630,7 +635,7 @@ def test_the_plan_memo_plans_an_animated_robots_frames_once():
     ):
         scene = apply_options(load_scene("lab20"), {"method": method})
         memo, state = PlanMemo(), TextureState()
-        base, lower, upper = scene.robot.angles
+        base, lower, upper = scene_robot(scene).angles
         seen = []
         for turn in range(6):
             posed = scene.with_angles((base, lower, upper + turn))

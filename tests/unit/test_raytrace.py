@@ -21,6 +21,7 @@ from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import Camera, Light
 from mirrorlab.scene.robot import model_file
 from tests.imagecheck import mirror_mask
+from tests.scenekit import planar_reflector
 
 LIGHT = np.array([0.0, 1.0, 0.0])
 NO_LIGHT = [(LIGHT, (0.0, 0.0, 0.0))]
@@ -178,8 +179,10 @@ def test_the_lab_scene_as_a_ray_scene():
     lab = load_scene("lab20")
     rays = ray_scene(lab)
     mirror = rays.surfaces[-1]
-    assert mirror.reflective and np.allclose(mirror.vertices, lab.reflector("mirror").corners)
-    assert mirror.backing == lab.reflector("mirror").backing
+    assert mirror.reflective and np.allclose(
+        mirror.vertices, planar_reflector(lab, "mirror").corners
+    )
+    assert mirror.backing == planar_reflector(lab, "mirror").backing
     assert len(rays.surfaces) == 7 + 1  # six robot parts and the frame, then the mirror
     (light,) = lab.lights
     assert np.allclose(rays.lights[0][1], np.asarray(light.color) * light.intensity)
@@ -193,8 +196,9 @@ def test_trace_scene_marks_each_pixel_with_the_reflector_it_meets_first():
     scene = replace(lab, camera=camera, objects=())  # nothing in front of the glass
     width, height = 40, 30
     traced = trace_scene(scene, (width, height))
-    inside = mirror_mask(scene.reflector("mirror"), camera, width, height, inset_px=1.0)
+    inside = mirror_mask(planar_reflector(scene, "mirror"), camera, width, height, inset_px=1.0)
     assert inside.sum() > 150
+    assert traced.reflector is not None
     assert np.all(traced.reflector[inside] == 0) and np.all(traced.reflective_mask[inside])
     assert np.all((traced.reflector == 0) == traced.reflective_mask)
     assert np.all(traced.reflector[~traced.reflective_mask] == -1)

@@ -20,6 +20,7 @@ def test_bands_give_the_picture_of_one_band(size, supersample):
     assert np.array_equal(whole.to_uint8(), banded.to_uint8())
     assert np.array_equal(whole.image, banded.image)
     assert np.array_equal(whole.reflective_mask, banded.reflective_mask)
+    assert whole.reflector is not None and banded.reflector is not None
     assert np.array_equal(whole.reflector, banded.reflector)
     assert banded.image.shape == (size[1], size[0], 3)
 

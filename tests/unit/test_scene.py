@@ -2,6 +2,7 @@
 camera, transforms, the ``with_*`` changes and keyframe animation."""
 
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -129,13 +130,14 @@ def test_the_lab_scene_draws_the_robots_parts_and_the_frame():
         "robot.hand",
         "mirror_frame",
     ]
+    assert lab.robot is not None
     graph = robot_graph(lab.robot)
     assert all(
         graph[name].angle == angle
         for name, angle in zip(JOINT_NAMES, (-35.0, 30.0, -75.0), strict=True)
     )
     (base,) = [p for p in parts if p.name == "robot.base"]
-    assert base.texture is not None and base.texture.name == "metal.png"
+    assert isinstance(base.texture, Path) and base.texture.name == "metal.png"
     (hand,) = [p for p in parts if p.name == "robot.hand"]
     assert np.allclose(hand.model[:3, 3], hand_center(lab.robot))
 
@@ -185,8 +187,15 @@ def test_a_robot_with_a_joint_angle_that_is_not_finite_is_refused():
 # --------------------------------------------------------------------------- the mirror
 
 
+def lab_mirror() -> PlanarReflector:
+    """The lab scene's flat mirror."""
+    mirror = load_scene("lab20").reflector("mirror")
+    assert isinstance(mirror, PlanarReflector)
+    return mirror
+
+
 def test_capture_camera_uses_the_labs_numbers():
-    capture = load_scene("lab20").reflector("mirror").ortho_capture
+    capture = lab_mirror().ortho_capture
     assert capture.extents == (-6, 2, -3, 5, 0, 15)
     assert np.allclose(capture.view(), math3d.look_at((-7, 0, 0), (0, 0, 0), (0, 1, 0)))
     assert np.allclose(capture.projection(), math3d.ortho(-6, 2, -3, 5, 0, 15))
@@ -204,7 +213,7 @@ def test_mirror_is_the_labs_quad_facing_the_robot():
 
 @given(st.floats(-3, 5), st.floats(-6, 2))
 def test_a_point_on_the_mirror_maps_to_the_quads_texture_coordinate(y, z):
-    mirror = load_scene("lab20").reflector("mirror")
+    mirror = lab_mirror()
     p = np.array([-7.0, y, z])
     capture = mirror.ortho_capture
     clip = math3d.transform_points(capture.projection() @ capture.view(), p)
@@ -217,7 +226,7 @@ def test_a_point_on_the_mirror_maps_to_the_quads_texture_coordinate(y, z):
 
 
 def test_capture_depth_range_covers_from_mirror_to_fifteen_units_out():
-    capture = load_scene("lab20").reflector("mirror").ortho_capture
+    capture = lab_mirror().ortho_capture
     vp = capture.projection() @ capture.view()
     for x, ndc_z in ((-7, -1.0), (8, 1.0)):
         clip = math3d.transform_points(vp, np.array([x, 0.0, 0.0]))
@@ -236,8 +245,9 @@ def test_a_derived_capture_sits_on_the_glass_and_looks_out_along_its_normal():
 
 def test_mirror_image_point_helper_is_consistent_with_texcoords():
     scene = load_scene("lab20")
+    assert scene.robot is not None
     hand = hand_center(scene.robot)
-    on_mirror = mirror_image_point(scene.reflector("mirror"), hand)
+    on_mirror = mirror_image_point(lab_mirror(), hand)
     assert on_mirror[0] == pytest.approx(-7)
     assert np.allclose(on_mirror[1:], hand[1:])
 
@@ -299,14 +309,21 @@ def test_interpolate_is_linear_between_keys_and_holds_outside():
     assert interpolate(vectors, 1) == (1.0, -2.0, 0.5)
 
 
+def robot_angles_at(scene: Scene, frame: int) -> tuple[float, float, float]:
+    """The joint angles of ``scene``'s robot at ``frame``, in degrees."""
+    robot = scene.at_frame(frame).robot
+    assert robot is not None
+    return robot.angles
+
+
 def test_robot_wave_holds_then_moves_its_joints_between_keyframes():
     scene = load_scene("robot_wave")
     assert scene.frame_count == 24
-    still = [scene.at_frame(f).robot.angles for f in range(5)]
+    still = [robot_angles_at(scene, f) for f in range(5)]
     assert still == [(-35.0, 30.0, -75.0)] * 5
-    assert scene.at_frame(8).robot.angles == pytest.approx((-5.0, 20.0, -52.5))
-    assert scene.at_frame(12).robot.angles == (25.0, 10.0, -30.0)
-    assert scene.at_frame(23).robot.angles == (-60.0, 40.0, -100.0)
+    assert robot_angles_at(scene, 8) == pytest.approx((-5.0, 20.0, -52.5))
+    assert robot_angles_at(scene, 12) == (25.0, 10.0, -30.0)
+    assert robot_angles_at(scene, 23) == (-60.0, 40.0, -100.0)
     assert scene.at_frame(8).camera == scene.camera
     assert scene.at_frame(8).reflectors == scene.reflectors
     for frame in (-1, 24):

@@ -21,6 +21,7 @@ from mirrorlab import math3d
 from mirrorlab.app.demo import ZOOM_FACTOR, Orbit
 from mirrorlab.options import apply_options
 from tests.imagecheck import assert_images_close, save_failure
+from tests.scenekit import curved_reflector, planar_reflector
 from tests.window.xwindow import (
     GIVE_UP_S,
     Demo,
@@ -123,7 +124,9 @@ def test_every_control_of_the_lab_demo(xdisplay, lab_demo, tmp_path):
     with mirrorlab.Renderer((WIDTH, HEIGHT)) as renderer:
         renderer.render(mirrorlab.load_scene("lab20"))
         capture = renderer.read_texture("mirror")
-    shrunk = np.asarray(Image.fromarray(capture).resize((96, 72), Image.BILINEAR)).astype(int)
+    shrunk = np.asarray(
+        Image.fromarray(capture).resize((96, 72), Image.Resampling.BILINEAR)
+    ).astype(int)
     # where the capture differs from what the frame shows there (the frame's own mirror
     # shows a copy of the capture, smaller)
     drawn = np.abs(shrunk - first[box]).max(axis=-1) > 40
@@ -221,7 +224,7 @@ def test_number_keys_and_inset_follow_the_reflector_under_the_mouse(xdisplay):
         scene = mirrorlab.load_scene("mirror_and_sphere")
         orbit = Orbit.from_eye(scene.camera.eye, scene.camera.target)
         before = settled(d, window, 0, "the first frame")
-        sphere = scene.reflector("sphere")
+        sphere = curved_reflector(scene, "sphere")
         move_pointer(d, window, *pixel_of("mirror_and_sphere", sphere.center(), orbit))
         press(d, window, "4")  # the fourth curved technique: a static cube map
         after = shows(d, window, "sphere: cube -")
@@ -239,7 +242,7 @@ def test_number_keys_and_inset_follow_the_reflector_under_the_mouse(xdisplay):
         assert changed_pixels(after[strip], inset[strip]) > 2000
         press(d, window, "e")
         # Over the mirror (away from the sphere), 3 makes the mirror a stencil mirror.
-        mirror = scene.reflector("mirror")
+        mirror = planar_reflector(scene, "mirror")
         corner = mirror.corner_array[0] * 0.8 + mirror.center * 0.2
         move_pointer(d, window, *pixel_of("mirror_and_sphere", corner, orbit))
         press(d, window, "3")

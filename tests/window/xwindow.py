@@ -90,6 +90,7 @@ def screenshot(d, window) -> np.ndarray:
         d.flush()
     assert viewable, f"window {window.id:#x} is not viewable (unmapped or closed)"
     assert on_screen, f"window {window.id:#x} is not wholly on the screen"
+    assert raw is not None
     pixels = np.frombuffer(raw.data, np.uint8).reshape(geometry.height, geometry.width, 4)
     return pixels[..., [2, 1, 0]].copy()  # BGRX -> RGB
 
