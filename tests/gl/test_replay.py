@@ -17,8 +17,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import mirrorlab
+from mirrorlab.draw_path import DrawPath
 from mirrorlab.gl.resources import Framebuffer
-from mirrorlab.options import DrawPath, apply_options
+from mirrorlab.options import apply_options
 from mirrorlab.plan import TextureState, plan_frame
 from mirrorlab.renderer import SceneRenderer
 from mirrorlab.scene.model import Transform

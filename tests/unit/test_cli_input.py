@@ -147,4 +147,5 @@ def test_every_command_module_is_a_command_of_the_parser():
     assert {command.__name__.rsplit(".", 1)[1] for command in COMMANDS} == modules
     assert all(command.__name__.endswith("." + command.NAME) for command in COMMANDS)
     subparsers = next(a for a in build_parser()._actions if a.dest == "command")
+    assert subparsers.choices is not None
     assert list(subparsers.choices) == [command.NAME for command in COMMANDS]
