@@ -168,11 +168,16 @@ def test_attacks_harm_nothing_outside(graded, canaries):
     assert (canaries / "delete_me.txt").read_text() == "canary\n"
     assert (canaries / "overwrite_me.txt").read_text() == "canary\n"
     assert sorted(p.name for p in canaries.iterdir()) == ["delete_me.txt", "overwrite_me.txt"]
-    # no sandboxed process outlives its run (the fork bomb's included)
+    # No sandboxed process outlives its run (the fork bomb's included). A sandboxed process
+    # runs as UID_BASE + the id of the process that asked for the run, which waits for the
+    # run to end: one whose asker is gone has outlived its run. (A run that other tests
+    # make at the same time, beside this one, still has its asker.)
     leftovers = [
         entry.name
         for entry in Path("/proc").iterdir()
-        if entry.name.isdigit() and _uid(entry) >= UID_BASE
+        if entry.name.isdigit()
+        and _uid(entry) >= UID_BASE
+        and not Path(f"/proc/{_uid(entry) - UID_BASE}").exists()
     ]
     assert leftovers == []
 
