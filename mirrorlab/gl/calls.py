@@ -5,16 +5,18 @@ mirrorlab's raw entry points (:data:`mirrorlab.gl.opengl.RAW`), each under its G
 the renderer (the labs' executor and legacy emulation, the overlay, tests) calls PyOpenGL
 itself, and nothing here touches it.
 
-**Recording.** ``with recording(calls):`` records every call made through :data:`gl` and
-:data:`raw` while it is entered that can change GL state, in order, into the list ``calls``
-(a list of ``(function, args, kwargs)``: the PyOpenGL function, not a wrapper), and still
-makes each call: what is recorded is what ran. Recording is the layers' own state:
-outside a recording a layer's attributes ARE the PyOpenGL functions (a call through it
-costs what one through PyOpenGL's module does); while one is entered the state-changing
-ones are the layer's recording wrappers, which append, then call. No attribute of
-PyOpenGL's modules, nor of ``RAW``, is ever replaced, so a GL call made outside the
-layer, by anyone, is neither recorded nor slowed. Queries (``glGet*``, ``glIs*``) are
-not recorded: a replayed ``glGetError`` would swallow an error the replay made.
+**Recording.** ``with recording(calls):`` records every call the calling thread makes
+through :data:`gl` and :data:`raw` while it is entered that can change GL state, in order,
+into the list ``calls`` (``(function, args, kwargs)``: the PyOpenGL function, not a
+wrapper), and still makes each call: what is recorded is what ran. (A GL context is
+current in one thread: another thread's calls are its own.) Recording is the layers' own
+state: outside a recording a layer's attributes ARE the PyOpenGL functions (a call
+through it costs what one through PyOpenGL's module does); while one is entered the
+state-changing ones are the layer's recording wrappers, which append, then call. No
+attribute of PyOpenGL's modules, nor of ``RAW``, is ever replaced, so a GL call made
+outside the layer, by anyone, is neither recorded nor slowed. Queries (``glGet*``,
+``glIs*``) are not recorded: a replayed ``glGetError`` would swallow an error the replay
+made.
 
 **Replaying.** Code that would make exactly the same calls again (a frame planned as the
 last one was, drawn by the same renderer into the same target) makes the list again
@@ -36,6 +38,7 @@ replayed frame draws the objects' new pose, sent to the views' buffers first).
 from __future__ import annotations
 
 import ctypes
+import threading
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from types import ModuleType, SimpleNamespace
@@ -56,9 +59,11 @@ def _changes_state(name: str) -> bool:
 class GLCalls:
     """The GL functions of ``namespace`` (every callable whose name starts with ``gl``) as
     attributes of the same names, kept in the instance's own dictionary: looking one up
-    costs what looking it up in ``namespace`` does. While :func:`recording` is entered,
-    the attributes of the functions that can change GL state are wrappers that append the
-    call to the recording's list, then make it."""
+    costs what looking it up in ``namespace`` does. While :func:`recording` is entered
+    (in any thread), the attributes of the functions that can change GL state are
+    wrappers that make the call, first appending it to the list of the recording the
+    calling thread is in, if any (a GL context is current in one thread: each thread's
+    calls are its own)."""
 
     if TYPE_CHECKING:
 
@@ -72,13 +77,15 @@ class GLCalls:
                 functions[name] = value
         self._functions: dict[str, Callable[..., Any]] = functions
         self._wrappers: dict[str, Callable[..., Any]] | None = None  # made at first use
-        self._into: list[Call] | None = None  # the list being recorded into
+        self._thread = threading.local()  # .into: the list this thread records into
+        self._recordings = 0  # the threads recording
+        self._lock = threading.Lock()
         self.__dict__.update(functions)
 
     @property
     def recording(self) -> bool:
-        """Whether calls through this layer are being recorded."""
-        return self._into is not None
+        """Whether the calling thread's calls through this layer are being recorded."""
+        return getattr(self._thread, "into", None) is not None
 
     def _recording_wrappers(self) -> dict[str, Callable[..., Any]]:
         if self._wrappers is None:
@@ -90,24 +97,32 @@ class GLCalls:
         return self._wrappers
 
     def _wrapper(self, function: Callable[..., Any]) -> Callable[..., Any]:
+        thread = self._thread
+
         def recorded(*args: Any, **kwargs: Any) -> Any:
-            into = self._into
-            assert into is not None  # the wrappers are attributes only while recording
-            into.append((function, args, kwargs))
+            into = getattr(thread, "into", None)
+            if into is not None:
+                into.append((function, args, kwargs))
             return function(*args, **kwargs)
 
         recorded.__name__ = getattr(function, "__name__", "recorded")
         return recorded
 
     def _record_into(self, into: list[Call]) -> None:
-        if self._into is not None:
-            raise RuntimeError("the GL calls are being recorded already")
-        self._into = into
-        self.__dict__.update(self._recording_wrappers())
+        if self.recording:
+            raise RuntimeError("this thread's GL calls are being recorded already")
+        self._thread.into = into
+        with self._lock:
+            self._recordings += 1
+            if self._recordings == 1:
+                self.__dict__.update(self._recording_wrappers())
 
     def _stop_recording(self) -> None:
-        self.__dict__.update(self._functions)
-        self._into = None
+        self._thread.into = None
+        with self._lock:
+            self._recordings -= 1
+            if self._recordings == 0:
+                self.__dict__.update(self._functions)
 
 
 gl = GLCalls(GL)
@@ -118,9 +133,9 @@ raw = GLCalls(RAW)
 
 @contextmanager
 def recording(into: list[Call]) -> Iterator[None]:
-    """Append to ``into``, while entered, every call made through :data:`gl` and
-    :data:`raw` that can change GL state (in order, with its arguments as given; see the
-    replay rule above). Recordings do not nest."""
+    """Append to ``into``, while entered, every call the calling thread makes through
+    :data:`gl` and :data:`raw` that can change GL state (in order, with its arguments as
+    given; see the replay rule above). Recordings do not nest."""
     gl._record_into(into)
     try:
         raw._record_into(into)

@@ -6,13 +6,15 @@ made outside the layer while a frame records is neither recorded nor wrapped."""
 from __future__ import annotations
 
 import ast
+import threading
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 from OpenGL import GL as PYOPENGL_GL
 
 import mirrorlab
-from mirrorlab.gl.calls import Call, gl, raw, recording
+from mirrorlab.gl.calls import Call, GLCalls, gl, raw, recording
 from mirrorlab.gl.opengl import GL, RAW
 from mirrorlab.gl.resources import Framebuffer
 from mirrorlab.renderer import SceneRenderer
@@ -158,3 +160,30 @@ def test_recordings_do_not_nest_and_an_error_inside_stops_one():
         with recording([]):
             pass
     assert not gl.recording and not raw.recording and raw.glEnable is RAW.glEnable
+
+
+def test_another_threads_calls_through_a_recording_layer_are_made_and_not_recorded():
+    """A recording holds the calls of the thread that made it (a GL context is current in
+    one thread): a call another thread makes through the layer meanwhile is made, and
+    recorded nowhere. (A layer over a namespace of plain functions: no other thread here
+    has a context.)"""
+    made: list[int] = []
+
+    def glEnable(cap: int) -> None:
+        made.append(cap)
+
+    layer = GLCalls(SimpleNamespace(glEnable=glEnable))
+    calls: list[Call] = []
+    layer._record_into(calls)
+    try:
+        seen: list[bool] = []
+        thread = threading.Thread(target=lambda: (seen.append(layer.recording), layer.glEnable(2)))
+        thread.start()
+        thread.join()
+        layer.glEnable(1)
+        assert layer.recording and seen == [False]
+    finally:
+        layer._stop_recording()
+    assert made == [2, 1]
+    assert calls == [(glEnable, (1,), {})]
+    assert layer.glEnable is glEnable and not layer.recording
