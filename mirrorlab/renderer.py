@@ -20,9 +20,9 @@ import numpy as np
 
 from mirrorlab.bounds import ObjectArrays, scene_index
 from mirrorlab.draw_path import DrawPath
+from mirrorlab.gl.calls import Call, for_replay, gl, known_state, recording, replay
 from mirrorlab.gl.context import ResourceRegistry, gl_pass, gl_version, require_gl_version
 from mirrorlab.gl.opengl import GL
-from mirrorlab.gl.record import CallRecorder, for_replay, known_state, replay
 from mirrorlab.gl.resources import RenderTarget, Texture2D, TextureCube
 from mirrorlab.passes.base import (
     ReflectorPass,
@@ -84,7 +84,7 @@ class FrameStats:
 @dataclass(eq=False)
 class RecordedFrame:
     """A frame's GL calls from its first pass to its end, made ready to be made again
-    (:func:`~mirrorlab.gl.record.for_replay`), for the frames after it planned the same
+    (:func:`~mirrorlab.gl.calls.for_replay`), for the frames after it planned the same
     way: what it was drawn into and with (``key``: target, size and options), the GL
     state it started from (``found``), the ``objects``
     (:class:`~mirrorlab.bounds.ObjectArrays`) it drew, the ``views`` it drew them in
@@ -237,7 +237,7 @@ class SceneRenderer:
             require_gl_version(RENDERER_GL_VERSION, "mirrorlab's renderer (GLSL 3.30)")
         self._scene = scene
         self._scissor = None
-        GL.glDisable(GL.GL_SCISSOR_TEST)  # a pass made for a new scene draws unscissored
+        gl.glDisable(GL.GL_SCISSOR_TEST)  # a pass made for a new scene draws unscissored
         names = {r.name: r for r in scene.reflectors}
         for name in list(self._passes):
             if name not in names or self._passes[name][0] != _pass_key(
@@ -307,11 +307,11 @@ class SceneRenderer:
             self._recorded = recorded
             assert self.last_frame is not None
             return self.last_frame
-        # Recording costs a patch of every GL entry point: only a frame planned as the
-        # last one was, which the next one may be too, pays it.
-        recorder = CallRecorder() if view is None and self.memo.reused else None
-        stats = self._run(scene, plan, target, found, start, use_plan, recorder)
-        if recorder is not None:
+        # Recording costs a wrapper around each call: only a frame planned as the last
+        # one was, which the next one may be too, pays it.
+        recorded_calls: list[Call] | None = [] if view is None and self.memo.reused else None
+        stats = self._run(scene, plan, target, found, start, use_plan, recorded_calls)
+        if recorded_calls is not None:
             views = tuple(_drawn_views(plan))
             objects = scene_index(scene).objects_part
             self._recorded = RecordedFrame(
@@ -321,7 +321,7 @@ class SceneRenderer:
                 views,
                 use_plan,
                 self.drawer.follows_pose(objects, views, use_plan),
-                for_replay(recorder.calls, known_state(found)),
+                for_replay(recorded_calls, known_state(found)),
                 stats,
             )
         return stats
@@ -366,9 +366,10 @@ class SceneRenderer:
         found: dict[str, object],
         start: float,
         use_plan: bool,
-        recorder: CallRecorder | None = None,
+        recorded_calls: list[Call] | None = None,
     ) -> FrameStats:
-        """Run the frame's plan: with ``recorder``, record its GL calls from the first
+        """Run the frame's plan: with a list ``recorded_calls``, record into it the GL
+        calls made through mirrorlab's layer (:mod:`mirrorlab.gl.calls`) from the first
         pass on (the views' data, sent before, is not in them)."""
         self._scissor = None
         self._cull = use_plan
@@ -377,9 +378,9 @@ class SceneRenderer:
         index = scene_index(scene)
         try:
             self.drawer.prepare(scene, _drawn_views(plan), use_plan)
-            with recorder or nullcontext():
+            with nullcontext() if recorded_calls is None else recording(recorded_calls):
                 try:
-                    GL.glDisable(GL.GL_SCISSOR_TEST)  # from the caller's state
+                    gl.glDisable(GL.GL_SCISSOR_TEST)  # from the caller's state
                     for step in plan.passes:
                         if not step.runs or step.name == "camera":
                             continue
@@ -420,12 +421,12 @@ class SceneRenderer:
         outer = self._scissor
         if stencil_level == 0:
             target.bind()
-            GL.glViewport(0, 0, *view.size)
-            GL.glStencilMask(0xFF)
-            GL.glClearColor(*scene.background.color, 1.0)
-            GL.glClearStencil(0)
+            gl.glViewport(0, 0, *view.size)
+            gl.glStencilMask(0xFF)
+            gl.glClearColor(*scene.background.color, 1.0)
+            gl.glClearStencil(0)
             self._set_scissor(cleared)  # whatever is drawn, all of it is cleared
-            GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT | GL.GL_STENCIL_BUFFER_BIT)
+            gl.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT | GL.GL_STENCIL_BUFFER_BIT)
         # Only the pixels that matter are rasterised (a capture's glass, a stencil
         # mirror's): a scissor cannot change a pixel the plan says is ever seen.
         self._set_scissor(plan.scissor)
@@ -466,10 +467,10 @@ class SceneRenderer:
         if rectangle == self._scissor:
             return
         if rectangle is None:
-            GL.glDisable(GL.GL_SCISSOR_TEST)
+            gl.glDisable(GL.GL_SCISSOR_TEST)
         else:
-            GL.glEnable(GL.GL_SCISSOR_TEST)
-            GL.glScissor(*rectangle)
+            gl.glEnable(GL.GL_SCISSOR_TEST)
+            gl.glScissor(*rectangle)
         self._scissor = rectangle
 
     def release(self) -> None:

@@ -720,6 +720,11 @@ _glfw_windows: list[object] = []
 (``glfw.terminate``, which closes every window) only after the last is released."""
 
 
+def _ignore_glfw_error(code: int, description: str) -> None:
+    """GLFW's error callback for mirrorlab's windows: nothing (a failed ``glfw.init`` or
+    window is raised as :class:`GLContextError` by the code that asked for it)."""
+
+
 class WindowContext(Context):
     """A glfw window with an OpenGL context (GLX on X11, WGL on Windows, CGL on macOS):
     visible (the ``window`` backend, :func:`window_context`) or hidden (the
@@ -757,7 +762,7 @@ class WindowContext(Context):
         self.backend = "window" if visible else "hidden-window"
         where = f"display {display!r}" if kind == "linux" else "this desktop"
         if not _glfw_windows:
-            glfw.ERROR_REPORTING = "ignore"
+            glfw.set_error_callback(_ignore_glfw_error)  # a failure is raised below
             if kind == "linux" and hasattr(glfw, "PLATFORM"):  # GLFW 3.4's init hint
                 # X11 (GLX, as PyOpenGL is bound), also on a Wayland desktop (XWayland)
                 glfw.init_hint(glfw.PLATFORM, glfw.PLATFORM_X11)

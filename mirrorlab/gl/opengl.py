@@ -1,6 +1,8 @@
 """PyOpenGL's ``GL`` namespace, imported only after :mod:`mirrorlab.gl.context` has chosen
-the platform. Modules that call GL directly import it from here (``from
-mirrorlab.gl.opengl import GL``), so import order can never pick the wrong platform.
+the platform. Modules that use GL import it from here (``from mirrorlab.gl.opengl import
+GL``), so import order can never pick the wrong platform. The renderer, its passes and
+the resource wrappers take only constants from it and make their calls through
+mirrorlab's layer, :mod:`mirrorlab.gl.calls` (``gl`` and ``raw``), which can record them.
 
 ``RAW`` holds PyOpenGL's raw entry points of the calls a frame makes around itself
 (saving and restoring the state it changes) and of those whose wrappers convert their

@@ -21,8 +21,9 @@ from typing import Protocol
 import numpy as np
 
 from mirrorlab.errors import GLLimitError
+from mirrorlab.gl.calls import gl, raw
 from mirrorlab.gl.context import GLContextError, ResourceRegistry, unchecked
-from mirrorlab.gl.opengl import GL, RAW
+from mirrorlab.gl.opengl import GL
 from mirrorlab.shaders import shader_source
 
 
@@ -89,26 +90,26 @@ class Program(_Resource):
         shaders: list[int] = []
         for name, kind in ((vertex, GL.GL_VERTEX_SHADER), (fragment, GL.GL_FRAGMENT_SHADER)):
             version, _, body = expand_includes(name).partition("\n")
-            shader = GL.glCreateShader(kind)
-            GL.glShaderSource(shader, f"{version}\n{header}{body}")
-            GL.glCompileShader(shader)
-            if not GL.glGetShaderiv(shader, GL.GL_COMPILE_STATUS):
-                log = GL.glGetShaderInfoLog(shader).decode(errors="replace").strip()
-                GL.glDeleteShader(shader)
+            shader = gl.glCreateShader(kind)
+            gl.glShaderSource(shader, f"{version}\n{header}{body}")
+            gl.glCompileShader(shader)
+            if not gl.glGetShaderiv(shader, GL.GL_COMPILE_STATUS):
+                log = gl.glGetShaderInfoLog(shader).decode(errors="replace").strip()
+                gl.glDeleteShader(shader)
                 for done in shaders:
-                    GL.glDeleteShader(done)
+                    gl.glDeleteShader(done)
                 raise GLContextError(f"shader {name} did not compile: {log}")
             shaders.append(shader)
-        self.name = GL.glCreateProgram()
+        self.name = gl.glCreateProgram()
         for shader in shaders:
-            GL.glAttachShader(self.name, shader)
-        GL.glLinkProgram(self.name)
+            gl.glAttachShader(self.name, shader)
+        gl.glLinkProgram(self.name)
         for shader in shaders:
-            GL.glDetachShader(self.name, shader)
-            GL.glDeleteShader(shader)
-        if not GL.glGetProgramiv(self.name, GL.GL_LINK_STATUS):
-            log = GL.glGetProgramInfoLog(self.name).decode(errors="replace").strip()
-            GL.glDeleteProgram(self.name)
+            gl.glDetachShader(self.name, shader)
+            gl.glDeleteShader(shader)
+        if not gl.glGetProgramiv(self.name, GL.GL_LINK_STATUS):
+            log = gl.glGetProgramInfoLog(self.name).decode(errors="replace").strip()
+            gl.glDeleteProgram(self.name)
             raise GLContextError(f"program {vertex}+{fragment} did not link: {log}")
         self.label = f"{vertex}+{fragment}"
         self._locations: dict[str, int] = {}
@@ -116,13 +117,13 @@ class Program(_Resource):
         super().__init__(registry)
 
     def use(self) -> None:
-        GL.glUseProgram(self.name)
+        gl.glUseProgram(self.name)
 
     def location(self, uniform: str) -> int:
         """Uniform location (cached); KeyError if the program has no active uniform by that name."""
         loc = self._locations.get(uniform)
         if loc is None:
-            loc = int(GL.glGetUniformLocation(self.name, uniform))
+            loc = int(gl.glGetUniformLocation(self.name, uniform))
             if loc < 0:
                 raise KeyError(f"program {self.label} has no active uniform {uniform!r}")
             self._locations[uniform] = loc
@@ -150,59 +151,59 @@ class Program(_Resource):
         data = np.asarray(matrix, dtype=np.float32)
         location = self.location(uniform)
         if not self._unchanged(location, data.tobytes()):
-            RAW.glUniformMatrix4fv(location, 1, GL.GL_TRUE, data)
+            raw.glUniformMatrix4fv(location, 1, GL.GL_TRUE, data)
 
     def set_mat3(self, uniform: str, matrix: np.ndarray) -> None:
         """Set a ``(3, 3)`` row-major (numpy) matrix."""
         data = np.asarray(matrix, dtype=np.float32)
         location = self.location(uniform)
         if not self._unchanged(location, data.tobytes()):
-            GL.glUniformMatrix3fv(location, 1, GL.GL_TRUE, data)
+            gl.glUniformMatrix3fv(location, 1, GL.GL_TRUE, data)
 
     def set_vec2(self, uniform: str, value) -> None:
         x, y = (float(v) for v in value)
         location = self.location(uniform)
         if not self._unchanged(location, ("2f", x, y)):
-            GL.glUniform2f(location, x, y)
+            gl.glUniform2f(location, x, y)
 
     def set_vec3(self, uniform: str, value) -> None:
         x, y, z = (float(v) for v in value)
         location = self.location(uniform)
         if not self._unchanged(location, ("3f", x, y, z)):
-            GL.glUniform3f(location, x, y, z)
+            gl.glUniform3f(location, x, y, z)
 
     def set_vec4(self, uniform: str, value) -> None:
         x, y, z, w = (float(v) for v in value)
         location = self.location(uniform)
         if not self._unchanged(location, ("4f", x, y, z, w)):
-            GL.glUniform4f(location, x, y, z, w)
+            gl.glUniform4f(location, x, y, z, w)
 
     def set_vec3_array(self, uniform: str, values: np.ndarray) -> None:
         """Set a ``vec3`` array uniform from ``values`` ``(n, 3)``."""
         data = np.asarray(values, dtype=np.float32)
         location = self.location(uniform)
         if not self._unchanged(location, data.tobytes()):
-            RAW.glUniform3fv(location, len(data), data)
+            raw.glUniform3fv(location, len(data), data)
 
     def set_float(self, uniform: str, value: float) -> None:
         location = self.location(uniform)
         if not self._unchanged(location, ("1f", float(value))):
-            GL.glUniform1f(location, float(value))
+            gl.glUniform1f(location, float(value))
 
     def set_int(self, uniform: str, value: int) -> None:
         location = self.location(uniform)
         if not self._unchanged(location, ("1i", int(value))):
-            GL.glUniform1i(location, int(value))
+            gl.glUniform1i(location, int(value))
 
     def _free(self) -> None:
-        GL.glDeleteProgram(self.name)
+        gl.glDeleteProgram(self.name)
 
 
 def check_texture_size(width: int, height: int, what: str, cube: bool = False) -> None:
     """GLLimitError naming ``what`` when a ``width`` x ``height`` texture (a cube map's face,
     with ``cube``) is larger than this GL allows."""
     limit_name = "GL_MAX_CUBE_MAP_TEXTURE_SIZE" if cube else "GL_MAX_TEXTURE_SIZE"
-    limit = int(np.asarray(GL.glGetIntegerv(getattr(GL, limit_name))).reshape(-1)[0])
+    limit = int(np.asarray(gl.glGetIntegerv(getattr(GL, limit_name))).reshape(-1)[0])
     if width > limit or height > limit:
         raise GLLimitError(
             f"{what} is {width}x{height}, larger than this OpenGL allows ({limit_name} {limit})"
@@ -224,14 +225,14 @@ class Texture2D(_Resource):
         what: str = "a texture",
     ) -> None:
         check_texture_size(width, height, what)
-        self.name = int(GL.glGenTextures(1))
+        self.name = int(gl.glGenTextures(1))
         self.width, self.height = int(width), int(height)
         self.mipmaps = mipmaps
         alpha = pixels is not None and pixels.shape[-1] == 4
-        GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
-        GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
+        gl.glBindTexture(GL.GL_TEXTURE_2D, self.name)
+        gl.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
         data = None if pixels is None else np.ascontiguousarray(pixels[::-1])
-        GL.glTexImage2D(
+        gl.glTexImage2D(
             GL.GL_TEXTURE_2D,
             0,
             GL.GL_RGBA8 if alpha else GL.GL_RGB8,
@@ -243,17 +244,17 @@ class Texture2D(_Resource):
             data,
         )
         wrap = GL.GL_CLAMP_TO_EDGE if clamp else GL.GL_REPEAT
-        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_S, wrap)
-        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, wrap)
-        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR)
+        gl.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_S, wrap)
+        gl.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, wrap)
+        gl.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR)
         if mipmaps:
-            GL.glGenerateMipmap(GL.GL_TEXTURE_2D)
+            gl.glGenerateMipmap(GL.GL_TEXTURE_2D)
             min_filter = GL.GL_LINEAR_MIPMAP_LINEAR
         else:
             min_filter = GL.GL_LINEAR
-        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, min_filter)
+        gl.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, min_filter)
         if not mipmaps:
-            GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAX_LEVEL, 0)
+            gl.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAX_LEVEL, 0)
         super().__init__(registry)
 
     @classmethod
@@ -279,8 +280,8 @@ class Texture2D(_Resource):
         return cls(registry, width, height, None, mipmaps=False, clamp=True)
 
     def bind(self, unit: int = 0) -> None:
-        GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
-        GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
+        gl.glActiveTexture(GL.GL_TEXTURE0 + unit)
+        gl.glBindTexture(GL.GL_TEXTURE_2D, self.name)
 
     def copy_from_framebuffer(
         self,
@@ -304,15 +305,15 @@ class Texture2D(_Resource):
                 f"a {width}x{height} copy reaches outside the {source[0]}x"
                 f"{source[1]} framebuffer it reads"
             )
-        GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
+        gl.glBindTexture(GL.GL_TEXTURE_2D, self.name)
         if (int(width), int(height)) == (self.width, self.height):
             x, y, w, h = (0, 0, int(width), int(height)) if region is None else region
             x0, y0 = max(int(x), 0), max(int(y), 0)
             x1, y1 = min(int(x + w), int(width)), min(int(y + h), int(height))
             if x1 > x0 and y1 > y0:
-                GL.glCopyTexSubImage2D(GL.GL_TEXTURE_2D, 0, x0, y0, x0, y0, x1 - x0, y1 - y0)
+                gl.glCopyTexSubImage2D(GL.GL_TEXTURE_2D, 0, x0, y0, x0, y0, x1 - x0, y1 - y0)
             return
-        GL.glCopyTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB, 0, 0, int(width), int(height), 0)
+        gl.glCopyTexImage2D(GL.GL_TEXTURE_2D, 0, GL.GL_RGB, 0, 0, int(width), int(height), 0)
         self.width, self.height = int(width), int(height)
 
     def allocate(self, width: int, height: int) -> None:
@@ -320,8 +321,8 @@ class Texture2D(_Resource):
         into); a no-op when it already has that size."""
         if (int(width), int(height)) == (self.width, self.height):
             return
-        GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
-        GL.glTexImage2D(
+        gl.glBindTexture(GL.GL_TEXTURE_2D, self.name)
+        gl.glTexImage2D(
             GL.GL_TEXTURE_2D,
             0,
             GL.GL_RGB8,
@@ -336,14 +337,14 @@ class Texture2D(_Resource):
 
     def read(self) -> np.ndarray:
         """Level 0 as ``(height, width, 3)`` uint8, row 0 at the top."""
-        GL.glBindTexture(GL.GL_TEXTURE_2D, self.name)
-        GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
-        data = GL.glGetTexImage(GL.GL_TEXTURE_2D, 0, GL.GL_RGB, GL.GL_UNSIGNED_BYTE)
+        gl.glBindTexture(GL.GL_TEXTURE_2D, self.name)
+        gl.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
+        data = gl.glGetTexImage(GL.GL_TEXTURE_2D, 0, GL.GL_RGB, GL.GL_UNSIGNED_BYTE)
         pixels = np.frombuffer(data, dtype=np.uint8).reshape(self.height, self.width, 3)
         return pixels[::-1].copy()
 
     def _free(self) -> None:
-        GL.glDeleteTextures([self.name])
+        gl.glDeleteTextures([self.name])
 
 
 PACK_INVERT_MESA = 0x8758
@@ -359,7 +360,7 @@ def read_pixels(
     C-contiguous ``(height, width, 3)`` uint8 array, is where GL writes them first
     (bottom row first, as GL keeps them), and they are copied over in the other order
     (one is made when not given)."""
-    pixel_store = unchecked(GL.glPixelStorei)  # an error shows at the caller's check
+    pixel_store = unchecked(gl.glPixelStorei)  # an error shows at the caller's check
     pixel_store(GL.GL_PACK_ALIGNMENT, 1)
     # Into an array of ours: PyOpenGL's own result array and its conversion cost 0.8 ms
     # of Python at 512 x 512, more than the driver's copy (0.27 ms).
@@ -367,13 +368,13 @@ def read_pixels(
         image = np.empty((height, width, 3), dtype=np.uint8)
         pixel_store(PACK_INVERT_MESA, 1)
         try:
-            RAW.glReadPixels(0, 0, width, height, GL.GL_RGB, GL.GL_UNSIGNED_BYTE, image)
+            raw.glReadPixels(0, 0, width, height, GL.GL_RGB, GL.GL_UNSIGNED_BYTE, image)
         finally:
             pixel_store(PACK_INVERT_MESA, 0)  # glGetTexImage follows it too
         return image
     if rows is None:
         rows = np.empty((height, width, 3), dtype=np.uint8)
-    RAW.glReadPixels(0, 0, width, height, GL.GL_RGB, GL.GL_UNSIGNED_BYTE, rows)
+    raw.glReadPixels(0, 0, width, height, GL.GL_RGB, GL.GL_UNSIGNED_BYTE, rows)
     return rows[::-1].copy()
 
 
@@ -397,7 +398,7 @@ class _FramebufferObject(_Resource):
         return self.width, self.height
 
     def bind(self) -> None:
-        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
+        gl.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
 
     def read(self) -> np.ndarray:
         """Colour as ``(height, width, 3)`` uint8, row 0 at the top (a new array)."""
@@ -419,34 +420,34 @@ class Framebuffer(_FramebufferObject):
     def __init__(self, registry: ResourceRegistry, width: int, height: int) -> None:
         if width < 1 or height < 1:
             raise ValueError(f"framebuffer size must be positive, got {width}x{height}")
-        max_size = int(GL.glGetIntegerv(GL.GL_MAX_RENDERBUFFER_SIZE))
+        max_size = int(gl.glGetIntegerv(GL.GL_MAX_RENDERBUFFER_SIZE))
         if width > max_size or height > max_size:
             raise ValueError(
                 f"framebuffer size {width}x{height} exceeds this GL's limit of {max_size}"
             )
         self.width, self.height = int(width), int(height)
-        self.name = int(GL.glGenFramebuffers(1))
-        self._renderbuffers = [int(n) for n in np.atleast_1d(GL.glGenRenderbuffers(2))]
-        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
+        self.name = int(gl.glGenFramebuffers(1))
+        self._renderbuffers = [int(n) for n in np.atleast_1d(gl.glGenRenderbuffers(2))]
+        gl.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
         for rb, fmt, attachment in zip(
             self._renderbuffers,
             (self.COLOR_FORMAT, GL.GL_DEPTH24_STENCIL8),
             (GL.GL_COLOR_ATTACHMENT0, GL.GL_DEPTH_STENCIL_ATTACHMENT),
             strict=True,
         ):
-            GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, rb)
-            GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, fmt, self.width, self.height)
-            GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, attachment, GL.GL_RENDERBUFFER, rb)
-        status = GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
+            gl.glBindRenderbuffer(GL.GL_RENDERBUFFER, rb)
+            gl.glRenderbufferStorage(GL.GL_RENDERBUFFER, fmt, self.width, self.height)
+            gl.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, attachment, GL.GL_RENDERBUFFER, rb)
+        status = gl.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
         if status != GL.GL_FRAMEBUFFER_COMPLETE:
-            GL.glDeleteRenderbuffers(2, self._renderbuffers)
-            GL.glDeleteFramebuffers(1, [self.name])
+            gl.glDeleteRenderbuffers(2, self._renderbuffers)
+            gl.glDeleteFramebuffers(1, [self.name])
             raise GLContextError(f"framebuffer {width}x{height} incomplete (status {status:#x})")
         super().__init__(registry)
 
     def _free(self) -> None:
-        GL.glDeleteRenderbuffers(2, self._renderbuffers)
-        GL.glDeleteFramebuffers(1, [self.name])
+        gl.glDeleteRenderbuffers(2, self._renderbuffers)
+        gl.glDeleteFramebuffers(1, [self.name])
 
 
 class TextureFramebuffer(_FramebufferObject):
@@ -460,55 +461,55 @@ class TextureFramebuffer(_FramebufferObject):
     def __init__(self, registry: ResourceRegistry, texture: Texture2D) -> None:
         self.texture = texture
         self.width, self.height = texture.width, texture.height
-        self.name = int(GL.glGenFramebuffers(1))
-        self._depth = int(GL.glGenRenderbuffers(1))
-        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
-        GL.glFramebufferTexture2D(
+        self.name = int(gl.glGenFramebuffers(1))
+        self._depth = int(gl.glGenRenderbuffers(1))
+        gl.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
+        gl.glFramebufferTexture2D(
             GL.GL_FRAMEBUFFER, GL.GL_COLOR_ATTACHMENT0, GL.GL_TEXTURE_2D, texture.name, 0
         )
-        GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, self._depth)
-        GL.glRenderbufferStorage(
+        gl.glBindRenderbuffer(GL.GL_RENDERBUFFER, self._depth)
+        gl.glRenderbufferStorage(
             GL.GL_RENDERBUFFER, GL.GL_DEPTH24_STENCIL8, self.width, self.height
         )
-        GL.glFramebufferRenderbuffer(
+        gl.glFramebufferRenderbuffer(
             GL.GL_FRAMEBUFFER, GL.GL_DEPTH_STENCIL_ATTACHMENT, GL.GL_RENDERBUFFER, self._depth
         )
-        status = GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
+        status = gl.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
         if status != GL.GL_FRAMEBUFFER_COMPLETE:
-            GL.glDeleteRenderbuffers(1, [self._depth])
-            GL.glDeleteFramebuffers(1, [self.name])
+            gl.glDeleteRenderbuffers(1, [self._depth])
+            gl.glDeleteFramebuffers(1, [self.name])
             raise GLContextError(
                 f"texture framebuffer {self.width}x{self.height} incomplete (status {status:#x})"
             )
         super().__init__(registry)
 
     def _free(self) -> None:
-        GL.glDeleteRenderbuffers(1, [self._depth])
-        GL.glDeleteFramebuffers(1, [self.name])
+        gl.glDeleteRenderbuffers(1, [self._depth])
+        gl.glDeleteFramebuffers(1, [self.name])
 
 
 class TimerQuery(_Resource):
     """GPU time of the commands between :meth:`begin` and :meth:`end` (GL_TIME_ELAPSED)."""
 
     def __init__(self, registry: ResourceRegistry) -> None:
-        self.name = int(np.asarray(GL.glGenQueries(1)).reshape(-1)[0])
+        self.name = int(np.asarray(gl.glGenQueries(1)).reshape(-1)[0])
         super().__init__(registry)
 
     def begin(self) -> None:
-        GL.glBeginQuery(GL.GL_TIME_ELAPSED, self.name)
+        gl.glBeginQuery(GL.GL_TIME_ELAPSED, self.name)
 
     def end(self) -> None:
-        GL.glEndQuery(GL.GL_TIME_ELAPSED)
+        gl.glEndQuery(GL.GL_TIME_ELAPSED)
 
     def milliseconds(self) -> float:
         """The elapsed time of the last begin/end pair; waits for it to be available."""
         # The 32-bit query (PyOpenGL 3.1 cannot convert the 64-bit one's result type)
         # holds up to 4.29 s, far more than a frame.
-        nanoseconds = GL.glGetQueryObjectuiv(self.name, GL.GL_QUERY_RESULT)
+        nanoseconds = gl.glGetQueryObjectuiv(self.name, GL.GL_QUERY_RESULT)
         return float(np.asarray(nanoseconds).reshape(-1)[0]) / 1e6
 
     def _free(self) -> None:
-        GL.glDeleteQueries(1, [self.name])
+        gl.glDeleteQueries(1, [self.name])
 
 
 class DefaultFramebuffer:
@@ -525,11 +526,11 @@ class DefaultFramebuffer:
         return self._size_source()
 
     def bind(self) -> None:
-        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
+        gl.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
 
     def read(self) -> np.ndarray:
         self.bind()
-        GL.glReadBuffer(GL.GL_BACK)
+        gl.glReadBuffer(GL.GL_BACK)
         width, height = self.size
         return read_pixels(width, height)
 
@@ -538,20 +539,20 @@ def upload_mesh(vertices: np.ndarray, indices: np.ndarray) -> tuple[int, int, in
     """A new VAO over a new interleaved VBO of ``vertices`` ``(n, 8)`` float32 (location 0
     position xyz, 1 normal xyz, 2 uv) and an index buffer of ``indices`` (flat uint32);
     returns the names ``(vao, vbo, ebo)``, the VAO unbound. Whoever calls it deletes them."""
-    vao = int(GL.glGenVertexArrays(1))
-    vbo, ebo = (int(n) for n in GL.glGenBuffers(2))
-    GL.glBindVertexArray(vao)
-    GL.glBindBuffer(GL.GL_ARRAY_BUFFER, vbo)
-    GL.glBufferData(GL.GL_ARRAY_BUFFER, vertices.nbytes, vertices, GL.GL_STATIC_DRAW)
-    GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, ebo)
-    GL.glBufferData(GL.GL_ELEMENT_ARRAY_BUFFER, indices.nbytes, indices, GL.GL_STATIC_DRAW)
+    vao = int(gl.glGenVertexArrays(1))
+    vbo, ebo = (int(n) for n in gl.glGenBuffers(2))
+    gl.glBindVertexArray(vao)
+    gl.glBindBuffer(GL.GL_ARRAY_BUFFER, vbo)
+    gl.glBufferData(GL.GL_ARRAY_BUFFER, vertices.nbytes, vertices, GL.GL_STATIC_DRAW)
+    gl.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, ebo)
+    gl.glBufferData(GL.GL_ELEMENT_ARRAY_BUFFER, indices.nbytes, indices, GL.GL_STATIC_DRAW)
     stride = vertices.shape[1] * vertices.itemsize
     for location, (size, offset) in enumerate(((3, 0), (3, 12), (2, 24))):
-        GL.glEnableVertexAttribArray(location)
-        GL.glVertexAttribPointer(
+        gl.glEnableVertexAttribArray(location)
+        gl.glVertexAttribPointer(
             location, size, GL.GL_FLOAT, GL.GL_FALSE, stride, GL.GLvoidp(offset)
         )
-    GL.glBindVertexArray(0)
+    gl.glBindVertexArray(0)
     return vao, vbo, ebo
 
 
@@ -582,18 +583,18 @@ class MeshBuffer(_Resource):
         """Replace the vertices with ``vertices`` ``(n, 8)`` of the same count (a mesh that
         moves: one ``glBufferSubData``)."""
         vertices = np.ascontiguousarray(vertices, dtype=np.float32)
-        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, self.vbo)
-        GL.glBufferSubData(GL.GL_ARRAY_BUFFER, 0, vertices.nbytes, vertices)
-        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, 0)
+        gl.glBindBuffer(GL.GL_ARRAY_BUFFER, self.vbo)
+        gl.glBufferSubData(GL.GL_ARRAY_BUFFER, 0, vertices.nbytes, vertices)
+        gl.glBindBuffer(GL.GL_ARRAY_BUFFER, 0)
 
     def draw(self) -> None:
         """One ``glDrawElements`` call for the whole mesh."""
-        GL.glBindVertexArray(self.vao)
-        GL.glDrawElements(GL.GL_TRIANGLES, self.index_count, GL.GL_UNSIGNED_INT, None)
+        gl.glBindVertexArray(self.vao)
+        gl.glDrawElements(GL.GL_TRIANGLES, self.index_count, GL.GL_UNSIGNED_INT, None)
 
     def _free(self) -> None:
-        GL.glDeleteVertexArrays(1, [self.vao])
-        GL.glDeleteBuffers(2, [self.vbo, self.ebo])
+        gl.glDeleteVertexArrays(1, [self.vao])
+        gl.glDeleteBuffers(2, [self.vbo, self.ebo])
 
 
 class Buffer(_Resource):
@@ -601,7 +602,7 @@ class Buffer(_Resource):
     draw commands): :meth:`upload` keeps the storage it has when the data fits."""
 
     def __init__(self, registry: ResourceRegistry) -> None:
-        self.name = int(GL.glGenBuffers(1))
+        self.name = int(gl.glGenBuffers(1))
         self.capacity = 0
         self.size = 0
         super().__init__(registry)
@@ -609,16 +610,16 @@ class Buffer(_Resource):
     def upload(self, target: int, data: np.ndarray) -> None:
         """Bind to ``target`` and fill with ``data`` (any contiguous array)."""
         data = np.ascontiguousarray(data)
-        GL.glBindBuffer(target, self.name)
+        gl.glBindBuffer(target, self.name)
         if data.nbytes > self.capacity:
-            GL.glBufferData(target, data.nbytes, data, GL.GL_DYNAMIC_DRAW)
+            gl.glBufferData(target, data.nbytes, data, GL.GL_DYNAMIC_DRAW)
             self.capacity = data.nbytes
         elif data.nbytes:
-            RAW.glBufferSubData(target, 0, data.nbytes, data)
+            raw.glBufferSubData(target, 0, data.nbytes, data)
         self.size = data.nbytes
 
     def _free(self) -> None:
-        GL.glDeleteBuffers(1, [self.name])
+        gl.glDeleteBuffers(1, [self.name])
 
 
 class PackedMeshes(_Resource):
@@ -650,17 +651,17 @@ class PackedMeshes(_Resource):
             self._add_part_attributes()
 
     def _add_part_attributes(self) -> None:
-        GL.glBindVertexArray(self.vao)
+        gl.glBindVertexArray(self.vao)
         for column in range(8):
-            GL.glEnableVertexAttribArray(PART_LOCATION + column)
-            GL.glVertexAttribDivisor(PART_LOCATION + column, 1)
-        GL.glBindVertexArray(0)
+            gl.glEnableVertexAttribArray(PART_LOCATION + column)
+            gl.glVertexAttribDivisor(PART_LOCATION + column, 1)
+        gl.glBindVertexArray(0)
 
     def bind_parts(self, buffer: int, first_part: int = 0) -> None:
         """Read the parts' data from ``buffer`` (the vertex array bound first), from part
         ``first_part`` on: instance ``i`` of a draw whose base instance is ``b`` reads
         part ``first_part + b + i``. Leaves ``buffer`` bound to ``GL_ARRAY_BUFFER``."""
-        RAW.glBindBuffer(GL.GL_ARRAY_BUFFER, buffer)
+        raw.glBindBuffer(GL.GL_ARRAY_BUFFER, buffer)
         self.point_parts(first_part)
 
     def point_parts(self, first_part: int) -> None:
@@ -669,7 +670,7 @@ class PackedMeshes(_Resource):
         instances are missing (OpenGL 4.1), a draw's first instance is chosen this way."""
         start = PART_BYTES * int(first_part)
         for column in range(8):
-            RAW.glVertexAttribPointer(
+            raw.glVertexAttribPointer(
                 PART_LOCATION + column,
                 4,
                 GL.GL_FLOAT,
@@ -699,14 +700,14 @@ class PackedMeshes(_Resource):
         return placed
 
     def bind(self) -> None:
-        GL.glBindVertexArray(self.vao)
+        gl.glBindVertexArray(self.vao)
 
     def draw_instanced(
         self, first_index: int, count: int, base_vertex: int, instances: int
     ) -> None:
         """``instances`` instances of one mesh's triangles (bound first, its parts
         attributes pointed at the first instance's part: :meth:`point_parts`)."""
-        RAW.glDrawElementsInstancedBaseVertex(
+        raw.glDrawElementsInstancedBaseVertex(
             GL.GL_TRIANGLES,
             count,
             GL.GL_UNSIGNED_INT,
@@ -719,7 +720,7 @@ class PackedMeshes(_Resource):
         """``count`` draws from the bound ``GL_DRAW_INDIRECT_BUFFER``'s commands
         (``(count, instances, first index, base vertex, base instance)`` uint32 each),
         starting at command ``first_command`` (bound first)."""
-        GL.glMultiDrawElementsIndirect(
+        gl.glMultiDrawElementsIndirect(
             GL.GL_TRIANGLES,
             GL.GL_UNSIGNED_INT,
             GL.GLvoidp(INDIRECT_COMMAND_BYTES * first_command),
@@ -729,8 +730,8 @@ class PackedMeshes(_Resource):
 
     def _free(self) -> None:
         if self.vao:
-            GL.glDeleteVertexArrays(1, [self.vao])
-            GL.glDeleteBuffers(2, [self.vbo, self.ebo])
+            gl.glDeleteVertexArrays(1, [self.vao])
+            gl.glDeleteBuffers(2, [self.vbo, self.ebo])
         self.vao = self.vbo = self.ebo = 0
 
 
@@ -772,14 +773,14 @@ class TextureCube(_Resource):
                     f"cube faces must be (6, {size}, {size}, 3) uint8, got "
                     f"{faces.shape} {faces.dtype}"
                 )
-        self.name = int(GL.glGenTextures(1))
+        self.name = int(gl.glGenTextures(1))
         self.size = int(size)
         self.mipmaps = mipmaps
-        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
-        GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
+        gl.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        gl.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
         for face in range(6):
             data = None if faces is None else np.ascontiguousarray(faces[face, ::-1])
-            GL.glTexImage2D(
+            gl.glTexImage2D(
                 GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face,
                 0,
                 GL.GL_RGB8,
@@ -791,15 +792,15 @@ class TextureCube(_Resource):
                 data,
             )
         for wrap in (GL.GL_TEXTURE_WRAP_S, GL.GL_TEXTURE_WRAP_T, GL.GL_TEXTURE_WRAP_R):
-            GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, wrap, GL.GL_CLAMP_TO_EDGE)
-        GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR)
+            gl.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, wrap, GL.GL_CLAMP_TO_EDGE)
+        gl.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR)
         min_filter = GL.GL_LINEAR_MIPMAP_LINEAR if mipmaps else GL.GL_LINEAR
-        GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MIN_FILTER, min_filter)
+        gl.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MIN_FILTER, min_filter)
         if mipmaps:
             if faces is not None:
-                GL.glGenerateMipmap(GL.GL_TEXTURE_CUBE_MAP)
+                gl.glGenerateMipmap(GL.GL_TEXTURE_CUBE_MAP)
         else:
-            GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MAX_LEVEL, 0)
+            gl.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MAX_LEVEL, 0)
         super().__init__(registry)
 
     @classmethod
@@ -830,8 +831,8 @@ class TextureCube(_Resource):
         return cls(registry, size, None, mipmaps=mipmaps, what=what)
 
     def bind(self, unit: int = 0) -> None:
-        GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
-        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        gl.glActiveTexture(GL.GL_TEXTURE0 + unit)
+        gl.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
 
     def upload(self, faces: np.ndarray) -> None:
         """Fill level 0 of every face from ``faces`` ``(6, size, size, 3)`` uint8 (rows as
@@ -842,10 +843,10 @@ class TextureCube(_Resource):
                 f"cube faces must be (6, {self.size}, {self.size}, 3) uint8, got "
                 f"{faces.shape} {faces.dtype}"
             )
-        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
-        GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
+        gl.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        gl.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
         for face in range(6):
-            GL.glTexSubImage2D(
+            gl.glTexSubImage2D(
                 GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face,
                 0,
                 0,
@@ -857,7 +858,7 @@ class TextureCube(_Resource):
                 np.ascontiguousarray(faces[face, ::-1]),
             )
         if self.mipmaps:
-            GL.glGenerateMipmap(GL.GL_TEXTURE_CUBE_MAP)
+            gl.glGenerateMipmap(GL.GL_TEXTURE_CUBE_MAP)
 
     def copy_face_from_framebuffer(self, face: int, source: tuple[int, int]) -> None:
         """Copy the bound read framebuffer's lower-left ``size`` x ``size`` square into level 0
@@ -872,8 +873,8 @@ class TextureCube(_Resource):
                 f"a {self.size}x{self.size} face reaches outside the "
                 f"{source[0]}x{source[1]} framebuffer it reads"
             )
-        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
-        GL.glCopyTexSubImage2D(
+        gl.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        gl.glCopyTexSubImage2D(
             GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, 0, 0, 0, 0, self.size, self.size
         )
 
@@ -881,21 +882,21 @@ class TextureCube(_Resource):
         """Rebuild the mipmap levels from level 0 (after a capture); needs ``mipmaps=True``."""
         if not self.mipmaps:
             raise ValueError("this cube map was made without mipmaps")
-        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
-        GL.glGenerateMipmap(GL.GL_TEXTURE_CUBE_MAP)
+        gl.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        gl.glGenerateMipmap(GL.GL_TEXTURE_CUBE_MAP)
 
     def read_face(self, face: int) -> np.ndarray:
         """Level 0 of ``face`` as ``(size, size, 3)`` uint8, row 0 at the top (``t = 1``)."""
-        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
-        GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
-        data = GL.glGetTexImage(
+        gl.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        gl.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
+        data = gl.glGetTexImage(
             GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL.GL_RGB, GL.GL_UNSIGNED_BYTE
         )
         pixels = np.frombuffer(data, dtype=np.uint8).reshape(self.size, self.size, 3)
         return pixels[::-1].copy()
 
     def _free(self) -> None:
-        GL.glDeleteTextures([self.name])
+        gl.glDeleteTextures([self.name])
 
 
 class DepthTextureCube(_Resource):
@@ -907,11 +908,11 @@ class DepthTextureCube(_Resource):
     def __init__(self, registry: ResourceRegistry, size: int) -> None:
         if size < 1:
             raise ValueError(f"cube-map size must be positive, got {size}")
-        self.name = int(GL.glGenTextures(1))
+        self.name = int(gl.glGenTextures(1))
         self.size = int(size)
-        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        gl.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
         for face in range(6):
-            GL.glTexImage2D(
+            gl.glTexImage2D(
                 GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face,
                 0,
                 GL.GL_DEPTH_COMPONENT24,
@@ -923,40 +924,40 @@ class DepthTextureCube(_Resource):
                 None,
             )
         for wrap in (GL.GL_TEXTURE_WRAP_S, GL.GL_TEXTURE_WRAP_T, GL.GL_TEXTURE_WRAP_R):
-            GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, wrap, GL.GL_CLAMP_TO_EDGE)
-        GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MAG_FILTER, GL.GL_NEAREST)
-        GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MIN_FILTER, GL.GL_NEAREST)
-        GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MAX_LEVEL, 0)
-        GL.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_COMPARE_MODE, GL.GL_NONE)
+            gl.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, wrap, GL.GL_CLAMP_TO_EDGE)
+        gl.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MAG_FILTER, GL.GL_NEAREST)
+        gl.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MIN_FILTER, GL.GL_NEAREST)
+        gl.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_MAX_LEVEL, 0)
+        gl.glTexParameteri(GL.GL_TEXTURE_CUBE_MAP, GL.GL_TEXTURE_COMPARE_MODE, GL.GL_NONE)
         super().__init__(registry)
 
     def bind(self, unit: int = 0) -> None:
-        GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
-        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        gl.glActiveTexture(GL.GL_TEXTURE0 + unit)
+        gl.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
 
     def copy_face_from_framebuffer(self, face: int) -> None:
         """Copy the bound read framebuffer's lower-left ``size`` x ``size`` depths into
         ``face`` (0..5), as :meth:`TextureCube.copy_face_from_framebuffer` copies colour."""
         if not 0 <= face < 6:
             raise ValueError(f"cube face must be 0..5, got {face}")
-        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
-        GL.glCopyTexSubImage2D(
+        gl.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        gl.glCopyTexSubImage2D(
             GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, 0, 0, 0, 0, self.size, self.size
         )
 
     def read_face(self, face: int) -> np.ndarray:
         """``face``'s depths as ``(size, size)`` float32 in [0, 1], row 0 at the top
         (``t = 1``)."""
-        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
-        GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 4)
-        data = GL.glGetTexImage(
+        gl.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, self.name)
+        gl.glPixelStorei(GL.GL_PACK_ALIGNMENT, 4)
+        data = gl.glGetTexImage(
             GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL.GL_DEPTH_COMPONENT, GL.GL_FLOAT
         )
         depths = np.frombuffer(data, dtype=np.float32).reshape(self.size, self.size)
         return depths[::-1].copy()
 
     def _free(self) -> None:
-        GL.glDeleteTextures([self.name])
+        gl.glDeleteTextures([self.name])
 
 
 class FloatFramebuffer(Framebuffer):
@@ -973,7 +974,7 @@ class FloatFramebuffer(Framebuffer):
     def read_rgba(self) -> np.ndarray:
         """Colour and alpha as ``(height, width, 4)`` float32, unclamped, row 0 at the top."""
         self.bind()
-        GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 4)
-        data = GL.glReadPixels(0, 0, self.width, self.height, GL.GL_RGBA, GL.GL_FLOAT)
+        gl.glPixelStorei(GL.GL_PACK_ALIGNMENT, 4)
+        data = gl.glReadPixels(0, 0, self.width, self.height, GL.GL_RGBA, GL.GL_FLOAT)
         pixels = np.frombuffer(data, dtype=np.float32).reshape(self.height, self.width, 4)
         return pixels[::-1].copy()

@@ -12,8 +12,9 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 
 from mirrorlab import math3d
+from mirrorlab.gl.calls import gl, raw
 from mirrorlab.gl.context import ResourceRegistry
-from mirrorlab.gl.opengl import GL, RAW
+from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import (
     Framebuffer,
     MeshBuffer,
@@ -162,21 +163,21 @@ def set_clip_plane(program: Program, view: View) -> None:
 def apply_view_state(view: View, stencil_level: int) -> None:
     """Winding, clipping and stencil test for drawing ``view`` at ``stencil_level`` (0: the
     whole target; k > 0: only where a stencil mirror k levels deep marked it)."""
-    GL.glFrontFace(GL.GL_CW if view.mirrored else GL.GL_CCW)
+    gl.glFrontFace(GL.GL_CW if view.mirrored else GL.GL_CCW)
     if view.clip_plane is None:
-        GL.glDisable(GL.GL_CLIP_DISTANCE0)
+        gl.glDisable(GL.GL_CLIP_DISTANCE0)
     else:
-        GL.glEnable(GL.GL_CLIP_DISTANCE0)
+        gl.glEnable(GL.GL_CLIP_DISTANCE0)
     if stencil_level == 0:
-        GL.glDisable(GL.GL_STENCIL_TEST)
+        gl.glDisable(GL.GL_STENCIL_TEST)
     else:
-        GL.glEnable(GL.GL_STENCIL_TEST)
-        GL.glStencilFunc(GL.GL_EQUAL, stencil_level, 0xFF)
-        GL.glStencilOp(GL.GL_KEEP, GL.GL_KEEP, GL.GL_KEEP)
-    GL.glEnable(GL.GL_DEPTH_TEST)
-    GL.glDepthFunc(GL.GL_LESS)
-    GL.glEnable(GL.GL_CULL_FACE)
-    GL.glCullFace(GL.GL_BACK)
+        gl.glEnable(GL.GL_STENCIL_TEST)
+        gl.glStencilFunc(GL.GL_EQUAL, stencil_level, 0xFF)
+        gl.glStencilOp(GL.GL_KEEP, GL.GL_KEEP, GL.GL_KEEP)
+    gl.glEnable(GL.GL_DEPTH_TEST)
+    gl.glDepthFunc(GL.GL_LESS)
+    gl.glEnable(GL.GL_CULL_FACE)
+    gl.glCullFace(GL.GL_BACK)
 
 
 _SWITCHES = (
@@ -221,19 +222,19 @@ _FLOATS = (ctypes.c_float * 4)()
 def gl_state() -> dict[str, object]:
     """The GL state a frame changes: switches, winding, depth and stencil settings, masks,
     bindings, viewport, scissor box and clear colour (to restore it, and for tests). Read
-    through the raw entry points (:data:`mirrorlab.gl.opengl.RAW`): a frame reads it
+    through the raw entry points (:data:`mirrorlab.gl.calls.raw`): a frame reads it
     every time."""
-    state: dict[str, object] = {name: bool(RAW.glIsEnabled(enum)) for name, enum in _SWITCH_ENUMS}
+    state: dict[str, object] = {name: bool(raw.glIsEnabled(enum)) for name, enum in _SWITCH_ENUMS}
     ints = _INTS
     for name, enum in _VALUE_ENUMS:
-        RAW.glGetIntegerv(enum, ints)
+        raw.glGetIntegerv(enum, ints)
         state[name] = int(ints[0])
-    RAW.glGetBooleanv(GL.GL_COLOR_WRITEMASK, _BOOLS)
+    raw.glGetBooleanv(GL.GL_COLOR_WRITEMASK, _BOOLS)
     state["GL_COLOR_WRITEMASK"] = tuple(bool(v) for v in _BOOLS)
     for name, enum in _BOX_ENUMS:
-        RAW.glGetIntegerv(enum, ints)
+        raw.glGetIntegerv(enum, ints)
         state[name] = tuple(int(v) for v in ints)
-    RAW.glGetFloatv(GL.GL_COLOR_CLEAR_VALUE, _FLOATS)
+    raw.glGetFloatv(GL.GL_COLOR_CLEAR_VALUE, _FLOATS)
     state["GL_COLOR_CLEAR_VALUE"] = tuple(round(float(v), 6) for v in _FLOATS)
     return state
 
@@ -241,29 +242,29 @@ def gl_state() -> dict[str, object]:
 def restore_state(state: dict[str, object]) -> None:
     """Put back what :func:`gl_state` read: leave GL as a frame found it."""
     for name, enum in _SWITCH_ENUMS:
-        (RAW.glEnable if state[name] else RAW.glDisable)(enum)
-    RAW.glFrontFace(state["GL_FRONT_FACE"])
-    RAW.glCullFace(state["GL_CULL_FACE_MODE"])
-    RAW.glDepthFunc(state["GL_DEPTH_FUNC"])
-    RAW.glDepthMask(bool(state["GL_DEPTH_WRITEMASK"]))
-    RAW.glStencilMask(state["GL_STENCIL_WRITEMASK"])
-    RAW.glStencilFunc(
+        (raw.glEnable if state[name] else raw.glDisable)(enum)
+    raw.glFrontFace(state["GL_FRONT_FACE"])
+    raw.glCullFace(state["GL_CULL_FACE_MODE"])
+    raw.glDepthFunc(state["GL_DEPTH_FUNC"])
+    raw.glDepthMask(bool(state["GL_DEPTH_WRITEMASK"]))
+    raw.glStencilMask(state["GL_STENCIL_WRITEMASK"])
+    raw.glStencilFunc(
         state["GL_STENCIL_FUNC"], state["GL_STENCIL_REF"], state["GL_STENCIL_VALUE_MASK"]
     )
-    RAW.glStencilOp(
+    raw.glStencilOp(
         state["GL_STENCIL_FAIL"],
         state["GL_STENCIL_PASS_DEPTH_FAIL"],
         state["GL_STENCIL_PASS_DEPTH_PASS"],
     )
-    RAW.glColorMask(*state["GL_COLOR_WRITEMASK"])  # type: ignore[misc]
-    RAW.glUseProgram(state["GL_CURRENT_PROGRAM"])
-    RAW.glBindVertexArray(state["GL_VERTEX_ARRAY_BINDING"])
-    RAW.glActiveTexture(state["GL_ACTIVE_TEXTURE"])
-    RAW.glBindFramebuffer(GL.GL_DRAW_FRAMEBUFFER, state["GL_DRAW_FRAMEBUFFER_BINDING"])
-    RAW.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, state["GL_READ_FRAMEBUFFER_BINDING"])
-    RAW.glViewport(*state["GL_VIEWPORT"])  # type: ignore[misc]
-    RAW.glScissor(*state["GL_SCISSOR_BOX"])  # type: ignore[misc]
-    RAW.glClearColor(*state["GL_COLOR_CLEAR_VALUE"])  # type: ignore[misc]
+    raw.glColorMask(*state["GL_COLOR_WRITEMASK"])  # type: ignore[misc]
+    raw.glUseProgram(state["GL_CURRENT_PROGRAM"])
+    raw.glBindVertexArray(state["GL_VERTEX_ARRAY_BINDING"])
+    raw.glActiveTexture(state["GL_ACTIVE_TEXTURE"])
+    raw.glBindFramebuffer(GL.GL_DRAW_FRAMEBUFFER, state["GL_DRAW_FRAMEBUFFER_BINDING"])
+    raw.glBindFramebuffer(GL.GL_READ_FRAMEBUFFER, state["GL_READ_FRAMEBUFFER_BINDING"])
+    raw.glViewport(*state["GL_VIEWPORT"])  # type: ignore[misc]
+    raw.glScissor(*state["GL_SCISSOR_BOX"])  # type: ignore[misc]
+    raw.glClearColor(*state["GL_COLOR_CLEAR_VALUE"])  # type: ignore[misc]
 
 
 class ViewDrawer(Protocol):

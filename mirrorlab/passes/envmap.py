@@ -12,6 +12,7 @@ import numpy as np
 
 from mirrorlab import math3d
 from mirrorlab.envmap import bake_cube_faces, bake_latlong, bake_sphere_map
+from mirrorlab.gl.calls import gl
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Program, RenderTarget, Texture2D, TextureCube
 from mirrorlab.passes.base import SharedResources, ViewDrawer, cube_from_folder, set_clip_plane
@@ -117,8 +118,8 @@ class CurvedPass:
         target; returns 1. Positions reach the shader relative to the view's origin
         (camera-relative rendering), the matrices composed in float64."""
         model = reflector.model_matrix()
-        GL.glEnable(GL.GL_DEPTH_TEST)
-        GL.glEnable(GL.GL_CULL_FACE)
+        gl.glEnable(GL.GL_DEPTH_TEST)
+        gl.glEnable(GL.GL_CULL_FACE)
         entry = self.entry
         program = self.program
         program.use()
@@ -139,7 +140,7 @@ class CurvedPass:
         if entry.map_size_uniform:
             program.set_vec2("map_size", (texture.width, texture.height))  # type: ignore
         if isinstance(texture, TextureCube):
-            GL.glEnable(GL.GL_TEXTURE_CUBE_MAP_SEAMLESS)
+            gl.glEnable(GL.GL_TEXTURE_CUBE_MAP_SEAMLESS)
         self.lookup_uniforms(program, reflector, view, draw)
         texture.bind(0)
         self.mesh.draw()
@@ -184,8 +185,8 @@ class SphereMapped(CurvedPass):
         old = self.textures.pop(step.slot, None)
         if old is not None and (old.width, old.height) == (image.shape[1], image.shape[0]):
             old.bind(0)
-            GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
-            GL.glTexSubImage2D(
+            gl.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
+            gl.glTexSubImage2D(
                 GL.GL_TEXTURE_2D,
                 0,
                 0,
@@ -196,7 +197,7 @@ class SphereMapped(CurvedPass):
                 GL.GL_UNSIGNED_BYTE,
                 np.ascontiguousarray(image[::-1]),
             )
-            GL.glGenerateMipmap(GL.GL_TEXTURE_2D)
+            gl.glGenerateMipmap(GL.GL_TEXTURE_2D)
             self.textures[step.slot] = old
             return 0
         if old is not None:
@@ -263,7 +264,7 @@ class LatlongMapped(CurvedPass):
         self.texture = Texture2D(
             shared.registry, image.shape[1], image.shape[0], image, mipmaps=True, clamp=False
         )
-        GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, GL.GL_CLAMP_TO_EDGE)
+        gl.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, GL.GL_CLAMP_TO_EDGE)
 
     def release(self) -> None:
         self.texture.release()

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from mirrorlab import math3d
+from mirrorlab.gl.calls import gl
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import MeshBuffer, RenderTarget, Texture2D, TextureFramebuffer
 from mirrorlab.passes.base import SharedResources, ViewDrawer, set_view_uniforms
@@ -92,10 +93,10 @@ class PlanarPass:
 
     def draw_backing(self, view: View) -> int:
         """The mirror's back face in its unlit backing colour; returns the draw count."""
-        GL.glEnable(GL.GL_CULL_FACE)
-        GL.glCullFace(GL.GL_FRONT)
+        gl.glEnable(GL.GL_CULL_FACE)
+        gl.glCullFace(GL.GL_FRONT)
         self.flat_quad(view, self.reflector.backing, far_depth=False)
-        GL.glCullFace(GL.GL_BACK)
+        gl.glCullFace(GL.GL_BACK)
         return 1
 
     def draw_textured(self, view: View, texture: Texture2D, source: View | None) -> int:
@@ -103,7 +104,7 @@ class PlanarPass:
         capture view ``source`` saw each point, :func:`~mirrorlab.views.projective_lookup`),
         back in its backing colour; returns 1."""
         program = self.mirror_program
-        GL.glDisable(GL.GL_CULL_FACE)
+        gl.glDisable(GL.GL_CULL_FACE)
         program.use()
         set_view_uniforms(program, view)
         program.set_mat4("model", self.quad_model(view))
@@ -113,7 +114,7 @@ class PlanarPass:
             program.set_mat4("texture_matrix", projective_lookup(source, view))
         texture.bind(0)
         self.quad.draw()
-        GL.glEnable(GL.GL_CULL_FACE)
+        gl.glEnable(GL.GL_CULL_FACE)
         return 1
 
     def draw(

@@ -43,6 +43,7 @@ import numpy as np
 from mirrorlab import culling, math3d
 from mirrorlab.bounds import ObjectArrays, SceneIndex, scene_index
 from mirrorlab.draw_path import DRAW_PATHS, DrawPath
+from mirrorlab.gl.calls import gl
 from mirrorlab.gl.context import gl_version, has_multi_draw
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Buffer, Program
@@ -374,12 +375,12 @@ class SceneDrawer:
     def _multi_draw(self, recorded: RecordedView) -> int:
         """Each run of ``recorded`` 's commands one multi-draw; returns the runs' count."""
         packed = self.shared.packed
-        GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, recorded.commands.name)
+        gl.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, recorded.commands.name)
         for texture, first, count in recorded.runs:
             if texture is not None:
                 self.shared.texture(texture).bind(0)
             packed.multi_draw(first, count)
-        GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
+        gl.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
         return len(recorded.runs)
 
     def _draw_instanced(self, recorded: RecordedView) -> int:
@@ -428,7 +429,7 @@ class SceneDrawer:
         recorded.parts.upload(GL.GL_ARRAY_BUFFER, data)
         if held is not commands and self.draw_path == "packed":  # per-draw: commands_held
             recorded.commands.upload(GL.GL_DRAW_INDIRECT_BUFFER, commands)
-            GL.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
+            gl.glBindBuffer(GL.GL_DRAW_INDIRECT_BUFFER, 0)
         self._recorded[key] = recorded
         return recorded
 
@@ -556,7 +557,7 @@ class SceneDrawer:
         program.set_mat4(
             "part", surface_matrix(math3d.normal_matrix(model), reflector.color, textured=False)
         )
-        GL.glEnable(GL.GL_CULL_FACE)
+        gl.glEnable(GL.GL_CULL_FACE)
         mesh.draw()
         return 1
 

@@ -7,6 +7,7 @@ from functools import lru_cache
 import numpy as np
 
 from mirrorlab.envmap import bake_cube_faces
+from mirrorlab.gl.calls import gl
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import MeshBuffer, TextureCube
 from mirrorlab.passes.base import SharedResources, cube_from_folder
@@ -89,15 +90,15 @@ class SkyPass:
 
     def run(self, view: View) -> int:
         """Draw into the bound target; returns the number of draw calls (1)."""
-        GL.glEnable(GL.GL_TEXTURE_CUBE_MAP_SEAMLESS)
-        GL.glDisable(GL.GL_DEPTH_TEST)
-        GL.glDepthMask(GL.GL_FALSE)
-        GL.glDisable(GL.GL_CULL_FACE)
+        gl.glEnable(GL.GL_TEXTURE_CUBE_MAP_SEAMLESS)
+        gl.glDisable(GL.GL_DEPTH_TEST)
+        gl.glDepthMask(GL.GL_FALSE)
+        gl.glDisable(GL.GL_CULL_FACE)
         self.program.use()
         self.program.set_mat3("ndc_to_direction", ray_directions(view))
         self.cube.bind(0)
         self.triangle.draw()
-        GL.glEnable(GL.GL_CULL_FACE)
-        GL.glDepthMask(GL.GL_TRUE)
-        GL.glEnable(GL.GL_DEPTH_TEST)
+        gl.glEnable(GL.GL_CULL_FACE)
+        gl.glDepthMask(GL.GL_TRUE)
+        gl.glEnable(GL.GL_DEPTH_TEST)
         return 1

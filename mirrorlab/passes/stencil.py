@@ -5,6 +5,7 @@ when done, so the reference value belongs to the mirror being drawn, not a const
 
 from __future__ import annotations
 
+from mirrorlab.gl.calls import gl
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import RenderTarget
 from mirrorlab.passes.base import ViewDrawer, apply_view_state
@@ -49,33 +50,33 @@ class StencilMirror(PlanarPass):
         assert draw.nested is not None
         inner = stencil_level + 1
         background = renderer.scene.background.color
-        GL.glEnable(GL.GL_STENCIL_TEST)
-        GL.glStencilMask(0xFF)
-        GL.glStencilFunc(GL.GL_EQUAL, stencil_level, 0xFF)
-        GL.glStencilOp(GL.GL_KEEP, GL.GL_KEEP, GL.GL_INCR)
-        GL.glColorMask(GL.GL_FALSE, GL.GL_FALSE, GL.GL_FALSE, GL.GL_FALSE)
-        GL.glDepthMask(GL.GL_FALSE)
-        GL.glEnable(GL.GL_CULL_FACE)
+        gl.glEnable(GL.GL_STENCIL_TEST)
+        gl.glStencilMask(0xFF)
+        gl.glStencilFunc(GL.GL_EQUAL, stencil_level, 0xFF)
+        gl.glStencilOp(GL.GL_KEEP, GL.GL_KEEP, GL.GL_INCR)
+        gl.glColorMask(GL.GL_FALSE, GL.GL_FALSE, GL.GL_FALSE, GL.GL_FALSE)
+        gl.glDepthMask(GL.GL_FALSE)
+        gl.glEnable(GL.GL_CULL_FACE)
         self.flat_quad(view, background, far_depth=False)
 
-        GL.glColorMask(GL.GL_TRUE, GL.GL_TRUE, GL.GL_TRUE, GL.GL_TRUE)
-        GL.glDepthMask(GL.GL_TRUE)
-        GL.glStencilFunc(GL.GL_EQUAL, inner, 0xFF)
-        GL.glStencilOp(GL.GL_KEEP, GL.GL_KEEP, GL.GL_KEEP)
-        GL.glDepthFunc(GL.GL_ALWAYS)
+        gl.glColorMask(GL.GL_TRUE, GL.GL_TRUE, GL.GL_TRUE, GL.GL_TRUE)
+        gl.glDepthMask(GL.GL_TRUE)
+        gl.glStencilFunc(GL.GL_EQUAL, inner, 0xFF)
+        gl.glStencilOp(GL.GL_KEEP, GL.GL_KEEP, GL.GL_KEEP)
+        gl.glDepthFunc(GL.GL_ALWAYS)
         self.flat_quad(view, background, far_depth=True)
-        GL.glDepthFunc(GL.GL_LESS)
+        gl.glDepthFunc(GL.GL_LESS)
 
         draws = renderer.draw_view(draw.nested, target, inner)
 
         apply_view_state(view, stencil_level)
-        GL.glEnable(GL.GL_STENCIL_TEST)
-        GL.glStencilFunc(GL.GL_EQUAL, inner, 0xFF)
-        GL.glStencilOp(GL.GL_KEEP, GL.GL_KEEP, GL.GL_DECR)
-        GL.glColorMask(GL.GL_FALSE, GL.GL_FALSE, GL.GL_FALSE, GL.GL_FALSE)
-        GL.glDepthFunc(GL.GL_ALWAYS)
+        gl.glEnable(GL.GL_STENCIL_TEST)
+        gl.glStencilFunc(GL.GL_EQUAL, inner, 0xFF)
+        gl.glStencilOp(GL.GL_KEEP, GL.GL_KEEP, GL.GL_DECR)
+        gl.glColorMask(GL.GL_FALSE, GL.GL_FALSE, GL.GL_FALSE, GL.GL_FALSE)
+        gl.glDepthFunc(GL.GL_ALWAYS)
         self.flat_quad(view, background, far_depth=False)
-        GL.glColorMask(GL.GL_TRUE, GL.GL_TRUE, GL.GL_TRUE, GL.GL_TRUE)
-        GL.glDepthFunc(GL.GL_LESS)
+        gl.glColorMask(GL.GL_TRUE, GL.GL_TRUE, GL.GL_TRUE, GL.GL_TRUE)
+        gl.glDepthFunc(GL.GL_LESS)
         apply_view_state(view, stencil_level)
         return draws + 3 + self.draw_backing(view)

@@ -271,8 +271,8 @@ def test_a_replay_leaves_out_the_settings_an_earlier_call_of_it_made_already():
     active texture unit, a framebuffer target that is both draw and read, the generic
     binding a glBindBufferBase sets too), what nothing earlier set is kept, and a call
     whose effect is not followed forgets everything."""
+    from mirrorlab.gl.calls import without_repeats
     from mirrorlab.gl.opengl import GL
-    from mirrorlab.gl.record import without_repeats
 
     T2D, SSBO = GL.GL_TEXTURE_2D, GL.GL_SHADER_STORAGE_BUFFER
     calls = [
@@ -315,8 +315,8 @@ def test_an_error_in_a_replayed_frame_is_raised_naming_it_and_the_next_frame_pla
     raised by the frame's own check, naming the replayed frame, and the renderer forgets
     what it held (the next frame is drawn anew, and right)."""
     from mirrorlab.errors import GLPassError
+    from mirrorlab.gl.calls import for_replay
     from mirrorlab.gl.opengl import GL
-    from mirrorlab.gl.record import for_replay
 
     drawer = Drawer(registry, "packed")
     try:
@@ -344,8 +344,8 @@ def test_a_replay_takes_the_state_it_starts_from_as_known_but_the_framebuffers()
     """Where the GL state a frame started from is known (:func:`known_state` of the state
     the renderer read), a setting to that value is left out from the first; not for the
     framebuffer bindings, which reading the last frame back changed."""
+    from mirrorlab.gl.calls import known_state, without_repeats
     from mirrorlab.gl.opengl import GL
-    from mirrorlab.gl.record import known_state, without_repeats
     from mirrorlab.passes.base import gl_state
 
     found: dict[str, Any] = gl_state()

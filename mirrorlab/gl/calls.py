@@ -1,77 +1,152 @@
-"""Recording a stretch of GL calls to replay them: code that would issue exactly the same
-calls again (a frame planned as the last one was, drawn by the same renderer into the
-same target) replays the list instead of working it out once more.
+"""mirrorlab's own thin GL layer. The renderer, its passes and the GL resource wrappers make
+their GL calls through it: :data:`gl` holds PyOpenGL's ``GL`` functions and :data:`raw`
+mirrorlab's raw entry points (:data:`mirrorlab.gl.opengl.RAW`), each under its GL name
+(``gl.glViewport(0, 0, 512, 512)``; the constants still come from ``GL``). GL code outside
+the renderer (the labs' executor and legacy emulation, the overlay, tests) calls PyOpenGL
+itself, and nothing here touches it.
 
-:class:`CallRecorder` records, while it is entered, every call made through PyOpenGL's
-``GL`` namespace and mirrorlab's raw entry points (:data:`mirrorlab.gl.opengl.RAW`), with
-its arguments, and still makes each call: what is recorded is what ran. The arguments
-are kept as they were given, so whoever records must not change an array it passed
-afterwards (mirrorlab's passes hand GL fresh or read-only arrays; a buffer they fill
-may be filled again before a replay, which then draws what it holds).
-:func:`for_replay` makes the list cheaper to make again to the same effect: without
-the calls that set state to the value it already has (:func:`without_repeats`), and
-with the entry points called without PyOpenGL's check after each call. :func:`replay`
-makes the calls again, in order, ignoring what they return; errors surface at the next
-checked call or pass check (:func:`mirrorlab.gl.context.check_gl_errors`).
+**Recording.** ``with recording(calls):`` records every call the calling thread makes
+through :data:`gl` and :data:`raw` while it is entered that can change GL state, in order,
+into the list ``calls`` (``(function, args, kwargs)``: the PyOpenGL function, not a
+wrapper), and still makes each call: what is recorded is what ran. (A GL context is
+current in one thread: another thread's calls are its own.) Recording is the layers' own
+state: outside a recording a layer's attributes ARE the PyOpenGL functions (a call
+through it costs what one through PyOpenGL's module does); while one is entered the
+state-changing ones are the layer's recording wrappers, which append, then call. No
+attribute of PyOpenGL's modules, nor of ``RAW``, is ever replaced, so a GL call made
+outside the layer, by anyone, is neither recorded nor slowed. Queries (``glGet*``,
+``glIs*``) are not recorded: a replayed ``glGetError`` would swallow an error the replay
+made.
+
+**Replaying.** Code that would make exactly the same calls again (a frame planned as the
+last one was, drawn by the same renderer into the same target) makes the list again
+instead of working it out once more. :func:`for_replay` makes the list cheaper to make
+again to the same effect: without the calls that set state to the value it already has
+(:func:`without_repeats`, from the state :func:`known_state` describes), and with the
+entry points called without PyOpenGL's check after each call where the arguments are
+plain numbers. :func:`replay` makes the calls again, in order, ignoring what they return;
+errors surface at the next checked call or pass check
+(:func:`mirrorlab.gl.context.check_gl_errors`).
+
+**The replay rule.** A call's arguments are recorded as they were given, not copied: whoever
+records must not change an array it passed afterwards (mirrorlab's passes hand GL fresh or
+read-only arrays). What a recorded call reads from GL objects is read again at each replay:
+a buffer or texture filled again before a replay draws what it then holds (this is how a
+replayed frame draws the objects' new pose, sent to the views' buffers first).
 """
 
 from __future__ import annotations
 
 import ctypes
-from collections.abc import Callable, Sequence
-from functools import lru_cache
+import threading
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from types import ModuleType, SimpleNamespace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mirrorlab.gl.context import unchecked
 from mirrorlab.gl.opengl import GL, RAW
 
 Call = tuple[Callable[..., Any], tuple, dict]
-
-
-@lru_cache(maxsize=1)
-def _gl_names() -> tuple[str, ...]:
-    return tuple(name for name in dir(GL) if name.startswith("gl") and callable(getattr(GL, name)))
+"""A recorded call: the PyOpenGL function, its positional and its keyword arguments."""
 
 
 def _changes_state(name: str) -> bool:
-    """Whether a call can change GL state: queries (``glGet*``, ``glIs*``) cannot, and are
-    not recorded (a replayed ``glGetError`` would swallow an error the replay made)."""
+    """Whether a call can change GL state: queries (``glGet*``, ``glIs*``) cannot."""
     return not name.startswith(("glGet", "glIs"))
 
 
-class CallRecorder:
-    """``with CallRecorder() as recorder:`` records every GL call made inside that can
-    change GL state into ``recorder.calls`` (a list of ``(function, args, kwargs)``)."""
+class GLCalls:
+    """The GL functions of ``namespace`` (every callable whose name starts with ``gl``) as
+    attributes of the same names, kept in the instance's own dictionary: looking one up
+    costs what looking it up in ``namespace`` does. While :func:`recording` is entered
+    (in any thread), the attributes of the functions that can change GL state are
+    wrappers that make the call, first appending it to the list of the recording the
+    calling thread is in, if any (a GL context is current in one thread: each thread's
+    calls are its own)."""
 
-    def __init__(self) -> None:
-        self.calls: list[Call] = []
-        self._patched: list[tuple[ModuleType | SimpleNamespace, str, Any]] = []
+    if TYPE_CHECKING:
 
-    def __enter__(self) -> CallRecorder:
-        calls = self.calls
-        targets: list[tuple[ModuleType | SimpleNamespace, Sequence[str]]] = [
-            (GL, _gl_names()),
-            (RAW, tuple(vars(RAW))),
-        ]
-        for namespace, names in targets:
-            for name in names:
-                if not _changes_state(name):
-                    continue
-                function = getattr(namespace, name)
+        def __getattr__(self, name: str) -> Callable[..., Any]: ...
 
-                def recorded(*args, _function=function, **kwargs):
-                    calls.append((_function, args, kwargs))
-                    return _function(*args, **kwargs)
+    def __init__(self, namespace: ModuleType | SimpleNamespace) -> None:
+        functions = {}
+        for name in dir(namespace):
+            value = getattr(namespace, name)
+            if name.startswith("gl") and callable(value):
+                functions[name] = value
+        self._functions: dict[str, Callable[..., Any]] = functions
+        self._wrappers: dict[str, Callable[..., Any]] | None = None  # made at first use
+        self._thread = threading.local()  # .into: the list this thread records into
+        self._recordings = 0  # the threads recording
+        self._lock = threading.Lock()
+        self.__dict__.update(functions)
 
-                self._patched.append((namespace, name, function))
-                setattr(namespace, name, recorded)
-        return self
+    @property
+    def recording(self) -> bool:
+        """Whether the calling thread's calls through this layer are being recorded."""
+        return getattr(self._thread, "into", None) is not None
 
-    def __exit__(self, *exc: object) -> None:
-        for namespace, name, function in reversed(self._patched):
-            setattr(namespace, name, function)
-        self._patched.clear()
+    def _recording_wrappers(self) -> dict[str, Callable[..., Any]]:
+        if self._wrappers is None:
+            self._wrappers = {
+                name: self._wrapper(function)
+                for name, function in self._functions.items()
+                if _changes_state(name)
+            }
+        return self._wrappers
+
+    def _wrapper(self, function: Callable[..., Any]) -> Callable[..., Any]:
+        thread = self._thread
+
+        def recorded(*args: Any, **kwargs: Any) -> Any:
+            into = getattr(thread, "into", None)
+            if into is not None:
+                into.append((function, args, kwargs))
+            return function(*args, **kwargs)
+
+        recorded.__name__ = getattr(function, "__name__", "recorded")
+        return recorded
+
+    def _record_into(self, into: list[Call]) -> None:
+        if self.recording:
+            raise RuntimeError("this thread's GL calls are being recorded already")
+        self._thread.into = into
+        with self._lock:
+            self._recordings += 1
+            if self._recordings == 1:
+                self.__dict__.update(self._recording_wrappers())
+
+    def _stop_recording(self) -> None:
+        self._thread.into = None
+        with self._lock:
+            self._recordings -= 1
+            if self._recordings == 0:
+                self.__dict__.update(self._functions)
+
+
+gl = GLCalls(GL)
+"""PyOpenGL's ``GL`` functions, through mirrorlab's layer."""
+raw = GLCalls(RAW)
+"""mirrorlab's raw entry points (:data:`mirrorlab.gl.opengl.RAW`), through the layer."""
+
+
+@contextmanager
+def recording(into: list[Call]) -> Iterator[None]:
+    """Append to ``into``, while entered, every call the calling thread makes through
+    :data:`gl` and :data:`raw` that can change GL state (in order, with its arguments as
+    given; see the replay rule above). Recordings do not nest."""
+    gl._record_into(into)
+    try:
+        raw._record_into(into)
+    except BaseException:
+        gl._stop_recording()
+        raise
+    try:
+        yield
+    finally:
+        raw._stop_recording()
+        gl._stop_recording()
 
 
 def replay(calls: Sequence[Call]) -> None:
