@@ -57,6 +57,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from collections import Counter, defaultdict
 from pathlib import Path
@@ -92,19 +93,26 @@ def scenes(variant: str) -> list:
     return [lab.with_angles((base, shoulder, elbow + step)) for step in (0.0, 0.5)]
 
 
-def child(variant: str, size: int, seconds: float) -> None:
-    """Frames of ``variant`` for ``seconds`` after a warm-up (announced with a line
-    ``ready`` on stdout, when the sampler may start)."""
+def child(variant: str, size: int) -> None:
+    """Frames of ``variant`` after a warm-up (announced with a line ``ready`` on stdout,
+    when the sampler may start), until a line comes on stdin: the sampler says when it is
+    done, so a sampler slowed by a busy machine never finds the process gone."""
     import mirrorlab
 
     frames = scenes(variant)
+    stop = threading.Event()
     with mirrorlab.Renderer((size, size)) as renderer:
         for index in range(20):
             renderer.render(frames[index % len(frames)])
+
+        def wait_for_stop() -> None:
+            sys.stdin.readline()
+            stop.set()
+
+        threading.Thread(target=wait_for_stop, daemon=True).start()
         print("ready", flush=True)
-        end = time.perf_counter() + seconds
         count = 0
-        while time.perf_counter() < end:
+        while not stop.is_set():
             renderer.render(frames[count % len(frames)])
             count += 1
     print(json.dumps({"frames": count}), flush=True)
@@ -173,13 +181,12 @@ def python_share(variant: str, size: int, seconds: float, chain_seconds: float) 
                 variant,
                 "--size",
                 str(size),
-                "--seconds",
-                str(seconds + chain_seconds + 3),
             ],
+            stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             text=True,
         )
-        assert process.stdout is not None
+        assert process.stdin is not None and process.stdout is not None
         try:
             if process.stdout.readline().strip() != "ready":
                 raise SystemExit(f"frame_profile.py: the {variant} process did not start")
@@ -191,9 +198,12 @@ def python_share(variant: str, size: int, seconds: float, chain_seconds: float) 
                     chain_seconds,
                     ["-F", str(CHAIN_RATE), "--call-graph", "dwarf,8192"],
                 )
-            frames = json.loads(process.stdout.readline())["frames"]
         finally:
+            process.stdin.write("stop\n")
+            process.stdin.close()
+            frames_line = process.stdout.readline()
             process.wait()
+        frames = json.loads(frames_line)["frames"]
         callers: Counter = Counter()
         if chain_seconds > 0:
             callers = either_callers(
@@ -320,7 +330,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--child", choices=VARIANTS, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.child:
-        child(args.child, args.size, args.seconds)
+        child(args.child, args.size)
         return 0
     if (
         not 16 <= args.size <= 4096

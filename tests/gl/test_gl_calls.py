@@ -81,6 +81,37 @@ def test_the_check_for_replacements_finds_one(tmp_path):
     assert len(_replacements(patched)) == 3
 
 
+def _direct_calls(path: Path) -> list[str]:
+    """Where the module at ``path`` calls a GL function straight through PyOpenGL's ``GL``
+    or ``RAW`` (``GL.glEnable(...)``), not through the layer (``file:line: call``)."""
+    tree = ast.parse(path.read_text(), str(path))
+    return [
+        f"{path.name}:{node.lineno}: {ast.unparse(node.func)}"
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Call)
+        and isinstance(node.func, ast.Attribute)
+        and isinstance(node.func.value, ast.Name)
+        and node.func.value.id in ("GL", "RAW")
+        and node.func.attr.startswith("gl")
+    ]
+
+
+def test_the_renderers_gl_calls_all_go_through_the_layer(tmp_path):
+    """The renderer, its passes and the resources it draws with call GL only through the
+    layer: a call made around it would be missing from a recorded frame's replay. (The
+    check finds such a call: it can fail.)"""
+    package = Path(mirrorlab.__file__).parent
+    modules = [
+        package / "renderer.py",
+        GL_PACKAGE / "resources.py",
+        *sorted((package / "passes").glob("*.py")),
+    ]
+    assert [found for path in modules for found in _direct_calls(path)] == []
+    direct = tmp_path / "direct.py"
+    direct.write_text("from OpenGL import GL\nGL.glEnable(GL.GL_BLEND)\nRAW.glFlush()\n")
+    assert len(_direct_calls(direct)) == 2
+
+
 def _snapshot() -> tuple[dict[str, int], dict[str, int]]:
     """The identity of every attribute of PyOpenGL's ``GL`` module and of ``RAW``."""
     return (
