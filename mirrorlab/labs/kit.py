@@ -1,7 +1,7 @@
 """The name a lab's starter imports: ``from mirrorlab.labs import kit``.
 
 A lab's file runs under ``mirrorlab lab run`` or ``mirrorlab lab check``, in the sandbox,
-where this name is the student side's stand-in (:mod:`mirrorlab.labs.student.kit`), whose
+where this name is the student side's stand-in (:mod:`mirrorlab.labs.student.kit_standin`), whose
 ``kit.lab20()`` returns the lab's object. Anywhere else (``python starter.py``) there is
 no lab session, and these say so in one line.
 """

@@ -11,8 +11,8 @@ import pytest
 
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Framebuffer
-from mirrorlab.labs.trusted.executor import Executor, RunLimits, Stop
-from mirrorlab.labs.trusted.kit import open_session
+from mirrorlab.labs.trusted.call_executor import Executor, RunLimits, Stop
+from mirrorlab.labs.trusted.session import open_session
 from mirrorlab.labs.trusted.variants import default_variant
 
 SIZE = (64, 64)

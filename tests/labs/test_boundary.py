@@ -19,7 +19,7 @@ from mirrorlab.labs.content import reference_folder
 from mirrorlab.labs.trusted import sandbox
 from mirrorlab.labs.trusted.checker import CHECK_SIZE, judges, trim_reference
 from mirrorlab.labs.trusted.evidence import Evidence
-from mirrorlab.labs.trusted.execute import run_job
+from mirrorlab.labs.trusted.gl_process import run_job
 from mirrorlab.labs.trusted.judging import Context, same_picture
 from mirrorlab.labs.trusted.sandbox import STUDENT_PACKAGE, Limits, Sandboxed, new_box
 from mirrorlab.labs.trusted.variants import default_variant

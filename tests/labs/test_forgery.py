@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from mirrorlab.labs import LABS
-from mirrorlab.labs.trusted.execute import run_job
+from mirrorlab.labs.trusted.gl_process import run_job
 from mirrorlab.labs.trusted.sandbox import Limits
 from mirrorlab.labs.trusted.variants import default_variant
 from tests.labs.conftest import mirrorlab_command, read_csv

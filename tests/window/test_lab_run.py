@@ -9,7 +9,7 @@ import os
 import subprocess
 import sys
 
-from mirrorlab.labs.trusted.execute import run_job
+from mirrorlab.labs.trusted.gl_process import run_job
 from mirrorlab.labs.trusted.sandbox import Limits, sandboxed
 from mirrorlab.labs.trusted.variants import default_variant
 from mirrorlab.scene.backgrounds import load_picture

@@ -4,7 +4,7 @@ Every call the sandbox sends is looked up here by name; one that is not here is 
 Each argument is checked by kind (an integer in a range, a finite number, an enum from
 the call's own list, a vector of a set length, a short string) before anything is
 executed; arrays reach only the calls that upload pixels, and their sizes are checked
-against what GL will read (:mod:`.executor`). The checks raise :class:`CallError`, which
+against what GL will read (:mod:`.call_executor`). The checks raise :class:`CallError`, which
 the student sees as the error PyOpenGL would raise (``GLError`` for a bad enum, as GL
 reports it, ``TypeError`` for a wrong argument).
 """
@@ -166,7 +166,7 @@ def anything(value: Any, what: str) -> Any:
 
 
 def pixels(value: Any, what: str) -> Any:
-    """None, or an array of the message (``{"$a": i}``; :mod:`.executor` resolves it)."""
+    """None, or an array of the message (``{"$a": i}``; :mod:`.call_executor` resolves it)."""
     if value is None or (
         isinstance(value, dict) and set(value) == {"$a"} and type(value["$a"]) is int
     ):

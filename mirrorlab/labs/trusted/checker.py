@@ -2,7 +2,7 @@
 the student's own variant, each task with a hint.
 
 The file runs in the sandbox with no GL of its own; the trusted checker process
-(:mod:`.execute`) executes its calls and makes every observation. The reference evidence
+(:mod:`.gl_process`) executes its calls and makes every observation. The reference evidence
 is made the same way from the teacher's solution where the solutions are given
 (``--solutions DIR`` or ``$MIRRORLAB_SOLUTIONS``), cached in ``$MIRRORLAB_CACHE`` or
 ``~/.cache/mirrorlab`` by the files that make it; without them, the evidence shipped in
@@ -26,7 +26,7 @@ import numpy as np
 
 from mirrorlab.labs import LABS, LabSpec, find_lab
 from mirrorlab.labs.trusted.evidence import Evidence
-from mirrorlab.labs.trusted.execute import run_job
+from mirrorlab.labs.trusted.gl_process import run_job
 from mirrorlab.labs.trusted.judging import Context, TaskResult
 from mirrorlab.labs.trusted.sandbox import Limits, sandboxed, unsandboxed_note
 from mirrorlab.labs.trusted.variants import (

@@ -33,7 +33,7 @@ from mirrorlab.labs.trusted.judging import (
     where,
     wrong_clear_colour,
 )
-from mirrorlab.labs.trusted.kit import CubeMapLab
+from mirrorlab.labs.trusted.session import CubeMapLab
 from mirrorlab.labs.trusted.probe import INPUTS, slip, slip_per_face
 from mirrorlab.labs.trusted.variants import cube_center
 from mirrorlab.views import CUBE_FACE_NAMES, CUBE_FACES

@@ -31,7 +31,7 @@ from mirrorlab.labs.trusted.judging import (
     where,
     wrong_clear_colour,
 )
-from mirrorlab.labs.trusted.kit import Lab20
+from mirrorlab.labs.trusted.session import Lab20
 from mirrorlab.labs.trusted.variants import lab20_geometry
 
 GL_LINEAR = 0x2601

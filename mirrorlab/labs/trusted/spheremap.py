@@ -28,7 +28,7 @@ from mirrorlab.labs.trusted.judging import (
     viewer_camera,
     where,
 )
-from mirrorlab.labs.trusted.kit import SphereMapLab
+from mirrorlab.labs.trusted.session import SphereMapLab
 from mirrorlab.labs.trusted.probe import INPUTS, slip
 
 GL_SPHERE_MAP = 0x2402

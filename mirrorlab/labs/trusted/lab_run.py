@@ -4,7 +4,7 @@
 sandbox with a pipe to this process, sends it the session (the names and values of
 OpenGL, the lab object's numbers), then commands: load the file, run the lab's set-up
 functions, then ``display()`` frame after frame. Every call that comes back is executed
-here (:mod:`.executor`); when the frames are drawn this process makes its own
+here (:mod:`.call_executor`); when the frames are drawn this process makes its own
 observations (the frame, the textures, the student's GLSL judged by the values it
 writes) and the run becomes :class:`~.evidence.Evidence`. The sandbox produces only the
 call stream; nothing it writes to its box is ever read.
@@ -28,8 +28,8 @@ from mirrorlab.labs import LabSpec
 from mirrorlab.labs.trusted import calls as C
 from mirrorlab.labs.trusted import legacy
 from mirrorlab.labs.trusted.evidence import Evidence
-from mirrorlab.labs.trusted.executor import Executor, RunLimits, Stop
-from mirrorlab.labs.trusted.kit import (
+from mirrorlab.labs.trusted.call_executor import Executor, RunLimits, Stop
+from mirrorlab.labs.trusted.session import (
     CubeMapLab,
     Lab20,
     LabBase,

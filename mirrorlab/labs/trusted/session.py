@@ -2,7 +2,7 @@
 meshes, the robot's scene graph, the cone, the sphere and the viewer's camera, each lab's
 numbers taken from its variant (:mod:`.variants`).
 
-A session lives in the executor's GL context (:mod:`.executor`); the student's file
+A session lives in the executor's GL context (:mod:`.call_executor`); the student's file
 reaches its drawing calls (``lab.draw_scene``, ``lab.draw_cone_shader``, ...) only as
 messages that the executor validates. Texture units: the given drawing binds object
 textures on unit 0 and leaves unit 0 active; the labs keep their environment textures

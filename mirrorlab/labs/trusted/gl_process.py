@@ -1,7 +1,7 @@
 """The trusted checker's GL process: one lab file run and observed, its evidence written.
 
-``python -m mirrorlab.labs.trusted.execute JOB.json`` opens a headless context, the lab's
-session for the job's variant, runs the file through :class:`~.run.LabRun` (the file
+``python -m mirrorlab.labs.trusted.gl_process JOB.json`` opens a headless context, the lab's
+session for the job's variant, runs the file through :class:`~.lab_run.LabRun` (the file
 itself in the sandbox) and writes ``evidence.json`` and ``arrays.npz`` into the job's
 output folder. It is a process of its own so that the command or grading worker that
 asked can stop it at a deadline whatever the student's GLSL does to the driver
@@ -58,8 +58,8 @@ def execute(job: dict[str, Any]) -> Evidence:
     from mirrorlab.gl.context import offscreen_context
     from mirrorlab.gl.resources import Framebuffer
     from mirrorlab.labs import find_lab
-    from mirrorlab.labs.trusted.kit import open_session
-    from mirrorlab.labs.trusted.run import LabRun
+    from mirrorlab.labs.trusted.session import open_session
+    from mirrorlab.labs.trusted.lab_run import LabRun
 
     spec = find_lab(job["lab"])
     size = (int(job["size"][0]), int(job["size"][1]))
@@ -192,7 +192,7 @@ class CheckerProcess:
 
     def __init__(self) -> None:
         self.process = subprocess.Popen(
-            [sys.executable, "-m", "mirrorlab.labs.trusted.execute", "--serve"],
+            [sys.executable, "-m", "mirrorlab.labs.trusted.gl_process", "--serve"],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             env=gl_process_environment(),
@@ -290,7 +290,7 @@ def run_job(
         else:
             try:
                 done = subprocess.run(
-                    [sys.executable, "-m", "mirrorlab.labs.trusted.execute", str(job_file)],
+                    [sys.executable, "-m", "mirrorlab.labs.trusted.gl_process", str(job_file)],
                     capture_output=True,
                     text=True,
                     env=gl_process_environment(),

@@ -29,7 +29,7 @@ from mirrorlab.gl.opengl import GL
 from mirrorlab.labs.trusted import calls as C
 from mirrorlab.labs.trusted import legacy
 from mirrorlab.labs.trusted.calls import CallError, gl_error
-from mirrorlab.labs.trusted.kit import (
+from mirrorlab.labs.trusted.session import (
     PICTURES,
     LabBase,
     LabSetupError,
@@ -37,7 +37,7 @@ from mirrorlab.labs.trusted.kit import (
     current_matrices,
 )
 from mirrorlab.labs.trusted.state import (
-    CUBE_FACES,
+    CUBE_FACE_TARGETS,
     GL_MODELVIEW,
     GL_PROJECTION,
     GL_TEXTURE_2D,
@@ -72,11 +72,11 @@ class RunLimits:
 
 
 def _bind_target(target: int) -> int:
-    return GL_TEXTURE_CUBE_MAP if target in CUBE_FACES else target
+    return GL_TEXTURE_CUBE_MAP if target in CUBE_FACE_TARGETS else target
 
 
 def _face(target: int) -> int:
-    return target - CUBE_FACES[0] if target in CUBE_FACES else 0
+    return target - CUBE_FACE_TARGETS[0] if target in CUBE_FACE_TARGETS else 0
 
 
 def _unit_name(unit: int) -> str:
