@@ -17,7 +17,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from mirrorlab.labs import LABS, find_lab  # noqa: E402
+from mirrorlab.labs import find_lab, lab_names  # noqa: E402
 from mirrorlab.labs.content import reference_folder  # noqa: E402
 from mirrorlab.labs.trusted.checker import (  # noqa: E402
     CHECK_SIZE,
@@ -31,7 +31,7 @@ SOLUTIONS = ROOT / "labs" / "solutions"
 
 
 def main(names: list[str]) -> int:
-    for name in names or list(LABS):
+    for name in names or list(lab_names()):
         spec = find_lab(name)
         evidence = make_reference(
             spec,

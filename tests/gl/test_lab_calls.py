@@ -21,8 +21,8 @@ from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Framebuffer
 from mirrorlab.labs.trusted import calls as C
 from mirrorlab.labs.trusted.call_executor import Executor, Stop
-from mirrorlab.labs.trusted.session import open_session
 from mirrorlab.labs.trusted.pipe import PipeBudget, PipeClosed, PipeError, TrustedChannel
+from mirrorlab.labs.trusted.session import open_session
 from mirrorlab.labs.trusted.variants import default_variant
 from tests.gl.conftest import module_context
 from tests.labs.mutants import solution

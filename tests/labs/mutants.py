@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from mirrorlab.labs import LABS
+from mirrorlab.labs import find_lab
 from tests import REPO_DIR
 
 SOLUTIONS = REPO_DIR / "labs" / "solutions"
@@ -18,7 +18,7 @@ SOLUTIONS = REPO_DIR / "labs" / "solutions"
 
 def solution(lab: str) -> str:
     """The teacher's solution of ``lab`` (the lab's own numbers)."""
-    return (SOLUTIONS / f"{LABS[lab].folder}.py").read_text()
+    return (SOLUTIONS / f"{find_lab(lab).folder}.py").read_text()
 
 
 @dataclass(frozen=True)
@@ -34,7 +34,7 @@ class Mutant:
 
     def expected_cause(self) -> tuple[str, str]:
         """(the first task expected to fail, the phrase naming the cause in its hint)."""
-        first = next(t.id for t in LABS[self.lab].tasks if t.id in self.fails)
+        first = next(t.id for t in find_lab(self.lab).tasks if t.id in self.fails)
         return first, self.cause or self.fails[first]
 
     def source(self) -> str:

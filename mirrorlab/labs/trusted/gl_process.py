@@ -20,6 +20,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from mirrorlab.labs import LabSpec
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.pipe import wait_readable
 from mirrorlab.labs.trusted.sandbox import Limits, SandboxError
@@ -57,11 +58,11 @@ def execute(job: dict[str, Any]) -> Evidence:
     """Run ``job`` in this process (which must not have loaded OpenGL for a window)."""
     from mirrorlab.gl.context import offscreen_context
     from mirrorlab.gl.resources import Framebuffer
-    from mirrorlab.labs import find_lab
-    from mirrorlab.labs.trusted.session import open_session
+    from mirrorlab.labs import load_lab
     from mirrorlab.labs.trusted.lab_run import LabRun
+    from mirrorlab.labs.trusted.session import open_session
 
-    spec = find_lab(job["lab"])
+    spec = load_lab(job["lab"], job["package"], job["import_root"])
     size = (int(job["size"][0]), int(job["size"][1]))
     variant = Variant(
         spec.name,
@@ -250,7 +251,7 @@ def kept_process() -> CheckerProcess:
 
 
 def run_job(
-    lab: str,
+    spec: LabSpec,
     source: bytes,
     file_name: str,
     variant: Variant,
@@ -258,7 +259,7 @@ def run_job(
     size: tuple[int, int],
     keep: bool = False,
 ) -> Evidence:
-    """Run ``source`` (the student's file, called ``file_name``) through ``lab`` for
+    """Run ``source`` (the student's file, called ``file_name``) through ``spec``'s lab for
     ``variant`` in a checker process of its own (with ``keep``, this process's kept one:
     see :class:`CheckerProcess`), which is stopped if it outlives the run's own limits;
     SandboxError when the sandbox cannot start, CheckerError when the checker's process
@@ -272,7 +273,9 @@ def run_job(
         out = base / "out"
         out.mkdir()
         job = {
-            "lab": lab,
+            "lab": spec.name,
+            "package": spec.package,
+            "import_root": str(spec.import_root),
             "file": str(base / "source.py"),
             "name": file_name,
             "variant": variant.plain(),
@@ -302,7 +305,7 @@ def run_job(
                 code = None
         if code is None:
             return Evidence(
-                lab,
+                spec.name,
                 "timeout",
                 f"stopped after {deadline:g} s: the calls took too long to draw",
                 variant=variant.plain(),

@@ -109,12 +109,6 @@ CALLS = {
 }
 """How the probe's main calls each function (a, b: the inputs as vec4)."""
 
-LAB_FUNCTIONS = {
-    "spheremap": ("reflect_eye", "sphere_map_st"),
-    "cubemap": ("cube_face", "cube_face_st"),
-}
-"""The functions the probe evaluates, per lab."""
-
 
 # ------------------------------------------------------------------ formulas and slips
 def _hoff(r: np.ndarray, plus: float = 1.0, two: float = 2.0, half: float = 0.5) -> np.ndarray:
@@ -301,7 +295,9 @@ def run_probe(
     target = None
     try:
         shaders.append(
-            session._compiled(GL.GL_VERTEX_SHADER, PROBE_VERTEX, "the probe's vertex shader", "probe")
+            session._compiled(
+                GL.GL_VERTEX_SHADER, PROBE_VERTEX, "the probe's vertex shader", "probe"
+            )
         )
         shaders.append(
             session._compiled(

@@ -50,11 +50,11 @@ def run_window(
     from mirrorlab.files import write_png_atomic
     from mirrorlab.gl.opengl import GL
     from mirrorlab.labs.content import starter
-    from mirrorlab.labs.trusted.checker import file_variant
     from mirrorlab.labs.trusted.call_executor import RunLimits
-    from mirrorlab.labs.trusted.session import open_session
-    from mirrorlab.labs.trusted.pipe import PipeBudget
+    from mirrorlab.labs.trusted.checker import file_variant
     from mirrorlab.labs.trusted.lab_run import LabRun
+    from mirrorlab.labs.trusted.pipe import PipeBudget
+    from mirrorlab.labs.trusted.session import open_session
     from mirrorlab.labs.trusted.variants import default_variant
 
     spec = find_lab(lab)

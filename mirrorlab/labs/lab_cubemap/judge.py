@@ -13,6 +13,8 @@ import numpy as np
 from mirrorlab import math3d
 from mirrorlab.envmap import cube_map
 from mirrorlab.labs import LabSpec, task_name
+from mirrorlab.labs.lab_cubemap.trusted import CubeMapLab
+from mirrorlab.labs.lab_cubemap.variant import cube_center
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.judging import (
     INTEGER_HALF,
@@ -33,9 +35,7 @@ from mirrorlab.labs.trusted.judging import (
     where,
     wrong_clear_colour,
 )
-from mirrorlab.labs.trusted.session import CubeMapLab
 from mirrorlab.labs.trusted.probe import INPUTS, slip, slip_per_face
-from mirrorlab.labs.trusted.variants import cube_center
 from mirrorlab.views import CUBE_FACE_NAMES, CUBE_FACES
 
 GLSL_FUNCTIONS = ("cube_face", "cube_face_st")
