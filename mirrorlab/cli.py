@@ -357,6 +357,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     lab = commands.add_parser("lab", help="start, check, run, release and grade the lab exercises")
     lab_commands = lab.add_subparsers(dest="lab_command", required=True, metavar="ACTION")
+    from mirrorlab.labs import lab_names
+
+    lab_help = f"{', '.join(lab_names())} (or the lab's folder name)"
     limits = argparse.ArgumentParser(add_help=False)
     limits.add_argument(
         "--timeout",
@@ -381,18 +384,14 @@ def build_parser() -> argparse.ArgumentParser:
     start = lab_commands.add_parser(
         "start", help="write a lab's handout (README.md) and starter.py into a folder"
     )
-    start.add_argument(
-        "lab_name", metavar="LAB", help="lab20, spheremap or cubemap (or the lab's folder name)"
-    )
+    start.add_argument("lab_name", metavar="LAB", help=lab_help)
     start.add_argument("folder", metavar="DIR", help="a new or empty folder")
     check = lab_commands.add_parser(
         "check",
         parents=[limits, solutions],
         help="check one file: each task passed or failed, with a hint; exit 0 only when all pass",
     )
-    check.add_argument(
-        "lab_name", metavar="LAB", help="lab20, spheremap or cubemap (or the lab's folder name)"
-    )
+    check.add_argument("lab_name", metavar="LAB", help=lab_help)
     check.add_argument(
         "file",
         metavar="FILE",

@@ -1,11 +1,11 @@
-"""Re-make the labs' shipped reference evidence, mirrorlab/labs/content/<lab>/reference/:
+"""Re-make the labs' shipped reference evidence, mirrorlab/labs/<folder>/reference/:
 what each lab's reference solution (labs/solutions/, teachers' only) shows for the lab's
 own numbers, run through the trusted checker like any submission. A student's
 ``mirrorlab lab check`` judges against it where no solutions are at hand (a wheel).
 
     .venv/bin/python tools/make_lab_references.py [LAB ...]
 
-tests/labs/test_content.py checks that the shipped evidence is what the solutions give now.
+tests/labs/test_boundary.py checks that the shipped evidence is what the solutions give now.
 """
 
 from __future__ import annotations

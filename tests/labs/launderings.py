@@ -5,7 +5,7 @@
   back with ``glReadPixels``, snaps the frame's extents to the variant grid and then does
   the lab with the numbers it measured. Once at set-up (``load_textures``), once at the
   start of the first frame.
-- ``noop_clear_*``: the shipped reference frame (``content/*/reference/arrays.npz``)
+- ``noop_clear_*``: the shipped reference frame (``mirrorlab/labs/*/reference/arrays.npz``)
   uploaded and drawn over the whole frame, then a clear that writes nothing
   (``glColorMask(0, 0, 0, 0)``), a clear outside the pasted part (scissored), or a copy of
   the pasted frame into a texture and back after a clear: each must still be known as
