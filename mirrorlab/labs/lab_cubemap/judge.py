@@ -10,7 +10,6 @@ from typing import Any
 
 import numpy as np
 
-from mirrorlab import math3d
 from mirrorlab.envmap import cube_map
 from mirrorlab.labs import LabSpec, task_name
 from mirrorlab.labs.lab_cubemap.trusted import CubeMapLab
@@ -175,12 +174,6 @@ def _face_draws(student: Evidence) -> list[dict[str, Any]]:
 def _near_far(projection: np.ndarray) -> tuple[float, float]:
     a, b = projection[2, 2], projection[2, 3]
     return float(b / (a - 1)), float(b / (a + 1))
-
-
-def _expected(face: int, center: tuple[float, float, float]) -> np.ndarray:
-    forward, up = CUBE_FACES[face]
-    eye = np.asarray(center, dtype=np.float64)
-    return math3d.look_at(tuple(eye), tuple(eye + np.asarray(forward)), up)
 
 
 def judge_cameras(
