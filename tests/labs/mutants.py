@@ -17,8 +17,9 @@ SOLUTIONS = REPO_DIR / "labs" / "solutions"
 
 
 def solution(lab: str) -> str:
-    """The teacher's solution of ``lab`` (the lab's own numbers)."""
-    return (SOLUTIONS / f"{find_lab(lab).folder}.py").read_text()
+    """The teacher's solution of ``lab`` (the lab's own numbers), where its registry entry
+    says it is."""
+    return find_lab(lab).solution.read_text()
 
 
 @dataclass(frozen=True)
