@@ -1,6 +1,7 @@
-"""What a lab gives its student, drawn by the trusted side: the context's shaders and
-meshes, the robot's scene graph, the cone, the sphere and the viewer's camera, each lab's
-numbers taken from its variant (:mod:`.variants`).
+"""What every lab's given drawing shares, on the trusted side: the kit's shaders (and the
+student's GLSL linked into them), meshes, pictures, textures read back, and
+:class:`LabBase`, the session each lab's ``trusted.SESSION`` extends with its own scene
+(the robot, the cone, the sphere), its numbers taken from its variant (:mod:`.variants`).
 
 A session lives in the executor's GL context (:mod:`.call_executor`); the student's file
 reaches its drawing calls (``lab.draw_scene``, ``lab.draw_cone_shader``, ...) only as
