@@ -131,6 +131,7 @@ def labs() -> tuple[LabSpec, ...]:
 
 
 def lab_names() -> tuple[str, ...]:
+    """The registered labs' names (what the command line takes)."""
     return tuple(_REGISTRY)
 
 
@@ -144,11 +145,11 @@ def find_lab(name: str) -> LabSpec:
     """The lab called ``name`` (``lab20``, ``spheremap``, ``cubemap``, a registered lab's
     name, or a folder name such as ``lab20_mirror``); ValueError naming the choices
     otherwise."""
-    key = name.rstrip("/").split("/")[-1]
+    folder = name.rstrip("/").split("/")[-1]
     for spec in _REGISTRY.values():
-        if key in (spec.name, spec.folder):
+        if name == spec.name or folder == spec.folder:
             return spec
-    choices = ", ".join(part for spec in _REGISTRY.values() for part in (spec.name, spec.folder))
+    choices = ", ".join([*_REGISTRY, *(spec.folder for spec in _REGISTRY.values())])
     raise ValueError(f"LAB: unknown lab {name!r}; expected one of {choices}")
 
 
