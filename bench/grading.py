@@ -38,7 +38,7 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
-from mirrorlab.labs import LABS  # noqa: E402
+from mirrorlab.labs import find_lab  # noqa: E402
 from mirrorlab.labs.trusted.checker import reference_evidence  # noqa: E402
 from mirrorlab.labs.trusted.grading import grade_folder  # noqa: E402
 from mirrorlab.labs.trusted.sandbox import Limits  # noqa: E402
@@ -180,7 +180,7 @@ def main() -> int:
         "--skip-engines", action="store_true", help="measure only what --before asks"
     )
     args = parser.parse_args()
-    spec, limits = LABS["lab20"], Limits()
+    spec, limits = find_lab("lab20"), Limits()
     folder = Path(tempfile.mkdtemp(prefix="mirrorlab-bench-class-"))
     figures: dict = {"students": args.students}
     try:

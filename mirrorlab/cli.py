@@ -130,7 +130,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_MACHINE
     except Exception as exc:
         from mirrorlab.labs.trusted.checker import CheckError
-        from mirrorlab.labs.trusted.execute import CheckerError
+        from mirrorlab.labs.trusted.gl_process import CheckerError
         from mirrorlab.labs.trusted.sandbox import SandboxError
 
         if isinstance(exc, SandboxError | CheckError):

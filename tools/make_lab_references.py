@@ -1,11 +1,11 @@
-"""Re-make the labs' shipped reference evidence, mirrorlab/labs/content/<lab>/reference/:
+"""Re-make the labs' shipped reference evidence, mirrorlab/labs/<folder>/reference/:
 what each lab's reference solution (labs/solutions/, teachers' only) shows for the lab's
 own numbers, run through the trusted checker like any submission. A student's
 ``mirrorlab lab check`` judges against it where no solutions are at hand (a wheel).
 
     .venv/bin/python tools/make_lab_references.py [LAB ...]
 
-tests/labs/test_content.py checks that the shipped evidence is what the solutions give now.
+tests/labs/test_boundary.py checks that the shipped evidence is what the solutions give now.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from mirrorlab.labs import LABS, find_lab  # noqa: E402
+from mirrorlab.labs import find_lab, lab_names  # noqa: E402
 from mirrorlab.labs.content import reference_folder  # noqa: E402
 from mirrorlab.labs.trusted.checker import (  # noqa: E402
     CHECK_SIZE,
@@ -31,7 +31,7 @@ SOLUTIONS = ROOT / "labs" / "solutions"
 
 
 def main(names: list[str]) -> int:
-    for name in names or list(LABS):
+    for name in names or list(lab_names()):
         spec = find_lab(name)
         evidence = make_reference(
             spec,

@@ -38,21 +38,20 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         help="the teacher's solutions (the repository's labs/solutions; "
         "default $MIRRORLAB_SOLUTIONS): references are made from them",
     )
+    from mirrorlab.labs import lab_names
+
+    lab_help = f"{', '.join(lab_names())} (or the lab's folder name)"
     start = lab_commands.add_parser(
         "start", help="write a lab's handout (README.md) and starter.py into a folder"
     )
-    start.add_argument(
-        "lab_name", metavar="LAB", help="lab20, spheremap or cubemap (or the lab's folder name)"
-    )
+    start.add_argument("lab_name", metavar="LAB", help=lab_help)
     start.add_argument("folder", metavar="DIR", help="a new or empty folder")
     check = lab_commands.add_parser(
         "check",
         parents=[limits, solutions],
         help="check one file: each task passed or failed, with a hint; exit 0 only when all pass",
     )
-    check.add_argument(
-        "lab_name", metavar="LAB", help="lab20, spheremap or cubemap (or the lab's folder name)"
-    )
+    check.add_argument("lab_name", metavar="LAB", help=lab_help)
     check.add_argument(
         "file",
         metavar="FILE",

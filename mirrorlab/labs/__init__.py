@@ -1,22 +1,33 @@
-"""The labs: each lab's tasks and the functions of the student's file they live in (here),
-and three packages whose split is the labs' trust boundary:
+"""The labs and their registry. Each lab is one package (``mirrorlab/labs/<folder>/`` for
+the shipped ones) that registers its :class:`LabSpec` with :func:`register` when imported:
 
-- :mod:`mirrorlab.labs.student` runs in the sandbox with the student's file: stand-ins for
-  OpenGL, GLU and the lab's kit that send every call to the checker. It imports nothing
-  of the rest of mirrorlab, and is all of mirrorlab a sandbox can see.
-- :mod:`mirrorlab.labs.trusted` runs outside: the sandbox, the executor that validates and
-  runs each call in its own GL context, the judges, the checker, grading, release and the
-  reports.
-- :mod:`mirrorlab.labs.content` holds what students are given: each lab's handout,
-  starter and reference data (package data). The teachers' solutions are not in the
-  package; they are in the repository's ``labs/solutions/``.
+- ``__init__.py``: the spec (tasks, the student's functions, the variants' choices);
+- ``student.py``: the lab object of the sandbox (imports only the standard library, numpy
+  and :mod:`mirrorlab.labs.student`);
+- ``trusted.py``: the lab's session (its given drawing in the checker's GL context), its
+  kit calls as the executor runs them, what the checker observes after the frames, the
+  calls it leaves out, and what a variant's numbers write into its templates;
+- ``judge.py``: each task's verdict and hint from the evidence;
+- ``handout.md``, ``starter.py`` (templates) and ``reference/`` (its reference solution's
+  evidence for the lab's own numbers), shipped as package data.
+
+The teacher's solution is not in the package: :attr:`LabSpec.solution` names where it is
+(the repository's ``labs/solutions/`` for the shipped labs). The shared machinery asks
+the registry: :mod:`mirrorlab.labs.student` runs in the sandbox with the student's file
+(stand-ins for OpenGL, GLU and the kit), :mod:`mirrorlab.labs.trusted` runs outside (the
+sandbox, the executor of the student's calls, the checker, grading, release, reports).
 
 Importing this package loads no OpenGL.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import importlib
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import ModuleType
+from typing import Any
 
 
 @dataclass(frozen=True)
@@ -38,10 +49,15 @@ class Task:
 
 @dataclass(frozen=True)
 class LabSpec:
-    """A lab: ``name`` (what the command line takes), ``folder`` (its content's and its
-    solution's name, also accepted on the command line), the functions the student's file
-    defines (``setup`` run once, then ``frame`` every frame), and its tasks in the
-    handout's order."""
+    """A lab's registry entry: ``name`` (what the command line takes), ``folder`` (its
+    package's folder name and its solution's file name, also accepted on the command
+    line), the functions the student's file defines (``setup`` run once, then ``frame``
+    every frame), its tasks in the handout's order, ``options`` (each variant value's
+    choices) and ``defaults`` (the lab's own numbers), ``declared`` (module-level strings
+    of the student's file the checker judges even when a frame never draws them: the
+    GLSL of the lab's shaders), ``package`` (the dotted name of the lab's package, whose
+    folder ``home`` holds its modules and content) and ``solution`` (the teacher's
+    solution file; it may not exist, as outside a checkout)."""
 
     name: str
     folder: str
@@ -50,6 +66,28 @@ class LabSpec:
     frame: str
     functions: tuple[str, ...]
     tasks: tuple[Task, ...]
+    package: str
+    home: Path
+    solution: Path
+    options: dict[str, tuple[Any, ...]] = field(default_factory=dict, compare=False)
+    defaults: dict[str, Any] = field(default_factory=dict, compare=False)
+    declared: tuple[str, ...] = ()
+
+    def module(self, part: str) -> ModuleType:
+        """The lab's module ``part`` (``trusted``, ``judge``); imports it (``trusted``
+        imports OpenGL)."""
+        return importlib.import_module(f"{self.package}.{part}")
+
+    @property
+    def student_file(self) -> Path:
+        """The lab's student side (``student.py``), which the sandbox is given read-only."""
+        return self.home / "student.py"
+
+    @property
+    def import_root(self) -> Path:
+        """The folder on ``sys.path`` the lab's package is imported from (what another
+        process adds to its path to import it)."""
+        return self.home.parents[self.package.count(".")]
 
     def task(self, task_id: str) -> Task:
         return next(t for t in self.tasks if t.id == task_id)
@@ -60,99 +98,73 @@ class LabSpec:
         return self.task(task_id).name
 
 
-LABS: dict[str, LabSpec] = {
-    "lab20": LabSpec(
-        name="lab20",
-        folder="lab20_mirror",
-        title="Lab 20: the multipass mirror",
-        setup=("load_textures", "build_scene_graph"),
-        frame="display",
-        functions=(
-            "load_textures",
-            "build_scene_graph",
-            "create_mirror",
-            "render_mirror",
-            "display",
-        ),
-        tasks=(
-            Task(
-                1,
-                "capture_camera",
-                "create_mirror",
-                "the capture's orthographic projection and camera",
-            ),
-            Task(2, "capture_scene", "create_mirror", "the scene drawn without the mirror"),
-            Task(3, "capture_copy", "create_mirror", "the framebuffer copied into ENVIRONMENT"),
-            Task(
-                4,
-                "environment_texture",
-                "load_textures",
-                "ENVIRONMENT's filters and wrapping, no mipmaps",
-            ),
-            Task(5, "base_texture", "build_scene_graph", "the base wears METAL"),
-            Task(
-                6,
-                "mirror_texture",
-                "render_mirror",
-                "the mirror's shader, sampler uniform and texture",
-            ),
-            Task(7, "mirror_quad", "render_mirror", "the mirror's corners and texture coordinates"),
-            Task(8, "passes", "display", "both passes, in order, every frame"),
-        ),
-    ),
-    "spheremap": LabSpec(
-        name="spheremap",
-        folder="lab_spheremap",
-        title="Sphere mapping: shader and texgen",
-        setup=("load_textures", "setup_texgen"),
-        frame="display",
-        functions=("load_textures", "setup_texgen", "draw_cone_texgen", "display"),
-        tasks=(
-            Task(1, "reflection", "reflect_eye", "the reflection vector in the shader"),
-            Task(
-                2, "sphere_coordinates", "sphere_map_st", "the sphere map's s and t in the shader"
-            ),
-            Task(3, "texgen_setup", "setup_texgen", "GL_SPHERE_MAP texgen for s and t"),
-            Task(
-                4,
-                "texgen_draw",
-                "draw_cone_texgen",
-                "the texgen cone: texgen on, the picture bound, texgen off again",
-            ),
-            Task(5, "side_by_side", "display", "both cones side by side"),
-        ),
-    ),
-    "cubemap": LabSpec(
-        name="cubemap",
-        folder="lab_cubemap",
-        title="Cube mapping: face selection and a live cube map",
-        setup=("create_cube_texture",),
-        frame="display",
-        functions=("create_cube_texture", "capture_cube", "display"),
-        tasks=(
-            Task(1, "face_selection", "cube_face", "the face by the major axis in the shader"),
-            Task(2, "face_coordinates", "cube_face_st", "s and t on the face in the shader"),
-            Task(3, "capture_cameras", "capture_cube", "six 90-degree cameras, one a face"),
-            Task(4, "capture_copy", "capture_cube", "each picture copied into its face"),
-            Task(5, "live_frame", "display", "the capture before the sphere, every frame"),
-        ),
-    ),
-}
+_REGISTRY: dict[str, LabSpec] = {}
 
-ALIASES = {spec.folder: name for name, spec in LABS.items()}
+
+def register(spec: LabSpec) -> LabSpec:
+    """Add ``spec`` to the labs: ``lab start``, ``check``, ``run``, ``release``,
+    ``solution`` and ``grade`` take it from then on. ValueError when its name or folder
+    is another lab's."""
+    for other in _REGISTRY.values():
+        if spec.name in (other.name, other.folder) or spec.folder in (other.name, other.folder):
+            raise ValueError(f"lab {spec.name!r} ({spec.folder}) is registered already")
+    missing = set(spec.defaults) ^ set(spec.options)
+    if missing:
+        raise ValueError(f"lab {spec.name!r}: options and defaults differ on {sorted(missing)}")
+    _REGISTRY[spec.name] = spec
+    return spec
+
+
+def unregister(name: str) -> None:
+    """Remove the lab ``name`` (tests that register one of their own)."""
+    spec = _REGISTRY.pop(name, None)
+    if spec is not None:
+        for module in [
+            m for m in sys.modules if m == spec.package or m.startswith(spec.package + ".")
+        ]:
+            del sys.modules[module]
+
+
+def labs() -> tuple[LabSpec, ...]:
+    """The registered labs, in the order they were registered."""
+    return tuple(_REGISTRY.values())
+
+
+def lab_names() -> tuple[str, ...]:
+    """The registered labs' names (what the command line takes)."""
+    return tuple(_REGISTRY)
 
 
 def task_name(lab: str, task_id: str) -> str:
     """The name of ``lab``'s task ``task_id`` (``task 8 (passes)``): how a hint points to
     another task, so that hints, CSVs and reports name a task one way."""
-    return LABS[lab].task_name(task_id)
+    return find_lab(lab).task_name(task_id)
 
 
 def find_lab(name: str) -> LabSpec:
-    """The lab called ``name`` (``lab20``, ``spheremap``, ``cubemap``, or a folder name such
-    as ``lab20_mirror``); ValueError naming the choices otherwise."""
-    key = ALIASES.get(name.rstrip("/").split("/")[-1], name)
-    if key not in LABS:
-        choices = ", ".join([*LABS, *ALIASES])
-        raise ValueError(f"LAB: unknown lab {name!r}; expected one of {choices}")
-    return LABS[key]
+    """The lab called ``name`` (``lab20``, ``spheremap``, ``cubemap``, a registered lab's
+    name, or a folder name such as ``lab20_mirror``); ValueError naming the choices
+    otherwise."""
+    folder = name.rstrip("/").split("/")[-1]
+    for spec in _REGISTRY.values():
+        if name == spec.name or folder == spec.folder:
+            return spec
+    choices = ", ".join([*_REGISTRY, *(spec.folder for spec in _REGISTRY.values())])
+    raise ValueError(f"LAB: unknown lab {name!r}; expected one of {choices}")
+
+
+def load_lab(name: str, package: str, import_root: str) -> LabSpec:
+    """The lab ``name`` in another process (the checker's GL process): its ``package``
+    imported from ``import_root`` first when it is not registered here."""
+    if name not in _REGISTRY:
+        if import_root not in sys.path:
+            sys.path.append(import_root)
+        importlib.import_module(package)
+    return find_lab(name)
+
+
+SHIPPED = ("lab20_mirror", "lab_spheremap", "lab_cubemap")
+"""The labs mirrorlab ships, each a package of this one (registered on import)."""
+
+for _folder in SHIPPED:
+    importlib.import_module(f"{__name__}.{_folder}")

@@ -1,8 +1,8 @@
 """The name a lab's starter imports: ``from mirrorlab.labs import kit``.
 
 A lab's file runs under ``mirrorlab lab run`` or ``mirrorlab lab check``, in the sandbox,
-where this name is the student side's stand-in (:mod:`mirrorlab.labs.student.kit`), whose
-``kit.lab20()`` returns the lab's object. Anywhere else (``python starter.py``) there is
+where this name is the student side's stand-in (:mod:`mirrorlab.labs.student.kit_standin`),
+whose ``kit.lab20()`` returns the lab's object. Anywhere else (``python starter.py``) there is
 no lab session, and these say so in one line.
 """
 
@@ -30,13 +30,15 @@ def _no_session() -> LabSetupError:
     )
 
 
-def lab20() -> Any:
-    raise _no_session()
+def __getattr__(name: str) -> Any:
+    """``kit.<lab>()`` for every registered lab (:func:`mirrorlab.labs.lab_names`)."""
+    from mirrorlab.labs import lab_names
 
+    if name not in lab_names():
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
-def spheremap() -> Any:
-    raise _no_session()
+    def open_lab() -> Any:
+        raise _no_session()
 
-
-def cubemap() -> Any:
-    raise _no_session()
+    open_lab.__name__ = name
+    return open_lab

@@ -170,7 +170,7 @@ def test_a_hidden_window_forced_without_a_display_says_what_to_do(tmp_path):
 
 
 def test_the_checker_process_is_pinned_to_the_backend_chosen_here(monkeypatch):
-    from mirrorlab.labs.trusted.execute import gl_process_environment
+    from mirrorlab.labs.trusted.gl_process import gl_process_environment
 
     monkeypatch.setenv("PYOPENGL_PLATFORM", "glx")
     monkeypatch.setenv("DISPLAY", ":99")

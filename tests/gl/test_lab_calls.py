@@ -20,9 +20,9 @@ from hypothesis import strategies as st
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Framebuffer
 from mirrorlab.labs.trusted import calls as C
-from mirrorlab.labs.trusted.executor import Executor, Stop
-from mirrorlab.labs.trusted.kit import open_session
+from mirrorlab.labs.trusted.call_executor import Executor, Stop
 from mirrorlab.labs.trusted.pipe import PipeBudget, PipeClosed, PipeError, TrustedChannel
+from mirrorlab.labs.trusted.session import open_session
 from mirrorlab.labs.trusted.variants import default_variant
 from tests.gl.conftest import module_context
 from tests.labs.mutants import solution
@@ -360,7 +360,7 @@ def fuzz_target(gl_context):
     ),
 )
 def test_fuzzed_calls_get_a_reply_or_one_line(fuzz_target, lab, calls):
-    from mirrorlab.labs.trusted.run import reset_state
+    from mirrorlab.labs.trusted.lab_run import reset_state
 
     framebuffer, sessions = fuzz_target
     framebuffer.bind()

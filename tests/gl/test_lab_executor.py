@@ -13,8 +13,10 @@ import pytest
 
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Framebuffer
-from mirrorlab.labs.trusted.executor import Executor, RunLimits, Stop
-from mirrorlab.labs.trusted.kit import Lab20, SphereMapLab, open_session
+from mirrorlab.labs.lab20_mirror.trusted import Lab20
+from mirrorlab.labs.lab_spheremap.trusted import SphereMapLab
+from mirrorlab.labs.trusted.call_executor import Executor, RunLimits, Stop
+from mirrorlab.labs.trusted.session import open_session
 from mirrorlab.labs.trusted.variants import default_variant
 
 SIZE = (64, 64)

@@ -12,7 +12,7 @@ import pytest
 
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import FloatFramebuffer
-from mirrorlab.labs.trusted.kit import StudentShaderError, open_session
+from mirrorlab.labs.trusted.session import StudentShaderError, open_session
 from mirrorlab.labs.trusted.variants import default_variant
 from tests.gl.conftest import module_context
 from tests.labs.mutants import solution
@@ -99,7 +99,7 @@ def test_a_compile_error_names_the_students_line_and_a_missing_function_its_name
 
 def test_gl_built_in_state_is_not_a_uniform_of_the_kit(registry):
     """Compatibility GLSL may read GL's own state (the same for the kit's every draw)."""
-    from mirrorlab.labs.trusted.kit import compile_program
+    from mirrorlab.labs.trusted.session import compile_program
 
     text = (
         "vec3 reflect_eye(vec3 u, vec3 n) {\n"

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from mirrorlab.envmap import cube_map, reflect, sphere_map
+from mirrorlab.labs import find_lab
 from mirrorlab.labs.trusted import probe
 from tests.labs.mutants import solution
 
@@ -26,7 +27,9 @@ def glsl(lab: str) -> str:
 
 
 def run(registry, lab: str, text: str) -> dict[str, np.ndarray]:
-    return probe.run_probe(KIT[lab], text, probe.LAB_FUNCTIONS[lab], registry)
+    return probe.run_probe(
+        KIT[lab], text, find_lab(lab).module("trusted").PROBE_FUNCTIONS, registry
+    )
 
 
 def test_solutions_give_the_numpy_references(registry):
@@ -130,6 +133,7 @@ def test_the_probe_runs_on_a_core_context():
         "import re, sys\n"
         "from mirrorlab.gl.context import offscreen_context\n"
         "from mirrorlab.gl.opengl import GL\n"
+        "from mirrorlab.labs import find_lab\n"
         "from mirrorlab.labs.trusted import probe\n"
         "from tests.labs.mutants import solution\n"
         "with offscreen_context() as context:\n"
@@ -145,7 +149,8 @@ def test_the_probe_runs_on_a_core_context():
         "            if old not in text and old != 'XX':\n"
         "                continue\n"
         "            values = probe.run_probe(kit, text.replace(old, new),\n"
-        "                                     probe.LAB_FUNCTIONS[lab], context.resources)\n"
+        "                                     find_lab(lab).module('trusted').PROBE_FUNCTIONS,\n"
+        "                                     context.resources)\n"
         "            print(lab, name, *(probe.slip(f, v) for f, v in values.items()))\n"
     )
     done = subprocess.run(

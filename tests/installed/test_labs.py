@@ -9,15 +9,15 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-from mirrorlab.labs import LABS
+from mirrorlab.labs import labs
 from tests import REPO_DIR
 from tests.installed.conftest import Installed
 
 
 def test_the_wheel_carries_each_labs_handout_starter_and_reference(wheel_names: list[str]):
-    for spec in LABS.values():
+    for spec in labs():
         for name in ("handout.md", "starter.py", "reference/evidence.json", "reference/arrays.npz"):
-            assert f"mirrorlab/labs/content/{spec.folder}/{name}" in wheel_names
+            assert f"mirrorlab/labs/{spec.folder}/{name}" in wheel_names
     assert "mirrorlab/labs/student/runner.py" in wheel_names
     assert not [n for n in wheel_names if n.startswith(("labs/", "tests/"))]
 
@@ -26,7 +26,7 @@ def test_lab_start_and_check_from_the_installed_wheel(installed: Installed, empt
     assert installed.root.stat().st_mode & 0o077 == 0  # a closed folder above the venv
     cache = empty_folder / "cache"
     where = installed.python(
-        "import mirrorlab.labs.student as s, mirrorlab.labs.content as c;"
+        "import mirrorlab.labs.student as s, mirrorlab.labs.lab20_mirror as c;"
         " print(s.__file__); print(c.__file__)",
         cwd=empty_folder,
     )

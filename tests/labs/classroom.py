@@ -8,12 +8,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mirrorlab.labs import LABS
+from mirrorlab.labs import find_lab
 from mirrorlab.labs.content import starter
 from mirrorlab.labs.trusted.variants import default_variant
 from tests.labs.mutants import EQUIVALENT, LAB20, solution
 
-TASKS = [t.id for t in LABS["lab20"].tasks]
+TASKS = [t.id for t in find_lab("lab20").tasks]
 
 STARTER = {
     "lab20": {
@@ -44,7 +44,7 @@ STARTER = {
 
 
 def starter_text(lab: str) -> str:
-    return starter(LABS[lab], default_variant(lab))
+    return starter(find_lab(lab), default_variant(lab))
 
 
 def verdicts(fails: dict[str, str]) -> dict[str, tuple[bool, str]]:
@@ -171,7 +171,7 @@ def compare(
     """What in ``rows`` (grades.csv as dicts, each task by its name: ``task 1
     (capture_camera)``) differs from ``expected`` (by task id); empty when none."""
     problems = []
-    ids = {task.name: task.id for task in LABS["lab20"].tasks}
+    ids = {task.name: task.id for task in find_lab("lab20").tasks}
     got: dict[str, dict[str, tuple[bool, str]]] = {}
     for row in rows:
         task = ids.get(row["task"], f"unknown task {row['task']!r}")

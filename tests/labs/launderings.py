@@ -5,7 +5,7 @@
   back with ``glReadPixels``, snaps the frame's extents to the variant grid and then does
   the lab with the numbers it measured. Once at set-up (``load_textures``), once at the
   start of the first frame.
-- ``noop_clear_*``: the shipped reference frame (``content/*/reference/arrays.npz``)
+- ``noop_clear_*``: the shipped reference frame (``mirrorlab/labs/*/reference/arrays.npz``)
   uploaded and drawn over the whole frame, then a clear that writes nothing
   (``glColorMask(0, 0, 0, 0)``), a clear outside the pasted part (scissored), or a copy of
   the pasted frame into a texture and back after a clear: each must still be known as
@@ -18,7 +18,7 @@ Each entry: lab -> name -> (source, a phrase a hint must hold).
 
 from __future__ import annotations
 
-from mirrorlab.labs import LABS
+from mirrorlab.labs import find_lab
 from mirrorlab.labs.content import reference_folder
 from mirrorlab.labs.trusted.evidence import Evidence
 from tests.labs.forgeries import _packed, unpacked
@@ -163,7 +163,7 @@ LAUNDER = {
 
 def reference_frame(lab: str) -> str:
     """The shipped reference's final frame of ``lab``, packed to embed in a file."""
-    return _packed(Evidence.load(reference_folder(LABS[lab])).arrays["frame"])
+    return _packed(Evidence.load(reference_folder(find_lab(lab))).arrays["frame"])
 
 
 def noop_clear(lab: str, trick: str, frame: str) -> str:

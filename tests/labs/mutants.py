@@ -10,15 +10,16 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from mirrorlab.labs import LABS
+from mirrorlab.labs import find_lab
 from tests import REPO_DIR
 
 SOLUTIONS = REPO_DIR / "labs" / "solutions"
 
 
 def solution(lab: str) -> str:
-    """The teacher's solution of ``lab`` (the lab's own numbers)."""
-    return (SOLUTIONS / f"{LABS[lab].folder}.py").read_text()
+    """The teacher's solution of ``lab`` (the lab's own numbers), where its registry entry
+    says it is."""
+    return find_lab(lab).solution.read_text()
 
 
 @dataclass(frozen=True)
@@ -34,7 +35,7 @@ class Mutant:
 
     def expected_cause(self) -> tuple[str, str]:
         """(the first task expected to fail, the phrase naming the cause in its hint)."""
-        first = next(t.id for t in LABS[self.lab].tasks if t.id in self.fails)
+        first = next(t.id for t in find_lab(self.lab).tasks if t.id in self.fails)
         return first, self.cause or self.fails[first]
 
     def source(self) -> str:

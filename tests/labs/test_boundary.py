@@ -14,12 +14,12 @@ from pathlib import Path
 
 import pytest
 
-from mirrorlab.labs import LABS
+from mirrorlab.labs import find_lab, lab_names, labs
 from mirrorlab.labs.content import reference_folder
 from mirrorlab.labs.trusted import sandbox
-from mirrorlab.labs.trusted.checker import CHECK_SIZE, judges, trim_reference
+from mirrorlab.labs.trusted.checker import CHECK_SIZE, trim_reference
 from mirrorlab.labs.trusted.evidence import Evidence
-from mirrorlab.labs.trusted.execute import run_job
+from mirrorlab.labs.trusted.gl_process import run_job
 from mirrorlab.labs.trusted.judging import Context, same_picture
 from mirrorlab.labs.trusted.sandbox import STUDENT_PACKAGE, Limits, Sandboxed, new_box
 from mirrorlab.labs.trusted.variants import default_variant
@@ -27,22 +27,44 @@ from tests import REPO_DIR
 from tests.labs.conftest import LIMITS, SOLUTIONS
 
 
-def test_the_student_side_imports_only_itself_and_the_standard_library():
+def student_side_imports(path: Path) -> list[str]:
+    """The modules ``path`` imports that the student side may not: anything but the
+    standard library, numpy, its own package (relative imports) and the shared student
+    side (``mirrorlab.labs.student``, which a lab's ``student.py`` imports)."""
     allowed = set(sys.stdlib_module_names) | {"numpy", "__future__"}
+    wrong = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom):
+            names = [] if node.level >= 1 else [str(node.module)]
+        elif isinstance(node, ast.Import):
+            names = [alias.name for alias in node.names]
+        else:
+            continue
+        for name in names:
+            if name.split(".")[0] not in allowed and not (
+                name == "mirrorlab.labs.student" or name.startswith("mirrorlab.labs.student.")
+            ):
+                wrong.append(name)
+    return wrong
+
+
+def test_the_student_side_imports_only_itself_and_the_standard_library():
     files = sorted(STUDENT_PACKAGE.glob("*.py"))
-    assert {p.name for p in files} >= {"runner.py", "wire.py", "gl.py", "kit.py"}
+    assert {p.name for p in files} >= {"runner.py", "wire.py", "gl.py", "kit_standin.py"}
     for path in files:
-        for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.ImportFrom):
-                assert node.level >= 1 or (
-                    node.module is not None and node.module.split(".")[0] in allowed
-                ), (
-                    path.name,
-                    node.module,
-                )
-            elif isinstance(node, ast.Import):
-                for alias in node.names:
-                    assert alias.name.split(".")[0] in allowed, (path.name, alias.name)
+        assert student_side_imports(path) == [], path.name
+    # each lab's own student side: the standard library and the shared student side alone
+    for spec in labs():
+        assert spec.student_file.is_file(), spec.name
+        assert student_side_imports(spec.student_file) == [], spec.student_file
+    # the shared student side imports itself relatively: the sandbox binds it as labstudent
+    for path in files:
+        absolute = [
+            node.module
+            for node in ast.walk(ast.parse(path.read_text()))
+            if isinstance(node, ast.ImportFrom) and node.level == 0
+        ]
+        assert not [m for m in absolute if str(m).startswith("mirrorlab")], path.name
 
 
 PROBE = """
@@ -67,6 +89,7 @@ def test_the_sandbox_holds_no_answers(tmp_path):
             [str(sandbox.interpreter()), "-I", "-S", "-c", PROBE],
             box,
             Limits(cpu_seconds=20, seconds=60),
+            lab_side=find_lab("lab20").student_file,
         )
         code, _, _ = run.wait()
         assert code == 0, sandbox.tail(box / "stderr.txt")
@@ -77,6 +100,7 @@ def test_the_sandbox_holds_no_answers(tmp_path):
     allowed = (
         base,
         "/lab/pkg/labstudent",
+        sandbox.SANDBOX_LAB_SIDE,
         "/lab/site/numpy",
         "/lab/site/numpy.libs",
         "/lab/box",
@@ -121,16 +145,17 @@ def test_the_sandbox_holds_no_answers(tmp_path):
         p.rsplit("/", 1)[1] for p in found["seen"] if p.startswith("/lab/pkg/labstudent/")
     ) == sorted(p.name for p in STUDENT_PACKAGE.iterdir() if p.name != "__pycache__")
     assert "/lab/box/mine.py" in found["seen"]
+    assert sandbox.SANDBOX_LAB_SIDE in found["seen"]
     if os.geteuid() == 0:
         assert found["uid"] >= sandbox.UID_BASE
 
 
-@pytest.mark.parametrize("lab", sorted(LABS))
+@pytest.mark.parametrize("lab", sorted(lab_names()))
 def test_the_shipped_reference_is_what_the_solution_gives(lab):
-    spec = LABS[lab]
+    spec = find_lab(lab)
     shipped = Evidence.load(reference_folder(spec))
     run = run_job(
-        lab,
+        spec,
         (SOLUTIONS / f"{spec.folder}.py").read_bytes(),
         "solution.py",
         default_variant(lab),
@@ -148,5 +173,5 @@ def test_the_shipped_reference_is_what_the_solution_gives(lab):
                 same_picture(a, b) for a, b in zip(array, shipped.arrays[name], strict=True)
             ), name
     # the fresh run judged against the shipped evidence passes every task
-    results = judges()[lab].judge(spec, run, shipped, Context(default_variant(lab)))
+    results = spec.module("judge").judge(spec, run, shipped, Context(default_variant(lab)))
     assert all(r.passed for r in results), [(r.task.id, r.hint) for r in results if not r.passed]

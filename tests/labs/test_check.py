@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mirrorlab.labs import LABS
+from mirrorlab.labs import find_lab, lab_names
 from mirrorlab.labs.trusted.grading import grade_folder
 from mirrorlab.scene.backgrounds import load_picture
 from tests.labs.classroom import STARTER, starter_text
@@ -42,9 +42,9 @@ def task_lines(output: str) -> dict[int, tuple[str, str]]:
     return found
 
 
-@pytest.mark.parametrize("lab", sorted(LABS))
+@pytest.mark.parametrize("lab", sorted(lab_names()))
 def test_reference_solution_passes(lab, tmp_path):
-    spec = LABS[lab]
+    spec = find_lab(lab)
     out = tmp_path / "check.png"
     done = mirrorlab_command(
         "lab",
@@ -68,12 +68,12 @@ def test_reference_solution_passes(lab, tmp_path):
     assert picture[rows, 2 * cell + 8 :].max() == 0
 
 
-@pytest.mark.parametrize("lab", sorted(LABS))
+@pytest.mark.parametrize("lab", sorted(lab_names()))
 def test_untouched_starter_fails_every_task_with_its_hint(lab, tmp_path):
     """The starter ``lab start`` writes, checked with no FILE from its folder (the folder's
     own file), judged against the packaged reference evidence: no solutions at hand, as
     for a student with the wheel. The report's first line names the file checked."""
-    spec = LABS[lab]
+    spec = find_lab(lab)
     started = mirrorlab_command("lab", "start", lab, str(tmp_path / "mine"))
     assert started.returncode == 0, started.stderr
     done = mirrorlab_command(
@@ -112,7 +112,14 @@ def test_each_mutant_is_caught_with_the_right_hint(lab, mutants, tmp_path):
         )
         (tmp_path / "class" / "glsl_typo.py").write_text(source)
     grades, _ = grade_folder(
-        LABS[lab], tmp_path / "class", 2, None, "pool", LIMITS, progress=False, solutions=SOLUTIONS
+        find_lab(lab),
+        tmp_path / "class",
+        2,
+        None,
+        "pool",
+        LIMITS,
+        progress=False,
+        solutions=SOLUTIONS,
     )
     by_student = {
         g.student: {task: (passed, hint) for task, passed, hint in g.tasks} for g in grades
@@ -138,7 +145,7 @@ def test_check_without_a_file_checks_the_folders_own_or_refuses(tmp_path):
         "lab", "check", "lab20", "--timeout", str(LIMITS.cpu_seconds), cwd=folder
     )
     assert done.returncode == 0, done.stdout + done.stderr
-    assert done.stdout.splitlines()[0] == f"{LABS['lab20'].title}: {folder / 'starter.py'}"
+    assert done.stdout.splitlines()[0] == f"{find_lab('lab20').title}: {folder / 'starter.py'}"
     assert "8/8 tasks passed" in done.stdout and picture.is_file()
     made = picture.read_bytes()
     (folder / "starter.py").rename(folder / "mine.py")
@@ -161,25 +168,22 @@ def test_every_hint_names_another_task_by_its_one_name():
     import ast
     import re
 
-    from mirrorlab.labs import task_name
+    from mirrorlab.labs import labs, task_name
     from tests import REPO_DIR
 
-    for module in (
-        "lab20",
-        "spheremap",
-        "cubemap",
-        "judging",
-        "checker",
-        "grading",
-        "report",
-        "window",
-    ):
-        tree = ast.parse((REPO_DIR / "mirrorlab/labs/trusted" / f"{module}.py").read_text())
+    trusted = REPO_DIR / "mirrorlab/labs/trusted"
+    paths = [spec.home / "judge.py" for spec in labs()] + [
+        trusted / f"{module}.py" for module in ("judging", "checker", "grading", "report", "window")
+    ]
+    assert len(paths) == 8
+    for path in paths:
+        module = str(path.relative_to(REPO_DIR))
+        tree = ast.parse(path.read_text())
         for node in ast.walk(tree):
             if isinstance(node, ast.Constant) and isinstance(node.value, str):
                 assert not re.search(r"\btask \d+(?! \()", node.value, re.I), (module, node.value)
     assert task_name("lab20", "passes") == "task 8 (passes)"
-    assert [t.name for t in LABS["cubemap"].tasks][:1] == ["task 1 (face_selection)"]
+    assert [t.name for t in find_lab("cubemap").tasks][:1] == ["task 1 (face_selection)"]
 
 
 def test_bad_command_lines_get_one_line_and_exit_2(tmp_path):

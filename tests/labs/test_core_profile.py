@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from mirrorlab.labs import LABS
+from mirrorlab.labs import find_lab, lab_names
 from mirrorlab.labs.trusted.grading import grade_folder
 from tests import MACOS_CONTEXT
 from tests.labs.classroom import STARTER, starter_text
@@ -367,14 +367,14 @@ def _grade(lab, folder, monkeypatch, cache, core: bool):
             else:
                 patch.delenv(key, raising=False)
         grades, _ = grade_folder(
-            LABS[lab], folder, 2, None, "pool", LIMITS, progress=False, solutions=SOLUTIONS
+            find_lab(lab), folder, 2, None, "pool", LIMITS, progress=False, solutions=SOLUTIONS
         )
     return {g.student: g for g in grades}
 
 
-@pytest.mark.parametrize("lab", sorted(LABS))
+@pytest.mark.parametrize("lab", sorted(lab_names()))
 def test_core_and_compatibility_grade_alike(lab, tmp_path, monkeypatch):
-    spec = LABS[lab]
+    spec = find_lab(lab)
     folder = tmp_path / "class"
     written = write_mutants(folder, mutants_of(lab))
     (folder / "solution.py").write_text((SOLUTIONS / f"{spec.folder}.py").read_text())

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from mirrorlab.labs import LABS
-from mirrorlab.labs.trusted.execute import run_job
+from mirrorlab.labs import find_lab
+from mirrorlab.labs.trusted.gl_process import run_job
 from mirrorlab.labs.trusted.sandbox import Limits
 from mirrorlab.labs.trusted.variants import default_variant
 from tests.labs.conftest import mirrorlab_command, read_csv
@@ -24,7 +24,7 @@ from tests.labs.glsl_forgeries import GLSL_FORGERIES
 TIMEOUT = "20"
 """CPU seconds a forgery may spend: enough that each meets the limit it is about (calls,
 bytes, vertices) before the CPU limit, however loaded the machine."""
-TASKS = len(LABS["lab20"].tasks)
+TASKS = len(find_lab("lab20").tasks)
 
 
 @pytest.fixture(scope="module")
@@ -105,7 +105,7 @@ def test_the_checker_stays_small_while_a_file_sends_1_gib(forged):
     grows by the gigabyte."""
     folder, _ = forged
     evidence = run_job(
-        "lab20",
+        find_lab("lab20"),
         (folder / "forge_upload_1gib.py").read_bytes(),
         "forge.py",
         default_variant("lab20"),
@@ -159,7 +159,7 @@ def test_glsl_macro_forgeries_do_not_get_every_task(lab, tmp_path, lab_environme
     done = mirrorlab_command(
         "lab", "check", lab, str(path), "--out", str(tmp_path / "check.png"), "--timeout", TIMEOUT
     )
-    tasks = len(LABS[lab].tasks)
+    tasks = len(find_lab(lab).tasks)
     assert done.returncode == 1 and done.stderr == "", done.stdout + done.stderr
     score = re.search(rf"(\d+)/{tasks} tasks passed", done.stdout)
     assert score and int(score.group(1)) < tasks, done.stdout

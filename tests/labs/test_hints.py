@@ -7,18 +7,25 @@ from __future__ import annotations
 
 import pytest
 
-from mirrorlab.labs import LABS
+from mirrorlab.labs import find_lab, lab_names
 from mirrorlab.labs.trusted.grading import grade_folder
 from tests.labs.conftest import LIMITS, SOLUTIONS
 from tests.labs.mutants import EVERY_MUTANT, PROBED_SLIPS, ROUND_TWO, problems, write_mutants
 
 
-@pytest.mark.parametrize("lab", sorted(LABS))
+@pytest.mark.parametrize("lab", sorted(lab_names()))
 def test_the_first_failing_hint_names_the_cause(lab, tmp_path):
     mutants = [m for m in EVERY_MUTANT if m.lab == lab]
     written = write_mutants(tmp_path / "class", mutants)
     grades, _ = grade_folder(
-        LABS[lab], tmp_path / "class", 2, None, "pool", LIMITS, progress=False, solutions=SOLUTIONS
+        find_lab(lab),
+        tmp_path / "class",
+        2,
+        None,
+        "pool",
+        LIMITS,
+        progress=False,
+        solutions=SOLUTIONS,
     )
     by_student = {g.student: g.tasks for g in grades}
     wrong = []

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mirrorlab.labs import LABS
+from mirrorlab.labs import find_lab, lab_names
 from mirrorlab.labs.content import reference_folder
 from mirrorlab.labs.trusted import calls as C
 from mirrorlab.labs.trusted.evidence import Evidence
@@ -19,7 +19,7 @@ from tests.labs.conftest import LIMITS, SOLUTIONS
 from tests.labs.launderings import launderings
 
 
-@pytest.mark.parametrize("lab", sorted(LABS))
+@pytest.mark.parametrize("lab", sorted(lab_names()))
 def test_laundered_evidence_fails_with_its_hint(lab, tmp_path):
     found = launderings()[lab]
     folder = tmp_path / "class"
@@ -27,7 +27,7 @@ def test_laundered_evidence_fails_with_its_hint(lab, tmp_path):
     for name, (source, _) in found.items():
         (folder / f"{name}.py").write_text(source)
     grades, _ = grade_folder(
-        LABS[lab], folder, 2, None, "pool", LIMITS, progress=False, solutions=SOLUTIONS
+        find_lab(lab), folder, 2, None, "pool", LIMITS, progress=False, solutions=SOLUTIONS
     )
     by_student = {g.student: g.tasks for g in grades}
     assert sorted(by_student) == sorted(found)
@@ -40,7 +40,7 @@ def test_laundered_evidence_fails_with_its_hint(lab, tmp_path):
 
 
 def test_no_lab_offers_a_way_to_read_what_was_drawn():
-    for lab in LABS:
+    for lab in lab_names():
         offered = C.lab_specs(lab)
         for name in C.REFUSED:
             assert name not in offered, (lab, name)
@@ -53,7 +53,7 @@ def test_no_lab_offers_a_way_to_read_what_was_drawn():
 
 
 def _reference(lab: str) -> np.ndarray:
-    return Evidence.load(reference_folder(LABS[lab])).arrays["frame"]
+    return Evidence.load(reference_folder(find_lab(lab))).arrays["frame"]
 
 
 def _blend(frame: np.ndarray, box: tuple[int, int, int, int], colour, alpha: float) -> np.ndarray:
@@ -63,7 +63,7 @@ def _blend(frame: np.ndarray, box: tuple[int, int, int, int], colour, alpha: flo
     return np.round(out).astype(np.uint8)
 
 
-@pytest.mark.parametrize("lab", sorted(LABS))
+@pytest.mark.parametrize("lab", sorted(lab_names()))
 def test_a_faint_overlay_shows_in_patches_and_noise_does_not(lab):
     reference = _reference(lab)
     marked = reference
@@ -110,7 +110,7 @@ def test_one_file_for_every_variant_gets_a_refusal_for_each_student(tmp_path):
     for student in ("Ada_Lovelace", "Ben_Ng"):
         (folder / f"{student}.py").write_text(source)
     grades, _ = grade_folder(
-        LABS["lab20"],
+        find_lab("lab20"),
         folder,
         2,
         None,

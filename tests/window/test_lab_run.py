@@ -9,7 +9,8 @@ import os
 import subprocess
 import sys
 
-from mirrorlab.labs.trusted.execute import run_job
+from mirrorlab.labs import find_lab
+from mirrorlab.labs.trusted.gl_process import run_job
 from mirrorlab.labs.trusted.sandbox import Limits, sandboxed
 from mirrorlab.labs.trusted.variants import default_variant
 from mirrorlab.scene.backgrounds import load_picture
@@ -48,7 +49,12 @@ def test_lab_run_shows_the_solution_as_the_check_sees_it(tmp_path):
     assert done.returncode == 0, done.stderr
     limits = Limits(cpu_seconds=5, seconds=60, unsandboxed=not sandboxed())
     evidence = run_job(
-        "lab20", SOLUTION.read_bytes(), "solution.py", default_variant("lab20"), limits, (256, 256)
+        find_lab("lab20"),
+        SOLUTION.read_bytes(),
+        "solution.py",
+        default_variant("lab20"),
+        limits,
+        (256, 256),
     )
     assert evidence.status == "ok", evidence.detail
     frame = evidence.arrays["frame"]

@@ -100,7 +100,7 @@ def _scalar(value: Any) -> int | float | None:
     return inner if isinstance(inner, int | float) else None
 
 
-def _number(value: Any, kind: str, what: str) -> int | float:
+def checked_number(value: Any, kind: str, what: str) -> int | float:
     try:
         if kind == "f":
             return float(value)
@@ -199,11 +199,11 @@ class Remote:
             kind = kind.rstrip("?")
             what = f"{name}() argument {index + 1}"
             if kind in ("i", "f", "b"):
-                packed.append(_number(value, kind, what))
+                packed.append(checked_number(value, kind, what))
             elif kind == "v":
                 packed.append([float(v) for v in flatten(value, what)])
             elif kind == "n":
-                packed.append([_number(v, "i", what) for v in flatten(value, what)])
+                packed.append([checked_number(v, "i", what) for v in flatten(value, what)])
             elif kind == "s":
                 if isinstance(value, bytes):
                     value = value.decode("utf-8", "replace")

@@ -3,7 +3,8 @@
 ``python -I -S runner.py`` (the checker starts it so, in the sandbox, with this package's
 folder on the path), the pipe to the checker on its stdin and stdout: what the student's
 file prints goes to stderr. The checker first sends the session (the
-lab, the file, the names and values of OpenGL, the lab object's values), then commands:
+lab, the file, the lab's own student side, the names and values of OpenGL, the lab
+object's values), then commands:
 ``load`` (execute the file), ``call`` (one of the lab's functions), ``exit``; the runner
 says ``ready`` before the student's code runs. Each command
 ends with a ``done`` message carrying the errors the student's code raised (the function,
@@ -12,6 +13,7 @@ the student's line, the message); everything else that passes is the calls thems
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import sys
 import traceback
@@ -19,7 +21,7 @@ from types import ModuleType
 from typing import Any
 
 from .gl import build_modules
-from .kit import build_kit
+from .kit_standin import build_kit
 from .remote import Remote, StudentShaderError
 from .wire import Channel
 
@@ -118,6 +120,31 @@ class Run:
             namespace[name] = wrapper
 
 
+def student_side(labs: ModuleType) -> dict[str, ModuleType]:
+    """This package under the name a lab's ``student.py`` imports it by,
+    ``mirrorlab.labs.student`` (and its modules), so that a lab's object is written as
+    any module of mirrorlab is, yet runs on this package alone."""
+    package = sys.modules[__package__ or "labstudent"]
+    found = {"mirrorlab.labs.student": package}
+    for name, module in list(sys.modules.items()):
+        if name.startswith(f"{package.__name__}."):
+            found[f"mirrorlab.labs.student.{name.split('.', 1)[1]}"] = module
+    labs.__dict__["student"] = package
+    return found
+
+
+def load_lab_side(path: str) -> ModuleType:
+    """The lab's own student side (its ``student.py``, which the checker gives read-only at
+    ``path``), whose ``LAB_OBJECT`` is the class of ``kit.<lab>()``."""
+    spec = importlib.util.spec_from_file_location("lab_side", path)
+    if spec is None or spec.loader is None:
+        raise ImportError(f"the lab's student side {path!r} cannot be loaded")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["lab_side"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
 def install(modules: dict[str, ModuleType]) -> None:
     for name, module in modules.items():
         sys.modules[name] = module
@@ -134,12 +161,13 @@ def main(argv: list[str]) -> int:
     path = description["file"]
     remote = Remote(channel, path, {int(k): v for k, v in description["pixel_types"].items()})
     modules = build_modules(remote, description)
-    kit = build_kit(remote, description)
     package, labs = ModuleType("mirrorlab"), ModuleType("mirrorlab.labs")
     package.__path__, labs.__path__ = [], []
     package.__dict__["labs"] = labs
+    install({"mirrorlab": package, "mirrorlab.labs": labs, **student_side(labs)})
+    kit = build_kit(remote, description, load_lab_side(description["lab_side"]).LAB_OBJECT)
     labs.__dict__["kit"] = kit
-    install({**modules, "mirrorlab": package, "mirrorlab.labs": labs, "mirrorlab.labs.kit": kit})
+    install({**modules, "mirrorlab.labs.kit": kit})
     run = Run(channel, path, list(description["functions"]))
     channel.send({"op": "ready"})
     namespace: dict[str, Any] | None = None

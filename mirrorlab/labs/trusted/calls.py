@@ -4,7 +4,7 @@ Every call the sandbox sends is looked up here by name; one that is not here is 
 Each argument is checked by kind (an integer in a range, a finite number, an enum from
 the call's own list, a vector of a set length, a short string) before anything is
 executed; arrays reach only the calls that upload pixels, and their sizes are checked
-against what GL will read (:mod:`.executor`). The checks raise :class:`CallError`, which
+against what GL will read (:mod:`.call_executor`). The checks raise :class:`CallError`, which
 the student sees as the error PyOpenGL would raise (``GLError`` for a bad enum, as GL
 reports it, ``TypeError`` for a wrong argument).
 """
@@ -15,6 +15,7 @@ import math
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any
 
 from mirrorlab.gl.opengl import GL
@@ -166,7 +167,7 @@ def anything(value: Any, what: str) -> Any:
 
 
 def pixels(value: Any, what: str) -> Any:
-    """None, or an array of the message (``{"$a": i}``; :mod:`.executor` resolves it)."""
+    """None, or an array of the message (``{"$a": i}``; :mod:`.call_executor` resolves it)."""
     if value is None or (
         isinstance(value, dict) and set(value) == {"$a"} and type(value["$a"]) is int
     ):
@@ -815,39 +816,41 @@ REFUSED: dict[str, str] = {
 what the trusted side drew (pixels, textures, feedback, selection, queries)."""
 
 # Each family whole, every form the allow-list has (glTexGend, glUniform1ui...), so that
-# a form added to GL_SPECS is left out with its family.
-_UNIFORMS = tuple(
+# a form added to GL_SPECS is left out with its family: what a lab's ``left_out()`` takes.
+UNIFORMS = tuple(
     name for name in GL_SPECS if name.startswith(("glUniform", "glGetUniformLocation"))
 )
-_COPIES = ("glCopyTexImage2D", "glCopyTexSubImage2D")
-_TEXGEN = tuple(name for name in GL_SPECS if name.startswith(("glTexGen", "glGetTexGen")))
-LEFT_OUT: dict[str, dict[str, str]] = {
-    "lab20": {name: "lab 20 makes no texture coordinates by texgen" for name in _TEXGEN},
-    "spheremap": {
-        **{name: "the sphere-map lab captures nothing" for name in _COPIES},
-        **{name: "the sphere-map lab gives no program with uniforms to set" for name in _UNIFORMS},
-    },
-    "cubemap": {
-        **{name: "the cube-map lab gives no program with uniforms to set" for name in _UNIFORMS},
-        **{name: "the cube-map lab's shader makes the lookup; no texgen" for name in _TEXGEN},
-    },
-}
-"""Calls of :data:`GL_SPECS` a lab's handout does not need, by lab, with why."""
+"""The uniform calls, every form."""
+COPIES = ("glCopyTexImage2D", "glCopyTexSubImage2D")
+"""The copies from the framebuffer into a texture."""
+TEXGEN = tuple(name for name in GL_SPECS if name.startswith(("glTexGen", "glGetTexGen")))
+"""The texgen calls, every form."""
 
 SETUP_DRAWS = frozenset({"glBegin", "glCopyTexImage2D", "glCopyTexSubImage2D"})
 """Calls that draw or capture: refused before the first frame (the file's top level and
 the set-up functions), like the kit's drawing calls; a lab draws only in its frame."""
 
 
+@lru_cache(maxsize=16)
+def left_out(lab: str) -> dict[str, str]:
+    """Calls of :data:`GL_SPECS` ``lab``'s handout does not need, with why: its lab's
+    ``trusted.left_out()`` (the registry's)."""
+    from mirrorlab.labs import find_lab
+
+    found: dict[str, str] = find_lab(lab).module("trusted").left_out()
+    return found
+
+
 def lab_specs(lab: str) -> dict[str, Spec]:
-    """The calls ``lab`` offers: :data:`GL_SPECS` without :data:`LEFT_OUT` ``[lab]``."""
-    left_out = LEFT_OUT.get(lab, {})
-    return {name: s for name, s in GL_SPECS.items() if name not in left_out}
+    """The calls ``lab`` offers: :data:`GL_SPECS` without those it leaves out
+    (:func:`left_out`)."""
+    leaves = left_out(lab)
+    return {name: s for name, s in GL_SPECS.items() if name not in leaves}
 
 
 def refusal(lab: str, name: str) -> str:
     """Why ``lab`` does not offer ``name`` (one line), '' when no reason is on file."""
-    return LEFT_OUT.get(lab, {}).get(name) or REFUSED.get(name, "")
+    return left_out(lab).get(name) or REFUSED.get(name, "")
 
 
 def refused_text(lab: str, name: str) -> str:

@@ -2,7 +2,7 @@
 the student's own variant, each task with a hint.
 
 The file runs in the sandbox with no GL of its own; the trusted checker process
-(:mod:`.execute`) executes its calls and makes every observation. The reference evidence
+(:mod:`.gl_process`) executes its calls and makes every observation. The reference evidence
 is made the same way from the teacher's solution where the solutions are given
 (``--solutions DIR`` or ``$MIRRORLAB_SOLUTIONS``), cached in ``$MIRRORLAB_CACHE`` or
 ``~/.cache/mirrorlab`` by the files that make it; without them, the evidence shipped in
@@ -24,9 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
-from mirrorlab.labs import LABS, LabSpec, find_lab
+from mirrorlab.labs import LabSpec, find_lab, lab_names
 from mirrorlab.labs.trusted.evidence import Evidence
-from mirrorlab.labs.trusted.execute import run_job
+from mirrorlab.labs.trusted.gl_process import run_job
 from mirrorlab.labs.trusted.judging import Context, TaskResult
 from mirrorlab.labs.trusted.sandbox import Limits, sandboxed, unsandboxed_note
 from mirrorlab.labs.trusted.variants import (
@@ -42,12 +42,6 @@ VARIANT_FILE = "variant.json"
 LAB_FILE = "starter.py"
 """The file a lab's folder holds for the student to edit (``lab start``, ``lab release``)."""
 REFERENCE_FOLDER = "reference"
-
-
-def judges():
-    from mirrorlab.labs.trusted import cubemap, lab20, spheremap
-
-    return {"lab20": lab20, "spheremap": spheremap, "cubemap": cubemap}
 
 
 @dataclass
@@ -92,20 +86,23 @@ def solutions_dir(given: str | Path | None) -> Path | None:
 
 
 def solution_source(spec: LabSpec, folder: Path) -> str:
-    path = folder / f"{spec.folder}.py"
-    if not path.is_file():
-        raise ValueError(f"--solutions: {str(folder)!r} holds no {path.name}")
-    return path.read_text()
+    """The teacher's solution of ``spec``: ``<folder>.py`` in the solutions ``folder``, else
+    the file the lab's registry entry names (:attr:`~mirrorlab.labs.LabSpec.solution`);
+    ValueError when neither is there."""
+    for path in (folder / f"{spec.folder}.py", spec.solution):
+        if path.is_file():
+            return path.read_text()
+    raise ValueError(f"--solutions: {str(folder)!r} holds no {spec.folder}.py")
 
 
 def cache_dir() -> Path:
     return Path(os.environ.get("MIRRORLAB_CACHE", Path.home() / ".cache" / "mirrorlab"))
 
 
-@lru_cache(maxsize=1)
-def code_digest() -> str:
-    """A digest of everything that makes a reference run: the labs' code, kit shaders,
-    meshes and pictures."""
+@lru_cache(maxsize=8)
+def code_digest(home: Path) -> str:
+    """A digest of everything that makes a reference run of the lab whose package is in
+    ``home``: the labs' shared code, the lab's own, kit shaders, meshes and pictures."""
     import mirrorlab.labs as labs_package
     from mirrorlab.data import data_path
     from mirrorlab.shaders import shader_source
@@ -113,7 +110,12 @@ def code_digest() -> str:
     root = Path(labs_package.__file__).parent
     digest = hashlib.sha256()
     for path in sorted(
-        [*root.glob("*.py"), *root.glob("student/*.py"), *root.glob("trusted/*.py")]
+        [
+            *root.glob("*.py"),
+            *root.glob("student/*.py"),
+            *root.glob("trusted/*.py"),
+            *home.glob("*.py"),
+        ]
     ):
         digest.update(path.read_bytes())
     for name in (
@@ -167,7 +169,7 @@ def make_reference(
     from mirrorlab.labs.content import solution_for
 
     text = solution_for(solution, variant)
-    evidence = run_job(spec.name, text.encode(), "solution.py", variant, limits, size, keep=keep)
+    evidence = run_job(spec, text.encode(), "solution.py", variant, limits, size, keep=keep)
     if evidence.status != "ok":
         raise CheckError(f"the reference solution of {spec.name} did not run: {evidence.detail}")
     problems = evidence.errors or evidence.call_errors
@@ -191,12 +193,19 @@ def reference_evidence(
 ) -> Evidence:
     """The reference evidence for ``variant``: made from the teacher's ``solutions`` when
     given (cached), else shipped in the package (the default variant) or in a released
-    folder (``released``); CheckError when there is none."""
+    folder (``released``); CheckError when there is none. A lab that ships no reference
+    evidence (one registered from outside the package) is referenced by its own solution
+    (:attr:`~mirrorlab.labs.LabSpec.solution`)."""
+    from mirrorlab.labs.content import reference_folder
+
+    shipped = reference_folder(spec)
+    if solutions is None and not (shipped / "evidence.json").is_file() and spec.solution.is_file():
+        solutions = spec.solution.parent
     if solutions is not None:
         solution = solution_source(spec, solutions)
         digest = hashlib.sha256(
             repr(
-                (spec.name, size, sorted(variant.values.items()), solution, code_digest())
+                (spec.name, size, sorted(variant.values.items()), solution, code_digest(spec.home))
             ).encode()
         ).hexdigest()[:24]
         folder = cache_dir() / "lab-references" / f"{spec.name}-{variant.id}-{digest}"
@@ -220,14 +229,12 @@ def reference_evidence(
         except ValueError as exc:
             raise CheckError(f"{released}: {exc}") from None
     if variant.is_default:
-        from mirrorlab.labs.content import reference_folder
-
         if size != CHECK_SIZE:
             raise CheckError(
                 f"the shipped reference is {CHECK_SIZE[0]}x{CHECK_SIZE[1]}; give "
                 f"--solutions to check at another size"
             )
-        return Evidence.load(reference_folder(spec))
+        return Evidence.load(shipped)
     raise CheckError(
         f"no reference for variant {variant.id} of {spec.name}: its released "
         f"folder's {REFERENCE_FOLDER}/ is missing; give --solutions DIR (the "
@@ -249,9 +256,9 @@ def check_submission(
     """Run ``source`` in the sandbox through the trusted checker (with ``keep``, this
     process's kept checker process) and judge it against ``reference`` for
     ``context.variant``."""
-    module = judges()[spec.name]
+    module = spec.module("judge")
     started = time.perf_counter()
-    evidence = run_job(spec.name, source, file_name, context.variant, limits, size, keep)
+    evidence = run_job(spec, source, file_name, context.variant, limits, size, keep)
     try:
         results = module.judge(spec, evidence, reference, context)
     except Exception as exc:  # a judge's own fault: every task fails, saying so
@@ -311,7 +318,7 @@ def folder_file(spec: LabSpec, folder: Path) -> Path:
         text = path.read_text(errors="replace")
     except OSError as exc:
         raise FileNotFoundError(f"FILE: cannot read {str(path)!r}: {exc.strerror}") from None
-    labs = set(re.findall(r"\bkit\.(\w+)\(", text)) & set(LABS)
+    labs = set(re.findall(r"\bkit\.(\w+)\(", text)) & set(lab_names())
     if labs and spec.name not in labs:
         raise FileNotFoundError(
             f"FILE: {str(path)!r} is a file of the {sorted(labs)[0]} lab "

@@ -101,12 +101,6 @@ class Evidence:
             and (within is None or within in (e.get("steps") or []))
         ]
 
-    def all_events(self, kind: str, who: str | None = None) -> list[dict[str, Any]]:
-        found = [e for e in self.setup if e.get("kind") == kind]
-        for frame in self.frames:
-            found += [e for e in frame["events"] if e.get("kind") == kind]
-        return [e for e in found if who is None or e.get("who") == who]
-
     def called(self, function: str, frame: int | None = -1) -> bool:
         """Whether lab function ``function`` ran in frame ``frame`` (None: any time)."""
         if frame is None:

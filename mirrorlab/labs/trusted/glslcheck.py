@@ -5,7 +5,7 @@ A driver's GLSL compiler runs inside the process that asks it: a preprocessor bo
 dozen macros, each twice the one before) takes gigabytes and crashes the process. So
 :func:`precompile` hands the text to ``python -m mirrorlab.labs.trusted.glslcheck`` in a
 context of its own, which compiles and links it exactly as the lab will
-(:func:`~.kit.compile_program`) and answers in one JSON line. When that process dies, is
+(:func:`~.session.compile_program`) and answers in one JSON line. When that process dies, is
 killed at its memory limit or does not answer in time, the file gets the student's error
 "could not be compiled within the limits" and the checker's own process never compiled
 it; when it answers with a compile error, that is the error, and the checker does not
@@ -36,7 +36,7 @@ def precompile(vertex: str, fragment: str, student: str, variable: str) -> None:
     """Compile ``student`` (the GLSL of ``variable``) with the kit's ``vertex`` and
     ``fragment`` files in a process of its own; StudentShaderError when it does not compile
     or not within the limits."""
-    from mirrorlab.labs.trusted.kit import StudentShaderError
+    from mirrorlab.labs.trusted.session import StudentShaderError
 
     key = hashlib.sha256(json.dumps([vertex, fragment, student]).encode()).hexdigest()
     if key not in _answers:
@@ -54,7 +54,7 @@ def _compile_alone(
     job = json.dumps(
         {"vertex": vertex, "fragment": fragment, "student": student, "variable": variable}
     )
-    from mirrorlab.labs.trusted.execute import child_options, gl_process_environment
+    from mirrorlab.labs.trusted.gl_process import child_options, gl_process_environment
 
     # the checker's own GL backend; compiling needs no rasteriser threads
     environment = {**gl_process_environment(), "LP_NUM_THREADS": "1"}
@@ -96,7 +96,7 @@ def main() -> int:
 
     context = offscreen_context()
     try:
-        from mirrorlab.labs.trusted.kit import StudentShaderError, compile_program
+        from mirrorlab.labs.trusted.session import StudentShaderError, compile_program
 
         try:
             compile_program(job["vertex"], job["fragment"], job["student"], job["variable"])

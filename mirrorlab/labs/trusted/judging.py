@@ -468,16 +468,6 @@ def matrix(values: Any) -> np.ndarray | None:
     return array
 
 
-def setting_line(state: dict[str, Any], *path: str) -> int:
-    """The student's line that set the snapshot entry at ``path`` (0 when unknown)."""
-    node: Any = state
-    for key in path:
-        if not isinstance(node, dict) or key not in node:
-            return 0
-        node = node[key]
-    return int(node.get("line", 0)) if isinstance(node, dict) else 0
-
-
 def matrix_ops(event: dict[str, Any], mode: int) -> list[dict[str, Any]]:
     ops = (event.get("state") or {}).get("matrix_ops", {}).get(str(mode))
     return [o for o in ops if isinstance(o, dict)] if isinstance(ops, list) else []

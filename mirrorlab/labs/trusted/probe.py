@@ -2,7 +2,7 @@
 chooses, so that a hint names the slip the values show.
 
 The student's GLSL is compiled alone, as the fragment shader object the kit links it as
-(:func:`.kit.compile_program`), and linked here to a probe ``main`` of the checker's own
+(:func:`.session.compile_program`), and linked here to a probe ``main`` of the checker's own
 that declares the same prototypes (those after the kit file's ``// STUDENT CODE`` line)
 and nothing else of the kit. One input per pixel: the inputs are two ``(n, 1)`` RGBA32F
 textures read with ``texelFetch``, the results one RGBA32F pixel each. ``#version 330
@@ -108,12 +108,6 @@ CALLS = {
     "cube_face_st": "vec4(cube_face_st(a.xyz, int(b.x + 0.5)), 0.0, 1.0)",
 }
 """How the probe's main calls each function (a, b: the inputs as vec4)."""
-
-LAB_FUNCTIONS = {
-    "spheremap": ("reflect_eye", "sphere_map_st"),
-    "cubemap": ("cube_face", "cube_face_st"),
-}
-"""The functions the probe evaluates, per lab."""
 
 
 # ------------------------------------------------------------------ formulas and slips
@@ -286,13 +280,13 @@ def run_probe(
     checker found them, but for the program (0) and the active unit (0)."""
     from mirrorlab.gl.opengl import GL
     from mirrorlab.gl.resources import FloatFramebuffer, expand_includes
-    from mirrorlab.labs.trusted import kit, legacy
+    from mirrorlab.labs.trusted import legacy, session
 
     kit_source = expand_includes(kit_fragment)
-    version, interface = kit.student_interface(kit_source)
+    version, interface = session.student_interface(kit_source)
     version = version or "#version 330 core"
     prototypes = "".join(f"{r} {n}({p});\n" for r, n, p in interface)
-    shaders = [kit.student_shader(GL.GL_FRAGMENT_SHADER, kit_source, glsl, "probe")]
+    shaders = [session.student_shader(GL.GL_FRAGMENT_SHADER, kit_source, glsl, "probe")]
     framebuffer = int(GL.glGetIntegerv(GL.GL_FRAMEBUFFER_BINDING))
     viewport = [int(v) for v in GL.glGetIntegerv(GL.GL_VIEWPORT)]
     textures: list[int] = []
@@ -301,17 +295,19 @@ def run_probe(
     target = None
     try:
         shaders.append(
-            kit._compiled(GL.GL_VERTEX_SHADER, PROBE_VERTEX, "the probe's vertex shader", "probe")
+            session._compiled(
+                GL.GL_VERTEX_SHADER, PROBE_VERTEX, "the probe's vertex shader", "probe"
+            )
         )
         shaders.append(
-            kit._compiled(
+            session._compiled(
                 GL.GL_FRAGMENT_SHADER,
                 probe_fragment(version, prototypes, [CALLS[f] for f in functions]),
                 "the probe's main",
                 "probe",
             )
         )
-        program = kit._linked(shaders, "probe", "probe")
+        program = session._linked(shaders, "probe", "probe")
         count = max(INPUTS[f][0].shape[0] for f in functions)
         target = FloatFramebuffer(registry, count, 1)
         target.bind()

@@ -67,6 +67,8 @@ BOX_PREFIX = "mirrorlab-box-"
 SANDBOX_BOX = "/lab/box"
 SANDBOX_PACKAGES = "/lab/pkg"
 SANDBOX_SITE = "/lab/site"
+SANDBOX_LAB_SIDE = "/lab/pkg/lab_side.py"
+"""Where the sandbox holds the lab's own student side (its ``student.py``), read-only."""
 
 
 class SandboxError(RuntimeError):
@@ -276,9 +278,10 @@ def numpy_folders() -> list[Path]:
     return [folder, *([libs] if libs.is_dir() else [])]
 
 
-def bwrap_arguments(box: Path) -> list[str]:
+def bwrap_arguments(box: Path, lab_side: Path | None = None) -> list[str]:
     """The bwrap command line before the program: the sandbox's file system (see the
-    module's text), ``box`` writable at :data:`SANDBOX_BOX`."""
+    module's text), ``box`` writable at :data:`SANDBOX_BOX`, the lab's ``student.py``
+    (``lab_side``) read-only at :data:`SANDBOX_LAB_SIDE`."""
     root = _Root()
     root.bind(Path("/usr"))
     for link in ("bin", "sbin", "lib", "lib64", "lib32", "libx32"):
@@ -313,6 +316,8 @@ def bwrap_arguments(box: Path) -> list[str]:
         root.hide(folder)
     root.hide(STUDENT_PACKAGE.parent.parent)  # mirrorlab itself, were it under those
     root.bind(STUDENT_PACKAGE, Path(SANDBOX_PACKAGES, "labstudent"))
+    if lab_side is not None:
+        root.bind(lab_side.resolve(), Path(SANDBOX_LAB_SIDE))
     for folder in numpy_folders():
         root.bind(folder, Path(SANDBOX_SITE, folder.name))
     root.bind(box, Path(SANDBOX_BOX), writable=True)
@@ -447,6 +452,7 @@ class Sandboxed:
         limits: Limits,
         pipe: bool = False,
         owner: int | None = None,
+        lab_side: Path | None = None,
     ) -> None:
         mode = sandbox_mode()
         if mode != "bwrap" and not limits.unsandboxed:
@@ -461,7 +467,7 @@ class Sandboxed:
         if mode == "bwrap":
             env = _environment(SANDBOX_BOX)
             command = [
-                *bwrap_arguments(self.box),
+                *bwrap_arguments(self.box, lab_side),
                 "--unshare-ipc",
                 "--unshare-pid",
                 "--unshare-net",

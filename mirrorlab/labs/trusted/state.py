@@ -23,7 +23,7 @@ import numpy as np
 
 GL_MODELVIEW, GL_PROJECTION, GL_TEXTURE = 0x1700, 0x1701, 0x1702
 GL_TEXTURE_2D, GL_TEXTURE_CUBE_MAP = 0x0DE1, 0x8513
-CUBE_FACES = tuple(range(0x8515, 0x851B))
+CUBE_FACE_TARGETS = tuple(range(0x8515, 0x851B))
 UNIT_CAPS = {
     0x0DE1: "GL_TEXTURE_2D",
     0x8513: "GL_TEXTURE_CUBE_MAP",
@@ -169,7 +169,7 @@ class Tracker:
         self.line = 0
         self.frame_bytes = 0
         """What the events of this frame (or of the set-up) take as JSON, about: the
-        executor caps it (:class:`~.executor.RunLimits`)."""
+        executor caps it (:class:`~.call_executor.RunLimits`)."""
         self._snapshot: dict[str, Any] | None = None
         """The last state snapshot: events share it while the state does not change."""
         self._counted: dict[str, Any] | None = None

@@ -2,10 +2,12 @@
 student's name with HMAC-SHA256, so the teacher can derive them again and nobody without
 the key can. The default variant is the lab's own numbers (the handout as published).
 
-What a variant changes is what changes the answer: for lab 20 the mirror's position and
-size (so glOrtho, gluLookAt and the quad's corners) and the robot's pose; for the
-sphere-map lab the side the shader's cone goes and the texture unit texgen uses (and the
-cone's tilt); for the cube-map lab the sphere's centre, where the six cameras sit.
+What a variant changes is what changes the answer; each lab's registry entry gives its
+choices (:attr:`~mirrorlab.labs.LabSpec.options`) and its ``variant`` module what they
+mean: for lab 20 the mirror's position and size (so glOrtho, gluLookAt and the quad's
+corners) and the robot's pose; for the sphere-map lab the side the shader's cone goes
+and the texture unit texgen uses (and the cone's tilt); for the cube-map lab the
+sphere's centre, where the six cameras sit.
 """
 
 from __future__ import annotations
@@ -18,43 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-OPTIONS: dict[str, dict[str, tuple]] = {
-    "lab20": {
-        "mirror_x": (-7.5, -7.0, -6.5),
-        "y0": (-3.5, -3.0, -2.5),
-        "height": (7.0, 7.5, 8.0, 8.5),
-        "z0": (-6.5, -6.0, -5.5),
-        "width": (7.0, 7.5, 8.0, 8.5),
-        "base_angle": (-50.0, -45.0, -40.0, -35.0, -30.0, -25.0, -20.0),
-        "lower_angle": (20.0, 25.0, 30.0, 35.0, 40.0),
-        "upper_angle": (-85.0, -80.0, -75.0, -70.0, -65.0),
-    },
-    "spheremap": {
-        "shader_side": ("left", "right"),
-        "unit": (0, 2, 3),
-        "tilt": (40.0, 50.0, 60.0),
-    },
-    "cubemap": {
-        "center_x": (-0.4, -0.2, 0.0, 0.2, 0.4),
-        "center_y": (0.0, 0.15, 0.3),
-        "center_z": (-0.4, -0.2, 0.0, 0.2, 0.4),
-    },
-}
-
-DEFAULTS: dict[str, dict[str, Any]] = {
-    "lab20": {
-        "mirror_x": -7.0,
-        "y0": -3.0,
-        "height": 8.0,
-        "z0": -6.0,
-        "width": 8.0,
-        "base_angle": -35.0,
-        "lower_angle": 30.0,
-        "upper_angle": -75.0,
-    },
-    "spheremap": {"shader_side": "left", "unit": 0, "tilt": 50.0},
-    "cubemap": {"center_x": 0.0, "center_y": 0.0, "center_z": 0.0},
-}
+from mirrorlab.labs import find_lab
 
 KEY_BYTES = 16
 """The shortest course key accepted."""
@@ -66,8 +32,9 @@ class VariantError(ValueError):
 
 @dataclass(frozen=True)
 class Variant:
-    """One set of a lab's numbers: ``values`` (see :data:`OPTIONS`), ``id`` (``default``
-    or 8 hex digits) and the ``student`` it was derived for ('' for the default)."""
+    """One set of a lab's numbers: ``values`` (one choice of each of the lab's
+    :attr:`~mirrorlab.labs.LabSpec.options`), ``id`` (``default`` or 8 hex digits) and the
+    ``student`` it was derived for ('' for the default)."""
 
     lab: str
     values: dict[str, Any] = field(compare=False)
@@ -94,7 +61,8 @@ class Variant:
 
 
 def default_variant(lab: str) -> Variant:
-    return Variant(lab, dict(DEFAULTS[lab]))
+    """The lab's own numbers (its registry entry's defaults)."""
+    return Variant(lab, dict(find_lab(lab).defaults))
 
 
 def student_key(student: str) -> str:
@@ -109,7 +77,7 @@ def derive_variant(lab: str, key: bytes, student: str) -> Variant:
         key, f"mirrorlab variant\0{lab}\0{student_key(student)}".encode(), hashlib.sha256
     ).digest()
     values = {}
-    for index, (name, choices) in enumerate(OPTIONS[lab].items()):
+    for index, (name, choices) in enumerate(find_lab(lab).options.items()):
         values[name] = choices[
             int.from_bytes(digest[2 * index : 2 * index + 2], "big") % len(choices)
         ]
@@ -141,41 +109,15 @@ def variant_from_file(path: Path, lab: str) -> Variant:
         other = data.get("lab") if isinstance(data, dict) else None
         raise VariantError(f"{path}: a variant of {other!r}, not of {lab}")
     values = data.get("values")
-    if not isinstance(values, dict) or set(values) != set(OPTIONS[lab]):
-        raise VariantError(f"{path}: expected the values {', '.join(OPTIONS[lab])}")
+    options = find_lab(lab).options
+    if not isinstance(values, dict) or set(values) != set(options):
+        raise VariantError(f"{path}: expected the values {', '.join(options)}")
     for name, value in values.items():
-        if value not in OPTIONS[lab][name]:
+        if value not in options[name]:
             raise VariantError(
-                f"{path}: {name} = {value!r} is not one of "
-                f"{', '.join(map(str, OPTIONS[lab][name]))}"
+                f"{path}: {name} = {value!r} is not one of {', '.join(map(str, options[name]))}"
             )
     ident = str(data.get("id", ""))
     if not re.fullmatch(r"default|[0-9a-f]{8}", ident):
         raise VariantError(f"{path}: id {ident!r} is not a variant id")
     return Variant(lab, dict(values), ident, str(data.get("student", ""))[:200])
-
-
-# ------------------------------------------------------------------ what each lab derives
-def lab20_geometry(variant: Variant) -> dict[str, Any]:
-    """Lab 20's mirror: plane ``x``, ``y0``..``y1``, ``z0``..``z1``, the four ``corners``
-    (as the handout lists them), the capture's ``extents`` (glOrtho's six numbers), its
-    ``eye`` and ``angles`` of the robot's joints."""
-    v = variant.values
-    x, y0, z0 = v["mirror_x"], v["y0"], v["z0"]
-    y1, z1 = y0 + v["height"], z0 + v["width"]
-    return {
-        "x": x,
-        "y0": y0,
-        "y1": y1,
-        "z0": z0,
-        "z1": z1,
-        "corners": ((x, y0, z0), (x, y1, z0), (x, y1, z1), (x, y0, z1)),
-        "extents": (z0, z1, y0, y1, 0.0, 15.0),
-        "eye": (x, 0.0, 0.0),
-        "angles": (v["base_angle"], v["lower_angle"], v["upper_angle"]),
-    }
-
-
-def cube_center(variant: Variant) -> tuple[float, float, float]:
-    v = variant.values
-    return (v["center_x"], v["center_y"], v["center_z"])

@@ -1,7 +1,7 @@
 """``mirrorlab lab run``: a student's file in a window that belongs to the trusted process.
 
 The window, its GL context and the lab's session are this process's; the student's file
-runs in the sandbox exactly as for a check (:class:`~.run.LabRun`), its calls executed
+runs in the sandbox exactly as for a check (:class:`~.lab_run.LabRun`), its calls executed
 here frame after frame: the lab's set-up functions once, then ``display()`` every frame
 until Esc, the window's close button or ``max_frames``. Errors are printed one line each,
 as the checker words them.
@@ -50,11 +50,11 @@ def run_window(
     from mirrorlab.files import write_png_atomic
     from mirrorlab.gl.opengl import GL
     from mirrorlab.labs.content import starter
+    from mirrorlab.labs.trusted.call_executor import RunLimits
     from mirrorlab.labs.trusted.checker import file_variant
-    from mirrorlab.labs.trusted.executor import RunLimits
-    from mirrorlab.labs.trusted.kit import open_session
+    from mirrorlab.labs.trusted.lab_run import LabRun
     from mirrorlab.labs.trusted.pipe import PipeBudget
-    from mirrorlab.labs.trusted.run import LabRun
+    from mirrorlab.labs.trusted.session import open_session
     from mirrorlab.labs.trusted.variants import default_variant
 
     spec = find_lab(lab)

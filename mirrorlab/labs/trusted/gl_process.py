@@ -1,7 +1,7 @@
 """The trusted checker's GL process: one lab file run and observed, its evidence written.
 
-``python -m mirrorlab.labs.trusted.execute JOB.json`` opens a headless context, the lab's
-session for the job's variant, runs the file through :class:`~.run.LabRun` (the file
+``python -m mirrorlab.labs.trusted.gl_process JOB.json`` opens a headless context, the lab's
+session for the job's variant, runs the file through :class:`~.lab_run.LabRun` (the file
 itself in the sandbox) and writes ``evidence.json`` and ``arrays.npz`` into the job's
 output folder. It is a process of its own so that the command or grading worker that
 asked can stop it at a deadline whatever the student's GLSL does to the driver
@@ -20,6 +20,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from mirrorlab.labs import LabSpec
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.pipe import wait_readable
 from mirrorlab.labs.trusted.sandbox import Limits, SandboxError
@@ -57,11 +58,11 @@ def execute(job: dict[str, Any]) -> Evidence:
     """Run ``job`` in this process (which must not have loaded OpenGL for a window)."""
     from mirrorlab.gl.context import offscreen_context
     from mirrorlab.gl.resources import Framebuffer
-    from mirrorlab.labs import find_lab
-    from mirrorlab.labs.trusted.kit import open_session
-    from mirrorlab.labs.trusted.run import LabRun
+    from mirrorlab.labs import load_lab
+    from mirrorlab.labs.trusted.lab_run import LabRun
+    from mirrorlab.labs.trusted.session import open_session
 
-    spec = find_lab(job["lab"])
+    spec = load_lab(job["lab"], job["package"], job["import_root"])
     size = (int(job["size"][0]), int(job["size"][1]))
     variant = Variant(
         spec.name,
@@ -192,7 +193,7 @@ class CheckerProcess:
 
     def __init__(self) -> None:
         self.process = subprocess.Popen(
-            [sys.executable, "-m", "mirrorlab.labs.trusted.execute", "--serve"],
+            [sys.executable, "-m", "mirrorlab.labs.trusted.gl_process", "--serve"],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             env=gl_process_environment(),
@@ -250,7 +251,7 @@ def kept_process() -> CheckerProcess:
 
 
 def run_job(
-    lab: str,
+    spec: LabSpec,
     source: bytes,
     file_name: str,
     variant: Variant,
@@ -258,7 +259,7 @@ def run_job(
     size: tuple[int, int],
     keep: bool = False,
 ) -> Evidence:
-    """Run ``source`` (the student's file, called ``file_name``) through ``lab`` for
+    """Run ``source`` (the student's file, called ``file_name``) through ``spec``'s lab for
     ``variant`` in a checker process of its own (with ``keep``, this process's kept one:
     see :class:`CheckerProcess`), which is stopped if it outlives the run's own limits;
     SandboxError when the sandbox cannot start, CheckerError when the checker's process
@@ -272,7 +273,9 @@ def run_job(
         out = base / "out"
         out.mkdir()
         job = {
-            "lab": lab,
+            "lab": spec.name,
+            "package": spec.package,
+            "import_root": str(spec.import_root),
             "file": str(base / "source.py"),
             "name": file_name,
             "variant": variant.plain(),
@@ -290,7 +293,7 @@ def run_job(
         else:
             try:
                 done = subprocess.run(
-                    [sys.executable, "-m", "mirrorlab.labs.trusted.execute", str(job_file)],
+                    [sys.executable, "-m", "mirrorlab.labs.trusted.gl_process", str(job_file)],
                     capture_output=True,
                     text=True,
                     env=gl_process_environment(),
@@ -302,7 +305,7 @@ def run_job(
                 code = None
         if code is None:
             return Evidence(
-                lab,
+                spec.name,
                 "timeout",
                 f"stopped after {deadline:g} s: the calls took too long to draw",
                 variant=variant.plain(),

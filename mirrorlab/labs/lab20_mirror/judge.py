@@ -11,6 +11,8 @@ import numpy as np
 
 from mirrorlab import math3d
 from mirrorlab.labs import LabSpec, task_name
+from mirrorlab.labs.lab20_mirror.trusted import Lab20
+from mirrorlab.labs.lab20_mirror.variant import lab20_geometry
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.judging import (
     Context,
@@ -31,8 +33,6 @@ from mirrorlab.labs.trusted.judging import (
     where,
     wrong_clear_colour,
 )
-from mirrorlab.labs.trusted.kit import Lab20
-from mirrorlab.labs.trusted.variants import lab20_geometry
 
 GL_LINEAR = 0x2601
 GL_CLAMP, GL_CLAMP_TO_EDGE = 0x2900, 0x812F

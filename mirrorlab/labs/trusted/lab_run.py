@@ -4,7 +4,7 @@
 sandbox with a pipe to this process, sends it the session (the names and values of
 OpenGL, the lab object's numbers), then commands: load the file, run the lab's set-up
 functions, then ``display()`` frame after frame. Every call that comes back is executed
-here (:mod:`.executor`); when the frames are drawn this process makes its own
+here (:mod:`.call_executor`); when the frames are drawn this process makes its own
 observations (the frame, the textures, the student's GLSL judged by the values it
 writes) and the run becomes :class:`~.evidence.Evidence`. The sandbox produces only the
 call stream; nothing it writes to its box is ever read.
@@ -24,22 +24,11 @@ from typing import Any
 import numpy as np
 
 from mirrorlab.gl.opengl import GL
-from mirrorlab.labs import LabSpec
+from mirrorlab.labs import LabSpec, lab_names
 from mirrorlab.labs.trusted import calls as C
 from mirrorlab.labs.trusted import legacy
+from mirrorlab.labs.trusted.call_executor import Executor, RunLimits, Stop
 from mirrorlab.labs.trusted.evidence import Evidence
-from mirrorlab.labs.trusted.executor import Executor, RunLimits, Stop
-from mirrorlab.labs.trusted.kit import (
-    CubeMapLab,
-    Lab20,
-    LabBase,
-    LabSetupError,
-    SphereMapLab,
-    picture,
-    read_cube_faces,
-    read_texture_2d,
-    texture_parameters,
-)
 from mirrorlab.labs.trusted.pipe import (
     PipeBudget,
     PipeClosed,
@@ -49,6 +38,7 @@ from mirrorlab.labs.trusted.pipe import (
 )
 from mirrorlab.labs.trusted.sandbox import (
     SANDBOX_BOX,
+    SANDBOX_LAB_SIDE,
     SANDBOX_PACKAGES,
     SANDBOX_SITE,
     STUDENT_PACKAGE,
@@ -61,13 +51,10 @@ from mirrorlab.labs.trusted.sandbox import (
     tail,
     user_interpreter,
 )
-from mirrorlab.labs.trusted.state import GL_TEXTURE_CUBE_MAP
+from mirrorlab.labs.trusted.session import LabBase, LabSetupError
 
 FRAMES = 2
 """Frames drawn by a check: the second shows what a capture left for the next frame."""
-DECLARED = {"lab20": (), "spheremap": ("SPHERE_MAP_GLSL",), "cubemap": ("CUBE_MAP_GLSL",)}
-"""Module-level strings of the student's file the checker judges even when the frame
-never draws them (the GLSL of the labs' shaders)."""
 BOX_FILE = "student.py"
 """The student's file in its box (whatever it was called: never the box's own
 stdout.txt or stderr.txt)."""
@@ -189,9 +176,10 @@ class LabRun:
         student = self.box / BOX_FILE
         student.write_bytes(self.source)
         mode = sandbox_mode()
+        lab_side = self.spec.student_file
         if mode == "bwrap":
             python, packages, site = interpreter(), SANDBOX_PACKAGES, SANDBOX_SITE
-            path = f"{SANDBOX_BOX}/{BOX_FILE}"
+            path, lab_side_path = f"{SANDBOX_BOX}/{BOX_FILE}", SANDBOX_LAB_SIDE
         else:
             python, packages, site = user_interpreter(), str(self.box / "pkg"), ""
             if mode == "none":
@@ -201,9 +189,12 @@ class LabRun:
                 self.box / "pkg" / "labstudent",
                 ignore=shutil.ignore_patterns("__pycache__"),
             )
-            path = str(student)
+            shutil.copyfile(lab_side, self.box / "pkg" / "lab_side.py")
+            path, lab_side_path = str(student), str(self.box / "pkg" / "lab_side.py")
         argv = [str(python), "-I", "-S", "-B", "-c", BOOT.format(packages=packages, site=site)]
-        self.sandbox = Sandboxed(argv, self.box, self.limits, pipe=True, owner=self.owner)
+        self.sandbox = Sandboxed(
+            argv, self.box, self.limits, pipe=True, owner=self.owner, lab_side=lab_side
+        )
         # the pipe: the runner's stdin and stdout, as file descriptors of the channel's own
         process = self.sandbox.process
         assert process.stdin is not None and process.stdout is not None
@@ -215,9 +206,11 @@ class LabRun:
         description = {
             "op": "session",
             "lab": self.spec.name,
+            "labs": list(lab_names()),
+            "lab_side": lab_side_path,
             "file": path,
             "functions": list(self.spec.functions),
-            "declared": list(DECLARED[self.spec.name]),
+            "declared": list(self.spec.declared),
             "kit": self.session.student_values(),
             **gl_names(self.spec.name),
         }
@@ -349,7 +342,7 @@ class LabRun:
             ):
                 self.evidence.errors.append(record)
         declared = header.get("declared")
-        for name in DECLARED[self.spec.name]:
+        for name in self.spec.declared:
             value = declared.get(name) if isinstance(declared, dict) else None
             if isinstance(value, str) and len(value) <= self.executor.limits.glsl_chars:
                 self.declared[name] = value
@@ -409,95 +402,28 @@ class LabRun:
     def observe(self) -> None:
         """The lab's own observations, made here after the student's run."""
         reset_state()
-        observers: dict[type, Callable[[], None]] = {
-            Lab20: self._observe_lab20,
-            SphereMapLab: self._observe_spheremap,
-            CubeMapLab: self._observe_cubemap,
-        }
-        observers[type(self.session)]()
+        self.spec.module("trusted").observe(self)
         reset_state()
 
-    def _observe_lab20(self) -> None:
-        evidence, tracker = self.evidence, self.executor.tracker
-        assert isinstance(self.session, Lab20)
-        pictures = {t.name for t in tracker.textures.values() if t.picture}
-        environment = find_environment(evidence, self.session, pictures)
-        metal = next((t.name for t in tracker.textures.values() if t.picture == "metal"), 0)
-        evidence.state["environment"], evidence.state["metal"] = environment, metal
-        evidence.state["texture_shader"] = self.session.textureShader
-        if environment and GL.glIsTexture(environment):
-            evidence.arrays["capture"] = read_texture_2d(environment)
-            evidence.state["environment_parameters"] = texture_parameters(environment)
-        if metal and GL.glIsTexture(metal):
-            now = read_texture_2d(metal)
-            original = picture("metal")
-            evidence.state["metal_intact"] = bool(
-                now.shape == original.shape and np.array_equal(now, original)
-            )
-
-    def _observe_spheremap(self) -> None:
-        session = self.session
-        assert isinstance(session, SphereMapLab)
-        tracker = self.executor.tracker
-        self.evidence.state["backdrop_texture"] = session.backdrop_texture
-        self.evidence.state["launch"] = next(
-            (t.name for t in tracker.textures.values() if t.picture == "launch"), 0
-        )
-        # the GLSL the cone was drawn with, else the file's SPHERE_MAP_GLSL
-        glsl = self.executor.glsl.get("SPHERE_MAP_GLSL") or self.declared.get("SPHERE_MAP_GLSL")
-        if glsl is not None:
-            self._values(
-                lambda mode: session.draw_cone_shader(
-                    glsl, session.backdrop_texture, mode, limit=64
-                ),
-                {"r": 1, "u": 2, "n": 3, "st": 4},
-                "reflect_eye",
-            )
-            self._probe("kit_sphere.frag", glsl, "spheremap")
-
-    def _observe_cubemap(self) -> None:
-        session = self.session
-        assert isinstance(session, CubeMapLab)
-        evidence, tracker = self.evidence, self.executor.tracker
-        draws = evidence.events("draw", who="draw_sphere", within="display")
-        cube = (
-            int(draws[-1]["texture"])
-            if draws
-            else next(
-                (t.name for t in tracker.textures.values() if t.target == GL_TEXTURE_CUBE_MAP), 0
-            )
-        )
-        evidence.state["cube_texture"] = cube
-        if cube and GL.glIsTexture(cube):
-            faces = read_cube_faces(cube)
-            if faces is not None:
-                evidence.arrays["cube_faces"] = faces
-        glsl = self.executor.glsl.get("CUBE_MAP_GLSL") or self.declared.get("CUBE_MAP_GLSL")
-        if glsl is not None:
-            self._values(
-                lambda mode: session.draw_sphere(glsl, cube, mode, limit=64),
-                {"face_st": 1, "r": 2},
-                "cube_face",
-            )
-            self._probe("kit_cube.frag", glsl, "cubemap")
-
-    def _probe(self, kit_fragment: str, glsl: str, lab: str) -> None:
+    def probe_glsl(self, kit_fragment: str, glsl: str, functions: tuple[str, ...]) -> None:
         """The lab's GLSL functions on the value probe's chosen inputs (:mod:`.probe`):
         ``probe_<function>`` ``(n, 4)`` float32 each; nothing when the GLSL did not make
         the kit's program (the check values say why)."""
-        from mirrorlab.labs.trusted.probe import LAB_FUNCTIONS, run_probe
+        from mirrorlab.labs.trusted.probe import run_probe
 
         if "values_error" in self.evidence.state:
             return
         reset_state()
         try:
-            found = run_probe(kit_fragment, glsl, LAB_FUNCTIONS[lab], self.registry)
+            found = run_probe(kit_fragment, glsl, functions, self.registry)
         except LabSetupError:
             return
         for function, values in found.items():
             self.evidence.arrays[f"probe_{function}"] = values
 
-    def _values(self, draw: Callable[[int], None], modes: dict[str, int], function: str) -> None:
+    def check_values(
+        self, draw: Callable[[int], None], modes: dict[str, int], function: str
+    ) -> None:
         """Draw with each check ``mode`` of the kit's shader into a float target and keep
         the values (``values_<name>``, ``(h, w, 3)`` float32) and the coverage mask."""
         from mirrorlab.gl.resources import FloatFramebuffer
@@ -524,31 +450,6 @@ class LabRun:
                 self.evidence.arrays["values_mask"] = rgba[..., 3] > 0.5
         finally:
             target.release()
-
-
-def find_environment(evidence: Evidence, session: LabBase, pictures: set[int]) -> int:
-    """Lab 20's ENVIRONMENT texture, as the calls show it: the texture the mirror quad
-    sampled in the last frame (bound on the unit the texture shader's sampler reads),
-    unless that is a picture such as METAL; else the texture create_mirror() copied
-    into, unless that is a picture; else the blank texture of the frame's size that the
-    set-up made."""
-    for event in reversed(evidence.events("draw", who="primitive", within="render_mirror")):
-        unit = event.get("sampler")
-        if isinstance(unit, int) and 0 <= unit < 8:
-            bound = event["state"]["units"].get(str(unit), {}).get("2d")
-            if bound and bound["value"] and int(bound["value"]) not in pictures:
-                return int(bound["value"])
-    for event in reversed(evidence.events("copy", within="create_mirror")):
-        if int(event["texture"]) not in pictures:
-            return int(event["texture"])
-    for event in evidence.events("upload", frame=None):
-        if (
-            not event.get("data")
-            and (event.get("width"), event.get("height")) == (session.width, session.height)
-            and int(event["texture"]) not in pictures
-        ):
-            return int(event["texture"])
-    return 0
 
 
 def reset_state() -> None:

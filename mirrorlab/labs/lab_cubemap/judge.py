@@ -10,9 +10,10 @@ from typing import Any
 
 import numpy as np
 
-from mirrorlab import math3d
 from mirrorlab.envmap import CUBE_FACE_NAMES, cube_map
 from mirrorlab.labs import LabSpec, task_name
+from mirrorlab.labs.lab_cubemap.trusted import CubeMapLab
+from mirrorlab.labs.lab_cubemap.variant import cube_center
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.judging import (
     INTEGER_HALF,
@@ -33,9 +34,7 @@ from mirrorlab.labs.trusted.judging import (
     where,
     wrong_clear_colour,
 )
-from mirrorlab.labs.trusted.kit import CubeMapLab
 from mirrorlab.labs.trusted.probe import INPUTS, slip, slip_per_face
-from mirrorlab.labs.trusted.variants import cube_center
 from mirrorlab.views import CUBE_FACE_AXES
 
 GLSL_FUNCTIONS = ("cube_face", "cube_face_st")
@@ -175,12 +174,6 @@ def _face_draws(student: Evidence) -> list[dict[str, Any]]:
 def _near_far(projection: np.ndarray) -> tuple[float, float]:
     a, b = projection[2, 2], projection[2, 3]
     return float(b / (a - 1)), float(b / (a + 1))
-
-
-def _expected(face: int, center: tuple[float, float, float]) -> np.ndarray:
-    forward, up = CUBE_FACE_AXES[face]
-    eye = np.asarray(center, dtype=np.float64)
-    return math3d.look_at(tuple(eye), tuple(eye + np.asarray(forward)), up)
 
 
 def judge_cameras(

@@ -16,6 +16,7 @@ import re
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -29,7 +30,7 @@ from mirrorlab.gl.opengl import GL
 from mirrorlab.labs.trusted import calls as C
 from mirrorlab.labs.trusted import legacy
 from mirrorlab.labs.trusted.calls import CallError, gl_error
-from mirrorlab.labs.trusted.kit import (
+from mirrorlab.labs.trusted.session import (
     PICTURES,
     LabBase,
     LabSetupError,
@@ -37,7 +38,7 @@ from mirrorlab.labs.trusted.kit import (
     current_matrices,
 )
 from mirrorlab.labs.trusted.state import (
-    CUBE_FACES,
+    CUBE_FACE_TARGETS,
     GL_MODELVIEW,
     GL_PROJECTION,
     GL_TEXTURE_2D,
@@ -72,11 +73,11 @@ class RunLimits:
 
 
 def _bind_target(target: int) -> int:
-    return GL_TEXTURE_CUBE_MAP if target in CUBE_FACES else target
+    return GL_TEXTURE_CUBE_MAP if target in CUBE_FACE_TARGETS else target
 
 
 def _face(target: int) -> int:
-    return target - CUBE_FACES[0] if target in CUBE_FACES else 0
+    return target - CUBE_FACE_TARGETS[0] if target in CUBE_FACE_TARGETS else 0
 
 
 def _unit_name(unit: int) -> str:
@@ -1018,25 +1019,17 @@ class Executor:
 
     # ------------------------------------------------------------------ the lab's calls
     def _kit_calls(self) -> dict[str, Callable[[list[Any]], Any]]:
-        lab = self.session.name
+        """The lab object's calls: the ones every lab gives, then the lab's own (its
+        ``trusted.kit_calls``, each taking this executor and the call's arguments)."""
+        from mirrorlab.labs import find_lab
+
+        own = find_lab(self.session.name).module("trusted").kit_calls()
         found: dict[str, Callable[[list[Any]], Any]] = {
-            "load_picture_texture": self.kit_load_picture
+            "load_picture_texture": self.kit_load_picture,
+            "set_viewer": self.kit_set_viewer,
         }
-        if lab == "lab20":
-            found.update(draw_scene=self.kit_draw_robot, set_viewer=self.kit_set_viewer)
-        elif lab == "spheremap":
-            found.update(
-                set_viewer=self.kit_set_viewer,
-                draw_backdrop=self.kit_backdrop,
-                draw_cone_shader=self.kit_cone_shader,
-                draw_cone_fixed_function=self.kit_cone_texgen,
-            )
-        else:
-            found.update(
-                set_viewer=self.kit_set_viewer,
-                draw_scene=self.kit_draw_objects,
-                draw_sphere=self.kit_sphere,
-            )
+        for name, handler in own.items():
+            found[name] = partial(handler, self)
         return found
 
     def kit_call(self, name: str, args: Any) -> Any:
@@ -1049,7 +1042,7 @@ class Executor:
             self._not_in_setup(f"lab.{name}")
         return handler(args)
 
-    def _owned(self, value: Any, what: str, target: int) -> int:
+    def owned_texture(self, value: Any, what: str, target: int) -> int:
         if type(value) is not int or (value and value not in self.owned):
             raise LabSetupError(
                 f"{what}: {C.shown(value)} is not a texture this file made with glGenTextures"
@@ -1060,7 +1053,7 @@ class Executor:
             raise LabSetupError(f"{what}: texture {value} is {kind}")
         return value
 
-    def _after_kit_draw(self, bound: list[int]) -> None:
+    def after_kit_draw(self, bound: list[int]) -> None:
         """What the given drawing leaves: unit 0 active, its last texture bound there, the
         modelview matrix current."""
         tracker = self.tracker
@@ -1095,7 +1088,7 @@ class Executor:
     def kit_load_picture(self, args: list[Any]) -> None:
         if len(args) != 2 or not isinstance(args[1], str):
             raise LabSetupError("lab.load_picture_texture(texture_id, name)")
-        texture = self._owned(args[0], "lab.load_picture_texture", GL_TEXTURE_2D)
+        texture = self.owned_texture(args[0], "lab.load_picture_texture", GL_TEXTURE_2D)
         if not texture:
             raise LabSetupError("lab.load_picture_texture: texture 0 is no texture")
         if args[1] not in PICTURES:
@@ -1146,49 +1139,14 @@ class Executor:
             tracker.matrix_op("lab.set_viewer", [aspect], replaces=True)
         tracker.matrix_mode = tracker.setting(GL_MODELVIEW)
 
-    def _taint_of(self, textures: list[int]) -> str:
+    def taint_of(self, textures: list[int]) -> str:
         for texture in textures:
             record = self.tracker.textures.get(texture)
             if record is not None and record.tainted:
                 return f"texture {texture} holds uploaded pixels"
         return ""
 
-    def kit_draw_robot(self, args: list[Any]) -> None:
-        textures: dict[str, int | None] = {}
-        shown: dict[str, Any] = {}
-        given = args[0].get("textures") if args and isinstance(args[0], dict) else None
-        if not isinstance(given, dict):
-            raise LabSetupError("lab.draw_scene(robot): the robot's graph is missing")
-        nodes = getattr(self.session, "NODES", ())
-        for node, value in list(given.items())[:16]:
-            if node not in nodes:
-                continue
-            if value is None or isinstance(value, dict):
-                textures[node] = None
-                shown[node] = None if value is None else {"other": str(value.get("other", ""))[:40]}
-            else:
-                textures[node] = (
-                    self._owned(value, f"robot[{node!r}].texture", GL_TEXTURE_2D) or None
-                )
-                shown[node] = textures[node]
-        used = [t for t in textures.values() if t]
-        bound = self.record_draw(
-            "draw_scene",
-            lambda: self.lab.draw_scene(textures),
-            self._taint_of(used),
-            textures=shown,
-        )
-        self._after_kit_draw(bound)
-
-    def kit_draw_objects(self, args: list[Any]) -> None:
-        bound = self.record_draw("draw_scene", self.lab.draw_scene, "")
-        self._after_kit_draw(bound)
-
-    def kit_backdrop(self, args: list[Any]) -> None:
-        bound = self.record_draw("draw_backdrop", self.lab.draw_backdrop, "")
-        self._after_kit_draw(bound)
-
-    def _glsl(self, value: Any, variable: str) -> str:
+    def take_glsl(self, value: Any, variable: str) -> str:
         if not isinstance(value, str):
             raise LabSetupError(f"{variable} must be a string of GLSL, got {type(value).__name__}")
         if len(value) > self.limits.glsl_chars:
@@ -1198,67 +1156,3 @@ class Executor:
             )
         self.glsl[variable] = value
         return value
-
-    def kit_cone_shader(self, args: list[Any]) -> None:
-        if len(args) != 2:
-            raise LabSetupError("lab.draw_cone_shader(glsl, texture)")
-        glsl = self._glsl(args[0], "SPHERE_MAP_GLSL")
-        texture = self._owned(args[1], "lab.draw_cone_shader", GL_TEXTURE_2D)
-        self.record_draw(
-            "draw_cone_shader",
-            lambda: self.lab.draw_cone_shader(glsl, texture, 0, self.limits.programs),
-            self._taint_of([texture]),
-            texture=texture,
-        )
-        tracker = self.tracker
-        tracker.bindings[(1, GL_TEXTURE_2D)] = tracker.setting(texture)
-        self._after_kit_draw([])
-
-    def kit_cone_texgen(self, args: list[Any]) -> None:
-        session = self.session
-        unit = int(getattr(session, "texgen_unit", 0))
-        previous = int(GL.glGetIntegerv(GL.GL_ACTIVE_TEXTURE))
-        GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
-        FF = legacy.gl()
-        seen = {
-            "unit": unit,
-            "gen_s": bool(FF.glIsEnabled(GL.GL_TEXTURE_GEN_S)),
-            "gen_t": bool(FF.glIsEnabled(GL.GL_TEXTURE_GEN_T)),
-            "mode_s": int(
-                np.asarray(FF.glGetTexGeniv(GL.GL_S, GL.GL_TEXTURE_GEN_MODE)).reshape(-1)[0]
-            ),
-            "mode_t": int(
-                np.asarray(FF.glGetTexGeniv(GL.GL_T, GL.GL_TEXTURE_GEN_MODE)).reshape(-1)[0]
-            ),
-            "texture": int(GL.glGetIntegerv(GL.GL_TEXTURE_BINDING_2D)),
-        }
-        GL.glActiveTexture(previous)
-        texture = self.tracker.bound(GL_TEXTURE_2D, unit)
-        self.record_draw(
-            "draw_cone_fixed_function",
-            self.lab.draw_cone_fixed_function,
-            self._taint_of([texture]),
-            seen=seen,
-        )
-        self.ok()
-
-    def kit_sphere(self, args: list[Any]) -> None:
-        if len(args) != 2:
-            raise LabSetupError("lab.draw_sphere(glsl, cube_texture)")
-        glsl = self._glsl(args[0], "CUBE_MAP_GLSL")
-        texture = self._owned(args[1], "lab.draw_sphere", GL_TEXTURE_CUBE_MAP)
-        record = self.tracker.textures.get(texture)
-        extra: dict[str, Any] = {"texture": texture}
-        if record is not None:
-            extra["sampling"] = {str(k): v.plain() for k, v in record.params.items()}
-            extra["mipmaps_fresh"] = record.mipmaps_fresh
-            extra["mipmaps"] = record.mipmaps.plain() if record.mipmaps else None
-        self.record_draw(
-            "draw_sphere",
-            lambda: self.lab.draw_sphere(glsl, texture, 0, self.limits.programs),
-            self._taint_of([texture]),
-            **extra,
-        )
-        tracker = self.tracker
-        tracker.bindings[(1, GL_TEXTURE_CUBE_MAP)] = tracker.setting(texture)
-        self._after_kit_draw([])

@@ -12,6 +12,7 @@ import numpy as np
 
 from mirrorlab.envmap import sphere_map
 from mirrorlab.labs import LabSpec, task_name
+from mirrorlab.labs.lab_spheremap.trusted import SphereMapLab
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.judging import (
     INTEGER_HALF,
@@ -28,7 +29,6 @@ from mirrorlab.labs.trusted.judging import (
     viewer_camera,
     where,
 )
-from mirrorlab.labs.trusted.kit import SphereMapLab
 from mirrorlab.labs.trusted.probe import INPUTS, slip
 
 GL_SPHERE_MAP = 0x2402

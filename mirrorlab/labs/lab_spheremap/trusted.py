@@ -1,0 +1,239 @@
+"""The sphere-map lab's trusted side: its session (the cone before the launch picture,
+drawn by the student's GLSL or by texgen), its kit calls as the executor runs them, what
+the checker observes after the frames (the check values and the value probe of the
+student's GLSL) and the calls it leaves out. OpenGL is imported on first use."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from mirrorlab import math3d
+from mirrorlab.labs.trusted import legacy
+from mirrorlab.labs.trusted.session import (
+    ENV_UNIT,
+    LabBase,
+    LabSetupError,
+    Mesh,
+    lazy_gl,
+    uniform,
+)
+from mirrorlab.labs.trusted.state import GL_TEXTURE_2D
+from mirrorlab.labs.trusted.variants import Variant
+
+if TYPE_CHECKING:
+    from mirrorlab.labs.trusted.call_executor import Executor
+    from mirrorlab.labs.trusted.lab_run import LabRun
+
+PROBE_FUNCTIONS = ("reflect_eye", "sphere_map_st")
+"""The student's GLSL functions the value probe evaluates."""
+
+
+def left_out() -> dict[str, str]:
+    """Calls of the allow-list (:data:`~mirrorlab.labs.trusted.calls.GL_SPECS`) this lab's
+    handout does not need, with why."""
+    from mirrorlab.labs.trusted import calls
+
+    return {
+        **{name: "the sphere-map lab captures nothing" for name in calls.COPIES},
+        **{
+            name: "the sphere-map lab gives no program with uniforms to set"
+            for name in calls.UNIFORMS
+        },
+    }
+
+
+class SphereMapLab(LabBase):
+    """The textbook's cone (Guha 13.6) in front of the launch picture: the cone drawn by the
+    student's shader functions, or by fixed-function texgen on the variant's unit."""
+
+    name = "spheremap"
+    EYE = (0.0, 1.0, 7.0)
+    TARGET = (0.0, 0.6, 0.0)
+    FOVY, NEAR, FAR = 45.0, 0.5, 60.0
+    BACKDROP_MODEL = math3d.translate((0.0, 0.0, -8.0))
+
+    def __init__(self, size: tuple[int, int], variant: Variant) -> None:
+        super().__init__(size, variant)
+        self.cone_model = math3d.translate((0.0, 1.0, 0.0)) @ math3d.rotate(
+            float(variant["tilt"]), (1.0, 0.0, 0.0)
+        )
+        self.texgen_unit = int(variant["unit"])
+        self.backdrop_texture = int(lazy_gl().glGenTextures(1))
+        self.load_picture_texture(self.backdrop_texture, "launch")
+
+    def draw_backdrop(self) -> list[int]:
+        """The launch picture on its board behind the cone, lit, under the current matrices."""
+        return self.draw_parts(
+            [("backdrop", self.BACKDROP_MODEL, (1.0, 1.0, 1.0), self.backdrop_texture)],
+            light_world=(0.0, 0.0, 1.0),
+        )
+
+    def draw_cone_shader(self, glsl: str, texture: int, mode: int = 0, limit: int = 16) -> None:
+        """The cone drawn by the kit's shader calling the student's ``reflect_eye`` and
+        ``sphere_map_st`` (from ``glsl``), sampling ``texture`` on unit 1, under the
+        current matrices. (``mode`` 1-4 write check values instead of colours.)"""
+        GL = lazy_gl()
+        program = self.student_program(
+            "kit_sphere.vert", "kit_sphere.frag", glsl, "SPHERE_MAP_GLSL", limit
+        )
+        previous = int(GL.glGetIntegerv(GL.GL_CURRENT_PROGRAM))
+        GL.glUseProgram(program)
+        GL.glUniform1i(uniform(program, "sphere_map"), ENV_UNIT)
+        GL.glUniform1i(uniform(program, "mode"), int(mode))
+        GL.glActiveTexture(GL.GL_TEXTURE0 + ENV_UNIT)
+        GL.glBindTexture(GL.GL_TEXTURE_2D, int(texture))
+        GL.glActiveTexture(GL.GL_TEXTURE0)
+        FF = legacy.gl()
+        FF.glMatrixMode(GL.GL_MODELVIEW)
+        FF.glPushMatrix()
+        FF.glMultMatrixd(np.ascontiguousarray(self.cone_model.T))
+        legacy.load_matrix_uniforms(program)
+        self.mesh("cone").draw()
+        FF.glPopMatrix()
+        GL.glUseProgram(previous)
+
+    def draw_cone_fixed_function(self) -> None:
+        """The cone with no shader, in the fixed-function pipeline: its texture coordinates
+        whatever texgen makes of them on the variant's unit, textured there (GL_REPLACE);
+        every other unit's texturing off while it is drawn."""
+        GL = lazy_gl()
+        previous = int(GL.glGetIntegerv(GL.GL_CURRENT_PROGRAM))
+        active = int(GL.glGetIntegerv(GL.GL_ACTIVE_TEXTURE))
+        GL.glUseProgram(0)
+        FF = legacy.gl()
+        FF.glDisable(GL.GL_LIGHTING)
+        FF.glEnable(GL.GL_NORMALIZE)
+        enabled = []
+        for unit in range(4):
+            GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
+            for cap in (GL.GL_TEXTURE_2D, GL.GL_TEXTURE_CUBE_MAP):
+                if FF.glIsEnabled(cap):
+                    enabled.append((unit, cap))
+                    FF.glDisable(cap)
+        GL.glActiveTexture(GL.GL_TEXTURE0 + self.texgen_unit)
+        FF.glEnable(GL.GL_TEXTURE_2D)
+        FF.glTexEnvi(GL.GL_TEXTURE_ENV, GL.GL_TEXTURE_ENV_MODE, GL.GL_REPLACE)
+        FF.glMatrixMode(GL.GL_MODELVIEW)
+        FF.glPushMatrix()
+        FF.glMultMatrixd(np.ascontiguousarray(self.cone_model.T))
+        mesh = self.mesh("cone")
+        emulation = legacy.emulated()
+        if emulation is not None:
+            emulation.draw_elements(mesh.vao, mesh.count)
+        else:
+            self._draw_client_arrays(mesh)
+        FF.glPopMatrix()
+        FF.glDisable(GL.GL_TEXTURE_2D)
+        for unit, cap in enabled:
+            GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
+            FF.glEnable(cap)
+        GL.glActiveTexture(active)
+        FF.glDisable(GL.GL_NORMALIZE)
+        GL.glUseProgram(previous)
+
+    @staticmethod
+    def _draw_client_arrays(mesh: Mesh) -> None:
+        """The cone from client-state arrays (the compatibility profile's own pipeline)."""
+        GL = lazy_gl()
+        GL.glBindVertexArray(0)
+        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, mesh.vbo)
+        GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, mesh.ebo)
+        for array in (
+            GL.GL_COLOR_ARRAY,
+            GL.GL_TEXTURE_COORD_ARRAY,
+            GL.GL_INDEX_ARRAY,
+            GL.GL_EDGE_FLAG_ARRAY,
+            GL.GL_FOG_COORD_ARRAY,
+            GL.GL_SECONDARY_COLOR_ARRAY,
+        ):
+            GL.glDisableClientState(array)
+        GL.glEnableClientState(GL.GL_VERTEX_ARRAY)
+        GL.glVertexPointer(3, GL.GL_FLOAT, 32, GL.GLvoidp(0))
+        GL.glEnableClientState(GL.GL_NORMAL_ARRAY)
+        GL.glNormalPointer(GL.GL_FLOAT, 32, GL.GLvoidp(12))
+        GL.glDrawElements(GL.GL_TRIANGLES, mesh.count, GL.GL_UNSIGNED_INT, None)
+        GL.glDisableClientState(GL.GL_VERTEX_ARRAY)
+        GL.glDisableClientState(GL.GL_NORMAL_ARRAY)
+        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, 0)
+        GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, 0)
+
+
+SESSION = SphereMapLab
+
+
+def kit_calls() -> dict[str, Any]:
+    """The lab object's own calls, each ``handler(executor, args)``."""
+    return {
+        "draw_backdrop": draw_backdrop,
+        "draw_cone_shader": draw_cone_shader,
+        "draw_cone_fixed_function": draw_cone_fixed_function,
+    }
+
+
+def draw_backdrop(executor: Executor, args: list[Any]) -> None:
+    bound = executor.record_draw("draw_backdrop", executor.lab.draw_backdrop, "")
+    executor.after_kit_draw(bound)
+
+
+def draw_cone_shader(executor: Executor, args: list[Any]) -> None:
+    if len(args) != 2:
+        raise LabSetupError("lab.draw_cone_shader(glsl, texture)")
+    glsl = executor.take_glsl(args[0], "SPHERE_MAP_GLSL")
+    texture = executor.owned_texture(args[1], "lab.draw_cone_shader", GL_TEXTURE_2D)
+    executor.record_draw(
+        "draw_cone_shader",
+        lambda: executor.lab.draw_cone_shader(glsl, texture, 0, executor.limits.programs),
+        executor.taint_of([texture]),
+        texture=texture,
+    )
+    tracker = executor.tracker
+    tracker.bindings[(1, GL_TEXTURE_2D)] = tracker.setting(texture)
+    executor.after_kit_draw([])
+
+
+def draw_cone_fixed_function(executor: Executor, args: list[Any]) -> None:
+    GL = lazy_gl()
+    session = executor.session
+    unit = int(getattr(session, "texgen_unit", 0))
+    previous = int(GL.glGetIntegerv(GL.GL_ACTIVE_TEXTURE))
+    GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
+    FF = legacy.gl()
+    seen = {
+        "unit": unit,
+        "gen_s": bool(FF.glIsEnabled(GL.GL_TEXTURE_GEN_S)),
+        "gen_t": bool(FF.glIsEnabled(GL.GL_TEXTURE_GEN_T)),
+        "mode_s": int(np.asarray(FF.glGetTexGeniv(GL.GL_S, GL.GL_TEXTURE_GEN_MODE)).reshape(-1)[0]),
+        "mode_t": int(np.asarray(FF.glGetTexGeniv(GL.GL_T, GL.GL_TEXTURE_GEN_MODE)).reshape(-1)[0]),
+        "texture": int(GL.glGetIntegerv(GL.GL_TEXTURE_BINDING_2D)),
+    }
+    GL.glActiveTexture(previous)
+    texture = executor.tracker.bound(GL_TEXTURE_2D, unit)
+    executor.record_draw(
+        "draw_cone_fixed_function",
+        executor.lab.draw_cone_fixed_function,
+        executor.taint_of([texture]),
+        seen=seen,
+    )
+    executor.ok()
+
+
+def observe(run: LabRun) -> None:
+    """What the checker observes after the frames (into ``run.evidence``)."""
+    session = run.session
+    assert isinstance(session, SphereMapLab)
+    tracker = run.executor.tracker
+    run.evidence.state["backdrop_texture"] = session.backdrop_texture
+    run.evidence.state["launch"] = next(
+        (t.name for t in tracker.textures.values() if t.picture == "launch"), 0
+    )
+    # the GLSL the cone was drawn with, else the file's SPHERE_MAP_GLSL
+    glsl = run.executor.glsl.get("SPHERE_MAP_GLSL") or run.declared.get("SPHERE_MAP_GLSL")
+    if glsl is not None:
+        run.check_values(
+            lambda mode: session.draw_cone_shader(glsl, session.backdrop_texture, mode, limit=64),
+            {"r": 1, "u": 2, "n": 3, "st": 4},
+            "reflect_eye",
+        )
+        run.probe_glsl("kit_sphere.frag", glsl, PROBE_FUNCTIONS)
