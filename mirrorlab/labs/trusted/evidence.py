@@ -165,7 +165,7 @@ class Evidence:
         ]
         plain["states"] = states
         with open(folder / "evidence.json", "w") as stream:  # streamed, never whole
-            json.dump(plain, stream, default=_plain)
+            json.dump(plain, stream, default=_json_value)
         if compress:
             np.savez_compressed(folder / "arrays.npz", **self.arrays)  # type: ignore[arg-type]
         else:
@@ -221,7 +221,8 @@ class Evidence:
         return evidence
 
 
-def _plain(value: Any) -> Any:
+def _json_value(value: Any) -> Any:
+    """What JSON cannot write as it is (numpy arrays and numbers, tuples) as what it can."""
     if isinstance(value, np.ndarray):
         return value.tolist()
     if isinstance(value, np.generic):
