@@ -47,15 +47,33 @@ def test_a_clone_and_its_venv_two_folders_deep_check_a_lab(tmp_path):
     all reached, and the solution passes from the clone's own folder."""
     clone = tmp_path / "x" / "y" / "clone"
     clone.mkdir(parents=True)
-    for folder in ("mirrorlab", "labs"):
+    for folder in ("mirrorlab", "labs", "scenes", "models", "textures"):
         shutil.copytree(
             REPO_DIR / folder, clone / folder, ignore=shutil.ignore_patterns("__pycache__")
         )
+    for name in ("pyproject.toml", "README.md", "LICENSE"):
+        shutil.copy(REPO_DIR / name, clone / name)
     venv = clone / ".venv"
     subprocess.run([sandbox.interpreter(), "-m", "venv", "--without-pip", str(venv)], check=True)
     site = next(venv.glob("lib/python3*/site-packages"))
-    # the clone's mirrorlab, and the dependencies of this venv (no second download)
-    (site / "clone.pth").write_text(f"{clone}\n{Path(np.__file__).parent.parent}\n")
+    # the dependencies of this venv (no second download; pip too), and the clone installed
+    # in place, as ./dev installs a checkout (its data folders are mapped into the package)
+    (site / "dependencies.pth").write_text(f"{Path(np.__file__).parent.parent}\n")
+    subprocess.run(
+        [
+            str(venv / "bin" / "python"),
+            "-m",
+            "pip",
+            "install",
+            "-q",
+            "--no-deps",
+            "--disable-pip-version-check",
+            "-e",
+            str(clone),
+        ],
+        check=True,
+        capture_output=True,
+    )
     for parent in (tmp_path / "x", tmp_path / "x" / "y", clone):
         parent.chmod(0o700)
     cache = tmp_path / "cache"
