@@ -111,22 +111,32 @@ class Technique:
 
     def load(self) -> type:
         """The pass class (imports its module, and with it OpenGL)."""
-        return _load(self.pass_class, f"technique {self.name!r}'s pass_class")
+        return _load(self.pass_class, self.name, "pass_class")
 
     def frame_function(self) -> Callable[..., Any]:
         """A frame technique's drawing function (imports its module)."""
-        return _load(self.draw_frame, f"technique {self.name!r}'s draw_frame")
+        return _load(self.draw_frame, self.name, "draw_frame")
 
     def capture_function(self) -> CaptureCamera:
         """Its capture camera (imports its module)."""
-        return _load(self.capture_camera, f"technique {self.name!r}'s capture_camera")
+        return _load(self.capture_camera, self.name, "capture_camera")
 
 
-def _load(spec: str, what: str) -> Any:
-    module, sep, name = spec.partition(":")
-    if not sep:
-        raise ValueError(f"{what} must be 'module:name', got {spec!r}")
-    return getattr(importlib.import_module(module), name)
+_LOADED: dict[str, Any] = {}
+"""What each ``module:name`` spec named, once loaded (the planner asks every frame)."""
+
+
+def _load(spec: str, technique: str, field: str) -> Any:
+    """The object ``spec`` (``module:name``, technique ``technique``'s ``field``) names."""
+    found = _LOADED.get(spec)
+    if found is None:
+        module, sep, name = spec.partition(":")
+        if not sep:
+            raise ValueError(
+                f"technique {technique!r}'s {field} must be 'module:name', got {spec!r}"
+            )
+        found = _LOADED[spec] = getattr(importlib.import_module(module), name)
+    return found
 
 
 RENDERER_GL_VERSION = (3, 3)
