@@ -126,7 +126,7 @@ def test_a_recorded_frame_leaves_pyopengl_alone_and_records_only_calls_through_t
     """A frame planned as the last one was is recorded; while it draws, PyOpenGL's
     functions and ``RAW``'s are the objects they were before and are after, the layer is
     recording, and a call made straight to PyOpenGL then is not among the frame's calls."""
-    renderer = SceneRenderer(registry, draw_path="packed")
+    renderer = SceneRenderer(registry)  # the context's own draw path (per-draw on 4.1)
     target = Framebuffer(registry, 48, 48)
     scene = mirrorlab.load_scene("lab20")
     seen_during: list[tuple[dict[str, int], dict[str, int]]] = []
