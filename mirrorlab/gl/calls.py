@@ -221,7 +221,7 @@ def _value(args: tuple, setter: str = "") -> tuple:
     return tuple(float(a) if isinstance(a, float) else int(a) for a in args)
 
 
-_FOUND_SWITCHES = (
+FRAME_SWITCHES = (
     "GL_DEPTH_TEST",
     "GL_CULL_FACE",
     "GL_STENCIL_TEST",
@@ -230,6 +230,9 @@ _FOUND_SWITCHES = (
     "GL_BLEND",
     "GL_SCISSOR_TEST",
 )
+"""The switches (``glEnable`` capabilities) a frame sets: what
+:func:`mirrorlab.passes.base.gl_state` reads and restores, and :func:`known_state` takes
+as known."""
 _FOUND_SETTINGS = (
     ("glFrontFace", ("GL_FRONT_FACE",)),
     ("glCullFace", ("GL_CULL_FACE_MODE",)),
@@ -259,7 +262,7 @@ def known_state(found: dict[str, Any]) -> dict[tuple, tuple]:
     scissor box; not the framebuffer bindings (reading a frame back changes them) nor
     the clear colour (``found`` holds it rounded)."""
     known: dict[tuple, tuple] = {}
-    for name in _FOUND_SWITCHES:
+    for name in FRAME_SWITCHES:
         if name in found:
             known[("switch", int(getattr(GL, name)))] = (bool(found[name]),)
     for setter, names in _FOUND_SETTINGS:

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 
 from mirrorlab import math3d
-from mirrorlab.gl.calls import gl, raw
+from mirrorlab.gl.calls import FRAME_SWITCHES, gl, raw
 from mirrorlab.gl.context import ResourceRegistry
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import (
@@ -180,15 +180,6 @@ def apply_view_state(view: View, stencil_level: int) -> None:
     gl.glCullFace(GL.GL_BACK)
 
 
-_SWITCHES = (
-    "GL_DEPTH_TEST",
-    "GL_CULL_FACE",
-    "GL_STENCIL_TEST",
-    "GL_CLIP_DISTANCE0",
-    "GL_TEXTURE_CUBE_MAP_SEAMLESS",
-    "GL_BLEND",
-    "GL_SCISSOR_TEST",
-)
 _VALUES = (
     "GL_FRONT_FACE",
     "GL_CULL_FACE_MODE",
@@ -209,7 +200,7 @@ _VALUES = (
 )
 
 
-_SWITCH_ENUMS = tuple((name, getattr(GL, name)) for name in _SWITCHES)
+_SWITCH_ENUMS = tuple((name, getattr(GL, name)) for name in FRAME_SWITCHES)
 _VALUE_ENUMS = tuple((name, getattr(GL, name)) for name in _VALUES)
 _BOX_ENUMS = tuple((name, getattr(GL, name)) for name in ("GL_VIEWPORT", "GL_SCISSOR_BOX"))
 
