@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mirrorlab import flip
 from mirrorlab.errors import BatchError
 from mirrorlab.files import Outputs, write_bytes_atomic
 from mirrorlab.jobs import Executor, Outcome, open_executor
@@ -76,14 +77,17 @@ class ImageError:
     """Error of an image against the truth over a region of ``pixels`` pixels, channels
     in 0..255 units: mean absolute error, 95th percentile of the per-pixel worst channel,
     PSNR in dB (inf when identical), and the share of pixels off by more than
-    ``OFF_BY``. A region with no pixels has no error to tell: every figure is NaN
-    (reported as "no reflector pixels", never as zero error; see :attr:`empty`)."""
+    ``OFF_BY``; ``flip``, the mean LDR-FLIP over the region (0..1; NaN where the
+    flip-evaluator package is missing, :data:`mirrorlab.flip.MISSING`). A region with no
+    pixels has no error to tell: every figure is NaN (reported as "no reflector pixels",
+    never as zero error; see :attr:`empty`)."""
 
     mae: float
     p95: float
     psnr: float
     share_off: float
     pixels: int = -1
+    flip: float = math.nan
 
     @property
     def empty(self) -> bool:
@@ -107,12 +111,16 @@ def image_error(image: np.ndarray, truth: np.ndarray, mask: np.ndarray) -> Image
     worst = diff.max(axis=1)
     mse = float(np.mean(diff**2))
     psnr = math.inf if mse == 0.0 else 10.0 * math.log10(255.0**2 / mse)
+    # FLIP looks at each pixel's surroundings, so it is computed on the whole picture and
+    # only then averaged over the region.
+    flip_error = flip.flip_map(image, truth)
     return ImageError(
         float(diff.mean()),
         float(np.percentile(worst, 95)),
         psnr,
         float(np.mean(worst > OFF_BY)),
         count,
+        math.nan if flip_error is None else float(flip_error[mask].mean()),
     )
 
 

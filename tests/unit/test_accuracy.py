@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from mirrorlab import accuracy
+from mirrorlab import accuracy, flip
 from mirrorlab.options import apply_options
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import BoxProxy, DistanceSearch
@@ -322,3 +322,24 @@ def test_the_report_is_remade_from_a_saved_csv_without_measuring(tmp_path):
         accuracy.run_command(accuracy.SweepSettings.quick(), "all", out, tmp_path / "bad.csv")
     with pytest.raises(ValueError, match="--from-csv: cannot read"):
         accuracy.run_command(accuracy.SweepSettings.quick(), "all", out, tmp_path / "none.csv")
+
+
+@pytest.mark.skipif(not flip.available(), reason=str(flip.MISSING))
+def test_flip_is_averaged_over_the_region_only_and_zero_for_identical_pictures():
+    rng = np.random.default_rng(3)
+    truth = rng.integers(0, 256, (32, 48, 3), dtype=np.uint8)
+    image = truth.copy()
+    image[:, 24:] = 255 - image[:, 24:]  # the right half is plainly wrong
+    left = np.zeros((32, 48), bool)
+    left[:, :20] = True  # away from the wrong half's edge, which FLIP's filters spread
+    assert accuracy.image_error(truth, truth, np.ones((32, 48), bool)).flip == 0.0
+    assert accuracy.image_error(image, truth, left).flip < 0.02
+    assert accuracy.image_error(image, truth, ~left).flip > 0.3
+
+
+def test_without_flip_evaluator_the_flip_figure_is_nan_and_the_reason_is_given(monkeypatch):
+    monkeypatch.setattr(flip, "_evaluator", None)
+    monkeypatch.setattr(flip, "MISSING", "no flip-evaluator here")
+    image = np.zeros((4, 4, 3), np.uint8)
+    assert math.isnan(accuracy.image_error(image, image, np.ones((4, 4), bool)).flip)
+    assert flip.flip_map(image, image) is None and not flip.available()
