@@ -10,12 +10,14 @@ Numpy only besides the package; no OpenGL.
 from __future__ import annotations
 
 import importlib
+from types import ModuleType
 
 import numpy as np
 
 MISSING: str | None = None
 """Why FLIP cannot be computed here (None where it can)."""
 
+_evaluator: ModuleType | None
 try:
     _evaluator = importlib.import_module("flip_evaluator")
 except ImportError as error:  # no wheel for this platform, or the extra not installed
