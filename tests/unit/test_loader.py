@@ -1498,5 +1498,7 @@ def test_parallax_belongs_to_live_cube_maps_only(tmp_path):
         tmp_path, document, "reflectors[1].parallax", "applies to technique 'cube-live', not 'cube'"
     )
     document = base_document()
-    document["reflectors"][0]["parallax"] = {"proxy": "distance"}
-    assert_refused(tmp_path, document, "reflectors[0].parallax", "unknown key")
+    document["reflectors"][0]["parallax"] = {"proxy": "distance"}  # a reflected mirror's
+    assert_refused(
+        tmp_path, document, "reflectors[0].parallax", "applies to a planar mirror of technique"
+    )

@@ -1,0 +1,194 @@
+#version 330
+// Screen-space reflections: the reflected ray of each visible reflector fragment
+// marched through the view's own depth buffer (frame_depth, copied after the view's
+// objects and the reflector's probe were drawn), as mirrorlab.screen_space.march does
+// it in numpy: the ray clipped to the view's volume in clip space, then followed along
+// its screen line pixel by pixel (McGuire and Mara, JCGT 2014), its eye-space depth
+// carried perspective-correctly; a sample behind the surface there by more than the
+// thickness ends it as a miss, one that meets the surface is narrowed by halvings.
+// Writes the hit's colour (location 0) and what happened (location 1: weight, reason,
+// hit pixel x, y). The reflector's own pixels have alpha 0 in frame_color.
+#include "common.glsl"
+in vec3 world_position;
+in vec3 world_normal;
+in vec3 eye_position;
+in vec3 eye_normal;
+in vec2 vertex_sphere_st;
+
+uniform sampler2D frame_color;
+uniform sampler2D frame_depth;
+uniform mat4 projection;
+uniform vec4 depth_row_z;   // rows 2 and 3 of the inverse projection: window depth to eye z
+uniform vec4 depth_row_w;
+uniform vec2 viewport;      // the view's size in pixels
+uniform vec4 screen;        // the drawn rectangle: x0, y0, x1, y1 (pixels)
+uniform bool orthographic;
+uniform float stride;
+uniform int steps;
+uniform float thickness;
+uniform float max_distance; // 0: until the ray leaves the view
+uniform int refine;
+uniform float edge_fade;
+uniform float end_fade;
+// 0: march; 1: the ray's eye-space origin, 2: its direction (for checks), into location 1
+uniform int output_mode;
+
+layout(location = 0) out vec4 hit_color;
+layout(location = 1) out vec4 hit_info;
+
+const int HIT = 1, SCREEN = 2, DISTANCE = 3, STEPS = 4, BEHIND = 5, THICKNESS = 6, OWN = 7;
+const float FAR_AWAY = 1e30;
+const float DEPTH_SLACK = 1.0 / 1048576.0;  // a stored 24-bit depth against the fragment's
+
+float k0, k1, qz0, qz1;
+vec2 s0, span;
+
+float ray_depth(float s) {
+    return -(qz0 + s * (qz1 - qz0)) / max(k0 + s * (k1 - k0), 1e-30);
+}
+
+ivec2 pixel_at(float s) {
+    vec2 p = floor(s0 + s * span);
+    return ivec2(clamp(p, screen.xy, screen.zw - 1.0));
+}
+
+// The eye distance of the surface at pixel p; empty where nothing was drawn (infinite).
+float surface_depth(ivec2 p, out bool empty, out bool mine) {
+    float z = texelFetch(frame_depth, p, 0).r;
+    mine = texelFetch(frame_color, p, 0).a < 0.5;
+    empty = z >= 1.0;
+    vec4 ndc = vec4((vec2(p) + 0.5) * 2.0 / viewport - 1.0, 2.0 * z - 1.0, 1.0);
+    float w = dot(depth_row_w, ndc);
+    float distance = -dot(depth_row_z, ndc) / (abs(w) < 1e-30 ? (w < 0.0 ? -1e-30 : 1e-30) : w);
+    return empty ? FAR_AWAY : distance;
+}
+
+// How far along a ray a clip-space bound value + t * rate >= 0 holds (FAR_AWAY: always).
+float leave(float value, float rate) {
+    return rate < 0.0 ? max(value, 0.0) / -rate : FAR_AWAY;
+}
+
+float smooth_ramp(float x) {
+    return smoothstep(0.0, 1.0, x);
+}
+
+void main() {
+    ivec2 here = ivec2(gl_FragCoord.xy);
+    // Only the fragments the view shows: the probe's draw left their depth and marked
+    // them with alpha 0; anything nearer won the depth test there.
+    if (texelFetch(frame_color, here, 0).a >= 0.5
+            || gl_FragCoord.z > texelFetch(frame_depth, here, 0).r + DEPTH_SLACK) {
+        discard;
+    }
+    vec3 origin = eye_position;
+    vec3 incoming = orthographic ? vec3(0.0, 0.0, -1.0) : safe_normalize(origin, vec3(0.0));
+    vec3 n = safe_normalize(eye_normal, vec3(0.0));
+    n = dot(n, incoming) > 0.0 ? -n : n;  // reflect about the side the ray comes from
+    vec3 r = safe_normalize(incoming - 2.0 * dot(n, incoming) * n, vec3(1.0, 0.0, 0.0));
+    hit_color = vec4(0.0);
+    if (output_mode == 1) {
+        hit_info = vec4(origin, 1.0);
+        return;
+    }
+    if (output_mode == 2) {
+        hit_info = vec4(r, 1.0);
+        return;
+    }
+
+    // the part of the ray within the drawn rectangle and between the near and far planes
+    vec4 h0 = projection * vec4(origin, 1.0);
+    vec4 hd = projection * vec4(r, 0.0);
+    vec2 low = 2.0 * screen.xy / viewport - 1.0;
+    vec2 high = 2.0 * screen.zw / viewport - 1.0;
+    float end = leave(h0.x - low.x * h0.w, hd.x - low.x * hd.w);
+    end = min(end, leave(high.x * h0.w - h0.x, high.x * hd.w - hd.x));
+    end = min(end, leave(h0.y - low.y * h0.w, hd.y - low.y * hd.w));
+    end = min(end, leave(high.y * h0.w - h0.y, high.y * hd.w - hd.y));
+    end = min(end, leave(h0.z + h0.w, hd.z + hd.w));
+    end = min(end, leave(h0.w - h0.z, hd.w - hd.z));
+    float limit = max_distance > 0.0 ? max_distance : FAR_AWAY;
+    int end_reason = end <= limit ? SCREEN : DISTANCE;
+    end = min(end, limit);
+
+    vec3 far_end = origin + r * end;
+    vec4 h1 = projection * vec4(far_end, 1.0);
+    k0 = 1.0 / max(h0.w, 1e-30);
+    k1 = 1.0 / max(h1.w, 1e-30);
+    s0 = (h0.xy * k0 + 1.0) * 0.5 * viewport;
+    vec2 s1 = (h1.xy * k1 + 1.0) * 0.5 * viewport;
+    span = s1 - s0;
+    qz0 = origin.z * k0;
+    qz1 = far_end.z * k1;
+    float pixels_along = max(abs(span.x), abs(span.y));
+    float step_size = stride / max(pixels_along, 1e-30);
+
+    int reason = 0;
+    float hit_s = 0.0;
+    int taken = 0;
+    if (pixels_along < 0.5) {
+        // along the line of sight: towards the eye it leaves the view, away from it it
+        // runs behind its own surface
+        reason = ray_depth(1.0) < ray_depth(0.0) ? SCREEN : OWN;
+    } else {
+        float previous_surface = ray_depth(0.0);
+        float previous_s = 0.0;
+        for (int i = 1; i <= steps; ++i) {
+            float s = float(i) * step_size;
+            if (s > 1.0) {
+                reason = end_reason;
+                break;
+            }
+            taken = i;
+            float half_step = 0.5 * step_size;
+            float a = ray_depth(max(s - half_step, 0.0));
+            float b = ray_depth(min(s + half_step, 1.0));
+            float near = min(a, b), far = max(a, b);
+            bool empty, mine;
+            float seen = surface_depth(pixel_at(s), empty, mine);
+            float thick = thickness * seen;
+            bool reaches = !empty && far >= seen;
+            bool beyond = reaches && near > seen + thick;
+            if (beyond) {
+                reason = mine ? OWN : (seen < previous_surface - thick ? BEHIND : THICKNESS);
+                break;
+            }
+            if (reaches && !mine) {
+                reason = HIT;
+                float low_s = previous_s;
+                float high_s = min(s + half_step, 1.0);
+                for (int j = 0; j < refine; ++j) {
+                    float middle = 0.5 * (low_s + high_s);
+                    bool e, m;
+                    bool crossed = ray_depth(middle) >= surface_depth(pixel_at(middle), e, m);
+                    high_s = crossed ? middle : high_s;
+                    low_s = crossed ? low_s : middle;
+                }
+                hit_s = high_s;
+                break;
+            }
+            if (!empty) {
+                previous_surface = seen;
+            }
+            previous_s = s;
+        }
+        if (reason == 0) {
+            reason = STEPS;
+        }
+    }
+    if (reason != HIT) {
+        hit_info = vec4(0.0, float(reason), 0.0, 0.0);
+        return;
+    }
+    ivec2 hit = pixel_at(hit_s);
+    vec2 centre = vec2(hit) + 0.5;
+    float edge = min(min(centre.x - screen.x, screen.z - centre.x),
+                     min(centre.y - screen.y, screen.w - centre.y));
+    float fade_width = edge_fade * min(viewport.x, viewport.y);
+    float weight = fade_width > 0.0 ? smooth_ramp(edge / fade_width) : 1.0;
+    weight *= smooth_ramp(float(steps - taken + 1) / (end_fade * float(steps)));
+    if (max_distance > 0.0) {
+        weight *= smooth_ramp((1.0 - hit_s * end / max_distance) / end_fade);
+    }
+    hit_color = vec4(texelFetch(frame_color, hit, 0).rgb, 1.0);
+    hit_info = vec4(weight, float(HIT), centre);
+}
