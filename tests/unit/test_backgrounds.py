@@ -29,6 +29,7 @@ from mirrorlab.scene.backgrounds import (
 )
 from mirrorlab.scene.loader import SceneError, load_scene
 from mirrorlab.scene.model import Background, CurvedReflector, MeshObject
+from mirrorlab.techniques import reflector_technique_names
 from tests.scenekit import curved_reflector
 
 SKY_CUBE = data_path("textures") / "sky_cube"
@@ -275,9 +276,8 @@ def test_methods_and_scene_names_are_checked_with_the_choices():
         with pytest.raises(OptionError) as info:
             apply_options(load_scene(name), {"method": "cubemap"})
         assert str(info.value) == (
-            "--method: reflectors[0].technique: expected one of ortho, reflected, stencil, "
-            "sphere, sphere-vertex, sphere-texgen, cube, cube-live, latlong, normal, got "
-            "'cubemap' (did you mean 'cube'?)"
+            "--method: reflectors[0].technique: expected one of "
+            f"{', '.join(reflector_technique_names())}, got 'cubemap' (did you mean 'cube'?)"
         )
     with pytest.raises(OptionError, match=r"--method: expected one of ortho, .* got 'cubemap'"):
         apply_options(load_scene("no_mirror"), {"method": "cubemap"})

@@ -22,6 +22,7 @@ from mirrorlab.options import (
 )
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import BoxProxy, DistanceSearch, SphereProxy
+from mirrorlab.techniques import reflector_technique_names
 from tests.scenekit import curved_reflector, planar_reflector, scene_robot
 
 SKY_CUBE = data_path("textures") / "sky_cube"
@@ -287,9 +288,8 @@ def test_set_changes_any_key_path_as_a_file_would():
         ),
         (
             {"method": "spheer"},
-            "--method: reflectors[0].technique: expected one of ortho, "
-            "reflected, stencil, sphere, sphere-vertex, sphere-texgen, cube, "
-            "cube-live, latlong, normal, got 'spheer' (did you mean 'sphere'?)",
+            "--method: reflectors[0].technique: expected one of "
+            f"{', '.join(reflector_technique_names())}, got 'spheer' (did you mean 'sphere'?)",
         ),
         ({"method": 5}, "--method: reflectors[0].technique: expected a string, got the number 5"),
         (

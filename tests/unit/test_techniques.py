@@ -18,7 +18,15 @@ from mirrorlab.commands.arguments import scene_from_args
 from mirrorlab.options import OptionError, apply_options, split_frame_technique
 from mirrorlab.plan import TextureState, plan_frame
 from mirrorlab.scene.loader import SceneError, load_scene, loads
-from mirrorlab.techniques import Technique, register, technique, technique_names, unregister
+from mirrorlab.techniques import (
+    Technique,
+    reflector_technique_names,
+    register,
+    technique,
+    technique_names,
+    techniques,
+    unregister,
+)
 from tests.scenekit import curved_reflector
 
 PROBE_MIRROR = Technique(
@@ -199,16 +207,15 @@ def test_a_frame_technique_is_a_method_like_the_ray_tracer():
 
 
 def test_every_list_comes_from_the_registry():
-    assert technique_names("planar") == ("ortho", "reflected", "stencil")
-    assert set(technique_names("curved")) == {
-        "sphere",
-        "sphere-vertex",
-        "sphere-texgen",
-        "cube",
-        "cube-live",
-        "latlong",
-        "normal",
-    }
+    # each kind's list holds every technique that serves it, in the order registered
+    # (the lab's and the textbook's among them), and nothing else
+    for kind in ("planar", "curved", "frame"):
+        assert technique_names(kind) == tuple(t.name for t in techniques() if t.serves(kind))
+    assert {"ortho", "reflected", "stencil"} <= set(technique_names("planar"))
+    assert {"sphere", "cube", "cube-live", "latlong", "normal"} <= set(technique_names("curved"))
+    both = [t.name for t in techniques() if t.kind == "both"]
+    assert all(n in technique_names("planar") and n in technique_names("curved") for n in both)
+    assert reflector_technique_names() == tuple(t.name for t in techniques() if t.kind != "frame")
     with registered(replace(PROBE_MIRROR, name="probe-two")):
         assert technique_names("planar")[-1] == "probe-two"
     with pytest.raises(ValueError, match="already registered"):
