@@ -10,6 +10,8 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from mirrorlab.draw_path import DRAW_PATHS, DrawPath
 from mirrorlab.frame import Frame
 from mirrorlab.options import apply_options, check_size, split_frame_technique
@@ -22,6 +24,7 @@ if TYPE_CHECKING:
     from mirrorlab.gl.resources import Framebuffer
     from mirrorlab.plan import FramePlan
     from mirrorlab.renderer import FrameStats, SceneRenderer
+    from mirrorlab.screen_space import MissMask
 
 SceneLike = Scene | str | Path
 
@@ -209,6 +212,39 @@ class Renderer:
         return plan_frame(
             posed, check_size(size) if size is not None else self.size, state, use_plan
         )
+
+    def ssr_mask(self) -> MissMask:
+        """What screen-space reflections (technique ``ssr``) did at each pixel of the last
+        :meth:`render`: a :class:`~mirrorlab.screen_space.MissMask` of the frame (for
+        each reflector pixel, whether its reflected ray was found on the screen, with
+        what weight, or why it fell back to the probe), all zero where no reflector drawn
+        by ``ssr`` shows. Its ``miss_share`` is the share of those pixels that fell back
+        to the probe; ``image()`` is it as a picture."""
+        from mirrorlab.screen_space import MissMask
+
+        renderer = self.scene_renderer
+        if self.last_stats is None:
+            raise ValueError("ssr_mask: no frame rendered yet")
+        top = self.last_stats.plan.top
+        height, width = top.view.size[1], top.view.size[0]
+        reason = np.zeros((height, width), dtype=np.uint8)
+        weight = np.zeros((height, width), dtype=np.float32)
+        pixel = np.zeros((height, width, 2), dtype=np.float32)
+        assert self._context is not None
+        self._context.make_current()
+        for draw in top.shown:
+            drawn = renderer.drawn_pass(draw) if draw.mode == "screen" else None
+            found = getattr(drawn, "miss_mask", None)
+            mask = found(top.view) if found is not None else None
+            if mask is None:
+                continue
+            mine = mask.reason != 0  # drawn later, in front: each pass's own pixels
+            reason[mine], weight[mine], pixel[mine] = (
+                mask.reason[mine],
+                mask.weight[mine],
+                mask.pixel[mine],
+            )
+        return MissMask(reason, weight, pixel)
 
     def read_texture(self, reflector: str, *, slot: int = 0) -> Frame:
         """A planar reflector's capture texture from the last frame, ``(h, w, 3)`` uint8

@@ -510,6 +510,13 @@ class SceneRenderer:
         held = self._passes.get(draw.reflector.name)
         return None if held is None else held[1].shown_texture(draw)
 
+    def drawn_pass(self, draw: ReflectorDraw) -> ReflectorPass | None:
+        """The pass that drew ``draw`` (one of the last frame's draws), for a reader of
+        what it made; None where the renderer holds none for that reflector. Looking
+        changes nothing: the frame is still replayed."""
+        held = self._passes.get(draw.reflector.name)
+        return None if held is None else held[1]
+
     def pass_for(self, name: str) -> ReflectorPass:
         """The pass of the current scene's reflector ``name`` (for checks and the demo).
         What a caller may change in it, the next frame draws: it is not replayed."""

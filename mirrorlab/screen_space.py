@@ -12,18 +12,26 @@ change linearly in screen space). What differs, and why:
   part of the target that was drawn, and its near and far planes) before it is
   projected, for any projection (perspective, orthographic, a mirror's oblique near
   plane): a ray towards the eye ends at the near plane, and no end point has w <= 0.
-- A sample whose ray lies behind the surface seen there by more than ``thickness`` ends
-  the march as a miss (McGuire and Mara march on behind it): what the ray meets there
-  is hidden from the view, and a later sample that meets a visible surface would show
-  what the hidden one covers (a false hit). It is told ``behind`` when the surface there
-  is nearer than the last sample's (the ray went behind an object's edge) and
-  ``thickness`` otherwise (it went through one surface farther than the thickness
-  allows within one step).
+- A sample meets the surface seen there when the ray's depth over the step spans the
+  surface's depth. A sample whose whole step lies behind the surface ends the march,
+  as a hit or a miss (McGuire and Mara march on behind it, and take it for a hit within
+  the thickness wherever it is): where that surface continues the surface under the
+  two pixels before it along the ray's line (its depth within the thickness of what
+  their inverse depths, carried on linearly, give), the ray went through that one
+  surface, seen steeply, between two samples: a hit when it lies within ``thickness``
+  of it, else ``thickness``; anywhere else a nearer surface came in front of the ray
+  (an object's edge): ``behind``, a miss whatever the thickness, since what the ray
+  meets there (the object's hidden side, or what lies beyond it) is hidden from the
+  view, and a later sample that met a visible surface would show what the hidden one
+  covers (a false hit).
 - The reflector's own pixels (marked by the pass in the frame's alpha) are never a hit:
   a ray passes over them, and one that lies behind its reflector's own surface there by
   more than the thickness ends as ``own``.
-- A hit is narrowed by ``refine`` halvings between the last sample in front and the
-  sample that met the surface, each looking at the depth under the halfway point.
+- A hit is narrowed by ``refine`` halvings between the last sample in front and the end
+  of the step that met the surface, each looking at the surface's depth under the
+  halfway point, interpolated between the pixel centres around it (in inverse depth,
+  exact on a plane: the depth of the pixel's centre alone would put every hit up to
+  half a pixel off, towards that centre). Its colour is read there, bilinearly.
 
 Every quantity is a function of its inputs alone, with no division by a value that can
 be zero and nothing that can become NaN (rays parallel to the screen, towards the eye,
@@ -82,6 +90,10 @@ REASON_COLORS = np.array(
 END_FADE = 0.1
 """The last share of the step budget (and of ``max_distance``) over which hits fade into
 the probe."""
+FAR_AWAY = 1e30
+"""How far a ray no plane of the view ends is followed (world units): far enough for any
+scene (a scene's numbers are at most 1e6), near enough that float32 keeps it finite
+through a projection."""
 MAX_REFINE = 16
 MAX_STEPS = 4096
 MAX_STRIDE = 64.0
@@ -116,8 +128,9 @@ def probe_reflector(reflector: Reflector) -> Reflector | None:
 @dataclass(frozen=True)
 class MarchResult:
     """What the march found for each of ``n`` rays: ``reason`` ``(n,)`` int (a code of
-    :data:`REASONS`), ``pixel`` ``(n, 2)`` float, the window pixel (x, y, from the
-    bottom left, at its centre) whose colour a hit shows, ``weight`` ``(n,)`` in [0, 1],
+    :data:`REASONS`), ``pixel`` ``(n, 2)`` float, the window position (x, y in pixels
+    from the bottom left; pixel centres at halves) whose colour a hit shows, read
+    bilinearly, ``weight`` ``(n,)`` in [0, 1],
     how much of the pixel's colour it gives (the rest is the probe's), and ``steps``
     ``(n,)`` int, the samples taken."""
 
@@ -185,14 +198,13 @@ def clip_segment(
     )
     value = start @ rows.T  # (n, 6): >= 0 inside
     rate = along @ rows.T
-    with np.errstate(divide="ignore", invalid="ignore"):
-        leaving = np.where(rate < 0.0, np.maximum(value, 0.0) / -rate, np.inf)
-    end = leaving.min(axis=1)
-    limit = max_distance if max_distance > 0.0 else np.inf
+    # a bound the ray moves towards ends it (a rate below -1e-30: one nearer parallel to
+    # it never does, and no division can overflow)
+    leaving = np.where(rate < -1e-30, np.maximum(value, 0.0) / np.maximum(-rate, 1e-30), FAR_AWAY)
+    end = np.minimum(leaving.min(axis=1), FAR_AWAY)
+    limit = max_distance if max_distance > 0.0 else FAR_AWAY
     reason = np.where(end <= limit, SCREEN, DISTANCE)
-    end = np.minimum(end, limit)
-    end = np.where(np.isfinite(end), end, 1e30)
-    return end, reason
+    return np.minimum(end, limit), reason
 
 
 def march(
@@ -261,6 +273,29 @@ def march(
         distance = eye_depth(z, p.astype(np.float64), inverse, size)
         return np.where(empty, np.inf, distance), empty, own[p[:, 1], p[:, 0]]
 
+    def between(point: np.ndarray) -> np.ndarray:
+        """The surface's eye distance at window positions ``point`` ``(m, 2)``: the inverse
+        depths of the four pixel centres around it interpolated bilinearly (exact on a
+        plane), over those that show a surface (not nothing, not the reflector's own);
+        :data:`FAR_AWAY` where none does."""
+        corner = np.floor(point - 0.5)
+        fraction = point - 0.5 - corner
+        inverse = np.zeros(len(point))
+        weights = np.zeros(len(point))
+        for dx, dy in ((0, 0), (1, 0), (0, 1), (1, 1)):
+            p = (corner + (dx, dy)).astype(np.int64)
+            p[:, 0] = np.clip(p[:, 0], x0, x1 - 1)
+            p[:, 1] = np.clip(p[:, 1], y0, y1 - 1)
+            distance, empty, mine = surface(p)
+            share = (fraction[:, 0] if dx else 1 - fraction[:, 0]) * (
+                fraction[:, 1] if dy else 1 - fraction[:, 1]
+            )
+            solid = ~empty & ~mine
+            inverse += np.where(solid, share / np.where(solid, distance, 1.0), 0.0)
+            weights += np.where(solid, share, 0.0)
+        inverse /= np.maximum(weights, 1e-30)
+        return np.where(inverse > 1e-30, 1.0 / np.maximum(inverse, 1e-30), FAR_AWAY)
+
     reason = np.zeros(count, dtype=np.int64)
     hit_s = np.zeros(count)
     taken = np.zeros(count, dtype=np.int64)
@@ -270,7 +305,6 @@ def march(
     towards_eye = ray_depth(np.ones(count)) < ray_depth(np.zeros(count))
     reason[still] = np.where(towards_eye[still], SCREEN, OWN)
     active = ~still
-    previous_surface = ray_depth(np.zeros(count))
     previous_s = np.zeros(count)
     steps = int(settings.steps)
     for i in range(1, steps + 1):
@@ -295,14 +329,23 @@ def march(
         seen, empty, mine = surface(p)
         thick = settings.thickness * seen
         reaches = (~empty) & (far >= seen)
-        beyond = reaches & (near > seen + thick)
-        meets = reaches & ~beyond & ~mine
+        straddles = reaches & (near <= seen)
+        behind_all = reaches & (near > seen)  # the whole step behind the surface there
+        within = near <= seen + thick
+        # the surface under the pixels one and two back along the line, carried on: where
+        # the one here continues it, the ray went through that one surface between them
+        pixel_step = 1.0 / np.maximum(pixels_along[rays], 1e-30)
+        back = [
+            surface(_pixel_of(pixel_at, rays, np.maximum(s - k * pixel_step, 0.0), count))[0]
+            for k in (1, 2)
+        ]
+        continues = np.abs(seen - _continued(back[1], back[0])) <= thick
         ended = np.zeros(len(rays), dtype=np.int64)
-        ended[beyond & mine] = OWN
-        behind = beyond & ~mine & (seen < previous_surface[rays] - thick)
-        ended[beyond & ~mine & ~behind] = THICKNESS
-        ended[behind] = BEHIND
-        met = meets
+        ended[mine & behind_all & ~within] = OWN
+        other = ~mine & behind_all
+        ended[other & continues & ~within] = THICKNESS
+        ended[other & ~continues] = BEHIND
+        met = ~mine & (straddles | (behind_all & continues & within))
         ended[met] = HIT
         stop = ended > 0
         stopped = rays[stop]
@@ -314,21 +357,30 @@ def march(
                 previous_s[hits],
                 np.minimum(s[met] + half[met], 1.0),
                 lambda ss, h=hits: _depth_of(ray_depth, h, ss, count),
-                lambda ss, h=hits: surface(_pixel_of(pixel_at, h, ss, count))[0],
+                lambda ss, h=hits: between(s0[h] + ss[:, None] * span[h]),
                 settings.refine,
             )
         going = rays[~stop]
-        previous_surface[going] = np.where(empty[~stop], previous_surface[going], seen[~stop])
         previous_s[going] = s[~stop]
     reason[active] = STEPS
     hit = reason == HIT
     pixel = np.zeros((count, 2))
     if hit.any():
-        chosen = _pixel_of(pixel_at, np.flatnonzero(hit), hit_s[hit], count)
-        pixel[hit] = chosen + 0.5
+        pixel[hit] = _position(s0[hit] + hit_s[hit, None] * span[hit], screen)
     weight = np.where(hit, 1.0, 0.0)
     weight *= fade(pixel, taken, hit_s * end, settings, screen, size)
     return MarchResult(reason, pixel, weight, taken)
+
+
+def _continued(two_back: np.ndarray, one_back: np.ndarray) -> np.ndarray:
+    """The depth a surface seen ``two_back`` and ``one_back`` (depths under the pixels two
+    and one back along the ray's line; infinite where nothing was drawn) has one pixel
+    further on, where it continues: its inverse depth carried on linearly (a plane's
+    inverse depth is linear across the screen)."""
+    with np.errstate(divide="ignore"):
+        predicted = 2.0 / one_back - 1.0 / two_back
+    solid = np.isfinite(one_back) & np.isfinite(two_back) & (predicted > 1e-30)
+    return np.where(solid, 1.0 / np.where(solid, predicted, 1.0), FAR_AWAY)
 
 
 def _depth_of(ray_depth, rays: np.ndarray, s: np.ndarray, count: int) -> np.ndarray:
@@ -344,18 +396,37 @@ def _pixel_of(pixel_at, rays: np.ndarray, s: np.ndarray, count: int) -> np.ndarr
     return pixel_at(full)[rays]
 
 
+def _solid(found: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
+    """The distance of a surface a hit may land on: infinite where nothing was drawn or
+    the pixel is the reflector's own."""
+    distance, _, mine = found
+    return np.where(mine, np.inf, distance)
+
+
 def _refine(low, high, ray_depth, surface_depth, halvings: int) -> np.ndarray:
-    """Narrow each hit to the first place between ``low`` (in front of the surface) and
-    ``high`` (where the march met it) where the ray reaches the surface under it:
-    ``halvings`` halvings, each keeping the half where the ray crosses. Returns the far
-    end of the last interval (a point at or behind the surface, or ``high``)."""
+    """Narrow each hit to the first place between ``low`` (the last sample before it) and
+    ``high`` (the end of the step that met a surface) where the ray reaches the surface
+    under it (``surface_depth``):
+    ``halvings`` halvings, each keeping the half where the ray crosses. Returns the
+    middle of the last interval (with no halving, ``high``): where the ray crosses the
+    surface, to a ``2 ** -halvings`` of a step."""
     low, high = low.copy(), high.copy()
     for _ in range(int(halvings)):
         middle = 0.5 * (low + high)
         crossed = ray_depth(middle) >= surface_depth(middle)
         high = np.where(crossed, middle, high)
         low = np.where(crossed, low, middle)
-    return high
+    return high if halvings <= 0 else 0.5 * (low + high)
+
+
+def _position(point: np.ndarray, screen: tuple[int, int, int, int]) -> np.ndarray:
+    """Window positions ``(n, 2)`` kept within the pixel centres of the rectangle
+    ``screen`` (where a hit's colour is read, bilinearly)."""
+    x, y, w, h = screen
+    return np.stack(
+        [np.clip(point[:, 0], x + 0.5, x + w - 0.5), np.clip(point[:, 1], y + 0.5, y + h - 0.5)],
+        axis=1,
+    )
 
 
 def fade(
@@ -403,6 +474,7 @@ def reflect_eye(positions: np.ndarray, normals: np.ndarray, orthographic: bool =
     n = np.asarray(normals, dtype=np.float64)
     n_length = np.linalg.norm(n, axis=1, keepdims=True)
     n = np.where(n_length > 1e-30, n / np.maximum(n_length, 1e-300), 0.0)
+    n = np.where(np.einsum("nd,nd->n", n, incoming)[:, None] > 0.0, -n, n)  # the ray's side
     reflected = incoming - 2.0 * np.einsum("nd,nd->n", n, incoming)[:, None] * n
     r_length = np.linalg.norm(reflected, axis=1, keepdims=True)
     return np.where(r_length > 1e-30, reflected / np.maximum(r_length, 1e-300), [1.0, 0.0, 0.0])
@@ -453,3 +525,28 @@ class MissMask:
         shade = 80.0 + 175.0 * self.weight[hits]
         picture[hits] = shade[:, None]
         return np.round(picture).astype(np.uint8)
+
+
+def handover(mask: MissMask) -> np.ndarray:
+    """``(h, w)`` bool: where a reflector's colour hands over between the screen and the
+    probe: its pixels whose hit is faded (weight between 0 and 1), and those whose
+    weight differs from a neighbour's (four-neighbourhood) on the same reflector's
+    pixels by more than a half."""
+    weight, mine = mask.weight, mask.reflector
+    band = mine & (weight > 0.0) & (weight < 1.0)
+    padded = np.pad(np.where(mine, weight, np.nan), 1, constant_values=np.nan)
+    centre = padded[1:-1, 1:-1]
+    for dy, dx in ((0, 1), (2, 1), (1, 0), (1, 2)):
+        neighbour = padded[dy : dy + weight.shape[0], dx : dx + weight.shape[1]]
+        with np.errstate(invalid="ignore"):
+            band |= mine & (np.abs(neighbour - centre) > 0.5)
+    return band
+
+
+def false_hits(mask: MissMask, visible: np.ndarray, reflector: np.ndarray) -> np.ndarray:
+    """``(h, w)`` bool: the pixels of a reflector (``reflector`` ``(h, w)`` bool: where the
+    truth's primary ray meets it) where screen-space reflections used a screen pixel
+    (a weight above 0) although what the reflected ray meets first is off the screen or
+    hidden in the view (``visible`` ``(h, w)`` bool False: see
+    :func:`mirrorlab.raytrace.reflection_hits`)."""
+    return reflector & mask.reflector & (mask.weight > 0.0) & ~visible

@@ -981,11 +981,12 @@ class FloatFramebuffer(Framebuffer):
 
 
 class FrameTextures(_Resource):
-    """A copy of a target's own frame: its colour (``GL_RGBA8``, alpha kept) and its depth
-    (``GL_DEPTH_COMPONENT24``, the bits mirrorlab's targets keep it in, as a live cube
-    map's depth copies are), each ``width`` x ``height``, sampled ``GL_NEAREST`` (a depth
-    between two surfaces would be a surface that is not there), clamped, no mipmaps, no
-    depth comparison (a lookup of the depth returns it in ``.r``)."""
+    """A copy of a target's own frame: its colour (``GL_RGBA8``, alpha kept, filtered
+    ``GL_LINEAR`` for reads between pixels) and its depth (``GL_DEPTH_COMPONENT24``, the
+    bits mirrorlab's targets keep it in, as a live cube map's depth copies are; read
+    ``GL_NEAREST``: a depth between two surfaces would be a surface that is not there),
+    each ``width`` x ``height``, clamped, no mipmaps, no depth comparison (a lookup of
+    the depth returns it in ``.r``)."""
 
     def __init__(self, registry: ResourceRegistry, width: int, height: int) -> None:
         check_texture_size(width, height, "the view's frame copy")
@@ -1000,9 +1001,10 @@ class FrameTextures(_Resource):
             gl.glTexImage2D(
                 GL.GL_TEXTURE_2D, 0, internal, self.width, self.height, 0, layout, kind, None
             )
+            smooth = GL.GL_LINEAR if name == self.color else GL.GL_NEAREST
             for parameter, value in (
-                (GL.GL_TEXTURE_MIN_FILTER, GL.GL_NEAREST),
-                (GL.GL_TEXTURE_MAG_FILTER, GL.GL_NEAREST),
+                (GL.GL_TEXTURE_MIN_FILTER, smooth),
+                (GL.GL_TEXTURE_MAG_FILTER, smooth),
                 (GL.GL_TEXTURE_WRAP_S, GL.GL_CLAMP_TO_EDGE),
                 (GL.GL_TEXTURE_WRAP_T, GL.GL_CLAMP_TO_EDGE),
                 (GL.GL_TEXTURE_MAX_LEVEL, 0),

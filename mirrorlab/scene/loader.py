@@ -1412,13 +1412,14 @@ def probe_technique_names() -> tuple[str, ...]:
     )
 
 
-def _map_technique(entry: Technique, ssr: ScreenSpace | None) -> Technique | None:
+def _map_technique(entry: Technique, ssr: ScreenSpace | None) -> Technique:
     """The technique whose map a reflector of technique ``entry`` draws with: its own, or
-    for a technique with a probe, the probe's (None: no probe)."""
+    for a technique with a probe, the probe's (with :data:`SSR_NO_PROBE`, the default
+    probe's: its map settings are kept for when a probe is named again, unused)."""
     if not entry.probe:
         return entry
     probe = (ssr or ScreenSpace()).probe
-    return None if probe == SSR_NO_PROBE else technique(probe)
+    return technique(ScreenSpace().probe if probe == SSR_NO_PROBE else probe)
 
 
 def _techniques_with(test) -> str:

@@ -63,9 +63,32 @@ float surface_depth(ivec2 p, out bool empty, out bool mine) {
     return empty ? FAR_AWAY : distance;
 }
 
-// How far along a ray a clip-space bound value + t * rate >= 0 holds (FAR_AWAY: always).
+// The surface's eye distance at a window position: the inverse depths of the four pixel
+// centres around it interpolated bilinearly (exact on a plane), over those that show a
+// surface (not nothing, not the reflector's own); FAR_AWAY where none does.
+float surface_between(vec2 point) {
+    vec2 corner = floor(point - 0.5);
+    vec2 fraction = point - 0.5 - corner;
+    float inverse = 0.0;
+    float weights = 0.0;
+    for (int k = 0; k < 4; ++k) {
+        vec2 offset = vec2(float(k & 1), float(k >> 1));
+        ivec2 p = ivec2(clamp(corner + offset, screen.xy, screen.zw - 1.0));
+        bool empty, mine;
+        float distance = surface_depth(p, empty, mine);
+        vec2 share = mix(1.0 - fraction, fraction, offset);
+        bool solid = !empty && !mine;
+        inverse += solid ? share.x * share.y / distance : 0.0;
+        weights += solid ? share.x * share.y : 0.0;
+    }
+    inverse /= max(weights, 1e-30);
+    return inverse > 1e-30 ? 1.0 / inverse : FAR_AWAY;
+}
+
+// How far along a ray a clip-space bound value + t * rate >= 0 holds (FAR_AWAY: always;
+// a rate nearer 0 than -1e-30 never ends it, and no division overflows).
 float leave(float value, float rate) {
-    return rate < 0.0 ? max(value, 0.0) / -rate : FAR_AWAY;
+    return rate < -1e-30 ? min(max(value, 0.0) / -rate, FAR_AWAY) : FAR_AWAY;
 }
 
 float smooth_ramp(float x) {
@@ -130,8 +153,8 @@ void main() {
         // runs behind its own surface
         reason = ray_depth(1.0) < ray_depth(0.0) ? SCREEN : OWN;
     } else {
-        float previous_surface = ray_depth(0.0);
         float previous_s = 0.0;
+        float pixel_step = 1.0 / max(pixels_along, 1e-30);
         for (int i = 1; i <= steps; ++i) {
             float s = float(i) * step_size;
             if (s > 1.0) {
@@ -147,10 +170,23 @@ void main() {
             float seen = surface_depth(pixel_at(s), empty, mine);
             float thick = thickness * seen;
             bool reaches = !empty && far >= seen;
-            bool beyond = reaches && near > seen + thick;
-            if (beyond) {
-                reason = mine ? OWN : (seen < previous_surface - thick ? BEHIND : THICKNESS);
-                break;
+            bool behind_all = reaches && near > seen;  // the whole step behind the surface
+            bool within = near <= seen + thick;
+            bool continues = false;
+            if (behind_all) {
+                // the surface under the pixels one and two back along the line, carried
+                // on (a plane's inverse depth is linear across the screen): where the one
+                // here continues it, the ray went through that one surface between them
+                bool e1, m1, e2, m2;
+                float one_back = surface_depth(pixel_at(max(s - pixel_step, 0.0)), e1, m1);
+                float two_back = surface_depth(pixel_at(max(s - 2.0 * pixel_step, 0.0)), e2, m2);
+                float predicted = 2.0 / one_back - 1.0 / two_back;
+                float expected = !e1 && !e2 && predicted > 1e-30 ? 1.0 / predicted : FAR_AWAY;
+                continues = abs(seen - expected) <= thick;
+                if (mine ? !within : !(continues && within)) {
+                    reason = mine ? OWN : (continues ? THICKNESS : BEHIND);
+                    break;
+                }
             }
             if (reaches && !mine) {
                 reason = HIT;
@@ -158,16 +194,12 @@ void main() {
                 float high_s = min(s + half_step, 1.0);
                 for (int j = 0; j < refine; ++j) {
                     float middle = 0.5 * (low_s + high_s);
-                    bool e, m;
-                    bool crossed = ray_depth(middle) >= surface_depth(pixel_at(middle), e, m);
+                    bool crossed = ray_depth(middle) >= surface_between(s0 + middle * span);
                     high_s = crossed ? middle : high_s;
                     low_s = crossed ? low_s : middle;
                 }
-                hit_s = high_s;
+                hit_s = refine > 0 ? 0.5 * (low_s + high_s) : high_s;
                 break;
-            }
-            if (!empty) {
-                previous_surface = seen;
             }
             previous_s = s;
         }
@@ -179,8 +211,9 @@ void main() {
         hit_info = vec4(0.0, float(reason), 0.0, 0.0);
         return;
     }
-    ivec2 hit = pixel_at(hit_s);
-    vec2 centre = vec2(hit) + 0.5;
+    // where the ray crosses the surface, kept within the drawn pixels' centres; its
+    // colour is read there bilinearly
+    vec2 centre = clamp(s0 + hit_s * span, screen.xy + 0.5, screen.zw - 0.5);
     float edge = min(min(centre.x - screen.x, screen.z - centre.x),
                      min(centre.y - screen.y, screen.w - centre.y));
     float fade_width = edge_fade * min(viewport.x, viewport.y);
@@ -189,6 +222,6 @@ void main() {
     if (max_distance > 0.0) {
         weight *= smooth_ramp((1.0 - hit_s * end / max_distance) / end_fade);
     }
-    hit_color = vec4(texelFetch(frame_color, hit, 0).rgb, 1.0);
+    hit_color = vec4(texture(frame_color, centre / viewport).rgb, 1.0);
     hit_info = vec4(weight, float(HIT), centre);
 }
