@@ -283,7 +283,7 @@ def march(
         inverse = np.zeros(len(point))
         weights = np.zeros(len(point))
         for dx, dy in ((0, 0), (1, 0), (0, 1), (1, 1)):
-            p = (corner + (dx, dy)).astype(np.int64)
+            p = (corner + np.array([dx, dy])).astype(np.int64)
             p[:, 0] = np.clip(p[:, 0], x0, x1 - 1)
             p[:, 1] = np.clip(p[:, 1], y0, y1 - 1)
             distance, empty, mine = surface(p)
