@@ -15,6 +15,7 @@ from PIL import Image
 
 import mirrorlab
 from mirrorlab.accuracy import (
+    CAPTURED,
     SweepSettings,
     curved_techniques,
     lab_techniques,
@@ -24,7 +25,8 @@ from mirrorlab.accuracy import (
 from mirrorlab.cli import main
 from mirrorlab.data import data_path, scenes_dir
 from mirrorlab.scene.backgrounds import CUBE_FACE_FILES
-from mirrorlab.techniques import technique_names
+from mirrorlab.scene.model import CAPTURE_MODES
+from mirrorlab.techniques import technique_names, techniques
 from tests.imagecheck import assert_images_close
 
 SKY_CUBE = data_path("textures") / "sky_cube"
@@ -56,7 +58,25 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
         1 + len(curved_techniques(quick.sizes, panel.proxies, quick.steps))
         for panel in sphere_panels(quick)
     )
-    assert (lab_rows, sphere_rows) == (2 * (1 + 2 * 2 * 2 + 2 + 1), 3 * (1 + 7 * 2 + 3 * 2))
+    # counted from the registry: each capturing planar technique at each capture mode and
+    # size (and a footprint-sized one for a camera of its own), the others once; each
+    # curved technique at each size, each correction of a live map at each size, and a
+    # probe's distance search at each size
+    sizes = len(quick.sizes)
+    planar = techniques("planar")
+    per_view = 1 + len([t for t in planar if t.texture not in CAPTURED])
+    per_view += sum(
+        len(CAPTURE_MODES) * (sizes + t.own_camera) for t in planar if t.texture in CAPTURED
+    )
+    curved = techniques("curved")
+    corrected = [t for t in curved if t.parallax and not t.probe]
+    probed = [t for t in curved if t.parallax and t.probe]
+    per_panel = [
+        1 + sizes * (len(curved) + len(corrected) * (len(panel.proxies) + 1) + len(probed))
+        for panel in sphere_panels(quick)
+    ]
+    assert (lab_rows, sphere_rows) == (2 * per_view, sum(per_panel))
+    assert per_view >= 1 + 2 * 2 * 2 + 2 + 1 and per_panel[0] >= 1 + 7 * 2 + 3 * 2
     total = lab_rows + sphere_rows
     # one progress bar (tqdm, on stderr), and it reached its end: a step per row, and one
     # more per viewpoint for scoring its frames (2 lab views, 3 sphere scenes)
@@ -84,9 +104,8 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     }
     assert set(sky) == {
         *technique_names("curved"),
-        "cube-live box",
-        "cube-live sphere",
-        "cube-live distance",
+        *(f"{t.name} {c}" for t in corrected for c in ("box", "sphere", "distance")),
+        *(f"{t.name} distance" for t in probed),
     }
     assert sky["sphere"] < sky["normal"] and sky["cube"] < sky["normal"]
     room = {
@@ -148,10 +167,9 @@ def test_accuracy_sweep_of_a_scene_file(tmp_path, capsys, monkeypatch):
     assert len(table) == total
     assert {r["scene"] for r in table} == {"two_mirrors"}
     assert {r["viewpoint"] for r in table} == {"camera"}
-    techniques = {r["technique"] for r in table}
-    assert techniques == {"raytrace", "stencil"} | {
-        f"{m}-{c}" for m in ("ortho", "reflected") for c in ("copy", "fbo")
-    } | {f"ortho-{c} footprint" for c in ("copy", "fbo")}
+    measured = {r["technique"] for r in table}
+    assert measured == {"raytrace", *(label for label, _ in lab_techniques((128,)))}
+    assert {"stencil", "reflected-copy", "reflected-fbo", "ortho-fbo footprint"} <= measured
     # The exact techniques, two bounces deep, at the frame's size: 99% of the mirrors'
     # pixels within 10/255 of the ray tracer.
     rows = {(r["technique"], r["map_size"]): r for r in table}
