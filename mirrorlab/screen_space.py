@@ -16,9 +16,9 @@ change linearly in screen space). What differs, and why:
   surface's depth. A sample whose whole step lies behind the surface ends the march,
   as a hit or a miss (McGuire and Mara march on behind it, and take it for a hit within
   the thickness wherever it is): where that surface continues the surface under the
-  two pixels before it along the ray's line (its depth within the thickness of what
-  their inverse depths, carried on linearly, give), the ray went through that one
-  surface, seen steeply, between two samples: a hit when it lies within ``thickness``
+  last sample and the pixel before it along the ray's line (its depth within the
+  thickness of what their inverse depths, carried on linearly, give), the ray went
+  through that one surface, seen steeply, between the two samples: a hit when it lies within ``thickness``
   of it, else ``thickness``; anywhere else a nearer surface came in front of the ray
   (an object's edge): ``behind``, a miss whatever the thickness, since what the ray
   meets there (the object's hidden side, or what lies beyond it) is hidden from the
@@ -332,14 +332,17 @@ def march(
         straddles = reaches & (near <= seen)
         behind_all = reaches & (near > seen)  # the whole step behind the surface there
         within = near <= seen + thick
-        # the surface under the pixels one and two back along the line, carried on: where
-        # the one here continues it, the ray went through that one surface between them
+        # the surface under the last sample and the pixel before it along the line, carried
+        # on to this one: where the surface here continues it, the ray went through that
+        # one surface between the two samples
         pixel_step = 1.0 / np.maximum(pixels_along[rays], 1e-30)
+        last = previous_s[rays]
         back = [
-            surface(_pixel_of(pixel_at, rays, np.maximum(s - k * pixel_step, 0.0), count))[0]
-            for k in (1, 2)
+            surface(_pixel_of(pixel_at, rays, np.maximum(last - k * pixel_step, 0.0), count))[0]
+            for k in (0, 1)
         ]
-        continues = np.abs(seen - _continued(back[1], back[0])) <= thick
+        carried = _continued(back[1], back[0], (s - last) / pixel_step)
+        continues = np.abs(seen - carried) <= thick
         ended = np.zeros(len(rays), dtype=np.int64)
         ended[mine & behind_all & ~within] = OWN
         other = ~mine & behind_all
@@ -372,14 +375,14 @@ def march(
     return MarchResult(reason, pixel, weight, taken)
 
 
-def _continued(two_back: np.ndarray, one_back: np.ndarray) -> np.ndarray:
-    """The depth a surface seen ``two_back`` and ``one_back`` (depths under the pixels two
-    and one back along the ray's line; infinite where nothing was drawn) has one pixel
-    further on, where it continues: its inverse depth carried on linearly (a plane's
-    inverse depth is linear across the screen)."""
+def _continued(before: np.ndarray, last: np.ndarray, pixels: np.ndarray) -> np.ndarray:
+    """The depth a surface seen under the pixel ``before`` the last sample and under the
+    ``last`` sample (eye distances; infinite where nothing was drawn) has ``pixels``
+    further on along the ray's line, where it continues: its inverse depth carried on
+    linearly (a plane's inverse depth is linear across the screen)."""
     with np.errstate(divide="ignore"):
-        predicted = 2.0 / one_back - 1.0 / two_back
-    solid = np.isfinite(one_back) & np.isfinite(two_back) & (predicted > 1e-30)
+        predicted = 1.0 / last + (1.0 / last - 1.0 / before) * pixels
+    solid = np.isfinite(last) & np.isfinite(before) & (predicted > 1e-30)
     return np.where(solid, 1.0 / np.where(solid, predicted, 1.0), FAR_AWAY)
 
 

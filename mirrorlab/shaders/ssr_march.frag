@@ -174,13 +174,14 @@ void main() {
             bool within = near <= seen + thick;
             bool continues = false;
             if (behind_all) {
-                // the surface under the pixels one and two back along the line, carried
-                // on (a plane's inverse depth is linear across the screen): where the one
-                // here continues it, the ray went through that one surface between them
+                // the surface under the last sample and the pixel before it along the
+                // line, carried on to this one (a plane's inverse depth is linear across
+                // the screen): where the surface here continues it, the ray went through
+                // that one surface between the two samples
                 bool e1, m1, e2, m2;
-                float one_back = surface_depth(pixel_at(max(s - pixel_step, 0.0)), e1, m1);
-                float two_back = surface_depth(pixel_at(max(s - 2.0 * pixel_step, 0.0)), e2, m2);
-                float predicted = 2.0 / one_back - 1.0 / two_back;
+                float last = surface_depth(pixel_at(previous_s), e1, m1);
+                float before = surface_depth(pixel_at(max(previous_s - pixel_step, 0.0)), e2, m2);
+                float predicted = 1.0 / last + (1.0 / last - 1.0 / before) * (s - previous_s) / pixel_step;
                 float expected = !e1 && !e2 && predicted > 1e-30 ? 1.0 / predicted : FAR_AWAY;
                 continues = abs(seen - expected) <= thick;
                 if (mine ? !within : !(continues && within)) {
