@@ -10,8 +10,6 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from mirrorlab.draw_path import DRAW_PATHS, DrawPath
 from mirrorlab.frame import Frame
 from mirrorlab.options import apply_options, check_size, split_frame_technique
@@ -220,31 +218,14 @@ class Renderer:
         what weight, or why it fell back to the probe), all zero where no reflector drawn
         by ``ssr`` shows. Its ``miss_share`` is the share of those pixels that fell back
         to the probe; ``image()`` is it as a picture."""
-        from mirrorlab.screen_space import MissMask
+        from mirrorlab.passes.ssr import frame_mask
 
         renderer = self.scene_renderer
         if self.last_stats is None:
             raise ValueError("ssr_mask: no frame rendered yet")
-        top = self.last_stats.plan.top
-        height, width = top.view.size[1], top.view.size[0]
-        reason = np.zeros((height, width), dtype=np.uint8)
-        weight = np.zeros((height, width), dtype=np.float32)
-        pixel = np.zeros((height, width, 2), dtype=np.float32)
         assert self._context is not None
         self._context.make_current()
-        for draw in top.shown:
-            drawn = renderer.drawn_pass(draw) if draw.mode == "screen" else None
-            found = getattr(drawn, "miss_mask", None)
-            mask = found(top.view) if found is not None else None
-            if mask is None:
-                continue
-            mine = mask.reason != 0  # drawn later, in front: each pass's own pixels
-            reason[mine], weight[mine], pixel[mine] = (
-                mask.reason[mine],
-                mask.weight[mine],
-                mask.pixel[mine],
-            )
-        return MissMask(reason, weight, pixel)
+        return frame_mask(renderer, self.last_stats.plan.top)
 
     def read_texture(self, reflector: str, *, slot: int = 0) -> Frame:
         """A planar reflector's capture texture from the last frame, ``(h, w, 3)`` uint8

@@ -15,15 +15,15 @@ change linearly in screen space). What differs, and why:
 - A sample meets the surface seen there when the ray's depth over the step spans the
   surface's depth. A sample whose whole step lies behind the surface ends the march,
   as a hit or a miss (McGuire and Mara march on behind it, and take it for a hit within
-  the thickness wherever it is): where that surface continues the surface under the
+  the thickness wherever it is). Where that surface continues the surface under the
   last sample and the pixel before it along the ray's line (its depth within the
   thickness of what their inverse depths, carried on linearly, give), the ray went
-  through that one surface, seen steeply, between the two samples: a hit when it lies within ``thickness``
-  of it, else ``thickness``; anywhere else a nearer surface came in front of the ray
-  (an object's edge): ``behind``, a miss whatever the thickness, since what the ray
-  meets there (the object's hidden side, or what lies beyond it) is hidden from the
-  view, and a later sample that met a visible surface would show what the hidden one
-  covers (a false hit).
+  through that one surface, seen steeply, between the two samples: a hit when it lies
+  within ``thickness`` of it, else ``thickness``. Anywhere else a nearer surface came in
+  front of the ray (an object's edge): ``behind``, a miss whatever the thickness, since
+  what the ray meets there (the object's hidden side, or what lies beyond it) is hidden
+  from the view, and a later sample that met a visible surface would show what the
+  hidden one covers (a false hit).
 - The reflector's own pixels (marked by the pass in the frame's alpha) are never a hit:
   a ray passes over them, and one that lies behind its reflector's own surface there by
   more than the thickness ends as ``own``.
@@ -531,19 +531,10 @@ class MissMask:
 
 
 def handover(mask: MissMask) -> np.ndarray:
-    """``(h, w)`` bool: where a reflector's colour hands over between the screen and the
-    probe: its pixels whose hit is faded (weight between 0 and 1), and those whose
-    weight differs from a neighbour's (four-neighbourhood) on the same reflector's
-    pixels by more than a half."""
-    weight, mine = mask.weight, mask.reflector
-    band = mine & (weight > 0.0) & (weight < 1.0)
-    padded = np.pad(np.where(mine, weight, np.nan), 1, constant_values=np.nan)
-    centre = padded[1:-1, 1:-1]
-    for dy, dx in ((0, 1), (2, 1), (1, 0), (1, 2)):
-        neighbour = padded[dy : dy + weight.shape[0], dx : dx + weight.shape[1]]
-        with np.errstate(invalid="ignore"):
-            band |= mine & (np.abs(neighbour - centre) > 0.5)
-    return band
+    """``(h, w)`` bool: where a reflector's colour hands over from the screen to the probe,
+    the pixels whose hit fades into the probe (a weight strictly between 0 and 1: near
+    the screen's edges, at the end of the step budget or of ``max_distance``)."""
+    return mask.reflector & (mask.weight > 0.0) & (mask.weight < 1.0)
 
 
 def false_hits(mask: MissMask, visible: np.ndarray, reflector: np.ndarray) -> np.ndarray:

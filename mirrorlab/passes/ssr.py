@@ -22,6 +22,8 @@ other views' pixels too, so there it draws the probe alone.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from mirrorlab.gl.calls import gl
@@ -31,11 +33,14 @@ from mirrorlab.gl.resources import TextureCube as _TextureCube
 from mirrorlab.passes.base import SharedResources, ViewDrawer, apply_view_state, set_clip_plane
 from mirrorlab.passes.planar import PlanarPass, mirror_model
 from mirrorlab.passes.view_frame import ViewFrame
-from mirrorlab.plan import PlannedPass, Rectangle, ReflectorDraw
+from mirrorlab.plan import PlannedPass, Rectangle, ReflectorDraw, ViewPlan
 from mirrorlab.scene.model import Background, CurvedReflector, PlanarReflector, Reflector
 from mirrorlab.screen_space import DEFAULTS, END_FADE, MissMask, probe_reflector
 from mirrorlab.techniques import technique
 from mirrorlab.views import View, is_orthographic
+
+if TYPE_CHECKING:
+    from mirrorlab.renderer import SceneRenderer
 
 COLOR_UNIT = 0
 DEPTH_UNIT = 1
@@ -342,3 +347,26 @@ def _ndc_rect(rectangle: Rectangle, size: tuple[int, int]) -> tuple[float, float
         2.0 * (x + w) / width - 1.0,
         2.0 * (y + h) / height - 1.0,
     )
+
+
+def frame_mask(renderer: SceneRenderer, plan: ViewPlan) -> MissMask:
+    """What screen-space reflections did at each pixel of ``plan``'s view, as ``renderer``
+    drew it last (the camera's view of its last frame): every reflector drawn by this
+    technique there (one drawn later, in front, over one before it); zero elsewhere.
+    Call with the renderer's context current."""
+    width, height = plan.view.size
+    reason = np.zeros((height, width), dtype=np.uint8)
+    weight = np.zeros((height, width), dtype=np.float32)
+    pixel = np.zeros((height, width, 2), dtype=np.float32)
+    for draw in plan.shown:
+        drawn = renderer.drawn_pass(draw) if draw.mode == "screen" else None
+        mask = drawn.miss_mask(plan.view) if isinstance(drawn, ScreenSpaceReflections) else None
+        if mask is None:
+            continue
+        mine = mask.reason != 0
+        reason[mine], weight[mine], pixel[mine] = (
+            mask.reason[mine],
+            mask.weight[mine],
+            mask.pixel[mine],
+        )
+    return MissMask(reason, weight, pixel)
