@@ -19,10 +19,10 @@ SIZE = 64
 PROJECTION = math3d.perspective(60.0, 1.0, 0.1, 100.0)
 
 
-def window_depth(distance, projection=PROJECTION) -> np.ndarray:
+def window_depth(distance, projection=PROJECTION) -> float:
     """The depth buffer's value of a point at eye depth ``distance`` on the view axis."""
     clip = projection @ np.array([0.0, 0.0, -float(distance), 1.0])
-    return np.float64((clip[2] / clip[3] + 1.0) / 2.0)
+    return float((clip[2] / clip[3] + 1.0) / 2.0)
 
 
 def wall(distance: float) -> np.ndarray:
