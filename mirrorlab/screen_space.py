@@ -250,6 +250,11 @@ def march(
     far_end = origins + directions * end[:, None]
     s1, k1 = window(far_end)
     qz0, qz1 = origins[:, 2] * k0, far_end[:, 2] * k1
+    # the ray's window depth, linear along its screen line (both it and the screen
+    # position are ratios over the same w): a sample it is in front of there is passed
+    # over without a look at eye depths
+    wz0 = _window_depth(origins, projection)
+    dwz = _window_depth(far_end, projection) - wz0
     span = s1 - s0
     pixels_along = np.maximum(np.abs(span[:, 0]), np.abs(span[:, 1]))
     step = settings.stride / np.maximum(pixels_along, 1e-30)
@@ -322,10 +327,19 @@ def march(
                 break
         taken[rays] = i
         half = 0.5 * step[rays]
-        a = _depth_of(ray_depth, rays, np.maximum(s - half, 0.0), count)
-        b = _depth_of(ray_depth, rays, np.minimum(s + half, 1.0), count)
-        near, far = np.minimum(a, b), np.maximum(a, b)
         p = _pixel_of(pixel_at, rays, s, count)
+        stored = depth[p[:, 1], p[:, 0]].astype(np.float64)
+        start_s, end_s = np.maximum(s - half, 0.0), np.minimum(s + half, 1.0)
+        window_far = np.maximum(wz0[rays] + start_s * dwz[rays], wz0[rays] + end_s * dwz[rays])
+        passed = (stored >= 1.0) | (window_far < stored)  # nothing there, or in front of it
+        previous_s[rays[passed]] = s[passed]
+        rays, s, half, p = rays[~passed], s[~passed], half[~passed], p[~passed]
+        start_s, end_s = start_s[~passed], end_s[~passed]
+        if not len(rays):
+            continue
+        a = _depth_of(ray_depth, rays, start_s, count)
+        b = _depth_of(ray_depth, rays, end_s, count)
+        near, far = np.minimum(a, b), np.maximum(a, b)
         seen, empty, mine = surface(p)
         thick = settings.thickness * seen
         reaches = (~empty) & (far >= seen)
@@ -373,6 +387,13 @@ def march(
     weight = np.where(hit, 1.0, 0.0)
     weight *= fade(pixel, taken, hit_s * end, settings, screen, size)
     return MarchResult(reason, pixel, weight, taken)
+
+
+def _window_depth(points: np.ndarray, projection: np.ndarray) -> np.ndarray:
+    """The window depth ``(n,)`` (0 at the near plane, 1 at the far) of eye-space points
+    ``(n, 3)`` through ``projection``."""
+    clip = np.hstack([points, np.ones((len(points), 1))]) @ projection.T
+    return clip[:, 2] / np.maximum(clip[:, 3], 1e-30) * 0.5 + 0.5
 
 
 def _continued(before: np.ndarray, last: np.ndarray, pixels: np.ndarray) -> np.ndarray:

@@ -1,6 +1,6 @@
 """Re-make the README's comparison pictures in docs/ (headless; run from the checkout):
 
-    .venv/bin/python tools/make_docs.py [methods] [envmaps] [cone] [parallax]
+    .venv/bin/python tools/make_docs.py [methods] [envmaps] [cone] [parallax] [ssr]
 
 (all of them when none is named). docs/methods.png: the lab scene (lab20) 30 degrees off
 the mirror's normal, by each mirror technique and the ray tracer. docs/envmaps.png: the
@@ -8,8 +8,9 @@ sphere scene (chrome_sphere) by each environment-map technique and the ray trace
 rays a pixel). docs/cone.png: the textbook's cone (spheremap_cone) at two heights (texgen
 sphere map). docs/parallax.png: the live cube map without and with its parallax
 corrections against the ray tracer, among chrome_sphere's objects and in sphere_room, and
-where the pixels that still differ lie. The accuracy plot comes from `mirrorlab bench
-accuracy`.
+where the pixels that still differ lie. docs/ssr.png: each of the scenes made to show
+screen-space reflections' failures: the frame, its miss mask, the frame without its probe
+and the ray tracer. The accuracy plot comes from `mirrorlab bench accuracy`.
 """
 
 from __future__ import annotations
@@ -132,12 +133,13 @@ def parallax_picture(renderer) -> None:
 
 
 def main(pictures: list[str]) -> None:
-    chosen = set(pictures) or {"methods", "envmaps", "cone", "parallax"}
-    unknown = chosen - {"methods", "envmaps", "cone", "parallax"}
+    known = {"methods", "envmaps", "cone", "parallax", "ssr"}
+    chosen = set(pictures) or known
+    unknown = chosen - known
     if unknown:
         raise SystemExit(
             f"make_docs.py: unknown picture {sorted(unknown)[0]!r}; expected "
-            "methods, envmaps, cone or parallax"
+            "methods, envmaps, cone, parallax or ssr"
         )
     with mirrorlab.Renderer(size=(SIZE, SIZE)) as renderer:
         if "methods" in chosen:
@@ -148,7 +150,60 @@ def main(pictures: list[str]) -> None:
             cone_picture(renderer)
         if "parallax" in chosen:
             parallax_picture(renderer)
+        if "ssr" in chosen:
+            ssr_picture(renderer)
     print(f"wrote {', '.join(f'{DOCS}/{name}.png' for name in sorted(chosen))}")
+
+
+SSR_SCENES = (
+    "ssr_behind_camera",
+    "ssr_thin_pole",
+    "ssr_grazing_water",
+    "ssr_sphere_near",
+    "ssr_box_room",
+)
+
+
+def ssr_picture(renderer) -> None:
+    """docs/ssr.png: a row per scene of :data:`SSR_SCENES`: the frame, its miss mask, the
+    frame without its probe (misses in the background's colour) and the ray tracer, with
+    each one's mean FLIP and the share of false hits in the mask's label."""
+    from mirrorlab import screen_space
+    from mirrorlab.accuracy import image_error
+    from mirrorlab.raytrace import reflection_hits
+
+    size = (320, 320)
+    rows = []
+    for name in SSR_SCENES:
+        scene = mirrorlab.load_scene(name)
+        frame = np.asarray(renderer.render(scene, size=size))
+        mask = renderer.ssr_mask()
+        none = [f'reflectors[{i}].ssr.probe="none"' for i in range(len(scene.reflectors))]
+        bare = np.asarray(renderer.render(scene, size=size, set=none))
+        truth = trace_scene(scene, size).to_uint8()
+        hits = reflection_hits(scene, size)
+        region = (hits.reflector >= 0) & mask.reflector
+        false = screen_space.false_hits(mask, hits.visible, hits.reflector >= 0)
+        with_probe, alone = image_error(frame, truth, region), image_error(bare, truth, region)
+        rows.append(
+            np.hstack(
+                [
+                    labelled(frame, f"{name}: ssr, FLIP {with_probe.flip:.3f}"),
+                    labelled(
+                        mask.image(),
+                        f"miss mask: {mask.miss_share:.0%} to the probe, "
+                        f"{false.sum() / max(region.sum(), 1):.2%} false hits",
+                    ),
+                    labelled(bare, f"no probe, FLIP {alone.flip:.3f}"),
+                    labelled(truth, "raytrace"),
+                ]
+            )
+        )
+        print(
+            f"{name}: FLIP {with_probe.flip:.4f} (no probe {alone.flip:.4f}), miss share "
+            f"{mask.miss_share:.3f}, false hits {false.sum()} of {region.sum()}"
+        )
+    Image.fromarray(np.vstack(rows)).save(DOCS / "ssr.png")
 
 
 def methods_picture(renderer) -> None:

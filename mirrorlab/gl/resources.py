@@ -195,6 +195,12 @@ class Program(_Resource):
         if not self._unchanged(location, ("1i", int(value))):
             gl.glUniform1i(location, int(value))
 
+    def set_ivec2(self, uniform: str, value) -> None:
+        x, y = (int(v) for v in value)
+        location = self.location(uniform)
+        if not self._unchanged(location, ("2i", x, y)):
+            gl.glUniform2i(location, x, y)
+
     def _free(self) -> None:
         gl.glDeleteProgram(self.name)
 
@@ -1134,3 +1140,67 @@ class AttachmentFramebuffer(_Resource):
     def _free(self) -> None:
         gl.glDeleteFramebuffers(1, [self.name])
         gl.glDeleteTextures(self.textures)
+
+
+class DepthPyramid(_Resource):
+    """A pyramid of nearest depths over a ``width`` x ``height`` depth buffer: one
+    ``GL_R32F`` texture whose level ``k`` (GL's sizes: ``max(1, size >> k)``) holds, for
+    each texel, the least window depth of the level ``k - 1`` texels under it (the last
+    texel of a row or column also takes the one left over where the level below has an
+    odd count, so it covers the buffer to its end); one framebuffer a level to draw it.
+    Read ``GL_NEAREST`` with ``texelFetch``."""
+
+    def __init__(self, registry: ResourceRegistry, width: int, height: int) -> None:
+        check_texture_size(width, height, "a depth pyramid")
+        self.width, self.height = int(width), int(height)
+        sizes = [(self.width, self.height)]
+        while sizes[-1] != (1, 1):
+            w, h = sizes[-1]
+            sizes.append((max(1, w // 2), max(1, h // 2)))
+        self.sizes = tuple(sizes)
+        self.texture = int(gl.glGenTextures(1))
+        gl.glBindTexture(GL.GL_TEXTURE_2D, self.texture)
+        for level, (w, h) in enumerate(sizes):
+            gl.glTexImage2D(
+                GL.GL_TEXTURE_2D, level, GL.GL_R32F, w, h, 0, GL.GL_RED, GL.GL_FLOAT, None
+            )
+        for parameter, value in (
+            (GL.GL_TEXTURE_MIN_FILTER, GL.GL_NEAREST_MIPMAP_NEAREST),
+            (GL.GL_TEXTURE_MAG_FILTER, GL.GL_NEAREST),
+            (GL.GL_TEXTURE_WRAP_S, GL.GL_CLAMP_TO_EDGE),
+            (GL.GL_TEXTURE_WRAP_T, GL.GL_CLAMP_TO_EDGE),
+            (GL.GL_TEXTURE_BASE_LEVEL, 0),
+            (GL.GL_TEXTURE_MAX_LEVEL, len(sizes) - 1),
+        ):
+            gl.glTexParameteri(GL.GL_TEXTURE_2D, parameter, value)
+        self.framebuffers = [int(n) for n in np.atleast_1d(gl.glGenFramebuffers(len(sizes)))]
+        for level, name in enumerate(self.framebuffers):
+            gl.glBindFramebuffer(GL.GL_FRAMEBUFFER, name)
+            gl.glFramebufferTexture2D(
+                GL.GL_FRAMEBUFFER, GL.GL_COLOR_ATTACHMENT0, GL.GL_TEXTURE_2D, self.texture, level
+            )
+            status = gl.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
+            if status != GL.GL_FRAMEBUFFER_COMPLETE:
+                gl.glDeleteFramebuffers(len(self.framebuffers), self.framebuffers)
+                gl.glDeleteTextures([self.texture])
+                raise GLContextError(
+                    f"depth pyramid level {level} {sizes[level]} incomplete (status {status:#x})"
+                )
+        super().__init__(registry)
+
+    @property
+    def levels(self) -> int:
+        return len(self.sizes)
+
+    def read_level(self, level: int) -> np.ndarray:
+        """Level ``level`` as ``(h, w)`` float32, row 0 at the top."""
+        width, height = self.sizes[level]
+        gl.glBindTexture(GL.GL_TEXTURE_2D, self.texture)
+        gl.glPixelStorei(GL.GL_PACK_ALIGNMENT, 4)
+        data = gl.glGetTexImage(GL.GL_TEXTURE_2D, level, GL.GL_RED, GL.GL_FLOAT)
+        values = np.frombuffer(data, dtype=np.float32).reshape(height, width)
+        return values[::-1].copy()
+
+    def _free(self) -> None:
+        gl.glDeleteFramebuffers(len(self.framebuffers), self.framebuffers)
+        gl.glDeleteTextures([self.texture])

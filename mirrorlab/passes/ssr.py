@@ -28,7 +28,13 @@ import numpy as np
 
 from mirrorlab.gl.calls import gl
 from mirrorlab.gl.opengl import GL
-from mirrorlab.gl.resources import AttachmentFramebuffer, MeshBuffer, RenderTarget, Texture2D
+from mirrorlab.gl.resources import (
+    AttachmentFramebuffer,
+    DepthPyramid,
+    MeshBuffer,
+    RenderTarget,
+    Texture2D,
+)
 from mirrorlab.gl.resources import TextureCube as _TextureCube
 from mirrorlab.passes.base import SharedResources, ViewDrawer, apply_view_state, set_clip_plane
 from mirrorlab.passes.planar import PlanarPass, mirror_model
@@ -45,8 +51,13 @@ if TYPE_CHECKING:
 COLOR_UNIT = 0
 DEPTH_UNIT = 1
 HITS_UNIT = 2
-"""Texture units of the frame copy's colour and depth, and of the march's hit colours
-(the composite reads the march's results on units 2 and 3)."""
+PYRAMID_UNIT = 4
+"""Texture units of the frame copy's colour and depth, of the march's hit colours (the
+composite reads the march's results on units 2 and 3), and of the nearest-depth
+pyramid."""
+PYRAMID_LEVELS = 8
+"""The levels of the nearest-depth pyramid the march climbs (blocks up to 128 pixels a
+side); 1 marches the plain DDA, every sample looked at."""
 OUTPUT_MARCH = 0
 OUTPUT_RAY_ORIGIN = 1
 OUTPUT_RAY_DIRECTION = 2
@@ -99,6 +110,9 @@ class ScreenSpaceReflections:
         self.composite.set_int("hit_colors", HITS_UNIT)
         self.composite.set_int("hit_infos", HITS_UNIT + 1)
         self.flat = shared.program("flat.vert", "flat.frag")
+        self.downsample = shared.program("ssr_composite.vert", "ssr_pyramid.frag")
+        self.pyramids: dict[tuple[int, int], DepthPyramid] = {}
+        self.pyramid_levels = PYRAMID_LEVELS
         self.square = MeshBuffer(shared.registry, _UNIT_SQUARE, np.array([0, 1, 2, 0, 2, 3]))
         self.targets: dict[tuple[int, int], AttachmentFramebuffer] = {}
         self.drawn: dict[tuple[int, int], View] = {}
@@ -128,9 +142,10 @@ class ScreenSpaceReflections:
         return self.probe.shown_texture(draw.fallback)
 
     def release(self) -> None:
-        for target in self.targets.values():
+        for target in (*self.targets.values(), *self.pyramids.values()):
             target.release()
         self.targets.clear()
+        self.pyramids.clear()
         self.drawn.clear()
         self.frame.release()
         self.square.release()
@@ -224,25 +239,68 @@ class ScreenSpaceReflections:
             )
         return held
 
+    def pyramid(self, size: tuple[int, int]) -> DepthPyramid:
+        held = self.pyramids.get(size)
+        if held is None:
+            while len(self.pyramids) >= TARGETS_KEPT:
+                self.pyramids.pop(next(iter(self.pyramids))).release()
+            held = self.pyramids[size] = DepthPyramid(self.shared.registry, *size)
+        return held
+
+    def build_pyramid(self, size: tuple[int, int], levels: int) -> DepthPyramid:
+        """The frame copy's depth (bound on :data:`DEPTH_UNIT`) and its nearest depths, up
+        to ``levels`` levels; each level drawn from the one below (which alone is then
+        readable: no level is read and drawn at once)."""
+        pyramid = self.pyramid(size)
+        program = self.downsample
+        program.use()
+        program.set_vec4("rect", (-1.0, -1.0, 1.0, 1.0))
+        gl.glActiveTexture(GL.GL_TEXTURE0 + PYRAMID_UNIT)
+        gl.glBindTexture(GL.GL_TEXTURE_2D, pyramid.texture)
+        for level in range(min(levels, pyramid.levels)):
+            gl.glBindFramebuffer(GL.GL_FRAMEBUFFER, pyramid.framebuffers[level])
+            gl.glViewport(0, 0, *pyramid.sizes[level])
+            program.set_int("level", level)
+            if level == 0:
+                program.set_int("source", DEPTH_UNIT)
+            else:
+                program.set_int("source", PYRAMID_UNIT)
+                program.set_ivec2("below", pyramid.sizes[level - 1])
+                gl.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_BASE_LEVEL, level - 1)
+                gl.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAX_LEVEL, level - 1)
+            self.square.draw()
+        gl.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_BASE_LEVEL, 0)
+        gl.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAX_LEVEL, pyramid.levels - 1)
+        gl.glViewport(0, 0, *size)
+        return pyramid
+
     def march(self, draw: ReflectorDraw, view: View, target: RenderTarget) -> int:
-        """Steps 2 to 4: copy the frame, march into the pass's own target, mix."""
+        """Steps 2 to 4: copy the frame (and its depth's pyramid), march into the pass's
+        own target, mix."""
         reflector = draw.reflector
         settings = reflector.ssr or DEFAULTS
         size = view.size
         drawn = (0, 0, *size)  # a view with a screen draw is drawn whole (its plan)
-        frame = self.frame.copy(size, None)
-        own = self.target(size)
+        # made first: making them binds their textures (on the active unit) and framebuffers
+        own, pyramid, frame = self.target(size), self.pyramid(size), self.frame.textures(size)
+        target.bind()
+        frame.copy(None)
+        frame.bind(COLOR_UNIT, DEPTH_UNIT)
+        gl.glDisable(GL.GL_CULL_FACE)
+        gl.glDisable(GL.GL_DEPTH_TEST)
+        gl.glDepthMask(GL.GL_FALSE)
+        levels = max(1, min(self.pyramid_levels, pyramid.levels))
+        self.build_pyramid(size, levels)
         own.bind()
         gl.glClearBufferfv(GL.GL_COLOR, 0, _ZEROS)
         gl.glClearBufferfv(GL.GL_COLOR, 1, _ZEROS)
-        frame.bind(COLOR_UNIT, DEPTH_UNIT)
-        gl.glDisable(GL.GL_DEPTH_TEST)  # the shader tests against the copied depth
-        gl.glDepthMask(GL.GL_FALSE)
-        gl.glEnable(GL.GL_CULL_FACE)
+        gl.glEnable(GL.GL_CULL_FACE)  # (no depth test: the shader tests the copied depth)
         program = self.program
         program.use()
         program.set_int("frame_color", COLOR_UNIT)
         program.set_int("frame_depth", DEPTH_UNIT)
+        program.set_int("pyramid", PYRAMID_UNIT)
+        program.set_int("top_level", levels - 1)
         model = self.model(reflector)
         program.set_mat4("model", view.relative(model))
         program.set_mat4("view", view.relative_view)

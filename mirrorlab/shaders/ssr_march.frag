@@ -17,6 +17,8 @@ in vec2 vertex_sphere_st;
 
 uniform sampler2D frame_color;
 uniform sampler2D frame_depth;
+uniform sampler2D pyramid;  // the frame's nearest depths, level k over 2^k pixels a side
+uniform int top_level;      // its last level used (0: the plain DDA)
 uniform mat4 projection;
 uniform vec4 depth_row_z;   // rows 2 and 3 of the inverse projection: window depth to eye z
 uniform vec4 depth_row_w;
@@ -142,6 +144,11 @@ void main() {
     span = s1 - s0;
     qz0 = origin.z * k0;
     qz1 = far_end.z * k1;
+    // the ray's window depth, which changes linearly along its screen line (both it and
+    // the screen position are ratios over the same w): a sample it is in front of there
+    // is passed over without a look at eye depths
+    float wz0 = h0.z * k0 * 0.5 + 0.5;
+    float dwz = h1.z * k1 * 0.5 + 0.5 - wz0;
     float pixels_along = max(abs(span.x), abs(span.y));
     float step_size = stride / max(pixels_along, 1e-30);
 
@@ -155,19 +162,68 @@ void main() {
     } else {
         float previous_s = 0.0;
         float pixel_step = 1.0 / max(pixels_along, 1e-30);
-        for (int i = 1; i <= steps; ++i) {
+        float half_step = 0.5 * step_size;
+        int last_sample = min(steps, int(floor(1.0 / step_size)));  // the last within the ray
+        // The samples are the DDA's, one by one at level 0; above it, the nearest-depth
+        // pyramid passes over every sample of a block at once where the ray stays in front
+        // of the block's nearest depth (each would pass alone): the same samples decided,
+        // the same way, fewer of them looked at.
+        int level = 0;
+        int i = 1;
+        for (int guard = 0; guard < 3 * steps + 64 && i <= steps; ++guard) {
             float s = float(i) * step_size;
             if (s > 1.0) {
                 reason = end_reason;
                 break;
             }
+            ivec2 p = pixel_at(s);
+            if (level > 0) {
+                // the level's size, as GL sizes a mipmap (llvmpipe's textureSize takes one
+                // lane's level for all, so it is not asked)
+                ivec2 size = max(ivec2(viewport) >> level, ivec2(1));
+                ivec2 block = min(p >> level, size - 1);
+                // a block's pixels; the last of a row or column reaches the view's end
+                vec2 low_corner = vec2(block << level);
+                vec2 high_corner = vec2(
+                    block.x == size.x - 1 ? int(viewport.x) : (block.x + 1) << level,
+                    block.y == size.y - 1 ? int(viewport.y) : (block.y + 1) << level);
+                vec2 out_x = vec2(
+                    span.x > 0.0 ? (high_corner.x - s0.x) / span.x
+                                 : (span.x < 0.0 ? (low_corner.x - s0.x) / span.x : FAR_AWAY),
+                    span.y > 0.0 ? (high_corner.y - s0.y) / span.y
+                                 : (span.y < 0.0 ? (low_corner.y - s0.y) / span.y : FAR_AWAY));
+                float exit_s = min(out_x.x, out_x.y);
+                // the samples short of the block's edge (by a thousandth of a step)
+                int inside = min(int(floor(min(exit_s, 2.0) / step_size - 1e-3)), last_sample);
+                if (inside >= i) {
+                    float nearest = texelFetch(pyramid, block, level).r;
+                    float skipped_end = min(float(inside) * step_size + half_step, 1.0);
+                    float farthest = max(wz0 + max(s - half_step, 0.0) * dwz, wz0 + skipped_end * dwz);
+                    if (nearest >= 1.0 || farthest < nearest) {
+                        taken = inside;
+                        previous_s = float(inside) * step_size;
+                        i = inside + 1;
+                        level = min(level + 1, top_level);
+                        continue;
+                    }
+                }
+                level -= 1;
+                continue;
+            }
             taken = i;
-            float half_step = 0.5 * step_size;
-            float a = ray_depth(max(s - half_step, 0.0));
-            float b = ray_depth(min(s + half_step, 1.0));
+            float start_s = max(s - half_step, 0.0), end_s = min(s + half_step, 1.0);
+            float stored = texelFetch(frame_depth, p, 0).r;
+            if (stored >= 1.0 || max(wz0 + start_s * dwz, wz0 + end_s * dwz) < stored) {
+                previous_s = s;  // nothing drawn there, or the ray in front of it
+                i += 1;
+                level = min(1, top_level);
+                continue;
+            }
+            float a = ray_depth(start_s);
+            float b = ray_depth(end_s);
             float near = min(a, b), far = max(a, b);
             bool empty, mine;
-            float seen = surface_depth(pixel_at(s), empty, mine);
+            float seen = surface_depth(p, empty, mine);
             float thick = thickness * seen;
             bool reaches = !empty && far >= seen;
             bool behind_all = reaches && near > seen;  // the whole step behind the surface
@@ -203,6 +259,7 @@ void main() {
                 break;
             }
             previous_s = s;
+            i += 1;
         }
         if (reason == 0) {
             reason = STEPS;
