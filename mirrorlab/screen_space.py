@@ -33,6 +33,13 @@ change linearly in screen space). What differs, and why:
   exact on a plane: the depth of the pixel's centre alone would put every hit up to
   half a pixel off, towards that centre). Its colour is read there, bilinearly.
 
+The shader looks at fewer samples than this reference, to the same effect: it climbs a
+pyramid of the frame's nearest depths and passes over all the samples within a block at
+once where the ray stays in front of the block's nearest depth (each of them would pass
+alone), going back down to single samples where it does not (the hierarchical march of
+Uludag, "Hi-Z Screen-Space Cone-Traced Reflections", GPU Pro 5, kept to the DDA's
+samples). The tests find the same reason for every pixel.
+
 Every quantity is a function of its inputs alone, with no division by a value that can
 be zero and nothing that can become NaN (rays parallel to the screen, towards the eye,
 along the line of sight, starting at the screen's edge).

@@ -9,10 +9,12 @@ after the view's objects, in four steps:
    no probe; the reflector's pixels keep alpha 0, marking them as its own;
 2. the target's colour and depth (the view's objects, the other reflectors drawn so
    far and this one's probe) copied into textures;
-3. the reflector drawn again into a target of the pass's own, each visible fragment
-   marching its reflected ray through the copied depth (``ssr_march.frag``; the numpy
-   reference is :func:`mirrorlab.screen_space.march`): the hit's colour, and its weight,
-   reason and pixel (what :meth:`ScreenSpaceReflections.miss_mask` reads back);
+3. the copied depth's nearest-depth pyramid (:class:`~mirrorlab.gl.resources.DepthPyramid`,
+   ``ssr_pyramid.frag``), then the reflector drawn again into a target of the pass's own,
+   each visible fragment marching its reflected ray through the copied depth, passing
+   over blocks of samples the pyramid shows the ray in front of (``ssr_march.frag``; the
+   numpy reference is :func:`mirrorlab.screen_space.march`): the hit's colour, and its
+   weight, reason and pixel (what :meth:`ScreenSpaceReflections.miss_mask` reads back);
 4. a rectangle over the reflector's footprint mixes each covered pixel's probe colour
    with its hit's by the hit's weight, and gives alpha back.
 
