@@ -378,7 +378,7 @@ class DemoApp:
             lines = [
                 f"miss mask: {100 * mask.miss_share:.1f}% of {pixels} reflector pixels fell "
                 "back to the probe",
-                *(f"{reason}: {counts[reason]}" for reason in REASONS[1:] if counts[reason]),
+                ", ".join(f"{reason} {counts[reason]}" for reason in REASONS[1:] if counts[reason]),
             ]
         else:
             lines = ["miss mask: no reflector drawn by ssr (M picks a technique)"]
