@@ -146,6 +146,14 @@ class Renderer:
                     self._target = None
                 assert self._context is not None
                 self._target = Framebuffer(self._context.resources, *size)
+                # Made, it is bound; the renderer puts back at every frame's end what was
+                # bound at its first (it owns the context): the default framebuffer, not
+                # this one, which a frame of another size deletes (binding a deleted name
+                # is an error in a core context, as on macOS).
+                from mirrorlab.gl.calls import gl
+                from mirrorlab.gl.opengl import GL
+
+                gl.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
         return self._target
 
     def render(
