@@ -46,11 +46,13 @@ import sysconfig
 import tempfile
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
+
+from mirrorlab.labs.trusted import scratch
 
 UID_BASE = 200_000
 """Sandboxed processes run as UID_BASE + the id of the process that asked for the run (the
@@ -64,6 +66,10 @@ STUDENT_PACKAGE = Path(__file__).resolve().parent.parent / "student"
 """The student side's folder: the only part of mirrorlab a sandbox sees."""
 
 BOX_PREFIX = "mirrorlab-box-"
+SCRATCH_FOLDER = "scratch"
+"""The run folder's scratch (:mod:`.scratch`): the one place its program may write."""
+STDERR_KEPT = 4000
+"""Bytes of a piped run's errors kept (its last ones)."""
 SANDBOX_BOX = "/lab/box"
 SANDBOX_PACKAGES = "/lab/pkg"
 SANDBOX_SITE = "/lab/site"
@@ -165,6 +171,11 @@ def _missing() -> tuple[str, str]:
         "no sandbox: bubblewrap is not installed",
         "install it (Debian/Ubuntu: apt-get install bubblewrap; Fedora: dnf install bubblewrap)",
     )
+
+
+def unsandboxed_reason() -> str:
+    """Why there is no sandbox here, in a few words ('' where bubblewrap works)."""
+    return "" if sandbox_mode() == "bwrap" else _missing()[0]
 
 
 def missing_sandbox() -> str:
@@ -278,10 +289,13 @@ def numpy_folders() -> list[Path]:
     return [folder, *([libs] if libs.is_dir() else [])]
 
 
-def bwrap_arguments(box: Path, lab_side: Path | None = None) -> list[str]:
+def bwrap_arguments(space: Path, lab_side: Path | None = None) -> list[str]:
     """The bwrap command line before the program: the sandbox's file system (see the
-    module's text), ``box`` writable at :data:`SANDBOX_BOX`, the lab's ``student.py``
-    (``lab_side``) read-only at :data:`SANDBOX_LAB_SIDE`."""
+    module's text), the run's scratch ``space`` (:mod:`.scratch`) writable at :data:`SANDBOX_BOX`
+    (its ``box/``) and ``/tmp`` (its ``tmp/``), the lab's ``student.py`` (``lab_side``)
+    read-only at :data:`SANDBOX_LAB_SIDE`. Everything else is read-only: bubblewrap's own
+    root and ``/dev`` (file systems of the sandbox's owner, without a total) are made so
+    once the sandbox is built, so the scratch is the only place a file may write."""
     root = _Root()
     root.bind(Path("/usr"))
     for link in ("bin", "sbin", "lib", "lib64", "lib32", "libx32"):
@@ -299,9 +313,8 @@ def bwrap_arguments(box: Path, lab_side: Path | None = None) -> list[str]:
         "/proc",
         "--dev",
         "/dev",
-        "--size",
-        str(64 << 20),
-        "--tmpfs",
+        "--bind",
+        str(space / scratch.TMP),
         "/tmp",
     ]
     root.made.update(Path(p) for p in ("/etc", "/etc/ld.so.cache", "/proc", "/dev", "/tmp"))
@@ -320,16 +333,19 @@ def bwrap_arguments(box: Path, lab_side: Path | None = None) -> list[str]:
         root.bind(lab_side.resolve(), Path(SANDBOX_LAB_SIDE))
     for folder in numpy_folders():
         root.bind(folder, Path(SANDBOX_SITE, folder.name))
-    root.bind(box, Path(SANDBOX_BOX), writable=True)
+    root.bind(space / scratch.BOX, Path(SANDBOX_BOX), writable=True)
+    hidden = [root.arguments[i + 1] for i, a in enumerate(root.arguments) if a == "--tmpfs"]
+    for made in [*hidden, "/dev", "/"]:
+        root.arguments += ["--remount-ro", made]
     return [shutil.which("bwrap") or "bwrap", *root.arguments, "--chdir", SANDBOX_BOX]
 
 
-def _environment(home: str) -> dict[str, str]:
+def _environment(home: str, temporary: str) -> dict[str, str]:
     return {
         "PATH": "/usr/bin:/bin",
         "LANG": "C.UTF-8",
         "HOME": home,
-        "TMPDIR": "/tmp",
+        "TMPDIR": temporary,
         "PYTHONDONTWRITEBYTECODE": "1",
         "PYTHONNOUSERSITE": "1",
         "PYTHONHASHSEED": "0",
@@ -438,12 +454,17 @@ def user_interpreter() -> Path:
 
 
 class Sandboxed:
-    """``argv`` running in the sandbox with ``box`` as its only writable place (started at
-    once). With ``pipe``, its stdin and stdout are pipes to this process (``process.stdin``
-    and ``process.stdout``); else its stdin is empty and its output goes to
-    ``box/stdout.txt``. Its errors go to ``box/stderr.txt``. A watchdog thread kills the
-    run at the wall-clock limit or when it starts too many processes; :meth:`wait` ends it
-    and says why."""
+    """``argv`` running in the sandbox (started at once), with ``box`` (a folder of
+    :func:`new_box`) as its run folder. The one place it may write is its scratch
+    (:mod:`.scratch`): ``box/scratch``, made with ``box/`` (its working folder, holding
+    ``files``: name -> bytes) and ``tmp/`` (its temporary folder) at the start, at most
+    :data:`~.scratch.SCRATCH_MB` MiB and :data:`~.scratch.SCRATCH_FILES` files and
+    folders. With ``pipe``, its stdin and stdout are pipes to this process
+    (``process.stdin`` and ``process.stdout``) and its errors are kept in memory (the last
+    4000 bytes: :meth:`stderr_tail`); else its stdin is empty and its output and errors go
+    to ``box/stdout.txt`` and ``box/stderr.txt``. A watchdog thread kills the run at the
+    wall-clock limit, when it starts too many processes, or (a ``watched`` scratch) when
+    its scratch holds more than the totals; :meth:`wait` ends it and says why."""
 
     def __init__(
         self,
@@ -453,6 +474,7 @@ class Sandboxed:
         pipe: bool = False,
         owner: int | None = None,
         lab_side: Path | None = None,
+        files: Mapping[str, bytes] | None = None,
     ) -> None:
         mode = sandbox_mode()
         if mode != "bwrap" and not limits.unsandboxed:
@@ -461,13 +483,29 @@ class Sandboxed:
         root = mode != "none" and _is_root()
         self.uid = sandbox_uid(owner) if root else -1
         self.root = root
-        if root:
-            for path in [self.box, *self.box.rglob("*")]:
-                os.chown(path, self.uid, self.uid)
+        self.scratch = self.box / SCRATCH_FOLDER
+        self.scratch.mkdir(mode=0o700)
+        self.kind = scratch.scratch_kind(mode)
+        files = dict(files or {})
+        drop_to = self.uid if root else None
+        made: Callable[[], None] | None = None
+        if self.kind == "tmpfs":
+            made = scratch.tmpfs_preexec(
+                self.scratch,
+                files,
+                drop_to,
+                user_namespace=mode == "bwrap" and not root,
+                read_only_host=mode == "user",
+            )
+        else:
+            scratch.prepare_watched(self.scratch, files, drop_to)
+        if mode == "user":  # the dropped user reaches its scratch and the run's own files
+            self.box.chmod(0o711)
+            self.scratch.chmod(0o711)
         if mode == "bwrap":
-            env = _environment(SANDBOX_BOX)
+            env = _environment(SANDBOX_BOX, "/tmp")
             command = [
-                *bwrap_arguments(self.box, lab_side),
+                *bwrap_arguments(self.scratch, lab_side),
                 "--unshare-ipc",
                 "--unshare-pid",
                 "--unshare-net",
@@ -496,13 +534,13 @@ class Sandboxed:
             else:
                 command += ["--unshare-user", "--"]
             command += argv
-            preexec = _limit(limits, None)
+            limit = _limit(limits, None)
         elif mode == "user":
-            env = _environment(str(self.box))
+            env = _environment(str(self.scratch / scratch.BOX), str(self.scratch / scratch.TMP))
             command = argv
-            preexec = _limit(limits, self.uid)
+            limit = _limit(limits, self.uid)
         else:
-            env = _environment(str(self.box))
+            env = _environment(str(self.scratch / scratch.BOX), str(self.scratch / scratch.TMP))
             if sys.platform == "win32":  # what Python and Windows need to start at all
                 env = {
                     **env,
@@ -510,40 +548,80 @@ class Sandboxed:
                     **{k: os.environ[k] for k in ("SYSTEMROOT", "TEMP", "TMP") if k in os.environ},
                 }
             command = argv
-            preexec = _limit(limits, None, processes=False)
+            limit = _limit(limits, None, processes=False)
         self.started = time.perf_counter()
         self.stopped = ""
         self._done = threading.Event()
+        self._errors = bytearray()
         # its own session (POSIX) or process group (Windows), to be ended as one
         group: dict[str, Any]
         if sys.platform == "win32":
             group = {"creationflags": subprocess.CREATE_NEW_PROCESS_GROUP}
         else:
-            group = {"start_new_session": True, "preexec_fn": preexec}
+            group = {"start_new_session": True, "preexec_fn": _chain(made, limit)}
+        workdir = self.box if self.kind == "tmpfs" else self.scratch / scratch.BOX
         with (
-            open(self.box / "stderr.txt", "wb") as err,
+            open(os.devnull if pipe else self.box / "stderr.txt", "wb") as err,
             open(os.devnull if pipe else self.box / "stdout.txt", "wb") as out,
         ):
-            self.process = subprocess.Popen(
-                command,
-                stdin=subprocess.PIPE if pipe else subprocess.DEVNULL,
-                stdout=subprocess.PIPE if pipe else out,
-                stderr=err,
-                cwd=self.box,
-                env=env,
-                **group,
-            )
+            try:
+                self.process = subprocess.Popen(
+                    command,
+                    stdin=subprocess.PIPE if pipe else subprocess.DEVNULL,
+                    stdout=subprocess.PIPE if pipe else out,
+                    stderr=subprocess.PIPE if pipe else err,
+                    cwd=workdir,
+                    env=env,
+                    **group,
+                )
+            except subprocess.SubprocessError as exc:  # the scratch's preparation failed
+                raise SandboxError(
+                    f"the run's scratch space could not be made ({self.kind}): {exc}"
+                ) from None
+        self._drain: threading.Thread | None = None
+        if pipe:
+            self._drain = threading.Thread(target=self._keep_errors, daemon=True)
+            self._drain.start()
         self._watchdog = threading.Thread(target=self._watch, daemon=True)
         self._watchdog.start()
 
+    def place(self, name: str) -> str:
+        """Where the program sees ``name`` of its working folder (one of ``files``)."""
+        if self.mode == "bwrap":
+            return f"{SANDBOX_BOX}/{name}"
+        return str(self.scratch / scratch.BOX / name)
+
+    def _keep_errors(self) -> None:
+        stream = self.process.stderr
+        assert stream is not None
+        while True:
+            try:
+                chunk = os.read(stream.fileno(), 1 << 16)
+            except OSError:
+                break
+            if not chunk:
+                break
+            self._errors += chunk
+            del self._errors[: max(0, len(self._errors) - STDERR_KEPT)]
+
+    def stderr_tail(self) -> str:
+        """The last bytes of what the program wrote to its errors, as text ('' if none);
+        with ``pipe``, once :meth:`wait` has returned."""
+        if self._drain is None:
+            return tail(self.box / "stderr.txt")
+        return bytes(self._errors).decode(errors="replace")
+
     def _watch(self) -> None:
-        while not self._done.wait(0.05):
+        watched = self.kind == "watched"
+        while not self._done.wait(scratch.WATCH_SECONDS):
             if self.process.poll() is not None:
                 return
             if self.root and len(uid_processes(self.uid)) > MAX_PROCESSES:
                 self.kill("processes")
             elif time.perf_counter() - self.started > self.limits.seconds:
                 self.kill("wall")
+            elif watched and scratch.over(self.scratch):
+                self.kill("scratch")
 
     def kill(self, why: str = "checker") -> None:
         """Stop the run now (``why`` is kept for :meth:`wait`)."""
@@ -566,7 +644,8 @@ class Sandboxed:
 
     def wait(self, timeout: float | None = None) -> tuple[int | None, float, str]:
         """(exit code, or None when stopped; seconds; why it was stopped: ``""``,
-        ``"wall"``, ``"processes"`` or ``"checker"``). Kills what is left."""
+        ``"wall"``, ``"processes"``, ``"scratch"`` or ``"checker"``). Kills what is
+        left."""
         try:
             code: int | None = self.process.wait(timeout=timeout)
         except subprocess.TimeoutExpired:
@@ -574,11 +653,26 @@ class Sandboxed:
             code = self.process.wait()
         self._done.set()
         self._watchdog.join()
+        if self._drain is not None:
+            self._drain.join(timeout=10)
         if self.root:
             _kill_uid(self.uid)
-        if self.stopped in ("wall", "processes"):
+        if self.stopped in ("wall", "processes", "scratch"):
             code = None
         return code, time.perf_counter() - self.started, self.stopped
+
+
+def _chain(*steps: Callable[[], None] | None) -> Callable[[], None] | None:
+    """One function running each of ``steps`` that is given, in order (None: none)."""
+    given = [step for step in steps if step is not None]
+    if not given:
+        return None
+
+    def run() -> None:  # pragma: no cover - runs in the child before it starts
+        for step in given:
+            step()
+
+    return run
 
 
 def run_sandboxed(argv: list[str], box: Path, limits: Limits) -> tuple[int | None, float, str]:
@@ -635,11 +729,17 @@ def _alive(pid: int) -> bool:
 
 
 def sweep_stale(parent: Path) -> None:
-    """Remove the boxes and check folders that dead processes left in ``parent``."""
+    """Remove the boxes and check folders that dead processes left in ``parent`` (with the
+    system's own tool, however deep a tree a run left there: :func:`~.scratch.discard`)."""
     for prefix in STALE_PREFIXES:
         for folder in parent.glob(f"{prefix}*"):
             if folder.is_dir() and _stale(folder, prefix):
-                shutil.rmtree(folder, ignore_errors=True)
+                scratch.discard(folder)
+
+
+def remove_box(box: Path) -> None:
+    """Remove a run folder of :func:`new_box` after its run (see :func:`sweep_stale`)."""
+    scratch.discard(box)
 
 
 def new_box(root: Path | None = None) -> Path:
