@@ -429,11 +429,12 @@ def test_the_other_labs_variants_fail_a_copied_file(lab, tmp_path):
         str(LIMITS.cpu_seconds),
     )
     assert done.returncode == 0, done.stderr
+    # the outputs say the class list's names (the files are student_N.py, default_copy.py)
     rows = read_csv(out / "grades.csv")
-    mine = [r for r in rows if r["student"] == name]
-    assert all(r["passed"] == "yes" for r in mine), mine
-    theirs = [r for r in rows if r["student"] == "default_copy"]
-    assert not all(r["passed"] == "yes" for r in theirs)
+    mine = [r for r in rows if r["student"] == student]
+    assert mine and all(r["passed"] == "yes" for r in mine), mine
+    theirs = [r for r in rows if r["student"] == "default copy"]
+    assert theirs and not all(r["passed"] == "yes" for r in theirs)
     # the lab's own numbers are another variant's for this student (unless both are alike)
     own = derive_variant(lab, KEY, "default_copy")
     if not own.same_numbers(default_variant(lab)):
@@ -441,9 +442,9 @@ def test_the_other_labs_variants_fail_a_copied_file(lab, tmp_path):
         # --copies=hold: the gradebook flags the default variant's copy and books no score
         book = {row["student"]: row for row in read_csv(out / "gradebook.csv")}
         assert (
-            book["default_copy"]["copy_of"],
-            book["default_copy"]["score"],
-            book["default_copy"]["percent"],
+            book["default copy"]["copy_of"],
+            book["default copy"]["score"],
+            book["default copy"]["percent"],
         ) == ("default variant", "", "")
-        assert book[name]["copy_of"] == "" and book[name]["score"] == str(len(spec.tasks))
+        assert book[student]["copy_of"] == "" and book[student]["score"] == str(len(spec.tasks))
     assert len(spec.tasks) == len(theirs)

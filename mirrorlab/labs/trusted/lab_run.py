@@ -179,6 +179,7 @@ class LabRun:
             lab_side_path = SANDBOX_LAB_SIDE
         else:  # the student side beside the scratch, where the run may read, not write
             library = self.box / "lib"
+            library.mkdir()
             python, packages, site = user_interpreter(), str(library / "pkg"), ""
             if mode == "none":
                 python, site = interpreter(), _offer_numpy(library / "site")

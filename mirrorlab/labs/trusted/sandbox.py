@@ -8,17 +8,21 @@ How, in order of preference (:func:`sandbox_mode` says which applies):
   read-only (the system's libraries), the interpreter's own folder read-only (wherever it
   is: every folder above it is made anew, open, holding nothing else, so an interpreter
   under a closed home works), the student side of the labs (:mod:`mirrorlab.labs.student`)
-  and numpy read-only under ``/lab``, the run's box writable at ``/lab/box``, an empty
-  ``/tmp``. No checkout, no venv, no other package, no solution, no reference, no other
-  submission, no home. Network, process ids, IPC and the host name are unshared. Run as
-  root, the process then drops to a user id of its own (``setpriv``).
+  and numpy read-only under ``/lab``, the run's scratch (:mod:`.scratch`: at most
+  :data:`~.scratch.SCRATCH_MB` MiB and :data:`~.scratch.SCRATCH_FILES` files and folders)
+  writable at ``/lab/box`` and ``/tmp``, everything else read-only. No checkout, no venv,
+  no other package, no solution, no reference, no other submission, no home. Network,
+  process ids, IPC and the host name are unshared. Run as root, the process then drops to
+  a user id of its own (``setpriv``).
 - ``user`` (root on Linux, no working bubblewrap): the same limits, the process under a
-  user id of its own, which may write only in its box (and world-writable places). The
-  file system stays visible to it (readable files only): the note of
+  user id of its own, which may write only in its scratch: where the kernel gives a mount
+  namespace every other mount is read-only there (else world-writable places stay open
+  to it). The file system stays visible to it (readable files only): the note of
   :func:`unsandboxed_note` says so.
 - ``none`` (no bubblewrap, not root on Linux; every macOS and Windows machine): the file
   runs in a process of its own, as the user, over the same pipe, with what limits the
-  system has. Nothing keeps it from reading or writing what the user may.
+  system has; its scratch is watched. Nothing keeps it from reading or writing what the
+  user may.
 
 Only ``bwrap`` is a sandbox. The other two run only when the run's :class:`Limits` say
 ``unsandboxed`` (a student's own file in ``lab check`` and ``lab run``, the teacher's

@@ -179,8 +179,9 @@ def _probe(user_namespace: bool, owner: int | None, read_only_host: bool) -> boo
         prepare = tmpfs_preexec(
             folder / "scratch", {"probe": b"1"}, owner, user_namespace, read_only_host
         )
+        program = shutil.which("true") or sys.executable
         done = subprocess.run(
-            [sys.executable, "-I", "-S", "-c", "open('probe').read()"],
+            [program] if program != sys.executable else [program, "-I", "-S", "-c", ""],
             preexec_fn=prepare,
             capture_output=True,
             timeout=30,
