@@ -331,3 +331,27 @@ def test_the_watch_measures_without_following_links_or_recursing(tmp_path):
         os.close(old)
     os.close(fd)
     assert measure(tmp_path)[2]
+
+
+def test_a_kernel_that_refuses_the_scratch_file_system_gets_a_watched_one(
+    memory_folder, monkeypatch
+):
+    """Where the kernel refuses the run's mount namespace (a container without it), the run
+    starts again with a watched scratch, and so do the process's later runs."""
+    from mirrorlab.labs.trusted import scratch
+
+    def refused(*args, **kwargs):
+        def prepare() -> None:
+            raise PermissionError(1, "unshare: Operation not permitted")
+
+        return prepare
+
+    monkeypatch.setattr(scratch, "tmpfs_preexec", refused)
+    monkeypatch.setattr(scratch, "_refused", set())
+    mode = sandbox.sandbox_mode()
+    for _ in range(2):
+        box = sandbox.new_box(memory_folder)
+        code, stopped, output = _run(box, "open('mine.txt', 'w').write('ok')\nprint('ok')\n")
+        sandbox.remove_box(box)
+        assert (code, stopped, output.strip()) == (0, "", "ok")
+        assert scratch.scratch_kind(mode) == "watched"

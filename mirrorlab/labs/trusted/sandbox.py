@@ -557,37 +557,55 @@ class Sandboxed:
         self.stopped = ""
         self._done = threading.Event()
         self._errors = bytearray()
-        # its own session (POSIX) or process group (Windows), to be ended as one
-        group: dict[str, Any]
-        if sys.platform == "win32":
-            group = {"creationflags": subprocess.CREATE_NEW_PROCESS_GROUP}
-        else:
-            group = {"start_new_session": True, "preexec_fn": _chain(made, limit)}
-        workdir = self.box if self.kind == "tmpfs" else self.scratch / scratch.BOX
-        with (
-            open(os.devnull if pipe else self.box / "stderr.txt", "wb") as err,
-            open(os.devnull if pipe else self.box / "stdout.txt", "wb") as out,
-        ):
+        try:
+            self.process = self._start(command, env, pipe, made, limit)
+        except subprocess.SubprocessError as exc:
+            if self.kind != "tmpfs":
+                raise SandboxError(f"the run could not start ({mode} mode): {exc}") from None
+            # the kernel refused the run's own file system: watched, from now on
+            scratch.refuse(mode)
+            self.kind = "watched"
+            scratch.prepare_watched(self.scratch, files, drop_to)
             try:
-                self.process = subprocess.Popen(
-                    command,
-                    stdin=subprocess.PIPE if pipe else subprocess.DEVNULL,
-                    stdout=subprocess.PIPE if pipe else out,
-                    stderr=subprocess.PIPE if pipe else err,
-                    cwd=workdir,
-                    env=env,
-                    **group,
-                )
-            except subprocess.SubprocessError as exc:  # the scratch's preparation failed
-                raise SandboxError(
-                    f"the run's scratch space could not be made ({self.kind}): {exc}"
-                ) from None
+                self.process = self._start(command, env, pipe, None, limit)
+            except subprocess.SubprocessError as again:
+                raise SandboxError(f"the run could not start ({mode} mode): {again}") from None
         self._drain: threading.Thread | None = None
         if pipe:
             self._drain = threading.Thread(target=self._keep_errors, daemon=True)
             self._drain.start()
         self._watchdog = threading.Thread(target=self._watch, daemon=True)
         self._watchdog.start()
+
+    def _start(
+        self,
+        command: list[str],
+        env: dict[str, str],
+        pipe: bool,
+        made: Callable[[], None] | None,
+        limit: Callable[[], None] | None,
+    ) -> subprocess.Popen:
+        """The run's process, in a session (POSIX) or process group (Windows) of its own to
+        be ended as one; ``made`` (the tmpfs scratch) then ``limit`` run in it first."""
+        group: dict[str, Any]
+        if sys.platform == "win32":
+            group = {"creationflags": subprocess.CREATE_NEW_PROCESS_GROUP}
+        else:
+            group = {"start_new_session": True, "preexec_fn": _chain(made, limit)}
+        workdir = self.box if made is not None else self.scratch / scratch.BOX
+        with (
+            open(os.devnull if pipe else self.box / "stderr.txt", "wb") as err,
+            open(os.devnull if pipe else self.box / "stdout.txt", "wb") as out,
+        ):
+            return subprocess.Popen(
+                command,
+                stdin=subprocess.PIPE if pipe else subprocess.DEVNULL,
+                stdout=subprocess.PIPE if pipe else out,
+                stderr=subprocess.PIPE if pipe else err,
+                cwd=workdir,
+                env=env,
+                **group,
+            )
 
     def place(self, name: str) -> str:
         """Where the program sees ``name`` of its working folder (one of ``files``)."""

@@ -4,7 +4,8 @@ A run's scratch holds ``box/`` (its working folder, where its file lies) and ``t
 ``/tmp``, or ``TMPDIR``). Two kinds (:func:`scratch_kind` says which applies here):
 
 - ``tmpfs``: a file system of its own, made in the run's own mount namespace before the
-  program starts (:func:`tmpfs_preexec`): at most :data:`SCRATCH_BYTES` and
+  program starts (:func:`tmpfs_preexec`; where the kernel refuses, the run is started
+  again, watched, and so are the process's later runs): at most :data:`SCRATCH_BYTES` and
   :data:`SCRATCH_FILES` files and folders, enforced by the kernel (a write past either
   fails with ``No space left on device``). Nobody else sees it, and it is gone with the
   run's last process: nothing of it is ever removed file by file. Used with bubblewrap
@@ -193,23 +194,41 @@ def _probe(user_namespace: bool, owner: int | None, read_only_host: bool) -> boo
         shutil.rmtree(folder, ignore_errors=True)
 
 
-@lru_cache(maxsize=4)
-def tmpfs_works(mode: str) -> bool:
-    """Whether a run in sandbox ``mode`` (``bwrap``, ``user``, ``none``) gets a tmpfs
-    scratch here (tried once per process): Linux, a mount namespace (root), or a user
-    namespace too (bubblewrap as a user). ``none`` never does (macOS, Windows and a Linux
-    without bubblewrap are alike: a watched folder)."""
+def eligible(mode: str) -> bool:
+    """Whether a run in sandbox ``mode`` (``bwrap``, ``user``, ``none``) may have a tmpfs
+    scratch: on Linux, with bubblewrap (as root a mount namespace; as a user a user
+    namespace too) or as root in the user-id fallback. ``none`` never does (macOS,
+    Windows and a Linux without bubblewrap are alike: a watched folder)."""
     if not sys.platform.startswith("linux") or mode == "none":
         return False
-    root = os.geteuid() == 0
-    if mode == "user" and not root:
-        return False
-    return _probe(user_namespace=not root, owner=None, read_only_host=False)
+    return mode == "bwrap" or os.geteuid() == 0
+
+
+_refused: set[str] = set()
+"""The modes whose tmpfs scratch the kernel refused in this process (then watched)."""
+
+
+def refuse(mode: str) -> None:
+    """Note that the kernel refused a tmpfs scratch in ``mode``: this process's later runs
+    in it are watched."""
+    _refused.add(mode)
 
 
 def scratch_kind(mode: str) -> str:
-    """``tmpfs`` or ``watched`` for a run in sandbox ``mode`` (see the module's text)."""
-    return "tmpfs" if tmpfs_works(mode) else "watched"
+    """``tmpfs`` or ``watched`` for a run in sandbox ``mode`` (see the module's text):
+    ``tmpfs`` where it is :func:`eligible` and was not refused (the run that finds it
+    refused is started again, watched: :func:`refuse`)."""
+    return "tmpfs" if eligible(mode) and mode not in _refused else "watched"
+
+
+@lru_cache(maxsize=4)
+def tmpfs_works(mode: str) -> bool:
+    """Whether a run in sandbox ``mode`` gets its tmpfs scratch here, tried with a process
+    that does nothing (``mirrorlab info`` asks; a run finds out as it starts)."""
+    if not eligible(mode):
+        return False
+    root = os.geteuid() == 0
+    return _probe(user_namespace=not root, owner=None, read_only_host=False)
 
 
 def prepare_watched(scratch: Path, files: Mapping[str, bytes], owner: int | None) -> None:
