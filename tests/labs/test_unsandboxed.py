@@ -106,9 +106,8 @@ def test_a_check_without_bubblewrap_passes_and_says_once_it_is_not_sandboxed(tmp
 def check_note(done: subprocess.CompletedProcess, how: str, picture: Path) -> None:
     assert done.returncode == 0, done.stderr
     assert "8/8 tasks passed" in done.stdout
-    # the teacher's solution names no variant: a second note says it is judged so
-    lines = [line for line in done.stderr.strip().splitlines() if "names no variant" not in line]
-    assert len(lines) == 1 and len(done.stderr.strip().splitlines()) == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1, done.stderr
     assert lines[0].startswith(
         "mirrorlab lab check: note: not sandboxed (no sandbox: bubblewrap is not installed)"
     ), lines[0]

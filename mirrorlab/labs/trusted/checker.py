@@ -309,8 +309,9 @@ def file_variant(spec: LabSpec, path: Path) -> Variant:
 
 
 def default_note(spec: LabSpec, path: Path) -> str:
-    """The line ``lab check`` says when ``path`` names no variant (no ``variant.json``
-    beside it, no header) and is judged against the lab's own numbers ('' otherwise)."""
+    """The line ``lab check`` says under the file's name when ``path`` names no variant (no
+    ``variant.json`` beside it, no header) and is judged against the lab's own numbers
+    ('' otherwise)."""
     if (path.parent / VARIANT_FILE).is_file():
         return ""
     try:
@@ -382,8 +383,6 @@ def run_check(
     if not sandboxed():
         print(f"mirrorlab lab check: {unsandboxed_note()}", file=sys.stderr)
     note = default_note(spec, path)
-    if note:
-        print(f"mirrorlab lab check: {note}", file=sys.stderr)
     reference = reference_evidence(spec, variant, folder, limits, released=released)
     made_for = reference.variant.get("id") if isinstance(reference.variant, dict) else None
     if made_for not in (None, variant.id):
@@ -394,7 +393,10 @@ def run_check(
     check = check_submission(
         spec, source, reference, Context(variant), str(path), path.name, limits
     )
-    print("\n".join(report_lines(spec, check)))
+    lines = report_lines(spec, check)
+    if note:  # right under the file's name: what it was judged against
+        lines.insert(1, f"  {note}")
+    print("\n".join(lines))
     write_png_atomic(out, check.picture)
     print(f"picture (student | reference | difference): {out}")
     return 0 if check.passed else 1
