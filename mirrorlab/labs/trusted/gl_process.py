@@ -11,6 +11,7 @@ asked can stop it at a deadline whatever the student's GLSL does to the driver
 from __future__ import annotations
 
 import dataclasses
+import errno
 import json
 import os
 import shutil
@@ -34,6 +35,15 @@ it could not make an OpenGL context; its own machine failed it (a full disk)."""
 MEMORY_MB = 3072
 """The GL process's own address-space limit (Mesa's threads reserve much more than they
 touch; its resident memory is measured in the tests)."""
+
+
+DISK_ERRORS = frozenset(
+    getattr(errno, name)
+    for name in ("ENOSPC", "EDQUOT", "EROFS", "EIO", "EFBIG")
+    if hasattr(errno, name)
+)
+"""The errors of a disk that refuses the checker's own files: the machine's, whatever the
+file ran (a full disk, a quota, a read-only or failing one)."""
 
 
 class CheckerError(RuntimeError):
@@ -134,7 +144,10 @@ def run_one(job_file: Path) -> int:
     except GLContextError as exc:
         _note(out / "no_gl.txt", str(exc))
         return EXIT_NO_GL
-    except OSError as exc:  # the file's own failures are evidence; this is the machine's
+    except OSError as exc:
+        if exc.errno not in DISK_ERRORS:
+            raise  # attributed by a second run and a control (failures.py)
+        # the file's own failures are evidence; a disk that refuses the checker's is not
         _note(out / "machine_error.txt", f"{exc.strerror or exc} ({exc.filename or 'a file'})")
         return EXIT_MACHINE
     try:
