@@ -31,6 +31,7 @@ th, td { border: 1px solid #ccc; padding: 4px 6px; vertical-align: top; font-siz
 th { background: #eee; cursor: pointer; user-select: none; white-space: nowrap; }
 th.sorted-up::after { content: " \\25B2"; } th.sorted-down::after { content: " \\25BC"; }
 td.pass { background: #e3f6e3; } td.fail { background: #fbe4e4; }
+td.not-judged { background: #eee; color: #666; }
 td.task { max-width: 14em; }
 td.copied, .copy, td.not-graded { color: #a00; }
 .id { font-size: 11px; display: block; color: #555; }
@@ -136,6 +137,9 @@ def report_html(
             f"</a></td>",
         ]
         for task in tasks:
+            if grade.not_graded:  # nothing was judged: no verdict to show
+                cells.append('<td class="task not-judged" data-sort="-1">not graded</td>')
+                continue
             passed, hint = verdicts.get(task.id, (False, "not checked"))
             word = "pass" if passed else "FAIL"
             note = f'<div class="hint">{escape(hint)}</div>' if hint else ""
