@@ -139,7 +139,7 @@ def rows(text: str) -> list[list[str]]:
     return list(csv.reader(io.StringIO(text)))
 
 
-def canvas_reads(table: list[list[str]]) -> dict[str, object]:
+def canvas_reads(table: list[list[str]]) -> dict[str, list]:
     """The header, points and student rows as Canvas's importer takes them
     (instructure/canvas-lms, app/models/gradebook_importer.rb: row_has_student_headers?,
     update_column_count, check_for_non_student_row)."""
