@@ -203,7 +203,7 @@ def lines(found: dict[str, Any]) -> list[str]:
             + (
                 " (one multi-draw a pass)"
                 if opengl["draw_path"] == "packed"
-                else " (a draw a mesh: OpenGL below 4.3)"
+                else " (one draw call at a time: OpenGL below 4.3)"
             ),
         ]
     out += [
