@@ -18,6 +18,7 @@ from mirrorlab.labs.trusted.judging import (
     Context,
     TaskResult,
     Verdicts,
+    copy_format_slip,
     differing,
     fmt,
     judge_frame,
@@ -317,11 +318,6 @@ def judge_capture(
     ref = reference.image(ref_copy.get("picture", "")) if ref_copy else None
     if seen is None or ref is None:
         return False, "the capture's picture is missing"
-    if copy.get("taint"):
-        return False, (
-            f"the capture shows pixels this file uploaded ({copy['taint']}): it must "
-            f"be drawn by lab.draw_scene"
-        )
     if same_picture(seen, ref):
         return True, ""
     if not camera_ok:
@@ -407,6 +403,8 @@ def judge_copy(student: Evidence, size: tuple[int, int]) -> tuple[bool, str]:
             f"the copy at {at} takes {copy['width']} x {copy['height']} pixels; "
             f"copy the whole framebuffer, WIDTH x HEIGHT ({width} x {height})"
         )
+    if slip := copy_format_slip(copy):
+        return False, f"the copy at {at} {slip}"
     events = student.last_frame
     draw = _capture_draw(student)
     if draw is not None and events.index(copy) < events.index(draw):
@@ -546,8 +544,6 @@ def judge_mirror_texture(student: Evidence, spec_programs: int, env_ok: bool) ->
                 "the mirror is black: ENVIRONMENT's filter wants mipmaps it does "
                 f"not have: see {_task('environment_texture')}"
             )
-    if draw.get("taint"):
-        return False, f"the mirror shows pixels this file uploaded ({draw['taint']})"
     return True, ""
 
 
