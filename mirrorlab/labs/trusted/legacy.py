@@ -848,6 +848,8 @@ class FixedFunction:
         height: int,
         border: int,
     ) -> None:
+        if internalformat in (1, 2, 3, 4):  # a copy takes no number of components (Mesa's)
+            raise gl_error(GL_INVALID_ENUM)
         internal, swizzle = CORE_FORMATS.get(internalformat, (internalformat, None))
         _gl().glCopyTexImage2D(target, level, internal, x, y, width, height, border)
         self._swizzle(target, swizzle)
