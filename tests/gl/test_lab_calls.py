@@ -6,6 +6,7 @@ reply or one line, never an internal error."""
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 import re
@@ -19,13 +20,13 @@ from hypothesis import strategies as st
 
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Framebuffer
+from mirrorlab.labs import unregister
 from mirrorlab.labs.trusted import calls as C
 from mirrorlab.labs.trusted.call_executor import Executor, Stop
 from mirrorlab.labs.trusted.pipe import PipeBudget, PipeClosed, PipeError, TrustedChannel
 from mirrorlab.labs.trusted.session import open_session
 from mirrorlab.labs.trusted.variants import default_variant
 from tests.gl.conftest import module_context
-from tests.labs.fourth_lab import SPEC as QUAD_LAB
 from tests.labs.mutants import solution
 
 SIZE = (32, 32)
@@ -78,6 +79,15 @@ def family(name: str) -> str:
     family name it starts with."""
     found = [f for f in FORMS if re.fullmatch(re.escape(f) + r"[0-9]?[a-z]*v?", name)]
     return max(found, key=len) if found else ""
+
+
+@pytest.fixture(scope="module")
+def quad_lab():
+    """The test folder's quad lab, which opens every channel (registered while the module
+    runs: lab-parametrised tests elsewhere take the shipped labs)."""
+    spec = importlib.import_module("tests.labs.fourth_lab").SPEC
+    yield spec
+    unregister(spec.name)
 
 
 @pytest.fixture
@@ -173,7 +183,7 @@ def test_every_form_of_every_allowed_family_is_allowed():
         assert not missing, f"{name}: the labs allow some forms but not {missing}"
 
 
-def test_every_allowed_call_runs_in_every_form(target):
+def test_every_allowed_call_runs_in_every_form(target, quad_lab):
     """Each allowed name exists in PyOpenGL (what the sandbox's stand-in offers) and, with
     arguments its checks accept, gets a reply: a value or the student's error, never an
     exception of the checker's own."""
@@ -182,7 +192,7 @@ def test_every_allowed_call_runs_in_every_form(target):
     from mirrorlab.labs.trusted.lab_run import reset_state
 
     failures = []
-    labs = ("lab20", "spheremap", "cubemap", QUAD_LAB.name)  # the quad lab opens every channel
+    labs = ("lab20", "spheremap", "cubemap", quad_lab.name)  # the quad lab opens every channel
     sessions = {lab: open_session(lab, SIZE, default_variant(lab)) for lab in labs}
     for op, specs, module in (("gl", C.GL_SPECS, GL), ("glu", C.GLU_SPECS, GLU)):
         for name, spec in specs.items():
@@ -209,16 +219,16 @@ def test_every_allowed_call_runs_in_every_form(target):
                 if reply["ok"] or reply["type"] == "GLError":
                     break  # allowed arguments, set-up state: only GL's own verdict refuses
                 # an argument of a channel this lab closes (the quad lab opens them all)
-                assert reply["type"] == "NotImplementedError" and lab != QUAD_LAB.name, reply
+                assert reply["type"] == "NotImplementedError" and lab != quad_lab.name, reply
                 assert "this lab's handout draws nothing with it" in reply["message"], reply
     assert not failures, "\n".join(failures)
     assert int(GL.glGetError()) == GL.GL_NO_ERROR
 
 
-def test_integer_forms_draw_where_the_float_forms_do(target):
+def test_integer_forms_draw_where_the_float_forms_do(target, quad_lab):
     """glVertex3i and glVertex2s put the vertex where glVertex3f does; glColor3ub's and
     glColor3us's colours are GL's normalised ones (in the quad lab, which offers colours)."""
-    ex = prepared(open_session(QUAD_LAB.name, SIZE, default_variant(QUAD_LAB.name)))
+    ex = prepared(open_session(quad_lab.name, SIZE, default_variant(quad_lab.name)))
     send(ex, "glBegin", [int(GL.GL_TRIANGLES)])
     for name, args in (
         ("glColor3ub", [255, 0, 51]),

@@ -8,6 +8,7 @@ same pixels whatever state a file left (a property, over generated leftover stat
 
 from __future__ import annotations
 
+import importlib
 from typing import Any
 
 import numpy as np
@@ -18,7 +19,7 @@ from OpenGL.error import GLError
 
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Framebuffer, read_pixels
-from mirrorlab.labs import find_lab
+from mirrorlab.labs import find_lab, unregister
 from mirrorlab.labs.content import reference_folder
 from mirrorlab.labs.trusted import calls as C
 from mirrorlab.labs.trusted import legacy
@@ -34,7 +35,6 @@ from mirrorlab.labs.trusted.session import (
 from mirrorlab.labs.trusted.variants import Variant, default_variant
 from tests.gl.conftest import module_context
 from tests.gl.test_lab_calls import solution_glsl
-from tests.labs.fourth_lab import SPEC as QUAD_LAB
 
 SIZE = (64, 64)
 LABS = ("lab20", "spheremap", "cubemap")
@@ -42,7 +42,16 @@ gl_context = pytest.fixture(scope="module", name="gl_context")(module_context)
 
 
 @pytest.fixture(scope="module")
-def sessions(gl_context):
+def quad_lab():
+    """The test folder's quad lab, which opens every channel (registered while the module
+    runs: lab-parametrised tests elsewhere take the shipped labs)."""
+    spec = importlib.import_module("tests.labs.fourth_lab").SPEC
+    yield spec
+    unregister(spec.name)
+
+
+@pytest.fixture(scope="module")
+def sessions(gl_context, quad_lab):
     """One session of each lab (the sphere-map lab's texgen on unit 2) and a target."""
     from mirrorlab.labs.trusted.session import open_session
 
@@ -51,7 +60,7 @@ def sessions(gl_context):
     variants = {lab: default_variant(lab) for lab in LABS}
     variants["spheremap"] = Variant("spheremap", {**variants["spheremap"].values, "unit": 2})
     found = {lab: open_session(lab, SIZE, variants[lab]) for lab in LABS}
-    found[QUAD_LAB.name] = open_session(QUAD_LAB.name, SIZE, default_variant(QUAD_LAB.name))
+    found[quad_lab.name] = open_session(quad_lab.name, SIZE, default_variant(quad_lab.name))
     yield target, found
     target.release()
 
@@ -94,7 +103,7 @@ def texture(ex: Executor, target: int = GL.GL_TEXTURE_2D) -> int:
 
 
 # ------------------------------------------------------------------ the list is closed
-def test_every_call_switch_and_mode_is_a_channels_or_carries_no_number():
+def test_every_call_switch_and_mode_is_a_channels_or_carries_no_number(quad_lab):
     """The closure, not a list: a call, a glEnable switch, a glBegin mode or a matrix mode
     added to the allow-list must be classed as a channel's or as carrying no number of the
     file's to a pixel, or this fails."""
@@ -114,7 +123,7 @@ def test_every_call_switch_and_mode_is_a_channels_or_carries_no_number():
         "spheremap": {"texgen"},
         "cubemap": {"copies"},
     }
-    assert C.lab_channels(QUAD_LAB.name) == set(C.CHANNELS)
+    assert C.lab_channels(quad_lab.name) == set(C.CHANNELS)
 
 
 def closed_cases() -> list[tuple[str, str]]:
