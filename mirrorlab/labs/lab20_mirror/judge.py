@@ -782,6 +782,18 @@ def drawn_region(draw: dict[str, Any], size: tuple[int, int]) -> np.ndarray:
     return triangles_mask(clip, _triangles(int(draw.get("mode", 0)), clip), size)
 
 
+def clamp_rim(
+    student: Evidence, size: tuple[int, int], geometry: dict[str, Any]
+) -> np.ndarray | None:
+    """The mirror's outline, 3 pixels either side, when ENVIRONMENT wraps with GL_CLAMP
+    (which the handout accepts): there its linear filter darkens a thin rim with the
+    border colour, not a mark of the file's; else None."""
+    params = student.state.get("environment_parameters") or {}
+    if GL_CLAMP not in (params.get("GL_TEXTURE_WRAP_S"), params.get("GL_TEXTURE_WRAP_T")):
+        return None
+    return mirror_region(size, geometry, 3) & ~mirror_region(size, geometry, -3)
+
+
 def judge(
     spec: LabSpec, student: Evidence, reference: Evidence, context: Context
 ) -> list[TaskResult]:
@@ -833,6 +845,7 @@ def judge(
         regions,
         "passes",
         {"mirror": ("mirror_quad", "the mirror's picture")},
+        clamp_rim(student, size, geometry),
     )
     return results(spec, student, verdicts)
 

@@ -765,14 +765,6 @@ class Executor:
         else:
             target, level, ox, oy, x, y, width, height = args
             offset, internalformat = (ox, oy), 0
-        size = (self.session.width, self.session.height)
-        if x < 0 or y < 0 or x + width > size[0] or y + height > size[1]:
-            raise CallError(
-                "ValueError",
-                f"{name}: {width} x {height} pixels from ({x}, {y}) reach outside the "
-                f"{size[0]} x {size[1]} framebuffer, where GL's pixels are undefined: "
-                f"copy from inside it",
-            )
         picture = ""
         frame = len(self.tracker.frames) - 1
         kept = sum(1 for k in self.pictures if k.startswith(f"copy_{frame}_"))
@@ -781,6 +773,7 @@ class Executor:
             self.pictures[picture] = self.session_frame()
         getattr(legacy.gl(), name)(*args)
         self.ok()
+        self._zero_outside(target, level, offset, (x, y, width, height))
         key = (_face(target), level)
         if name == "glCopyTexImage2D":
             self._write(
@@ -820,6 +813,49 @@ class Executor:
             picture=picture,
             viewport=tracker.viewport.plain(),
         )
+
+    def _zero_outside(
+        self,
+        target: int,
+        level: int,
+        offset: tuple[int, int],
+        box: tuple[int, int, int, int],
+    ) -> None:
+        """After a copy of ``box`` (x, y, width, height of the framebuffer) into ``level``
+        of image ``target`` at ``offset``: the texels whose pixels lay outside the
+        framebuffer, which GL leaves undefined (memory of anything's), made zeros."""
+        x, y, width, height = box
+        frame_width, frame_height = self.session.width, self.session.height
+        left, bottom = max(0, -x), max(0, -y)
+        right, top = min(width, frame_width - x), min(height, frame_height - y)
+        if left == 0 and bottom == 0 and right >= width and top >= height:
+            return
+        right, top = max(right, left), max(top, bottom)
+        strips = [  # (x, y, width, height) in the copy's own texels
+            (0, 0, width, bottom),
+            (0, top, width, height - top),
+            (0, bottom, left, top - bottom),
+            (right, bottom, width - right, top - bottom),
+        ]
+        depth = int(GL.glGetTexLevelParameteriv(target, level, GL.GL_TEXTURE_DEPTH_SIZE))
+        fmt = GL.GL_DEPTH_COMPONENT if depth else GL.GL_RGBA
+        GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
+        for sx, sy, sw, sh in strips:
+            if sw > 0 and sh > 0:
+                zeros = np.zeros(sw * sh * 4, dtype=np.uint8)
+                RAW_1_1.glTexSubImage2D(
+                    target,
+                    level,
+                    offset[0] + sx,
+                    offset[1] + sy,
+                    sw,
+                    sh,
+                    fmt,
+                    GL.GL_UNSIGNED_BYTE,
+                    zeros,
+                )
+        GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, self.alignment[int(GL.GL_UNPACK_ALIGNMENT)])
+        self.ok()
 
     def session_frame(self) -> np.ndarray:
         """The target's colour now, ``(h, w, 3)`` uint8, row 0 at the top."""

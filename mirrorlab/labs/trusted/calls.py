@@ -45,7 +45,13 @@ def gl_error(err: int, detail: str = "") -> CallError:
     return CallError("GLError", text + (f" ({detail})" if detail else ""), err)
 
 
+ENUM_NAMES: dict[int, str] = {}
+"""The name each enum of the allow-list was first given here (its refusals name it so)."""
+
+
 def enums(*names: str) -> frozenset[int]:
+    for name in names:
+        ENUM_NAMES.setdefault(int(getattr(GL, name)), name)
     return frozenset(int(getattr(GL, name)) for name in names)
 
 
@@ -1072,12 +1078,9 @@ def refusal(lab: str, name: str) -> str:
     return left_out(lab).get(name) or REFUSED.get(name, "")
 
 
-def enum_name(value: int, prefix: str = "GL_") -> str:
-    """GL's name for ``value`` (the first of PyOpenGL's names), else its hex."""
-    for name in dir(GL):
-        if name.startswith(prefix) and getattr(GL, name) == value and type(value) is int:
-            return name
-    return f"{value:#x}"
+def enum_name(value: int) -> str:
+    """The allow-list's name for enum ``value`` (:data:`ENUM_NAMES`), else its hex."""
+    return ENUM_NAMES.get(value, f"{value:#x}")
 
 
 def open_for(lab: str, kind: str, value: int) -> str:

@@ -430,6 +430,7 @@ def judge_frame(
     regions: dict[str, np.ndarray | None],
     frame_task: str,
     owner: dict[str, tuple[str, str]],
+    allowed: np.ndarray | None = None,
 ) -> Verdicts:
     """The final frame compared with the reference frame as a whole, after the per-task
     verdicts: pixels that differ beyond :data:`TOLERANCE` and the pixels of a faint mark
@@ -437,12 +438,15 @@ def judge_frame(
     must be explained by a failed task whose region (``regions[task]``, a mask; None for
     the whole frame) holds the differing pixels; otherwise the task that owns
     them (``owner``: a region's name -> (task id, what it is)) fails saying where, or
-    ``frame_task`` fails with the count."""
+    ``frame_task`` fails with the count. ``allowed``: pixels whose faint mark is a
+    difference the handout accepts (a mask), not counted."""
     frame, ref = student.image("frame"), reference.image("frame")
     if frame is None or ref is None or frame.shape != ref.shape:
         return verdicts
     verdicts = dict(verdicts)
     marks = overlay_marks(frame, ref)
+    if allowed is not None and allowed.shape == marks.shape:
+        marks &= ~allowed
     mask = differing(frame, ref) | marks
     limit = allowed_pixels(frame.shape)
     if int(mask.sum()) <= limit:

@@ -298,7 +298,7 @@ def kit_state() -> Iterator[None]:
     ]
     depth_mask = bool(np.asarray(GL.glGetBooleanv(GL.GL_DEPTH_WRITEMASK)).reshape(-1)[0])
     depth_func = int(np.asarray(GL.glGetIntegerv(GL.GL_DEPTH_FUNC)).reshape(-1)[0])
-    polygon_mode = int(np.asarray(GL.glGetIntegerv(GL.GL_POLYGON_MODE)).reshape(-1)[0])
+    polygon_modes = [int(v) for v in np.asarray(GL.glGetIntegerv(GL.GL_POLYGON_MODE)).reshape(-1)]
     for name in RASTER_CAPS:
         GL.glDisable(getattr(GL, name))
     for name in LEGACY_CAPS:
@@ -318,7 +318,11 @@ def kit_state() -> Iterator[None]:
         GL.glColorMask(*colour_mask)
         GL.glDepthMask(depth_mask)
         GL.glDepthFunc(depth_func)
-        FF.glPolygonMode(GL.GL_FRONT_AND_BACK, polygon_mode)
+        if legacy.emulated() is None and len(polygon_modes) > 1:  # each face its own
+            GL.glPolygonMode(GL.GL_FRONT, polygon_modes[0])
+            GL.glPolygonMode(GL.GL_BACK, polygon_modes[1])
+        else:
+            FF.glPolygonMode(GL.GL_FRONT_AND_BACK, polygon_modes[0])
 
 
 class Mesh:
