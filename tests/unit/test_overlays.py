@@ -110,7 +110,7 @@ MARKS = st.one_of(
 )
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=50, deadline=None)
 @given(
     lab=st.sampled_from(LABS),
     mark=MARKS,

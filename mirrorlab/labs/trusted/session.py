@@ -414,15 +414,6 @@ def read_level(target: int, level: int) -> np.ndarray:
     return np.ascontiguousarray(image[::-1])
 
 
-def texture_format(target: int, level: int = 0) -> int:
-    """The internal format GL reports for ``level`` of image ``target`` of the texture
-    bound on the active unit (0 when it has no storage)."""
-    GL = lazy_gl()
-    if not int(GL.glGetTexLevelParameteriv(target, level, GL.GL_TEXTURE_WIDTH)):
-        return 0
-    return int(GL.glGetTexLevelParameteriv(target, level, GL.GL_TEXTURE_INTERNAL_FORMAT))
-
-
 def read_texture_2d(texture_id: int, level: int = 0) -> np.ndarray:
     """Level ``level`` of 2D texture ``texture_id`` as ``(h, w, 3)`` uint8, row 0 at the
     top; (0, 0, 3) when it has no storage (:func:`read_level`). Keeps the active unit's
@@ -480,9 +471,6 @@ def texture_parameters(texture_id: int, target: int | None = None) -> dict[str, 
     for level, key in ((0, "width"), (1, "level1_width")):
         values[key] = int(GL.glGetTexLevelParameteriv(image_target, level, GL.GL_TEXTURE_WIDTH))
     values["height"] = int(GL.glGetTexLevelParameteriv(image_target, 0, GL.GL_TEXTURE_HEIGHT))
-    values["depth_bits"] = int(
-        GL.glGetTexLevelParameteriv(image_target, 0, GL.GL_TEXTURE_DEPTH_SIZE)
-    )
     GL.glBindTexture(target, previous)
     return values
 
