@@ -235,7 +235,8 @@ def test_a_blank_texture_is_zeros_whatever_gl_held_before(lab):
 
 
 @pytest.mark.parametrize(
-    "rectangle", [(-8, 0, 64, 64), (0, -8, 16, 16), (8, 0, 64, 64), (60, 60, 8, 2), (-4, -4, 72, 70)]
+    "rectangle",
+    [(-8, 0, 64, 64), (0, -8, 16, 16), (8, 0, 64, 64), (60, 60, 8, 2), (-4, -4, 72, 70)],
 )
 def test_what_a_copy_takes_from_outside_the_framebuffer_is_zeros(lab, rectangle):
     """GL's pixels outside the framebuffer are undefined (memory of anything's): the texels
