@@ -108,6 +108,7 @@ def test_every_call_switch_and_mode_is_a_channels_or_carries_no_number(quad_lab)
     added to the allow-list must be classed as a channel's or as carrying no number of the
     file's to a pixel, or this fails."""
     in_channels = {name for channel in C.CHANNELS.values() for name in channel.calls}
+    assert len(in_channels) == sum(len(c.calls) for c in C.CHANNELS.values())  # one each
     assert set(C.GL_SPECS) == in_channels | C.NEUTRAL
     assert not in_channels & C.NEUTRAL
     caps = {cap for channel in C.CHANNELS.values() for cap in channel.caps}

@@ -921,7 +921,10 @@ CHANNELS: dict[str, Channel] = {
         Channel(
             "texgen",
             "texture coordinates made by texgen from the geometry",
-            _forms("glTexGeni", "glTexGenf", "glTexGend", "glGetTexGen"),
+            (
+                *(name for name in _forms("glTexGen") if not name.endswith("v")),
+                *_forms("glGetTexGen"),
+            ),
             caps=enums("GL_TEXTURE_GEN_S", "GL_TEXTURE_GEN_T"),
         ),
         Channel(
