@@ -40,8 +40,8 @@ PIXEL_TOLERANCE = 2
 """The most a channel of the student's picture may differ (of 255) between the two ways,
 but on :data:`STRAY_PIXELS` of the pixels. Measured on every solution, starter and mutant
 of the three labs (63 files): at most 1, on at most 0.011% of the pixels; on
-:data:`FIXED_FUNCTION`'s, 20 pixels (0.005%) of a point centred on a pixel corner, which
-the core context rasterises as a sprite one row and column over."""
+:data:`FIXED_FUNCTION`'s (in the quad lab), 10 pixels (0.015%) of a point centred on a
+pixel corner, which the core context rasterises as a sprite one row and column over."""
 STRAY_PIXELS = 0.0005
 """The judges' own share of pixels a frame may differ on (0.05%)."""
 
