@@ -22,7 +22,11 @@ from mirrorlab.options import (
 )
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import BoxProxy, DistanceSearch, SphereProxy
+from mirrorlab.techniques import techniques
 from tests.scenekit import curved_reflector, planar_reflector, scene_robot
+
+CORRECTED = tuple(t.name for t in techniques("curved") if t.parallax)
+"""The curved techniques that take a parallax correction (the registry's, in order)."""
 
 SKY_CUBE = data_path("textures") / "sky_cube"
 
@@ -178,8 +182,8 @@ def test_leaving_cube_live_drops_the_parallax_correction():
         (
             "chrome_sphere",
             "distance",
-            "--parallax: scene 'chrome_sphere' has no cube-live "
-            "reflector (--method cube-live makes every curved",
+            f"--parallax: scene 'chrome_sphere' has no {' or '.join(CORRECTED)} "
+            f"reflector (--method {CORRECTED[0]} makes every curved",
         ),
         ("lab20", "distance", "--parallax: scene 'lab20' has no curved reflector"),
     ],
@@ -287,9 +291,9 @@ def test_set_changes_any_key_path_as_a_file_would():
         ),
         (
             {"method": "spheer"},
-            "--method: reflectors[0].technique: expected one of ortho, "
-            "reflected, stencil, sphere, sphere-vertex, sphere-texgen, cube, "
-            "cube-live, latlong, normal, got 'spheer' (did you mean 'sphere'?)",
+            "--method: reflectors[0].technique: expected one of "
+            + ", ".join(t.name for t in techniques() if t.kind != "frame")
+            + ", got 'spheer' (did you mean 'sphere'?)",
         ),
         ({"method": 5}, "--method: reflectors[0].technique: expected a string, got the number 5"),
         (
