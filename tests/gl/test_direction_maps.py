@@ -26,7 +26,7 @@ from mirrorlab.flip import flip_map
 from mirrorlab.options import apply_options
 from mirrorlab.passes.envmap import OUTPUT_COORDINATES, OUTPUT_RAY_DIRECTION
 from mirrorlab.raytrace import trace_scene
-from mirrorlab.scene.model import Background, Camera, MeshObject, Scene
+from mirrorlab.scene.model import Background, Camera, MeshObject, Scene, Transform
 from mirrorlab.techniques import technique
 from tests.gl.envmap_frames import assert_close_to_truth, region_error
 from tests.gl.test_envmap_paths import CLOSE_UP, SIZE, SMALL, render, sphere_scene, traced
@@ -307,14 +307,26 @@ def test_the_vertex_warp_bends_only_vertices(scene_renderer, tmp_path):
     curve: far from the map converted from the cube capture (both without the room's
     parallax correction, which the warped map does not take). Cut into triangles 0.5
     units long, the walls come out right (measured MAE /255 against the converted map's
-    frame: 10.5 as shipped, 0.21 subdivided)."""
+    frame: 10.4 as shipped, 0.24 subdivided). A chrome ball with a static cube map stands
+    beside the sphere, so its own pass draws through the warp too."""
     room = load_scene("sphere_room")
     _, mask = traced_room()
+    sphere = room.reflectors[0]
+    ball = replace(
+        sphere,
+        name="ball",
+        technique="cube",
+        parallax=None,
+        transform=Transform(position=(1.6, 0.4, 0.8), scale=(0.4, 0.4, 0.4)),
+    )
     errors = []
     for scene in (room, subdivided(room, tmp_path, 4)):
-        warped = apply_options(scene, {"method": "paraboloid-warped", "map_size": 128})
-        converted = apply_options(
-            scene, {"method": "paraboloid-live", "map_size": 128, "parallax": "none"}
+        warped, converted = (
+            replace(
+                scene,
+                reflectors=(replace(sphere, technique=method, map_size=128, parallax=None), ball),
+            )
+            for method in ("paraboloid-warped", "paraboloid-live")
         )
         reference, _ = render(scene_renderer, converted, SMALL)
         image, stats = render(scene_renderer, warped, SMALL)
