@@ -31,6 +31,7 @@ from mirrorlab.techniques import technique
 from tests.gl.envmap_frames import assert_close_to_truth, region_error
 from tests.gl.test_envmap_paths import CLOSE_UP, SIZE, SMALL, render, sphere_scene, traced
 from tests.imagecheck import save_failure
+from tests.scenekit import curved_reflector
 
 OCTAHEDRAL = ("octahedral", "octahedral-live")
 PARABOLOID = ("paraboloid", "paraboloid-live", "paraboloid-warped")
@@ -311,7 +312,7 @@ def test_the_vertex_warp_bends_only_vertices(scene_renderer, tmp_path):
     beside the sphere, so its own pass draws through the warp too."""
     room = load_scene("sphere_room")
     _, mask = traced_room()
-    sphere = room.reflectors[0]
+    sphere = curved_reflector(room, "sphere")
     ball = replace(
         sphere,
         name="ball",
