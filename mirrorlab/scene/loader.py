@@ -932,7 +932,7 @@ class _Reader:
             if entry.source == "faces":
                 source = self.folder_of_faces(table["source"], f"{key}.source")
             elif entry.source == "picture":
-                source = self.file(table["source"], f"{key}.source", "sphere-map picture")
+                source = self.file(table["source"], f"{key}.source", f"{name} map's picture")
             else:
                 raise self.fail(
                     f"{key}.source",
