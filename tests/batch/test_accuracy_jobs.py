@@ -52,7 +52,14 @@ def test_the_quick_sweep_on_two_processes_gives_the_figures_of_one(tmp_path, cap
     panels = [lab_panel(quick), *sphere_panels(quick)]
     assert len(serial) == sum(
         len(panel.viewpoints)
-        * (1 + len(scene_techniques(panel.scene, quick.sizes, panel.proxies, quick.steps)))
+        * (
+            1
+            + len(
+                scene_techniques(
+                    panel.scene, quick.sizes, panel.proxies, quick.steps, quick.map_sizes
+                )
+            )
+        )
         for panel in panels
     )
     own_cameras = sum(t.own_camera for t in techniques("planar"))

@@ -49,14 +49,14 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     # 2 viewpoints x (ray tracer + each capturing planar technique x 2 captures x 2 sizes
     # + one with a camera of its own x 2 captures with a footprint-sized texture + each
     # inline one); the sphere alone in the sky, among its objects and in the room, 1 view
-    # each x (ray tracer + each curved map x 2 sizes + each that takes a parallax
-    # correction with a box proxy, a sphere proxy and a distance search x 2 sizes).
+    # each x (ray tracer + each curved map at 128 + each that takes a parallax correction
+    # with a box proxy, a sphere proxy and a distance search at 128).
     quick = SweepSettings.quick()
     assert quick.sizes == (64, 128) and quick.viewpoints == ("head-on far", "60 deg")
-    assert quick.steps == ()
+    assert quick.steps == () and quick.map_sizes == (128,)
     lab_rows = 2 * (1 + len(lab_techniques(quick.sizes)))
     sphere_rows = sum(
-        1 + len(curved_techniques(quick.sizes, panel.proxies, quick.steps))
+        1 + len(curved_techniques(quick.map_sizes, panel.proxies, quick.steps))
         for panel in sphere_panels(quick)
     )
     planar, curved = techniques("planar"), techniques("curved")
@@ -68,7 +68,7 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
         + sum(t.own_camera for t in captured) * 2
         + sum(t.draws_inline for t in planar)
     )
-    assert sphere_rows == 3 * (1 + len(curved) * 2 + len(corrected) * 3 * 2)
+    assert sphere_rows == 3 * (1 + len(curved) + len(corrected) * 3)
     total = lab_rows + sphere_rows
     # one progress bar (tqdm, on stderr), and it reached its end: a step per row, and one
     # more per viewpoint for scoring its frames (2 lab views, 3 sphere scenes)
@@ -105,8 +105,9 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
         if r["scene"] == "sphere-room" and r["map_size"] == "128"
     }
     for name in corrected:  # in the room, the room as the proxy, or what the capture saw
-        assert room[f"{name} box"] < 0.01 and room[f"{name} distance"] < 0.01, name
         assert room[name] > 0.2, name
+        assert room[f"{name} box"] < 0.05 * room[name], (name, room)
+        assert room[f"{name} distance"] < 0.05 * room[name], (name, room)
     assert all(float(r["wall_ms"]) > 0 for r in table)
     markdown = (tmp_path / "accuracy.md").read_text()
     assert markdown.count("| technique |") == 4  # lab, sphere-sky, -objects, -room
