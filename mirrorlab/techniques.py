@@ -76,8 +76,10 @@ class Technique:
     ``draws_after_objects``: its own draw (its map, capture or nested view) comes after
     the view's objects, not before them as by default (the stencil mirror marks only the
     glass the objects leave showing); ``source`` what a reflector's
-    ``source`` key names for it (a ``picture`` used as its map, a folder of six cube
-    ``faces``; None: it takes none); ``view_ray``: its
+    ``source`` key names for it (a sphere-map ``picture`` used as its map, a folder of
+    six cube ``faces``, a square ``octahedral`` picture, a ``paraboloid`` picture of two
+    discs side by side; None: it takes none; a technique changed to one whose source is
+    of another kind drops the reflector's); ``view_ray``: its
     lookup follows the world-space view ray (``eye_world``, ``view_direction``);
     ``map_size_uniform``: its shader is told its map's size; ``parallax``: it takes a
     ``parallax`` table; ``own_camera``: planar, an ``ortho`` table sets its camera;
@@ -96,7 +98,7 @@ class Technique:
     constants: tuple[tuple[str, int], ...] = ()
     capture_camera: str = ""
     draws_after_objects: bool = False
-    source: Literal["picture", "faces"] | None = None
+    source: Literal["picture", "faces", "octahedral", "paraboloid"] | None = None
     view_ray: bool = False
     map_size_uniform: bool = False
     parallax: bool = False
@@ -319,7 +321,7 @@ for _entry in (
         vertex_shader="envmap.vert",
         fragment_shader="envmap_octahedral.frag",
         sampler="octahedral_texture",
-        source="picture",
+        source="octahedral",
         view_ray=True,
     ),
     Technique(
@@ -346,7 +348,7 @@ for _entry in (
         vertex_shader="envmap.vert",
         fragment_shader="envmap_paraboloid.frag",
         sampler="paraboloid_texture",
-        source="picture",
+        source="paraboloid",
         view_ray=True,
     ),
     Technique(

@@ -12,6 +12,9 @@ right again. Tolerances are the measured figures (stated beside each) with head 
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from dataclasses import replace
 from functools import cache
 from pathlib import Path
@@ -429,3 +432,39 @@ def test_the_converted_maps_take_the_live_cube_maps_parallax(scene_renderer):
         plain_error, _ = region_error(plain, objects_truth, objects_mask)
         searched_error, _ = region_error(searched, objects_truth, objects_mask)
         assert searched_error < 0.6 * plain_error, (method, searched_error, plain_error)
+
+
+def test_every_scene_with_a_curved_reflector_draws_alike_in_the_macos_context(registry, tmp_path):
+    """Each shipped scene with a curved reflector, by each of the five maps (64 px, map
+    32), drawn in a child process whose Mesa simulates macOS's OpenGL 4.1 core context
+    (no multi-draw, no base instance, ...) and here in the default context: the same
+    frames, pixel for pixel (tolerance 0, as the golden frames' core comparison)."""
+    from mirrorlab.testing import difference_image
+    from tests import MACOS_CONTEXT, REPO_DIR
+    from tests.gl.maps_frames import draw_all
+
+    out = tmp_path / "frames.npz"
+    result = subprocess.run(
+        [sys.executable, "-m", "tests.gl.maps_frames", str(out)],
+        cwd=REPO_DIR,
+        env={**os.environ, **MACOS_CONTEXT},
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert result.returncode == 0, result.stderr[-3000:]
+    frames = draw_all(registry)
+    with np.load(out) as saved:
+        assert bool(saved["core"]), "the child's context was not a core profile"
+        assert set(saved.files) == {"core", *frames}
+        for label, default in frames.items():
+            core = saved[label]
+            if not np.array_equal(core, default):
+                diff = difference_image(core, default)
+                folder = save_failure(f"macos_{label}", core=core, default=default, diff=diff)
+                pytest.fail(
+                    f"{label}: {int((core != default).any(axis=-1).sum())} pixels differ "
+                    f"between the core and the default context; images in {folder}"
+                )
+    scenes = {label.split("__")[0] for label in frames}
+    assert {"chrome_sphere", "sphere_room", "spheremap_cone", "mirror_and_sphere"} <= scenes

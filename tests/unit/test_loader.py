@@ -692,7 +692,7 @@ def test_a_missing_picture_is_named(tmp_path):
     document["background"] = {"sphere_map": "gone.png"}
     assert_refused(tmp_path, document, "background.sphere_map", "picture", "does not exist")
     document = base_document()
-    for name in names_where(lambda t: t.source == "picture"):
+    for name in names_where(lambda t: t.source not in (None, "faces")):
         document["reflectors"][1].update(technique=name, source="gone.png")
         assert_refused(
             tmp_path, document, "reflectors[1].source", f"{name} map's picture", "does not exist"
