@@ -60,8 +60,8 @@ def test_the_octahedral_map_matches_the_cubes_coarsest_texel_at_087_of_its_texel
     6 n^2 (the issue's 0.87, computed on its own grid)."""
     n = 48
     cube = tb.largest_texel(tb.Layout("cube", n))
-    assert cube == pytest.approx((2 / n) ** 2, rel=2e-3)
-    matched = tb.matching_budget("octahedral", cube, low=80, high=160)
+    assert cube == pytest.approx((2 / n) ** 2, rel=3e-3)  # a little less: the texel is curved
+    matched = tb.matching_budget("octahedral", cube, low=100, high=130)
     assert (
         tb.largest_texel(matched)
         <= cube
