@@ -514,7 +514,7 @@ PARABOLOID_EXTENT = 1.0625
 """Half the width of a dual-paraboloid texture's square in paraboloid units: the disc
 that holds a hemisphere has radius 1, and the square around it reaches
 ``PARABOLOID_EXTENT`` from its centre, so that a margin of directions from across the
-rim surrounds the disc (8 texels of 256 at level 0, one at level 3): bilinear filtering
+rim surrounds the disc (7.5 texels of 256 at level 0, about one at level 3): bilinear filtering
 and mipmaps at the rim read the directions that lie past it, not a clamped edge."""
 
 
