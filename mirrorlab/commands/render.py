@@ -315,6 +315,7 @@ def render_frames(
             if save_mask is not None and mask is not None:
                 outputs.add_png(save_mask, mask.image())
             gl_renderer = renderer.gl_renderer
+            described = renderer.gl_description if stats else None
     last = records[-1][1]
     total = (time.perf_counter() - start) * 1e3
     say(
@@ -336,6 +337,10 @@ def render_frames(
             else f"{100 * mask.miss_share:.1f}% of its reflector pixels fell back to the probe"
         )
         say(f"wrote {save_mask} (screen-space reflections' miss mask: {shares})")
+    if described is not None:
+        from mirrorlab.gl.context import summary
+
+        say(f"OpenGL: {summary(described)}; draw path {described['draw_path']}")
     if stats:
         _report(records, comparison, use_plan, say)
     return 0

@@ -19,7 +19,8 @@ after the view's objects, in four steps:
    with its hit's by the hit's weight, and gives alpha back.
 
 In a view seen through a stencil mirror (stencil level above 0) the frame copy holds
-other views' pixels too, so there it draws the probe alone.
+other views' pixels too, and a warped view (a paraboloid capture) has no matrix to
+project a ray by, so there it draws the probe alone.
 """
 
 from __future__ import annotations
@@ -111,7 +112,6 @@ class ScreenSpaceReflections:
         self.composite.set_int("frame_color", COLOR_UNIT)
         self.composite.set_int("hit_colors", HITS_UNIT)
         self.composite.set_int("hit_infos", HITS_UNIT + 1)
-        self.flat = shared.program("flat.vert", "flat.frag")
         self.downsample = shared.program("ssr_composite.vert", "ssr_pyramid.frag")
         self.pyramids: dict[tuple[int, int], DepthPyramid] = {}
         self.pyramid_levels = PYRAMID_LEVELS
@@ -173,7 +173,9 @@ class ScreenSpaceReflections:
         elif draw.mode == "plain":
             assert isinstance(reflector, CurvedReflector)
             return renderer.drawer.draw_plain(renderer.scene, reflector, view)
-        marching = stencil_level == 0
+        # the march projects rays by the view's matrix: no march through a stencil mirror
+        # (other views' pixels in the frame) or in a warped view (no matrix projects it)
+        marching = stencil_level == 0 and view.warp is None
         draws = self.draw_probe(draw, view, renderer, target, stencil_level, marking=marching)
         if marching:
             draws += self.march(draw, view, target)
@@ -207,7 +209,7 @@ class ScreenSpaceReflections:
 
     def draw_flat(self, reflector: Reflector, view: View, color) -> int:
         """The reflector's front in one unlit colour (no probe: the background's)."""
-        program = self.flat
+        program = self.shared.program("flat.vert", "flat.frag", view.warp)
         program.use()
         program.set_mat4("view_projection", view.uniforms[0])
         set_clip_plane(program, view)

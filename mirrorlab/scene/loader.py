@@ -912,8 +912,8 @@ class _Reader:
         kind = None if mapped is None else mapped.source
         if kind == "faces":
             return self.folder_of_faces(table["source"], f"{key}.source")
-        if kind == "picture":
-            return self.file(table["source"], f"{key}.source", "sphere-map picture")
+        if kind is not None and mapped is not None:  # a picture: the map in its layout
+            return self.file(table["source"], f"{key}.source", f"{mapped.name} map's picture")
         via = "" if mapped is None or mapped.name == name else f" (its probe {mapped.name!r})"
         raise self.fail(
             f"{key}.source",

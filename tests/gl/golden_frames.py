@@ -92,8 +92,9 @@ TECHNIQUE_VARIANTS: tuple[tuple[str, dict[str, Any]], ...] = (
     ("two_mirrors", {"method": "stencil"}),
     ("mirror_and_sphere", {"max_bounces": 3}),
 )
-"""Shipped scenes with options that put every technique and capture mode on screen (the
-curved techniques from the registry: a new one needs its golden PNG made)."""
+"""Shipped scenes with options that put every technique and capture mode on screen (every
+curved technique of the registry on the chrome sphere, and a technique for both kinds on
+the lab's mirror: a new one needs its golden PNG made)."""
 
 
 def sequences() -> Iterator[Sequence]:

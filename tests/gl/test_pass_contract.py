@@ -311,7 +311,7 @@ class ShiftedFrame(PlanarPass):
 
     def draw_own(self, draw, view, renderer, target, stencil_level):
         frame = self.frames.copy(view.size, None)
-        program = self.mirror_program
+        program = self.mirror_program(view)
         program.use()
         set_view_uniforms(program, view)
         program.set_mat4("model", self.quad_model(view))
