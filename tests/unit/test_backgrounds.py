@@ -29,6 +29,7 @@ from mirrorlab.scene.backgrounds import (
 )
 from mirrorlab.scene.loader import SceneError, load_scene
 from mirrorlab.scene.model import Background, CurvedReflector, MeshObject
+from mirrorlab.techniques import technique_names
 from tests.scenekit import curved_reflector
 
 SKY_CUBE = data_path("textures") / "sky_cube"
@@ -274,9 +275,9 @@ def test_methods_and_scene_names_are_checked_with_the_choices():
     for name in ("sphere", "lab"):  # a misspelt name is named, whatever the reflector
         with pytest.raises(OptionError) as info:
             apply_options(load_scene(name), {"method": "cubemap"})
+        every = ", ".join(dict.fromkeys(technique_names("planar") + technique_names("curved")))
         assert str(info.value) == (
-            "--method: reflectors[0].technique: expected one of ortho, reflected, stencil, "
-            "sphere, sphere-vertex, sphere-texgen, cube, cube-live, latlong, normal, got "
+            f"--method: reflectors[0].technique: expected one of {every}, got "
             "'cubemap' (did you mean 'cube'?)"
         )
     with pytest.raises(OptionError, match=r"--method: expected one of ortho, .* got 'cubemap'"):

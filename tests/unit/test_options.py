@@ -22,9 +22,16 @@ from mirrorlab.options import (
 )
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import BoxProxy, DistanceSearch, SphereProxy
+from mirrorlab.techniques import technique, technique_names, techniques
 from tests.scenekit import curved_reflector, planar_reflector, scene_robot
 
 SKY_CUBE = data_path("textures") / "sky_cube"
+CORRECTED = tuple(t.name for t in techniques("curved") if t.parallax)
+"""The curved techniques that take a parallax correction, in the registry's order."""
+REFLECTOR_TECHNIQUES = ", ".join(
+    dict.fromkeys(technique_names("planar") + technique_names("curved"))
+)
+"""Every technique a reflector may take, as a message lists them (planar, then curved)."""
 
 
 def changed_fields(before, after) -> set[str]:
@@ -96,11 +103,14 @@ def test_leaving_ortho_drops_the_labs_capture_camera():
 def test_a_reflectors_source_is_kept_only_where_it_means_the_same():
     cone = load_scene("cone")
     picture = curved_reflector(cone, "cone").source
+    kind = technique(curved_reflector(cone, "cone").technique).source
+    assert picture is not None and kind == "picture"
     assert curved_reflector(apply_options(cone, {"method": "sphere"}), "cone").source == picture
-    assert curved_reflector(apply_options(cone, {"method": "normal"}), "cone").source == picture
-    # A picture is no folder of cube faces, and latlong takes no source: baked instead.
-    for method in ("cube", "latlong", "cube-live"):
-        assert curved_reflector(apply_options(cone, {"method": method}), "cone").source is None
+    # A sphere map's picture is no folder of cube faces, and a technique that takes no
+    # source bakes or captures its map instead: every curved technique of the registry.
+    for entry in techniques("curved"):
+        kept = curved_reflector(apply_options(cone, {"method": entry.name}), "cone").source
+        assert kept == (picture if entry.source == kind else None), entry.name
     faces = apply_options(
         load_scene("sphere"),
         {"set": ['reflectors[0].technique="cube"', f'reflectors[0].source="{SKY_CUBE}"']},
@@ -140,9 +150,13 @@ def test_parallax_sets_every_live_cube_map_in_any_form():
 
 
 def test_leaving_cube_live_drops_the_parallax_correction():
+    """... for every curved technique that takes none; one that takes it keeps it."""
     room = load_scene("sphere_room")
-    for method in ("cube", "sphere", "latlong"):
-        assert curved_reflector(apply_options(room, {"method": method}), "sphere").parallax is None
+    corrected = curved_reflector(room, "sphere").parallax
+    assert corrected is not None
+    for entry in techniques("curved"):
+        moved = curved_reflector(apply_options(room, {"method": entry.name}), "sphere")
+        assert moved.parallax == (corrected if entry.parallax else None), entry.name
     assert apply_options(room, {"method": "cube-live"}) == room
 
 
@@ -178,8 +192,8 @@ def test_leaving_cube_live_drops_the_parallax_correction():
         (
             "chrome_sphere",
             "distance",
-            "--parallax: scene 'chrome_sphere' has no cube-live "
-            "reflector (--method cube-live makes every curved",
+            f"--parallax: scene 'chrome_sphere' has no {' or '.join(CORRECTED)} "
+            f"reflector (--method {CORRECTED[0]} makes every curved",
         ),
         ("lab20", "distance", "--parallax: scene 'lab20' has no curved reflector"),
     ],
@@ -287,9 +301,8 @@ def test_set_changes_any_key_path_as_a_file_would():
         ),
         (
             {"method": "spheer"},
-            "--method: reflectors[0].technique: expected one of ortho, "
-            "reflected, stencil, sphere, sphere-vertex, sphere-texgen, cube, "
-            "cube-live, latlong, normal, got 'spheer' (did you mean 'sphere'?)",
+            f"--method: reflectors[0].technique: expected one of {REFLECTOR_TECHNIQUES}, "
+            "got 'spheer' (did you mean 'sphere'?)",
         ),
         ({"method": 5}, "--method: reflectors[0].technique: expected a string, got the number 5"),
         (

@@ -18,7 +18,15 @@ from mirrorlab.commands.arguments import scene_from_args
 from mirrorlab.options import OptionError, apply_options, split_frame_technique
 from mirrorlab.plan import TextureState, plan_frame
 from mirrorlab.scene.loader import SceneError, load_scene, loads
-from mirrorlab.techniques import Technique, register, technique, technique_names, unregister
+from mirrorlab.techniques import (
+    Technique,
+    register,
+    technique,
+    technique_names,
+    techniques,
+    unregister,
+)
+from tests import REPO_DIR
 from tests.scenekit import curved_reflector
 
 PROBE_MIRROR = Technique(
@@ -199,16 +207,20 @@ def test_a_frame_technique_is_a_method_like_the_ray_tracer():
 
 
 def test_every_list_comes_from_the_registry():
-    assert technique_names("planar") == ("ortho", "reflected", "stencil")
-    assert set(technique_names("curved")) == {
-        "sphere",
-        "sphere-vertex",
-        "sphere-texgen",
-        "cube",
-        "cube-live",
-        "latlong",
-        "normal",
+    every = techniques()
+    names = technique_names()
+    assert names == tuple(t.name for t in every) and len(set(names)) == len(names)
+    for kind in ("planar", "curved", "frame"):
+        listed = technique_names(kind)
+        # each technique of a kind, in the order registered (a list keeps no order of its own)
+        assert {t.name for t in every if t.kind == kind} <= set(listed)
+        assert list(listed) == [n for n in names if n in listed]
+    assert set(technique_names("planar")) | set(technique_names("curved")) == {
+        t.name for t in every if t.kind != "frame"
     }
+    # the lab's and the textbook's techniques, each of its kind
+    assert {"ortho", "reflected", "stencil"} <= set(technique_names("planar"))
+    assert {"sphere", "cube", "cube-live", "latlong", "normal"} <= set(technique_names("curved"))
     with registered(replace(PROBE_MIRROR, name="probe-two")):
         assert technique_names("planar")[-1] == "probe-two"
     with pytest.raises(ValueError, match="already registered"):
@@ -219,13 +231,15 @@ def test_every_list_comes_from_the_registry():
 
 def test_the_lists_hold_under_python_O():
     # No import-time asserts keep lists in step: -O (which drops asserts) changes nothing.
+    # (the child imports the tests too, so a run with twins registered has them there)
     code = (
+        "import tests; "
         "from mirrorlab.techniques import technique_names as t; "
         "from mirrorlab.scene.loader import load_scene; "
         "s = load_scene('mirror_and_sphere'); print(len(t()), s.reflectors[0].technique)"
     )
     out = subprocess.run(
-        [sys.executable, "-O", "-c", code], capture_output=True, text=True, check=True
+        [sys.executable, "-O", "-c", code], capture_output=True, text=True, check=True, cwd=REPO_DIR
     ).stdout.split()
     assert out == [str(len(technique_names())), "reflected"]
 
