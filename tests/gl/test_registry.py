@@ -11,21 +11,29 @@ import pytest
 
 import mirrorlab
 from mirrorlab.options import apply_options
-from mirrorlab.techniques import register, technique, technique_names, techniques, unregister
+from mirrorlab.techniques import (
+    Technique,
+    register,
+    technique,
+    technique_names,
+    techniques,
+    unregister,
+)
 from tests.gl.frames import draw
 
 SIZE = (96, 96)
 
 
+def scene_for(entry: Technique) -> str:
+    """A shipped scene with a reflector of ``entry``'s kind: the lab's mirror for a planar
+    technique, and for a curved one the sphere beside a mirror (a live map captures the
+    mirror too)."""
+    return "lab20" if entry.kind == "planar" else "mirror_and_sphere"
+
+
 def copy_cases() -> list[tuple[str, str]]:
-    """Every technique a reflector may take (from the registry), on a shipped scene with a
-    reflector of its kind: the lab's mirror for a planar one, and for a curved one the
-    sphere beside a mirror (a live map captures the mirror too)."""
-    return [
-        ("lab20" if entry.kind == "planar" else "mirror_and_sphere", entry.name)
-        for entry in techniques()
-        if entry.kind != "frame"
-    ]
+    """Every technique a reflector may take (from the registry), on its :func:`scene_for`."""
+    return [(scene_for(entry), entry.name) for entry in techniques() if entry.kind != "frame"]
 
 
 @pytest.mark.parametrize(("scene_name", "like"), copy_cases())
