@@ -215,54 +215,65 @@ def test_planar_configurations_cover_every_capture_mode_and_size_plus_stencil():
             assert mirror.texture_size == options["env_size"]
 
 
-def distance_labels(name: str, steps=accuracy.DISTANCE_STEPS) -> list[str]:
-    """The distance search's labels for the parallax-corrected technique ``name``: at each
-    size with its default steps, then at one size with each other step count."""
-    others = [f"{name} distance {s}" for s in steps if s != accuracy.DEFAULT_STEPS]
-    return [f"{name} distance", *others]
+def assert_curved_configurations(configs, sizes) -> None:
+    """Every curved technique of the registry plain at each of ``sizes`` (in the registry's
+    order, first), and every other configuration a parallax correction of a technique
+    that takes one, labelled ``<technique> <correction>``, that the scene's options give
+    as labelled."""
+    plain = [(t.name, size) for t in techniques("curved") for size in sizes]
+    assert [(label, o["map_size"]) for label, o in configs[: len(plain)]] == plain
+    corrected = {t.name for t in techniques("curved") if t.parallax}
+    sphere = load_scene("chrome_sphere")
+    for index, (label, options) in enumerate(configs):
+        reflector = curved_reflector(apply_options(sphere, options), "sphere")
+        assert reflector.technique == options["method"]
+        if index < len(plain):
+            assert label == options["method"]
+            assert reflector.parallax is None  # a live map plain: no correction
+            continue
+        name, correction = label.split(" ", 1)
+        assert name == options["method"] and name in corrected, label
+        assert options["parallax"] != "none", label
+        if correction.startswith("distance"):
+            steps = correction.split()[-1] if label[-1].isdigit() else accuracy.DEFAULT_STEPS
+            assert reflector.parallax == DistanceSearch(*map(int, steps.split("+"))), label
 
 
 def test_curved_configurations_stop_at_the_largest_map_the_sweep_bakes():
     configs = accuracy.curved_techniques((64, 2048))
-    corrected = [t.name for t in techniques("curved") if t.parallax]
-    assert corrected, "a shipped curved technique takes a parallax correction"
-    assert [label for label, _ in configs] == [
-        *technique_names("curved"),
-        *(label for name in corrected for label in distance_labels(name)),
-    ]
-    assert all(o["map_size"] == 64 for _, o in configs)
+    assert_curved_configurations(configs, (64,))
     assert accuracy.ENVMAP_MAX_SIZE < 2048
-    sphere = load_scene("chrome_sphere")
-    for label, options in configs:
-        reflector = curved_reflector(apply_options(sphere, options), "sphere")
-        assert reflector.technique == options["method"]
-        if options.get("parallax") == "none":  # the plain live map has no correction
-            assert reflector.parallax is None
-        elif "distance" in label:
-            steps = label.split()[-1] if label[-1].isdigit() else accuracy.DEFAULT_STEPS
-            assert reflector.parallax == DistanceSearch(*map(int, steps.split("+")))
+    assert all(o["map_size"] == 64 for _, o in configs)
+    # the distance search's other step counts, at the one size there is
+    others = [s for s in accuracy.DISTANCE_STEPS if s != accuracy.DEFAULT_STEPS]
+    labels = {label for label, _ in configs}
+    assert {f"cube-live distance {steps}" for steps in others} <= labels
 
 
 def test_the_live_cube_map_is_measured_with_each_proxy_and_each_step_count():
-    """... and so is every technique that takes a parallax correction."""
     proxies = (("box", "box:-4,-2,-4,4,4,4"), ("sphere", "sphere:3"))
     configs = accuracy.curved_techniques((64, 256, 512), proxies, ("4+1", "8+2"))
-    corrected = [t.name for t in techniques("curved") if t.parallax]
-    assert "cube-live" in corrected
-    room = load_scene("sphere_room")
-    for name in corrected:
-        labels = [(label, o["map_size"]) for label, o in configs if label.startswith(f"{name} ")]
-        assert labels == [
-            *((f"{name} {proxy}", size) for proxy in ("box", "sphere") for size in (64, 256, 512)),
-            *((f"{name} distance", size) for size in (64, 256, 512)),
-            (f"{name} distance 4+1", 256),
-        ]
-        boxed = dict(configs)[f"{name} box"]  # the last size's options
-        assert curved_reflector(apply_options(room, boxed), "sphere").parallax == BoxProxy(
-            (-4.0, -2.0, -4.0), (4.0, 4.0, 4.0)
-        )
+    assert_curved_configurations(configs, (64, 256, 512))
+    labels = [(label, o["map_size"]) for label, o in configs if label.startswith("cube-live ")]
+    assert labels == [
+        ("cube-live box", 64),
+        ("cube-live box", 256),
+        ("cube-live box", 512),
+        ("cube-live sphere", 64),
+        ("cube-live sphere", 256),
+        ("cube-live sphere", 512),
+        ("cube-live distance", 64),
+        ("cube-live distance", 256),
+        ("cube-live distance", 512),
+        ("cube-live distance 4+1", 256),
+    ]
     assert accuracy.search_map_size((64, 128)) == 128
     assert accuracy.search_map_size((512, 1024)) == 512
+    room = load_scene("sphere_room")
+    boxed = dict(configs)["cube-live box"]  # the last size's options
+    assert curved_reflector(apply_options(room, boxed), "sphere").parallax == BoxProxy(
+        (-4.0, -2.0, -4.0), (4.0, 4.0, 4.0)
+    )
 
 
 def test_proxies_are_the_box_around_the_objects_and_the_sphere_inside_it():
@@ -284,11 +295,13 @@ def test_a_scene_gets_the_configurations_of_its_kinds_of_reflector():
         for name in ("lab20", "chrome_sphere", "mirror_and_sphere", "no_mirror")
     }
     assert labels["lab20"] == [label for label, _ in accuracy.lab_techniques(sizes)]
-    corrected = [t.name for t in techniques("curved") if t.parallax]
-    assert labels["chrome_sphere"] == [
-        *technique_names("curved"),
-        *(f"{name} distance" for name in corrected),
-    ]
+    # every curved technique, then (no proxies, no other steps) the distance search of
+    # each that takes a parallax correction
+    curved = technique_names("curved")
+    assert labels["chrome_sphere"][: len(curved)] == list(curved)
+    corrected = {f"{t.name} distance" for t in techniques("curved") if t.parallax}
+    rest = labels["chrome_sphere"][len(curved) :]
+    assert sorted(rest) == sorted(corrected) and "cube-live distance" in corrected
     assert labels["mirror_and_sphere"] == labels["lab20"] + labels["chrome_sphere"]
     assert labels["no_mirror"] == []
 
