@@ -111,16 +111,16 @@ def image_error(image: np.ndarray, truth: np.ndarray, mask: np.ndarray) -> Image
     worst = diff.max(axis=1)
     mse = float(np.mean(diff**2))
     psnr = math.inf if mse == 0.0 else 10.0 * math.log10(255.0**2 / mse)
-    # FLIP looks at each pixel's surroundings, so it is computed on the whole picture and
-    # only then averaged over the region.
-    flip_error = flip.flip_map(image, truth)
+    # FLIP looks at each pixel's surroundings: its map is computed on the region and what
+    # lies within reach of it, and only then averaged over the region.
+    flip_error = flip.region_mean(image, truth, mask)
     return ImageError(
         float(diff.mean()),
         float(np.percentile(worst, 95)),
         psnr,
         float(np.mean(worst > OFF_BY)),
         count,
-        math.nan if flip_error is None else float(flip_error[mask].mean()),
+        math.nan if flip_error is None else flip_error,
     )
 
 

@@ -529,3 +529,32 @@ def test_the_report_names_the_frontier_and_why_flip_is_empty(tmp_path):
     assert any(line.split()[:2] == ["3.50", "stencil"] for line in frontier_lines)
     markdown = (out / "accuracy.md").read_text()
     assert markdown.count("FLIP is empty: old.csv") == 2 and "| 3.50 | stencil | - |" in markdown
+
+
+@pytest.mark.skipif(not flip.available(), reason=str(flip.MISSING))
+@settings(max_examples=12, derandomize=True)
+@given(
+    st.integers(0, 39),
+    st.integers(0, 47),
+    st.integers(1, 40),
+    st.integers(1, 48),
+    st.booleans(),
+)
+def test_flip_over_a_region_is_the_whole_pictures_map_there(top, left, height, width, scatter):
+    """FLIP of the region and what lies within its reach (flip.REACH pixels) only, as the
+    sweep computes it, is the whole pictures' FLIP map averaged over the region: for a
+    region anywhere, at an edge or in a corner, whole or scattered."""
+    rng = np.random.default_rng(top * 100 + left)
+    truth = rng.integers(0, 256, (40, 48, 3), dtype=np.uint8)
+    image = truth.copy()
+    image[10:30, 12:40] = 255 - image[10:30, 12:40]
+    mask = np.zeros((40, 48), bool)
+    mask[top : top + height, left : left + width] = True
+    if scatter:
+        mask &= rng.random((40, 48)) < 0.3
+    if not mask.any():
+        assert math.isnan(flip.region_mean(image, truth, mask) or 0.0)
+        return
+    whole = flip.flip_map(image, truth)
+    assert whole is not None
+    assert flip.region_mean(image, truth, mask) == pytest.approx(whole[mask].mean(), abs=1e-6)
