@@ -1149,9 +1149,38 @@ CSV_WITHOUT_FLIP = (
 """Why FLIP is empty in a report re-made from a CSV (``name`` the file's)."""
 
 
+SweptScenes = str | Scene | Sequence[str | Scene]
+"""What a sweep measures: ``lab`` (the mirror techniques), ``sphere`` (the environment
+maps), ``all`` (both), a scene (from its own camera: every technique its reflectors can
+take), or several of these."""
+
+
+def panels_for(scenes: SweptScenes, settings: SweepSettings) -> list[Panel]:
+    """The panels of :data:`SweptScenes`, in the order given; ValueError when two would
+    have one name (their rows could not be told apart)."""
+    items = [scenes] if isinstance(scenes, str | Scene) else list(scenes)
+    panels: list[Panel] = []
+    for item in items:
+        if isinstance(item, Scene):
+            panels.append(file_panel(item))
+        elif item in ("lab", "sphere", "all"):
+            panels += [lab_panel(settings)] if item in ("lab", "all") else []
+            panels += sphere_panels(settings) if item in ("sphere", "all") else []
+        else:
+            raise ValueError(f"--scene: expected lab, sphere, all or a scene, got {item!r}")
+    names = [panel.name for panel in panels]
+    twice = sorted({name for name in names if names.count(name) > 1})
+    if twice:
+        raise ValueError(
+            f"--scene: two scenes named {twice[0]!r} (give each scene once; a scene file's "
+            "name key tells its rows from another's)"
+        )
+    return panels
+
+
 def run_command(
     settings: SweepSettings,
-    scenes: str | Scene,
+    scenes: SweptScenes,
     out_dir: Path,
     from_csv: Path | None = None,
     say: Callable[[str], None] = print,
@@ -1173,12 +1202,7 @@ def run_command(
         title = f"accuracy vs time, from {from_csv.name}"
         flip_reason: str | None = CSV_WITHOUT_FLIP.format(name=from_csv.name)
     else:
-        if isinstance(scenes, Scene):
-            panels = [file_panel(scenes)]
-        else:
-            panels = ([lab_panel(settings)] if scenes in ("lab", "all") else []) + (
-                sphere_panels(settings) if scenes in ("sphere", "all") else []
-            )
+        panels = panels_for(scenes, settings)
         started = time.perf_counter()
         with open_executor(jobs, scheduler, engine) as executor:
             rows = run_panels(panels, settings, executor=executor)

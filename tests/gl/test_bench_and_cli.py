@@ -292,10 +292,13 @@ def test_bench_refuses_a_file_as_its_folder_and_unknown_benchmarks(tmp_path, cap
     assert main(["bench", "accuracy", "--sizes", "64,zero"]) == 2
     assert main(["bench", "accuracy", "--from-csv", str(blocker)]) == 2
     assert main(["bench", "accuracy", "--scene", "moon"]) == 2
+    cone = str(scenes_dir() / "spheremap_cone.toml")
+    assert main(["bench", "accuracy", "--scene", cone, "--scene", "cone"]) == 2
     errors = capsys.readouterr().err.strip().splitlines()
-    assert len(errors) == 4 and "--out-dir" in errors[0]
+    assert len(errors) == 5 and "--out-dir" in errors[0]
     assert "--sizes" in errors[1] and "--from-csv" in errors[2]
     assert "moon" in errors[3] and "unknown scene" in errors[3]
+    assert "--scene: two scenes named 'spheremap_cone'" in errors[4]
     assert blocker.read_text() == "keep me"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["taken"]
 

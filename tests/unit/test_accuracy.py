@@ -559,3 +559,22 @@ def test_flip_over_a_region_is_the_whole_pictures_map_there(top, left, height, w
     whole = flip.flip_map(image, truth)
     assert whole is not None
     assert flip.region_mean(image, truth, mask) == pytest.approx(whole[mask].mean(), abs=1e-6)
+
+
+def test_a_sweep_takes_several_scenes_each_a_panel_of_its_own():
+    quick = accuracy.SweepSettings.quick()
+    cone, room = load_scene("cone"), load_scene("sphere_room")
+    panels = accuracy.panels_for(["lab", cone, room], quick)
+    assert [p.name for p in panels] == ["lab", cone.name, room.name]
+    assert panels[1] == accuracy.file_panel(cone)
+    assert [p.name for p in accuracy.panels_for("all", quick)] == [
+        "lab",
+        "sphere-sky",
+        "sphere-objects",
+        "sphere-room",
+    ]
+    assert accuracy.panels_for(cone, quick) == [accuracy.file_panel(cone)]
+    with pytest.raises(ValueError, match="two scenes named 'spheremap_cone'"):
+        accuracy.panels_for([cone, cone], quick)
+    with pytest.raises(ValueError, match="two scenes named 'lab'"):
+        accuracy.panels_for(["all", "lab"], quick)
