@@ -193,7 +193,7 @@ def test_planar_configurations_cover_every_capture_mode_and_size_plus_stencil():
     (stencil) once."""
     sizes = (64, 128)
     configs = accuracy.lab_techniques(sizes)
-    expected = []
+    expected: list[tuple[str, object]] = []
     for entry in techniques("planar"):
         if entry.draws_inline:
             continue
