@@ -79,3 +79,11 @@ def techniques_named(test: Callable[[Technique], bool]) -> str:
     names = [t.name for t in techniques() if test(t)]
     listed = ", ".join(repr(n) for n in names)
     return f"technique {listed}" if len(names) == 1 else f"techniques {listed}"
+
+
+def reflector_choices() -> str:
+    """How a message lists the techniques a reflector may take: the planar ones, then the
+    curved ones, each once, in the registry's order."""
+    from mirrorlab.techniques import technique_names
+
+    return ", ".join(dict.fromkeys(technique_names("planar") + technique_names("curved")))

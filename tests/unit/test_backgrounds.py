@@ -29,8 +29,8 @@ from mirrorlab.scene.backgrounds import (
 )
 from mirrorlab.scene.loader import SceneError, load_scene
 from mirrorlab.scene.model import Background, CurvedReflector, MeshObject
-from mirrorlab.techniques import technique_names
 from tests.scenekit import curved_reflector
+from tests.twins import reflector_choices
 
 SKY_CUBE = data_path("textures") / "sky_cube"
 LAUNCH = data_path("textures") / "launch.png"
@@ -275,9 +275,8 @@ def test_methods_and_scene_names_are_checked_with_the_choices():
     for name in ("sphere", "lab"):  # a misspelt name is named, whatever the reflector
         with pytest.raises(OptionError) as info:
             apply_options(load_scene(name), {"method": "cubemap"})
-        every = ", ".join(dict.fromkeys(technique_names("planar") + technique_names("curved")))
         assert str(info.value) == (
-            f"--method: reflectors[0].technique: expected one of {every}, got "
+            f"--method: reflectors[0].technique: expected one of {reflector_choices()}, got "
             "'cubemap' (did you mean 'cube'?)"
         )
     with pytest.raises(OptionError, match=r"--method: expected one of ortho, .* got 'cubemap'"):

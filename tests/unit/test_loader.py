@@ -52,7 +52,7 @@ from mirrorlab.scene.model import (
 )
 from mirrorlab.techniques import technique_names
 from tests import REPO_DIR
-from tests.twins import techniques_named
+from tests.twins import reflector_choices, techniques_named
 
 MODELS = sorted((data_path("models")).glob("*.obj"))
 PICTURES = sorted((data_path("textures")).glob("*.png"))
@@ -619,7 +619,7 @@ def test_wrong_types_are_named_with_what_was_expected(tmp_path):
             ("reflectors", 0, "technique"),
             "mirror",
             "reflectors[0].technique",
-            "expected one of ortho, reflected, stencil, sphere",
+            f"expected one of {reflector_choices()}, got",
         ),
         (
             ("reflectors", 1, "map_size"),

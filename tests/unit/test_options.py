@@ -22,16 +22,13 @@ from mirrorlab.options import (
 )
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import BoxProxy, DistanceSearch, SphereProxy
-from mirrorlab.techniques import technique, technique_names, techniques
+from mirrorlab.techniques import technique, techniques
 from tests.scenekit import curved_reflector, planar_reflector, scene_robot
+from tests.twins import reflector_choices
 
 SKY_CUBE = data_path("textures") / "sky_cube"
 CORRECTED = tuple(t.name for t in techniques("curved") if t.parallax)
 """The curved techniques that take a parallax correction, in the registry's order."""
-REFLECTOR_TECHNIQUES = ", ".join(
-    dict.fromkeys(technique_names("planar") + technique_names("curved"))
-)
-"""Every technique a reflector may take, as a message lists them (planar, then curved)."""
 
 
 def changed_fields(before, after) -> set[str]:
@@ -301,7 +298,7 @@ def test_set_changes_any_key_path_as_a_file_would():
         ),
         (
             {"method": "spheer"},
-            f"--method: reflectors[0].technique: expected one of {REFLECTOR_TECHNIQUES}, "
+            f"--method: reflectors[0].technique: expected one of {reflector_choices()}, "
             "got 'spheer' (did you mean 'sphere'?)",
         ),
         ({"method": 5}, "--method: reflectors[0].technique: expected a string, got the number 5"),
