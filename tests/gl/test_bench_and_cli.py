@@ -36,6 +36,9 @@ from mirrorlab.scene.loader import load_scene
 from mirrorlab.techniques import register, technique, technique_names, unregister
 from tests.imagecheck import assert_images_close
 
+CORRECTIONS = ("box", "sphere", "distance")
+"""The parallax corrections the quick sweep measures: its panels' two proxies, the search."""
+
 SKY_CUBE = data_path("textures") / "sky_cube"
 
 
@@ -102,8 +105,9 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     boxed = [label.removesuffix(" box") for label in room if label.endswith(" box")]
     assert "cube-live" in boxed
     for name in boxed:
-        assert room[f"{name} box"] < 0.01 and room[f"{name} distance"] < 0.01, (name, room)
         assert room[name] > 0.2, (name, room)
+        assert room[f"{name} box"] < 0.05 * room[name], (name, room)
+        assert room[f"{name} distance"] < 0.05 * room[name], (name, room)
     # FLIP beside the old figures (or, without flip-evaluator, empty, and the table says
     # why); no shipped technique falls back to a probe, so no miss share
     scored = [r for r in table if not r["technique"].startswith("raytrace")]

@@ -185,6 +185,11 @@ TOLERANCE_ORTHO = {  # method: (max mean abs error /255, max share of pixels off
     "cube": (5.2, 0.17),  # measured 3.67, 0.121
     "cube-live": (5.2, 0.17),  # measured 3.67, 0.121
     "latlong": (5.2, 0.19),  # measured 2.72, 0.083
+    "octahedral": (5.7, 0.23),  # measured 4.06, 0.165
+    "octahedral-live": (6.0, 0.22),  # measured 4.27, 0.158
+    "paraboloid": (4.7, 0.16),  # measured 3.34, 0.115
+    "paraboloid-live": (5.0, 0.17),  # measured 3.55, 0.120
+    "paraboloid-warped": (5.0, 0.17),  # measured 3.60, 0.121
 }
 
 

@@ -50,7 +50,7 @@ from mirrorlab.scene.model import (
     Transform,
     Vec3,
 )
-from mirrorlab.techniques import technique_names
+from mirrorlab.techniques import names_where, technique_names
 from tests import REPO_DIR
 from tests.twins import reflector_choices, techniques_named
 
@@ -693,10 +693,11 @@ def test_a_missing_picture_is_named(tmp_path):
     document["background"] = {"sphere_map": "gone.png"}
     assert_refused(tmp_path, document, "background.sphere_map", "picture", "does not exist")
     document = base_document()
-    document["reflectors"][1].update(technique="sphere", source="gone.png")
-    assert_refused(
-        tmp_path, document, "reflectors[1].source", "sphere-map picture", "does not exist"
-    )
+    for name in names_where(lambda t: t.source not in (None, "faces")):
+        document["reflectors"][1].update(technique=name, source="gone.png")
+        assert_refused(
+            tmp_path, document, "reflectors[1].source", f"{name} map's picture", "does not exist"
+        )
 
 
 def test_a_missing_cube_face_is_named(tmp_path):
