@@ -327,6 +327,8 @@ TOLERANCE_STATIC_IN_MIRROR = {  # method: (max mean abs error /255, max share of
     "normal": (8.5, 0.24),  # measured 6.07, 0.171 (ignores where the eye is)
     "cube": (4.5, 0.14),  # measured 3.17, 0.100
     "latlong": (4.5, 0.15),  # measured 2.30, 0.061
+    "octahedral": (5.0, 0.19),  # measured 3.55, 0.138
+    "paraboloid": (4.2, 0.13),  # measured 2.93, 0.093
 }
 TOLERANCE_LIVE_IN_MIRROR = (8.0, 0.25)  # measured 5.79, 0.180 (parallax, as in the sphere scene)
 
@@ -342,7 +344,8 @@ def test_static_map_seen_in_a_mirror_agrees_with_the_ray_tracer(scene_renderer, 
     image in the glass, measured the same for stencil and reflected: sphere 1.83, 4.9 %
     (bound 2.6, 7 %); sphere-vertex and sphere-texgen 1.87, 5.1 % (2.6, 7.5 %); cube
     3.17, 10.0 % (4.5, 14 %); latlong 2.30, 6.1 % (4.5, 15 %); normal 6.07, 17.1 %
-    (8.5, 24 %).
+    (8.5, 24 %); octahedral 3.55, 13.8 % (5.0, 19 %); paraboloid 2.93, 9.3 % (4.2, 13 %).
+    A technique registered later needs its figures measured and added (the message says so).
     """
     _, through, sphere, _ = traced_mirror()
     assert sphere.sum() > 3000
