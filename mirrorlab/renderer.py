@@ -26,6 +26,7 @@ from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import RenderTarget, Texture2D, TextureCube
 from mirrorlab.passes.base import (
     ReflectorPass,
+    ReportsFallback,
     SharedResources,
     apply_view_state,
     gl_state,
@@ -516,6 +517,27 @@ class SceneRenderer:
         changes nothing: the frame is still replayed."""
         held = self._passes.get(draw.reflector.name)
         return None if held is None else held[1]
+
+    def fallback_mask(self) -> np.ndarray | None:
+        """Which pixels of the last frame the reflectors' techniques filled from their
+        fallback (their probe) instead of their own method: ``(h, w)`` bool over the
+        frame, row 0 at the top, the union over the reflectors drawn in the frame's own
+        view whose pass reports it
+        (:class:`~mirrorlab.passes.base.ReportsFallback`). None where no reflector drawn
+        there has a fallback (every shipped technique but those that fall back). Looking
+        changes nothing: the frame is still replayed."""
+        if self.last_frame is None:
+            return None
+        top = self.last_frame.plan.top
+        union: np.ndarray | None = None
+        for draw in top.draws:
+            held = self._passes.get(draw.reflector.name)
+            if held is None or not isinstance(held[1], ReportsFallback):
+                continue
+            mask = held[1].fallback_mask(draw, top.view)
+            if mask is not None:
+                union = mask.copy() if union is None else union | mask
+        return union
 
     def pass_for(self, name: str) -> ReflectorPass:
         """The pass of the current scene's reflector ``name`` (for checks and the demo).

@@ -361,6 +361,14 @@ class ScreenSpaceReflections:
             pixel=info[..., 2:4].astype(np.float32),
         )
 
+    def fallback_mask(self, draw: ReflectorDraw, view: View) -> np.ndarray | None:
+        """``(h, w)`` bool, row 0 at the top: the pixels of ``view`` where this reflector
+        showed its probe alone, no screen colour at all (what :attr:`MissMask.miss_share`
+        counts); the :class:`~mirrorlab.passes.base.ReportsFallback` the accuracy sweep
+        reads. ``draw`` is this pass's own reflector's."""
+        mask = self.miss_mask(view)
+        return None if mask is None else mask.reflector & (mask.weight <= 0.0)
+
     def read_rays(self, view: View) -> np.ndarray | None:
         """``(h, w, 4)`` float32: what the march's second target holds for ``view`` (its
         rays' origins or directions with :attr:`output_mode` set for checks)."""

@@ -20,6 +20,7 @@ import mirrorlab
 from mirrorlab import math3d
 from mirrorlab.app.demo import ZOOM_FACTOR, Orbit
 from mirrorlab.options import apply_options
+from mirrorlab.techniques import technique_names
 from tests.imagecheck import assert_images_close, save_failure
 from tests.scenekit import curved_reflector, planar_reflector
 from tests.window.xwindow import (
@@ -166,9 +167,9 @@ def test_every_control_of_the_lab_demo(xdisplay, lab_demo, tmp_path):
     same_picture("demo_wheel", after, headless("lab20", orbit, angles=angles))
     before = after
 
-    # 1-9 pick the technique of the reflector under the mouse: 2 is reflected.
+    # 1-9 pick the technique of the reflector under the mouse, in the registry's order.
     move_pointer(d, window, *pixel_of("lab20", (-7.0, 1.0, -2.0), orbit))
-    press(d, window, "2")
+    press(d, window, str(technique_names("planar").index("reflected") + 1))
     after = shows(d, window, "mirror: reflected")
     assert changed_pixels(before, after) > 50
     same_picture(
@@ -226,7 +227,7 @@ def test_number_keys_and_inset_follow_the_reflector_under_the_mouse(xdisplay):
         before = settled(d, window, 0, "the first frame")
         sphere = curved_reflector(scene, "sphere")
         move_pointer(d, window, *pixel_of("mirror_and_sphere", sphere.center(), orbit))
-        press(d, window, "4")  # the fourth curved technique: a static cube map
+        press(d, window, str(technique_names("curved").index("cube") + 1))  # a static cube map
         after = shows(d, window, "sphere: cube -")
         assert changed_pixels(before, after) > 20
         same_picture(
