@@ -319,7 +319,7 @@ def _local(
         if value not in (0.0, 1.0):
             if value == 0.5:
                 yield replace(e, value=0.25, text=""), "1/2 applied twice", "twice"
-            else:
+            elif value != 2.0:  # 2 squared is 2 doubled, named so
                 words = f"{label} squared ({value * value:g})"
                 yield replace(e, value=value * value, text=""), words, "squared"
         if value == 2.0 and _in_denominator(root, path):

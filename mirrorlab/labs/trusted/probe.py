@@ -609,18 +609,22 @@ def _fitted(
         return words, (shown if len(shown) <= 100 else "")
     if f.cases is None:
         return None
-    # one slip per case (a face), each named on its own inputs
+    # one slip per case (a face), each named on its own inputs: a slip of that case's
+    # entry first, then one of the whole formula
     case, titles = f.cases(p.inputs)
-    whole = np.array(
-        [not (w.startswith("on ") or w.startswith("every face")) for _, w, _ in candidates]
-    )
+    words = [w for _, w, _ in candidates]
     named = []
     for which in sorted(set(case[wrong].tolist())):
         on = (case == which) & judged
-        fits = np.flatnonzero(whole & (match[:, on].mean(-1) >= MATCH_SHARE))
-        if not fits.size:
+        fits = match[:, on].mean(-1) >= MATCH_SHARE
+        own = [i for i in np.flatnonzero(fits) if words[i].startswith(f"on the {titles[which]}")]
+        whole = [i for i in np.flatnonzero(fits) if not words[i].startswith(("on ", "every "))]
+        if own:
+            named.append(words[own[0]])
+        elif whole:
+            named.append(f"on the {titles[which]}: {words[whole[0]]}")
+        else:
             return None
-        named.append(f"on the {titles[which]}: {candidates[fits[0]][1]}")
     return ("; ".join(named), "") if named else None
 
 
