@@ -70,6 +70,7 @@ def precompile(vertex: str, fragment: str, student: str, variable: str, lab: str
         _answers[key] = _compile_alone(vertex, fragment, student, variable, seed, drawn)
         while len(_answers) > KEPT:
             _answers.popitem(last=False)
+    _answers.move_to_end(key)
     answer = _answers[key]
     if answer.error is not None:
         raise StudentShaderError(variable, *answer.error)
