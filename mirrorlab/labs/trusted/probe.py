@@ -29,7 +29,6 @@ but :func:`evaluate`.
 from __future__ import annotations
 
 import os
-import re
 import secrets
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -38,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from mirrorlab.labs.trusted import formulas as F
+from mirrorlab.labs.trusted.judging import INTEGER_HALF, glsl_body
 
 TOLERANCE = 1e-3
 """Largest difference between the GPU's float32 values and the formula's float64 ones on
@@ -170,7 +170,6 @@ def function_named(lab: str, name: str) -> GlslFunction:
 
 
 # ------------------------------------------------------------------ the GL part
-PROTOTYPE = re.compile(r"^\s*(\w+)\s+(\w+)\s*\(([^)]*)\)\s*;", re.MULTILINE)
 ARGUMENT = {
     "float": "{}.x",
     "int": "int(floor({}.x + 0.5))",
@@ -478,8 +477,6 @@ def judge(evidence: Any, lab: str, name: str) -> tuple[bool, str]:
     value right, else the mistake named (see the module's text). The function's text in
     the student's file is read only where values cannot tell two forms apart (``1/2``,
     integer division, against no ``+ 1/2`` at all)."""
-    from mirrorlab.labs.trusted.judging import glsl_body
-
     function = function_named(lab, name)
     error = evidence.state.get("probe_error")
     if isinstance(error, str) and error:
@@ -494,10 +491,6 @@ def judge(evidence: Any, lab: str, name: str) -> tuple[bool, str]:
     if bool(ok.all()):
         return True, ""
     return False, name_mistake(p, ok, glsl_body(evidence.source, name))
-
-
-INTEGER_HALF = re.compile(r"(?<![\w.])1\s*/\s*2(?![\w.])")
-"""``1/2`` in GLSL: integer division, 0."""
 
 
 Candidates = list[tuple[np.ndarray, str, F.Expr | None]]
