@@ -694,7 +694,7 @@ PROBED_SLIPS = (
         "spheremap",
         "st_minus_one",
         (("(r.z + 1.0) * (r.z + 1.0)", "(r.z - 1.0) * (r.z - 1.0)"),),
-        {"sphere_coordinates": "the sign of 1 flipped", "side_by_side": "tasks 1 and 2"},
+        {"sphere_coordinates": "the sign of rz flipped", "side_by_side": "tasks 1 and 2"},
         cause="m = 2 sqrt(rx^2 + ry^2 + (-rz + 1)^2)",
     ),
     Mutant(

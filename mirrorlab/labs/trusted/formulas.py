@@ -231,7 +231,7 @@ def show(e: Expr, top: bool = False) -> str:
 def _wrap(e: Expr, floor: int, product: bool = False) -> str:
     text = show(e)
     own = _PRECEDENCE.get(e.op, 9) if not e.name else 9
-    if (e.op == "const" and "/" in text or e.op == "dot") and product:
+    if ((e.op == "const" and "/" in text) or e.op == "dot") and product:
         own = 2
     return f"({text})" if own < floor or (product and e.op == "div" and not e.name) else text
 
@@ -258,6 +258,8 @@ class Variant:
 
     expr: Expr
     slip: str
+    form: int = 0
+    """Which written form of the formula it was made from."""
 
 
 Path = tuple[int, ...]
@@ -579,7 +581,7 @@ def _variants(
     sizes = dict(sizes_items)
     found: list[Variant] = []
     seen: set[Expr] = set(forms)
-    for form in forms:
+    for index, form in enumerate(forms):
         candidates: list[tuple[Expr, str, str]] = []
         for path, node in _nodes(form):
             if not _inside_table(form, path):
@@ -592,7 +594,7 @@ def _variants(
         for expr, words, _ in candidates:
             if expr not in seen:
                 seen.add(expr)
-                found.append(Variant(expr, words))
+                found.append(Variant(expr, words, index))
     return tuple(found)
 
 

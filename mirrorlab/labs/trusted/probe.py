@@ -29,6 +29,7 @@ but :func:`evaluate`.
 from __future__ import annotations
 
 import os
+import re
 import secrets
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -493,8 +494,18 @@ def judge(evidence: Any, lab: str, name: str) -> tuple[bool, str]:
     return False, name_mistake(p, ok, glsl_body(evidence.source, name))
 
 
-Candidates = list[tuple[np.ndarray, str, F.Expr | None]]
-"""Each variant's values, its words and its tree (None: not a formula's variant)."""
+@dataclass(frozen=True)
+class Candidate:
+    """A variant on the probe's inputs: its values ``(n, k)``, its words, its tree and the
+    written form it was made from (None and -1: not one slip of a formula)."""
+
+    values: np.ndarray
+    words: str
+    expr: F.Expr | None = None
+    form: int = -1
+
+
+Candidates = list[Candidate]
 
 
 def name_mistake(
@@ -562,10 +573,14 @@ def name_mistake(
     )
 
 
+ARITHMETIC = re.compile(r"\b(squared|doubled|halved)\b")
+"""Words of a slip that says another's arithmetic again (a square root squared)."""
+
+
 def _matches(out: np.ndarray, candidates: Candidates) -> np.ndarray:
     """``(variants, rows)``: where each candidate's values are the student's ``out``
     (within the tolerance, 1e-3 of the size too; not finite both counts as equal)."""
-    stack = np.stack([values for values, _, _ in candidates])
+    stack = np.stack([c.values for c in candidates])
     with np.errstate(invalid="ignore"):
         near = np.abs(stack - out[None]) <= TOLERANCE + 1e-3 * np.abs(stack)
     near |= ~np.isfinite(stack) & ~np.isfinite(out)[None]
@@ -591,12 +606,20 @@ def _fitted(
     good = np.flatnonzero((share >= MATCH_SHARE) & (explained >= 0.9))
     if good.size:
         best = good[np.argmax(share[good])]  # the first of the best (the likelier words)
-        _, words, tree = candidates[best]
-        shown = F.formula_text(tree, f.result) if tree is not None else ""
+        chosen = candidates[best]
+        words = chosen.words
+        shown = F.formula_text(chosen.expr, f.result) if chosen.expr is not None else ""
         # another reading of the very same numbers (a factor missing, or a vector not
-        # normalised), from the formula's other written forms
-        same = [candidates[i][1] for i in good if share[i] == share[best]]
-        same = [w for w in same if w != words][:1]
+        # normalised), another written form's first, then not the same arithmetic said
+        # again (a root squared)
+        readings = [candidates[i] for i in good if share[i] == share[best]]
+        other = [c for c in readings if c.form not in (-1, chosen.form)]
+        other += [c for c in readings if c.form == chosen.form and not ARITHMETIC.search(c.words)]
+        same = [
+            c.words
+            for c in other
+            if not (c.words.startswith(words) or words.startswith(c.words.split(",")[0]))
+        ][:1]
         if same:
             words += f" (the same numbers as: {same[0]})"
         return words, (shown if len(shown) <= 100 else "")
@@ -605,7 +628,7 @@ def _fitted(
     # one slip per case (a face), each named on its own inputs: a slip of that case's
     # entry first, then one of the whole formula
     case, titles = f.cases(p.inputs)
-    words = [w for _, w, _ in candidates]
+    words = [c.words for c in candidates]
     named = []
     for which in sorted(set(case[wrong].tolist())):
         on = (case == which) & judged
@@ -631,7 +654,7 @@ def _candidates(f: GlslFunction, inputs: dict[str, np.ndarray]) -> Candidates:
     for parameter, w in zip(f.parameters, f.widths, strict=True):
         if w == width:
             found.append(
-                (inputs[parameter], f"it returns its argument {parameter} unchanged", None)
+                Candidate(inputs[parameter], f"it returns its argument {parameter} unchanged")
             )
     if f.forms:
         sizes = dict(zip(f.parameters, f.widths, strict=True))
@@ -639,10 +662,10 @@ def _candidates(f: GlslFunction, inputs: dict[str, np.ndarray]) -> Candidates:
         for variant in F.variants(f.forms, sizes, f.result, f.kind):
             values = F.evaluate(variant.expr, inputs, memo)
             if values.shape == (count, width):
-                found.append((values, variant.slip, variant.expr))
+                found.append(Candidate(values, variant.slip, variant.expr, variant.form))
     if f.family is not None:
         for values, words in f.family(inputs):
-            found.append((np.asarray(values, dtype=np.float64).reshape(count, width), words, None))
+            found.append(Candidate(np.asarray(values, np.float64).reshape(count, width), words))
     return found
 
 
