@@ -161,7 +161,9 @@ def lab_functions(lab: str) -> tuple[GlslFunction, ...]:
     spec = find_lab(lab)
     try:
         module = importlib.import_module(f"{spec.package}.glsl")
-    except ModuleNotFoundError:
+    except ModuleNotFoundError as exc:
+        if exc.name != f"{spec.package}.glsl":
+            raise
         return ()
     return tuple(module.FUNCTIONS)
 
