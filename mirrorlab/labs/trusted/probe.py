@@ -73,7 +73,8 @@ class GlslFunction:
     widths in ``widths``); ``result``: the result's name(s) (``r``, ``st``); ``kind``:
     ``direction``, ``coordinates`` or ``face``; ``forms``: the right formula as written
     (the handout's first); ``handout``: the formula as a hint quotes it; ``domain``: the
-    blocks of inputs drawn from a generator. Optional: ``family`` (variants that are not
+    blocks of inputs drawn from a generator (the general inputs over the whole domain
+    first, then the hard cases). Optional: ``family`` (variants that are not
     one slip of a formula), ``accepts`` (which rows are right, when the formula allows
     more than one answer: a cube edge's two faces) and ``cases`` (a per-row group, such as
     the face, whose own slips are named one by one)."""
