@@ -97,7 +97,7 @@ def test_every_variant_given_back_is_named_by_one_with_the_same_numbers(name):
     assert len(candidates) >= 25
     judged = np.array([d.blocks[b][1] for b in d.block]) != probe.ANY
     named = 0
-    stride = max(1, len(candidates) // 80)  # a spread of them: the check is quadratic
+    stride = max(1, len(candidates) // 40)  # a spread of them: the check is quadratic
     for candidate in candidates[::stride]:
         values, words = candidate.values, candidate.words
         p = student(function, inputs, d, values)
