@@ -63,13 +63,13 @@ def _task(task_id: str) -> str:
 
 
 def judge_face(student: Evidence) -> tuple[bool, str]:
-    """Task 1: ``cube_face`` by the value probe (:func:`.probe.judge`)."""
+    """task 1 (face_selection): ``cube_face`` by the value probe (:func:`.probe.judge`)."""
     return probe.judge(student, "cubemap", "cube_face")
 
 
 def judge_coordinates(student: Evidence) -> tuple[bool, str]:
-    """Task 2: ``cube_face_st`` by the value probe (:func:`.probe.judge`), given the right
-    face whatever ``cube_face`` picks."""
+    """task 2 (face_coordinates): ``cube_face_st`` by the value probe
+    (:func:`.probe.judge`), given the right face whatever ``cube_face`` picks."""
     return probe.judge(student, "cubemap", "cube_face_st")
 
 

@@ -44,12 +44,12 @@ def _task(task_id: str) -> str:
 
 
 def judge_reflection(student: Evidence) -> tuple[bool, str]:
-    """Task 1: ``reflect_eye`` by the value probe (:func:`.probe.judge`)."""
+    """task 1 (reflection): ``reflect_eye`` by the value probe (:func:`.probe.judge`)."""
     return probe.judge(student, "spheremap", "reflect_eye")
 
 
 def judge_coordinates(student: Evidence) -> tuple[bool, str]:
-    """Task 2: ``sphere_map_st`` by the value probe (:func:`.probe.judge`)."""
+    """task 2 (sphere_coordinates): ``sphere_map_st`` by the value probe (:func:`.probe.judge`)."""
     return probe.judge(student, "spheremap", "sphere_map_st")
 
 
