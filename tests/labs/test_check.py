@@ -19,6 +19,7 @@ from tests.labs.conftest import LIMITS, SOLUTIONS, mirrorlab_command
 from tests.labs.mutants import (
     CUBE_EQUIVALENT,
     CUBEMAP,
+    GLSL_EQUIVALENT,
     LAB20_MORE,
     SPHEREMAP,
     problems,
@@ -99,7 +100,14 @@ def test_untouched_starter_fails_every_task_with_its_hint(lab, tmp_path):
 
 @pytest.mark.parametrize(
     "lab, mutants",
-    [("spheremap", SPHEREMAP), ("cubemap", (*CUBEMAP, *CUBE_EQUIVALENT)), ("lab20", LAB20_MORE)],
+    [
+        ("spheremap", (*SPHEREMAP, *(m for m in GLSL_EQUIVALENT if m.lab == "spheremap"))),
+        (
+            "cubemap",
+            (*CUBEMAP, *CUBE_EQUIVALENT, *(m for m in GLSL_EQUIVALENT if m.lab == "cubemap")),
+        ),
+        ("lab20", LAB20_MORE),
+    ],
 )
 def test_each_mutant_is_caught_with_the_right_hint(lab, mutants, tmp_path):
     assert len(mutants) >= 6

@@ -19,7 +19,7 @@ from mirrorlab.labs.trusted.sandbox import Limits
 from mirrorlab.labs.trusted.variants import default_variant
 from tests.labs.conftest import mirrorlab_command, read_csv
 from tests.labs.forgeries import forgeries
-from tests.labs.glsl_forgeries import GLSL_FORGERIES
+from tests.labs.glsl_forgeries import GLSL_FORGERIES, PHRASES
 
 TIMEOUT = "20"
 """CPU seconds a forgery may spend: enough that each meets the limit it is about (calls,
@@ -150,17 +150,35 @@ def test_the_command_stays_small_while_a_file_sends_1_gib(forged):
     assert peak_kib < 400 * 1024, f"the command peaked at {peak_kib} KiB"
 
 
-@pytest.mark.parametrize("lab", sorted(GLSL_FORGERIES))
-def test_glsl_macro_forgeries_do_not_get_every_task(lab, tmp_path, lab_environment):
-    """The student's GLSL is compiled alone: macros that would rewrite the kit's probe
-    shader reach nothing, and functions that return constants fail the GLSL tasks."""
-    path = tmp_path / f"forge_{lab}.py"
-    path.write_text(GLSL_FORGERIES[lab])
-    done = mirrorlab_command(
-        "lab", "check", lab, str(path), "--out", str(tmp_path / "check.png"), "--timeout", TIMEOUT
-    )
-    tasks = len(find_lab(lab).tasks)
-    assert done.returncode == 1 and done.stderr == "", done.stdout + done.stderr
-    score = re.search(rf"(\d+)/{tasks} tasks passed", done.stdout)
-    assert score and int(score.group(1)) < tasks, done.stdout
-    assert "[FAIL] task 1" in done.stdout, done.stdout
+@pytest.fixture(scope="module")
+def glsl_forgeries_graded(tmp_path_factory, lab_environment):
+    """Every GLSL forgery graded, a lab's at once (two at a time)."""
+    from mirrorlab.labs.trusted.grading import grade_folder
+    from tests.labs.conftest import LIMITS, SOLUTIONS
+
+    found = {}
+    for lab in ("spheremap", "cubemap"):
+        folder = tmp_path_factory.mktemp(f"glsl-{lab}")
+        for name, source in GLSL_FORGERIES.items():
+            if name.split("_")[0] == lab:
+                (folder / f"{name}.py").write_text(source)
+        grades, _ = grade_folder(
+            find_lab(lab), folder, 2, None, "pool", LIMITS, progress=False, solutions=SOLUTIONS
+        )
+        found.update({g.student: g for g in grades})
+    return found
+
+
+@pytest.mark.parametrize("name", sorted(GLSL_FORGERIES))
+def test_glsl_forgeries_fail_the_glsl_tasks_in_one_line(glsl_forgeries_graded, name):
+    """The student's GLSL is compiled alone (macros reach nothing), judged on inputs the
+    checker draws (constants and 64 hard-coded fragments, the rest discarded, fail) and
+    refused when it names the checker's own ``ml_`` uniforms."""
+    grade = glsl_forgeries_graded[name]
+    assert grade.status == "ok", grade
+    verdicts = {task: (passed, hint) for task, passed, hint in grade.tasks}
+    first, second = list(verdicts)[:2]
+    for task in (first, second):
+        passed, hint = verdicts[task]
+        assert not passed and "\n" not in hint and "Traceback" not in hint, (task, hint)
+    assert PHRASES[name] in verdicts[first][1], verdicts[first]

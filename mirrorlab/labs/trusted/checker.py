@@ -151,7 +151,8 @@ def trim_reference(evidence: Evidence) -> Evidence:
         evidence.status,
         evidence.detail,
         frames=[{"events": events}],
-        state=dict(evidence.state),
+        # the value probe's seed and inputs judge the student's GLSL only
+        state={k: v for k, v in evidence.state.items() if not k.startswith("probe_")},
         arrays={k: v for k, v in evidence.arrays.items() if k in keep},
         variant=evidence.variant,
     )

@@ -414,21 +414,22 @@ class LabRun:
         self.spec.module("trusted").observe(self)
         reset_state()
 
-    def probe_glsl(self, kit_fragment: str, glsl: str, functions: tuple[str, ...]) -> None:
-        """The lab's GLSL functions on the value probe's chosen inputs (:mod:`.probe`):
-        ``probe_<function>`` ``(n, 4)`` float32 each; nothing when the GLSL did not make
-        the kit's program (the check values say why)."""
-        from mirrorlab.labs.trusted.probe import run_probe
+    def probe_glsl(self, vertex: str, fragment: str, glsl: str, variable: str) -> None:
+        """The value probe of the lab's GLSL functions in ``glsl`` (the string
+        ``variable``, linked to the kit's ``vertex`` and ``fragment`` files), made where
+        the text was first compiled (:mod:`.glslcheck`, :mod:`.probe`): its inputs and
+        values into the evidence (``probe_<function>...``), or ``probe_error``, the
+        student's error that stopped it (a probe that cannot run is never a pass)."""
+        from mirrorlab.labs.trusted import probe
+        from mirrorlab.labs.trusted.glslcheck import precompile
+        from mirrorlab.labs.trusted.session import StudentShaderError
 
-        if "values_error" in self.evidence.state:
-            return
-        reset_state()
         try:
-            found = run_probe(kit_fragment, glsl, functions, self.registry)
-        except LabSetupError:
+            answer = precompile(vertex, fragment, glsl, variable, lab=self.spec.name)
+        except StudentShaderError as exc:
+            self.evidence.state["probe_error"] = str(exc)[:400]
             return
-        for function, values in found.items():
-            self.evidence.arrays[f"probe_{function}"] = values
+        probe.record(self.evidence, answer.drawn, answer.values, answer.seed)
 
     def check_values(
         self, draw: Callable[[int], None], modes: dict[str, int], function: str

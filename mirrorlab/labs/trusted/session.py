@@ -24,6 +24,7 @@ from mirrorlab import math3d
 from mirrorlab.data import model_file, texture_file
 from mirrorlab.labs.trusted import legacy
 from mirrorlab.labs.trusted.compat_glsl import TRANSLATED_STATE, translate_compat_glsl
+from mirrorlab.labs.trusted.glsl_source import GlslRefused, prepare
 from mirrorlab.labs.trusted.variants import Variant
 
 ENV_UNIT = 1
@@ -40,10 +41,11 @@ class StudentShaderError(LabSetupError):
     """The student's GLSL did not compile: ``variable`` names the Python string, ``line``
     the line inside it (1-based, or 0 when unknown)."""
 
-    def __init__(self, variable: str, line: int, message: str) -> None:
-        self.variable, self.line, self.detail = variable, line, message
+    def __init__(self, variable: str, line: int, message: str, refused: bool = False) -> None:
+        self.variable, self.line, self.detail, self.refused = variable, line, message, refused
         where = f"{variable} line {line}" if line else variable
-        super().__init__(f"GLSL in {where} did not compile: {message}")
+        verb = "is refused" if refused else "did not compile"
+        super().__init__(f"GLSL in {where} {verb}: {message}")
 
 
 def lazy_gl():
@@ -107,12 +109,18 @@ def student_interface(kit_source: str) -> tuple[str, list[tuple[str, str, str]]]
 
 def student_shader(kind: int, kit_source: str, glsl: str, variable: str) -> int:
     """The student's GLSL ``glsl`` (of ``variable``) compiled as a shader object of its own,
-    of stage ``kind``: the kit file's ``#version`` line, then the text with its
+    of stage ``kind``: the kit file's ``#version`` line, then the text preprocessed and
+    checked here (:func:`.glsl_source.prepare`: no directive and no macro reaches the
+    driver, no ``ml_`` name and no declaration outside the functions) with its
     compatibility built-ins translated, as source string 1 (its lines counted from 1).
-    StudentShaderError when it does not compile."""
+    StudentShaderError when it is refused or does not compile."""
     stage = "vertex" if kind == lazy_gl().GL_VERTEX_SHADER else "fragment"
     version, _ = student_interface(kit_source)
-    source = f"{version}\n#line 1 1\n{translate_compat_glsl(glsl, stage)}\n"
+    try:
+        prepared = prepare(glsl, version or "#version 330 core")
+    except GlslRefused as exc:
+        raise StudentShaderError(variable, exc.line, exc.message, refused=True) from None
+    source = f"{version}\n#line 1 1\n{translate_compat_glsl(prepared, stage)}\n"
     return _compiled(kind, source, "", variable)
 
 
@@ -184,8 +192,8 @@ def _only_arguments(kit_source: str, student_shaders: list[int], variable: str) 
         calls.append(STUB_RESULTS[result].format(f"{name}({', '.join(args)})"))
     declared = "".join(f"{r} {n}({p});\n" for r, n, p in prototypes)
     stub = (
-        f"{version_line}\n{declared}out vec4 mirrorlab_stub_out;\nvoid main() {{\n"
-        f"    mirrorlab_stub_out = vec4({' + '.join(calls) or '0.0'});\n}}\n"
+        f"{version_line}\n{declared}out vec4 ml_stub_out;\nvoid main() {{\n"
+        f"    ml_stub_out = vec4({' + '.join(calls) or '0.0'});\n}}\n"
     )
     main = _compiled(GL.GL_FRAGMENT_SHADER, stub, "the kit's stub", variable)
     program = GL.glCreateProgram()
@@ -202,10 +210,12 @@ def _only_arguments(kit_source: str, student_shaders: list[int], variable: str) 
             )
         names = []
         for index in range(int(GL.glGetProgramiv(program, GL.GL_ACTIVE_UNIFORMS))):
-            name = _text(GL.glGetActiveUniform(program, index)[0])
+            name, _, kind = GL.glGetActiveUniform(program, index)
+            name = _text(name)
             # GL's own state (gl_ModelViewMatrix, or its translation for a core context)
-            # is not the kit's: the same for every draw
-            if not name.startswith("gl_") and name.split("[")[0] not in TRANSLATED_STATE:
+            # is not the kit's: the same for every draw; only the translation's own
+            # names and types (the student's text may not name ml_ itself)
+            if not name.startswith("gl_") and TRANSLATED_STATE.get(name) != int(kind):
                 names.append(name)
         if names or GL.glGetProgramiv(program, GL.GL_ACTIVE_UNIFORM_BLOCKS):
             shown = ", ".join(names) or "a uniform block"
@@ -525,7 +535,8 @@ class LabBase:
                 raise LabSetupError(f"more than {limit} different {variable} strings in one run")
             from mirrorlab.labs.trusted.glslcheck import precompile
 
-            precompile(vertex, fragment, glsl, variable)  # where a bomb costs the file only
+            # where a bomb or an endless loop costs the file only; probed there too
+            precompile(vertex, fragment, glsl, variable, lab=self.name)
             self._programs[glsl] = compile_program(vertex, fragment, glsl, variable)
         return self._programs[glsl]
 
