@@ -18,6 +18,7 @@ import re
 import shutil
 import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -26,7 +27,7 @@ import numpy as np
 
 from mirrorlab.labs import LabSpec, find_lab, lab_names
 from mirrorlab.labs.trusted.evidence import Evidence
-from mirrorlab.labs.trusted.gl_process import run_job
+from mirrorlab.labs.trusted.gl_process import CheckerProcess, run_job
 from mirrorlab.labs.trusted.judging import Context, TaskResult
 from mirrorlab.labs.trusted.sandbox import Limits, sandboxed, unsandboxed_note
 from mirrorlab.labs.trusted.variants import (
@@ -252,13 +253,22 @@ def check_submission(
     limits: Limits = DEFAULT_LIMITS,
     size: tuple[int, int] = CHECK_SIZE,
     keep: bool = False,
+    process: CheckerProcess | None = None,
 ) -> CheckResult:
     """Run ``source`` in the sandbox through the trusted checker (with ``keep``, this
-    process's kept checker process) and judge it against ``reference`` for
-    ``context.variant``."""
-    module = spec.module("judge")
+    process's kept checker process; or ``process``, the caller's) and judge it against
+    ``reference`` for ``context.variant``. A check in a process of its own imports the
+    judge while the file runs (an interrupt ends that process too: it is in the
+    terminal's process group, where a kept process is left to its owner)."""
     started = time.perf_counter()
-    evidence = run_job(spec, source, file_name, context.variant, limits, size, keep)
+    if keep or process is not None:
+        module = spec.module("judge")
+        evidence = run_job(spec, source, file_name, context.variant, limits, size, keep, process)
+    else:
+        with ThreadPoolExecutor(1) as pool:
+            running = pool.submit(run_job, spec, source, file_name, context.variant, limits, size)
+            module = spec.module("judge")
+            evidence = running.result()
     try:
         results = module.judge(spec, evidence, reference, context)
     except Exception as exc:  # a judge's own fault: every task fails, saying so
@@ -333,10 +343,12 @@ def run_check(
     out: Path | None,
     limits: Limits,
     solutions: str | Path | None = None,
+    watch: bool = False,
 ) -> int:
     """``mirrorlab lab check``: print the verdicts, write the picture; 0 only when every
     task passed. Without ``file``, the lab file of the current folder (:func:`folder_file`)
-    is checked. The report's first line names the file checked."""
+    is checked. The report's first line names the file checked. With ``watch``, the file
+    is checked again on every save until Ctrl-C (:func:`~.watch.watch_check`)."""
     from mirrorlab.files import write_png_atomic
 
     spec = find_lab(lab)
@@ -344,12 +356,16 @@ def run_check(
     path = Path(file) if file else folder_file(spec, Path.cwd())
     if not path.is_file():
         raise FileNotFoundError(f"FILE: {str(path)!r} is not a file")
-    source = path.read_bytes()
-    variant = file_variant(spec, path)
-    released = path.parent / REFERENCE_FOLDER
     out = out or Path("out") / f"{spec.name}_check.png"
     if not sandboxed():
         print(f"mirrorlab lab check: {unsandboxed_note()}", file=sys.stderr)
+    if watch:
+        from mirrorlab.labs.trusted.watch import watch_check
+
+        return watch_check(spec, path, out, limits, folder)
+    source = path.read_bytes()
+    variant = file_variant(spec, path)
+    released = path.parent / REFERENCE_FOLDER
     reference = reference_evidence(spec, variant, folder, limits, released=released)
     check = check_submission(
         spec, source, reference, Context(variant), str(path), path.name, limits
