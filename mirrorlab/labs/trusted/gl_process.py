@@ -115,8 +115,10 @@ def serve(prepare: bool = False) -> int:
     written there, by Python or a library, goes to stderr). With ``prepare``, the next
     run is prepared as soon as a job's status is written, for a job like the last one
     (:class:`~.prepared.PreparedRun`: a new runner, context and session, which nothing of
-    any job has touched). The process is its parent's to stop (closing stdin ends it),
-    so an interrupt from the terminal is left to the parent."""
+    any job has touched). Either way the next student GLSL text finds its compiling
+    process started (:func:`~.glslcheck.keep_ready`). The process is its parent's to stop
+    (closing stdin ends it), so an interrupt from the terminal is left to the parent."""
+    from mirrorlab.labs.trusted import glslcheck
     from mirrorlab.labs.trusted.prepared import prepare_like
 
     if hasattr(signal, "SIGINT"):
@@ -124,6 +126,7 @@ def serve(prepare: bool = False) -> int:
     reply_fd = os.dup(1)
     os.dup2(2, 1)
     prepared: PreparedRun | None = None
+    glslcheck.keep_ready()
     try:
         for line in sys.stdin:
             job_file = Path(line.strip())
@@ -140,6 +143,7 @@ def serve(prepare: bool = False) -> int:
     finally:
         if prepared is not None:
             prepared.release()
+        glslcheck.keep_ready(False)
     return 0
 
 
@@ -215,12 +219,15 @@ class CheckerProcess:
 
     SERVE: tuple[str, ...] = ("--serve",)
     """How the process is started (:func:`main`'s arguments)."""
+    STDERR: int | None = None
+    """Where what the process writes goes (None: this process's stderr)."""
 
     def __init__(self) -> None:
         self.process = subprocess.Popen(
             [sys.executable, "-m", "mirrorlab.labs.trusted.gl_process", *self.SERVE],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
+            stderr=self.STDERR,
             env=gl_process_environment(),
             **child_options(MEMORY_MB, die_with_parent=True),
         )

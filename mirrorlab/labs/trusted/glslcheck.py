@@ -10,6 +10,11 @@ killed at its memory limit or does not answer in time, the file gets the student
 "could not be compiled within the limits" and the checker's own process never compiled
 it; when it answers with a compile error, that is the error, and the checker does not
 compile the text either. A text that compiled is remembered for the process's life.
+
+A checker process kept for many runs (:func:`keep_ready`) starts the next compiling
+process as soon as one has answered, so that the next text finds Python, OpenGL and a
+context loaded (about half a second of a core on llvmpipe): each text still gets a
+process of its own, which has compiled nothing before it.
 """
 
 from __future__ import annotations
@@ -30,6 +35,9 @@ hundred MB of it, the honest labs' GLSL little more."""
 _answers: dict[str, tuple[int, str] | None] = {}
 """By digest of the texts: None for a text that compiled, else the error's line and
 message (a file draws with the same text every frame)."""
+_ready: list[subprocess.Popen] = []
+"""The compiling process started ahead (at most one), waiting for its text."""
+_keep_ready = [False]
 
 
 def precompile(vertex: str, fragment: str, student: str, variable: str) -> None:
@@ -46,6 +54,35 @@ def precompile(vertex: str, fragment: str, student: str, variable: str) -> None:
         raise StudentShaderError(variable, *failed)
 
 
+def keep_ready(keep: bool = True) -> None:
+    """Whether this process keeps a compiling process started ahead for its next text
+    (a kept checker process does; without it, every text starts its own); ``False``
+    also ends the one waiting."""
+    _keep_ready[0] = keep
+    if not keep:
+        while _ready:
+            process = _ready.pop()
+            process.kill()
+            process.communicate()
+
+
+def _start() -> subprocess.Popen:
+    """A compiling process, its context made, waiting for its job on stdin."""
+    from mirrorlab.labs.trusted.gl_process import child_options, gl_process_environment
+
+    # the checker's own GL backend; compiling needs no rasteriser threads
+    environment = {**gl_process_environment(), "LP_NUM_THREADS": "1"}
+    return subprocess.Popen(
+        [sys.executable, "-m", "mirrorlab.labs.trusted.glslcheck"],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=environment,
+        **child_options(MEMORY_MB, CPU_SECONDS, cores=False, die_with_parent=True),
+    )
+
+
 def _compile_alone(
     vertex: str, fragment: str, student: str, variable: str
 ) -> tuple[int, str] | None:
@@ -54,24 +91,18 @@ def _compile_alone(
     job = json.dumps(
         {"vertex": vertex, "fragment": fragment, "student": student, "variable": variable}
     )
-    from mirrorlab.labs.trusted.gl_process import child_options, gl_process_environment
-
-    # the checker's own GL backend; compiling needs no rasteriser threads
-    environment = {**gl_process_environment(), "LP_NUM_THREADS": "1"}
     limits = f"your shader could not be compiled within the limits ({SECONDS:g} s, {MEMORY_MB} MB)"
+    process = _ready.pop() if _ready else _start()
     try:
-        done = subprocess.run(
-            [sys.executable, "-m", "mirrorlab.labs.trusted.glslcheck"],
-            input=job,
-            capture_output=True,
-            text=True,
-            timeout=SECONDS,
-            env=environment,
-            **child_options(MEMORY_MB, CPU_SECONDS, cores=False),
-        )
+        stdout, _ = process.communicate(job, timeout=SECONDS)
     except subprocess.TimeoutExpired:
+        process.kill()
+        process.communicate()
         return 0, limits
-    answer = _answer(done.stdout)
+    finally:
+        if _keep_ready[0]:
+            _ready.append(_start())
+    answer = _answer(stdout)
     if answer is None:
         return 0, limits
     if not answer.get("ok"):
@@ -90,14 +121,15 @@ def _answer(stdout: str) -> dict[str, Any] | None:
 
 
 def main() -> int:
-    """The compiling process: a job on stdin, one JSON line on stdout."""
-    job = json.loads(sys.stdin.read())
+    """The compiling process: its context made, then a job on stdin, one JSON line on
+    stdout."""
     from mirrorlab.gl.context import offscreen_context
 
     context = offscreen_context()
     try:
         from mirrorlab.labs.trusted.session import StudentShaderError, compile_program
 
+        job = json.loads(sys.stdin.read())
         try:
             compile_program(job["vertex"], job["fragment"], job["student"], job["variable"])
             answer: dict[str, Any] = {"ok": True}

@@ -56,9 +56,28 @@ check until its CPU limit)."""
 
 
 class WarmProcess(CheckerProcess):
-    """A checker process that prepares each next run while it waits."""
+    """A checker process that prepares each next run while it waits. What it writes is
+    dropped, as a check's own process's is: the report is the student's whole answer (a
+    job's failure comes back in its folder)."""
 
     SERVE = ("--serve", "--prepare")
+    STDERR = subprocess.DEVNULL
+
+    def close(self, ask: bool = True) -> None:
+        """End the process: asked to when ``ask`` (between jobs: it then releases its
+        prepared run), else, or when it does not end in time, made to; then every
+        process of the sandbox's user is ended and what the process left in the
+        temporary folder removed."""
+        stdin = self.process.stdin
+        if ask and self.process.poll() is None and stdin is not None:
+            try:
+                stdin.close()
+                self.process.wait(timeout=10)
+            except (OSError, subprocess.TimeoutExpired):
+                pass
+        super().close()
+        _end_sandbox_user()
+        sweep_stale(Path(tempfile.gettempdir()))
 
 
 class WarmChecker:
@@ -138,27 +157,16 @@ class WarmChecker:
                 return False
             self._cancelled = True
             if self.process is not None:
-                self.process.close()
-                _end_sandbox_user()
+                self.process.close(ask=False)
             return True
 
     def close(self) -> None:
-        """End the GL process: when it is between jobs, asked to (it releases its
-        prepared run); else, or when it does not end in time, made to, with every process
-        of the sandbox's user; then what that left in the temporary folder is removed."""
+        """End the GL process (asked to, when it is between jobs: see
+        :meth:`WarmProcess.close`)."""
         with self._lock:
             process, self.process = self.process, None
-        if process is None:
-            return
-        if not self._busy and process.process.stdin is not None:
-            try:
-                process.process.stdin.close()
-                process.process.wait(timeout=10)
-            except (OSError, subprocess.TimeoutExpired):
-                pass
-        process.close()
-        _end_sandbox_user()
-        sweep_stale(Path(tempfile.gettempdir()))
+        if process is not None:
+            process.close(ask=not self._busy)
 
 
 def _end_sandbox_user() -> None:

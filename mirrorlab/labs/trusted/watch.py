@@ -57,29 +57,25 @@ class FileWatch:
             status.st_ctime_ns,
         )
 
-    def settled(self, stop: threading.Event | None = None) -> Signature | None:
-        """The file's status once it has held still for one look and the file is there
-        (None when ``stop`` was set first)."""
+    def settled(self) -> Signature:
+        """The file's status once the file is there and its status has held still for
+        one look."""
         last = self.signature()
-        while not (stop is not None and stop.is_set()):
+        while True:
             time.sleep(self.poll)
             now = self.signature()
             if now is not None and now == last:
                 return now
             last = now
-        return None
 
-    def changed_from(
-        self, seen: Signature | None, stop: threading.Event | None = None
-    ) -> Signature | None:
-        """Wait until the file's status differs from ``seen``, then until it holds
-        still; the new status (None when ``stop`` was set first)."""
-        while not (stop is not None and stop.is_set()):
+    def changed_from(self, seen: Signature | None) -> Signature | None:
+        """Wait until the file's status differs from ``seen``: None when that is because
+        the file is gone, else its status once it holds still."""
+        while True:
             now = self.signature()
-            if now is not None and now != seen:
-                return self.settled(stop)
+            if now != seen:
+                return None if now is None else self.settled()
             time.sleep(self.poll)
-        return None
 
 
 def _read(path: Path) -> bytes | None:
