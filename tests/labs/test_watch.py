@@ -8,11 +8,6 @@ from __future__ import annotations
 
 import json
 import os
-import queue
-import signal
-import subprocess
-import sys
-import threading
 import time
 from pathlib import Path
 
@@ -26,96 +21,9 @@ from mirrorlab.labs.trusted.variants import default_variant
 from mirrorlab.labs.trusted.warm import WarmProcess
 from tests.labs.conftest import LIMITS, leftovers
 from tests.labs.mutants import LAB20, solution
+from tests.labs.warm_checks import GIVE_UP_S, Watch, save_by_rename
 
-GIVE_UP_S = 240.0
-"""Only a hung watch stops a wait this long: every wait ends on what it waits for."""
 WRONG_EXTENTS = next(m for m in LAB20 if m.name == "wrong_extents")
-
-
-class Watch:
-    """``mirrorlab lab check lab20 FILE --watch`` in a process of its own (Ctrl-C reaches
-    it as a terminal's would), its output read as it comes."""
-
-    def __init__(self, folder: Path, name: str = "mine.py") -> None:
-        self.process = subprocess.Popen(
-            [sys.executable, "-m", "mirrorlab.cli", "lab", "check", "lab20", name, "--watch"],
-            cwd=folder,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
-        )
-        self.lines: queue.Queue[str] = queue.Queue()
-        self.seen: list[str] = []
-        self.reader = threading.Thread(target=self._read, daemon=True)
-        self.reader.start()
-
-    def _read(self) -> None:
-        assert self.process.stdout is not None
-        for line in self.process.stdout:
-            self.lines.put(line)
-
-    def until(self, text: str) -> list[str]:
-        """The lines up to the next one holding ``text``."""
-        got: list[str] = []
-        deadline = time.monotonic() + GIVE_UP_S
-        while True:
-            try:
-                line = self.lines.get(timeout=max(deadline - time.monotonic(), 0.01))
-            except queue.Empty:
-                raise AssertionError(f"no {text!r} after {got}") from None
-            got.append(line)
-            self.seen.append(line)
-            if text in line:
-                return got
-
-    def report(self) -> str:
-        return "".join(self.until("checked at "))
-
-    def checkers(self) -> list[int]:
-        """The watch's checker processes (its children running the GL process)."""
-        found = []
-        for entry in Path("/proc").iterdir():
-            if not entry.name.isdigit():
-                continue
-            try:
-                status = (entry / "status").read_text()
-                command = (entry / "cmdline").read_bytes()
-            except OSError:
-                continue
-            parent = int(status.split("PPid:")[1].split()[0])
-            if parent == self.process.pid and b"gl_process" in command:
-                found.append(int(entry.name))
-        return found
-
-    def __enter__(self) -> Watch:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        if self.process.poll() is None:  # a failed test: the watch is stopped all the same
-            self.process.send_signal(signal.SIGINT)
-            try:
-                self.process.communicate(timeout=GIVE_UP_S)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
-                self.process.communicate()
-
-    def interrupt(self) -> tuple[int, str, str]:
-        """Ctrl-C: (exit status, everything it printed, its stderr)."""
-        self.process.send_signal(signal.SIGINT)
-        self.process.wait(timeout=GIVE_UP_S)
-        self.reader.join(timeout=GIVE_UP_S)
-        while not self.lines.empty():
-            self.seen.append(self.lines.get())
-        assert self.process.stderr is not None
-        return self.process.returncode, "".join(self.seen), self.process.stderr.read()
-
-
-def save_by_rename(path: Path, text: str) -> None:
-    """As vim and JetBrains editors save: a new file renamed over the old."""
-    staging = path.with_name(f".{path.name}.swp")
-    staging.write_text(text)
-    os.replace(staging, path)
 
 
 def wait_for(condition, what: str):
