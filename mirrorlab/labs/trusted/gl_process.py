@@ -130,6 +130,10 @@ def serve(prepare: bool = False) -> int:
     try:
         for line in sys.stdin:
             job_file = Path(line.strip())
+            try:  # read now: the asker removes the job's folder once it has the status
+                job = json.loads(job_file.read_text())
+            except (OSError, ValueError):
+                job = None
             try:
                 code = run_one(job_file, prepared)
             except Exception as exc:  # the job's own folder says what failed
@@ -138,8 +142,8 @@ def serve(prepare: bool = False) -> int:
                 code = EXIT_FAILED
             prepared = None
             os.write(reply_fd, f"{code}\n".encode())
-            if prepare:
-                prepared = prepare_like(job_file)
+            if prepare and job is not None:
+                prepared = prepare_like(job)
     finally:
         if prepared is not None:
             prepared.release()

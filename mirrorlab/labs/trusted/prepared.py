@@ -10,7 +10,6 @@ box and a new context, which nothing of any other run has touched.
 from __future__ import annotations
 
 import json
-from pathlib import Path
 from typing import Any
 
 from mirrorlab.labs.trusted.runner import Runner, start_runner
@@ -83,10 +82,10 @@ class PreparedRun:
             self.context = None
 
 
-def prepare_like(job_file: Path) -> PreparedRun | None:
-    """A run prepared for a job like the one in ``job_file`` (whose own file is gone by
-    now); None when it cannot be made (the next job then says why, made afresh)."""
+def prepare_like(job: dict[str, Any]) -> PreparedRun | None:
+    """A run prepared for a job like ``job``; None when it cannot be made (the next job
+    then says why, made afresh)."""
     try:
-        return PreparedRun(json.loads(job_file.read_text()))
+        return PreparedRun(job)
     except Exception:
         return None

@@ -93,14 +93,18 @@ class WarmChecker:
         size: tuple[int, int] = CHECK_SIZE,
     ) -> None:
         self.spec, self.limits, self.solutions, self.size = spec, limits, solutions, size
-        self.process: WarmProcess | None = WarmProcess()  # it loads while the judge does
-        self.judge = spec.module("judge")
         self._references: dict[str, Evidence] = {}
         self._lock = threading.Lock()
         self._started: float | None = None
         self._cancelled = False
         self._busy = False
         """Whether the process may be in a job (a check left by an exception leaves it so)."""
+        self.process: WarmProcess | None = WarmProcess()  # it loads while the judge does
+        try:
+            self.judge = spec.module("judge")
+        except BaseException:
+            self.close()
+            raise
 
     def __enter__(self) -> WarmChecker:
         return self

@@ -19,7 +19,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from datetime import datetime
 from pathlib import Path
@@ -104,6 +104,7 @@ def watch_check(
     stop = threading.Event()
     checking: list[Signature | None] = [None]
     print(f"watching {path}: each save is checked (Ctrl-C to stop)", flush=True)
+    terminate = _terminate_as_interrupt()
     checker = WarmChecker(spec, limits, solutions)
 
     def cancel_stale() -> None:  # a check made stale by a save, when it runs long
@@ -160,7 +161,25 @@ def watch_check(
             stop.set()
             monitor.join()
             checker.close()
+            terminate()
     return 0
+
+
+def _terminate_as_interrupt() -> Callable[[], None]:
+    """SIGTERM ends the watch as Ctrl-C does, cleaning up (``kill`` would leave the
+    checker's prepared box); returns what puts the old handler back."""
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "SIGTERM"):
+        return lambda: None
+
+    def interrupt(number: int, frame: object) -> None:
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+
+    def restore() -> None:
+        signal.signal(signal.SIGTERM, previous)
+
+    return restore
 
 
 @contextmanager
