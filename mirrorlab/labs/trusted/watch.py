@@ -4,7 +4,7 @@ A save is seen by looking at the file's status every :data:`POLL_SECONDS` (:clas
 its inode, size and modification and change times, by path. That needs no library and
 no service of the system, works the same on every operating system and file system
 (network and container folders included, where change notifications are often
-missing), and costs a ``stat`` call 20 times a second. Looking by path follows the
+missing), and costs a ``stat`` call 40 times a second. Looking by path follows the
 editors that save by writing a new file and renaming it over the old one (vim, JetBrains,
 VS Code's "atomic" saves), and those that remove the file first: while the path is
 missing, the watch waits for it. A change counts once the status has held still for one
@@ -30,7 +30,7 @@ from mirrorlab.labs.trusted.gl_process import CheckerError
 from mirrorlab.labs.trusted.sandbox import Limits
 from mirrorlab.labs.trusted.warm import WarmChecker
 
-POLL_SECONDS = 0.05
+POLL_SECONDS = 0.025
 """How often a watched file's status is looked at."""
 
 Signature = tuple[int, int, int, int, int]
