@@ -123,3 +123,43 @@ def test_lab_check_watch_and_lab_run_in_a_lab_folder_from_the_installed_wheel(
     with np.load(reference_folder(find_lab("lab20")) / "arrays.npz") as reference:
         frame = reference["frame"]
     assert_image_close(load_picture(shot), frame, tolerance=8, fraction=0.99, name="wheel_lab_run")
+
+
+def test_info_a_headed_starter_and_a_canvas_gradebook_from_the_installed_wheel(
+    installed: Installed, empty_folder: Path
+):
+    """``mirrorlab info`` names the OpenGL and the sandbox; a starter moved away from its
+    folder is judged by its first line (no note); a class graded from a CSV list writes
+    Canvas's layout with the list's names and ids. All from the wheel, no solutions."""
+    info = installed.run("mirrorlab", "info", cwd=empty_folder)
+    assert info.returncode == 0, info.stdout + info.stderr
+    lines = dict(line.split(None, 1) for line in info.stdout.splitlines() if " " in line)
+    assert lines["mirrorlab"].strip() and "profile" in lines["profile"], info.stdout
+    assert lines["draw"].startswith("path ") and lines["sandbox"].strip(), info.stdout
+    started = installed.run("mirrorlab", "lab", "start", "lab20", "mine", cwd=empty_folder)
+    assert started.returncode == 0, started.stderr
+    assert (empty_folder / "mine" / "starter.py").read_text().startswith("# mirrorlab variant: ")
+    submissions = empty_folder / "class"
+    submissions.mkdir()
+    shutil.copy(empty_folder / "mine" / "starter.py", submissions / "s1001.py")
+    (empty_folder / "class.csv").write_text("id,name,email\ns1001,Ada Lovelace,ada@uni.edu\n")
+    graded = installed.run(
+        "mirrorlab",
+        "lab",
+        "grade",
+        "lab20",
+        "class",
+        "--students",
+        "class.csv",
+        "--format",
+        "canvas",
+        "--out-dir",
+        "grades",
+        cwd=empty_folder,
+    )
+    assert graded.returncode == 0, graded.stdout + graded.stderr
+    assert (empty_folder / "grades" / "gradebook.csv").read_text().splitlines() == [
+        "Student,ID,SIS User ID,SIS Login ID,Section,Lab 20: the multipass mirror",
+        "Points Possible,,,,,8",
+        "Ada Lovelace,,s1001,ada@uni.edu,,0",
+    ]

@@ -27,7 +27,8 @@ import numpy as np
 
 from mirrorlab.labs import LabSpec, find_lab, lab_names
 from mirrorlab.labs.trusted.evidence import Evidence
-from mirrorlab.labs.trusted.gl_process import CheckerProcess, run_job
+from mirrorlab.labs.trusted.failures import Runner, run_attributed
+from mirrorlab.labs.trusted.gl_process import run_job
 from mirrorlab.labs.trusted.judging import Context, TaskResult
 from mirrorlab.labs.trusted.sandbox import Limits, sandboxed, unsandboxed_note
 from mirrorlab.labs.trusted.variants import (
@@ -35,6 +36,7 @@ from mirrorlab.labs.trusted.variants import (
     VariantError,
     default_variant,
     variant_from_file,
+    variant_from_header,
 )
 
 CHECK_SIZE = (256, 256)
@@ -170,7 +172,7 @@ def make_reference(
     from mirrorlab.labs.content import solution_for
 
     text = solution_for(solution, variant)
-    evidence = run_job(spec, text.encode(), "solution.py", variant, limits, size, keep=keep)
+    evidence = run_attributed(spec, text.encode(), "solution.py", variant, limits, size, keep)
     if evidence.status != "ok":
         raise CheckError(f"the reference solution of {spec.name} did not run: {evidence.detail}")
     problems = evidence.errors or evidence.call_errors
@@ -253,20 +255,24 @@ def check_submission(
     limits: Limits = DEFAULT_LIMITS,
     size: tuple[int, int] = CHECK_SIZE,
     keep: bool = False,
-    process: CheckerProcess | None = None,
+    run: Runner = run_job,
 ) -> CheckResult:
-    """Run ``source`` in the sandbox through the trusted checker (with ``keep``, this
-    process's kept checker process; or ``process``, the caller's) and judge it against
-    ``reference`` for ``context.variant``. A check in a process of its own imports the
-    judge while the file runs (an interrupt ends that process too: it is in the
-    terminal's process group, where a kept process is left to its owner)."""
+    """Run ``source`` in the sandbox through the trusted checker (with ``keep``, a kept
+    checker process: this process's, or the one ``run`` keeps) and judge it against
+    ``reference`` for ``context.variant``; the checker's own failures are told from the
+    file's (:func:`~.failures.run_attributed`, with ``run`` for
+    :func:`~.gl_process.run_job`). A check in a process of its own imports the judge while
+    the file runs (an interrupt ends that process too: it is in the terminal's process
+    group, where a kept process is left to its owner)."""
     started = time.perf_counter()
-    if keep or process is not None:
+    if keep:
         module = spec.module("judge")
-        evidence = run_job(spec, source, file_name, context.variant, limits, size, keep, process)
+        evidence = run_attributed(spec, source, file_name, context.variant, limits, size, keep, run)
     else:
         with ThreadPoolExecutor(1) as pool:
-            running = pool.submit(run_job, spec, source, file_name, context.variant, limits, size)
+            running = pool.submit(
+                run_attributed, spec, source, file_name, context.variant, limits, size, False, run
+            )
             module = spec.module("judge")
             evidence = running.result()
     try:
@@ -304,14 +310,43 @@ def report_lines(spec: LabSpec, check: CheckResult) -> list[str]:
 
 def file_variant(spec: LabSpec, path: Path) -> Variant:
     """The variant of a student's file: its released folder's ``variant.json`` beside it,
-    else the lab's own numbers."""
+    else the variant its header names (:data:`~.variants.HEADER`: the first line of every
+    starter), else the lab's own numbers. (``lab grade`` never asks: a variant follows
+    from the course key and the student's name there.)"""
     found = path.parent / VARIANT_FILE
-    if found.is_file():
-        try:
+    try:
+        if found.is_file():
             return variant_from_file(found, spec.name)
-        except VariantError as exc:
-            raise ValueError(str(exc)) from None
-    return default_variant(spec.name)
+        named = variant_from_header(_text(path), spec.name, str(path))
+    except VariantError as exc:
+        raise ValueError(str(exc)) from None
+    return named if named is not None else default_variant(spec.name)
+
+
+def default_note(spec: LabSpec, path: Path) -> str:
+    """The line ``lab check`` says under the file's name when ``path`` names no variant (no
+    ``variant.json`` beside it, no header) and is judged against the lab's own numbers
+    ('' otherwise)."""
+    if (path.parent / VARIANT_FILE).is_file():
+        return ""
+    try:
+        if variant_from_header(_text(path), spec.name, str(path)) is not None:
+            return ""
+    except VariantError:
+        return ""
+    return (
+        f"note: {path.name} names no variant (no {VARIANT_FILE} beside it, no variant line "
+        f"at its top): judged against the lab's own numbers; a released starter is checked "
+        f"in its own folder"
+    )
+
+
+def _text(path: Path) -> str:
+    try:
+        with open(path, "rb") as stream:
+            return stream.read(1 << 16).decode("utf-8", errors="replace")
+    except OSError:
+        return ""
 
 
 def folder_file(spec: LabSpec, folder: Path) -> Path:
@@ -337,6 +372,39 @@ def folder_file(spec: LabSpec, folder: Path) -> Path:
     return path
 
 
+def file_reference(
+    spec: LabSpec,
+    variant: Variant,
+    solutions: Path | None,
+    limits: Limits,
+    path: Path,
+    size: tuple[int, int] = CHECK_SIZE,
+) -> Evidence:
+    """The reference evidence the student's file ``path`` (of ``variant``) is judged
+    against (:func:`reference_evidence`, its released folder beside it); CheckError when
+    the ``reference/`` beside it is another variant's."""
+    released = path.parent / REFERENCE_FOLDER
+    reference = reference_evidence(spec, variant, solutions, limits, size, released=released)
+    made_for = reference.variant.get("id") if isinstance(reference.variant, dict) else None
+    if made_for not in (None, variant.id):
+        raise CheckError(
+            f"{path.name} is variant {variant.id}, but the {REFERENCE_FOLDER}/ beside it is "
+            f"variant {made_for}'s: check the file in its own released folder"
+        )
+    return reference
+
+
+def file_report(spec: LabSpec, path: Path, check: CheckResult) -> list[str]:
+    """The check of the file ``path`` as ``lab check`` prints it: :func:`report_lines`,
+    with the note of :func:`default_note` right under the file's name (what it was judged
+    against)."""
+    lines = report_lines(spec, check)
+    note = default_note(spec, path)
+    if note:
+        lines.insert(1, f"  {note}")
+    return lines
+
+
 def run_check(
     lab: str,
     file: str | None,
@@ -350,6 +418,7 @@ def run_check(
     is checked. The report's first line names the file checked. With ``watch``, the file
     is checked again on every save until Ctrl-C (:func:`~.watch.watch_check`)."""
     from mirrorlab.files import write_png_atomic
+    from mirrorlab.gl.context import choose
 
     spec = find_lab(lab)
     folder = solutions_dir(solutions)
@@ -357,6 +426,7 @@ def run_check(
     if not path.is_file():
         raise FileNotFoundError(f"FILE: {str(path)!r} is not a file")
     out = out or Path("out") / f"{spec.name}_check.png"
+    choose("offscreen", new_process=True)  # no OpenGL: render's one line, before any of it
     if not sandboxed():
         print(f"mirrorlab lab check: {unsandboxed_note()}", file=sys.stderr)
     if watch:
@@ -365,12 +435,11 @@ def run_check(
         return watch_check(spec, path, out, limits, folder)
     source = path.read_bytes()
     variant = file_variant(spec, path)
-    released = path.parent / REFERENCE_FOLDER
-    reference = reference_evidence(spec, variant, folder, limits, released=released)
+    reference = file_reference(spec, variant, folder, limits, path)
     check = check_submission(
         spec, source, reference, Context(variant), str(path), path.name, limits
     )
-    print("\n".join(report_lines(spec, check)))
+    print("\n".join(file_report(spec, path, check)))
     write_png_atomic(out, check.picture)
     print(f"picture (student | reference | difference): {out}")
     return 0 if check.passed else 1

@@ -12,7 +12,6 @@ call stream; nothing it writes to its box is ever read.
 
 from __future__ import annotations
 
-import shutil
 import signal
 import time
 from collections.abc import Callable
@@ -40,8 +39,8 @@ from mirrorlab.labs.trusted.sandbox import (
     Limits,
     Sandboxed,
     SandboxError,
+    remove_box,
     sandbox_mode,
-    tail,
 )
 from mirrorlab.labs.trusted.session import LabBase, LabSetupError
 
@@ -141,7 +140,7 @@ class LabRun:
             self.channel.close()
             self.channel = None
         if self.box is not None:
-            shutil.rmtree(self.box, ignore_errors=True)
+            remove_box(self.box)
             self.box = None
 
     def start(self) -> None:
@@ -178,9 +177,9 @@ class LabRun:
 
     def _ended_early(self) -> None:
         """The runner died before it said ready: the sandbox itself failed."""
-        assert self.sandbox is not None and self.box is not None
+        assert self.sandbox is not None
         code, _, stopped = self.sandbox.wait(timeout=10)
-        stderr = tail(self.box / "stderr.txt")
+        stderr = self.sandbox.stderr_tail()
         last = next((line for line in reversed(stderr.strip().splitlines()) if line.strip()), "")
         if stopped:
             self.end(*self._classify(code, stopped))
@@ -204,6 +203,10 @@ class LabRun:
             return "timeout", (
                 f"stopped after {limits.seconds:g} s of waiting (the wall-clock limit)"
             )
+        if stopped == "scratch":
+            from mirrorlab.labs.trusted.scratch import scratch_message
+
+            return "scratch", (f"stopped when its scratch space held more than {scratch_message()}")
         if stopped == "processes":
             from mirrorlab.labs.trusted.sandbox import MAX_PROCESSES
 
@@ -215,8 +218,8 @@ class LabRun:
             return "timeout", (
                 f"stopped at the CPU-time limit of {limits.cpu_seconds} s (an endless loop?)"
             )
-        assert self.box is not None
-        stderr = tail(self.box / "stderr.txt")
+        assert self.sandbox is not None
+        stderr = self.sandbox.stderr_tail()
         if "MemoryError" in stderr or "Cannot allocate memory" in stderr:
             return "memory", f"stopped at the memory limit of {limits.memory_mb} MB"
         died = (

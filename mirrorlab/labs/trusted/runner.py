@@ -5,9 +5,10 @@ in the sandbox with a pipe to this process, and returns at once: the runner load
 Python and its modules while the trusted side gets ready (imports OpenGL, makes its
 context and the lab's session), and :class:`~.lab_run.LabRun` then sends it the session.
 A runner may be started before its file is known (a warm checker's next run): the file
-then comes with the session, as bytes, and the runner writes it into its box before
-anything of it runs. Either way the runner is a new process in a new box, which has run
-nothing of any student's yet.
+then comes with the session, as bytes, and the runner writes it into its working folder
+(in its scratch: :mod:`.scratch`) before anything of it runs. Either way the runner is a
+new process in a new run folder and scratch, which has run nothing of any student's
+yet.
 
 This module imports neither OpenGL nor numpy, so that a checker process can start the
 runner before it loads them.
@@ -22,7 +23,6 @@ from pathlib import Path
 
 from mirrorlab.labs import LabSpec
 from mirrorlab.labs.trusted.sandbox import (
-    SANDBOX_BOX,
     SANDBOX_LAB_SIDE,
     SANDBOX_PACKAGES,
     SANDBOX_SITE,
@@ -31,13 +31,13 @@ from mirrorlab.labs.trusted.sandbox import (
     Sandboxed,
     interpreter,
     new_box,
+    remove_box,
     sandbox_mode,
     user_interpreter,
 )
 
 BOX_FILE = "student.py"
-"""The student's file in its box (whatever it was called: never the box's own
-stdout.txt or stderr.txt)."""
+"""The student's file in its working folder (whatever it was called)."""
 BOOT = (
     "import sys; sys.path[:0] = [{packages!r}]; sys.path.append({site!r}); "
     "from labstudent.runner import main; sys.exit(main(sys.argv[1:]))"
@@ -61,11 +61,11 @@ def _offer_numpy(folder: Path) -> str:
 
 @dataclass
 class Runner:
-    """A runner started in the sandbox, waiting for its session: its ``box``, its
-    process (``sandbox``), this side's ends of its pipe (``read_fd``, ``write_fd``), the
-    paths by which it finds the student's ``file`` and the lab's student side
-    (``lab_side``), and whether the box holds the file yet (``has_file``: when not, the
-    session carries it)."""
+    """A runner started in the sandbox, waiting for its session: its run folder ``box``,
+    its process (``sandbox``), this side's ends of its pipe (``read_fd``, ``write_fd``),
+    the paths by which it finds the student's ``file`` and the lab's student side
+    (``lab_side``), and whether its working folder holds the file yet (``has_file``: when
+    not, the session carries it)."""
 
     box: Path
     sandbox: Sandboxed
@@ -76,7 +76,7 @@ class Runner:
     has_file: bool
 
     def release(self) -> None:
-        """End a runner that no run took: its process, its pipe and its box."""
+        """End a runner that no run took: its process, its pipe and its run folder."""
         self.sandbox.kill()
         self.sandbox.wait(timeout=10)
         for fd in (self.read_fd, self.write_fd):
@@ -84,38 +84,47 @@ class Runner:
                 os.close(fd)
             except OSError:
                 pass
-        shutil.rmtree(self.box, ignore_errors=True)
+        remove_box(self.box)
 
 
 def start_runner(
     spec: LabSpec, limits: Limits, owner: int | None = None, source: bytes | None = None
 ) -> Runner:
-    """Start ``spec``'s runner in a new box, with ``source`` (the student's file) in it,
-    or without a file yet when ``source`` is None; SandboxError when it cannot start."""
+    """Start ``spec``'s runner in a new run folder, with ``source`` (the student's file) in
+    its working folder, or without a file yet when ``source`` is None; SandboxError when
+    it cannot start."""
     box = new_box()
     try:
-        if source is not None:
-            (box / BOX_FILE).write_bytes(source)
         mode = sandbox_mode()
         lab_side = spec.student_file
         if mode == "bwrap":
             python, packages, site = interpreter(), SANDBOX_PACKAGES, SANDBOX_SITE
-            path, lab_side_path = f"{SANDBOX_BOX}/{BOX_FILE}", SANDBOX_LAB_SIDE
-        else:
-            python, packages, site = user_interpreter(), str(box / "pkg"), ""
+            lab_side_path = SANDBOX_LAB_SIDE
+        else:  # the student side beside the scratch, where the run may read, not write
+            library = box / "lib"
+            library.mkdir()
+            python, packages, site = user_interpreter(), str(library / "pkg"), ""
             if mode == "none":
-                python, site = interpreter(), _offer_numpy(box / "site")
+                python, site = interpreter(), _offer_numpy(library / "site")
             shutil.copytree(
                 STUDENT_PACKAGE,
-                box / "pkg" / "labstudent",
+                library / "pkg" / "labstudent",
                 ignore=shutil.ignore_patterns("__pycache__"),
             )
-            shutil.copyfile(lab_side, box / "pkg" / "lab_side.py")
-            path, lab_side_path = str(box / BOX_FILE), str(box / "pkg" / "lab_side.py")
+            shutil.copyfile(lab_side, library / "pkg" / "lab_side.py")
+            lab_side_path = str(library / "pkg" / "lab_side.py")
         argv = [str(python), "-I", "-S", "-B", "-c", BOOT.format(packages=packages, site=site)]
-        sandbox = Sandboxed(argv, box, limits, pipe=True, owner=owner, lab_side=lab_side)
+        sandbox = Sandboxed(
+            argv,
+            box,
+            limits,
+            pipe=True,
+            owner=owner,
+            lab_side=lab_side,
+            files={} if source is None else {BOX_FILE: source},
+        )
     except BaseException:
-        shutil.rmtree(box, ignore_errors=True)
+        remove_box(box)
         raise
     # the pipe: the runner's stdin and stdout, as file descriptors of this side's own
     process = sandbox.process
@@ -123,4 +132,5 @@ def start_runner(
     read_fd, write_fd = os.dup(process.stdout.fileno()), os.dup(process.stdin.fileno())
     process.stdout.close()
     process.stdin.close()
+    path = sandbox.place(BOX_FILE)
     return Runner(box, sandbox, read_fd, write_fd, path, lab_side_path, source is not None)

@@ -37,14 +37,13 @@ from pathlib import Path
 from mirrorlab.labs import LabSpec
 from mirrorlab.labs.trusted.checker import (
     CHECK_SIZE,
-    REFERENCE_FOLDER,
     CheckResult,
     check_submission,
+    file_reference,
     file_variant,
-    reference_evidence,
 )
 from mirrorlab.labs.trusted.evidence import Evidence
-from mirrorlab.labs.trusted.gl_process import CheckerProcess
+from mirrorlab.labs.trusted.gl_process import CheckerError, CheckerProcess, run_job
 from mirrorlab.labs.trusted.judging import Context
 from mirrorlab.labs.trusted.sandbox import Limits, sandbox_uid, sweep_stale, uid_processes
 from mirrorlab.labs.trusted.variants import Variant
@@ -80,6 +79,10 @@ class WarmProcess(CheckerProcess):
         sweep_stale(Path(tempfile.gettempdir()))
 
 
+class Cancelled(Exception):
+    """A check stopped because a newer save made it stale (:meth:`WarmChecker.cancel`)."""
+
+
 class WarmChecker:
     """Checks of one lab's files, one after another, with the GL process, the prepared
     run, the judge and the references kept warm (see the module's text). Use as a context
@@ -112,12 +115,13 @@ class WarmChecker:
     def __exit__(self, *exc: object) -> None:
         self.close()
 
-    def reference(self, variant: Variant, released: Path) -> Evidence:
-        """A copy of the reference evidence for ``variant`` (loaded or made once)."""
-        key = json.dumps([variant.plain(), str(released)], sort_keys=True)
+    def reference(self, variant: Variant, path: Path) -> Evidence:
+        """A copy of the reference evidence the file ``path`` of ``variant`` is judged
+        against (:func:`~.checker.file_reference`: loaded or made once)."""
+        key = json.dumps([variant.plain(), str(path.parent.resolve())], sort_keys=True)
         if key not in self._references:
-            self._references[key] = reference_evidence(
-                self.spec, variant, self.solutions, self.limits, self.size, released
+            self._references[key] = file_reference(
+                self.spec, variant, self.solutions, self.limits, path, self.size
             )
         return copy.deepcopy(self._references[key])
 
@@ -126,13 +130,12 @@ class WarmChecker:
         check`` does; None when :meth:`cancel` stopped it."""
         source = path.read_bytes() if source is None else source
         variant = file_variant(self.spec, path)
-        reference = self.reference(variant, path.parent / REFERENCE_FOLDER)
+        reference = self.reference(variant, path)
         with self._lock:
             if self.process is None or not self.process.alive():
                 if self.process is not None:
                     self.process.close()
                 self.process = WarmProcess()
-            process = self.process
             self._started, self._cancelled, self._busy = time.monotonic(), False, True
         try:
             result = check_submission(
@@ -144,14 +147,47 @@ class WarmChecker:
                 path.name,
                 self.limits,
                 self.size,
-                process=process,
+                keep=True,
+                run=self._run,
             )
             self._busy = False
+        except Cancelled:
+            self._busy = False
+            return None
         finally:
             with self._lock:
                 self._started = None
-                cancelled = self._cancelled
-        return None if cancelled else result
+        return result
+
+    def _run(
+        self,
+        spec: LabSpec,
+        source: bytes,
+        file_name: str,
+        variant: Variant,
+        limits: Limits,
+        size: tuple[int, int],
+        keep: bool,
+    ) -> Evidence:
+        """:func:`~.gl_process.run_job` in the warm process (``keep``; the checker's own
+        failures are run again in a process of their own, :mod:`.failures`); Cancelled
+        when :meth:`cancel` stopped it."""
+        if self._cancelled:
+            raise Cancelled
+        try:
+            return run_job(
+                spec,
+                source,
+                file_name,
+                variant,
+                limits,
+                size,
+                process=self.process if keep else None,
+            )
+        except CheckerError:
+            if self._cancelled:
+                raise Cancelled from None
+            raise
 
     def cancel(self, after: float = CANCEL_AFTER) -> bool:
         """Stop the check in progress if it has run ``after`` seconds or more (its GL

@@ -25,7 +25,7 @@ from datetime import datetime
 from pathlib import Path
 
 from mirrorlab.labs import LabSpec
-from mirrorlab.labs.trusted.checker import CheckError, report_lines
+from mirrorlab.labs.trusted.checker import CheckError, file_report
 from mirrorlab.labs.trusted.gl_process import CheckerError
 from mirrorlab.labs.trusted.sandbox import Limits
 from mirrorlab.labs.trusted.warm import WarmChecker
@@ -140,7 +140,7 @@ def watch_check(
                     checking[0] = None
                 if check is not None and watch.signature() == seen:
                     seconds = time.perf_counter() - started
-                    print("\n".join(report_lines(spec, check)))
+                    print("\n".join(file_report(spec, path, check)))
                     write_png_atomic(out, check.picture)
                     print(f"picture (student | reference | difference): {out}")
                     stamp = datetime.now().strftime("%H:%M:%S")
