@@ -18,7 +18,10 @@ numbers, judged against the shipped reference, as a student's check is). One
   the checker compiles a new shader.
 
 Figures are medians with the 10th and 90th percentiles, in seconds, and the ratio of the
-watch's median to the cold check's, from the same rounds. The cache folder
+watch's median to the cold check's, from the same rounds; beside them, the CPU seconds of
+every process each took (Linux's /proc: the command and what it waited for; for the
+watch, its process tree's growth from the save to the answer, which also counts a
+process its checker started ahead for the next save once that one is reaped). The cache folder
 (``MIRRORLAB_CACHE``) is a fresh one, filled by a first, untimed check of each kind, as
 the second check of a student's day finds it.
 """
@@ -80,7 +83,30 @@ def save(path: Path, text: str) -> float:
     return moment
 
 
-def cold(python: str, lab: str, folder: Path, env: dict[str, str]) -> float:
+def tree_cpu(pid: int) -> float:
+    """CPU seconds of process ``pid``, of the children it has waited for and of its living
+    children (and theirs), from Linux's /proc; 0 elsewhere."""
+    tick = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
+    total = 0.0
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        total += sum(int(f) for f in fields[11:15]) / tick
+        children = Path(f"/proc/{pid}/task/{pid}/children").read_text().split()
+    except OSError:
+        return total
+    return total + sum(tree_cpu(int(child)) for child in children)
+
+
+def children_cpu() -> float:
+    import resource
+
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def cold(python: str, lab: str, folder: Path, env: dict[str, str]) -> tuple[float, float]:
+    """(seconds, CPU seconds of the command and every process it waited for)."""
+    cpu = children_cpu()
     started = time.perf_counter()
     done = subprocess.run(
         [python, "-m", "mirrorlab.cli", "lab", "check", lab, "mine.py", "--out", "cold.png"],
@@ -92,7 +118,7 @@ def cold(python: str, lab: str, folder: Path, env: dict[str, str]) -> float:
     seconds = time.perf_counter() - started
     if "tasks passed" not in done.stdout:
         raise SystemExit(f"lab check {lab} judged nothing: {done.stderr.strip()[-500:]}")
-    return seconds
+    return seconds, children_cpu() - cpu
 
 
 class Watch:
@@ -177,6 +203,7 @@ def measure(lab: str, rounds: int, before: Before | None, cache: Path) -> dict[s
     versions = [text.replace(old, new, 1), text]
     mark = GLSL_MARK.get(lab)
     kinds: dict[str, list[float]] = {"cold": [], "watch, a save": []}
+    cpu: dict[str, list[float]] = {}
     before_kind = f"cold, {before.revision}" if before is not None else ""
     if before is not None:
         kinds[before_kind] = []
@@ -193,26 +220,35 @@ def measure(lab: str, rounds: int, before: Before | None, cache: Path) -> dict[s
             cold(before.python, lab, folder, env)
         watch = Watch(lab, folder, env)
         watch.checked()
+
+        def timed(kind: str, seconds: float, used: float) -> None:
+            kinds[kind].append(seconds)
+            cpu.setdefault(kind, []).append(used)
+
         for round_ in range(rounds):
-            kinds["cold"].append(cold(sys.executable, lab, folder, env))
+            timed("cold", *cold(sys.executable, lab, folder, env))
             if before is not None:
-                kinds[before_kind].append(cold(before.python, lab, folder, env))
+                timed(before_kind, *cold(before.python, lab, folder, env))
             time.sleep(0.5)  # the watch is waiting, as it is between a student's saves
+            used = tree_cpu(watch.process.pid)
             saved = save(path, versions[round_ % 2])
             done, _ = watch.checked()
-            kinds["watch, a save"].append(done - saved)
+            timed("watch, a save", done - saved, tree_cpu(watch.process.pid) - used)
             if mark is not None:
                 time.sleep(0.5)
                 glsl = text.replace(mark, f"// round {round_}\n{mark}", 1)
+                used = tree_cpu(watch.process.pid)
                 saved = save(path, glsl)
                 done, _ = watch.checked()
-                kinds["watch, a save with new GLSL"].append(done - saved)
+                timed(
+                    "watch, a save with new GLSL", done - saved, tree_cpu(watch.process.pid) - used
+                )
             print(f"{lab} round {round_ + 1}/{rounds}", file=sys.stderr, flush=True)
     finally:
         if watch is not None:
             watch.close()
         shutil.rmtree(folder, ignore_errors=True)
-    return kinds
+    return {**kinds, **{f"{kind} (CPU s)": values for kind, values in cpu.items()}}
 
 
 def main() -> int:
@@ -235,16 +271,25 @@ def main() -> int:
         shutil.rmtree(cache, ignore_errors=True)
         if before is not None:
             before.close()
-    print(f"\n{args.rounds} rounds a lab; seconds: median (p10-p90); watch / cold of medians")
-    print("| lab | check | median s | p10-p90 s | / cold |")
-    print("|---|---|---:|---:|---:|")
+    print(
+        f"\n{args.rounds} rounds a lab; seconds from the start or the save to the answer, and "
+        f"CPU seconds of every process it took; median (p10-p90); the ratio of medians to "
+        f"the cold check's"
+    )
+    print("| lab | check | s | p10-p90 | / cold | CPU s | p10-p90 | / cold |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|")
     for lab, kinds in figures.items():
         cold_median = statistics.median(kinds["cold"])
+        cold_cpu = statistics.median(kinds["cold (CPU s)"])
         for kind, values in kinds.items():
+            if kind.endswith("(CPU s)"):
+                continue
             median, low, high = percentiles(values)
+            used, used_low, used_high = percentiles(kinds[f"{kind} (CPU s)"])
             print(
                 f"| {lab} | {kind} | {median:.2f} | {low:.2f}-{high:.2f} | "
-                f"{median / cold_median:.2f}x |"
+                f"{median / cold_median:.2f}x | {used:.2f} | {used_low:.2f}-{used_high:.2f} | "
+                f"{used / cold_cpu:.2f}x |"
             )
     if args.json:
         Path(args.json).write_text(json.dumps(figures, indent=1))
