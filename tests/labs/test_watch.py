@@ -77,26 +77,41 @@ def each_save_is_checked(watch: Watch, path: Path, lab_environment: Path) -> Non
     assert leftovers(lab_environment) == []
 
 
+SLOW = "import time\ntime.sleep(5)\n" + WRONG_EXTENTS.source()
+"""A file whose check takes seconds (and would fail task 1)."""
+
+
 def test_a_save_during_a_check_has_the_newest_file_checked(tmp_path, lab_environment):
     """The stale file takes seconds to load; the save while it runs stops it, and the
-    report printed is the new file's alone."""
+    report printed is the new file's alone. Ctrl-C during a check leaves nothing either."""
     path = tmp_path / "mine.py"
-    path.write_text("import time\ntime.sleep(5)\n" + WRONG_EXTENTS.source())
+    path.write_text(SLOW)
     with Watch(tmp_path) as watch:
         newest_is_checked(watch, path, lab_environment)
 
 
+def under_way(watch: Watch, lab_environment: Path) -> None:
+    """Wait until the watch has a check running (its job's folder is there)."""
+    wait_for(
+        lambda: list(lab_environment.glob(f"mirrorlab-check-{watch.process.pid}-*")),
+        "a check to be under way",
+    )
+
+
 def newest_is_checked(watch: Watch, path: Path, lab_environment: Path) -> None:
     watch.until("watching mine.py")
-    wait_for(
-        lambda: [p for p in lab_environment.glob(f"mirrorlab-check-{watch.process.pid}-*")],
-        "the first check to be under way",
-    )
+    under_way(watch, lab_environment)
     save_by_rename(path, solution("lab20"))
     assert "8/8 tasks passed" in watch.report()
+    save_by_rename(path, SLOW)
+    under_way(watch, lab_environment)
+    checkers = watch.checkers()
     code, out, errors = watch.interrupt()
     assert code == 0 and "[FAIL]" not in out and out.count("tasks passed") == 1, out
     assert notes_only(errors), errors
+    wait_for(lambda: not any(Path(f"/proc/{pid}").exists() for pid in checkers), "the checker")
+    if os.geteuid() == 0 and sandbox_mode() != "none":
+        assert uid_processes(UID_BASE + watch.process.pid) == []
     assert leftovers(lab_environment) == []
 
 
