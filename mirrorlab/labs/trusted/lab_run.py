@@ -337,7 +337,6 @@ class LabRun:
                     break
         if not self.ended:
             self.evidence.arrays["frame"] = self.executor.session_frame()
-            self.evidence.state["frame_taint"] = self.executor.tracker.framebuffer_taint
         self.finish()
         if self.evidence.status == "ok":
             self.observe()
@@ -409,39 +408,44 @@ class LabRun:
 
 
 def reset_state() -> None:
-    """State a student's calls may have left that would change the checker's own drawing
-    and reading."""
+    """Every state a student's calls may have left that the checker's own drawing and
+    reading depend on, set to GL's defaults (the trusted side's own work starts from
+    here, whatever the file left): switches (every one the labs' calls can reach, on every
+    texture unit), masks, depth, polygon mode and offset, pixel store, each unit's
+    texture environment, texture matrix and bindings, the matrices (loaded: no stack is
+    pushed), the program, the active unit, the current colour."""
+    from mirrorlab.labs.trusted.state import UNIT_CAPS
+
     GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, GL.glGetIntegerv(GL.GL_FRAMEBUFFER_BINDING))
     FF = legacy.gl()  # the legacy switches are the emulation's on a core context
-    for cap in (
-        GL.GL_SCISSOR_TEST,
-        GL.GL_BLEND,
-        GL.GL_CULL_FACE,
-        GL.GL_STENCIL_TEST,
-        GL.GL_ALPHA_TEST,
-        GL.GL_LIGHTING,
-        GL.GL_FOG,
-        GL.GL_POLYGON_OFFSET_FILL,
-    ):
+    for cap in sorted(C.CAPS - set(UNIT_CAPS) - {int(GL.GL_DEPTH_TEST)}):
         FF.glDisable(cap)
+    GL.glEnable(GL.GL_DEPTH_TEST)
     GL.glColorMask(1, 1, 1, 1)
     GL.glDepthMask(1)
     GL.glDepthFunc(GL.GL_LESS)
-    GL.glPolygonMode(GL.GL_FRONT_AND_BACK, GL.GL_FILL)
+    GL.glDepthRange(0.0, 1.0)
+    GL.glCullFace(GL.GL_BACK)
+    GL.glFrontFace(GL.GL_CCW)
+    GL.glPolygonOffset(0.0, 0.0)
+    FF.glPolygonMode(GL.GL_FRONT_AND_BACK, GL.GL_FILL)
     GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 4)
     GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 4)
-    for unit in range(8):
-        GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
-        for cap in (
-            GL.GL_TEXTURE_2D,
-            GL.GL_TEXTURE_CUBE_MAP,
-            GL.GL_TEXTURE_GEN_S,
-            GL.GL_TEXTURE_GEN_T,
-            GL.GL_TEXTURE_GEN_R,
-            GL.GL_TEXTURE_GEN_Q,
-        ):
+    for unit in sorted(C.UNITS):
+        GL.glActiveTexture(unit)
+        for cap in UNIT_CAPS:
             FF.glDisable(cap)
+        FF.glTexEnvi(GL.GL_TEXTURE_ENV, GL.GL_TEXTURE_ENV_MODE, GL.GL_MODULATE)
+        FF.glMatrixMode(GL.GL_TEXTURE)
+        FF.glLoadIdentity()
+        GL.glBindTexture(GL.GL_TEXTURE_2D, 0)
+        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, 0)
     GL.glActiveTexture(GL.GL_TEXTURE0)
+    for mode in (GL.GL_PROJECTION, GL.GL_MODELVIEW):
+        FF.glMatrixMode(mode)
+        FF.glLoadIdentity()
+    FF.glColor4f(1.0, 1.0, 1.0, 1.0)
     GL.glUseProgram(0)
+    GL.glBindVertexArray(0)
     while GL.glGetError() != GL.GL_NO_ERROR:
         pass
