@@ -131,8 +131,10 @@ if os.fork() == 0:  # a process that means to outlive its run
 """
 """Put at the top of the solution: notes in its box, its /tmp and its home, and a
 detached process. The solution's display() then ends with GL state left on (below)."""
-LEFT_STATE = """    glEnable(GL_BLEND)
-    glBlendFunc(GL_ONE, GL_ONE)
+LEFT_STATE = """    glEnable(GL_CULL_FACE)
+    glCullFace(GL_FRONT_AND_BACK)
+    glColorMask(GL_TRUE, GL_FALSE, GL_FALSE, GL_TRUE)
+    glDepthFunc(GL_NEVER)
     glClearColor(1, 0, 0, 1)
     glMatrixMode(GL_PROJECTION)
     glLoadIdentity()
