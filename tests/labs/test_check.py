@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 
 from mirrorlab.labs import find_lab, lab_names
-from mirrorlab.labs.trusted.grading import grade_folder
 from mirrorlab.scene.backgrounds import load_picture
 from tests.labs.classroom import STARTER, starter_text
 from tests.labs.conftest import LIMITS, SOLUTIONS, mirrorlab_command
@@ -25,6 +24,7 @@ from tests.labs.mutants import (
     problems,
     write_mutants,
 )
+from tests.labs.warm_checks import check_folder
 
 
 def task_lines(output: str) -> dict[int, tuple[str, str]]:
@@ -119,18 +119,9 @@ def test_each_mutant_is_caught_with_the_right_hint(lab, mutants, tmp_path):
             .replace("return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * dot(n, u) * n")
         )
         (tmp_path / "class" / "glsl_typo.py").write_text(source)
-    grades, _ = grade_folder(
-        find_lab(lab),
-        tmp_path / "class",
-        2,
-        None,
-        "pool",
-        LIMITS,
-        progress=False,
-        solutions=SOLUTIONS,
-    )
     by_student = {
-        g.student: {task: (passed, hint) for task, passed, hint in g.tasks} for g in grades
+        student: {task: (passed, hint) for task, passed, hint in tasks}
+        for student, tasks in check_folder(lab, tmp_path / "class").items()
     }
     for stem, mutant in written.items():
         assert problems(mutant.fails, by_student[stem]) == [], stem

@@ -5,10 +5,9 @@ small while a file tries to send it 1 GiB."""
 
 from __future__ import annotations
 
-import re
 import subprocess
 import sys
-from concurrent.futures import ThreadPoolExecutor
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -17,9 +16,10 @@ from mirrorlab.labs import find_lab
 from mirrorlab.labs.trusted.gl_process import run_job
 from mirrorlab.labs.trusted.sandbox import Limits
 from mirrorlab.labs.trusted.variants import default_variant
-from tests.labs.conftest import mirrorlab_command, read_csv
+from tests.labs.conftest import LIMITS, mirrorlab_command, read_csv
 from tests.labs.forgeries import forgeries
 from tests.labs.glsl_forgeries import GLSL_FORGERIES, PHRASES
+from tests.labs.warm_checks import check_files, report
 
 TIMEOUT = "20"
 """CPU seconds a forgery may spend: enough that each meets the limit it is about (calls,
@@ -38,33 +38,22 @@ def forged(tmp_path_factory, lab_environment):
     return folder, {name: phrase for name, (_, phrase) in found.items()}
 
 
-def check_one(folder, name: str) -> subprocess.CompletedProcess:
-    return mirrorlab_command(
-        "lab",
-        "check",
-        "lab20",
-        str(folder / f"{name}.py"),
-        "--out",
-        str(folder / f"{name}.png"),
-        "--timeout",
-        TIMEOUT,
-    )
-
-
-def test_every_forgery_fails_lab_check_in_one_line(forged):
+def test_every_forgery_fails_the_check_in_one_line(forged, capfd):
+    """Through the warm checker (``lab check --watch``'s), one forgery after another: each
+    fails, with a hint, one line a task, and no traceback or other word on stderr."""
     folder, phrases = forged
     assert len(phrases) >= 15
-    with ThreadPoolExecutor(2) as pool:
-        results = dict(zip(phrases, pool.map(lambda n: check_one(folder, n), phrases), strict=True))
-    for name, done in results.items():
-        assert done.returncode == 1, (name, done.stdout, done.stderr)
-        assert done.stderr == "" and "Traceback" not in done.stdout, (name, done.stderr)
-        score = re.search(r"(\d+)/8 tasks passed", done.stdout)
-        assert score and int(score.group(1)) < TASKS, (name, done.stdout)
-        hints = [line for line in done.stdout.splitlines() if line.strip().startswith("hint:")]
+    limits = replace(LIMITS, cpu_seconds=int(TIMEOUT), seconds=3.0 * int(TIMEOUT) + 30)
+    checks = check_files("lab20", [folder / f"{name}.py" for name in phrases], limits)
+    for name, check in checks.items():
+        printed = report("lab20", check)
+        assert not check.passed and check.score < TASKS, (name, printed)
+        assert "Traceback" not in printed, (name, printed)
+        hints = [line for line in printed.splitlines() if line.strip().startswith("hint:")]
         assert hints, name
         phrase = phrases[name]
         assert phrase is None or any(phrase in hint for hint in hints), (name, phrase, hints)
+    assert capfd.readouterr().err == ""
 
 
 def test_every_forgery_fails_lab_grade(forged, tmp_path):

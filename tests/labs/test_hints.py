@@ -1,33 +1,23 @@
 """Hints by cause: every mutant of the suite (tests/labs/mutants.py), round two's among them
 (GLSL slips that give another slip's numbers on the cone, GL errors, a frame stopped
-early), is graded, and the hint of its first failing task names that mutant's cause;
-the issue's slips fail exactly the tasks they should."""
+early), is checked (one warm checker a lab: tests/labs/warm_checks.py), and the hint of
+its first failing task names that mutant's cause; the issue's slips fail exactly the
+tasks they should."""
 
 from __future__ import annotations
 
 import pytest
 
-from mirrorlab.labs import find_lab, lab_names
-from mirrorlab.labs.trusted.grading import grade_folder
-from tests.labs.conftest import LIMITS, SOLUTIONS
+from mirrorlab.labs import lab_names
 from tests.labs.mutants import EVERY_MUTANT, PROBED_SLIPS, ROUND_TWO, problems, write_mutants
+from tests.labs.warm_checks import check_folder
 
 
 @pytest.mark.parametrize("lab", sorted(lab_names()))
 def test_the_first_failing_hint_names_the_cause(lab, tmp_path):
     mutants = [m for m in EVERY_MUTANT if m.lab == lab]
     written = write_mutants(tmp_path / "class", mutants)
-    grades, _ = grade_folder(
-        find_lab(lab),
-        tmp_path / "class",
-        2,
-        None,
-        "pool",
-        LIMITS,
-        progress=False,
-        solutions=SOLUTIONS,
-    )
-    by_student = {g.student: g.tasks for g in grades}
+    by_student = check_folder(lab, tmp_path / "class")
     wrong = []
     for stem, mutant in written.items():
         first, cause = mutant.expected_cause()

@@ -16,6 +16,7 @@ import re
 from collections.abc import Iterator
 from contextlib import contextmanager
 from functools import lru_cache
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -358,42 +359,93 @@ class Mesh:
 @lru_cache(maxsize=32)
 def mesh_arrays(name: str) -> tuple[np.ndarray, np.ndarray]:
     """The shipped mesh ``name`` as interleaved float32 vertices and uint32 indices (read
-    once a process: a checker process kept for many runs reads each file once)."""
-    from mirrorlab.scene.mesh import load_mesh
+    once a process, through the asset cache: :mod:`.assets`)."""
+    from mirrorlab.labs.trusted.assets import cached_arrays
+    from mirrorlab.scene import mesh
 
-    data = load_mesh(model_file(name))
-    return (
-        np.ascontiguousarray(data.interleaved(), dtype=np.float32),
-        np.ascontiguousarray(data.indices.reshape(-1), dtype=np.uint32),
-    )
+    def read() -> dict[str, np.ndarray]:
+        data = mesh.load_mesh(model_file(name))
+        return {
+            "vertices": np.ascontiguousarray(data.interleaved(), dtype=np.float32),
+            "indices": np.ascontiguousarray(data.indices.reshape(-1), dtype=np.uint32),
+        }
+
+    sources = [model_file(name), Path(mesh.__file__)]
+    arrays = cached_arrays("mesh", name, sources, ("trimesh", "numpy"), read)
+    for array in arrays.values():
+        array.flags.writeable = False
+    return arrays["vertices"], arrays["indices"]
 
 
 @lru_cache(maxsize=8)
 def picture(name: str) -> np.ndarray:
-    """``textures/<name>.png`` as ``(h, w, 3)`` uint8, row 0 at the top."""
-    from mirrorlab.scene.backgrounds import load_picture
+    """``textures/<name>.png`` as ``(h, w, 3)`` uint8, row 0 at the top (read once a
+    process, through the asset cache: :mod:`.assets`)."""
+    from mirrorlab.labs.trusted.assets import cached_arrays
+    from mirrorlab.scene import backgrounds
 
-    return load_picture(texture_file(name))
+    def read() -> dict[str, np.ndarray]:
+        return {"pixels": backgrounds.load_picture(texture_file(name))}
+
+    sources = [texture_file(name), Path(backgrounds.__file__)]
+    pixels = cached_arrays("picture", name, sources, ("pillow",), read)["pixels"]
+    pixels.flags.writeable = False
+    return pixels
 
 
-def upload_picture(texture_id: int, image: np.ndarray) -> None:
-    """Fill GL texture ``texture_id`` (bound on the active unit) with ``image``: mipmapped,
-    repeating, trilinear."""
+def mipmap_levels(image: np.ndarray) -> list[np.ndarray] | None:
+    """The mipmap chain of ``image`` (``(n, n, 3)`` uint8, ``n`` a power of two; rows in
+    GL's order): level 0 (``image``) to the 1 x 1 level, each texel the mean of the 2 x 2
+    texels below it, rounded as llvmpipe's ``glGenerateMipmap`` rounds it (each row's pair,
+    then the two rows; texel for texel the same on the shipped pictures). None for another
+    shape, which GL then mipmaps itself."""
+    size = image.shape[0]
+    if image.ndim != 3 or image.shape[1] != size or size < 1 or size & (size - 1):
+        return None
+    levels = [image]
+    level: np.ndarray = image.astype(np.uint16)
+    while level.shape[0] > 1:
+        top = (level[0::2, 0::2] + level[0::2, 1::2] + 1) >> 1
+        bottom = (level[1::2, 0::2] + level[1::2, 1::2] + 1) >> 1
+        level = (top + bottom + 1) >> 1
+        levels.append(level.astype(np.uint8))
+    return levels
+
+
+@lru_cache(maxsize=8)
+def picture_levels(name: str) -> tuple[np.ndarray, ...]:
+    """The picture ``name``'s mipmap chain in GL's row order (:func:`mipmap_levels`), or
+    level 0 alone where GL must make the others; made once a process."""
+    image = np.ascontiguousarray(picture(name)[::-1])
+    levels = tuple(mipmap_levels(image) or [image])
+    for level in levels:
+        level.flags.writeable = False
+    return levels
+
+
+def upload_picture(texture_id: int, name: str) -> None:
+    """Fill GL texture ``texture_id`` (bound on the active unit) with the picture ``name``
+    (one of :data:`PICTURES`): mipmapped, repeating, trilinear. The levels are uploaded
+    as :func:`picture_levels` makes them: ``glGenerateMipmap`` would build a shader in each
+    new context, on llvmpipe a large share of a check's time."""
     GL = lazy_gl()
+    levels = picture_levels(name)
     GL.glBindTexture(GL.GL_TEXTURE_2D, int(texture_id))
     GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
-    GL.glTexImage2D(
-        GL.GL_TEXTURE_2D,
-        0,
-        GL.GL_RGB8,
-        image.shape[1],
-        image.shape[0],
-        0,
-        GL.GL_RGB,
-        GL.GL_UNSIGNED_BYTE,
-        np.ascontiguousarray(image[::-1]),
-    )
-    GL.glGenerateMipmap(GL.GL_TEXTURE_2D)
+    for number, level in enumerate(levels):
+        GL.glTexImage2D(
+            GL.GL_TEXTURE_2D,
+            number,
+            GL.GL_RGB8,
+            level.shape[1],
+            level.shape[0],
+            0,
+            GL.GL_RGB,
+            GL.GL_UNSIGNED_BYTE,
+            level,
+        )
+    if len(levels) == 1:
+        GL.glGenerateMipmap(GL.GL_TEXTURE_2D)
     GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_LINEAR_MIPMAP_LINEAR)
     GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR)
     GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_S, GL.GL_REPEAT)
@@ -543,7 +595,7 @@ class LabBase:
     def load_picture_texture(self, texture_id: int, name: str) -> None:
         GL = lazy_gl()
         GL.glActiveTexture(GL.GL_TEXTURE0)
-        upload_picture(texture_id, picture(name))
+        upload_picture(texture_id, name)
 
     def draw_parts(self, parts, light_world=(0.45, 0.8, 0.4)) -> list[int]:
         """Lit parts ``(mesh name, model (4, 4), colour, GL texture or None)`` under the
