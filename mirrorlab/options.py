@@ -308,10 +308,10 @@ def parse_parallax(flag: str, text: str) -> dict[str, Any] | str:
 
 
 def _apply_parallax(document: dict, value: Any, flag: str) -> None:
-    """Give every reflector whose technique takes a parallax correction (``cube-live``,
-    ``octahedral-live``, ``paraboloid-live``: its entry's ``parallax`` flag) the
-    ``parallax`` ``value``: a ``parallax`` table as in a scene file, or its
-    ``--parallax`` text; ``"none"`` removes the correction."""
+    """Give every reflector whose technique takes a parallax correction (its entry's
+    ``parallax`` flag: ``cube-live``, ``octahedral-live``, ``paraboloid-live``, and
+    ``ssr`` for its probe's map) the ``parallax`` ``value``: a ``parallax`` table as in
+    a scene file, or its ``--parallax`` text; ``"none"`` removes the correction."""
     if isinstance(value, str):
         value = parse_parallax(flag, value)
     live = [
@@ -321,7 +321,8 @@ def _apply_parallax(document: dict, value: Any, flag: str) -> None:
     ]
     if not live:
         _reflectors_of_kind(document, False, flag)  # with no curved reflector, says so
-        names = [t.name for t in techniques("curved") if t.parallax and not t.probe]
+        # every technique the correction is given to above, so the message names them all
+        names = [t.name for t in techniques("curved") if t.parallax]
         raise OptionError(
             flag,
             f"scene {document.get('name')!r} has no {' or '.join(names)} "
@@ -488,8 +489,8 @@ OPTIONS: tuple[Option, ...] = (
     Option(
         "parallax",
         "PROXY",
-        "how the lookups of the live maps that take a parallax correction correct for "
-        f"nearby surroundings: {', '.join(PARALLAX_FORMS)}",
+        "how the lookups of the live maps that take a parallax correction (ssr's: its "
+        f"probe's) correct for nearby surroundings: {', '.join(PARALLAX_FORMS)}",
         parse_parallax,
         _apply_parallax,
         r"reflectors\[\d+\]\.parallax",

@@ -31,7 +31,11 @@ change linearly in screen space). What differs, and why:
   of the step that met the surface, each looking at the surface's depth under the
   halfway point, interpolated between the pixel centres around it (in inverse depth,
   exact on a plane: the depth of the pixel's centre alone would put every hit up to
-  half a pixel off, towards that centre). Its colour is read there, bilinearly.
+  half a pixel off, towards that centre). Its colour is read there, bilinearly. That
+  interpolation leaves out the reflector's own pixels, so the crossing it finds can lie
+  under one of them, where the surface met is hidden behind the reflector and the
+  screen holds the reflector's colour instead: there the hit stays at its sample (a
+  pixel that is not the reflector's own), as the march found it.
 
 The shader looks at fewer samples than this reference, to the same effect: it climbs a
 pyramid of the frame's nearest depths and passes over all the samples within a block at
@@ -377,13 +381,15 @@ def march(
         active[stopped] = False
         hits = rays[met]
         if len(hits):
-            hit_s[hits] = _refine(
+            refined = _refine(
                 previous_s[hits],
                 np.minimum(s[met] + half[met], 1.0),
                 lambda ss, h=hits: _depth_of(ray_depth, h, ss, count),
                 lambda ss, h=hits: between(s0[h] + ss[:, None] * span[h]),
                 settings.refine,
             )
+            under = _pixel_of(pixel_at, hits, refined, count)
+            hit_s[hits] = np.where(own[under[:, 1], under[:, 0]], s[met], refined)
         going = rays[~stop]
         previous_s[going] = s[~stop]
     reason[active] = STEPS
@@ -425,13 +431,6 @@ def _pixel_of(pixel_at, rays: np.ndarray, s: np.ndarray, count: int) -> np.ndarr
     full = np.zeros(count)
     full[rays] = s
     return pixel_at(full)[rays]
-
-
-def _solid(found: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
-    """The distance of a surface a hit may land on: infinite where nothing was drawn or
-    the pixel is the reflector's own."""
-    distance, _, mine = found
-    return np.where(mine, np.inf, distance)
 
 
 def _refine(low, high, ray_depth, surface_depth, halvings: int) -> np.ndarray:

@@ -256,6 +256,11 @@ void main() {
                     low_s = crossed ? low_s : middle;
                 }
                 hit_s = refine > 0 ? 0.5 * (low_s + high_s) : high_s;
+                // a crossing under the reflector's own pixels (the interpolation leaves
+                // them out) is hidden behind it: the hit stays at its sample
+                if (texelFetch(frame_color, pixel_at(hit_s), 0).a < 0.5) {
+                    hit_s = s;
+                }
                 break;
             }
             previous_s = s;

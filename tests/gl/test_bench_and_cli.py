@@ -29,6 +29,7 @@ from mirrorlab.accuracy import (
 )
 from mirrorlab.cli import main
 from mirrorlab.data import data_path, scenes_dir
+from mirrorlab.passes.base import ReportsFallback
 from mirrorlab.passes.envmap import CubeMapped
 from mirrorlab.raytrace import trace_scene
 from mirrorlab.scene.backgrounds import CUBE_FACE_FILES
@@ -109,7 +110,7 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
         assert room[f"{name} box"] < 0.05 * room[name], (name, room)
         assert room[f"{name} distance"] < 0.05 * room[name], (name, room)
     # FLIP beside the old figures (or, without flip-evaluator, empty, and the table says
-    # why); no shipped technique falls back to a probe, so no miss share
+    # why)
     scored = [r for r in table if not r["technique"].startswith("raytrace")]
     if flip.available():
         assert all(0.0 <= float(r["flip"]) < 1.0 for r in scored)
@@ -119,7 +120,26 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
         assert {r["flip"] for r in table if r["technique"].startswith("raytrace")} == {"0.0"}
     else:
         assert all(r["flip"] == "" for r in table) and "FLIP is empty" in out.out
-    assert all(r["miss_share"] == "" for r in table) and "miss share" not in out.out
+    # a miss share for every configuration whose technique reports its fallback (from the
+    # registry: ssr's probe), and for no other
+    method = {
+        (panel.name, label): options["method"]
+        for panel in panels
+        for label, options in panel_configurations(panel, quick)
+    }
+    falls_back = [r for r in scored if reports_fallback(method[(r["scene"], r["technique"])])]
+    assert all(r["miss_share"] == "" for r in scored if r not in falls_back)
+    assert all(0.0 <= float(r["miss_share"]) <= 1.0 for r in falls_back)
+    assert bool(falls_back) == any(reports_fallback(name) for name in methods_registered())
+    assert ("miss share" in out.out) == bool(falls_back)
+    # the sphere in the sky alone: nothing in the view for a reflected ray to meet, so all
+    # of it falls back; among its objects, some of it finds them (measured: 79% falls back)
+    for r in falls_back:
+        share = float(r["miss_share"])
+        if r["scene"] == "sphere-sky":
+            assert share == 1.0, r
+        if r["scene"] == "sphere-objects":
+            assert share < 0.95, r
     # each scene's Pareto frontier is named: configurations of that scene, cheapest first
     assert out.out.count("Pareto frontier") == len(panels)
     assert all(float(r["wall_ms"]) > 0 for r in table)
@@ -233,6 +253,19 @@ def test_a_sweep_from_inside_the_sphere_reports_no_reflector_pixels(tmp_path, ca
     assert not re.search(r"\b0\.00\b", out)
 
 
+def reports_fallback(method: str) -> bool:
+    """Whether technique ``method``'s pass reports the pixels it filled from its fallback
+    (its pass class is a :class:`~mirrorlab.passes.base.ReportsFallback`): the techniques
+    the sweep gives a miss share."""
+    entry = technique(method)
+    return bool(entry.pass_class) and issubclass(entry.load(), ReportsFallback)
+
+
+def methods_registered() -> set[str]:
+    """Every registered planar and curved technique's name."""
+    return {t.name for kind in ("planar", "curved") for t in techniques(kind)}
+
+
 class RightHalfFallback(CubeMapped):
     """A static cube map that says it filled the right half of every view from a
     fallback: what a technique with a probe (screen-space reflections) reports."""
@@ -267,7 +300,11 @@ def test_a_technique_with_a_fallback_gets_its_miss_share(tmp_path, capsys):
     right = scored[:, 16:].sum() / scored.sum()
     assert 0.3 < right < 0.7
     assert float(table["cube-halfback"]["miss_share"]) == pytest.approx(right)
-    assert all(r["miss_share"] == "" for name, r in table.items() if name != "cube-halfback")
+    # a curved configuration is labelled by its technique's name (then its correction): the
+    # registered ones that report a fallback (ssr) have their share, the others none
+    for label, r in table.items():
+        if label != "cube-halfback" and not is_truth(label):
+            assert (r["miss_share"] != "") == reports_fallback(label.split()[0]), label
     # the same pictures as the cube map's: the same errors
     for figure in ("mae", "flip", "share_off"):
         assert table["cube-halfback"][figure] == table["cube"][figure]

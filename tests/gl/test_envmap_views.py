@@ -35,7 +35,7 @@ from mirrorlab.options import apply_options
 from mirrorlab.passes.envmap import OUTPUT_COORDINATES
 from mirrorlab.raytrace import trace_scene
 from mirrorlab.scene.model import Camera, Scene, Transform
-from mirrorlab.techniques import CAMERA_TEXTURES, technique, technique_names, techniques
+from mirrorlab.techniques import CAMERA_TEXTURES, technique, technique_names
 from mirrorlab.views import (
     View,
     camera_view,
@@ -49,9 +49,11 @@ from tests.twins import measured, original
 
 SIZE = 192
 SUPERSAMPLE = 4
-STATIC_MAPS = tuple(t.name for t in techniques("curved") if t.texture not in CAMERA_TEXTURES)
+STATIC_MAPS = tuple(
+    name for name in map_technique_names() if technique(name).texture not in CAMERA_TEXTURES
+)
 """The curved techniques whose map holds the background alone (made once, or baked for
-the view), not the scene: from the registry."""
+the view), not the scene: from the registry (not one drawn from the view's own frame)."""
 
 # ------------------------------------------------------------------- scenes and truths
 

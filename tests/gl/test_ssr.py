@@ -333,6 +333,10 @@ def test_the_miss_mask_through_the_api_and_the_command_line(renderer, tmp_path, 
     assert 0.3 < mask.miss_share < 1.0 and 0.0 <= mask.probe_share <= 1.0
     counts = mask.counts()
     assert counts["hit"] > 100 and sum(counts.values()) == mask.reflector.sum()
+    # the fallback the accuracy sweep reads (its miss share): the pixels with no screen colour
+    fallback = renderer.scene_renderer.fallback_mask()
+    assert np.array_equal(fallback, mask.reflector & (mask.weight <= 0.0))
+    assert fallback.sum() / mask.reflector.sum() == pytest.approx(mask.miss_share)
     out, saved = tmp_path / "frame.png", tmp_path / "mask.png"
     arguments = ["render", "ssr_sphere_near", "--size", "96x96", "--out", str(out)]
     assert main([*arguments, "--save-ssr-mask", str(saved)]) == 0

@@ -26,13 +26,10 @@ from mirrorlab.techniques import technique, techniques
 from tests.scenekit import curved_reflector, planar_reflector, scene_robot
 from tests.twins import reflector_choices
 
-CORRECTED = tuple(t.name for t in techniques("curved") if t.parallax and not t.probe)
-"""The curved map techniques that take a parallax correction (the registry's, in order;
-one with a probe takes it for its probe's map)."""
-
 SKY_CUBE = data_path("textures") / "sky_cube"
 CORRECTED = tuple(t.name for t in techniques("curved") if t.parallax)
-"""The curved techniques that take a parallax correction, in the registry's order."""
+"""The curved techniques that take a parallax correction, in the registry's order (one
+with a probe, ``ssr``, takes it for its probe's map)."""
 
 
 def changed_fields(before, after) -> set[str]:

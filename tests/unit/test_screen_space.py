@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from mirrorlab import math3d
@@ -227,6 +227,15 @@ unit = st.floats(-1.0, 1.0, allow_subnormal=True)
     py=st.integers(0, SIZE - 1),
     along=st.floats(0.0, 1.0),
     stride=st.sampled_from([1.0, 2.5, 7.0]),
+)
+@example(  # refined onto the reflector's own pixel beside its sample (now kept at the sample)
+    projection=math3d.ortho(-14.0, 14.0, -14.0, 14.0, 0.0, 7.0),
+    direction=(-0.09375, -0.625, 0.75),
+    depth_seed=809,
+    px=29,
+    py=21,
+    along=0.3125,
+    stride=1.0,
 )
 def test_any_ray_gives_a_finite_answer_in_range(
     projection, direction, depth_seed, px, py, along, stride
