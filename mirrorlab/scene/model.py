@@ -191,7 +191,8 @@ class PlanarReflector:
     covers in that view, see :data:`FOOTPRINT_TEXTURE`). ``ortho`` is the
     capture camera of the ``ortho`` technique (None: one derived from the corners, see
     :func:`ortho_capture_for`). ``color`` is its plain look when bounces run out;
-    ``backing`` the unlit colour of its back."""
+    ``backing`` the unlit colour of its back. ``allow``: the techniques an accuracy
+    budget may choose among for it (:class:`Budget`; empty: every planar technique)."""
 
     name: str
     corners: tuple[Vec3, Vec3, Vec3, Vec3]
@@ -201,6 +202,7 @@ class PlanarReflector:
     ortho: OrthoCapture | None = None
     color: Vec3 = DEFAULT_PLAIN_COLOR
     backing: Vec3 = DEFAULT_BACKING
+    allow: tuple[str, ...] = ()
 
     kind: ClassVar[Literal["planar"]] = "planar"
 
@@ -338,7 +340,9 @@ class CurvedReflector:
     as it is, or a folder of six cube faces for ``cube`` (None: baked from the
     background); ``capture_center`` the point, in the mesh's own frame, a live cube
     map is captured from; ``parallax`` (``cube-live`` only) how its lookups correct for
-    nearby surroundings (None: everything is taken as infinitely far away)."""
+    nearby surroundings (None: everything is taken as infinitely far away); ``allow``
+    the techniques an accuracy budget may choose among for it (:class:`Budget`; empty:
+    every curved technique)."""
 
     name: str
     mesh: Path
@@ -349,6 +353,7 @@ class CurvedReflector:
     capture_center: Vec3 = (0.0, 0.0, 0.0)
     color: Vec3 = DEFAULT_PLAIN_COLOR
     parallax: Parallax | None = None
+    allow: tuple[str, ...] = ()
 
     kind: ClassVar[Literal["curved"]] = "curved"
 
@@ -361,6 +366,47 @@ class CurvedReflector:
 
 
 Reflector = PlanarReflector | CurvedReflector
+
+
+BUDGET_METRICS = ("flip", "mae")
+"""How a budget's error is measured, per reflector against the ray-traced truth: the mean
+LDR-FLIP over its pixels (0..1), or the mean absolute error in levels of 255."""
+MAX_BUDGET_ERROR = {"flip": 1.0, "mae": 255.0}
+"""The largest error a budget may allow, per metric (the metric's own range)."""
+
+
+@dataclass(frozen=True)
+class Budget:
+    """An accuracy budget (:mod:`mirrorlab.budget`): each reflector of every frame is drawn
+    by the cheapest candidate (technique, map size, parameters) predicted to stay within
+    ``max_error`` (in ``metric``, see :data:`BUDGET_METRICS`); or, the dual, with
+    ``max_ms``, by the most accurate combination predicted to fit that frame cost in
+    milliseconds. Exactly one of ``max_error`` and ``max_ms`` is set."""
+
+    max_error: float | None = None
+    metric: Literal["flip", "mae"] = "flip"
+    max_ms: float | None = None
+
+    def __post_init__(self) -> None:
+        if (self.max_error is None) == (self.max_ms is None):
+            raise ValueError("a budget sets one of max_error and max_ms")
+
+    def describe(self) -> str:
+        """The budget in words, as the command line writes it (``FLIP <= 0.05``,
+        ``MAE <= 3/255``, ``<= 20 ms a frame``)."""
+        if self.max_ms is not None:
+            return f"<= {self.max_ms:g} ms a frame"
+        assert self.max_error is not None
+        if self.metric == "mae":
+            return f"MAE <= {self.max_error:g}/255"
+        return f"FLIP <= {self.max_error:g}"
+
+    def text(self) -> str:
+        """The budget as ``--max-error`` or ``--max-ms`` takes it (``0.05``, ``mae=3``,
+        ``20``)."""
+        if self.max_ms is not None:
+            return f"{self.max_ms:g}"
+        return f"{self.max_error:g}" if self.metric == "flip" else f"mae={self.max_error:g}"
 
 
 @dataclass(frozen=True)
@@ -391,7 +437,9 @@ class Scene:
 
     ``max_bounces`` is how deep reflections of reflections go (0 draws reflectors as
     plain surfaces; 1 shows each reflector with the scene and the others plain). ``source``
-    is the file the scene was read from (not compared)."""
+    is the file the scene was read from (not compared). ``budget``: an accuracy or time
+    budget (:class:`Budget`) that chooses each reflector's technique frame by frame
+    (None: the techniques the file gives, as they are)."""
 
     name: str
     camera: Camera = Camera()
@@ -404,6 +452,7 @@ class Scene:
     animation: Animation | None = None
     description: str = ""
     source: Path | None = field(default=None, compare=False)
+    budget: Budget | None = None
 
     # ----------------------------------------------------------------- look-ups
 
