@@ -70,7 +70,10 @@ def candidates_for(reflector: Reflector, scene: Scene) -> tuple[Candidate, ...]:
     proxies: tuple[tuple[str, str], ...] = ()
     if isinstance(reflector, CurvedReflector) and technique_takes_parallax():
         proxies = _proxies(scene.objects, reflector)
-    return _candidates(_configuration(reflector), proxies)
+    from mirrorlab.techniques import techniques
+
+    # the registry's entries are part of the key: a technique registered later joins
+    return _candidates(_configuration(reflector), proxies, techniques(reflector.kind))
 
 
 def technique_takes_parallax() -> bool:
@@ -104,7 +107,7 @@ def _proxies(objects: tuple, reflector: CurvedReflector) -> tuple[tuple[str, str
 
 @functools.lru_cache(maxsize=64)
 def _candidates(
-    reflector: Reflector, proxies: tuple[tuple[str, str], ...]
+    reflector: Reflector, proxies: tuple[tuple[str, str], ...], registered: tuple
 ) -> tuple[Candidate, ...]:
     from mirrorlab.accuracy import (
         DISTANCE_STEPS,

@@ -145,14 +145,14 @@ def view_features(
     hits = first_hits(samples.points, samples.reflected, low, high, far)
     met = hits.ids >= 0
     w = samples.weights
-    objects = float(w[met].sum())
+    objects = min(float(w[met].sum()), 1.0)
     distance = np.linalg.norm(hits.points - samples.points, axis=1)
     near = (
         float(np.median(np.minimum(radius / np.maximum(distance[met], 1e-12), 4.0)))
         if met.any()
         else 0.0
     )
-    offscreen = float(w[_off_screen(hits, met, view, low, high)].sum())
+    offscreen = min(float(w[_off_screen(hits, met, view, low, high)].sum()), 1.0)
     grazing = float(w @ (1.0 - np.abs(np.einsum("ij,ij->i", samples.normals, samples.views))))
     return ViewFeatures(
         pixels=float(footprint.pixels),
@@ -385,7 +385,7 @@ def lookup_error(features: ViewFeatures, drawn: Reflector) -> tuple[float, float
     samples, hits = features.samples, features.hits
     w = samples.weights
     if entry.texture in ("static", "baked"):
-        return float(w[hits.ids >= 0].sum()), 0.0
+        return min(float(w[hits.ids >= 0].sum()), 1.0), 0.0
     if entry.texture == "fixed" and isinstance(drawn, PlanarReflector):
         origins, directions = samples.points, samples.normals
     elif entry.texture == "fixed" and isinstance(drawn, CurvedReflector):
@@ -424,7 +424,8 @@ def lookup_error(features: ViewFeatures, drawn: Reflector) -> tuple[float, float
         shift[sky] = _angle(samples.reflected[sky], directions[sky]) / pixel
     shift = np.minimum(shift, SHIFT_CLIP)
     kept = w[same].sum()
-    return float(w[differ].sum()), float(w[same] @ shift[same] / kept) if kept > 0 else 0.0
+    wrong = min(float(w[differ].sum()), 1.0)
+    return wrong, float(w[same] @ shift[same] / kept) if kept > 0 else 0.0
 
 
 def _angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
