@@ -58,6 +58,17 @@ SWITCH_MARGIN = 0.1
 TIME_KEEP = 0.05
 """Under a time budget, the last frame's combination is kept while it fits and its
 predicted error is within this share of the best combination's."""
+MAX_HELD = 8
+"""A choice is predicted again at least every this many frames."""
+EYE_DRIFT = 0.04
+"""The choice is predicted again when the eye has moved this share of its distance to a
+reflector since the last prediction (or a reflector this share of its distance to the
+eye) ..."""
+TURN_DRIFT = math.radians(2.0)
+"""... or the view, or a planar mirror, has turned this much ..."""
+OBJECT_DRIFT = 0.02
+"""... or an object has moved this share of the scene's radius (or anything else about
+the scene, the budget or a reflector's configuration changed)."""
 EXHAUSTIVE = 20_000
 """Under a time budget, up to this many combinations are all tried."""
 
@@ -98,8 +109,10 @@ class BudgetFrame:
     """The budget's choice for one frame: ``budget``, a :class:`ReflectorChoice` per
     reflector, the frame's predicted cost (``predicted_ms``: its base and every chosen
     candidate's), whether every reflector in view is predicted within the budget
-    (``met``), the choice's own time (``milliseconds``) and whether it is the last
-    frame's, unchanged (``repeated``)."""
+    (``met``), the choice's own time (``milliseconds``), whether it is the last frame's
+    for the same scene (``repeated``), and whether it was predicted for this frame
+    (``predicted``: False when the view and the scene moved too little since the last
+    prediction to change it, see :func:`_drifted`)."""
 
     budget: Budget
     choices: tuple[ReflectorChoice, ...]
@@ -107,6 +120,7 @@ class BudgetFrame:
     met: bool
     milliseconds: float
     repeated: bool = False
+    predicted: bool = True
 
     def describe(self, candidates: bool = False) -> list[str]:
         """Lines for people: the budget, then each reflector's choice and why (and with
@@ -116,6 +130,11 @@ class BudgetFrame:
             f"budget {self.budget.describe()}: predicted {state}; frame predicted "
             f"{self.predicted_ms:.1f} ms; choosing took {self.milliseconds:.2f} ms"
             + (" (the last frame's choice)" if self.repeated else "")
+            + (
+                ""
+                if self.predicted or self.repeated
+                else " (kept: little moved since it was predicted)"
+            )
         ]
         metric = (
             "MAE" if self.budget.max_error is not None and self.budget.metric == "mae" else "FLIP"
@@ -206,12 +225,17 @@ def _texel_modes(drawn: Reflector) -> tuple[int, int, float]:
 
 @dataclass
 class _Last:
-    """The last frame: its input scene and size, output scene and choice."""
+    """The last frame: its input scene and size, output scene and choice; the scene the
+    choice was last predicted for, which reflectors were in view then, and the frames
+    since that kept it (``held``)."""
 
     scene: Scene
     size: tuple[int, int]
     output: Scene
     frame: BudgetFrame
+    predicted: Scene
+    shown: tuple[bool, ...]
+    held: int = 0
 
 
 class BudgetChooser:
@@ -243,18 +267,35 @@ class BudgetChooser:
             frame = replace(
                 last.frame, milliseconds=(time.perf_counter() - start) * 1e3, repeated=True
             )
-            self._last = _Last(scene, size, last.output, frame)
+            self._last = replace(last, scene=scene, frame=frame)
             return last.output, frame
-        changes = _changes(last.scene if last is not None else None, scene, size, last)
         from mirrorlab.plan import reflector_footprint
         from mirrorlab.views import camera_view
 
         view = camera_view(scene.camera, size)
+        footprints = [reflector_footprint(r, view) for r in scene.reflectors]
+        shown = tuple(not f.empty for f in footprints)
+        if (
+            last is not None
+            and last.size == size
+            and last.held < MAX_HELD
+            and last.shown == shown
+            and not _drifted(last.predicted, scene)
+        ):
+            output = _apply(scene, last.frame.choices, self._chosen, last)
+            frame = replace(
+                last.frame,
+                milliseconds=(time.perf_counter() - start) * 1e3,
+                repeated=False,
+                predicted=False,
+            )
+            self._last = replace(last, scene=scene, output=output, frame=frame, held=last.held + 1)
+            return output, frame
+        changes = _changes(last.scene if last is not None else None, scene, size, last)
         metric = budget.metric if budget.max_error is not None else "flip"
         parts = _parts(scene)
         options: list[tuple[Reflector, list[Prediction], float] | None] = []
-        for reflector in scene.reflectors:
-            footprint = reflector_footprint(reflector, view)
+        for reflector, footprint in zip(scene.reflectors, footprints, strict=True):
             found = None if footprint.empty else view_features(scene, reflector, view, footprint)
             if found is None:
                 options.append(None)
@@ -274,7 +315,7 @@ class BudgetChooser:
         predicted = base + sum(c.chosen.cost for c in choices if c.chosen is not None)
         met = all(c.met for c in choices)
         frame = BudgetFrame(budget, choices, predicted, met, (time.perf_counter() - start) * 1e3)
-        self._last = _Last(scene, size, output, frame)
+        self._last = _Last(scene, size, output, frame, scene, shown)
         for choice in choices:
             if choice.chosen is not None:
                 self._chosen[choice.reflector] = choice.chosen.candidate
@@ -582,6 +623,76 @@ def _changes(
     ):
         found.add("content")
     return frozenset(found)
+
+
+def _drifted(before: Scene, scene: Scene) -> bool:
+    """Whether ``scene`` moved far enough from ``before`` (the scene of the last
+    prediction) that the choice is predicted again (see :data:`EYE_DRIFT`)."""
+    if (
+        before.budget != scene.budget
+        or before.background != scene.background
+        or before.lights != scene.lights
+        or before.ambient != scene.ambient
+        or before.max_bounces != scene.max_bounces
+        or len(before.reflectors) != len(scene.reflectors)
+    ):
+        return True
+    old, new = before.camera, scene.camera
+    if (old.fovy, old.near, old.far, old.up) != (new.fovy, new.near, new.far, new.up):
+        return True
+    eye0, eye1 = np.asarray(old.eye), np.asarray(new.eye)
+    forward0 = np.asarray(old.target) - eye0
+    forward1 = np.asarray(new.target) - eye1
+    if _turn(forward0, forward1) > TURN_DRIFT:
+        return True
+    for a, b in zip(before.reflectors, scene.reflectors, strict=True):
+        if _configuration_of(a) != _configuration_of(b):
+            return True
+        center0, center1 = _center(a), _center(b)
+        distance = max(float(np.linalg.norm(center1 - eye1)), 1e-12)
+        moved = float(np.linalg.norm(eye1 - eye0)) + float(np.linalg.norm(center1 - center0))
+        if moved > EYE_DRIFT * distance:
+            return True
+        if isinstance(a, PlanarReflector) and isinstance(b, PlanarReflector):
+            if _turn(a.normal, b.normal) > TURN_DRIFT:
+                return True
+        elif not isinstance(a, PlanarReflector) and not isinstance(b, PlanarReflector):
+            if not np.allclose(a.model_matrix()[:3, :3], b.model_matrix()[:3, :3], atol=1e-3):
+                return True
+    if before.objects is not scene.objects and before.objects != scene.objects:
+        from mirrorlab.bounds import scene_index
+
+        first, second = scene_index(before), scene_index(scene)
+        a_centres, b_centres = first.part_centers, second.part_centers
+        if a_centres.shape != b_centres.shape:
+            return True
+        radius = max(second.sphere[1], 1e-12)
+        if len(a_centres) and float(np.abs(a_centres - b_centres).max()) > OBJECT_DRIFT * radius:
+            return True
+    return False
+
+
+def _turn(a: np.ndarray, b: np.ndarray) -> float:
+    """The angle between two directions (radians)."""
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    return float(np.arctan2(np.linalg.norm(np.cross(a, b)), float(a @ b)))
+
+
+def _center(reflector: Reflector) -> np.ndarray:
+    from mirrorlab.bounds import bounding_sphere
+
+    return bounding_sphere(reflector)[0]
+
+
+def _configuration_of(reflector: Reflector) -> tuple:
+    """A reflector's fields but where it is."""
+    from dataclasses import fields
+
+    from mirrorlab.budget.candidates import PLACEMENT_FIELDS
+
+    kept = [f.name for f in fields(reflector) if f.name not in PLACEMENT_FIELDS]
+    return (reflector.name, *(getattr(reflector, name) for name in kept))
 
 
 def _places(scene: Scene) -> tuple:

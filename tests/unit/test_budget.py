@@ -346,8 +346,9 @@ def test_a_cheaper_candidate_must_save_enough_to_take_over():
         scene = _lab(Budget(max_error=0.02))
         _, first = chooser.choose(scene, (96, 96))
         assert first.choices[0].candidate_label.startswith("reflected-copy")
-        moved = replace(scene, camera=replace(scene.camera, eye=(12.0, 5.5, 9.0)))
+        moved = replace(scene, camera=replace(scene.camera, eye=(12.0, 8.0, 9.0)))
         _, second = chooser.choose(moved, (96, 96))
+        assert second.predicted
         label = second.choices[0].candidate_label
         assert label.startswith("reflected-copy" if kept else "stencil"), (capture, label)
 
