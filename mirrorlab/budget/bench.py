@@ -84,7 +84,7 @@ class BenchSettings:
     sequence, the ``motion`` (moving or still), and the largest map a candidate may have
     (``largest``: the quick run leaves out the maps that take seconds to bake)."""
 
-    frames: int = 24
+    frames: int = 16
     size: tuple[int, int] = (192, 192)
     repeats: int = 3
     motion: Motion = "moving"

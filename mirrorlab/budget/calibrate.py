@@ -111,8 +111,12 @@ def collect(
     executor: Executor | None = None,
     progress: bool = True,
     say: Callable[[str], None] = print,
+    partial: Path | None = None,
 ) -> list[dict[str, Any]]:
-    """Measure the calibration samples: one row (:data:`FIELDS`) per sample and candidate."""
+    """Measure the calibration samples: one row (:data:`FIELDS`) per sample and candidate.
+    With ``partial``, the rows of each batch are appended to that CSV file as they are
+    scored, and the samples it already holds are not measured again (a calibration takes
+    hours: one stopped part way resumes)."""
     from tqdm import tqdm
 
     executor = executor or Executor()
@@ -120,6 +124,17 @@ def collect(
         (settings.first_seed + i, "planar") for i in range(settings.planar)
     ] + [(settings.first_seed + i, "curved") for i in range(settings.curved)]
     rows: list[dict[str, Any]] = []
+    if partial is not None and partial.is_file():
+        rows = rows_from_csv(partial.read_text())
+        done = {str(row["sample"]) for row in rows}
+        samples = [(seed, kind) for seed, kind in samples if f"{kind}-{seed}" not in done]
+        wanted = {
+            f"{kind}-{seed + settings.first_seed}"
+            for kind, count in (("planar", settings.planar), ("curved", settings.curved))
+            for seed in range(count)
+        }
+        rows = [row for row in rows if str(row["sample"]) in wanted]
+        say(f"calibration: resuming, {len(done)} samples measured before")
     with tqdm(
         total=3 * len(samples),
         desc="calibration",
@@ -150,12 +165,16 @@ def collect(
                     pending[f"score-{i}"] = crops
                     bar.update()
                 bar.set_postfix_str("scoring", refresh=False)
+                scored: list[dict[str, Any]] = []
                 for outcome in executor.run(score_images, pending):
                     i = int(outcome.key.split("-")[1])
                     for row, found in zip(measured[i], _value(outcome, "scoring"), strict=True):
                         row.update(flip=found.flip, mae=found.mae, scored=found.pixels)
-                    rows += measured[i]
+                    scored += measured[i]
                     bar.update()
+                rows += scored
+                if partial is not None:
+                    _append(partial, scored)
     say(f"calibration: {len(kept)} of {len(samples)} samples kept ({len(rows)} rows)")
     return rows
 
@@ -257,6 +276,15 @@ def rows_to_csv(rows: Sequence[dict[str, Any]]) -> str:
             {k: ("" if isinstance(v, float) and math.isnan(v) else v) for k, v in row.items()}
         )
     return buffer.getvalue()
+
+
+def _append(path: Path, rows: Sequence[dict[str, Any]]) -> None:
+    """Add ``rows`` to the CSV file at ``path`` (made, with its header, if missing)."""
+    text = rows_to_csv(rows)
+    if path.is_file():
+        text = text.split("\n", 1)[1]
+    with path.open("a", encoding="utf-8") as stream:
+        stream.write(text)
 
 
 def rows_from_csv(text: str) -> list[dict[str, Any]]:
@@ -455,8 +483,10 @@ def run_command(
         except ValueError as exc:
             raise ValueError(f"--from-csv: {from_csv}: {exc}") from None
     else:
+        partial = out_dir / "samples.partial.csv"
+        out_dir.mkdir(parents=True, exist_ok=True)
         with open_executor(jobs, scheduler, engine) as executor:
-            rows = collect(settings, executor, say=say)
+            rows = collect(settings, executor, say=say, partial=partial)
     if not rows:
         raise ValueError("no calibration samples were measured (every one was left out)")
     calibration, report = fit(
@@ -473,6 +503,8 @@ def run_command(
         outputs.add(out_dir / "calibration.json", calibration.to_json().encode())
         if from_csv is None:
             outputs.add(out_dir / "samples.csv", rows_to_csv(rows).encode())
+    if from_csv is None:
+        (out_dir / "samples.partial.csv").unlink(missing_ok=True)
     say(
         f"wrote {out_dir / 'calibration.json'}"
         + ("" if from_csv is not None else f" and {out_dir / 'samples.csv'}")

@@ -88,14 +88,12 @@ _PLACE = ((0.0, -1.0, -1.0), (0.0, 1.0, -1.0), (0.0, 1.0, 1.0), (0.0, -1.0, 1.0)
 
 
 def _configuration(reflector: Reflector) -> Reflector:
-    """``reflector`` put at one fixed place, as a key of its configuration (so that a
-    moving reflector's candidates are made once)."""
+    """``reflector`` as a key of its configuration: a planar mirror put at one fixed place
+    (so that a moving mirror's candidates are made once); a curved reflector where it is
+    (its parallax proxies are checked against where it is)."""
     if isinstance(reflector, PlanarReflector):
         return replace(reflector, name="r", corners=_PLACE, ortho=None)
-    assert isinstance(reflector, CurvedReflector)
-    from mirrorlab.scene.model import Transform
-
-    return replace(reflector, name="r", transform=Transform())
+    return replace(reflector, name="r")
 
 
 @functools.lru_cache(maxsize=64)

@@ -55,7 +55,7 @@ def _add_budget_parser(benchmarks: argparse._SubParsersAction) -> None:
     budget.add_argument(
         "--max-ms", metavar="T,T,...", help="time budgets, milliseconds of a frame's cost"
     )
-    budget.add_argument("--frames", metavar="N", help="frames a sequence (default 24)")
+    budget.add_argument("--frames", metavar="N", help="frames a sequence (default 16)")
     budget.add_argument("--size", metavar="WxH", help="frame size (default 192x192)")
     budget.add_argument(
         "--repeats", metavar="N", help="timed runs of each sequence, the median kept (default 3)"
