@@ -18,6 +18,7 @@ from mirrorlab.labs.trusted.judging import (
     Context,
     TaskResult,
     Verdicts,
+    copy_format_slip,
     differing,
     fmt,
     judge_frame,
@@ -317,11 +318,6 @@ def judge_capture(
     ref = reference.image(ref_copy.get("picture", "")) if ref_copy else None
     if seen is None or ref is None:
         return False, "the capture's picture is missing"
-    if copy.get("taint"):
-        return False, (
-            f"the capture shows pixels this file uploaded ({copy['taint']}): it must "
-            f"be drawn by lab.draw_scene"
-        )
     if same_picture(seen, ref):
         return True, ""
     if not camera_ok:
@@ -407,6 +403,8 @@ def judge_copy(student: Evidence, size: tuple[int, int]) -> tuple[bool, str]:
             f"the copy at {at} takes {copy['width']} x {copy['height']} pixels; "
             f"copy the whole framebuffer, WIDTH x HEIGHT ({width} x {height})"
         )
+    if slip := copy_format_slip(copy):
+        return False, f"the copy at {at} {slip}"
     events = student.last_frame
     draw = _capture_draw(student)
     if draw is not None and events.index(copy) < events.index(draw):
@@ -546,8 +544,6 @@ def judge_mirror_texture(student: Evidence, spec_programs: int, env_ok: bool) ->
                 "the mirror is black: ENVIRONMENT's filter wants mipmaps it does "
                 f"not have: see {_task('environment_texture')}"
             )
-    if draw.get("taint"):
-        return False, f"the mirror shows pixels this file uploaded ({draw['taint']})"
     return True, ""
 
 
@@ -786,6 +782,18 @@ def drawn_region(draw: dict[str, Any], size: tuple[int, int]) -> np.ndarray:
     return triangles_mask(clip, _triangles(int(draw.get("mode", 0)), clip), size)
 
 
+def clamp_rim(
+    student: Evidence, size: tuple[int, int], geometry: dict[str, Any]
+) -> np.ndarray | None:
+    """The mirror's outline, 3 pixels either side, when ENVIRONMENT wraps with GL_CLAMP
+    (which the handout accepts): there its linear filter darkens a thin rim with the
+    border colour, not a mark of the file's; else None."""
+    params = student.state.get("environment_parameters") or {}
+    if GL_CLAMP not in (params.get("GL_TEXTURE_WRAP_S"), params.get("GL_TEXTURE_WRAP_T")):
+        return None
+    return mirror_region(size, geometry, 3) & ~mirror_region(size, geometry, -3)
+
+
 def judge(
     spec: LabSpec, student: Evidence, reference: Evidence, context: Context
 ) -> list[TaskResult]:
@@ -837,6 +845,7 @@ def judge(
         regions,
         "passes",
         {"mirror": ("mirror_quad", "the mirror's picture")},
+        clamp_rim(student, size, geometry),
     )
     return results(spec, student, verdicts)
 

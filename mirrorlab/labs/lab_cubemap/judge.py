@@ -20,6 +20,7 @@ from mirrorlab.labs.trusted.judging import (
     Context,
     TaskResult,
     Verdicts,
+    copy_format_slip,
     differing,
     fmt,
     glsl_body,
@@ -361,6 +362,8 @@ def judge_copy(
                 f"the copy at {at} went into texture {copy['texture']}, not "
                 f"cube_texture: bind it to GL_TEXTURE_CUBE_MAP on unit 1 first"
             )
+        if slip := copy_format_slip(copy):
+            return False, f"the {name} face's copy at {at} {slip}"
         target = copy["target"] - GL_TEXTURE_CUBE_MAP_POSITIVE_X
         if target != i:
             into = FACE_TARGETS[target] if 0 <= target < 6 else hex(copy["target"])
@@ -387,9 +390,6 @@ def judge_copy(
         return False, "cube_texture holds no six square faces after capture_cube()"
     if faces.shape != ref.shape:
         return False, f"the faces are {faces.shape[1]} texels wide; FACE_SIZE is {ref.shape[1]}"
-    record = student.texture(cube)
-    if record is not None and record.get("tainted"):
-        return False, "the faces hold pixels this file uploaded: they must be copied pictures"
     bad = [i for i in range(6) if not same_picture(faces[i], ref[i])]
     if not bad:
         return True, ""
