@@ -86,7 +86,7 @@ class CalibrationSettings:
     is sent out."""
 
     planar: int = 160
-    curved: int = 160
+    curved: int = 200
     first_seed: int = 0
     timed_every: int = 4
     frames: int = 3
@@ -120,9 +120,10 @@ def collect(
     from tqdm import tqdm
 
     executor = executor or Executor()
-    samples: list[tuple[int, ReflectorKind]] = [
-        (settings.first_seed + i, "planar") for i in range(settings.planar)
-    ] + [(settings.first_seed + i, "curved") for i in range(settings.curved)]
+    samples: list[tuple[int, ReflectorKind]] = sorted(
+        [(settings.first_seed + i, "planar") for i in range(settings.planar)]
+        + [(settings.first_seed + i, "curved") for i in range(settings.curved)]
+    )  # the kinds alternate, so that a run stopped part way has some of each
     rows: list[dict[str, Any]] = []
     if partial is not None and partial.is_file():
         rows = rows_from_csv(partial.read_text())
@@ -135,6 +136,7 @@ def collect(
         }
         rows = [row for row in rows if str(row["sample"]) in wanted]
         say(f"calibration: resuming, {len(done)} samples measured before")
+    kept = 0
     with tqdm(
         total=3 * len(samples),
         desc="calibration",
@@ -144,23 +146,23 @@ def collect(
         dynamic_ncols=True,
         mininterval=0.5,
     ) as bar:
-        bar.set_postfix_str("ray tracing the truths", refresh=False)
-        truths: dict[int, Truth] = {}
-        work = {f"truth-{i}": sample for i, sample in enumerate(samples)}
-        for outcome in executor.run(_truth_job, work):
-            truths[int(outcome.key.split("-")[1])] = _value(outcome, "ray tracing")
-            bar.update()
-        kept = [i for i in range(len(samples)) if truths[i].masks[0].sum() >= MIN_PIXELS]
-        bar.update(2 * (len(samples) - len(kept)))
+        chunks = [samples[i : i + settings.batch] for i in range(0, len(samples), settings.batch)]
+        # the first truths are traced before the OpenGL context is opened: a pool's
+        # workers are forked at its first run, from this process as it is then
+        truths = _trace(executor, chunks[0], bar) if chunks else {}
         with frame_bench() as bench:
-            for start in range(0, len(kept), settings.batch):
-                batch = kept[start : start + settings.batch]
+            for number, chunk in enumerate(chunks):
+                if number:
+                    truths = _trace(executor, chunk, bar)
+                batch = [i for i in range(len(chunk)) if truths[i].masks[0].sum() >= MIN_PIXELS]
+                bar.update(2 * (len(chunk) - len(batch)))
+                kept += len(batch)
                 pending: dict[str, tuple] = {}
                 measured: dict[int, list[dict[str, Any]]] = {}
                 for i in batch:
-                    seed, kind = samples[i]
+                    seed, kind = chunk[i]
                     bar.set_postfix_str(f"{kind} sample {seed}", refresh=False)
-                    timed = (i % settings.timed_every) == 0
+                    timed = (seed % settings.timed_every) == 0
                     measured[i], crops = _measure(bench, seed, kind, truths[i], timed, settings)
                     pending[f"score-{i}"] = crops
                     bar.update()
@@ -175,8 +177,18 @@ def collect(
                 rows += scored
                 if partial is not None:
                     _append(partial, scored)
-    say(f"calibration: {len(kept)} of {len(samples)} samples kept ({len(rows)} rows)")
+    say(f"calibration: {kept} of {len(samples)} samples measured ({len(rows)} rows in all)")
     return rows
+
+
+def _trace(executor: Executor, chunk: Sequence[tuple[int, ReflectorKind]], bar) -> dict[int, Truth]:
+    """The truths of ``chunk``'s samples, by their index in it."""
+    bar.set_postfix_str("ray tracing the truths", refresh=False)
+    truths: dict[int, Truth] = {}
+    for outcome in executor.run(_truth_job, {f"truth-{i}": s for i, s in enumerate(chunk)}):
+        truths[int(outcome.key.split("-")[1])] = _value(outcome, "ray tracing")
+        bar.update()
+    return truths
 
 
 def _measure(

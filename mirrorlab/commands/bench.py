@@ -97,7 +97,7 @@ def _add_calibrate_parser(benchmarks: argparse._SubParsersAction) -> None:
     calibrate.add_argument(
         "--curved",
         metavar="N",
-        default="160",
+        default="200",
         help="curved reflector samples (default %(default)s)",
     )
     calibrate.add_argument(
