@@ -185,7 +185,7 @@ def measure_scene(
     runs = []
     for budget in budgets:
         bar.set_postfix_str(f"{scene.name}: planning {budget.describe()}", refresh=False)
-        run = _plan(scene, posed, budget, size, calibration)
+        run = _plan(scene, posed, budget, size, calibration, settings.largest)
         chosen_scenes = [_with_all(p, run.chosen[f]) for f, p in enumerate(posed)]
         images = []
         run.measured_ms = _time_sequence(gl, chosen_scenes, settings, images)
@@ -268,9 +268,11 @@ def _plan(
     budget: Budget,
     size: tuple[int, int],
     calibration: Calibration | None,
+    largest: int,
 ) -> Run:
-    """The planner over the sequence under ``budget``: its choices and CPU time a frame."""
-    chooser = BudgetChooser(calibration)
+    """The planner over the sequence under ``budget``, choosing among the table's
+    candidates (maps up to ``largest``): its choices and CPU time a frame."""
+    chooser = BudgetChooser(calibration, largest)
     frames, times, chosen = [], [], []
     for p in posed:
         start = time.process_time()

@@ -241,10 +241,12 @@ class _Last:
 class BudgetChooser:
     """Chooses each reflector's candidate frame by frame under the scene's budget, keeping
     what it chose (for steady choices). One per sequence of frames (a renderer keeps
-    one); ``calibration`` None reads the shipped one."""
+    one); ``calibration`` None reads the shipped one; ``largest`` (texels a side) leaves
+    out the candidates with larger maps (the benchmark's short runs)."""
 
-    def __init__(self, calibration: Calibration | None = None) -> None:
+    def __init__(self, calibration: Calibration | None = None, largest: int | None = None) -> None:
         self.calibration = calibration or load_calibration()
+        self.largest = largest
         self._last: _Last | None = None
         self._chosen: dict[str, Candidate] = {}  # reflector -> its candidate
         self._prepared_for: dict[tuple, _Prepared] = {}
@@ -328,7 +330,10 @@ class BudgetChooser:
         key = (reflector.name, reflector.kind, reflector.technique, reflector.allow)
         found = self._candidates.get(key)
         if found is None:
-            found = self._candidates[key] = candidates_for(reflector, scene)
+            found = candidates_for(reflector, scene)
+            if self.largest is not None:
+                found = tuple(c for c in found if c.map_size <= self.largest)
+            self._candidates[key] = found
         return found
 
     def _unseen(self, name: str) -> ReflectorChoice:

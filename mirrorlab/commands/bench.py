@@ -61,6 +61,12 @@ def _add_budget_parser(benchmarks: argparse._SubParsersAction) -> None:
         "--repeats", metavar="N", help="timed runs of each sequence, the median kept (default 3)"
     )
     budget.add_argument(
+        "--largest",
+        metavar="N",
+        help="leave out candidates whose map is larger than N texels a side, for the "
+        "planner and the brute force alike (default 4096; 256 with --quick)",
+    )
+    budget.add_argument(
         "--still", action="store_true", help="still sequences (every frame the first)"
     )
     budget.add_argument(
@@ -321,6 +327,8 @@ def _run_budget(args: argparse.Namespace) -> int:
         changes["size"] = parse_size("--size", args.size)
     if args.repeats:
         changes["repeats"] = parse_count("--repeats", args.repeats, 1, 100)
+    if args.largest:
+        changes["largest"] = parse_count("--largest", args.largest, 1, 1 << 16)
     if args.still:
         changes["motion"] = "still"
     settings = replace(settings, **changes)

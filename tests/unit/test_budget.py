@@ -157,6 +157,15 @@ def test_every_registered_technique_of_a_kind_is_a_candidate():
             assert {64, 128, 256, 512, 1024} <= sized
 
 
+def test_a_chooser_limited_to_a_map_size_offers_no_larger_map():
+    scene = load_scene("chrome_sphere")
+    sphere = scene.reflectors[0]
+    every = BudgetChooser().candidates(sphere, scene)
+    limited = BudgetChooser(largest=256).candidates(sphere, scene)
+    assert set(limited) == {c for c in every if c.map_size <= 256}
+    assert len(limited) < len(every)
+
+
 def test_allow_keeps_its_techniques_only():
     scene = load_scene("lab20")
     mirror = replace(scene.reflectors[0], allow=("stencil", "reflected"))
