@@ -369,6 +369,8 @@ def analyse(result: SceneResult, run: Run) -> dict[str, Any]:
         else math.nan,
         "switches": switches,
         "switches_after_first": switches,
+        "frame_ms": float(np.median(planner_cost)),
+        "truth_ms": result.truth_ms,
     }
     if budget.max_error is not None:
         limit = budget.max_error
