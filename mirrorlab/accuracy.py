@@ -197,7 +197,7 @@ def lab_techniques(sizes: Sequence[int]) -> list[tuple[str, dict]]:
     size 0, as it differs from view to view), and the stencil mirror."""
     rows = []
     planar = techniques("planar")
-    for entry in (t for t in planar if not t.draws_inline):
+    for entry in (t for t in planar if t.texture in CAPTURED):
         for capture in CAPTURE_MODES:
             rows += [
                 (
@@ -213,8 +213,16 @@ def lab_techniques(sizes: Sequence[int]) -> list[tuple[str, dict]]:
                         {"method": entry.name, "capture": capture, "env_size": FOOTPRINT_TEXTURE},
                     )
                 )
-    rows += [(entry.name, {"method": entry.name}) for entry in planar if entry.draws_inline]
+    rows += [
+        (entry.name, {"method": entry.name}) for entry in planar if entry.texture not in CAPTURED
+    ]
     return rows
+
+
+CAPTURED = ("fixed", "viewer")
+"""The texture kinds of the planar techniques that capture into a texture (measured at
+each capture mode and size); the others (drawn in place, or from the view's own frame)
+are measured once."""
 
 
 def search_map_size(sizes: Sequence[int]) -> int:
@@ -232,14 +240,27 @@ def curved_techniques(
     """``(label, options)`` for every curved technique at each map size, and the live cube
     map with each parallax correction: the ``proxies`` (``(label, --parallax text)``), and
     the distance search at every size and with each other of ``steps`` (linear+secant)
-    at the :func:`search_map_size` (labelled ``cube-live distance STEPS``)."""
+    at the :func:`search_map_size` (labelled ``cube-live distance STEPS``); a technique
+    with a probe that takes a parallax correction (``ssr``), plain and with its probe's
+    distance search at each size."""
     sizes = [size for size in sizes if size <= ENVMAP_MAX_SIZE]
     rows = []
     for entry in techniques("curved"):
         plain = {"parallax": "none"} if entry.parallax else {}
         rows += [(entry.name, {"method": entry.name, "map_size": size, **plain}) for size in sizes]
     searched = search_map_size(sizes)
-    for name in (entry.name for entry in techniques("curved") if entry.parallax):
+    for entry in techniques("curved"):
+        if entry.probe and entry.parallax:  # its probe with the distance search
+            rows += [
+                (
+                    f"{entry.name} distance",
+                    {"method": entry.name, "map_size": size, "parallax": "distance"},
+                )
+                for size in sizes
+            ]
+    for name in (
+        entry.name for entry in techniques("curved") if entry.parallax and not entry.probe
+    ):
         corrections = [(f"{name} {label}", text) for label, text in proxies]
         corrections.append((f"{name} distance", "distance"))
         for label, text in corrections:

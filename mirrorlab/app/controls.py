@@ -17,6 +17,7 @@ CONTROLS: tuple[tuple[str, str], ...] = (
     ("E", "show its texture (a cube map: six faces) as an inset"),
     ("B", "accuracy budget on or off (each reflector's technique chosen to meet it)"),
     ("[ / ]", "tighten / loosen the budget (by a factor of 1.5)"),
+    ("X", "show screen-space reflections' miss mask over the frame (technique ssr)"),
     ("P", "print the frame's plan to the terminal"),
     ("S", "save a screenshot"),
     ("R", "reset scene and camera"),

@@ -23,7 +23,7 @@ import mirrorlab
 from mirrorlab.data import scenes_dir
 from mirrorlab.options import apply_options
 from mirrorlab.scene.model import Scene
-from mirrorlab.techniques import technique_names
+from mirrorlab.techniques import technique_names, techniques
 from tests.scenekit import vec3
 
 SIZE = (96, 96)
@@ -87,11 +87,14 @@ TECHNIQUE_VARIANTS: tuple[tuple[str, dict[str, Any]], ...] = (
         ("chrome_sphere", {"method": method, "map_size": 64})
         for method in technique_names("curved")
     ),
+    # a technique for both kinds of reflector on the lab's planar mirror too
+    *(("lab20", {"method": t.name}) for t in techniques("planar") if t.kind == "both"),
     ("two_mirrors", {"method": "stencil"}),
     ("mirror_and_sphere", {"max_bounces": 3}),
 )
 """Shipped scenes with options that put every technique and capture mode on screen (every
-curved technique of the registry on the chrome sphere)."""
+curved technique of the registry on the chrome sphere, and a technique for both kinds on
+the lab's mirror: a new one needs its golden PNG made)."""
 
 
 def sequences() -> Iterator[Sequence]:

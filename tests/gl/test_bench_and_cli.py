@@ -15,6 +15,7 @@ from PIL import Image
 
 import mirrorlab
 from mirrorlab.accuracy import (
+    CAPTURED,
     SweepSettings,
     curved_techniques,
     lab_techniques,
@@ -59,16 +60,19 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
         1 + len(curved_techniques(quick.map_sizes, panel.proxies, quick.steps))
         for panel in sphere_panels(quick)
     )
+    # a technique with a probe that takes a parallax correction (ssr) adds one row, its
+    # probe's distance search; the others' corrections are their own
     planar, curved = techniques("planar"), techniques("curved")
-    captured = [t for t in planar if not t.draws_inline]
-    corrected = [t.name for t in curved if t.parallax]
+    captured = [t for t in planar if t.texture in CAPTURED]
+    corrected = [t.name for t in curved if t.parallax and not t.probe]
+    probed = [t.name for t in curved if t.parallax and t.probe]
     assert lab_rows == 2 * (
         1
         + len(captured) * 2 * 2
         + sum(t.own_camera for t in captured) * 2
-        + sum(t.draws_inline for t in planar)
+        + (len(planar) - len(captured))
     )
-    assert sphere_rows == 3 * (1 + len(curved) + len(corrected) * 3)
+    assert sphere_rows == 3 * (1 + len(curved) + len(corrected) * 3 + len(probed))
     total = lab_rows + sphere_rows
     # one progress bar (tqdm, on stderr), and it reached its end: a step per row, and one
     # more per viewpoint for scoring its frames (2 lab views, 3 sphere scenes)
@@ -97,6 +101,7 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     assert set(sky) == {
         *technique_names("curved"),
         *(f"{name} {correction}" for name in corrected for correction in CORRECTIONS),
+        *(f"{name} distance" for name in probed),
     }
     assert sky["sphere"] < sky["normal"] and sky["cube"] < sky["normal"]
     room = {
@@ -160,10 +165,9 @@ def test_accuracy_sweep_of_a_scene_file(tmp_path, capsys, monkeypatch):
     assert len(table) == total
     assert {r["scene"] for r in table} == {"two_mirrors"}
     assert {r["viewpoint"] for r in table} == {"camera"}
-    techniques = {r["technique"] for r in table}
-    assert techniques == {"raytrace", "stencil"} | {
-        f"{m}-{c}" for m in ("ortho", "reflected") for c in ("copy", "fbo")
-    } | {f"ortho-{c} footprint" for c in ("copy", "fbo")}
+    measured = {r["technique"] for r in table}
+    assert measured == {"raytrace", *(label for label, _ in lab_techniques((128,)))}
+    assert {"stencil", "reflected-copy", "reflected-fbo", "ortho-fbo footprint"} <= measured
     # The exact techniques, two bounces deep, at the frame's size: 99% of the mirrors'
     # pixels within 10/255 of the ray tracer.
     rows = {(r["technique"], r["map_size"]): r for r in table}
@@ -242,9 +246,9 @@ def test_bench_refuses_a_file_as_its_folder_and_unknown_benchmarks(tmp_path, cap
 
 @pytest.mark.parametrize(
     "scene, method",
-    [
+    [  # each technique once (one for either kind on the lab's mirror)
         *(("lab20", m) for m in technique_names("planar")),
-        *(("chrome_sphere", m) for m in technique_names("curved")),
+        *(("chrome_sphere", t.name) for t in techniques("curved") if not t.serves("planar")),
     ],
 )
 def test_render_command_draws_each_technique(tmp_path, capsys, scene, method):

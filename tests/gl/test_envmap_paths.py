@@ -35,16 +35,15 @@ from mirrorlab.raytrace import trace_scene
 from mirrorlab.renderer import SceneRenderer
 from mirrorlab.scene.mesh import load_mesh
 from mirrorlab.scene.model import Camera, Scene
-from mirrorlab.techniques import technique_names
 from mirrorlab.testing import difference_image
 from tests.gl import envmap_frames
 from tests.gl.envmap_frames import assert_close_to_truth, region_error
 from tests.gl.envmap_frames import render as render_frame
 from tests.gl.frames import draw
 from tests.imagecheck import save_failure
-from tests.scenekit import curved_reflector
+from tests.scenekit import curved_reflector, map_technique_names
 
-ENVMAP_METHODS = technique_names("curved")
+ENVMAP_METHODS = map_technique_names()
 SIZE = 192
 SMALL = 96
 SUPERSAMPLE = 4

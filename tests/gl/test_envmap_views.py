@@ -44,7 +44,7 @@ from mirrorlab.views import (
     stencil_view,
 )
 from tests.gl.envmap_frames import assert_close_to_truth, drawn_mode, region_error, render
-from tests.scenekit import curved_reflector, planar_reflector
+from tests.scenekit import curved_reflector, map_technique_names, planar_reflector
 
 SIZE = 192
 SUPERSAMPLE = 4
@@ -190,7 +190,7 @@ TOLERANCE_ORTHO = {  # method: (max mean abs error /255, max share of pixels off
 }
 
 
-@pytest.mark.parametrize("method", technique_names("curved"))
+@pytest.mark.parametrize("method", map_technique_names())
 def test_curved_reflector_in_an_orthographic_view_stays_finite_and_in_range(scene_renderer, method):
     _, mask = traced_ortho()
     scene = ball_alone(method)
@@ -204,7 +204,7 @@ def test_curved_reflector_in_an_orthographic_view_stays_finite_and_in_range(scen
     assert_lookups_in_range(coords[mask], method, f"{method}, orthographic")
 
 
-@pytest.mark.parametrize("method", technique_names("curved"))
+@pytest.mark.parametrize("method", map_technique_names())
 def test_curved_reflector_in_an_orthographic_view_agrees_with_the_ray_tracer(
     scene_renderer, method
 ):
@@ -247,8 +247,9 @@ def test_sphere_map_in_an_orthographic_view_is_the_normal_lookup(scene_renderer)
 def test_lab_capture_shows_the_ball_as_its_own_orthographic_view(scene_renderer, method):
     # The lab's pass 1 draws the scene without the mirror from the capture camera; with
     # two bounces the ball in it is drawn with its map: the capture must be that picture
-    # (measured: identical). A live map is the exception inside the ball: its own capture
-    # (one bounce down) sees the mirror, plain, where the direct view has none.
+    # (measured: identical). A live map is the exception inside the ball (and a technique
+    # whose probe is one): its own capture (one bounce down) sees the mirror, plain, where
+    # the direct view has none.
     scene = lab_with_ball(method)
     _, stats = render(scene_renderer, scene, SIZE)
     (capture,) = [
@@ -258,12 +259,15 @@ def test_lab_capture_shows_the_ball_as_its_own_orthographic_view(scene_renderer,
     ]
     (seen,) = capture.views
     ball = next(d for d in seen.draws if d.reflector.name == "ball")
-    assert ball.mode in ("map", "texture"), ball.reason
+    assert ball.own, ball.reason  # its map, its capture or the capture's own frame
     captured = scene_renderer.pass_for("mirror").captures.textures[capture.slot].read()
     without_mirror = replace(scene, reflectors=(scene.reflector("ball"),), max_bounces=1)
     direct, _ = render(scene_renderer, without_mirror, SIZE, view=ortho_view())
     _, on_ball = traced_ortho()
-    live = technique(method).texture in CAMERA_TEXTURES
+    # a live capture (the technique's own, or its probe's) in the ball sees the mirror
+    live = technique(method).texture in CAMERA_TEXTURES or (
+        ball.fallback is not None and ball.fallback.mode == "texture"
+    )
     compared = erode(~on_ball, 3) if live else np.ones(on_ball.shape, bool)
     mean, share = region_error(captured, direct, compared)
     assert mean < 0.5 and share < 0.005, (mean, share)
@@ -272,7 +276,7 @@ def test_lab_capture_shows_the_ball_as_its_own_orthographic_view(scene_renderer,
 # ------------------------------------------------------------------- mirrored views
 
 
-@pytest.mark.parametrize("method", technique_names("curved"))
+@pytest.mark.parametrize("method", map_technique_names())
 def test_curved_reflector_seen_through_a_stencil_mirror_stays_finite_and_in_range(
     scene_renderer, method
 ):
@@ -288,7 +292,7 @@ def test_curved_reflector_seen_through_a_stencil_mirror_stays_finite_and_in_rang
     assert_lookups_in_range(coords[sphere], method, f"{method} through a stencil mirror")
 
 
-@pytest.mark.parametrize("method", technique_names("curved"))
+@pytest.mark.parametrize("method", map_technique_names())
 def test_curved_reflector_in_a_reflected_capture_stays_finite_and_in_range(scene_renderer, method):
     # The capture texture is 8-bit, so the capture's own view (mirrored eye, oblique near
     # plane on the glass) is drawn straight into a float target here; then the frame.

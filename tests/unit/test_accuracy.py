@@ -13,8 +13,8 @@ import pytest
 from mirrorlab import accuracy, flip
 from mirrorlab.options import apply_options
 from mirrorlab.scene.loader import load_scene
-from mirrorlab.scene.model import BoxProxy, DistanceSearch
-from mirrorlab.techniques import names_where, technique_names
+from mirrorlab.scene.model import CAPTURE_MODES, BoxProxy, DistanceSearch
+from mirrorlab.techniques import names_where, technique_names, techniques
 from tests.scenekit import curved_reflector, planar_reflector
 
 
@@ -184,24 +184,28 @@ def test_erode_shrinks_a_mask_by_whole_pixels():
 
 def test_planar_configurations_cover_every_capture_mode_and_size_plus_stencil():
     """... and, for ortho (a capture camera of its own), a texture the size of the
-    mirror's footprint on screen, with each capture mode."""
+    mirror's footprint on screen, with each capture mode; a planar technique that
+    captures nothing of its own (drawn in place, or from the view's own frame) once.
+    The expected rows come from the registry: a new technique is covered by
+    registering it."""
     configs = accuracy.lab_techniques((64, 128))
     labels = [label for label, _ in configs]
-    assert labels == (
-        ["ortho-copy"] * 2
-        + ["ortho-copy footprint"]
-        + ["ortho-fbo"] * 2
-        + ["ortho-fbo footprint"]
-        + ["reflected-copy"] * 2
-        + ["reflected-fbo"] * 2
-        + ["stencil"]
-    )
+    expected = []
+    for entry in techniques("planar"):
+        if entry.texture not in accuracy.CAPTURED:
+            continue
+        for capture in CAPTURE_MODES:
+            expected += [f"{entry.name}-{capture}"] * 2
+            expected += [f"{entry.name}-{capture} footprint"] if entry.own_camera else []
+    expected += [t.name for t in techniques("planar") if t.texture not in accuracy.CAPTURED]
+    assert labels == expected
+    assert {"ortho-copy footprint", "reflected-fbo", "stencil"} <= set(labels)
     assert [o.get("env_size") for _, o in configs[:2]] == [64, 128]
     lab = load_scene("lab20")
     for label, options in configs:
         mirror = planar_reflector(apply_options(lab, options), "mirror")
         assert mirror.technique == label.split("-")[0]
-        if label != "stencil":
+        if "capture" in options:
             assert mirror.capture == options["capture"]
             assert mirror.texture_size == options["env_size"]
 
@@ -211,11 +215,18 @@ def corrected() -> tuple[str, ...]:
     return names_where(lambda t: t.kind == "curved" and t.parallax)
 
 
+def probed() -> tuple[str, ...]:
+    """The curved techniques with a probe that takes a parallax correction (measured with
+    the probe's distance search)."""
+    return names_where(lambda t: t.serves("curved") and bool(t.probe) and t.parallax)
+
+
 def test_curved_configurations_stop_at_the_largest_map_the_sweep_bakes():
     configs = accuracy.curved_techniques((64, 2048))
     assert corrected(), "the live cube map at least takes a correction"
     assert [label for label, _ in configs] == [
         *technique_names("curved"),
+        *(f"{name} distance" for name in probed()),
         *(
             f"{name} distance{steps}"
             for name in corrected()
@@ -228,7 +239,7 @@ def test_curved_configurations_stop_at_the_largest_map_the_sweep_bakes():
     for label, options in configs:
         reflector = curved_reflector(apply_options(sphere, options), "sphere")
         assert reflector.technique == label.split()[0]
-        if label in corrected():  # the plain one has no correction
+        if label in (*corrected(), *probed()):  # the plain one has no correction
             assert reflector.parallax is None
         elif "distance" in label:
             steps = label.split()[-1] if label[-1].isdigit() else accuracy.DEFAULT_STEPS
@@ -282,7 +293,7 @@ def test_a_scene_gets_the_configurations_of_its_kinds_of_reflector():
     assert labels["lab20"] == [label for label, _ in accuracy.lab_techniques(sizes)]
     assert labels["chrome_sphere"] == [
         *technique_names("curved"),
-        *(f"{name} distance" for name in corrected()),
+        *(f"{name} distance" for name in (*probed(), *corrected())),
     ]
     assert labels["mirror_and_sphere"] == labels["lab20"] + labels["chrome_sphere"]
     assert labels["no_mirror"] == []

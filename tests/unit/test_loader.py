@@ -1495,10 +1495,13 @@ def test_a_bad_parallax_table_is_named(tmp_path, parallax, key, words):
 def test_parallax_belongs_to_live_cube_maps_only(tmp_path):
     document = base_document()
     document["reflectors"][1].update(technique="cube", parallax={"proxy": "distance"})
-    corrected = names_where(lambda t: t.parallax)
+    # the maps that take one (a technique with a probe takes it for its probe's map)
+    corrected = names_where(lambda t: t.parallax and not t.probe)
     assert "cube" not in corrected
     error = assert_refused(tmp_path, document, "reflectors[1].parallax", "applies to technique")
     assert error.problem.endswith(f"{', '.join(map(repr, corrected))}, not 'cube'")
     document = base_document()
-    document["reflectors"][0]["parallax"] = {"proxy": "distance"}
-    assert_refused(tmp_path, document, "reflectors[0].parallax", "unknown key")
+    document["reflectors"][0]["parallax"] = {"proxy": "distance"}  # a reflected mirror's
+    assert_refused(
+        tmp_path, document, "reflectors[0].parallax", "applies to a planar mirror of technique"
+    )

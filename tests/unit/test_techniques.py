@@ -20,6 +20,7 @@ from mirrorlab.plan import TextureState, plan_frame
 from mirrorlab.scene.loader import SceneError, load_scene, loads
 from mirrorlab.techniques import (
     Technique,
+    reflector_technique_names,
     register,
     technique,
     technique_names,
@@ -206,11 +207,16 @@ def test_a_frame_technique_is_a_method_like_the_ray_tracer():
 
 
 def test_every_list_comes_from_the_registry():
+    # each kind's list holds every technique that serves it (one for both kinds in
+    # either), in the order registered, and nothing else
     every = techniques()
     for kind in ("planar", "curved", "frame"):
-        assert technique_names(kind) == tuple(t.name for t in every if t.kind == kind)
+        assert technique_names(kind) == tuple(t.name for t in every if t.serves(kind))
     assert set(technique_names()) == {t.name for t in every}
     assert technique_names("planar") and technique_names("curved")
+    both = [t.name for t in every if t.kind == "both"]
+    assert all(n in technique_names("planar") and n in technique_names("curved") for n in both)
+    assert reflector_technique_names() == tuple(t.name for t in every if t.kind != "frame")
     with registered(replace(PROBE_MIRROR, name="probe-two")):
         assert technique_names("planar")[-1] == "probe-two"
     with pytest.raises(ValueError, match="already registered"):

@@ -280,3 +280,32 @@ def test_demo_screenshot_matches_the_headless_render(tmp_path, method):
     window_frame = np.asarray(Image.open(shot).convert("RGB"))
     headless_frame = mirrorlab.render("lab20", size=(WIDTH, HEIGHT), method=method)
     same_picture(f"demo_vs_headless_{method}", window_frame, headless_frame)
+
+
+@pytest.mark.parametrize("scene", ["ssr_box_room", "ssr_sphere_near"])
+def test_screen_space_reflections_in_the_demo_and_their_miss_mask(xdisplay, scene):
+    """Screen-space reflections (a planar floor, a curved sphere) in the window, as the
+    headless render draws them (the frame copied from the window's own framebuffer);
+    X shows their miss mask over the window, as the API gives it (its label aside)."""
+    d = xdisplay
+    demo = Demo(scene, "--size", f"{WIDTH}x{HEIGHT}")
+    try:
+        window = find_window(d, f"mirrorlab demo - {scene}")
+        loaded = mirrorlab.load_scene(scene)
+        orbit = Orbit.from_eye(loaded.camera.eye, loaded.camera.target)
+        frame = settled(d, window, 0, "the first frame")
+        same_picture(f"demo_{scene}", frame, headless(scene, orbit))
+        count = frame_number(window)
+        press(d, window, "x")
+        masked = settled(d, window, count, "the frame with the miss mask")
+        with mirrorlab.Renderer((WIDTH, HEIGHT)) as renderer:
+            camera = replace(loaded.camera, eye=orbit.eye(), target=orbit.target)
+            renderer.render(replace(loaded, camera=camera))
+            expected = renderer.ssr_mask().image()
+        top = slice(0, HEIGHT * 2 // 3)  # its label lies along the bottom
+        same_picture(f"demo_{scene}_mask", masked[top], expected[top])
+        press(d, window, "Escape")
+        assert demo.finish() == 0
+        assert demo.err == [], demo.err
+    finally:
+        demo.stop()
