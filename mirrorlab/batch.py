@@ -105,18 +105,26 @@ def release_frame_renderer() -> None:
         held[1].close()
 
 
-def render_frame(job: FrameJob, frame: int) -> bytes:
+def render_frame(job: FrameJob, frame: int, reflectors: tuple | None = None) -> bytes:
     """One frame of ``job``'s scene as PNG file bytes: what a worker runs. OpenGL frames
     are drawn by this thread's kept renderer; a frame technique's (the ray tracer's) need
-    no context."""
+    no context. ``reflectors``: the frame's reflectors as a budget chose them (the
+    choices of a budget are made for the whole batch first, in frame order, so that a
+    frame does not depend on which worker draws it)."""
     if job.frame_technique is not None:
         from mirrorlab.techniques import technique
 
         draw_frame = technique(job.frame_technique).frame_function()
         image = draw_frame(job.scene.at_frame(frame), job.size, progress=False)
     else:
+        scene = job.scene
+        if reflectors is not None:
+            scene = replace(
+                scene.at_frame(frame), reflectors=reflectors, budget=None, animation=None
+            )
+            frame = 0
         image = _frame_renderer(job).render(
-            job.scene,
+            scene,
             frame=frame,
             size=job.size,
             use_plan=job.use_plan,
@@ -268,6 +276,14 @@ def _render_frames(
     unreachable scheduler leaves the folder as it was)."""
     from tqdm import tqdm
 
+    chosen: dict[int, tuple] = {}
+    if job.scene.budget is not None and job.frame_technique is None:
+        from mirrorlab.budget.chooser import choose_frames
+
+        chosen = {
+            frame: scene.reflectors
+            for frame, (scene, _) in choose_frames(job.scene, sorted(names), job.size).items()
+        }
     with open_executor(jobs, scheduler, engine) as executor:
         _remove_staged(record.parent, [names[f] for f in todo])
         if not (record.is_file() and record.read_text(errors="replace") == description):
@@ -286,7 +302,7 @@ def _render_frames(
         try:
             with bar:
                 for outcome in executor.run(
-                    render_frame, {f"frame-{f:04d}": (job, f) for f in todo}
+                    render_frame, {f"frame-{f:04d}": (job, f, chosen.get(f)) for f in todo}
                 ):
                     frame = int(outcome.key.split("-")[1])
                     if outcome.error is not None:

@@ -19,7 +19,12 @@ from typing import Any
 
 import numpy as np
 
-from mirrorlab.scene.loader import SceneError, from_document, scene_to_document
+from mirrorlab.scene.loader import (
+    SceneError,
+    from_document,
+    parse_error_budget,
+    scene_to_document,
+)
 from mirrorlab.scene.model import CAPTURE_MODES, FOOTPRINT_TEXTURE, Scene
 from mirrorlab.techniques import (
     Technique,
@@ -435,6 +440,26 @@ def _parse_set(flag: str, text: str) -> tuple[tuple[str, Any], ...]:
     return ((key.strip(), value),)
 
 
+def _parse_error_budget(flag: str, text: str) -> str | float:
+    """``--max-error`` text: a mean FLIP (``0.05``) or ``mae=3``, checked now so that a
+    bad value names the flag; kept as the scene file writes it."""
+    try:
+        metric, error = parse_error_budget(text)
+    except ValueError as exc:
+        raise OptionError(flag, str(exc)) from None
+    return error if metric == "flip" else f"{metric}={error:g}"
+
+
+def _apply_budget(key: str) -> Callable[[dict, Any, str], None]:
+    """Set the scene's ``[budget]`` to ``key = value`` (one of ``max_error`` and
+    ``max_ms``: the other is dropped)."""
+
+    def apply(document: dict, value: Any, flag: str) -> None:
+        document["budget"] = {key: float(value) if isinstance(value, int | float) else value}
+
+    return apply
+
+
 def _method_help() -> str:
     frames = technique_names("frame")
     drawn = f"; or the whole frame drawn by {', '.join(frames)}" if frames else ""
@@ -537,6 +562,25 @@ OPTIONS: tuple[Option, ...] = (
         "background",
     ),
     Option(
+        "max_error",
+        "E",
+        "an accuracy budget: each reflector drawn by the cheapest technique, map size and "
+        "parameters predicted to keep its mean FLIP against the truth within E (or "
+        "mae=N: its mean absolute error within N/255); see 'Accuracy as a budget'",
+        _parse_error_budget,
+        _apply_budget("max_error"),
+        r"budget",
+    ),
+    Option(
+        "max_ms",
+        "T",
+        "a time budget: the most accurate techniques predicted to fit a frame cost of T "
+        "milliseconds (the dual of --max-error)",
+        lambda flag, text: parse_floats(flag, text, 1, "T (milliseconds)")[0],
+        _apply_budget("max_ms"),
+        r"budget",
+    ),
+    Option(
         "set",
         "KEY=VALUE",
         "set any scene key, as in the file (e.g. camera.fovy=30, "
@@ -568,6 +612,10 @@ def apply_options(scene: Scene, values: Mapping[str, Any]) -> Scene:
     unknown = [name for name in chosen if name not in OPTION_NAMES]
     if unknown:
         raise TypeError(f"unknown option {unknown[0]!r}; options are {', '.join(OPTION_NAMES)}")
+    if "max_error" in chosen and "max_ms" in chosen:
+        raise OptionError(
+            "--max-error / --max-ms", "a budget is an error or a frame time: give one of them"
+        )
     document = scene_to_document(scene)
     # In the declared order, whatever the order given: --method before --parallax.
     for option in (option for option in OPTIONS if option.name in chosen):

@@ -15,6 +15,7 @@ import time
 from collections.abc import Iterator
 from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -56,19 +57,25 @@ from mirrorlab.scene.model import (
 from mirrorlab.techniques import RENDERER_GL_VERSION, technique
 from mirrorlab.views import View
 
+if TYPE_CHECKING:
+    from mirrorlab.budget.chooser import BudgetChooser, BudgetFrame
+
 
 @dataclass
 class FrameStats:
     """What the last frame did: its plan (passes run and skipped, with reasons), the
     number of draw calls (a multi-draw counts one), the wall time of the frame's GL calls
-    in milliseconds (without waiting for the GPU to finish), and ``parts_drawn``: the
-    object parts drawn, summed over every view of the frame (what culling left)."""
+    in milliseconds (without waiting for the GPU to finish; the budget's choice
+    included), and ``parts_drawn``: the object parts drawn, summed over every view of the
+    frame (what culling left); under a budget, ``budget``: what it chose and predicted
+    (:class:`mirrorlab.budget.chooser.BudgetFrame`)."""
 
     plan: FramePlan
     draw_calls: int
     milliseconds: float = 0.0
     passes_run: list[str] = field(default_factory=list)
     parts_drawn: int = 0
+    budget: BudgetFrame | None = None
 
     @property
     def ran(self) -> list[str]:
@@ -192,6 +199,9 @@ class SceneRenderer:
         self._cull = True  # whether this frame's views cull objects (not with use_plan off)
         self.own_context = own_context
         self._home: dict[str, object] | None = None  # the state every frame leaves (own_context)
+        self.budget_chooser: BudgetChooser | None = None
+        """What chooses the reflectors' techniques of a scene with a budget (made at the
+        first such frame; set one to choose with another calibration)."""
 
     @property
     def scene(self) -> Scene:
@@ -292,13 +302,16 @@ class SceneRenderer:
         places sent first, when the views see the same parts of them.
         """
         start = time.perf_counter()
+        size = (int(target.size[0]), int(target.size[1]))
+        chosen: BudgetFrame | None = None
+        if scene.budget is not None:
+            scene, chosen = self.choose(scene, size)
         if not self.own_context:
             found = gl_state()
         elif self._home is None:
             found = self._home = gl_state()
         else:
             found = self._home  # what the last frame left
-        size = (int(target.size[0]), int(target.size[1]))
         self._use_scene(scene)
         if view is not None:
             self.memo.clear()
@@ -317,11 +330,13 @@ class SceneRenderer:
         ):
             self._recorded = recorded
             assert self.last_frame is not None
+            self.last_frame.budget = chosen
             return self.last_frame
         # Recording costs a wrapper around each call: only a frame planned as the last
         # one was, which the next one may be too, pays it.
         recorded_calls: list[Call] | None = [] if view is None and self.memo.reused else None
         stats = self._run(scene, plan, target, found, start, use_plan, recorded_calls)
+        stats.budget = chosen
         if recorded_calls is not None:
             views = tuple(_drawn_views(plan))
             objects = scene_index(scene).objects_part
@@ -336,6 +351,16 @@ class SceneRenderer:
                 stats,
             )
         return stats
+
+    def choose(self, scene: Scene, size: tuple[int, int]) -> tuple[Scene, BudgetFrame]:
+        """``scene`` (which has a budget) with each reflector set to what the budget
+        chooses for this frame at ``size`` (:mod:`mirrorlab.budget`), and the choice; the
+        choice is kept for the next frames (steady choices)."""
+        if self.budget_chooser is None:
+            from mirrorlab.budget.chooser import BudgetChooser
+
+            self.budget_chooser = BudgetChooser()
+        return self.budget_chooser.choose(scene, size)
 
     def _replay(self, recorded: RecordedFrame, scene: Scene, plan: FramePlan, start: float) -> bool:
         """Draw ``recorded``'s frame again for ``scene``, whose ``plan`` is the one it was

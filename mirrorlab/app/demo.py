@@ -22,10 +22,11 @@ from mirrorlab.app.controls import CONTROLS
 from mirrorlab.app.picking import framebuffer_pixel, pick_reflector
 from mirrorlab.gl.context import WindowContext, gl_pass, window_context
 from mirrorlab.options import with_technique
-from mirrorlab.scene.model import Camera, CurvedReflector, Scene
+from mirrorlab.scene.model import Budget, Camera, CurvedReflector, Scene
 from mirrorlab.techniques import technique, technique_names
 
 if TYPE_CHECKING:
+    from mirrorlab.budget.chooser import BudgetFrame
     from mirrorlab.gl.resources import Texture2D
 
 JOINT_STEP_DEG = 5.0
@@ -36,6 +37,10 @@ REFLECTOR_RANGE = 3.0
 """How far (world units) Up/Down may move a curved reflector from where the file puts it."""
 IDLE_WAIT_S = 0.5
 """How long an idle demo sleeps in glfw.wait_events_timeout before looking again."""
+BUDGET_STEP = 1.5
+"""What [ and ] divide or multiply the budget by."""
+DEFAULT_BUDGET = Budget(max_error=0.05)
+"""The budget B turns on when the scene and the command line gave none."""
 
 
 @dataclass
@@ -85,6 +90,7 @@ class Changes:
     joints: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
     lift: float = 0.0
     techniques: dict[str, str] = field(default_factory=dict)
+    budget: Budget | None = None
 
 
 def _first_curved(scene: Scene) -> CurvedReflector | None:
@@ -103,7 +109,9 @@ class DemoApp:
 
         self.context = context
         self.initial = scene
-        self.changes = Changes(Orbit.from_eye(scene.camera.eye, scene.camera.target))
+        self.changes = Changes(
+            Orbit.from_eye(scene.camera.eye, scene.camera.target), budget=scene.budget
+        )
         self.configured = scene  # the file's scene with the chosen techniques
         self.shot_dir = shot_dir
         self.renderer = SceneRenderer(context.resources)
@@ -118,6 +126,7 @@ class DemoApp:
         self.print_plan = False
         self.last_ms = 0.0
         self.last_ran: list[str] = []
+        self.last_budget: BudgetFrame | None = None  # the last frame's budget choice
         self.message = ""
         self._drag_from: tuple[float, float] | None = None
         self._cursor: tuple[float, float] | None = None
@@ -158,7 +167,30 @@ class DemoApp:
             x, y, z = curved.transform.position
             moved = replace(curved.transform, position=(x, y + self.changes.lift, z))
             scene = scene.with_reflector(curved.name, transform=moved)
-        return replace(scene, camera=self.camera(scene))
+        return replace(scene, camera=self.camera(scene), budget=self.changes.budget)
+
+    def toggle_budget(self) -> None:
+        """B: the budget off, or on again (the scene's, else :data:`DEFAULT_BUDGET`)."""
+        if self.changes.budget is not None:
+            self.changes.budget = None
+        else:
+            self.changes.budget = self.initial.budget or DEFAULT_BUDGET
+
+    def scale_budget(self, factor: float) -> None:
+        """[ and ]: the budget's error (or time) times ``factor``, within its range."""
+        from mirrorlab.scene.model import MAX_BUDGET_ERROR
+
+        budget = self.changes.budget
+        if budget is None:
+            return
+        if budget.max_ms is not None:
+            self.changes.budget = replace(budget, max_ms=budget.max_ms * factor)
+        else:
+            assert budget.max_error is not None
+            top = MAX_BUDGET_ERROR[budget.metric]
+            self.changes.budget = replace(
+                budget, max_error=min(max(budget.max_error * factor, 1e-4), top)
+            )
 
     def turn_joint(self, index: int, delta: float) -> None:
         if self.configured.robot is not None:
@@ -209,7 +241,10 @@ class DemoApp:
 
     def reset(self) -> None:
         self.configured = self.initial
-        self.changes = Changes(Orbit.from_eye(self.initial.camera.eye, self.initial.camera.target))
+        self.changes = Changes(
+            Orbit.from_eye(self.initial.camera.eye, self.initial.camera.target),
+            budget=self.initial.budget,
+        )
 
     # ------------------------------------------------------------- input
 
@@ -246,6 +281,12 @@ class DemoApp:
             self.next_technique()
         elif key == glfw.KEY_E and once:
             self.show_inset = not self.show_inset
+        elif key == glfw.KEY_B and once:
+            self.toggle_budget()
+        elif key == glfw.KEY_LEFT_BRACKET:
+            self.scale_budget(1.0 / BUDGET_STEP)
+        elif key == glfw.KEY_RIGHT_BRACKET:
+            self.scale_budget(BUDGET_STEP)
         elif key == glfw.KEY_X and once:
             self.show_mask = not self.show_mask
         elif key == glfw.KEY_P and once:
@@ -312,6 +353,7 @@ class DemoApp:
             GL.glFinish()  # the frame's time includes the rasterising, not only the calls
         self.last_ms = (time.perf_counter() - began) * 1e3
         self.last_ran = stats.ran
+        self.last_budget = stats.budget
         self.frames += 1
         if self.print_plan:
             self.print_plan = False
@@ -337,9 +379,34 @@ class DemoApp:
         width, _ = glfw.get_window_size(self.context.window)
         return self._size[0] / width if width > 0 else 1.0
 
+    def budget_lines(self, stats) -> list[str]:
+        """The overlay's budget panel: the budget, whether the frame is predicted to meet
+        it, and each reflector's technique with its predicted error and cost."""
+        chosen = stats.budget
+        if chosen is None:
+            return []
+        lines = [
+            f"budget {chosen.budget.describe()} ([ ] to change, B off): "
+            + ("met" if chosen.met else "NOT met")
+            + f", predicted {chosen.predicted_ms:.1f} ms"
+        ]
+        for choice in chosen.choices:
+            if choice.chosen is None:
+                lines.append(f"{choice.reflector}: {choice.candidate_label} (not in view)")
+            else:
+                lines.append(
+                    f"{choice.reflector}: {choice.chosen.candidate.label}, predicted "
+                    f"{choice.chosen.error:.3g} (bound {choice.chosen.bound:.3g}), "
+                    f"{choice.chosen.cost:.1f} ms"
+                )
+        return lines
+
     def draw_overlay(self, scene: Scene, stats, size: tuple[int, int]) -> None:
         scale = self.scale()
         margin = round(8 * scale)
+        budget = self.budget_lines(stats)
+        if budget and not self.show_help:
+            self.overlay.text("budget", budget, (margin, margin), size, scale)
         if self.show_mask:
             self.draw_mask(stats, size, scale, margin)
         if self.show_inset:
@@ -466,7 +533,18 @@ class DemoApp:
         index = self.target_index()
         if index is not None:
             reflector = scene.reflectors[index]
-            parts.append(f"{reflector.name}: {reflector.technique}")
+            technique_name = reflector.technique
+            if self.last_budget is not None:
+                choice = (
+                    self.last_budget.choices[index]
+                    if index < len(self.last_budget.choices)
+                    else None
+                )
+                if choice is not None:
+                    technique_name = choice.candidate_label
+            parts.append(f"{reflector.name}: {technique_name}")
+        if self.changes.budget is not None:
+            parts.append(f"budget {self.changes.budget.describe()}")
         x, y, z = scene.camera.eye
         parts.append(f"eye {x:.2f},{y:.2f},{z:.2f}")
         parts.append(f"{self.last_ms:.1f} ms")

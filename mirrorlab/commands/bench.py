@@ -5,6 +5,7 @@ the work."""
 from __future__ import annotations
 
 import argparse
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -23,6 +24,109 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     benchmarks = bench.add_subparsers(dest="what", required=True, metavar="BENCHMARK")
     _add_accuracy_parser(benchmarks)
     _add_speed_parser(benchmarks)
+    _add_budget_parser(benchmarks)
+    _add_calibrate_parser(benchmarks)
+
+
+def _add_budget_parser(benchmarks: argparse._SubParsersAction) -> None:
+    budget = benchmarks.add_parser(
+        "budget",
+        help="prove a budget held: animated sequences, every frame against the truth, "
+        "against brute force",
+        description="Render each scene as an animated sequence (the camera swings, objects "
+        "drift, mirrors turn) and measure every frame's true error per reflector against "
+        "the ray-traced truth, under each budget: the share of reflector-frames within it, "
+        "the worst overrun, the cost against the per-frame oracle and the best fixed "
+        "choice (both by brute force over every candidate), and with --max-ms the error "
+        "against the oracle's within the time. Writes budget.csv, summary.json and "
+        "budget.png.",
+    )
+    budget.add_argument(
+        "scenes",
+        nargs="*",
+        metavar="SCENE",
+        help="scene files or shipped scenes (default: the shipped scenes with a reflector)",
+    )
+    budget.add_argument(
+        "--max-error",
+        metavar="E,E,...",
+        help="error budgets, each a mean FLIP (0.05) or mae=N (levels of 255)",
+    )
+    budget.add_argument(
+        "--max-ms", metavar="T,T,...", help="time budgets, milliseconds of a frame's cost"
+    )
+    budget.add_argument("--frames", metavar="N", help="frames a sequence (default 16)")
+    budget.add_argument("--size", metavar="WxH", help="frame size (default 192x192)")
+    budget.add_argument(
+        "--repeats", metavar="N", help="timed runs of each sequence, the median kept (default 3)"
+    )
+    budget.add_argument(
+        "--largest",
+        metavar="N",
+        help="leave out candidates whose map is larger than N texels a side, for the "
+        "planner and the brute force alike (default 4096; 256 with --quick)",
+    )
+    budget.add_argument(
+        "--still", action="store_true", help="still sequences (every frame the first)"
+    )
+    budget.add_argument(
+        "--quick",
+        action="store_true",
+        help="3 frames of 64x64, one timed run, maps up to 256 (checks that it runs)",
+    )
+    budget.add_argument("--calibration", metavar="PATH", help="predict with this calibration file")
+    budget.add_argument(
+        "--out-dir",
+        default="out/bench/budget",
+        help="where budget.csv, summary.json and budget.png go (default %(default)s)",
+    )
+    add_executor_arguments(
+        budget,
+        jobs="ray trace the truths and score the frames in J processes; the timed "
+        "frames stay in this process, run while the others are idle",
+        scheduler="trace and score on",
+    )
+
+
+def _add_calibrate_parser(benchmarks: argparse._SubParsersAction) -> None:
+    calibrate = benchmarks.add_parser(
+        "calibrate",
+        help="make the budget's calibration: random scenes, every candidate against the truth",
+        description="Draw random scenes of the calibration class, score every candidate of "
+        "their reflector against the ray-traced truth and time it, fit the budget's "
+        "models, and write the calibration (JSON) and the measured samples (CSV). The "
+        "shipped calibration is mirrorlab/budget/calibration.json.",
+    )
+    calibrate.add_argument(
+        "--planar", metavar="N", default="160", help="planar mirror samples (default %(default)s)"
+    )
+    calibrate.add_argument(
+        "--curved",
+        metavar="N",
+        default="200",
+        help="curved reflector samples (default %(default)s)",
+    )
+    calibrate.add_argument(
+        "--seed", metavar="N", default="0", help="the first sample's seed (default %(default)s)"
+    )
+    calibrate.add_argument(
+        "--quick", action="store_true", help="two samples of each (checks that it runs)"
+    )
+    calibrate.add_argument(
+        "--out-dir",
+        default="out/bench/calibrate",
+        help="where calibration.json and samples.csv go (default %(default)s)",
+    )
+    calibrate.add_argument(
+        "--from-csv",
+        metavar="PATH",
+        help="measure nothing: fit the models to a saved samples.csv",
+    )
+    add_executor_arguments(
+        calibrate,
+        jobs="ray trace the truths and score the frames in J processes",
+        scheduler="trace and score on",
+    )
 
 
 def _add_accuracy_parser(benchmarks: argparse._SubParsersAction) -> None:
@@ -179,7 +283,96 @@ def _add_speed_parser(benchmarks: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """``mirrorlab bench BENCHMARK``: the benchmark named."""
+    if args.what == "budget":
+        return _run_budget(args)
+    if args.what == "calibrate":
+        return _run_calibrate(args)
     return _run_speed(args) if args.what == "speed" else _run_accuracy(args)
+
+
+def _run_budget(args: argparse.Namespace) -> int:
+    """``mirrorlab bench budget``: the budgets and settings read, then the benchmark."""
+    from mirrorlab.budget.bench import DEFAULT_SCENES, BenchSettings, run_command
+    from mirrorlab.budget.model import load_calibration
+    from mirrorlab.options import parse_size
+    from mirrorlab.scene.loader import parse_error_budget
+    from mirrorlab.scene.model import Budget
+
+    budgets = []
+    if args.max_error:
+        for text in args.max_error.split(","):
+            try:
+                metric, error = parse_error_budget(text)
+            except ValueError as exc:
+                raise OptionError("--max-error", str(exc)) from None
+            budgets.append(Budget(max_error=error, metric=metric))  # type: ignore[arg-type]
+    if args.max_ms:
+        for text in args.max_ms.split(","):
+            try:
+                milliseconds = float(text)
+            except ValueError:
+                milliseconds = math.nan
+            if not (math.isfinite(milliseconds) and milliseconds > 0):
+                raise OptionError("--max-ms", f"expected milliseconds above 0, got {text!r}")
+            budgets.append(Budget(max_ms=milliseconds))
+    if not budgets:
+        raise OptionError("--max-error", "give --max-error E[,E...] or --max-ms T[,T...]")
+    if any(b.max_error is not None and b.metric == "flip" for b in budgets):
+        from mirrorlab import flip
+
+        if not flip.available():
+            raise OptionError("--max-error", f"{flip.MISSING}; or give budgets as mae=N")
+    settings = BenchSettings.quick() if args.quick else BenchSettings()
+    changes: dict = {}
+    if args.frames:
+        changes["frames"] = parse_count("--frames", args.frames, 1, 10_000)
+    if args.size:
+        changes["size"] = parse_size("--size", args.size)
+    if args.repeats:
+        changes["repeats"] = parse_count("--repeats", args.repeats, 1, 100)
+    if args.largest:
+        changes["largest"] = parse_count("--largest", args.largest, 1, 1 << 16)
+    if args.still:
+        changes["motion"] = "still"
+    settings = replace(settings, **changes)
+    jobs = parse_count("--jobs", args.jobs, 1, 1024)
+    out_dir = check_folder("--out-dir", args.out_dir)
+    calibration = load_calibration(args.calibration) if args.calibration else None
+    names = args.scenes or (DEFAULT_SCENES[:2] if args.quick else DEFAULT_SCENES)
+    scenes = [load_scene(name) for name in names]
+    return run_command(
+        scenes,
+        budgets,
+        settings,
+        out_dir,
+        jobs=jobs,
+        scheduler=args.scheduler,
+        engine=args.engine,
+        calibration=calibration,
+    )
+
+
+def _run_calibrate(args: argparse.Namespace) -> int:
+    """``mirrorlab bench calibrate``: measure (or read) the samples, fit, write."""
+    from mirrorlab.budget.calibrate import CalibrationSettings, run_command
+
+    settings = CalibrationSettings(
+        planar=parse_count("--planar", args.planar, 0, 100_000),
+        curved=parse_count("--curved", args.curved, 0, 100_000),
+        first_seed=parse_count("--seed", args.seed, 0, 10**9),
+    )
+    if args.quick:
+        settings = replace(CalibrationSettings.quick(), first_seed=settings.first_seed)
+    jobs = parse_count("--jobs", args.jobs, 1, 1024)
+    out_dir = check_folder("--out-dir", args.out_dir)
+    return run_command(
+        settings,
+        out_dir,
+        Path(args.from_csv) if args.from_csv else None,
+        jobs=jobs,
+        scheduler=args.scheduler,
+        engine=args.engine,
+    )
 
 
 def _run_accuracy(args: argparse.Namespace) -> int:

@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import json
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from mirrorlab.commands.arguments import (
     TINY_HELP,
@@ -17,6 +18,9 @@ from mirrorlab.commands.arguments import (
 from mirrorlab.options import parse_count, parse_size
 from mirrorlab.plan import TINY_PIXELS, FramePlan, TextureState, plan_frame
 from mirrorlab.scene.model import Scene
+
+if TYPE_CHECKING:
+    from mirrorlab.budget.chooser import BudgetFrame
 
 NAME = "plan"
 
@@ -57,14 +61,25 @@ def plan_frames(
     frames: int,
     use_plan: bool = True,
     tiny_pixels: float = TINY_PIXELS,
+    choices: list[BudgetFrame] | None = None,
 ) -> list[FramePlan]:
-    """The plans of frames 0 .. ``frames`` - 1, each knowing what the earlier ones made."""
+    """The plans of frames 0 .. ``frames`` - 1, each knowing what the earlier ones made.
+    Under the scene's budget each frame's reflectors are first chosen (one chooser for
+    the frames, in order), and each choice appended to ``choices`` when given."""
     state = TextureState()
     plans = []
+    chooser = None
+    if scene.budget is not None:
+        from mirrorlab.budget.chooser import BudgetChooser
+
+        chooser = BudgetChooser()
     for frame in range(frames):
-        plan = plan_frame(
-            scene.at_frame(min(frame, scene.frame_count - 1)), size, state, use_plan, tiny_pixels
-        )
+        posed = scene.at_frame(min(frame, scene.frame_count - 1))
+        if chooser is not None:
+            posed, chosen = chooser.choose(posed, size)
+            if choices is not None:
+                choices.append(chosen)
+        plan = plan_frame(posed, size, state, use_plan, tiny_pixels)
         for step in plan.ran:
             if step.reflector is not None:
                 state.record(step)
@@ -72,19 +87,28 @@ def plan_frames(
     return plans
 
 
-def plan_document(plans: list[FramePlan]) -> list[dict]:
-    """The plans as JSON-ready dicts: each frame's passes and how each reflector is drawn."""
-    return [
-        {
+def plan_document(plans: list[FramePlan], choices: list[BudgetFrame] | None = None) -> list[dict]:
+    """The plans as JSON-ready dicts: each frame's passes and how each reflector is drawn
+    (and, under a budget, the choice: every candidate's predictions)."""
+    document = []
+    for frame, plan in enumerate(plans):
+        entry: dict = {
             "frame": frame,
             "passes": [step.as_dict() for step in plan.passes],
             "draws": [
-                {"reflector": d.reflector.name, "mode": d.mode, "reason": d.reason}
+                {
+                    "reflector": d.reflector.name,
+                    "technique": d.reflector.technique,
+                    "mode": d.mode,
+                    "reason": d.reason,
+                }
                 for d in plan.top.draws
             ],
         }
-        for frame, plan in enumerate(plans)
-    ]
+        if choices:
+            entry["budget"] = choices[frame].as_dict()
+        document.append(entry)
+    return document
 
 
 def print_plans(
@@ -99,11 +123,17 @@ def print_plans(
     """Say (print) the plans of frames 0 .. ``frames`` - 1 of ``scene`` at ``size``: each
     frame's passes run and skipped with their reasons, or with ``as_json`` one JSON
     document; returns the exit status, 0."""
-    plans = plan_frames(scene, size, frames, use_plan, tiny_pixels)
+    choices: list[BudgetFrame] = []
+    plans = plan_frames(scene, size, frames, use_plan, tiny_pixels, choices)
     if as_json:
         say(
             json.dumps(
-                {"scene": scene.name, "size": list(size), "frames": plan_document(plans)}, indent=2
+                {
+                    "scene": scene.name,
+                    "size": list(size),
+                    "frames": plan_document(plans, choices),
+                },
+                indent=2,
             )
         )
         return 0
@@ -113,6 +143,9 @@ def print_plans(
             f"frame {frame}: {ran} pass{'es' if ran != 1 else ''} run, "
             f"{len(plan.passes) - ran} skipped"
         )
+        if choices:
+            for line in choices[frame].describe(candidates=not choices[frame].repeated):
+                say(f"  {line}")
         for line in plan.describe():
             say(f"  {line}")
     return 0

@@ -294,6 +294,8 @@ def render_frames(
                 for warm in (renderer, unplanned):
                     warm.render(scene, frame=frames[0], use_plan=False)
                     warm.scene_renderer.state.clear()  # and forgotten: frame 0 captures
+                    if warm.scene_renderer.budget_chooser is not None:
+                        warm.scene_renderer.budget_chooser.reset()  # and chooses afresh
             for index, frame in enumerate(frames):
                 if compare and index % 2:  # take turns at going first
                     comparison.append(_unplanned(unplanned, scene, frame))
@@ -343,6 +345,13 @@ def render_frames(
         say(f"OpenGL: {summary(described)}; draw path {described['draw_path']}")
     if stats:
         _report(records, comparison, use_plan, say)
+    elif last.budget is not None:
+        met = sum(1 for _, s, _, _ in records if s.budget is not None and s.budget.met)
+        say(
+            f"budget {last.budget.budget.describe()}: predicted met in {met} of "
+            f"{len(records)} frames; last frame: "
+            + "; ".join(f"{c.reflector} {c.candidate_label}" for c in last.budget.choices)
+        )
     return 0
 
 
@@ -400,6 +409,9 @@ def _report(records, comparison, use_plan: bool, say: Callable[[str], None]) -> 
                 else f"; {differing[index]} pixels differ from --no-plan"
             )
         say(f"frame {frame}: ran {', '.join(stats.ran)}{skips} ({elapsed:.1f} ms{against})")
+        if stats.budget is not None:
+            for line in stats.budget.describe():
+                say(f"  {line}")
     ran = [len(stats.plan.ran) for _, stats, _, _ in records]
     skipped = [len(stats.plan.skipped) for _, stats, _, _ in records]
     times = [elapsed for _, _, elapsed, _ in records]

@@ -35,15 +35,18 @@ from mirrorlab.scene.animation import (
 )
 from mirrorlab.scene.backgrounds import CUBE_FACE_FILES
 from mirrorlab.scene.model import (
+    BUDGET_METRICS,
     CAPTURE_MODES,
     DEFAULT_BACKING,
     DEFAULT_PLAIN_COLOR,
     FOOTPRINT_TEXTURE,
+    MAX_BUDGET_ERROR,
     PARALLAX_PROXIES,
     SSR_NO_PROBE,
     Animation,
     Background,
     BoxProxy,
+    Budget,
     Camera,
     CurvedReflector,
     DistanceSearch,
@@ -64,6 +67,7 @@ from mirrorlab.techniques import (
     names_where,
     reflector_technique_names,
     technique,
+    technique_names,
     techniques,
 )
 
@@ -106,7 +110,9 @@ _TOP_KEYS = (
     "objects",
     "reflectors",
     "animation",
+    "budget",
 )
+_BUDGET_KEYS = ("max_error", "max_ms")
 _CAMERA_KEYS = ("eye", "target", "up", "fovy", "near", "far")
 _BACKGROUND_SOURCES = ("color", "sky", "cube_faces", "sphere_map")
 _LIGHT_KEYS = ("direction", "intensity", "color")
@@ -127,6 +133,7 @@ _PLANAR_KEYS = (
     "ortho",
     "color",
     "backing",
+    "allow",
     "map_size",
     "source",
     "capture_center",
@@ -146,6 +153,7 @@ _CURVED_KEYS = (
     "capture_center",
     "color",
     "parallax",
+    "allow",
     "ssr",
 )
 _PARALLAX_KEYS = {
@@ -340,6 +348,8 @@ def scene_to_document(scene: Scene, base: Path | None = None) -> dict[str, Any]:
                 }
             entry["color"] = list(reflector.color)
             entry["backing"] = list(reflector.backing)
+            if reflector.allow:
+                entry["allow"] = list(reflector.allow)
             if technique(reflector.technique).probe:
                 entry["map_size"] = reflector.map_size
                 entry["capture_center"] = list(reflector.capture_center)
@@ -361,6 +371,8 @@ def scene_to_document(scene: Scene, base: Path | None = None) -> dict[str, Any]:
                 entry["source"] = rel(reflector.source)
             if reflector.parallax is not None:
                 entry["parallax"] = parallax_document(reflector.parallax)
+            if reflector.allow:
+                entry["allow"] = list(reflector.allow)
         if reflector.ssr is not None:
             entry["ssr"] = screen_space_document(reflector.ssr)
         reflectors.append(entry)
@@ -375,7 +387,42 @@ def scene_to_document(scene: Scene, base: Path | None = None) -> dict[str, Any]:
                     entry[group] = _tuples_as_lists(values)
             keyframes.append(entry)
         document["animation"] = {"frames": scene.animation.frames, "keyframes": keyframes}
+    if scene.budget is not None:
+        budget = scene.budget
+        document["budget"] = (
+            {"max_ms": budget.max_ms}
+            if budget.max_ms is not None
+            else {"max_error": budget.max_error if budget.metric == "flip" else budget.text()}
+        )
     return document
+
+
+def parse_error_budget(value: Any) -> tuple[str, float]:
+    """An error budget as a scene file, ``--max-error`` or ``max_error=`` gives it: a
+    number (mean FLIP), or the text ``"flip=N"`` or ``"mae=N"`` (MAE in levels of 255),
+    as ``(metric, error)``. ValueError saying what was expected otherwise."""
+    expected = 'expected a mean FLIP from 0 to 1 (e.g. 0.05), or "mae=N" with N from 0 to 255'
+    metric: str = "flip"
+    number: Any = value
+    if isinstance(value, str):
+        text = value.strip()
+        name, sep, rest = text.partition("=")
+        if sep:
+            metric, number = name.strip().lower(), rest.strip()
+        else:
+            number = text
+        if metric not in BUDGET_METRICS:
+            raise ValueError(f"{expected}; got {value!r}")
+        try:
+            number = float(number)
+        except ValueError:
+            raise ValueError(f"{expected}; got {value!r}") from None
+    if isinstance(number, bool) or not isinstance(number, int | float):
+        raise ValueError(f"{expected}; got {_kind(value)}")
+    error = float(number)
+    if not (math.isfinite(error) and 0.0 < error <= MAX_BUDGET_ERROR[metric]):
+        raise ValueError(f"{expected} (greater than 0); got {value!r}")
+    return metric, error
 
 
 def dumps(scene: Scene, base: Path | None = None) -> str:
@@ -653,7 +700,41 @@ class _Reader:
         )
         if "animation" in document:
             scene = replace(scene, animation=self.animation(document["animation"], scene))
+        if "budget" in document:
+            scene = replace(scene, budget=self.budget(document["budget"]))
         return scene
+
+    def budget(self, value: Any) -> Budget:
+        """A ``[budget]`` table: ``max_error`` (mean FLIP, or ``"mae=N"`` / ``"flip=N"``)
+        or ``max_ms`` (a frame's predicted cost), one of them."""
+        table = self.table(value, "budget", _BUDGET_KEYS)
+        given = [key for key in _BUDGET_KEYS if key in table]
+        if len(given) != 1:
+            problem = (
+                "give one of max_error and max_ms, not both"
+                if given
+                else 'expected max_error (mean FLIP, or "mae=N") or max_ms'
+            )
+            raise self.fail(f"budget.{given[-1]}" if given else "budget", problem)
+        if "max_ms" in table:
+            return Budget(max_ms=self.number(table["max_ms"], "budget.max_ms", 0.0, low_open=True))
+        try:
+            metric, error = parse_error_budget(table["max_error"])
+        except ValueError as exc:
+            raise self.fail("budget.max_error", str(exc)) from None
+        return Budget(max_error=error, metric=metric)  # type: ignore[arg-type]
+
+    def allow(self, value: Any, key: str, kind: str) -> tuple[str, ...]:
+        """A reflector's ``allow``: technique names of its ``kind``, each once."""
+        items = self.array(value, key)
+        names = technique_names(kind)  # type: ignore[arg-type]
+        if not items:
+            raise self.fail(key, f"expected at least one of {', '.join(names)}")
+        allowed = tuple(self.choice(item, f"{key}[{i}]", names) for i, item in enumerate(items))
+        for i, name in enumerate(allowed):
+            if name in allowed[:i]:
+                raise self.fail(f"{key}[{i}]", f"{name!r} is listed twice")
+        return allowed
 
     def camera(self, value: Any, key: str) -> Camera:
         table = self.table(value, key, _CAMERA_KEYS)
@@ -892,6 +973,7 @@ class _Reader:
             ortho=ortho,
             color=self.color(table.get("color", list(DEFAULT_PLAIN_COLOR)), f"{key}.color"),
             backing=self.color(table.get("backing", list(DEFAULT_BACKING)), f"{key}.backing"),
+            allow=self.allow(table["allow"], f"{key}.allow", "planar") if "allow" in table else (),
             map_size=self.integer(table.get("map_size", 256), f"{key}.map_size", 4, MAX_MAP_SIZE),
             capture_center=self.vec3(
                 table.get("capture_center", [0, 0, 0]), f"{key}.capture_center"
@@ -1081,6 +1163,7 @@ class _Reader:
                 table.get("capture_center", [0, 0, 0]), f"{key}.capture_center"
             ),
             color=self.color(table.get("color", list(DEFAULT_PLAIN_COLOR)), f"{key}.color"),
+            allow=self.allow(table["allow"], f"{key}.allow", "curved") if "allow" in table else (),
             ssr=ssr,
         )
         parallax = self.map_parallax(table, key, name, mapped, reflector.center())
@@ -1461,6 +1544,7 @@ __all__ = [
     "from_document",
     "load_scene",
     "loads",
+    "parse_error_budget",
     "scene_path",
     "scene_to_document",
     "shipped_scene_names",

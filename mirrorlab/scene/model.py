@@ -226,7 +226,9 @@ class PlanarReflector:
     A technique that falls back to a map (``ssr``: :class:`ScreenSpace`, its settings in
     ``ssr``) reads that map's settings from ``map_size``, ``source``, ``capture_center``
     (a live map's capture point, from the mirror's centre, in world axes that turn with
-    the mirror) and ``parallax``, as a curved reflector's own map has them."""
+    the mirror) and ``parallax``, as a curved reflector's own map has them. ``allow``:
+    the techniques an accuracy budget may choose among for it (:class:`Budget`; empty:
+    every planar technique)."""
 
     name: str
     corners: tuple[Vec3, Vec3, Vec3, Vec3]
@@ -236,6 +238,7 @@ class PlanarReflector:
     ortho: OrthoCapture | None = None
     color: Vec3 = DEFAULT_PLAIN_COLOR
     backing: Vec3 = DEFAULT_BACKING
+    allow: tuple[str, ...] = ()
     map_size: int = 256
     source: Path | None = None
     capture_center: Vec3 = (0.0, 0.0, 0.0)
@@ -392,7 +395,8 @@ class CurvedReflector:
     nearby surroundings (None: everything is taken as infinitely far away); ``ssr`` the
     settings of screen-space reflections (technique ``ssr``; None: the defaults), whose
     probe map is this reflector's own (``map_size``, ``source``, ``capture_center``,
-    ``parallax``)."""
+    ``parallax``); ``allow`` the techniques an accuracy budget may choose among for it
+    (:class:`Budget`; empty: every curved technique)."""
 
     name: str
     mesh: Path
@@ -403,6 +407,7 @@ class CurvedReflector:
     capture_center: Vec3 = (0.0, 0.0, 0.0)
     color: Vec3 = DEFAULT_PLAIN_COLOR
     parallax: Parallax | None = None
+    allow: tuple[str, ...] = ()
     ssr: ScreenSpace | None = None
 
     kind: ClassVar[Literal["curved"]] = "curved"
@@ -416,6 +421,47 @@ class CurvedReflector:
 
 
 Reflector = PlanarReflector | CurvedReflector
+
+
+BUDGET_METRICS = ("flip", "mae")
+"""How a budget's error is measured, per reflector against the ray-traced truth: the mean
+LDR-FLIP over its pixels (0..1), or the mean absolute error in levels of 255."""
+MAX_BUDGET_ERROR = {"flip": 1.0, "mae": 255.0}
+"""The largest error a budget may allow, per metric (the metric's own range)."""
+
+
+@dataclass(frozen=True)
+class Budget:
+    """An accuracy budget (:mod:`mirrorlab.budget`): each reflector of every frame is drawn
+    by the cheapest candidate (technique, map size, parameters) predicted to stay within
+    ``max_error`` (in ``metric``, see :data:`BUDGET_METRICS`); or, the dual, with
+    ``max_ms``, by the most accurate combination predicted to fit that frame cost in
+    milliseconds. Exactly one of ``max_error`` and ``max_ms`` is set."""
+
+    max_error: float | None = None
+    metric: Literal["flip", "mae"] = "flip"
+    max_ms: float | None = None
+
+    def __post_init__(self) -> None:
+        if (self.max_error is None) == (self.max_ms is None):
+            raise ValueError("a budget sets one of max_error and max_ms")
+
+    def describe(self) -> str:
+        """The budget in words, as the command line writes it (``FLIP <= 0.05``,
+        ``MAE <= 3/255``, ``<= 20 ms a frame``)."""
+        if self.max_ms is not None:
+            return f"<= {self.max_ms:g} ms a frame"
+        assert self.max_error is not None
+        if self.metric == "mae":
+            return f"MAE <= {self.max_error:g}/255"
+        return f"FLIP <= {self.max_error:g}"
+
+    def text(self) -> str:
+        """The budget as ``--max-error`` or ``--max-ms`` takes it (``0.05``, ``mae=3``,
+        ``20``)."""
+        if self.max_ms is not None:
+            return f"{self.max_ms:g}"
+        return f"{self.max_error:g}" if self.metric == "flip" else f"mae={self.max_error:g}"
 
 
 @dataclass(frozen=True)
@@ -446,7 +492,9 @@ class Scene:
 
     ``max_bounces`` is how deep reflections of reflections go (0 draws reflectors as
     plain surfaces; 1 shows each reflector with the scene and the others plain). ``source``
-    is the file the scene was read from (not compared)."""
+    is the file the scene was read from (not compared). ``budget``: an accuracy or time
+    budget (:class:`Budget`) that chooses each reflector's technique frame by frame
+    (None: the techniques the file gives, as they are)."""
 
     name: str
     camera: Camera = Camera()
@@ -459,6 +507,7 @@ class Scene:
     animation: Animation | None = None
     description: str = ""
     source: Path | None = field(default=None, compare=False)
+    budget: Budget | None = None
 
     # ----------------------------------------------------------------- look-ups
 

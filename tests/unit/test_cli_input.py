@@ -129,7 +129,7 @@ def test_plan_prints_each_frames_passes_as_json(capsys):
     ]
     assert captured == [True, False, False, False, False, True]
     assert document["frames"][1]["draws"] == [
-        {"reflector": "mirror", "mode": "texture", "reason": "its capture"}
+        {"reflector": "mirror", "technique": "ortho", "mode": "texture", "reason": "its capture"}
     ]
 
 

@@ -356,6 +356,8 @@ def test_every_option_has_a_flag_and_parses_its_text():
         "max_bounces": "2",
         "cube_faces": str(SKY_CUBE),
         "set": "camera.near=0.5",
+        "max_error": "mae=3",
+        "max_ms": "20",
     }
     for name, option in OPTION_NAMES.items():
         if name in ("map_size", "parallax"):
