@@ -328,7 +328,9 @@ def test_bench_refuses_a_file_as_its_folder_and_unknown_benchmarks(tmp_path, cap
     with pytest.raises(SystemExit) as stopped:  # argparse's own refusal: usage, then why
         main(["bench", "sprint"])
     assert stopped.value.code == 2
-    assert "invalid choice: 'sprint' (choose from 'accuracy', 'speed')" in (capsys.readouterr().err)
+    assert "invalid choice: 'sprint' (choose from 'accuracy', 'speed', 'budget', 'calibrate')" in (
+        capsys.readouterr().err
+    )
     assert main(["bench", "accuracy", "--quick", "--out-dir", str(blocker)]) == 2
     assert main(["bench", "accuracy", "--sizes", "64,zero"]) == 2
     assert main(["bench", "accuracy", "--from-csv", str(blocker)]) == 2
