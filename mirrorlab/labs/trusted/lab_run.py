@@ -395,6 +395,13 @@ class LabRun:
         evidence.call_errors = executor.call_errors
         evidence.arrays.update(executor.pictures)
         evidence.state["calls"] = executor.calls
+        traced = {
+            str(e.get("fn"))
+            for events in (evidence.setup, *(f["events"] for f in evidence.frames))
+            for e in events
+            if e.get("kind") == "call" and e.get("op") in ("gl", "glu")
+        }
+        evidence.state["signatures"] = {fn: list(C.arg_names(fn)) for fn in sorted(traced)[:200]}
         evidence.state["declared"] = sorted(self.declared)
         return evidence
 
