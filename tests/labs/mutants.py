@@ -77,7 +77,10 @@ LAB20 = (
         "lab20",
         "wrong_extents",
         (("glOrtho(Z0, Z1, Y0, Y1, 0, 15)", "glOrtho(-4, 4, -4, 4, 0, 15)"),),
-        {"capture_camera": "wrong extents", "capture_scene": "fix its projection"},
+        {
+            "capture_camera": "left, right, bottom, top = -4, 4, -4, 4",
+            "capture_scene": "left, right, bottom, top = -4, 4, -4, 4",
+        },
     ),
     Mutant(
         "lab20",
@@ -88,7 +91,7 @@ LAB20 = (
                 "gluLookAt(-MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)",
             ),
         ),
-        {"capture_camera": "camera on the wrong side", "capture_scene": "fix its projection"},
+        {"capture_camera": "eyeX = 7 (the solution's: -7)", "capture_scene": "eyeX = 7"},
     ),
     Mutant(
         "lab20",
@@ -101,7 +104,7 @@ LAB20 = (
         ),
         {
             "capture_camera": "applied to the modelview matrix",
-            "capture_scene": "fix its projection",
+            "capture_scene": "applied to the modelview matrix",
         },
     ),
     Mutant(
@@ -114,8 +117,8 @@ LAB20 = (
             ),
         ),
         {
-            "capture_camera": "multiplied onto the viewer's matrix",
-            "capture_scene": "fix its projection",
+            "capture_camera": "needs glLoadIdentity on the projection matrix",
+            "capture_scene": "needs glLoadIdentity on the projection matrix",
         },
     ),
     Mutant(
@@ -140,7 +143,7 @@ LAB20 = (
         "lab20",
         "wrong_corner",
         (("glVertex3f(MIRROR_X, Y1, Z1)", "glVertex3f(MIRROR_X, Y1, Z1 - 1)"),),
-        {"mirror_quad": "is not a corner of your mirror; the nearest corner is (-7, 5, 2)"},
+        {"mirror_quad": "gives the vertex (-7, 5, 1); the solution's nearest is (-7, 5, 2)"},
     ),
     Mutant(
         "lab20",
@@ -157,7 +160,10 @@ LAB20 = (
                 "    lab.draw_scene(robot)\n    render_mirror()\n    # TODO 3",
             ),
         ),
-        {"capture_scene": "drawn into its own capture", "passes": "wrong order"},
+        {
+            "capture_scene": "render_mirror() is called inside create_mirror()",
+            "passes": "render_mirror() is called inside create_mirror()",
+        },
     ),
     Mutant(
         "lab20",
@@ -169,28 +175,25 @@ LAB20 = (
                 "    glCopyTexImage2D",
             ),
         ),
-        {
-            "capture_copy": "overwrote METAL",
-            "capture_scene": "judged once task 3 (capture_copy) passes",
-        },
+        {"capture_copy": "filled tex_ids[METAL]", "capture_scene": "filled tex_ids[METAL]"},
     ),
     Mutant(
         "lab20",
         "half_copy",
         (("0, 0, WIDTH, HEIGHT, 0)", "0, 0, WIDTH // 2, HEIGHT // 2, 0)"),),
-        {"capture_copy": "copy the whole framebuffer, WIDTH x HEIGHT (256 x 256)"},
+        {"capture_copy": "width, height = 128, 128 (the solution's: 256, 256)"},
     ),
     Mutant(
         "lab20",
         "copy_offset",
         (("GL_RGB, 0, 0, WIDTH, HEIGHT, 0)", "GL_RGB, 64, 64, WIDTH, HEIGHT, 0)"),),
-        {"capture_copy": "starts at (64, 64) of the framebuffer: copy from its corner (0, 0)"},
+        {"capture_copy": "x, y = 64, 64 (the solution's: 0, 0)"},
     ),
     Mutant(
         "lab20",
         "environment_mipmaps",
         (("GL_TEXTURE_MIN_FILTER, GL_LINEAR)", "GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR)"),),
-        {"environment_texture": "mipmaps", "mirror_texture": "black"},
+        {"environment_texture": "GL_LINEAR_MIPMAP_LINEAR"},
     ),
     Mutant(
         "lab20",
@@ -202,13 +205,16 @@ LAB20 = (
         "lab20",
         "base_not_textured",
         (('    robot["base"].texture = tex_ids[METAL]\n', ""),),
-        {"base_texture": "base not textured", "capture_scene": "task 5 (base_texture)"},
+        {
+            "base_texture": 'robot["base"].texture is no texture',
+            "capture_scene": "base wears no texture",
+        },
     ),
     Mutant(
         "lab20",
         "sampler_not_set",
         (("    glUniform1i(lab.texSampler, 1)\n", ""),),
-        {"mirror_texture": "sampler uniform is not set"},
+        {"mirror_texture": "makes no glUniform1i(lab.texSampler, 1)"},
     ),
     Mutant(
         "lab20",
@@ -229,7 +235,7 @@ LAB20 = (
             (CLEAR + "    # TODO 1", "    # TODO 1"),
             ("    create_mirror()\n" + CLEAR, CLEAR + "    create_mirror()\n"),
         ),
-        {"passes": "the capture's picture stays in the frame"},
+        {"passes": "create_mirror() at line 97 (create_mirror()) comes after glClear"},
     ),
 )
 
@@ -247,7 +253,7 @@ LAB20_MORE = (
             ),
         ),
         {
-            "passes": "the frame is cleared to (1, 1, 1)",
+            "passes": "glClearColor at line 98 (glClearColor(1, 1, 1, 1)) in display()",
             "capture_scene": "the capture is cleared to (1, 1, 1)",
         },
     ),
@@ -256,8 +262,8 @@ LAB20_MORE = (
         "viewport_quarter",
         ((VIEWER_PASS, "    glViewport(0, 0, 128, 128)\n" + VIEWER_PASS),),
         {
-            "passes": "the scene is drawn in glViewport(0, 0, 128, 128)",
-            "capture_scene": "glViewport(0, 0, 128, 128)",
+            "passes": "glViewport at line 99 (glViewport(0, 0, 128, 128)) in display()",
+            "capture_scene": "the capture is drawn in the viewport (0, 0, 128, 128)",
         },
     ),
     Mutant(
@@ -276,7 +282,7 @@ LAB20_MORE = (
                 "from OpenGL.GLU import gluLookAt, gluPerspective",
             ),
         ),
-        {"passes": "field of view of 60 degrees; the viewer's is 45"},
+        {"passes": "field of view 60 degrees (the solution's: 45)"},
     ),
     Mutant(
         "lab20",
@@ -288,7 +294,10 @@ LAB20_MORE = (
         "lab20",
         "near_cuts_the_robot",
         (("glOrtho(Z0, Z1, Y0, Y1, 0, 15)", "glOrtho(Z0, Z1, Y0, Y1, 5, 15)"),),
-        {"capture_camera": "near and far planes", "capture_scene": "fix its projection"},
+        {
+            "capture_camera": "the near and far planes 5, 15",
+            "capture_scene": "judged once task 1 (capture_camera)",
+        },
     ),
     Mutant(
         "lab20",
@@ -299,7 +308,7 @@ LAB20_MORE = (
                 "gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, -1, 0)",
             ),
         ),
-        {"capture_camera": "up is (0, -1, 0)", "capture_scene": "fix its projection"},
+        {"capture_camera": "upY = -1 (the solution's: 1)", "capture_scene": "upY = -1"},
     ),
 )
 
@@ -380,25 +389,31 @@ SPHEREMAP = (
         "spheremap",
         "reflect_sign",
         (("return u - 2.0 * dot(n, u) * n;", "return 2.0 * dot(n, u) * n - u;"),),
-        {"reflection": "wrong way", "side_by_side": "tasks 1 and 2"},
+        {"reflection": "wrong way", "side_by_side": "the shader's cone's half is judged once task"},
     ),
     Mutant(
         "spheremap",
         "reflect_no_two",
         (("return u - 2.0 * dot(n, u) * n;", "return u - dot(n, u) * n;"),),
-        {"reflection": "factor 2", "side_by_side": "tasks 1 and 2"},
+        {"reflection": "factor 2", "side_by_side": "the shader's cone's half is judged once task"},
     ),
     Mutant(
         "spheremap",
         "st_no_plus_one",
         (("(r.z + 1.0) * (r.z + 1.0)", "r.z * r.z"),),
-        {"sphere_coordinates": "m must use (r.z + 1)", "side_by_side": "tasks 1 and 2"},
+        {
+            "sphere_coordinates": "m must use (r.z + 1)",
+            "side_by_side": "the shader's cone's half is judged once task",
+        },
     ),
     Mutant(
         "spheremap",
         "st_swapped",
         (("vec2(r.x / m + 0.5, r.y / m + 0.5)", "vec2(r.y / m + 0.5, r.x / m + 0.5)"),),
-        {"sphere_coordinates": "swapped", "side_by_side": "tasks 1 and 2"},
+        {
+            "sphere_coordinates": "swapped",
+            "side_by_side": "the shader's cone's half is judged once task",
+        },
     ),
     Mutant(
         "spheremap",
@@ -409,19 +424,25 @@ SPHEREMAP = (
                 "glTexGeni(GL_T, GL_TEXTURE_GEN_MODE, GL_OBJECT_LINEAR)",
             ),
         ),
-        {"texgen_setup": "GL_OBJECT_LINEAR", "side_by_side": "tasks 3 and 4"},
+        {
+            "texgen_setup": "GL_OBJECT_LINEAR",
+            "side_by_side": "judged once task 3 (texgen_setup)",
+        },
     ),
     Mutant(
         "spheremap",
         "texgen_left_on",
         (("    glDisable(GL_TEXTURE_GEN_S)\n    glDisable(GL_TEXTURE_GEN_T)\n", ""),),
-        {"texgen_draw": "left on"},
+        {"texgen_draw": "makes no glDisable(GL_TEXTURE_GEN_S)"},
     ),
     Mutant(
         "spheremap",
         "texgen_only_s",
         (("    glEnable(GL_TEXTURE_GEN_T)\n", ""),),
-        {"texgen_draw": "for t is off", "side_by_side": "tasks 3 and 4"},
+        {
+            "texgen_draw": "makes no glEnable(GL_TEXTURE_GEN_T)",
+            "side_by_side": "judged once task 4 (texgen_draw)",
+        },
     ),
     Mutant(
         "spheremap",
@@ -432,7 +453,7 @@ SPHEREMAP = (
                 "    glViewport(0, 0, half, HEIGHT)\n    lab.set_viewer()",
             ),
         ),
-        {"side_by_side": "aspect 1.00; this view needs 0.50"},
+        {"side_by_side": "aspect 1.00 (the solution's: 0.50)"},
     ),
     Mutant(
         "spheremap",
@@ -444,8 +465,8 @@ SPHEREMAP = (
             ),
         ),
         {
-            "texgen_setup": "texgen for s is GL_REFLECTION_MAP (line",
-            "side_by_side": "tasks 3 and 4",
+            "texgen_setup": "param = GL_REFLECTION_MAP (the solution's: GL_SPHERE_MAP)",
+            "side_by_side": "judged once task 3 (texgen_setup)",
         },
     ),
     Mutant(
@@ -458,8 +479,8 @@ SPHEREMAP = (
             ),
         ),
         {
-            "texgen_draw": "texgen for s and t is switched on for unit 1",
-            "side_by_side": "tasks 3 and 4",
+            "texgen_draw": "(GL_TEXTURE1 was active, by glActiveTexture at line 52",
+            "side_by_side": "judged once task 4 (texgen_draw)",
         },
     ),
 )
@@ -476,7 +497,10 @@ ROUND_TWO_SPHEREMAP = (
                 "    return vec2(h.x / 2.0 + 0.5, h.y / 2.0 + 0.5);",
             ),
         ),
-        {"sphere_coordinates": "is not normalised", "side_by_side": "tasks 1 and 2"},
+        {
+            "sphere_coordinates": "is not normalised",
+            "side_by_side": "the shader's cone's half is judged once task",
+        },
     ),
     Mutant(
         "spheremap",
@@ -488,19 +512,28 @@ ROUND_TWO_SPHEREMAP = (
                 "    vec3 h = r + vec3(0.0, 0.0, 1.0);\n    return h.xy / 2.0 + 0.5;",
             ),
         ),
-        {"sphere_coordinates": "is not normalised", "side_by_side": "tasks 1 and 2"},
+        {
+            "sphere_coordinates": "is not normalised",
+            "side_by_side": "the shader's cone's half is judged once task",
+        },
     ),
     Mutant(
         "spheremap",
         "st_integer_half",
         (("vec2(r.x / m + 0.5, r.y / m + 0.5)", "vec2(r.x / m + 1/2, r.y / m + 1/2)"),),
-        {"sphere_coordinates": "integer division", "side_by_side": "tasks 1 and 2"},
+        {
+            "sphere_coordinates": "integer division",
+            "side_by_side": "the shader's cone's half is judged once task",
+        },
     ),
     Mutant(
         "spheremap",
         "reflect_clamped_dot",
         (("return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * max(dot(n, u), 0.0) * n;"),),
-        {"reflection": "dot(n, u) is clamped", "side_by_side": "tasks 1 and 2"},
+        {
+            "reflection": "dot(n, u) is clamped",
+            "side_by_side": "the shader's cone's half is judged once task",
+        },
     ),
     Mutant(
         "spheremap",
@@ -509,7 +542,7 @@ ROUND_TWO_SPHEREMAP = (
         {
             "reflection": "GLSL in SPHERE_MAP_GLSL line",
             "sphere_coordinates": "GLSL in SPHERE_MAP_GLSL line",
-            "texgen_setup": "not judged",
+            "texgen_setup": "judged once task 4 (texgen_draw)",
             "texgen_draw": "not judged: the frame stopped at display()",
             "side_by_side": "not judged: display() stopped at line",
         },
@@ -556,13 +589,16 @@ CUBEMAP = (
             ("((0, 0, 1), (0, -1, 0))", "((0, 0, 1), (0, 1, 0))"),
             ("((0, 0, -1), (0, -1, 0))", "((0, 0, -1), (0, 1, 0))"),
         ),
-        {"capture_cameras": "up must be", "capture_copy": "task 3 (capture_cameras)"},
+        {
+            "capture_cameras": "the camera's up is (0, 1, 0); the solution's is (0, -1, 0)",
+            "capture_copy": "upY = 1 (the solution's: -1)",
+        },
     ),
     Mutant(
         "cubemap",
         "fov_60",
         (("gluPerspective(90, 1, 0.05, 50)", "gluPerspective(60, 1, 0.05, 50)"),),
-        {"capture_cameras": "field of view 60", "capture_copy": "task 3 (capture_cameras)"},
+        {"capture_cameras": "field of view 60 degrees", "capture_copy": "fovy = 60"},
     ),
     Mutant(
         "cubemap",
@@ -571,7 +607,10 @@ CUBEMAP = (
             ("((0, 1, 0), (0, 0, 1)),  # POSITIVE_Y", "((0, -1, 0), (0, 0, -1)),  # Y-"),
             ("((0, -1, 0), (0, 0, -1)),  # NEGATIVE_Y", "((0, 1, 0), (0, 0, 1)),  # Y+"),
         ),
-        {"capture_cameras": "wrong order", "capture_copy": "task 3 (capture_cameras)"},
+        {
+            "capture_cameras": "in the wrong order: the 3rd is the solution's 4th",
+            "capture_copy": "in its 3rd run has centerY, upZ = -1, -1",
+        },
     ),
     Mutant(
         "cubemap",
@@ -594,15 +633,15 @@ CUBEMAP = (
                 "        glClear(GL_COLOR_BUFFER_BIT)\n        glMatrixMode",
             ),
         ),
-        {"capture_copy": "the depth buffer is not cleared between faces"},
+        {"capture_copy": "mask = GL_COLOR_BUFFER_BIT (the solution's: GL_DEPTH_BUFFER_BIT"},
     ),
     Mutant(
         "cubemap",
         "viewport_in_loop",
         ((FACE_LOOP, FACE_LOOP + "        glViewport(0, 0, WIDTH, HEIGHT)\n"),),
         {
-            "capture_cameras": "the viewport when the -X face is drawn is 256 x 256",
-            "capture_copy": "task 3 (capture_cameras)",
+            "capture_cameras": "glViewport at line 104 (glViewport(0, 0, WIDTH, HEIGHT))",
+            "capture_copy": "glViewport at line 104 (glViewport(0, 0, WIDTH, HEIGHT))",
         },
     ),
     Mutant(
@@ -610,8 +649,8 @@ CUBEMAP = (
         "cleared_black",
         (("    cx, cy, cz = CENTER\n", "    cx, cy, cz = CENTER\n    glClearColor(0, 0, 0, 1)\n"),),
         {
-            "capture_copy": "the faces are cleared to (0, 0, 0)",
-            "live_frame": "the frame is cleared to (0, 0, 0)",
+            "capture_copy": "glClearColor at line 88 (glClearColor(0, 0, 0, 1))",
+            "live_frame": "glClearColor at line 88 (glClearColor(0, 0, 0, 1))",
         },
     ),
     Mutant(
@@ -625,7 +664,7 @@ CUBEMAP = (
         ),
         {
             "capture_cameras": "was applied to the modelview matrix",
-            "capture_copy": "task 3 (capture_cameras)",
+            "capture_copy": "was applied to the modelview matrix",
         },
     ),
     Mutant(
@@ -644,7 +683,7 @@ CUBEMAP = (
                 "GL_LINEAR_MIPMAP_LINEAR)\n    glGenerateMipmap(GL_TEXTURE_CUBE_MAP)\n",
             ),
         ),
-        {"live_frame": "mipmaps made before the faces were copied"},
+        {"live_frame": "mipmaps made before this frame's pictures"},
     ),
 )
 
@@ -680,21 +719,30 @@ PROBED_SLIPS = (
         "spheremap",
         "reflect_abs_dot",
         (("return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * abs(dot(n, u)) * n;"),),
-        {"reflection": "abs(dot(n, u))", "side_by_side": "tasks 1 and 2"},
+        {
+            "reflection": "abs(dot(n, u))",
+            "side_by_side": "the shader's cone's half is judged once task",
+        },
         cause="abs(dot(n, u))",
     ),
     Mutant(
         "spheremap",
         "reflect_clamped_dot_clamp",
         (("return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * clamp(dot(n, u), 0.0, 1.0) * n;"),),
-        {"reflection": "dot(n, u) is clamped", "side_by_side": "tasks 1 and 2"},
+        {
+            "reflection": "dot(n, u) is clamped",
+            "side_by_side": "the shader's cone's half is judged once task",
+        },
         cause="is clamped (clamp or max)",
     ),
     Mutant(
         "spheremap",
         "st_minus_one",
         (("(r.z + 1.0) * (r.z + 1.0)", "(r.z - 1.0) * (r.z - 1.0)"),),
-        {"sphere_coordinates": "the sign of the 1 in m", "side_by_side": "tasks 1 and 2"},
+        {
+            "sphere_coordinates": "the sign of the 1 in m",
+            "side_by_side": "the shader's cone's half is judged once task",
+        },
         cause="the sign of the 1 in m",
     ),
     Mutant(
@@ -707,7 +755,10 @@ PROBED_SLIPS = (
                 "    vec3 h = r;\n    h.z += 1.0;\n    return 0.5 * h.xy + vec2(0.5);",
             ),
         ),
-        {"sphere_coordinates": "is not normalised", "side_by_side": "tasks 1 and 2"},
+        {
+            "sphere_coordinates": "is not normalised",
+            "side_by_side": "the shader's cone's half is judged once task",
+        },
         cause="halfway vector (r.x, r.y, r.z + 1) is not normalised",
     ),
     Mutant(

@@ -1486,7 +1486,10 @@ def judge(
         declared.frame_task,
         declared.owner,
     )
-    return results(spec, student, verdicts, declared.glsl_functions)
+    return [
+        r if r.passed else TaskResult(r.task, False, run.hints.guard(r.hint))
+        for r in results(spec, student, verdicts, declared.glsl_functions)
+    ]
 
 
 def hint(run: Run, rule: TaskRule, found: Finding) -> str:

@@ -724,7 +724,7 @@ class Hints:
         ]
         again = ""
         if len(same) > 1 and call in same:
-            again = f", the {ordinal(same.index(call))} time it runs"
+            again = f" in its {ordinal(same.index(call))} run"
         return f"{call.fn} at {self.at(call)}{again}"
 
     # ------------------------------------------------------------------ never called
@@ -1432,7 +1432,11 @@ def describe_value(slot: tuple[Any, ...], value: Any) -> str:
 
 # --------------------------------------------------------------------- hints' calls
 CALL_TEXT = re.compile(r"\b((?:glu?|lab\.)[A-Za-z_]\w*)\(([^()]*(?:\([^()]*\)[^()]*)*)\)")
-QUOTED = re.compile(r"line \d+ \((?:[^()]*(?:\([^()]*(?:\([^()]*\)[^()]*)*\)[^()]*)*)\)")
+QUOTED = re.compile(
+    r"line \d+ \((?:[^()]*(?:\([^()]*(?:\([^()]*\)[^()]*)*\)[^()]*)*)\)|line \d+: .*? -> "
+)
+"""A line of the student's file as a hint quotes it: ``line N (code)``, or an error's
+``line N: code -> ``."""
 
 
 def suggested_calls(hint: str) -> list[tuple[str, list[str]]]:
