@@ -162,7 +162,6 @@ LAB20 = (
         ),
         {
             "capture_scene": "render_mirror() is called inside create_mirror()",
-            "passes": "render_mirror() is called inside create_mirror()",
         },
     ),
     Mutant(
@@ -591,14 +590,17 @@ CUBEMAP = (
         ),
         {
             "capture_cameras": "the camera's up is (0, 1, 0); the solution's is (0, -1, 0)",
-            "capture_copy": "upY = 1 (the solution's: -1)",
+            "capture_copy": "judged once task 3 (capture_cameras)",
         },
     ),
     Mutant(
         "cubemap",
         "fov_60",
         (("gluPerspective(90, 1, 0.05, 50)", "gluPerspective(60, 1, 0.05, 50)"),),
-        {"capture_cameras": "field of view 60 degrees", "capture_copy": "fovy = 60"},
+        {
+            "capture_cameras": "field of view 60 degrees",
+            "capture_copy": "judged once task 3 (capture_cameras)",
+        },
     ),
     Mutant(
         "cubemap",
@@ -609,7 +611,7 @@ CUBEMAP = (
         ),
         {
             "capture_cameras": "in the wrong order: the 3rd is the solution's 4th",
-            "capture_copy": "in its 3rd run has centerY, upZ = -1, -1",
+            "capture_copy": "judged once task 3 (capture_cameras)",
         },
     ),
     Mutant(
@@ -641,7 +643,7 @@ CUBEMAP = (
         ((FACE_LOOP, FACE_LOOP + "        glViewport(0, 0, WIDTH, HEIGHT)\n"),),
         {
             "capture_cameras": "glViewport at line 104 (glViewport(0, 0, WIDTH, HEIGHT))",
-            "capture_copy": "glViewport at line 104 (glViewport(0, 0, WIDTH, HEIGHT))",
+            "capture_copy": "judged once task 3 (capture_cameras)",
         },
     ),
     Mutant(
@@ -664,7 +666,7 @@ CUBEMAP = (
         ),
         {
             "capture_cameras": "was applied to the modelview matrix",
-            "capture_copy": "was applied to the modelview matrix",
+            "capture_copy": "judged once task 3 (capture_cameras)",
         },
     ),
     Mutant(
@@ -876,3 +878,495 @@ def problems(expected_fails: dict[str, str], verdicts: dict[str, tuple[bool, str
         elif not passed:
             found.append(f"{task} failed unexpectedly: {hint}")
     return found
+
+
+def texcoords_after_vertices() -> str:
+    """The mirror quad with each glTexCoord2f after its glVertex3f."""
+    lines = QUAD.splitlines(keepends=True)
+    return "".join(lines[i + 1] + lines[i] for i in range(0, len(lines), 2))
+
+
+ENVIRONMENT_PARAMETERS = (
+    "    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR)\n"
+    "    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR)\n"
+    "    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE)\n"
+    "    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE)\n"
+)
+BIND_ENVIRONMENT = (
+    "    glActiveTexture(GL_TEXTURE1)\n    glBindTexture(GL_TEXTURE_2D, tex_ids[ENVIRONMENT])\n"
+)
+LAB20_COPY = (
+    BIND_ENVIRONMENT + "    glCopyTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, 0, 0, WIDTH, HEIGHT, 0)\n"
+)
+TEXGEN_ON = "    glEnable(GL_TEXTURE_GEN_S)\n    glEnable(GL_TEXTURE_GEN_T)\n"
+CUBE_COPY = (
+    "        glActiveTexture(GL_TEXTURE1)\n"
+    "        glBindTexture(GL_TEXTURE_CUBE_MAP, cube_texture)\n"
+    "        glCopyTexImage2D(\n"
+    "            GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL_RGB, 0, 0, FACE_SIZE, FACE_SIZE, 0\n"
+    "        )\n"
+    "        glActiveTexture(GL_TEXTURE0)\n"
+)
+
+TRACE_SLIPS = (
+    # issue 45's mistakes by pattern, each a slip a student makes following the handout;
+    # the hint must come from the call trace (the call, its line, why it took no effect)
+    Mutant(
+        "lab20",
+        "texcoord_after_vertex",
+        ((QUAD, texcoords_after_vertices()),),
+        {"mirror_quad": "a vertex takes the texture coordinates set before it"},
+    ),
+    Mutant(
+        "lab20",
+        "parameters_on_metal",
+        (
+            (
+                BIND_ENVIRONMENT + "    glTexImage2D",
+                ENVIRONMENT_PARAMETERS + BIND_ENVIRONMENT + "    glTexImage2D",
+            ),
+            (
+                "    # TODO 4: filters and wrapping of ENVIRONMENT (no mipmaps)\n"
+                + ENVIRONMENT_PARAMETERS,
+                "",
+            ),
+        ),
+        {"environment_texture": "set the parameters of tex_ids[METAL]"},
+    ),
+    Mutant(
+        "lab20",
+        "copy_before_draw",
+        (
+            (
+                "    lab.draw_scene(robot)\n    # TODO 3: copy the framebuffer into ENVIRONMENT\n"
+                + LAB20_COPY,
+                "    # TODO 3: copy the framebuffer into ENVIRONMENT\n"
+                + LAB20_COPY
+                + "    lab.draw_scene(robot)\n",
+            ),
+        ),
+        {
+            "capture_scene": "a copy takes only what was drawn before it",
+            "capture_copy": "a copy takes only what was drawn before it",
+        },
+    ),
+    Mutant(
+        "lab20",
+        "luminance_copy",
+        (
+            (
+                "GL_TEXTURE_2D, 0, GL_RGB, 0, 0, WIDTH, HEIGHT, 0)",
+                "GL_TEXTURE_2D, 0, GL_LUMINANCE, 0, 0, WIDTH, HEIGHT, 0)",
+            ),
+        ),
+        {"capture_copy": "internalformat = GL_LUMINANCE (the solution's: GL_RGB)"},
+    ),
+    Mutant(
+        "lab20",
+        "render_mirror_never_called",
+        (("    # TODO 8: pass 2\n    render_mirror()\n", "    # TODO 8: pass 2\n"),),
+        {
+            "mirror_texture": "render_mirror() is never called",
+            "mirror_quad": "render_mirror() is never called",
+            "passes": "render_mirror() is never called",
+        },
+    ),
+    Mutant(
+        "lab20",
+        "sampler_on_unit_0",
+        (("glUniform1i(lab.texSampler, 1)", "glUniform1i(lab.texSampler, 0)"),),
+        {"mirror_texture": "v0 = 0 (the solution's: 1)"},
+    ),
+    Mutant(
+        "lab20",
+        "no_texture_shader",
+        (("    glUseProgram(lab.textureShader)\n    glUniform1i(lab.texSampler, 1)\n", ""),),
+        {"mirror_texture": "makes no glUseProgram(lab.textureShader)"},
+    ),
+    Mutant(
+        "lab20",
+        "look_at_off_axis",
+        (
+            (
+                "gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)",
+                "gluLookAt(MIRROR_X, 0, 0, 0, 0, 5, 0, 1, 0)",
+            ),
+        ),
+        {"capture_camera": "centerZ = 5 (the solution's: 0)", "capture_scene": "centerZ = 5"},
+    ),
+    Mutant(
+        "lab20",
+        "ortho_top_and_bottom_swapped",
+        (("glOrtho(Z0, Z1, Y0, Y1, 0, 15)", "glOrtho(Z0, Z1, Y1, Y0, 0, 15)"),),
+        {
+            "capture_camera": "bottom, top = 5, -3 (the solution's: -3, 5)",
+            "capture_scene": "bottom, top = 5, -3",
+        },
+    ),
+    Mutant(
+        "lab20",
+        "look_at_on_the_projection",
+        (("    glMatrixMode(GL_MODELVIEW)\n    glLoadIdentity()\n    gluLookAt", "    gluLookAt"),),
+        {
+            "capture_camera": "gluLookAt at line 60 (gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)) was applied to the projection matrix",
+            "capture_scene": "was applied to the projection matrix",
+        },
+    ),
+    Mutant(
+        "lab20",
+        "viewer_before_capture",
+        (
+            (
+                "    create_mirror()\n" + CLEAR + "    lab.set_viewer()\n",
+                "    lab.set_viewer()\n    create_mirror()\n" + CLEAR,
+            ),
+        ),
+        {
+            "mirror_quad": "judged once task 8 (passes)",
+            "passes": "lab.set_viewer at line 97 (lab.set_viewer()) comes before create_mirror()",
+        },
+    ),
+    Mutant(
+        "lab20",
+        "filter_by_number",
+        (("GL_TEXTURE_MAG_FILTER, GL_LINEAR)", "GL_TEXTURE_MAG_FILTER, 0x2600)"),),
+        {"environment_texture": "param = GL_NEAREST (the solution's: GL_LINEAR)"},
+    ),
+    Mutant(
+        "lab20",
+        "quad_as_a_line_loop",
+        (("glBegin(GL_QUADS)", "glBegin(GL_LINE_LOOP)"),),
+        {"mirror_quad": "glBegin at line 81 (glBegin(GL_LINE_LOOP)) has mode = GL_LINE_LOOP"},
+    ),
+    # the sphere-map lab
+    Mutant(
+        "spheremap",
+        "texgen_enabled_in_setup",
+        (
+            (
+                "    glTexGeni(GL_T, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)\n",
+                "    glTexGeni(GL_T, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)\n" + TEXGEN_ON,
+            ),
+            (
+                "    glBindTexture(GL_TEXTURE_2D, launch)\n" + TEXGEN_ON,
+                "    glBindTexture(GL_TEXTURE_2D, launch)\n",
+            ),
+        ),
+        {
+            "texgen_draw": "runs once, in setup_texgen() before the first frame",
+            "side_by_side": "judged once task 4 (texgen_draw)",
+        },
+    ),
+    Mutant(
+        "spheremap",
+        "texgen_function_never_called",
+        (
+            (
+                '    if SHADER_SIDE == "left":\n        draw_cone_texgen()',
+                '    if SHADER_SIDE == "left":\n        lab.draw_cone_fixed_function()',
+            ),
+            (
+                "    else:\n        draw_cone_texgen()",
+                "    else:\n        lab.draw_cone_fixed_function()",
+            ),
+        ),
+        {
+            "texgen_draw": "draw_cone_texgen() is never called",
+            "side_by_side": "draw_cone_texgen() is never called",
+        },
+    ),
+    Mutant(
+        "spheremap",
+        "texgen_set_up_on_unit_1",
+        (
+            (
+                'texgen makes s and t by the sphere-map formula, for the variant\'s unit."""\n    glActiveTexture(GL_TEXTURE0 + UNIT)',
+                'texgen makes s and t by the sphere-map formula, for the variant\'s unit."""\n    glActiveTexture(GL_TEXTURE1)',
+            ),
+        ),
+        {
+            "texgen_setup": "acted on texture unit 1",
+            "side_by_side": "judged once task 3 (texgen_setup)",
+        },
+    ),
+    Mutant(
+        "spheremap",
+        "launch_not_bound",
+        (("    glBindTexture(GL_TEXTURE_2D, launch)\n", ""),),
+        {"texgen_draw": "makes no glBindTexture(GL_TEXTURE_2D, launch)"},
+    ),
+    Mutant(
+        "spheremap",
+        "texgen_s_twice",
+        (
+            (
+                "glTexGeni(GL_T, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)",
+                "glTexGeni(GL_S, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)",
+            ),
+        ),
+        {
+            "texgen_setup": "coord = GL_S (the solution's: GL_T)",
+            "side_by_side": "judged once task 3 (texgen_setup)",
+        },
+    ),
+    Mutant(
+        "spheremap",
+        "texgen_coordinate_as_capability",
+        (
+            (
+                "glTexGeni(GL_S, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)",
+                "glTexGeni(GL_TEXTURE_GEN_S, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)",
+            ),
+        ),
+        {
+            "texgen_setup": "GL_TEXTURE_GEN_S is a capability (glEnable's); glTexGeni takes GL_S, GL_T, "
+            "GL_R or GL_Q",
+            "side_by_side": "judged once task 3 (texgen_setup)",
+        },
+    ),
+    Mutant(
+        "spheremap",
+        "enable_a_coordinate",
+        (("    glEnable(GL_TEXTURE_GEN_T)\n", "    glEnable(GL_T)\n"),),
+        {
+            "texgen_setup": "judged once task 4 (texgen_draw)",
+            "texgen_draw": "GL_T is a texture coordinate (glTexGen's); glEnable takes",
+            "side_by_side": "not judged",
+        },
+    ),
+    Mutant(
+        "spheremap",
+        "cones_swapped",
+        (
+            (
+                '    if SHADER_SIDE == "left":\n        lab.draw_cone_shader(SPHERE_MAP_GLSL, launch)\n    else:\n        draw_cone_texgen()',
+                '    if SHADER_SIDE == "left":\n        draw_cone_texgen()\n    else:\n        lab.draw_cone_shader(SPHERE_MAP_GLSL, launch)',
+            ),
+            (
+                '    if SHADER_SIDE == "left":\n        draw_cone_texgen()\n    else:\n        lab.draw_cone_shader(SPHERE_MAP_GLSL, launch)\n    glViewport(0, 0, WIDTH, HEIGHT)',
+                '    if SHADER_SIDE == "left":\n        lab.draw_cone_shader(SPHERE_MAP_GLSL, launch)\n    else:\n        draw_cone_texgen()\n    glViewport(0, 0, WIDTH, HEIGHT)',
+            ),
+        ),
+        {"side_by_side": "where the solution draws lab.draw_cone_shader"},
+    ),
+    Mutant(
+        "spheremap",
+        "right_viewport_forgotten",
+        (("    glViewport(half, 0, WIDTH - half, HEIGHT)\n", ""),),
+        {"side_by_side": "makes no glViewport(128, 0, 128, 256)"},
+    ),
+    Mutant(
+        "spheremap",
+        "texgen_off_before_the_cone",
+        (
+            (
+                "    lab.draw_cone_fixed_function()\n    glDisable(GL_TEXTURE_GEN_S)\n    glDisable(GL_TEXTURE_GEN_T)\n",
+                "    glDisable(GL_TEXTURE_GEN_S)\n    glDisable(GL_TEXTURE_GEN_T)\n    lab.draw_cone_fixed_function()\n",
+            ),
+        ),
+        {
+            "texgen_draw": "lab.draw_cone_fixed_function at line 58 (lab.draw_cone_fixed_function()) "
+            "comes after glDisable",
+            "side_by_side": "judged once task 4 (texgen_draw)",
+        },
+    ),
+    Mutant(
+        "spheremap",
+        "texgen_t_normal_map",
+        (
+            (
+                "glTexGeni(GL_T, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)",
+                "glTexGeni(GL_T, GL_TEXTURE_GEN_MODE, GL_NORMAL_MAP)",
+            ),
+        ),
+        {
+            "texgen_setup": "param = GL_NORMAL_MAP (the solution's: GL_SPHERE_MAP)",
+            "side_by_side": "judged once task 3 (texgen_setup)",
+        },
+    ),
+    Mutant(
+        "spheremap",
+        "right_backdrop_forgotten",
+        (
+            (
+                "    lab.set_viewer((WIDTH - half) / HEIGHT)\n    lab.draw_backdrop()\n",
+                "    lab.set_viewer((WIDTH - half) / HEIGHT)\n",
+            ),
+        ),
+        {"side_by_side": "needs one more lab.draw_backdrop"},
+    ),
+    # the cube-map lab
+    Mutant(
+        "cubemap",
+        "copies_before_each_face",
+        (("        lab.draw_scene()\n" + CUBE_COPY, CUBE_COPY + "        lab.draw_scene()\n"),),
+        {"capture_copy": "a copy takes only what was drawn before it"},
+    ),
+    Mutant(
+        "cubemap",
+        "face_target_off_by_one",
+        (
+            (
+                "GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL_RGB, 0, 0",
+                "GL_TEXTURE_CUBE_MAP_POSITIVE_X + face + 1, 0, GL_RGB, 0, 0",
+            ),
+        ),
+        {
+            "capture_copy": "GL_TEXTURE_CUBE_MAP_NEGATIVE_Z + 1 is past the last face",
+            "capture_cameras": "GL_TEXTURE_CUBE_MAP_NEGATIVE_Z + 1 is past the last face",
+            "live_frame": "not judged",
+        },
+    ),
+    Mutant(
+        "cubemap",
+        "every_face_into_negative_x",
+        (
+            (
+                "GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL_RGB, 0, 0",
+                "GL_TEXTURE_CUBE_MAP_NEGATIVE_X, 0, GL_RGB, 0, 0",
+            ),
+        ),
+        {
+            "capture_copy": "target = GL_TEXTURE_CUBE_MAP_NEGATIVE_X (the solution's: GL_TEXTURE_CUBE_MAP_POSITIVE_X)"
+        },
+    ),
+    Mutant(
+        "cubemap",
+        "capture_after_the_sphere",
+        (
+            ("    capture_cube()\n    glClear", "    glClear"),
+            (
+                "    lab.draw_sphere(CUBE_MAP_GLSL, cube_texture)",
+                "    lab.draw_sphere(CUBE_MAP_GLSL, cube_texture)\n    capture_cube()",
+            ),
+        ),
+        {"live_frame": "in the wrong order"},
+    ),
+    Mutant(
+        "cubemap",
+        "faces_of_aspect_2",
+        (("gluPerspective(90, 1, 0.05, 50)", "gluPerspective(90, 2, 0.05, 50)"),),
+        {
+            "capture_cameras": "aspect = 2 (the solution's: 1)",
+            "capture_copy": "judged once task 3 (capture_cameras)",
+        },
+    ),
+    Mutant(
+        "cubemap",
+        "far_plane_5",
+        (("gluPerspective(90, 1, 0.05, 50)", "gluPerspective(90, 1, 0.05, 5)"),),
+        {
+            "capture_cameras": "the far plane 5 stops short",
+            "capture_copy": "judged once task 3 (capture_cameras)",
+        },
+    ),
+    Mutant(
+        "cubemap",
+        "luminance_faces",
+        (
+            (
+                "GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL_RGB, 0, 0",
+                "GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL_LUMINANCE, 0, 0",
+            ),
+        ),
+        {"capture_copy": "internalformat = GL_LUMINANCE (the solution's: GL_RGB)"},
+    ),
+    Mutant(
+        "cubemap",
+        "copy_into_level_1",
+        (
+            (
+                "GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL_RGB, 0, 0",
+                "GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 1, GL_RGB, 0, 0",
+            ),
+        ),
+        {"capture_copy": "level = 1 (the solution's: 0)"},
+    ),
+    Mutant(
+        "cubemap",
+        "face_viewport_forgotten",
+        (("    glViewport(0, 0, FACE_SIZE, FACE_SIZE)\n", ""),),
+        {
+            "capture_cameras": "makes no glViewport(0, 0, 128, 128)",
+            "capture_copy": "judged once task 3 (capture_cameras)",
+        },
+    ),
+    Mutant(
+        "cubemap",
+        "cleared_once_for_six_faces",
+        (
+            (
+                "    gluPerspective(90, 1, 0.05, 50)\n",
+                "    gluPerspective(90, 1, 0.05, 50)\n    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT)\n",
+            ),
+            (
+                "        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT)\n        glMatrixMode",
+                "        glMatrixMode",
+            ),
+        ),
+        {"capture_copy": "glClear"},
+    ),
+    Mutant(
+        "cubemap",
+        "identity_outside_the_loop",
+        (
+            (
+                "    for face, ((dx, dy, dz), (ux, uy, uz)) in enumerate(FACE_VIEWS):\n",
+                "    glMatrixMode(GL_MODELVIEW)\n    glLoadIdentity()\n    for face, ((dx, dy, dz), (ux, uy, uz)) in enumerate(FACE_VIEWS):\n",
+            ),
+            (
+                "        glMatrixMode(GL_MODELVIEW)\n        glLoadIdentity()\n        gluLookAt",
+                "        gluLookAt",
+            ),
+        ),
+        {
+            "capture_cameras": "needs glLoadIdentity",
+            "capture_copy": "judged once task 3 (capture_cameras)",
+        },
+    ),
+    Mutant(
+        "cubemap",
+        "mipmap_filter_without_mipmaps",
+        (
+            (
+                "glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR)",
+                "glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR)",
+            ),
+        ),
+        {"live_frame": "wants mipmaps it does not have"},
+    ),
+    Mutant(
+        "cubemap",
+        "background_colour_forgotten",
+        (("    glClearColor(*lab.BACKGROUND, 1.0)\n", ""),),
+        {
+            "capture_copy": "the 1st face is cleared to (0, 0, 0)",
+            "live_frame": "makes no glClearColor(0.55, 0.7, 0.9, 1)",
+        },
+    ),
+)
+
+TRACE_EQUIVALENT = (
+    # other forms the handouts allow: each passes every task
+    Mutant(
+        "lab20",
+        "copy_into_the_existing_image",
+        (
+            (
+                "glCopyTexImage2D(GL_TEXTURE_2D, 0, GL_RGB, 0, 0, WIDTH, HEIGHT, 0)",
+                "glCopyTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, 0, 0, WIDTH, HEIGHT)",
+            ),
+        ),
+    ),
+    Mutant(
+        "lab20",
+        "rgba_copy",
+        (("0, GL_RGB, 0, 0, WIDTH, HEIGHT, 0)", "0, GL_RGBA, 0, 0, WIDTH, HEIGHT, 0)"),),
+    ),
+    Mutant(
+        "spheremap",
+        "builtin_reflect",
+        (("return u - 2.0 * dot(n, u) * n;", "return reflect(u, n);"),),
+    ),
+    Mutant("cubemap", "rgba_faces", (("face, 0, GL_RGB, 0, 0", "face, 0, GL_RGBA, 0, 0"),)),
+)

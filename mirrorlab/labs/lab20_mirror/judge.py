@@ -104,14 +104,17 @@ JUDGE = J.LabJudge(
         J.TaskRule(
             "capture_copy",
             ("create_mirror",),
-            checks=(J.Happens(COPY, "the copy into ENVIRONMENT"), J.SameCopies(COPY)),
+            checks=(
+                J.Happens(COPY, "the copy into ENVIRONMENT"),
+                J.CopiesAfterDraws(COPY, CAPTURE),
+                J.SameCopies(COPY),
+            ),
             families=COPYING,
         ),
         J.TaskRule(
             "environment_texture",
             ("load_textures",),
             checks=(J.SameTexture("environment"),),
-            region="mirror",
         ),
         J.TaskRule(
             "base_texture",

@@ -269,7 +269,7 @@ JUDGE = J.LabJudge(
             ("capture_cube",),
             checks=(
                 J.Happens(COPIES, "the copies into the faces"),
-                J.SameOrder("capture_cube"),
+                J.CopiesAfterDraws(COPIES, FACES),
                 J.SameCopies(COPIES),
                 J.Untainted("the faces", texture="cube_texture"),
                 J.SamePicture("the faces", array="cube_faces"),
@@ -277,6 +277,7 @@ JUDGE = J.LabJudge(
             explain=(J.SameClears(FACES, "face"),),
             region="sphere",
             after=("capture_cameras",),
+            after_first=True,
         ),
         J.TaskRule(
             "live_frame",

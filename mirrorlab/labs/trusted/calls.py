@@ -1214,6 +1214,8 @@ def arg_names(name: str) -> tuple[str, ...]:
     from OpenGL import GLU
 
     function = getattr(GLU if name.startswith("glu") else GL, name, None)
+    while function is not None and not getattr(function, "argNames", None):
+        function = getattr(function, "wrappedOperation", None)  # PyOpenGL's lazy wrappers
     return tuple(str(n) for n in getattr(function, "argNames", None) or ())
 
 

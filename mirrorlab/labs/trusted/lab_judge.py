@@ -371,18 +371,18 @@ def explain_view(
             parts.append(f"aspect {mine['aspect']:.2f} (the solution's: {theirs['aspect']:.2f})")
         elif keep and not 0 < mine["near"] < min(keep):
             parts.append(
-                f"the near plane {mine['near']:g} is beyond what lies {min(keep):g} away, "
-                f"so it is lost (the solution's near plane: {theirs['near']:g})"
+                f"the near plane {mine['near']:.4g} is beyond what lies {min(keep):g} away, "
+                f"so it is lost (the solution's near plane: {theirs['near']:.4g})"
             )
         elif keep and mine["far"] < max(keep):
             parts.append(
-                f"the far plane {mine['far']:g} stops short of what lies {max(keep):g} away "
-                f"(the solution's far plane: {theirs['far']:g})"
+                f"the far plane {mine['far']:.4g} stops short of what lies {max(keep):g} away "
+                f"(the solution's far plane: {theirs['far']:.4g})"
             )
         elif not keep:
             parts.append(
-                f"near and far {mine['near']:g}, {mine['far']:g} (the solution's: "
-                f"{theirs['near']:g}, {theirs['far']:g})"
+                f"near and far {mine['near']:.4g}, {mine['far']:.4g} (the solution's: "
+                f"{theirs['near']:.4g}, {theirs['far']:.4g})"
             )
     if not np.allclose(m, rm, atol=1e-4):
         camera, want = camera_of(m), camera_of(rm)
@@ -578,9 +578,7 @@ class SamePicture:
             found = f"{self.what} differs from the solution's in {int(mask.sum())} pixels, {where(mask)}"
         for task in self.after:
             if not run.passed.get(task, True):
-                return Finding(
-                    f"{self.what} is judged once {run.task_name(task)} passes", final=True
-                )
+                return Finding(f"{self.what} is judged once {run.task_name(task)} passes")
         return Finding(found, frozenset({"framebuffer", "image"}))
 
 
@@ -709,22 +707,28 @@ def format_name(value: int) -> str:
 @dataclass(frozen=True)
 class SameOrder:
     """The frame's draws, clears and copies while ``within`` ran come in the solution's
-    order (consecutive clears taken as one)."""
+    order (consecutive clears taken as one; a lab function called from ``within`` as one
+    step, its own order its task's)."""
 
     within: str
 
     def signature(self, evidence: Evidence) -> list[tuple[Any, ...]]:
         found: list[tuple[Any, ...]] = []
         for event in evidence.last_frame:
-            if event.get("kind") not in ("draw", "copy", "clear"):
-                continue
-            if self.within not in (event.get("steps") or []):
+            steps = event.get("steps") or []
+            if event.get("kind") not in ("draw", "copy", "clear") or self.within not in steps:
                 continue
             if (
                 event.get("kind") == "draw"
                 and event.get("who") == "primitive"
                 and len(event.get("vertices") or []) < 3
             ):
+                continue
+            inner = steps[steps.index(self.within) + 1 :]
+            if inner:
+                label: tuple[Any, ...] = ("function", inner[0], self.within)
+                if not found or found[-1] != label:
+                    found.append(label)
                 continue
             label = (event["kind"], event.get("who"), event.get("function"))
             if found and event["kind"] == "clear" and found[-1][0] == "clear":
@@ -737,24 +741,53 @@ class SameOrder:
         mine, theirs = self.signature(run.student), self.signature(run.reference)
         if mine == theirs:
             return None
-        said = {
-            "draw": lambda who, f: (
-                f"lab.{who}" if who != "primitive" else f"the glBegin/glEnd of {f}()"
-            ),
-            "copy": lambda who, f: f"the copy in {f}()",
-            "clear": lambda who, f: f"the clear in {f}()",
-        }
+
+        def said(label: tuple[Any, ...]) -> str:
+            kind, who, function = label
+            if kind == "function":
+                return f"{who}()"
+            if kind == "draw":
+                return f"lab.{who}" if who != "primitive" else f"the glBegin/glEnd of {function}()"
+            return f"the {kind} in {function}()"
+
         for a, b in zip(mine, theirs, strict=False):
             if a != b:
                 return Finding(
-                    f"in the wrong order: the solution's frame has {said[b[0]](b[1], b[2])} where "
-                    f"yours has {said[a[0]](a[1], a[2])}",
+                    f"in the wrong order: the solution's frame has {said(b)} where yours has "
+                    f"{said(a)}",
                     frozenset({"framebuffer"}),
                 )
         return Finding(
             f"the frame draws {len(mine)} things in {self.within}(); the solution's {len(theirs)}",
             frozenset({"framebuffer"}),
         )
+
+
+@dataclass(frozen=True)
+class CopiesAfterDraws:
+    """Each of the copies ``copies`` comes after the same draw of ``draws`` (and before
+    the next) as the solution's: it takes what was drawn for it."""
+
+    copies: Events
+    draws: Events
+
+    def places(self, evidence: Evidence) -> list[int]:
+        index = {id(e): i for i, e in enumerate(evidence.last_frame)}
+        drawn = [index[id(d)] for d in self.draws.find(evidence)]
+        return [sum(1 for d in drawn if d < index[id(c)]) for c in self.copies.find(evidence)]
+
+    def __call__(self, run: Run) -> Finding | None:
+        mine, theirs = self.places(run.student), self.places(run.reference)
+        for i, (a, b) in enumerate(zip(mine, theirs, strict=False)):
+            if a != b:
+                copy = self.copies.find(run.student)[i]
+                return Finding(
+                    f"in the wrong order: the copy at {run.at(copy.get('line', 0))} comes "
+                    f"after {a} of the draws ({self.draws.said()}); the solution's after {b}: "
+                    f"a copy takes only what was drawn before it",
+                    frozenset({"framebuffer", "image"}),
+                )
+        return None
 
 
 @dataclass(frozen=True)
@@ -1260,29 +1293,29 @@ class SameDraws:
         for a, b in zip(mine, theirs, strict=False):
             if a.get("who") != b.get("who"):
                 return Finding(
-                    f"lab.{a.get('who')} at {run.at(a.get('line', 0))} draws in "
-                    f"glViewport({fmt(a.get('viewport') or [])}), where the solution draws "
+                    f"lab.{a.get('who')} at {run.at(a.get('line', 0))} draws in the viewport "
+                    f"({fmt(a.get('viewport') or [])}), where the solution draws "
                     f"lab.{b.get('who')}",
                     frozenset({"viewport", "framebuffer"}),
                 )
             if a.get("viewport") != b.get("viewport"):
                 return Finding(
-                    f"lab.{a.get('who')} at {run.at(a.get('line', 0))} draws in "
-                    f"glViewport({fmt(a.get('viewport') or [])}); the solution draws it in "
-                    f"glViewport({fmt(b.get('viewport') or [])})",
+                    f"lab.{a.get('who')} at {run.at(a.get('line', 0))} draws in the viewport "
+                    f"({fmt(a.get('viewport') or [])}); the solution draws it in "
+                    f"({fmt(b.get('viewport') or [])})",
                     frozenset({"viewport"}),
                 )
         if len(mine) > len(theirs):
             extra = mine[len(theirs)]
             return Finding(
                 f"lab.{extra.get('who')} at {run.at(extra.get('line', 0))} draws once more than the "
-                f"solution does (in glViewport({fmt(extra.get('viewport') or [])}))",
+                f"solution does (in the viewport ({fmt(extra.get('viewport') or [])}))",
                 frozenset({"framebuffer"}),
             )
         if len(mine) < len(theirs):
             lost = theirs[len(mine)]
             return Finding(
-                f"lab.{lost.get('who')} is not drawn in glViewport({fmt(lost.get('viewport') or [])})",
+                f"lab.{lost.get('who')} is not drawn in the viewport ({fmt(lost.get('viewport') or [])})",
                 frozenset({"framebuffer"}),
             )
         return None
@@ -1429,6 +1462,9 @@ class TaskRule:
     region: str | None = None
     after: tuple[str, ...] = ()
     """Tasks whose failure this one's is judged after ("judged once task N passes")."""
+    after_first: bool = False
+    """Say "judged once" before the divergences of its functions (they are the other
+    task's to name)."""
 
 
 @dataclass(frozen=True)
@@ -1500,6 +1536,9 @@ def hint(run: Run, rule: TaskRule, found: Finding) -> str:
         never = run.hints.never_called(function)
         if never:
             return never
+    failed = [task for task in rule.after if not run.passed.get(task, True)]
+    if failed and rule.after_first:
+        return f"judged once {run.task_name(failed[0])} passes"
     divergences = [d for f in rule.functions for d in run.hints.divergences(f, rule.families)]
     chosen = next((d for d in divergences if d.slots & found.slots), None) or next(
         iter(divergences), None

@@ -621,12 +621,12 @@ WHY_ORDER = {
     "normal": "a vertex takes the normal set before it",
     "framebuffer": "what is drawn or copied depends on what was drawn before it",
     "matrix": "a draw uses the matrices set before it",
+    "enable": "a draw uses the switches as they are at that moment",
+    "texgen": "a draw uses the texgen modes set before it",
     "unit": "it acts on the texture unit active at that moment",
     "binding": "it acts on the texture bound at that moment",
     "matrix_mode": "a matrix call applies to the matrix glMatrixMode chose last",
     "program": "glUniform sets a uniform of the program in use at that moment",
-    "enable": "a draw uses the switches as they are at that moment",
-    "texgen": "a draw uses the texgen modes set before it",
     "texparam": "a draw samples the texture as its parameters are at that moment",
     "image": "a draw shows the texture's pictures as they are at that moment",
     "mipmaps": "mipmaps are made from the pictures the texture holds at that moment",
@@ -708,8 +708,15 @@ class Hints:
         return -1 if function in self.setup else trace.last
 
     def at(self, call: Call) -> str:
-        """``line N (code)`` of the student's call."""
-        return self.student.at(call.line) or "the lab's own code"
+        """``line N (code)`` of the student's call (a call written over several lines
+        closed with ``...)``)."""
+        code = self.student.line_text(call.line)
+        if not code:
+            return f"line {call.line}" if call.line else "the lab's own code"
+        open_ = code.count("(") - code.count(")")
+        if open_ > 0:
+            code += "...)" + ")" * (open_ - 1)
+        return f"line {call.line} ({code})"
 
     def said(self, call: Call) -> str:
         """The student's call as a hint names it: ``glOrtho at line 59 (glOrtho(...))``, and
@@ -1083,51 +1090,61 @@ class Hints:
         sequence: list[Call],
         rows: list[tuple[Call | None, Call | None]],
     ) -> Divergence:
-        """``mine`` is in the solution too, elsewhere in the order: which call it passed,
-        and why the order matters."""
+        """``mine`` is in the solution too, elsewhere in the order: which of the calls it
+        passed matters most to it (the state one writes and the other reads), and why."""
         partners = {id(a): b for a, b in rows if a is not None and b is not None}
         index = next(i for i, c in enumerate(sequence) if c is mine)
-        for other in reversed(sequence[:index]):
+        crossed: list[tuple[int, int, Call, bool]] = []
+        for distance, other in enumerate(reversed(sequence[:index])):
             partner = partners.get(id(other))
             if partner is not None and partner.at > theirs.at:
-                return Divergence(
-                    "moved",
-                    mine,
-                    theirs,
-                    f"in the wrong order: {self.said(mine)} comes after {self.said(other)}; it "
-                    f"belongs before it{self._why(mine, other)}",
-                    kinds(mine),
-                )
-        for other in sequence[index + 1 :]:
+                crossed.append((self._priority(mine, other), distance, other, True))
+        for distance, other in enumerate(sequence[index + 1 :]):
             partner = partners.get(id(other))
             if partner is not None and partner.at < theirs.at:
-                return Divergence(
-                    "moved",
-                    mine,
-                    theirs,
-                    f"in the wrong order: {self.said(mine)} comes before {self.said(other)}; it "
-                    f"belongs after it{self._why(other, mine)}",
-                    kinds(mine),
-                )
+                crossed.append((self._priority(mine, other), distance, other, False))
+        if not crossed:
+            return Divergence(
+                "moved", mine, theirs, f"{self.said(mine)} is not where the solution makes it"
+            )
+        _, _, other, after = min(crossed, key=lambda c: (c[0], c[1]))
+        which = "after" if after else "before"
+        belongs = "before" if after else "after"
         return Divergence(
-            "moved", mine, theirs, f"{self.said(mine)} is not where the solution makes it"
+            "moved",
+            mine,
+            theirs,
+            f"in the wrong order: {self.said(mine)} comes {which} {self.said(other)}; it "
+            f"belongs {belongs} it{self._why(mine, other)}",
+            kinds(mine),
         )
 
+    @classmethod
+    def _priority(cls, mover: Call, other: Call) -> int:
+        """How much the order of ``mover`` and ``other`` matters: the rank of the state they
+        share in :data:`ORDER_KINDS` (the framebuffer first), past the end when none."""
+        why = cls._why(mover, other)
+        for rank, kind in enumerate(ORDER_KINDS):
+            if why == f": {WHY_ORDER[kind]}":
+                return rank
+        return len(ORDER_KINDS) if not why else 0
+
     @staticmethod
-    def _why(first: Call, second: Call) -> str:
-        """': why' ``first`` must come before ``second`` (the state one writes and the other
-        reads), or ''."""
+    def _why(mover: Call, other: Call) -> str:
+        """': why' the order of ``mover`` and ``other`` matters (the state one writes and
+        the other reads), or ''."""
         copies = ("glCopyTexImage2D", "glCopyTexSubImage2D")
-        if second.family in copies and "framebuffer" in kinds(first):
-            return ": a copy takes only what was drawn before it"
-        if first.family == "glClear" or second.family == "glClear":
-            drawer = second if first.family == "glClear" else first
-            if drawer.family != "glClear" and "framebuffer" in kinds(drawer):
-                return (
-                    ": a clear wipes what was drawn before it, and what is drawn after it "
-                    "stays in the frame"
-                )
-        for writer, reader in ((first, second), (second, first)):
+        for copy, drawer in ((mover, other), (other, mover)):
+            if copy.family in copies and "framebuffer" in kinds(drawer):
+                return ": a copy takes only what was drawn before it"
+        for clear, drawer in ((mover, other), (other, mover)):
+            if clear.family == "glClear" and drawer.family != "glClear":
+                if "framebuffer" in kinds(drawer):
+                    return (
+                        ": a clear wipes what was drawn before it, and what is drawn after it "
+                        "stays in the frame"
+                    )
+        for writer, reader in ((other, mover), (mover, other)):
             shared = kinds(writer) & reads(reader)
             for kind in ORDER_KINDS:
                 if kind in shared:
@@ -1178,6 +1195,18 @@ class Hints:
                 kinds(theirs),
             )
         found = self.mine.with_key(theirs.key)
+        if found and "framebuffer" in kinds(theirs):
+            nearest = min(found, key=lambda c: (abs(c.at - mine_at), c.at))
+            verb = "clears" if theirs.family == "glClear" else "draws"
+            return Divergence(
+                "missing",
+                nearest,
+                theirs,
+                f"{function}() needs one more {theirs.fn}{around}: the file's "
+                f"{self.said(nearest)} {verb} {'before' if nearest.at < mine_at else 'after'} "
+                f"that, not there",
+                kinds(theirs),
+            )
         if found:
             return Divergence(
                 "missing",
@@ -1495,8 +1524,8 @@ def same_call(call: Call, fn: str, arguments: list[str]) -> bool:
                 continue
         except (ValueError, TypeError):
             pass
-        if re.fullmatch(r"GL_\w+", wanted) or re.fullmatch(r"-?[\d.]+", wanted):
-            return False
+        if not re.fullmatch(r"(?!GL_)[A-Z_][A-Z0-9_]*|.*[-+*/%].*", wanted):
+            return False  # a GL name, a number, a texture's or the lab's name: not this one
     return True
 
 
