@@ -1370,3 +1370,278 @@ TRACE_EQUIVALENT = (
     ),
     Mutant("cubemap", "rgba_faces", (("face, 0, GL_RGB, 0, 0", "face, 0, GL_RGBA, 0, 0"),)),
 )
+
+HELD_OUT = (
+    # written after the hints' module was done, graded before anything was fixed for them
+    # (the report of issue 45 says how many it named then); each names its cause now
+    Mutant(
+        "lab20",
+        "sampler_on_unit_2",
+        (("glUniform1i(lab.texSampler, 1)", "glUniform1i(lab.texSampler, 2)"),),
+        {"mirror_texture": "v0 = 2 (the solution's: 1)"},
+    ),
+    Mutant(
+        "lab20",
+        "quad_ends_swapped",
+        (
+            (
+                QUAD,
+                quad(
+                    RIGHT,
+                    (
+                        "MIRROR_X, Y0, Z1",
+                        "MIRROR_X, Y1, Z1",
+                        "MIRROR_X, Y1, Z0",
+                        "MIRROR_X, Y0, Z0",
+                    ),
+                ),
+            ),
+        ),
+        {"mirror_quad": "flipped left-right"},
+    ),
+    Mutant(
+        "lab20",
+        "ortho_depth_behind",
+        (("glOrtho(Z0, Z1, Y0, Y1, 0, 15)", "glOrtho(Z0, Z1, Y0, Y1, -15, 0)"),),
+        {"capture_camera": "near and far planes -15, 0", "capture_scene": "judged once task 1"},
+    ),
+    Mutant(
+        "lab20",
+        "frame_not_cleared",
+        (("    create_mirror()\n" + CLEAR, "    create_mirror()\n"),),
+        {"passes": "glClear"},
+    ),
+    Mutant(
+        "lab20",
+        "mirror_wears_metal",
+        (
+            (
+                "    glActiveTexture(GL_TEXTURE1)\n    glBindTexture(GL_TEXTURE_2D, tex_ids[ENVIRONMENT])\n    glActiveTexture(GL_TEXTURE0)\n    # TODO 7",
+                "    glActiveTexture(GL_TEXTURE1)\n    glBindTexture(GL_TEXTURE_2D, tex_ids[METAL])\n    glActiveTexture(GL_TEXTURE0)\n    # TODO 7",
+            ),
+        ),
+        {"mirror_texture": "tex_ids[METAL]"},
+    ),
+    Mutant(
+        "lab20",
+        "up_along_the_view",
+        (
+            (
+                "gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)",
+                "gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 1, 0, 0)",
+            ),
+        ),
+        {
+            "capture_camera": "is parallel to the view direction",
+            "capture_scene": "is parallel to the view direction",
+        },
+    ),
+    Mutant(
+        "lab20",
+        "wrap_t_repeats",
+        (("GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE", "GL_TEXTURE_WRAP_T, GL_REPEAT"),),
+        {"environment_texture": "GL_REPEAT"},
+    ),
+    Mutant(
+        "lab20",
+        "program_off_inside_begin",
+        (("    glEnd()\n    glUseProgram(0)\n", "    glUseProgram(0)\n    glEnd()\n"),),
+        {
+            "mirror_texture": "between glBegin and glEnd",
+            "mirror_quad": "between glBegin and glEnd",
+            "passes": "not judged",
+        },
+    ),
+    Mutant(
+        "lab20",
+        "capture_in_perspective",
+        (("glOrtho(Z0, Z1, Y0, Y1, 0, 15)", "glFrustum(Z0, Z1, Y0, Y1, 1, 15)"),),
+        {"capture_camera": "glFrustum", "capture_scene": "glFrustum"},
+    ),
+    Mutant(
+        "lab20",
+        "base_wears_environment",
+        (
+            (
+                'robot["base"].texture = tex_ids[METAL]',
+                'robot["base"].texture = tex_ids[ENVIRONMENT]',
+            ),
+        ),
+        {"base_texture": "tex_ids[ENVIRONMENT]", "capture_scene": "tex_ids[ENVIRONMENT]"},
+    ),
+    Mutant(
+        "lab20",
+        "quad_lifted",
+        (("    glBegin(GL_QUADS)\n", "    glTranslatef(0, 1, 0)\n    glBegin(GL_QUADS)\n"),),
+        {"mirror_quad": "glTranslatef"},
+    ),
+    # the sphere-map lab
+    Mutant(
+        "spheremap",
+        "texgen_for_r",
+        (
+            (
+                "glTexGeni(GL_T, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)",
+                "glTexGeni(GL_R, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)",
+            ),
+        ),
+        {"texgen_setup": "GL_R", "side_by_side": "judged once task 3"},
+    ),
+    Mutant(
+        "spheremap",
+        "enable_gen_r",
+        (("    glEnable(GL_TEXTURE_GEN_T)\n", "    glEnable(GL_TEXTURE_GEN_R)\n"),),
+        {"texgen_draw": "GL_TEXTURE_GEN_R", "side_by_side": "judged once task 4"},
+    ),
+    Mutant(
+        "spheremap",
+        "t_left_on",
+        (("    glDisable(GL_TEXTURE_GEN_T)\n", ""),),
+        {"texgen_draw": "glDisable(GL_TEXTURE_GEN_T)"},
+    ),
+    Mutant(
+        "spheremap",
+        "left_aspect_of_the_window",
+        (
+            (
+                "    glViewport(0, 0, half, HEIGHT)\n    lab.set_viewer(half / HEIGHT)",
+                "    glViewport(0, 0, half, HEIGHT)\n    lab.set_viewer(WIDTH / HEIGHT)",
+            ),
+        ),
+        {"side_by_side": "aspect 1.00"},
+    ),
+    Mutant(
+        "spheremap",
+        "texgen_cone_both_sides",
+        (
+            (
+                '    if SHADER_SIDE == "left":\n        lab.draw_cone_shader(SPHERE_MAP_GLSL, launch)',
+                '    if SHADER_SIDE == "left":\n        draw_cone_texgen()',
+            ),
+        ),
+        {"side_by_side": "lab.draw_cone_shader"},
+    ),
+    Mutant(
+        "spheremap",
+        "s_eye_linear",
+        (
+            (
+                "glTexGeni(GL_S, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)",
+                "glTexGeni(GL_S, GL_TEXTURE_GEN_MODE, GL_EYE_LINEAR)",
+            ),
+        ),
+        {"texgen_setup": "GL_EYE_LINEAR", "side_by_side": "judged once task 3"},
+    ),
+    Mutant(
+        "spheremap",
+        "left_viewport_whole_window",
+        (("    glViewport(0, 0, half, HEIGHT)\n", "    glViewport(0, 0, WIDTH, HEIGHT)\n"),),
+        {"side_by_side": "viewport"},
+    ),
+    Mutant(
+        "spheremap",
+        "texgen_on_unit_3_everywhere",
+        (("glActiveTexture(GL_TEXTURE0 + UNIT)", "glActiveTexture(GL_TEXTURE3)"),),
+        {"texgen_setup": "unit 3", "texgen_draw": "unit 3", "side_by_side": "judged once task 3"},
+    ),
+    Mutant(
+        "spheremap",
+        "left_backdrop_forgotten",
+        (
+            (
+                "    lab.set_viewer(half / HEIGHT)\n    lab.draw_backdrop()\n",
+                "    lab.set_viewer(half / HEIGHT)\n",
+            ),
+        ),
+        {"side_by_side": "lab.draw_backdrop"},
+    ),
+    # the cube-map lab
+    Mutant(
+        "cubemap",
+        "near_plane_zero",
+        (("gluPerspective(90, 1, 0.05, 50)", "gluPerspective(90, 1, 0, 50)"),),
+        {"capture_cameras": "zNear = 0", "capture_copy": "judged once task 3"},
+    ),
+    Mutant(
+        "cubemap",
+        "fov_45",
+        (("gluPerspective(90, 1, 0.05, 50)", "gluPerspective(45, 1, 0.05, 50)"),),
+        {"capture_cameras": "field of view 45", "capture_copy": "judged once task 3"},
+    ),
+    Mutant(
+        "cubemap",
+        "cameras_beside_the_centre",
+        (("gluLookAt(cx, cy, cz, cx + dx", "gluLookAt(cx + 1, cy, cz, cx + dx"),),
+        {"capture_cameras": "eyeX = 1", "capture_copy": "judged once task 3"},
+    ),
+    Mutant(
+        "cubemap",
+        "half_a_face_copied",
+        (("0, 0, FACE_SIZE, FACE_SIZE, 0\n", "0, 0, FACE_SIZE // 2, FACE_SIZE // 2, 0\n"),),
+        {"capture_copy": "width, height = 64, 64"},
+    ),
+    Mutant(
+        "cubemap",
+        "face_copied_from_the_middle",
+        (("GL_RGB, 0, 0, FACE_SIZE, FACE_SIZE, 0\n", "GL_RGB, 64, 64, FACE_SIZE, FACE_SIZE, 0\n"),),
+        {"capture_copy": "x, y = 64, 64"},
+    ),
+    Mutant(
+        "cubemap",
+        "sphere_in_its_own_capture",
+        (
+            (
+                "        lab.draw_scene()\n        glActiveTexture(GL_TEXTURE1)",
+                "        lab.draw_scene()\n        lab.draw_sphere(CUBE_MAP_GLSL, cube_texture)\n        glActiveTexture(GL_TEXTURE1)",
+            ),
+        ),
+        {"capture_copy": "lab.draw_sphere"},
+    ),
+    Mutant(
+        "cubemap",
+        "cube_bound_as_2d",
+        (
+            (
+                "        glBindTexture(GL_TEXTURE_CUBE_MAP, cube_texture)\n",
+                "        glBindTexture(GL_TEXTURE_2D, cube_texture)\n",
+            ),
+        ),
+        {
+            "capture_cameras": "another target",
+            "capture_copy": "another target",
+            "live_frame": "not judged",
+        },
+    ),
+    Mutant(
+        "cubemap",
+        "magnified_nearest",
+        (("GL_TEXTURE_MAG_FILTER, GL_LINEAR)", "GL_TEXTURE_MAG_FILTER, GL_NEAREST)"),),
+        {"live_frame": "GL_NEAREST"},
+    ),
+    Mutant(
+        "cubemap",
+        "up_along_y_faces",
+        (("((0, 1, 0), (0, 0, 1)),  # POSITIVE_Y", "((0, 1, 0), (0, -1, 0)),  # POSITIVE_Y"),),
+        {"capture_cameras": "parallel to the view direction", "capture_copy": "judged once task 3"},
+    ),
+    Mutant(
+        "cubemap",
+        "look_at_on_the_projection",
+        (
+            (
+                "        glMatrixMode(GL_MODELVIEW)\n        glLoadIdentity()\n        gluLookAt",
+                "        glLoadIdentity()\n        gluLookAt",
+            ),
+        ),
+        {
+            "capture_cameras": "applied to the projection matrix",
+            "capture_copy": "judged once task 3",
+        },
+    ),
+    Mutant(
+        "cubemap",
+        "viewport_not_restored",
+        (("    glViewport(0, 0, WIDTH, HEIGHT)\n\n\ndef display", "\n\ndef display"),),
+        {"live_frame": "glViewport"},
+    ),
+)
