@@ -29,7 +29,7 @@ MATRICES = frozenset(
 COPYING = frozenset({"glActiveTexture", "glBindTexture", "glCopyTexImage2D"})
 COPYING |= {"glCopyTexSubImage2D", "lab.draw_scene"}
 SHADING = frozenset({"glUseProgram", "glUniform", "glActiveTexture", "glBindTexture"})
-QUAD = frozenset({"glBegin", "glEnd", "glVertex", "glTexCoord"})
+QUAD = frozenset({"glBegin", "glEnd", "glVertex", "glTexCoord"}) | MATRICES
 ROBOT_DEPTHS, BEHIND_GLASS = (4.5, 9.5), (-0.2,)
 """Along the capture camera's view (from the glass): where the robot lies, and the frame
 behind the glass, which the near and far planes must keep and leave out."""

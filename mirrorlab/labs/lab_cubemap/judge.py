@@ -287,6 +287,7 @@ JUDGE = J.LabJudge(
                 J.Happens(SPHERE, "the sphere's drawing"),
                 J.SameOrder("display"),
                 J.SameClears(VIEWER, "the frame"),
+                J.SameViewport(VIEWER, "the scene"),
                 J.SameMipmaps(SPHERE, "cube_texture"),
                 J.SameView(VIEWER, "the viewer's view"),
             ),

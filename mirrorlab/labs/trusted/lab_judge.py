@@ -1522,6 +1522,16 @@ def judge(
         declared.frame_task,
         declared.owner,
     )
+    frame_hint = verdicts.get(declared.frame_task, (True, ""))
+    if not frame_hint[0] and findings.get(declared.frame_task) is None:
+        # the whole frame differs and no task explains it: the first divergence of any
+        # lab function names what made it so
+        found = next(
+            (d for f in spec.functions for d in run.hints.divergences(f)),
+            None,
+        )
+        if found is not None:
+            verdicts[declared.frame_task] = (False, f"{found.text}; {frame_hint[1]}")
     return [
         r if r.passed else TaskResult(r.task, False, run.hints.guard(r.hint))
         for r in results(spec, student, verdicts, declared.glsl_functions)

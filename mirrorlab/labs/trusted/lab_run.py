@@ -324,7 +324,7 @@ class LabRun:
         errors = list(errors) if isinstance(errors, list) else []
         unended = self.executor.end_open_primitive()
         if unended is not None:  # the student's error, as if their function had raised it
-            errors.insert(0, unended)
+            errors.append(unended)  # after the error that left glBegin open, when one did
         for error in errors:
             if not isinstance(error, dict) or len(self.evidence.errors) >= 20:
                 continue
