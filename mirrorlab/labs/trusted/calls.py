@@ -115,6 +115,11 @@ def refused_enum(value: int, allowed: Enums, call: str) -> str:
     kind of enum, or a step past the end of a run such as the cube map's faces) and what
     ``call`` takes."""
     taken = [allowed.names[v] for v in sorted(allowed) if v in allowed.names]
+    for first, last in _runs(allowed):  # a run of consecutive enums as its ends
+        names = [allowed.names[v] for v in range(first, last + 1) if v in allowed.names]
+        if len(names) > 3 and names[0] in taken:
+            at = taken.index(names[0])
+            taken[at : at + len(names)] = [f"{names[0]} ... {names[-1]}"]
     what = ""
     for first, last in _runs(allowed):
         member = allowed.member or "one"

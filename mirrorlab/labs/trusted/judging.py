@@ -69,7 +69,7 @@ GL_ERROR_NAMES = {
     1285: "GL_OUT_OF_MEMORY",
 }
 GL_ERROR = re.compile(
-    r"GLError: GLError\(err = (\d+), description = (['\"])(.*?)\2"
+    r"GLError: GLError\(err = (\d+), description = (['\"])(.*?)(?:\2|$)"
     r"(?:, baseOperation = (\w*))?"
 )
 
@@ -82,7 +82,7 @@ def plain_message(message: str) -> str:
     if not found:
         return message
     code, description, call = int(found.group(1)), found.group(3), found.group(4)
-    detail = re.fullmatch(r"[a-z ]+ \((.*)\)", description)
+    detail = re.fullmatch(r"[a-z ]+ \((.*?)\)?", description)
     text = detail.group(1) if detail else f"{call or 'a call'}: {description}"
     return f"{text} ({GL_ERROR_NAMES.get(code, f'GL error {code}')})"
 
