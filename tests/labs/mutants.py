@@ -1344,6 +1344,45 @@ TRACE_SLIPS = (
             "live_frame": "makes no glClearColor(0.55, 0.7, 0.9, 1)",
         },
     ),
+    # degenerate input, named by the argument that makes it so (issue 45, item 3)
+    Mutant(
+        "lab20",
+        "look_at_itself",
+        (
+            (
+                "gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)",
+                "gluLookAt(MIRROR_X, 0, 0, MIRROR_X, 0, 0, 0, 1, 0)",
+            ),
+        ),
+        {
+            "capture_camera": "eye and center are both (-7, 0, 0): the camera has no direction",
+            "capture_scene": "eye and center are both (-7, 0, 0)",
+        },
+    ),
+    Mutant(
+        "lab20",
+        "ortho_without_width",
+        (("glOrtho(Z0, Z1, Y0, Y1, 0, 15)", "glOrtho(Z0, Z0, Y0, Y1, 0, 15)"),),
+        {
+            "capture_camera": "left = right = -6: the box has no width",
+            "capture_scene": "left = right = -6",
+            "capture_copy": "left = right = -6",
+            "base_texture": "stopped at create_mirror()",
+            "mirror_texture": "stopped at create_mirror()",
+            "mirror_quad": "stopped at create_mirror()",
+            "passes": "stopped at create_mirror()",
+        },
+    ),
+    Mutant(
+        "cubemap",
+        "far_plane_nan",
+        (("gluPerspective(90, 1, 0.05, 50)", 'gluPerspective(90, 1, 0.05, float("nan"))'),),
+        {
+            "capture_cameras": "gluPerspective() argument 4 (zFar) is nan (not a number)",
+            "capture_copy": "argument 4 (zFar) is nan",
+            "live_frame": "not judged",
+        },
+    ),
 )
 
 TRACE_EQUIVALENT = (

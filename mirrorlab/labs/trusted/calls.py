@@ -117,7 +117,7 @@ def refused_enum(value: int, allowed: Enums, call: str) -> str:
     taken = [allowed.names[v] for v in sorted(allowed) if v in allowed.names]
     for first, last in _runs(allowed):  # a run of consecutive enums as its ends
         names = [allowed.names[v] for v in range(first, last + 1) if v in allowed.names]
-        if len(names) > 3 and names[0] in taken:
+        if len(names) > 4 and names[0] in taken:
             at = taken.index(names[0])
             taken[at : at + len(names)] = [f"{names[0]} ... {names[-1]}"]
     what = ""
@@ -151,7 +151,7 @@ def refused_enum(value: int, allowed: Enums, call: str) -> str:
     else:
         # the names nearest the one given first (most words shared): GL_S -> GL_TEXTURE_GEN_S
         words = set(gl_name(value).split("_")[1:])
-        nearest = sorted(taken, key=lambda n: -len(words & set(n.split("_")[1:])))
+        nearest = sorted(taken, key=lambda n: (-len(words & set(n.split("_")[1:])), n.isdigit()))
         takes = f"{allowed.noun or 'an enum'} such as {', '.join(nearest[:4])}"
     return f"{what}; {call} takes {takes}"
 

@@ -865,6 +865,9 @@ class SameArgument:
         if not theirs:
             return None
         if not mine:
+            stopped = run.student.raised_in()
+            if stopped:
+                return Finding(f"not judged: the frame stopped at {stopped}()", final=True)
             return Finding(f"no {self.events.said()} in the last frame", frozenset({"framebuffer"}))
 
         def value(event: dict[str, Any], evidence: Evidence) -> str:
