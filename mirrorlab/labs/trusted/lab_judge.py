@@ -1422,7 +1422,14 @@ def _equal(a: Any, b: Any) -> bool:
 
 def _said(value: Any) -> str:
     if isinstance(value, tuple | list | np.ndarray):
-        return f"({fmt(np.asarray(value, dtype=float).reshape(-1))})"
+        return (
+            "("
+            + ", ".join(
+                fmt([v]) if isinstance(v, int | float) else str(v)
+                for v in np.asarray(value, dtype=object).reshape(-1)
+            )
+            + ")"
+        )
     return str(value)
 
 
