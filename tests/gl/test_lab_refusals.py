@@ -23,8 +23,14 @@ from mirrorlab.labs.trusted.variants import default_variant
 
 SIZE = (64, 64)
 EVERY_CALL = {**C.GL_SPECS, **C.GLU_SPECS}
-CANDIDATES: tuple[Any, ...] = (1, 0, 0.5, None, [], "x") + tuple(
-    [number] * n for number in (0.5, 1) for n in (16, 4, 3, 2, 1)
+CANDIDATES: tuple[Any, ...] = (
+    1,
+    0,
+    0.5,
+    None,
+    [],
+    "x",
+    *([number] * n for number in (0.5, 1) for n in (16, 4, 3, 2, 1)),
 )
 
 

@@ -1008,7 +1008,10 @@ TRACE_SLIPS = (
         "look_at_on_the_projection",
         (("    glMatrixMode(GL_MODELVIEW)\n    glLoadIdentity()\n    gluLookAt", "    gluLookAt"),),
         {
-            "capture_camera": "gluLookAt at line 60 (gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)) was applied to the projection matrix",
+            "capture_camera": (
+                "gluLookAt at line 60 (gluLookAt(MIRROR_X, 0, 0, 0, 0, 0, 0, 1, 0)) "
+                "was applied to the projection matrix"
+            ),
             "capture_scene": "was applied to the projection matrix",
         },
     ),
@@ -1080,8 +1083,10 @@ TRACE_SLIPS = (
         "texgen_set_up_on_unit_1",
         (
             (
-                'texgen makes s and t by the sphere-map formula, for the variant\'s unit."""\n    glActiveTexture(GL_TEXTURE0 + UNIT)',
-                'texgen makes s and t by the sphere-map formula, for the variant\'s unit."""\n    glActiveTexture(GL_TEXTURE1)',
+                'texgen makes s and t by the sphere-map formula, for the variant\'s unit."""\n'
+                "    glActiveTexture(GL_TEXTURE0 + UNIT)",
+                'texgen makes s and t by the sphere-map formula, for the variant\'s unit."""\n'
+                "    glActiveTexture(GL_TEXTURE1)",
             ),
         ),
         {
@@ -1119,8 +1124,10 @@ TRACE_SLIPS = (
             ),
         ),
         {
-            "texgen_setup": "GL_TEXTURE_GEN_S is a capability (glEnable's); glTexGeni takes GL_S, GL_T, "
-            "GL_R or GL_Q",
+            "texgen_setup": (
+                "GL_TEXTURE_GEN_S is a capability (glEnable's); glTexGeni takes GL_S, "
+                "GL_T, GL_R or GL_Q"
+            ),
             "side_by_side": "judged once task 3 (texgen_setup)",
         },
     ),
@@ -1139,12 +1146,26 @@ TRACE_SLIPS = (
         "cones_swapped",
         (
             (
-                '    if SHADER_SIDE == "left":\n        lab.draw_cone_shader(SPHERE_MAP_GLSL, launch)\n    else:\n        draw_cone_texgen()',
-                '    if SHADER_SIDE == "left":\n        draw_cone_texgen()\n    else:\n        lab.draw_cone_shader(SPHERE_MAP_GLSL, launch)',
+                '    if SHADER_SIDE == "left":\n'
+                "        lab.draw_cone_shader(SPHERE_MAP_GLSL, launch)\n"
+                "    else:\n"
+                "        draw_cone_texgen()",
+                '    if SHADER_SIDE == "left":\n'
+                "        draw_cone_texgen()\n"
+                "    else:\n"
+                "        lab.draw_cone_shader(SPHERE_MAP_GLSL, launch)",
             ),
             (
-                '    if SHADER_SIDE == "left":\n        draw_cone_texgen()\n    else:\n        lab.draw_cone_shader(SPHERE_MAP_GLSL, launch)\n    glViewport(0, 0, WIDTH, HEIGHT)',
-                '    if SHADER_SIDE == "left":\n        lab.draw_cone_shader(SPHERE_MAP_GLSL, launch)\n    else:\n        draw_cone_texgen()\n    glViewport(0, 0, WIDTH, HEIGHT)',
+                '    if SHADER_SIDE == "left":\n'
+                "        draw_cone_texgen()\n"
+                "    else:\n"
+                "        lab.draw_cone_shader(SPHERE_MAP_GLSL, launch)\n"
+                "    glViewport(0, 0, WIDTH, HEIGHT)",
+                '    if SHADER_SIDE == "left":\n'
+                "        lab.draw_cone_shader(SPHERE_MAP_GLSL, launch)\n"
+                "    else:\n"
+                "        draw_cone_texgen()\n"
+                "    glViewport(0, 0, WIDTH, HEIGHT)",
             ),
         ),
         {"side_by_side": "where the solution draws lab.draw_cone_shader"},
@@ -1160,13 +1181,17 @@ TRACE_SLIPS = (
         "texgen_off_before_the_cone",
         (
             (
-                "    lab.draw_cone_fixed_function()\n    glDisable(GL_TEXTURE_GEN_S)\n    glDisable(GL_TEXTURE_GEN_T)\n",
-                "    glDisable(GL_TEXTURE_GEN_S)\n    glDisable(GL_TEXTURE_GEN_T)\n    lab.draw_cone_fixed_function()\n",
+                "    lab.draw_cone_fixed_function()\n    glDisable(GL_TEXTURE_GEN_S)\n    "
+                "glDisable(GL_TEXTURE_GEN_T)\n",
+                "    glDisable(GL_TEXTURE_GEN_S)\n    glDisable(GL_TEXTURE_GEN_T)\n    "
+                "lab.draw_cone_fixed_function()\n",
             ),
         ),
         {
-            "texgen_draw": "lab.draw_cone_fixed_function at line 58 (lab.draw_cone_fixed_function()) "
-            "comes after glDisable",
+            "texgen_draw": (
+                "lab.draw_cone_fixed_function at line 58 "
+                "(lab.draw_cone_fixed_function()) comes after glDisable"
+            ),
             "side_by_side": "judged once task 4 (texgen_draw)",
         },
     ),
@@ -1227,7 +1252,10 @@ TRACE_SLIPS = (
             ),
         ),
         {
-            "capture_copy": "target = GL_TEXTURE_CUBE_MAP_NEGATIVE_X (the solution's: GL_TEXTURE_CUBE_MAP_POSITIVE_X)"
+            "capture_copy": (
+                "target = GL_TEXTURE_CUBE_MAP_NEGATIVE_X (the solution's: "
+                "GL_TEXTURE_CUBE_MAP_POSITIVE_X)"
+            )
         },
     ),
     Mutant(
@@ -1297,7 +1325,8 @@ TRACE_SLIPS = (
         (
             (
                 "    gluPerspective(90, 1, 0.05, 50)\n",
-                "    gluPerspective(90, 1, 0.05, 50)\n    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT)\n",
+                "    gluPerspective(90, 1, 0.05, 50)\n    glClear(GL_COLOR_BUFFER_BIT | "
+                "GL_DEPTH_BUFFER_BIT)\n",
             ),
             (
                 "        glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT)\n        glMatrixMode",
@@ -1312,7 +1341,8 @@ TRACE_SLIPS = (
         (
             (
                 "    for face, ((dx, dy, dz), (ux, uy, uz)) in enumerate(FACE_VIEWS):\n",
-                "    glMatrixMode(GL_MODELVIEW)\n    glLoadIdentity()\n    for face, ((dx, dy, dz), (ux, uy, uz)) in enumerate(FACE_VIEWS):\n",
+                "    glMatrixMode(GL_MODELVIEW)\n    glLoadIdentity()\n    for face, ((dx, dy, "
+                "dz), (ux, uy, uz)) in enumerate(FACE_VIEWS):\n",
             ),
             (
                 "        glMatrixMode(GL_MODELVIEW)\n        glLoadIdentity()\n        gluLookAt",
@@ -1330,7 +1360,8 @@ TRACE_SLIPS = (
         (
             (
                 "glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR)",
-                "glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR)",
+                "glTexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, "
+                "GL_LINEAR_MIPMAP_LINEAR)",
             ),
         ),
         {"live_frame": "wants mipmaps it does not have"},
@@ -1455,8 +1486,10 @@ HELD_OUT = (
         "mirror_wears_metal",
         (
             (
-                "    glActiveTexture(GL_TEXTURE1)\n    glBindTexture(GL_TEXTURE_2D, tex_ids[ENVIRONMENT])\n    glActiveTexture(GL_TEXTURE0)\n    # TODO 7",
-                "    glActiveTexture(GL_TEXTURE1)\n    glBindTexture(GL_TEXTURE_2D, tex_ids[METAL])\n    glActiveTexture(GL_TEXTURE0)\n    # TODO 7",
+                "    glActiveTexture(GL_TEXTURE1)\n    glBindTexture(GL_TEXTURE_2D, "
+                "tex_ids[ENVIRONMENT])\n    glActiveTexture(GL_TEXTURE0)\n    # TODO 7",
+                "    glActiveTexture(GL_TEXTURE1)\n    glBindTexture(GL_TEXTURE_2D, "
+                "tex_ids[METAL])\n    glActiveTexture(GL_TEXTURE0)\n    # TODO 7",
             ),
         ),
         {"mirror_texture": "tex_ids[METAL]"},
@@ -1554,7 +1587,8 @@ HELD_OUT = (
         "texgen_cone_both_sides",
         (
             (
-                '    if SHADER_SIDE == "left":\n        lab.draw_cone_shader(SPHERE_MAP_GLSL, launch)',
+                '    if SHADER_SIDE == "left":\n'
+                "        lab.draw_cone_shader(SPHERE_MAP_GLSL, launch)",
                 '    if SHADER_SIDE == "left":\n        draw_cone_texgen()',
             ),
         ),
@@ -1634,7 +1668,8 @@ HELD_OUT = (
         (
             (
                 "        lab.draw_scene()\n        glActiveTexture(GL_TEXTURE1)",
-                "        lab.draw_scene()\n        lab.draw_sphere(CUBE_MAP_GLSL, cube_texture)\n        glActiveTexture(GL_TEXTURE1)",
+                "        lab.draw_scene()\n        lab.draw_sphere(CUBE_MAP_GLSL, "
+                "cube_texture)\n        glActiveTexture(GL_TEXTURE1)",
             ),
         ),
         {"capture_copy": "lab.draw_sphere"},

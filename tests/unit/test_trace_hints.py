@@ -128,6 +128,11 @@ def asked_and_made(found: Hints, hint: str) -> list[str]:
     ]
 
 
+def shown(value: Any) -> str:
+    """An argument as a hint writes it: an enum by its name, a number as ``:g`` does."""
+    return NAMES.get(value, f"{value:g}") if isinstance(value, int | float) else str(value)
+
+
 CALLS = st.sampled_from(
     [
         ("glActiveTexture", [GL_TEXTURE0]),
@@ -151,10 +156,7 @@ def test_a_guarded_hint_never_asks_for_a_call_the_file_made(mine, data):
     guarded, no call it asks for is one the file made with the same arguments."""
     found = hints(mine)
     asked = data.draw(st.lists(CALLS, min_size=1, max_size=3))
-    hint = "; ".join(
-        f"call {fn}({', '.join(NAMES.get(a, f'{a:g}') if isinstance(a, int | float) else str(a) for a in args)}) first"
-        for fn, args in asked
-    )
+    hint = "; ".join(f"call {fn}({', '.join(map(shown, args))}) first" for fn, args in asked)
     for text in [hint, *texts(found)]:
         guarded = found.guard(text)
         assert not asked_and_made(found, guarded), (text, guarded)

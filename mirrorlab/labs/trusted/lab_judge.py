@@ -570,12 +570,18 @@ class SamePicture:
                 return None
             worst = max(bad, key=lambda i: int(differing(mine[i], theirs[i]).sum()))
             mask = differing(mine[worst], theirs[worst])
-            found = f"{self.what}: {len(bad)} of {len(mine)} differ from the solution's; the {ordinal(worst)} in {int(mask.sum())} texels, {where(mask)}"
+            found = (
+                f"{self.what}: {len(bad)} of {len(mine)} differ from the solution's; the "
+                f"{ordinal(worst)} in {int(mask.sum())} texels, {where(mask)}"
+            )
         elif same_picture(mine, theirs):
             return None
         else:
             mask = differing(mine, theirs)
-            found = f"{self.what} differs from the solution's in {int(mask.sum())} pixels, {where(mask)}"
+            found = (
+                f"{self.what} differs from the solution's in {int(mask.sum())} pixels, "
+                f"{where(mask)}"
+            )
         for task in self.after:
             if not run.passed.get(task, True):
                 return Finding(f"{self.what} is judged once {run.task_name(task)} passes")
@@ -669,10 +675,12 @@ class SameCopies:
                 )
             formats = (mine.get("internalformat"), theirs.get("internalformat"))
             if formats[0] and formats[1] and colour_format(formats[0]) != colour_format(formats[1]):
+                keeps = (
+                    "only the brightness" if formats[0] in (0x1909, 0x8040) else "not the colour"
+                )
                 return Finding(
                     f"the copy at {at} makes a {format_name(formats[0])} texture, which keeps "
-                    f"{'only the brightness' if formats[0] in (0x1909, 0x8040) else 'not the colour'}; "
-                    f"the solution copies {format_name(formats[1])}",
+                    f"{keeps}; the solution copies {format_name(formats[1])}",
                     frozenset({"image"}),
                 )
         return None
@@ -882,7 +890,8 @@ class SameArgument:
         if have == want:
             return None
         return Finding(
-            f"{self.label} is {have} when {self.events.said()} at {run.at(mine[-1].get('line', 0))} "
+            f"{self.label} is {have} when {self.events.said()} at "
+            f"{run.at(mine[-1].get('line', 0))} "
             f"draws; the solution gives it {want}",
             frozenset(),
         )
@@ -909,7 +918,8 @@ class SameSampling:
             by = f" (glUseProgram at {run.at(line)})" if line else ""
             return Finding(
                 f"{self.events.said()} draws without {self.program_name(run)}: the program in use "
-                f"is {program.get('value') or 'none'}{by}; the solution uses {self.program_name(run)}",
+                f"is {program.get('value') or 'none'}{by}; the solution uses "
+                f"{self.program_name(run)}",
                 frozenset({"program"}),
             )
         unit, want_unit = mine.get("sampler"), theirs.get("sampler")
@@ -994,7 +1004,8 @@ class SamePrimitive:
                 level = float(points[0] @ normal * np.sign(normal.sum()))
                 return Finding(
                     f"{self.what} at {at} lies in the plane {axis} = {level:g}; the solution's "
-                    f"in {axis} = {float(offset * np.sign(normal.sum())):g} (its corners: {listed})",
+                    f"in {axis} = {float(offset * np.sign(normal.sum())):g} (its corners: "
+                    f"{listed})",
                     frozenset({"vertex"}),
                 )
             return Finding(
@@ -1048,7 +1059,8 @@ class SamePrimitive:
                 run.context.matched = run.context.matched or name
                 listed = ", ".join(f"({fmt(c)})" for c in mine)
                 return Finding(
-                    f"this {self.what} is {another(name)}, not yours: yours has the corners {listed}",
+                    f"this {self.what} is {another(name)}, not yours: yours has the corners "
+                    f"{listed}",
                     final=True,
                 )
         return None
@@ -1311,14 +1323,16 @@ class SameDraws:
         if len(mine) > len(theirs):
             extra = mine[len(theirs)]
             return Finding(
-                f"lab.{extra.get('who')} at {run.at(extra.get('line', 0))} draws once more than the "
+                f"lab.{extra.get('who')} at {run.at(extra.get('line', 0))} draws once more than "
+                "the "
                 f"solution does (in the viewport ({fmt(extra.get('viewport') or [])}))",
                 frozenset({"framebuffer"}),
             )
         if len(mine) < len(theirs):
             lost = theirs[len(mine)]
             return Finding(
-                f"lab.{lost.get('who')} is not drawn in the viewport ({fmt(lost.get('viewport') or [])})",
+                f"lab.{lost.get('who')} is not drawn in the viewport "
+                f"({fmt(lost.get('viewport') or [])})",
                 frozenset({"framebuffer"}),
             )
         return None

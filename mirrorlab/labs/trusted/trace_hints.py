@@ -284,7 +284,7 @@ class Trace:
     def value_before(self, slot: tuple[Any, ...], at: float) -> tuple[Any, Call | None]:
         """The value ``slot`` held just before position ``at``, and the call that set it
         (None: GL's default, when it is known, else unknown)."""
-        for call in reversed(self.calls[: max(int(math.ceil(at)), 0)]):
+        for call in reversed(self.calls[: max(math.ceil(at), 0)]):
             if call.kind != "function" and slot in call.values:
                 return call.values[slot], call
         return DEFAULTS.get(slot[0], UNKNOWN), None
