@@ -130,7 +130,9 @@ def asked_and_made(found: Hints, hint: str) -> list[str]:
 
 def shown(value: Any) -> str:
     """An argument as a hint writes it: an enum by its name, a number as ``:g`` does."""
-    return NAMES.get(value, f"{value:g}") if isinstance(value, int | float) else str(value)
+    if isinstance(value, int) and value in NAMES:
+        return NAMES[value]
+    return f"{value:g}" if isinstance(value, int | float) else str(value)
 
 
 CALLS = st.sampled_from(

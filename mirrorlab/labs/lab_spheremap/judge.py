@@ -201,7 +201,7 @@ def _observed(run: J.Run) -> tuple[str, int] | None:
 def regions(run: J.Run) -> dict[str, np.ndarray | None]:
     """The shader cone's half of the frame and the texgen cone's."""
     width, height = run.size
-    found = {}
+    found: dict[str, np.ndarray | None] = {}
     for name, shader in (("shader", True), ("texgen", False)):
         mask = np.zeros((height, width), dtype=bool)
         mask[:, _columns(run, shader)] = True

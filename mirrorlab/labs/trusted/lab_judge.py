@@ -979,7 +979,7 @@ class SamePrimitive:
         at = run.at(a.get("begin_line", 0))
         if a.get("mode") not in (4, 5, 6, 7, 8, 9):
             return Finding(
-                f"{self.what} at {at} is drawn as {BEGIN_NAMES.get(a.get('mode'), 'lines')}: it "
+                f"{self.what} at {at} is drawn as {BEGIN_NAMES.get(int(a.get('mode') or 0), 'lines')}: it "
                 f"must fill its area (the solution's: a polygon)",
                 frozenset({"primitive"}),
             )
@@ -1550,12 +1550,9 @@ def judge(
     if not frame_hint[0] and findings.get(declared.frame_task) is None:
         # the whole frame differs and no task explains it: the first divergence of any
         # lab function names what made it so
-        found = next(
-            (d for f in spec.functions for d in run.hints.divergences(f)),
-            None,
-        )
-        if found is not None:
-            verdicts[declared.frame_task] = (False, f"{found.text}; {frame_hint[1]}")
+        first = next((d for f in spec.functions for d in run.hints.divergences(f)), None)
+        if first is not None:
+            verdicts[declared.frame_task] = (False, f"{first.text}; {frame_hint[1]}")
     return [
         r if r.passed else TaskResult(r.task, False, run.hints.guard(r.hint))
         for r in results(spec, student, verdicts, declared.glsl_functions)

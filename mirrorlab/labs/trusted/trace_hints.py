@@ -351,6 +351,7 @@ def _normalise(call: Call, roles: Roles) -> None:
     call.family = family
     writes: list[tuple[Any, ...]] = list(call.writes)
     values: dict[tuple[Any, ...], Any] = {}
+    slot: tuple[Any, ...]
 
     def bound(target: Any) -> str:
         kind = "tc" if target == GL_TEXTURE_CUBE_MAP or target in CUBE_FACES else "t2"
@@ -538,6 +539,7 @@ def _kit(call: Call, roles: Roles) -> None:
         else:
             shown.append(str(value) if value != "GLSL" else "GLSL")
     call.text = f"{call.fn}({', '.join(shown)})"
+    slots: tuple[tuple[Any, ...], ...]
     if name == "set_viewer":
         slots = (("matrix", GL_PROJECTION), ("matrix", GL_MODELVIEW), ("matrix_mode",))
         call.writes, call.values = slots, {s: None for s in slots}
@@ -793,10 +795,12 @@ class Hints:
         extra = [a for a, b in rows if a is not None and b is None]
         missing = [b for a, b in rows if b is not None and a is None]
         moved: dict[int, Call] = {}
-        for a in extra:
-            partner = next((b for b in missing if b.key == a.key and b not in moved.values()), None)
+        for one_extra in extra:
+            partner = next(
+                (b for b in missing if b.key == one_extra.key and b not in moved.values()), None
+            )
             if partner is not None:
-                moved[id(a)] = partner
+                moved[id(one_extra)] = partner
         moved_theirs = {id(b) for b in moved.values()}
         matched = {id(a) for a, b in rows if a is not None and b is not None}
         mine_at = mine[0].at - 0.5 if mine else 0.0
