@@ -979,7 +979,8 @@ class SamePrimitive:
         at = run.at(a.get("begin_line", 0))
         if a.get("mode") not in (4, 5, 6, 7, 8, 9):
             return Finding(
-                f"{self.what} at {at} is drawn as {BEGIN_NAMES.get(int(a.get('mode') or 0), 'lines')}: it "
+                f"{self.what} at {at} is drawn as "
+                f"{BEGIN_NAMES.get(int(a.get('mode') or 0), 'lines')}: it "
                 f"must fill its area (the solution's: a polygon)",
                 frozenset({"primitive"}),
             )
