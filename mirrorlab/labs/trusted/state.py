@@ -45,6 +45,8 @@ def small(value: Any, depth: int = 0) -> Any:
     data to ``"<data>"``, three levels deep."""
     if isinstance(value, str):
         return "<glsl>" if len(value) > 40 or "\n" in value else value
+    if isinstance(value, int) and not isinstance(value, bool) and not -(1 << 63) <= value < 1 << 63:
+        return f"{str(value)[:8]}... (an integer of {len(str(abs(value)))} digits)"
     if isinstance(value, bool | int | float) or value is None:
         return value
     if depth >= 3:

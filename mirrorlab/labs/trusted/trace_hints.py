@@ -23,6 +23,7 @@ Numpy only: it reads :class:`~.evidence.Evidence`, which only the trusted proces
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 from collections.abc import Iterable
@@ -122,7 +123,11 @@ def _number(value: Any) -> Any:
     if isinstance(value, bool):
         return int(value)
     if isinstance(value, int | float):
-        return round(float(value), 4) + 0.0
+        try:
+            number = round(float(value), 4) + 0.0
+        except OverflowError:
+            return str(value)[:24]
+        return number if math.isfinite(number) else str(number)
     return value
 
 
@@ -254,7 +259,11 @@ class Trace:
             str(event.get("error") or ""),
             str(event.get("note") or ""),
         )
-        _normalise(call, self.roles)
+        try:
+            _normalise(call, self.roles)
+        except Exception:  # arguments of a shape no call takes: kept, unread
+            call.family, call.key, call.writes, call.values = "unread", ("unread", fn), (), {}
+            call.text = f"{call.fn}(...)"
         self.calls.append(call)
 
     def argument_names(self, fn: str) -> tuple[str, ...]:
@@ -686,6 +695,24 @@ def _blocks(calls: list[Call]) -> list[tuple[int, int]]:
     return found
 
 
+def _never_fails(fallback: Any) -> Any:
+    """A hint's reasoning over a trace the student's file made (arguments of any shape): a
+    case it does not foresee gives no divergence (or the hint as it was), never a run that
+    cannot be judged. ``fallback(self, *args)`` is what it gives then."""
+
+    def wrap(method: Any) -> Any:
+        @functools.wraps(method)
+        def safe(self: Any, *args: Any, **kwargs: Any) -> Any:
+            try:
+                return method(self, *args, **kwargs)
+            except Exception:  # the verdicts stand; only the words fall back
+                return fallback(*args)
+
+        return safe
+
+    return wrap
+
+
 class Hints:
     """The hints of one student's run against the solution's: ``student`` and
     ``reference`` evidence, ``roles`` (evidence key -> the texture's name), ``setup`` (the
@@ -737,6 +764,7 @@ class Hints:
         return f"{call.fn} at {self.at(call)}{again}"
 
     # ------------------------------------------------------------------ never called
+    @_never_fails(lambda *args: "")
     def never_called(self, function: str) -> str:
         """'F() is never called ...' when the solution calls lab function ``function`` in
         the judged frame (or the set-up) and the student's file does not, else ''."""
@@ -780,6 +808,7 @@ class Hints:
         return ""
 
     # ------------------------------------------------------------------ divergences
+    @_never_fails(lambda *args: [])
     def divergences(
         self, function: str, families: frozenset[str] | None = None
     ) -> list[Divergence]:
@@ -1272,6 +1301,7 @@ class Hints:
         return ", and ".join(parts)
 
     # ------------------------------------------------------------------ the guard
+    @_never_fails(lambda hint: hint)
     def guard(self, hint: str) -> str:
         """``hint`` unless it asks for a call the file already makes with the same
         arguments; then why that call took no effect (where it runs, what it acted on,
