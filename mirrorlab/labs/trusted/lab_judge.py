@@ -41,7 +41,6 @@ from mirrorlab.labs.trusted.judging import (
     where,
 )
 from mirrorlab.labs.trusted.trace_hints import (
-    MODE_NAMES,
     Hints,
     fmt,
     ordinal,
@@ -1592,10 +1591,6 @@ def hint(run: Run, rule: TaskRule, found: Finding) -> str:
         if explained is not None:
             return run.hints.guard(explained.hint)
     return run.hints.guard(found.hint)
-
-
-def mode_name(mode: int) -> str:
-    return MODE_NAMES.get(mode, f"{mode:#x}")
 
 
 # ----------------------------------------------------------------------- regions

@@ -48,7 +48,7 @@ MODE_NAMES = {
 COLOUR_FORMATS = frozenset({3, 4, 0x1907, 0x1908, 0x8051, 0x8058})
 """Internal formats that keep every colour channel (GL_RGB, GL_RGBA, GL_RGB8, GL_RGBA8, 3,
 4): one form for an alignment; a copy into GL_LUMINANCE or GL_ALPHA is another."""
-CLAMP_TO_EDGE, CLAMP = 0x812F, 0x2900
+CLAMP = 0x2900
 FILL_MODES = frozenset({0x0004, 0x0005, 0x0006, 0x0007, 0x0008, 0x0009})
 """glBegin's modes that fill (triangles, strips, fans, quads, polygons): the handouts allow
 any of them for a quad, with the vertices they need."""
@@ -111,12 +111,6 @@ class Call:
     text: str = ""
     end: int = -1
     """For a lab function: the position of its last call."""
-
-    @property
-    def shown(self) -> str:
-        """How the student wrote the call's name: ``glTexCoord2f``, ``lab.draw_scene``,
-        ``render_mirror()``."""
-        return self.fn
 
 
 def _number(value: Any) -> Any:
