@@ -725,6 +725,9 @@ class Hints:
         self.mine = Trace(student, Roles(student, roles, programs, uniforms))
         self.theirs = Trace(reference, Roles(reference, roles, programs, uniforms))
         self.setup = setup
+        self.traced = any(c.kind != "function" for c in self.theirs.calls)
+        """Whether the reference has a call trace (evidence made before the trace was kept,
+        a released folder's from an older version, has none: then no divergence is said)."""
 
     # ------------------------------------------------------------------ where
     def frame_of(self, function: str, trace: Trace) -> int:
@@ -764,6 +767,8 @@ class Hints:
         the judged frame (or the set-up) and the student's file does not, else ''."""
         theirs = self.theirs.entered(function, self.frame_of(function, self.theirs))
         frame = self.frame_of(function, self.mine)
+        if not self.traced:
+            return ""
         if not theirs or self.mine.entered(function, frame):
             return ""
         caller = theirs[0].function
@@ -810,6 +815,8 @@ class Hints:
         student's order; each changes something (a call that sets what the state holds
         already is not one). ``families`` (``glTexParameter`` ...; None: every call)
         limits them to the calls a task judges."""
+        if not self.traced:
+            return []
         mine = self.mine.made_in(function, self.frame_of(function, self.mine))
         theirs = self.theirs.made_in(function, self.frame_of(function, self.theirs))
         found: list[Divergence] = []
