@@ -155,8 +155,9 @@ DISTANCE_STEPS = ("2+0", "4+1", DEFAULT_STEPS, "16+2", "32+4")
 @dataclass(frozen=True)
 class SweepSettings:
     """``frame`` side in pixels, texture ``sizes``, ``frames`` timed per configuration
-    after ``warmup`` frames, which viewpoints to use (None: all), and the distance
-    search's ``steps`` (linear+secant) compared at one map size."""
+    after ``warmup`` frames, which viewpoints to use (None: all), the distance search's
+    ``steps`` (linear+secant) compared at one map size, and ``curved_sizes``, the
+    environment maps' sizes where they are not ``sizes``."""
 
     frame: int = 512
     sizes: tuple[int, ...] = FULL_SIZES
@@ -164,11 +165,20 @@ class SweepSettings:
     warmup: int = 3
     viewpoints: tuple[str, ...] | None = None
     steps: tuple[str, ...] = DISTANCE_STEPS
+    curved_sizes: tuple[int, ...] | None = None
+
+    @property
+    def map_sizes(self) -> tuple[int, ...]:
+        """The environment maps' sizes: ``curved_sizes``, else ``sizes``."""
+        return self.sizes if self.curved_sizes is None else self.curved_sizes
 
     @classmethod
     def quick(cls) -> SweepSettings:
-        """A small sweep for tests: 128-pixel frames, two sizes, two viewpoints, the
-        distance search with its default steps only."""
+        """A small sweep for tests: 128-pixel frames, two sizes for the mirror's captures
+        and the larger for the environment maps (each curved technique of the registry
+        adds a row per size, panel and correction: a sweep of them all at both sizes
+        would grow with each), two viewpoints, the distance search with its default
+        steps only."""
         return cls(
             frame=128,
             sizes=QUICK_SIZES,
@@ -176,6 +186,7 @@ class SweepSettings:
             warmup=1,
             viewpoints=("head-on far", "60 deg"),
             steps=(),
+            curved_sizes=QUICK_SIZES[-1:],
         )
 
 
@@ -251,13 +262,15 @@ def scene_techniques(
     sizes: Sequence[int],
     proxies: Sequence[tuple[str, str]] = (),
     steps: Sequence[str] = DISTANCE_STEPS,
+    curved_sizes: Sequence[int] | None = None,
 ) -> list[tuple[str, dict]]:
     """The configurations a scene's reflectors can take: the planar ones when it has a
-    planar mirror, the curved ones (see :func:`curved_techniques`) when it has a curved
-    reflector."""
+    planar mirror, the curved ones (see :func:`curved_techniques`, at ``curved_sizes``
+    when given) when it has a curved reflector."""
     kinds = {reflector.kind for reflector in scene.reflectors}
     rows = lab_techniques(sizes) if "planar" in kinds else []
-    return rows + (curved_techniques(sizes, proxies, steps) if "curved" in kinds else [])
+    maps = sizes if curved_sizes is None else curved_sizes
+    return rows + (curved_techniques(maps, proxies, steps) if "curved" in kinds else [])
 
 
 def surroundings_box(scene: Scene) -> tuple[np.ndarray, np.ndarray] | None:
@@ -423,7 +436,7 @@ def run_panels(
         for name, camera in panel.viewpoints.items()
     ]
     configurations = [
-        scene_techniques(scene, settings.sizes, panel.proxies, settings.steps)
+        scene_techniques(scene, settings.sizes, panel.proxies, settings.steps, settings.map_sizes)
         for panel, _, scene in views
     ]
     total = 2 * len(views) + sum(len(c) for c in configurations)

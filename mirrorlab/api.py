@@ -119,6 +119,20 @@ class Renderer:
         return self._context.info()["renderer"]
 
     @property
+    def gl_description(self) -> dict[str, str]:
+        """What a bug report needs of this renderer's context: its backend and PyOpenGL's
+        platform, the OpenGL version, profile, GLSL version, renderer and vendor
+        (:func:`mirrorlab.gl.context.describe`), and the draw path this renderer draws
+        with (``draw_path``)."""
+        from mirrorlab.gl.context import describe
+
+        self.open()
+        assert self._context is not None and self._renderer is not None
+        found = describe(self._context)
+        found["draw_path"] = self._renderer.drawer.draw_path
+        return found
+
+    @property
     def gl_objects(self) -> int:
         """How many GL objects (programs, textures, buffers, framebuffers) are live in
         this renderer's context now; 0 when it is closed."""

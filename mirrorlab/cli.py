@@ -1,4 +1,4 @@
-"""Command line: ``mirrorlab render | plan | bench | demo | techniques | lab``.
+"""Command line: ``mirrorlab render | plan | bench | demo | techniques | lab | info``.
 
 Argument parsing and dispatch only: each command is a module of :mod:`mirrorlab.commands`
 that adds its own subparser (``add_parser``) and does its work (``run``), in the order of
@@ -14,14 +14,14 @@ import sys
 import warnings
 from collections.abc import Sequence
 
-from mirrorlab.commands import bench, demo, lab, plan, render, techniques
+from mirrorlab.commands import bench, demo, info, lab, plan, render, techniques
 from mirrorlab.commands.arguments import UsageError, check_executor
 from mirrorlab.errors import BatchError, BenchmarkError, GLContextError, GLPassError, WriteError
 from mirrorlab.files import OutputError
 from mirrorlab.options import OPTIONS, OptionError
 from mirrorlab.scene.loader import SceneError
 
-COMMANDS = (render, plan, bench, demo, techniques, lab)
+COMMANDS = (render, plan, bench, demo, techniques, lab, info)
 """The command modules, in the order ``--help`` lists them: each has ``NAME``,
 ``add_parser(subparsers)`` and ``run(args) -> exit status``."""
 EXIT_BAD_INPUT, EXIT_MACHINE, EXIT_INTERRUPTED = 2, 1, 130
@@ -131,8 +131,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Exception as exc:
         from mirrorlab.labs.trusted.checker import CheckError
         from mirrorlab.labs.trusted.gl_process import CheckerError
+        from mirrorlab.labs.trusted.grading import GradingStopped
         from mirrorlab.labs.trusted.sandbox import SandboxError
 
+        if isinstance(exc, GradingStopped):
+            print(f"{command}: error: grading stopped, nothing written: {exc}", file=sys.stderr)
+            return EXIT_BAD_INPUT
         if isinstance(exc, SandboxError | CheckError):
             print(f"{command}: error: {exc}", file=sys.stderr)
             return EXIT_BAD_INPUT

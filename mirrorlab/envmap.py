@@ -29,6 +29,12 @@ Hard cases, chosen so that nothing returns NaN, Inf or a coordinate out of range
   ``-0.0``.
 - ``latlong_map`` poles: ``s = 0`` whenever ``rx = ry = 0``; ``r = 0`` gives
   ``(0, 0)``, the image of ``+z``.
+- ``octahedral_map``: a zero component counts as positive (``-0.0`` too), so the
+  fold lines and the square's edges, where the sign picks a side, give one answer; the
+  lower hemisphere's edges are where a direction's two images meet
+  (:func:`octahedral_wrap`). ``r = 0`` gives the centre, the image of ``+z``.
+- ``paraboloid_map``: ``rz = 0`` (either zero) belongs to the front side; the
+  denominator ``1 + |rz|`` is at least 1. ``r = 0`` gives the front's centre.
 
 Non-finite inputs (NaN, Inf) are outside the domain; they may give NaN.
 """
@@ -331,6 +337,239 @@ def latlong_map_inverse(s, t) -> np.ndarray:
     return r.astype(s.dtype, copy=False)
 
 
+# ---------------------------------------------------------------------------- octahedral
+
+
+def _sign(v: np.ndarray) -> np.ndarray:
+    """+1 where ``v >= 0`` (``-0.0`` included), -1 elsewhere, in ``v``'s dtype."""
+    return np.where(v >= 0, 1, -1).astype(v.dtype, copy=False)
+
+
+def octahedral_map(r) -> tuple[np.ndarray, np.ndarray]:
+    """Octahedral coordinates ``(s, t)``, each ``(...)`` in [0, 1], of directions ``r``
+    ``(..., 3)`` (Engelhardt & Dachsbacher 2008; Cigolle et al., JCGT 2014).
+
+    ``p = r / (|rx| + |ry| + |rz|)`` lies on the octahedron; the upper half (``rz >= 0``)
+    projects straight down onto the diamond ``|u| + |v| <= 1``, the lower half is folded
+    out over the diamond's edges into the square's four corners:
+    ``(u, v) = ((1 - |py|) sign(px), (1 - |px|) sign(py))``. Then ``s = (u + 1)/2``,
+    ``t = (v + 1)/2``: ``+z`` at the centre, ``-z`` at the four corners, the equator on
+    the diamond (the fold lines, where both formulas agree).
+
+    A zero component counts as positive, ``-0.0`` too, so every direction on a fold or
+    an edge has one image; on an edge of the square (the lower half's ``rx = 0`` or
+    ``ry = 0``) a direction's two images are mirror images across the edge's midpoint
+    (:func:`octahedral_wrap`). ``r = 0`` gives ``(0.5, 0.5)``. ``r`` need not be unit.
+    """
+    (r,) = _floats(r)
+    _check_vectors(r, "r")
+    w, _ = _unit(r)
+    x, y, z = _split(w)
+    l1 = np.abs(x) + np.abs(y) + np.abs(z)
+    safe = np.where(l1 > 0, l1, 1)
+    px, py, pz = x / safe, y / safe, z / safe
+    lower = pz < 0
+    u = np.where(lower, (1 - np.abs(py)) * _sign(px), px)
+    v = np.where(lower, (1 - np.abs(px)) * _sign(py), py)
+    s = np.clip(0.5 + 0.5 * u, 0, 1).astype(r.dtype, copy=False)
+    t = np.clip(0.5 + 0.5 * v, 0, 1).astype(r.dtype, copy=False)
+    return s, t
+
+
+def octahedral_wrap(s, t) -> tuple[np.ndarray, np.ndarray]:
+    """Any ``(s, t)`` (each ``(...)``, broadcast) as the point of the square [0, 1]^2 that
+    continues the map across its edges: the octahedral map's border identification.
+
+    In ``(u, v) = (2s - 1, 2t - 1)``, crossing the right edge ``u = 1`` comes back in
+    mirrored: ``(1 + e, v) ~ (1 - e, -v)``, and so for each edge (``(u, 1 + e) ~ (-u, 1 -
+    e)``); the four corners meet at ``-z``. The continuation has period 4 in ``u`` and in
+    ``v``. This is what the padded border of an octahedral texture holds, so that
+    bilinear filtering across an edge reads the directions that lie across it.
+    """
+    s, t = _floats(s, t)
+    s, t = np.broadcast_arrays(s, t)
+    u = np.mod(2 * s - 1 + 2, 4) - 2  # in [-2, 2)
+    v = np.mod(2 * t - 1 + 2, 4) - 2
+    right, left = u > 1, u < -1
+    u, v = np.where(right, 2 - u, np.where(left, -2 - u, u)), np.where(right | left, -v, v)
+    top, bottom = v > 1, v < -1
+    u, v = np.where(top | bottom, -u, u), np.where(top, 2 - v, np.where(bottom, -2 - v, v))
+    return (
+        np.clip(0.5 + 0.5 * u, 0, 1).astype(s.dtype, copy=False),
+        np.clip(0.5 + 0.5 * v, 0, 1).astype(s.dtype, copy=False),
+    )
+
+
+def octahedral_map_inverse(s, t) -> np.ndarray:
+    """The unit direction ``(..., 3)`` at octahedral coordinates ``(s, t)`` (each
+    ``(...)``, broadcast; outside [0, 1] continued across the square's edges by
+    :func:`octahedral_wrap`).
+
+    ``(u, v) = (2s - 1, 2t - 1)``, ``z = 1 - |u| - |v|``; in the corners (``z < 0``) the
+    fold is undone: ``(x, y) = ((1 - |v|) sign(u), (1 - |u|) sign(v))``; then normalised.
+    """
+    s, t = octahedral_wrap(s, t)
+    u, v = 2 * s - 1, 2 * t - 1
+    z = 1 - np.abs(u) - np.abs(v)
+    lower = z < 0
+    x = np.where(lower, (1 - np.abs(v)) * _sign(u), u)
+    y = np.where(lower, (1 - np.abs(u)) * _sign(v), v)
+    return _unit(np.stack([x, y, z], axis=-1))[0]
+
+
+def octahedral_level_sizes(size: int) -> tuple[int, ...]:
+    """The edge in texels of each mip level of an octahedral texture ``size`` texels wide
+    (GL's ``max(1, size >> k)``), as far as a level still has a 2 x 2 interior inside
+    its one-texel border: ``size`` must be at least 4."""
+    size = _check_size(size, "size")
+    if size < 4:
+        raise ValueError(f"an octahedral map needs at least 4 texels a side, got {size}")
+    sizes: list[int] = []
+    while (size >> len(sizes)) >= 4:
+        sizes.append(size >> len(sizes))
+    return tuple(sizes)
+
+
+def octahedral_texel_grid(level_size: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(s, t)`` ``(n, n)`` each: the octahedral coordinates of the texel centres of a
+    level ``n = level_size`` texels wide, in image row order (row 0 at the top).
+
+    Every level has a one-texel border around its interior of ``m = n - 2`` texels: texel
+    ``i`` (from the left, or from the bottom for ``t``) has its centre at ``(i - 0.5) /
+    m``, so the interior spans [0, 1] and the border texels lie half a texel outside it
+    (their directions continue across the edge, :func:`octahedral_wrap`). A lookup at
+    ``s`` reads level ``k`` at texel position ``1 + s m_k`` of ``n_k``: the position
+    differs from level to level, so a shader filters between levels itself."""
+    interior = level_size - 2
+    centres = (np.arange(level_size, dtype=np.float64) - 0.5) / interior
+    s, t = np.meshgrid(centres, centres[::-1])
+    return s, t
+
+
+def _bilinear(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """``image`` ``(h, w, c)`` (row 0 at the *bottom*) read bilinearly at texel-space
+    positions ``x``, ``y`` (texel ``i``'s centre at ``i + 0.5``), clamped to the edge."""
+    h, w = image.shape[:2]
+    fx = np.clip(x - 0.5, 0, w - 1)
+    fy = np.clip(y - 0.5, 0, h - 1)
+    x0 = np.minimum(np.floor(fx).astype(np.intp), w - 2 if w > 1 else 0)
+    y0 = np.minimum(np.floor(fy).astype(np.intp), h - 2 if h > 1 else 0)
+    x1 = np.minimum(x0 + 1, w - 1)
+    y1 = np.minimum(y0 + 1, h - 1)
+    ax = (fx - x0)[..., None]
+    ay = (fy - y0)[..., None]
+    lower = image[y0, x0] * (1 - ax) + image[y0, x1] * ax
+    upper = image[y1, x0] * (1 - ax) + image[y1, x1] * ax
+    return lower * (1 - ay) + upper * ay
+
+
+def _octahedral_border(level: np.ndarray) -> np.ndarray:
+    """``level`` ``(n, n, c)`` (row 0 at the bottom) with its border texels copied from
+    the interior texels their centres wrap onto (exact: centres land on centres)."""
+    n = level.shape[0]
+    interior = n - 2
+    centres = (np.arange(n, dtype=np.float64) - 0.5) / interior
+    s, t = np.meshgrid(centres, centres)
+    ws, wt = octahedral_wrap(s, t)
+    i = np.clip(np.floor(ws * interior).astype(np.intp), 0, interior - 1) + 1
+    j = np.clip(np.floor(wt * interior).astype(np.intp), 0, interior - 1) + 1
+    return level[j, i]
+
+
+def octahedral_levels(level0: np.ndarray, size: int | None = None) -> list[np.ndarray]:
+    """Every mip level of an octahedral texture from its level 0 ``(n, n, c)`` float
+    (row 0 at the top, border included), each ``(n_k, n_k, c)`` float, row 0 at the top.
+
+    Level ``k`` averages level ``k - 1`` over each of its texels by four bilinear taps at
+    the texel's quarter points (a box filter that does not need the interiors to halve
+    exactly), reading across the edges through ``k - 1``'s border; then its own border
+    is copied in (:func:`octahedral_wrap`). ``size`` (default ``n``) names the levels
+    (:func:`octahedral_level_sizes`)."""
+    first = np.asarray(level0, dtype=np.float64)[::-1]  # row 0 at the bottom from here
+    sizes = octahedral_level_sizes(size or first.shape[0])
+    if first.shape[:2] != (sizes[0], sizes[0]):
+        raise ValueError(f"level 0 must be ({sizes[0]}, {sizes[0]}, c), got {first.shape}")
+    levels = [first]
+    for n in sizes[1:]:
+        finer = levels[-1]
+        fine_interior = finer.shape[0] - 2
+        interior = n - 2
+        centres = (np.arange(n, dtype=np.float64) - 0.5) / interior
+        s, t = np.meshgrid(centres, centres)
+        total = np.zeros((n, n, finer.shape[2]))
+        for ds in (-0.25, 0.25):
+            for dt in (-0.25, 0.25):
+                total += _bilinear(
+                    finer,
+                    1 + (s + ds / interior) * fine_interior,
+                    1 + (t + dt / interior) * fine_interior,
+                )
+        levels.append(_octahedral_border(total / 4))
+    return [level[::-1] for level in levels]
+
+
+# ---------------------------------------------------------------------------- dual paraboloid
+
+PARABOLOID_EXTENT = 1.0625
+"""Half the width of a dual-paraboloid texture's square in paraboloid units: the disc
+that holds a hemisphere has radius 1, and the square around it reaches
+``PARABOLOID_EXTENT`` from its centre, so that a margin of directions from across the
+rim surrounds the disc (7.5 texels of 256 at level 0, about one at level 3): bilinear filtering
+and mipmaps at the rim read the directions that lie past it, not a clamped edge."""
+
+
+def paraboloid_map(r) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Dual-paraboloid side and coordinates ``(side, s, t)``, each ``(...)``, of
+    directions ``r`` ``(..., 3)`` (Heidrich & Seidel 1998).
+
+    ``side`` (int64) is 0, the front, for ``rz >= 0`` (``-0.0`` too) and 1, the back,
+    for ``rz < 0``. Each side is the image of a camera at the centre looking along
+    ``+z`` (front) or ``-z`` (back), both with ``+y`` up, through the paraboloid
+    ``(a, b) = (ex, ey) / (1 - ez)`` of the camera's eye-space direction ``e``: in world
+    terms ``(a, b) = (-rx, ry) / (1 + rz)`` on the front and ``(rx, ry) / (1 - rz)`` on
+    the back, ``1 + |rz|`` below both, at least 1. ``s = (1 + a / E) / 2``, ``t = (1 +
+    b / E) / 2`` with ``E`` = :data:`PARABOLOID_EXTENT`: the hemisphere fills a disc of
+    radius ``1 / (2E)`` around ``(0.5, 0.5)``, its rim (``rz = 0``) the disc's edge.
+    A texture holds the front in its left half and the back in its right:
+    ``u = (side + s) / 2``. ``r = 0`` gives the front's centre.
+    """
+    (r,) = _floats(r)
+    _check_vectors(r, "r")
+    w, _ = _unit(r)
+    x, y, z = _split(w)
+    front = z >= 0
+    scale = 1 / ((1 + np.abs(z)) * PARABOLOID_EXTENT)
+    a = np.where(front, -x, x) * scale
+    b = y * scale
+    side = np.where(front, 0, 1).astype(np.int64)
+    s = np.clip(0.5 + 0.5 * a, 0, 1).astype(r.dtype, copy=False)
+    t = np.clip(0.5 + 0.5 * b, 0, 1).astype(r.dtype, copy=False)
+    return side, s, t
+
+
+def paraboloid_map_inverse(side, s, t) -> np.ndarray:
+    """The unit direction ``(..., 3)`` shown at ``(s, t)`` of ``side`` (0 front, 1 back;
+    each ``(...)``, broadcast), continued past the rim: the point at paraboloid radius
+    ``q = sqrt(a^2 + b^2)`` (``a = (2s - 1) E``, ``b = (2t - 1) E``) looks along
+    ``e = (2a, 2b, q^2 - 1) / (1 + q^2)`` of its camera, in front of it for ``q < 1``
+    and behind it, towards the other side's directions, for ``q > 1`` (so the square's
+    margin around the disc shows what lies past the rim). Raises ValueError for a side
+    other than 0 or 1."""
+    side = np.asarray(side)
+    if not np.issubdtype(side.dtype, np.integer):
+        raise ValueError(f"paraboloid side must be 0 or 1, got dtype {side.dtype}")
+    if side.size and (side.min() < 0 or side.max() > 1):
+        raise ValueError(f"paraboloid side must be 0 or 1, got values {np.unique(side)}")
+    s, t = _floats(s, t)
+    side, s, t = np.broadcast_arrays(side, s, t)
+    a = (2 * s - 1) * PARABOLOID_EXTENT
+    b = (2 * t - 1) * PARABOLOID_EXTENT
+    q = a * a + b * b
+    front = side == 0
+    r = np.stack([np.where(front, -2 * a, 2 * a), 2 * b, np.where(front, 1 - q, q - 1)], axis=-1)
+    return _unit(r)[0]
+
+
 # ---------------------------------------------------------------------------- demo style
 
 
@@ -442,3 +681,91 @@ def bake_latlong(env: EnvFunction, width: int, height: int) -> np.ndarray:
     height = _check_size(height, "height")
     s, t = _image_grid(width, height)
     return _shade(env, latlong_map_inverse(s, t))
+
+
+def _env_colours(env: EnvFunction, directions: np.ndarray) -> np.ndarray:
+    """``env`` over ``directions`` ``(..., 3)`` as float colours ``(..., 3)`` in [0, 1]."""
+    flat = np.ascontiguousarray(directions.reshape(-1, 3), dtype=np.float64)
+    colours = np.asarray(env(flat), dtype=np.float64)
+    if colours.shape != flat.shape:
+        raise ValueError(
+            f"env must return (n, 3) colours for (n, 3) directions, got "
+            f"{colours.shape} for {flat.shape}"
+        )
+    return np.nan_to_num(np.clip(colours, 0, 1), nan=0.0).reshape(directions.shape)
+
+
+def _to_uint8(colours: np.ndarray) -> np.ndarray:
+    return np.round(np.clip(colours, 0, 1) * 255).astype(np.uint8)
+
+
+def bake_octahedral(env: EnvFunction, size: int) -> list[np.ndarray]:
+    """Every mip level of an octahedral texture ``size`` texels wide of ``env``: a list of
+    ``(n_k, n_k, 3)`` uint8 images (row 0 at the top; :func:`octahedral_level_sizes`),
+    each with its one-texel border (:func:`octahedral_texel_grid`).
+
+    Level 0 shows ``env`` at each texel centre's direction (the border's continue across
+    the edges); the others are filtered from it (:func:`octahedral_levels`)."""
+    sizes = octahedral_level_sizes(size)
+    s, t = octahedral_texel_grid(sizes[0])
+    level0 = _env_colours(env, octahedral_map_inverse(s, t))
+    return [_to_uint8(level) for level in octahedral_levels(level0)]
+
+
+def bake_paraboloid(env: EnvFunction, size: int) -> np.ndarray:
+    """A dual-paraboloid image ``(size, 2 size, 3)`` uint8 of ``env``: the front side in
+    the left half, the back in the right (:func:`paraboloid_map`), row 0 at the top.
+    Every texel, in the disc or in the margin around it, shows ``env`` at its centre's
+    direction (:func:`paraboloid_map_inverse`)."""
+    size = _check_size(size, "size")
+    s, t = _image_grid(size, size)
+    halves = [_shade(env, paraboloid_map_inverse(side, s, t)) for side in (0, 1)]
+    return np.concatenate(halves, axis=1)
+
+
+def octahedral_picture_environment(picture: np.ndarray) -> EnvFunction:
+    """The environment a square octahedral picture ``(n, n, 3)`` (uint8 or float in [0,
+    1], row 0 at the top; the whole picture the square of :func:`octahedral_map`, no
+    border) shows: each direction read bilinearly at its coordinates, across the edges
+    as :func:`octahedral_wrap` continues them."""
+    image = np.asarray(picture)
+    if image.ndim != 3 or image.shape[0] != image.shape[1] or image.shape[0] < 2:
+        raise ValueError(f"an octahedral picture must be square (n, n, 3), got {image.shape}")
+    colours = image.astype(np.float64) / (255.0 if image.dtype == np.uint8 else 1.0)
+    n = colours.shape[0]
+    padded = np.zeros((n + 2, n + 2, colours.shape[2]))
+    padded[1:-1, 1:-1] = colours[::-1]
+    padded = _octahedral_border(padded)
+
+    def env(directions: np.ndarray) -> np.ndarray:
+        s, t = octahedral_map(directions)
+        return _bilinear(padded, 1 + s * n, 1 + t * n)
+
+    return env
+
+
+def paraboloid_picture_environment(picture: np.ndarray) -> EnvFunction:
+    """The environment a dual-paraboloid picture ``(n, 2n, 3)`` (uint8 or float in [0,
+    1], row 0 at the top) shows: the front hemisphere's disc in the left square, the
+    back's in the right, each disc touching its square's edges (the common layout,
+    without :data:`PARABOLOID_EXTENT`'s margin). Each direction is read bilinearly in
+    its side's square, clamped to it."""
+    image = np.asarray(picture)
+    if image.ndim != 3 or image.shape[1] != 2 * image.shape[0] or image.shape[0] < 2:
+        raise ValueError(
+            f"a dual-paraboloid picture must be twice as wide as high (n, 2n, 3), got {image.shape}"
+        )
+    colours = image.astype(np.float64) / (255.0 if image.dtype == np.uint8 else 1.0)
+    n = colours.shape[0]
+    halves = (colours[::-1, :n], colours[::-1, n:])
+
+    def env(directions: np.ndarray) -> np.ndarray:
+        side, s, t = paraboloid_map(directions)
+        # the picture's discs reach its squares' edges: undo the margin
+        s = 0.5 + (s - 0.5) * PARABOLOID_EXTENT
+        t = 0.5 + (t - 0.5) * PARABOLOID_EXTENT
+        front = _bilinear(halves[0], s * n, t * n)
+        back = _bilinear(halves[1], s * n, t * n)
+        return np.where((side == 0)[..., None], front, back)
+
+    return env

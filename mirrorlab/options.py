@@ -293,7 +293,8 @@ def parse_parallax(flag: str, text: str) -> dict[str, Any] | str:
 
 
 def _apply_parallax(document: dict, value: Any, flag: str) -> None:
-    """Give every reflector whose technique takes a parallax correction (``cube-live``) the
+    """Give every reflector whose technique takes a parallax correction (``cube-live``,
+    ``octahedral-live``, ``paraboloid-live``: its entry's ``parallax`` flag) the
     ``parallax`` ``value``: a ``parallax`` table as in a scene file, or its
     ``--parallax`` text; ``"none"`` removes the correction."""
     if isinstance(value, str):
@@ -471,7 +472,8 @@ OPTIONS: tuple[Option, ...] = (
     Option(
         "parallax",
         "PROXY",
-        f"how cube-live lookups correct for nearby surroundings: {', '.join(PARALLAX_FORMS)}",
+        "how the lookups of the live maps that take a parallax correction correct for "
+        f"nearby surroundings: {', '.join(PARALLAX_FORMS)}",
         parse_parallax,
         _apply_parallax,
         r"reflectors\[\d+\]\.parallax",

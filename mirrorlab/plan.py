@@ -44,7 +44,7 @@ import numpy as np
 
 from mirrorlab import bounds, culling
 from mirrorlab.culling import OUTSIDE_REASONS
-from mirrorlab.footprint import Footprint, polygon_footprint, sphere_footprint
+from mirrorlab.footprint import Footprint, full_screen, polygon_footprint, sphere_footprint
 from mirrorlab.scene.model import (
     FOOTPRINT_STEP,
     FOOTPRINT_TEXTURE,
@@ -898,7 +898,10 @@ def bounding_sphere(reflector: Reflector) -> tuple[np.ndarray, float]:
 def reflector_footprint(reflector: Reflector, view: View) -> Footprint:
     """Where ``reflector`` can show in ``view`` (:mod:`mirrorlab.footprint`): a planar
     mirror's quad clipped against the view volume and the view's clip plane, a curved
-    reflector's bounding sphere by its projected ellipse. It errs large."""
+    reflector's bounding sphere by its projected ellipse; in a warped view, whose
+    projection is not a matrix, the whole target. It errs large."""
+    if view.warp is not None:
+        return full_screen(view.size)
     if isinstance(reflector, PlanarReflector):
         return polygon_footprint(
             reflector.corner_array, view.view_projection, view.size, view.clip_plane

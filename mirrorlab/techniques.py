@@ -76,8 +76,10 @@ class Technique:
     ``draws_after_objects``: its own draw (its map, capture or nested view) comes after
     the view's objects, not before them as by default (the stencil mirror marks only the
     glass the objects leave showing); ``source`` what a reflector's
-    ``source`` key names for it (a ``picture`` used as its map, a folder of six cube
-    ``faces``; None: it takes none); ``view_ray``: its
+    ``source`` key names for it (a sphere-map ``picture`` used as its map, a folder of
+    six cube ``faces``, a square ``octahedral`` picture, a ``paraboloid`` picture of two
+    discs side by side; None: it takes none; a technique changed to one whose source is
+    of another kind drops the reflector's); ``view_ray``: its
     lookup follows the world-space view ray (``eye_world``, ``view_direction``);
     ``map_size_uniform``: its shader is told its map's size; ``parallax``: it takes a
     ``parallax`` table; ``own_camera``: planar, an ``ortho`` table sets its camera;
@@ -96,7 +98,7 @@ class Technique:
     constants: tuple[tuple[str, int], ...] = ()
     capture_camera: str = ""
     draws_after_objects: bool = False
-    source: Literal["picture", "faces"] | None = None
+    source: Literal["picture", "faces", "octahedral", "paraboloid"] | None = None
     view_ray: bool = False
     map_size_uniform: bool = False
     parallax: bool = False
@@ -308,6 +310,73 @@ for _entry in (
         sampler="normal_map_texture",
         source="picture",
         map_size_uniform=True,
+    ),
+    Technique(
+        "octahedral",
+        "curved",
+        "static octahedral map: the whole sphere in one square, its levels padded across "
+        "the folds; baked from the background or a square octahedral picture",
+        texture="static",
+        pass_class="mirrorlab.passes.octahedral:OctahedralMapped",
+        vertex_shader="envmap.vert",
+        fragment_shader="envmap_octahedral.frag",
+        sampler="octahedral_texture",
+        source="octahedral",
+        view_ray=True,
+    ),
+    Technique(
+        "octahedral-live",
+        "curved",
+        "live cube capture resampled into an octahedral map (as EEVEE and DDGI store "
+        "probes); its lookups optionally corrected for parallax as cube-live's",
+        texture="fixed",
+        pass_class="mirrorlab.passes.octahedral:LiveOctahedralMapped",
+        vertex_shader="envmap.vert",
+        fragment_shader="envmap_octahedral.frag",
+        sampler="octahedral_texture",
+        capture_camera="mirrorlab.captures:octahedral_cube_camera",
+        view_ray=True,
+        parallax=True,
+    ),
+    Technique(
+        "paraboloid",
+        "curved",
+        "static dual-paraboloid map: two hemispheres in two squares; baked from the "
+        "background or a dual-paraboloid picture",
+        texture="static",
+        pass_class="mirrorlab.passes.paraboloid:ParaboloidMapped",
+        vertex_shader="envmap.vert",
+        fragment_shader="envmap_paraboloid.frag",
+        sampler="paraboloid_texture",
+        source="paraboloid",
+        view_ray=True,
+    ),
+    Technique(
+        "paraboloid-live",
+        "curved",
+        "live cube capture converted into a dual-paraboloid map (as GTA V does); its "
+        "lookups optionally corrected for parallax as cube-live's",
+        texture="fixed",
+        pass_class="mirrorlab.passes.paraboloid:LiveParaboloidMapped",
+        vertex_shader="envmap.vert",
+        fragment_shader="envmap_paraboloid.frag",
+        sampler="paraboloid_texture",
+        capture_camera="mirrorlab.captures:paraboloid_cube_camera",
+        view_ray=True,
+        parallax=True,
+    ),
+    Technique(
+        "paraboloid-warped",
+        "curved",
+        "dual-paraboloid map captured live in two passes, the paraboloid applied per "
+        "vertex (large triangles come out straight where they should curve)",
+        texture="fixed",
+        pass_class="mirrorlab.passes.paraboloid:WarpedParaboloidMapped",
+        vertex_shader="envmap.vert",
+        fragment_shader="envmap_paraboloid.frag",
+        sampler="paraboloid_texture",
+        capture_camera="mirrorlab.captures:paraboloid_camera",
+        view_ray=True,
     ),
     Technique(
         "raytrace",

@@ -39,6 +39,31 @@ CULL_TESTS_KEPT = 8
 """Scissors whose culling test (:meth:`View.cull_test`) a view keeps."""
 
 
+@dataclass(frozen=True)
+class Warp:
+    """How a view whose projection is not a matrix places what it draws: a function of
+    the vertex stage (a hemisphere's paraboloid, ...), written in GLSL.
+
+    ``shader`` names the package shader file that stands in for ``warp.glsl`` in every
+    program that draws the view (:meth:`mirrorlab.passes.base.SharedResources.program`):
+    with ``WARP_VERTEX`` defined it gives ``vec4 project(mat4 view_projection, vec4
+    point)``, the clip position of an origin-relative point from the view's matrix (it
+    may lower ``gl_ClipDistance[0]``, which is on while a warped view is drawn, below
+    what ``clip.glsl``'s ``clip_world`` wrote), else
+    ``vec3 view_direction(mat3 eye_to_world, vec2 ndc)``, the world direction seen at a
+    point of the target (the background's).
+
+    A warped :class:`View` keeps a ``projection``: the matrix its warp's shader takes
+    (with :attr:`View.relative_view`), whose clip volume holds everything the view can
+    show, so that culling, which tests against it, errs large. A reflector's footprint
+    in a warped view is the whole target. A warped view has no clip plane, and no mirror
+    image: a reflector whose camera follows the viewer (a reflected or stencil mirror)
+    has no camera from it and is drawn plain there.
+    """
+
+    shader: str
+
+
 @dataclass(frozen=True, eq=False)
 class View:
     """One way of looking at the scene.
@@ -50,7 +75,9 @@ class View:
     clockwise (the world seen in a mirror); ``clip_plane`` ``(4,)`` world-space plane
     whose negative side is cut away, or None; ``label`` names the view in plans;
     ``depth_range`` the (near, far) clip distances its projection was made with (an
-    oblique near plane then replaced near), None where unknown.
+    oblique near plane then replaced near), None where unknown; ``warp`` how a view whose
+    projection is not a matrix places what it draws (:class:`Warp`), None for a
+    projection matrix.
     """
 
     view: np.ndarray
@@ -61,6 +88,17 @@ class View:
     mirrored: bool = False
     clip_plane: np.ndarray | None = None
     depth_range: tuple[float, float] | None = None
+    warp: Warp | None = None
+
+    def __post_init__(self) -> None:
+        if self.warp is not None and self.clip_plane is not None:
+            raise ValueError(f"view {self.label!r}: a warped view takes no clip plane")
+
+    @property
+    def orthographic(self) -> bool:
+        """Whether the view looks along its ``-z`` from everywhere, with no eye point: its
+        projection is orthographic and it is not warped."""
+        return self.warp is None and is_orthographic(self.projection)
 
     # What a view works out is kept, read-only: one view may be drawn in many frames
     # (camera_view gives a still camera's view again).
@@ -158,6 +196,7 @@ class View:
             self.origin.tobytes(),
             clip,
             self.size,
+            self.warp,
         )
 
     def relative(self, model: np.ndarray) -> np.ndarray:
@@ -186,6 +225,7 @@ class View:
             tuple(_rounded(self.projection).ravel()),
             self.size,
             clip,
+            self.warp,
         )
 
     @property
@@ -389,14 +429,18 @@ def _ortho_capture_view(capture: OrthoCapture, size: tuple[int, int], name: str)
     )
 
 
-def cube_face_views(reflector: CurvedReflector, depth_range: tuple[float, float]) -> list[View]:
+def cube_face_views(
+    reflector: CurvedReflector, depth_range: tuple[float, float], size: int | None = None
+) -> list[View]:
     """The six 90-degree views of a live cube map from the reflector's capture centre,
     with clip distances ``depth_range`` (near, far; see
-    :func:`mirrorlab.bounds.cube_depth_range`)."""
+    :func:`mirrorlab.bounds.cube_depth_range`), ``size`` texels a side (default: the
+    reflector's map size)."""
     center = reflector.center()
     near, far = depth_range
     projection = math3d.perspective(90.0, 1.0, near, far)
-    size = (reflector.map_size, reflector.map_size)
+    edge = reflector.map_size if size is None else int(size)
+    face_size = (edge, edge)
     views = []
     for name, (direction, up) in zip(CUBE_FACE_NAMES, CUBE_FACE_AXES, strict=True):
         view = math3d.look_at(center, center + np.asarray(direction), up)
@@ -404,7 +448,7 @@ def cube_face_views(reflector: CurvedReflector, depth_range: tuple[float, float]
             View(
                 view=view,
                 projection=projection,
-                size=size,
+                size=face_size,
                 eye=center,
                 label=f"{reflector.name} cube {name}",
                 depth_range=(float(near), float(far)),

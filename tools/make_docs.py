@@ -1,6 +1,6 @@
 """Re-make the README's comparison pictures in docs/ (headless; run from the checkout):
 
-    .venv/bin/python tools/make_docs.py [methods] [envmaps] [cone] [parallax]
+    .venv/bin/python tools/make_docs.py [methods] [envmaps] [cone] [parallax] [maps] [warp]
 
 (all of them when none is named). docs/methods.png: the lab scene (lab20) 30 degrees off
 the mirror's normal, by each mirror technique and the ray tracer. docs/envmaps.png: the
@@ -8,8 +8,12 @@ sphere scene (chrome_sphere) by each environment-map technique and the ray trace
 rays a pixel). docs/cone.png: the textbook's cone (spheremap_cone) at two heights (texgen
 sphere map). docs/parallax.png: the live cube map without and with its parallax
 corrections against the ray tracer, among chrome_sphere's objects and in sphere_room, and
-where the pixels that still differ lie. The accuracy plot comes from `mirrorlab bench
-accuracy`.
+where the pixels that still differ lie. docs/direction_maps.png: the chrome sphere by the
+octahedral and dual-paraboloid maps, each above the map it samples. docs/paraboloid_warp.png:
+the room's sphere by the dual-paraboloid map converted from the cube capture and by the
+vertex-warped one, with the room's walls as shipped (two triangles each) and cut into
+small triangles, above their maps. The accuracy plot comes from `mirrorlab bench
+accuracy`, the texel-budget study's from `bench/texel_budget.py`.
 """
 
 from __future__ import annotations
@@ -27,7 +31,7 @@ import mirrorlab
 from mirrorlab.accuracy import erode
 from mirrorlab.options import apply_options
 from mirrorlab.raytrace import trace_scene
-from mirrorlab.scene.model import CurvedReflector
+from mirrorlab.scene.model import CurvedReflector, MeshObject
 from mirrorlab.techniques import technique_names
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
@@ -131,14 +135,93 @@ def parallax_picture(renderer) -> None:
     Image.fromarray(np.vstack(rows)).save(DOCS / "parallax.png")
 
 
+PICTURES = ("methods", "envmaps", "cone", "parallax", "maps", "warp")
+FILES = {"maps": "direction_maps", "warp": "paraboloid_warp"}
+"""The file a picture is written to, where it is not named as the picture is."""
+
+
+def frames_and_maps(scenes: list[tuple[str, Any]]) -> np.ndarray:
+    """Each ``(label, scene)`` drawn at ``SIZE``, above the map its sphere sampled (read
+    back from the GL, level 0, scaled to the frame's width)."""
+    from mirrorlab.gl.context import offscreen_context
+    from mirrorlab.gl.resources import Framebuffer
+    from mirrorlab.renderer import SceneRenderer
+
+    columns = []
+    with offscreen_context() as context:
+        renderer = SceneRenderer(context.resources)
+        target = Framebuffer(context.resources, SIZE, SIZE)
+        try:
+            for label, scene in scenes:
+                stats = renderer.render(scene, target)
+                frame = target.read()
+                draw = next(d for d in stats.plan.top.draws if d.reflector.name == "sphere")
+                texture = renderer.shown_texture(draw)
+                assert texture is not None and hasattr(texture, "read")
+                shown = Image.fromarray(texture.read())
+                height = SIZE * shown.height // shown.width
+                shown = shown.resize((SIZE, height), Image.Resampling.NEAREST)
+                picture = np.zeros((SIZE, SIZE, 3), dtype=np.uint8)
+                picture[(SIZE - height) // 2 : (SIZE - height) // 2 + height] = np.asarray(shown)
+                columns.append(np.vstack([labelled(frame, label), picture]))
+        finally:
+            target.release()
+            renderer.release()
+    return np.hstack(columns)
+
+
+def maps_picture() -> None:
+    sphere = mirrorlab.load_scene("chrome_sphere")
+    names = ("octahedral", "octahedral-live", "paraboloid", "paraboloid-live", "paraboloid-warped")
+    scenes = [(m, apply_options(sphere, {"method": m, "map_size": 128})) for m in names]
+    Image.fromarray(frames_and_maps(scenes)).save(DOCS / "direction_maps.png")
+
+
+def warp_picture() -> None:
+    import tempfile
+
+    import trimesh
+
+    room = mirrorlab.load_scene("sphere_room")
+    with tempfile.TemporaryDirectory() as folder:
+        objects = []
+        for item in room.objects:
+            assert isinstance(item, MeshObject)
+            path = Path(folder) / f"{item.mesh.stem}.obj"
+            if not path.exists():
+                mesh = trimesh.load(item.mesh, force="mesh", process=False)
+                assert isinstance(mesh, trimesh.Trimesh)
+                for _ in range(4):  # each triangle into four: the walls' 8-unit edges 0.5
+                    mesh = mesh.subdivide()
+                mesh.export(path)
+            objects.append(replace(item, mesh=path))
+        finer = replace(room, objects=tuple(objects))
+        warped = {"method": "paraboloid-warped", "map_size": 128}
+        scenes = [
+            (
+                "converted",
+                apply_options(
+                    room, {"method": "paraboloid-live", "map_size": 128, "parallax": "none"}
+                ),
+            ),
+            ("warped", apply_options(room, warped)),
+            ("warped, walls cut", apply_options(finer, warped)),
+        ]
+        Image.fromarray(frames_and_maps(scenes)).save(DOCS / "paraboloid_warp.png")
+
+
 def main(pictures: list[str]) -> None:
-    chosen = set(pictures) or {"methods", "envmaps", "cone", "parallax"}
-    unknown = chosen - {"methods", "envmaps", "cone", "parallax"}
+    chosen = set(pictures) or set(PICTURES)
+    unknown = chosen - set(PICTURES)
     if unknown:
         raise SystemExit(
-            f"make_docs.py: unknown picture {sorted(unknown)[0]!r}; expected "
-            "methods, envmaps, cone or parallax"
+            f"make_docs.py: unknown picture {sorted(unknown)[0]!r}; expected one of "
+            f"{', '.join(PICTURES)}"
         )
+    if "maps" in chosen:
+        maps_picture()
+    if "warp" in chosen:
+        warp_picture()
     with mirrorlab.Renderer(size=(SIZE, SIZE)) as renderer:
         if "methods" in chosen:
             methods_picture(renderer)
@@ -148,7 +231,7 @@ def main(pictures: list[str]) -> None:
             cone_picture(renderer)
         if "parallax" in chosen:
             parallax_picture(renderer)
-    print(f"wrote {', '.join(f'{DOCS}/{name}.png' for name in sorted(chosen))}")
+    print(f"wrote {', '.join(f'{DOCS}/{FILES.get(name, name)}.png' for name in sorted(chosen))}")
 
 
 def methods_picture(renderer) -> None:

@@ -32,7 +32,8 @@ def _add_accuracy_parser(benchmarks: argparse._SubParsersAction) -> None:
     accuracy.add_argument(
         "--quick",
         action="store_true",
-        help="a small sweep (128-pixel frames, maps 64 and 128, few viewpoints)",
+        help="a small sweep (128-pixel frames, the mirror's captures at 64 and 128, the "
+        "environment maps at 128, few viewpoints)",
     )
     accuracy.add_argument(
         "--out-dir",
@@ -187,6 +188,7 @@ def _run_accuracy(args: argparse.Namespace) -> int:
         changes["frame"] = parse_count("--frame", args.frame, 16, 4096)
     if args.sizes:
         changes["sizes"] = parse_counts("--sizes", args.sizes, 1, 8192)
+        changes["curved_sizes"] = None  # every map at the sizes asked for
     if args.frames:
         changes["frames"] = parse_count("--frames", args.frames, 1, 10000)
     jobs = parse_count("--jobs", args.jobs, 1, 1024)

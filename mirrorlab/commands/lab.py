@@ -100,9 +100,24 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     grade.add_argument(
         "--students",
         metavar="FILE",
-        help="the class list (one name a line, "
-        "as for lab release): submissions by other names are reported and not "
-        "graded",
+        help="the class list, as for lab release: one name a line, or a .csv with a "
+        "header (a name, and an id and an email where it has them); submissions by "
+        "nobody on it are reported and not graded, and every output keeps its names "
+        "and ids",
+    )
+    grade.add_argument(
+        "--format",
+        metavar="LAYOUT",
+        default="plain",
+        help="gradebook.csv's layout: plain (mirrorlab's own), canvas (Canvas's "
+        "gradebook import) or moodle (Moodle's CSV grade import; needs a class list "
+        "with ids or emails); default %(default)s",
+    )
+    grade.add_argument(
+        "--assignment",
+        metavar="NAME",
+        help="the gradebook's column for the lab, as the LMS names the assignment "
+        "(Canvas: 'Title (ID)' as its export writes it); default the lab's title",
     )
     grade.add_argument(
         "--copies",
@@ -128,7 +143,10 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     release.add_argument("lab_name", metavar="LAB")
     release.add_argument("out", metavar="OUT", help="where the students' folders go")
     release.add_argument(
-        "--students", metavar="FILE", required=True, help="the class list: one name a line"
+        "--students",
+        metavar="FILE",
+        required=True,
+        help="the class list: one name a line, or a .csv with a header (name, id, email)",
     )
     release.add_argument(
         "--key",
@@ -214,4 +232,6 @@ def run(args: argparse.Namespace) -> int:
         args.solutions,
         Path(args.students) if args.students else None,
         args.copies,
+        args.format,
+        args.assignment,
     )

@@ -283,6 +283,7 @@ def render_frames(
             if save_env is not None and environment is not None:
                 outputs.add_png(save_env, environment)
             gl_renderer = renderer.gl_renderer
+            described = renderer.gl_description if stats else None
     last = records[-1][1]
     total = (time.perf_counter() - start) * 1e3
     say(
@@ -297,6 +298,10 @@ def render_frames(
             say(
                 f"wrote {save_env} (capture texture, {environment.shape[1]}x{environment.shape[0]})"
             )
+    if described is not None:
+        from mirrorlab.gl.context import summary
+
+        say(f"OpenGL: {summary(described)}; draw path {described['draw_path']}")
     if stats:
         _report(records, comparison, use_plan, say)
     return 0

@@ -873,3 +873,54 @@ def gl_info() -> dict[str, str]:
             ("vendor", GL.GL_VENDOR),
         )
     }
+
+
+_PROFILE_MASK, _CORE_BIT, _COMPATIBILITY_BIT = 0x9126, 0x1, 0x2
+_CONTEXT_FLAGS, _FORWARD_COMPATIBLE_BIT = 0x821E, 0x1
+
+
+def gl_profile() -> str:
+    """The current context's profile: ``core profile`` (with ``, forward-compatible`` when
+    it is, as macOS's), ``compatibility profile``, or ``no profile`` (OpenGL before 3.2,
+    such as macOS's legacy 2.1)."""
+    from OpenGL import GL
+
+    if gl_version() < (3, 2):
+        return "no profile"
+    mask = int(GL.glGetIntegerv(_PROFILE_MASK))
+    flags = int(GL.glGetIntegerv(_CONTEXT_FLAGS))
+    while GL.glGetError() != GL.GL_NO_ERROR:
+        pass
+    if mask & _CORE_BIT:
+        forward = flags & _FORWARD_COMPATIBLE_BIT
+        return "core profile, forward-compatible" if forward else "core profile"
+    return "compatibility profile" if mask & _COMPATIBILITY_BIT else "no profile"
+
+
+def describe(context: Context) -> dict[str, str]:
+    """What a bug report needs of ``context`` (made current): its backend and PyOpenGL's
+    platform, the OpenGL version, profile, GLSL version, renderer and vendor, and the
+    scene drawer's draw path on it (``packed``: one multi-draw a pass, OpenGL 4.3; else
+    ``per-draw``)."""
+    from OpenGL import GL
+
+    context.make_current()
+    found = {
+        "backend": context.backend,
+        "platform": loaded_platform() or "",
+        **gl_info(),
+        "profile": gl_profile(),
+        "glsl": GL.glGetString(GL.GL_SHADING_LANGUAGE_VERSION).decode(errors="replace"),
+        "draw_path": "packed" if has_multi_draw() else "per-draw",
+    }
+    return found
+
+
+def summary(found: Mapping[str, str]) -> str:
+    """:func:`describe`'s answer as one phrase: ``backend egl (PyOpenGL egl), OpenGL 4.5,
+    compatibility profile, llvmpipe (...), Mesa/X.org``."""
+    version = found["version"].split(" ")[0]
+    return (
+        f"backend {found['backend']} (PyOpenGL {found['platform']}), OpenGL {version}, "
+        f"{found['profile']}, {found['renderer']}, {found['vendor']}"
+    )

@@ -64,20 +64,27 @@ class _Resource:
 _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.MULTILINE)
 
 
-def expand_includes(name: str, seen: tuple[str, ...] = ()) -> str:
+def expand_includes(
+    name: str, seen: tuple[str, ...] = (), aliases: dict[str, str] | None = None
+) -> str:
     """The shader file ``name`` with every ``#include "other.glsl"`` line replaced by that
-    package shader file's text (recursively; an include cycle is a ValueError)."""
+    package shader file's text (recursively; an include cycle is a ValueError). An
+    include named in ``aliases`` pulls in the file it maps to instead (a view's warp
+    standing in for ``warp.glsl``)."""
     if name in seen:
         raise ValueError(f"shader include cycle: {' -> '.join((*seen, name))}")
+    chosen = (aliases or {}).get(name, name) if seen else name
     return _INCLUDE.sub(
-        lambda match: expand_includes(match.group(1), (*seen, name)), shader_source(name)
+        lambda match: expand_includes(match.group(1), (*seen, name), aliases),
+        shader_source(chosen),
     )
 
 
 class Program(_Resource):
     """A linked shader program built from package shader files. Lines ``#include
-    "file.glsl"`` pull in shared GLSL from the same folder; ``defines`` are added as
-    ``#define NAME VALUE`` lines after the ``#version`` line."""
+    "file.glsl"`` pull in shared GLSL from the same folder (``includes`` maps an included
+    name to another file that stands in for it); ``defines`` are added as ``#define NAME
+    VALUE`` lines after the ``#version`` line."""
 
     def __init__(
         self,
@@ -85,11 +92,12 @@ class Program(_Resource):
         vertex: str,
         fragment: str,
         defines: dict[str, str | int] | None = None,
+        includes: dict[str, str] | None = None,
     ) -> None:
         header = "".join(f"#define {key} {value}\n" for key, value in (defines or {}).items())
         shaders: list[int] = []
         for name, kind in ((vertex, GL.GL_VERTEX_SHADER), (fragment, GL.GL_FRAGMENT_SHADER)):
-            version, _, body = expand_includes(name).partition("\n")
+            version, _, body = expand_includes(name, aliases=includes).partition("\n")
             shader = gl.glCreateShader(kind)
             gl.glShaderSource(shader, f"{version}\n{header}{body}")
             gl.glCompileShader(shader)
@@ -279,9 +287,73 @@ class Texture2D(_Resource):
         clamped to the edge (the lab's ENVIRONMENT texture)."""
         return cls(registry, width, height, None, mipmaps=False, clamp=True)
 
+    @classmethod
+    def with_levels(
+        cls,
+        registry: ResourceRegistry,
+        sizes: tuple[int, ...],
+        levels: list[np.ndarray] | None = None,
+        what: str = "a texture",
+    ) -> Texture2D:
+        """A square RGB texture whose mip levels are its own, not GL's filtering of level
+        0 (an octahedral map's, each with a border of its own): level ``k`` is
+        ``sizes[k]`` texels wide, GL's ``size >> k``, and holds ``levels[k]`` (``(n_k,
+        n_k, 3)`` uint8, row 0 at the top) or nothing yet, for a pass to draw into
+        (:class:`TextureFramebuffer` of that level). Clamped to the edge, linear within
+        and between levels, no level past the last of ``sizes``."""
+        if any(size != sizes[0] >> k for k, size in enumerate(sizes)):
+            raise ValueError(f"mip level sizes must halve as GL's do, got {sizes}")
+        texture = cls(registry, sizes[0], sizes[0], None, mipmaps=False, clamp=True, what=what)
+        texture.mipmaps = True
+        gl.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
+        for level, size in enumerate(sizes):
+            data = None
+            if levels is not None:
+                image = np.asarray(levels[level])
+                if image.shape != (size, size, 3) or image.dtype != np.uint8:
+                    raise ValueError(
+                        f"mip level {level} must be ({size}, {size}, 3) uint8, got "
+                        f"{image.shape} {image.dtype}"
+                    )
+                data = np.ascontiguousarray(image[::-1])
+            gl.glTexImage2D(
+                GL.GL_TEXTURE_2D,
+                level,
+                GL.GL_RGB8,
+                size,
+                size,
+                0,
+                GL.GL_RGB,
+                GL.GL_UNSIGNED_BYTE,
+                data,
+            )
+        gl.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAX_LEVEL, len(sizes) - 1)
+        gl.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_LINEAR_MIPMAP_LINEAR)
+        return texture
+
     def bind(self, unit: int = 0) -> None:
         gl.glActiveTexture(GL.GL_TEXTURE0 + unit)
         gl.glBindTexture(GL.GL_TEXTURE_2D, self.name)
+
+    def generate_mipmaps(self) -> None:
+        """Rebuild the mipmap levels from level 0 (after a capture); needs ``mipmaps``."""
+        if not self.mipmaps:
+            raise ValueError("this texture was made without mipmaps")
+        gl.glBindTexture(GL.GL_TEXTURE_2D, self.name)
+        gl.glGenerateMipmap(GL.GL_TEXTURE_2D)
+
+    def copy_square_from_framebuffer(self, x: int, size: int, source: tuple[int, int]) -> None:
+        """Copy the bound read framebuffer's lower-left ``size`` x ``size`` square into
+        level 0 at column ``x`` (the storage the texture has; ``glCopyTexSubImage2D``).
+        ``source`` is the size of the framebuffer read, which must hold the square, and
+        the texture must hold it at ``x``."""
+        if size > min(source) or x < 0 or x + size > self.width or size > self.height:
+            raise ValueError(
+                f"a {size}x{size} copy from a {source[0]}x{source[1]} framebuffer does "
+                f"not fit a {self.width}x{self.height} texture at column {x}"
+            )
+        gl.glBindTexture(GL.GL_TEXTURE_2D, self.name)
+        gl.glCopyTexSubImage2D(GL.GL_TEXTURE_2D, 0, int(x), 0, 0, 0, int(size), int(size))
 
     def copy_from_framebuffer(
         self,
@@ -451,40 +523,44 @@ class Framebuffer(_FramebufferObject):
 
 
 class TextureFramebuffer(_FramebufferObject):
-    """An offscreen target that draws straight into a :class:`Texture2D`'s level 0, with a
-    24-bit depth + 8-bit stencil renderbuffer of the same size.
+    """An offscreen target that draws straight into a :class:`Texture2D`'s ``level`` (0 by
+    default), with a 24-bit depth + 8-bit stencil renderbuffer of the same size unless
+    ``depth`` is False (a pass that fills a texture without depth testing).
 
     The texture keeps its own lifetime; this frees only the framebuffer and
     its depth buffer. Re-make it after the texture is re-allocated.
     """
 
-    def __init__(self, registry: ResourceRegistry, texture: Texture2D) -> None:
+    def __init__(
+        self, registry: ResourceRegistry, texture: Texture2D, level: int = 0, depth: bool = True
+    ) -> None:
         self.texture = texture
-        self.width, self.height = texture.width, texture.height
+        self.width, self.height = max(1, texture.width >> level), max(1, texture.height >> level)
         self.name = int(gl.glGenFramebuffers(1))
-        self._depth = int(gl.glGenRenderbuffers(1))
+        self._depth = int(gl.glGenRenderbuffers(1)) if depth else 0
         gl.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
         gl.glFramebufferTexture2D(
-            GL.GL_FRAMEBUFFER, GL.GL_COLOR_ATTACHMENT0, GL.GL_TEXTURE_2D, texture.name, 0
+            GL.GL_FRAMEBUFFER, GL.GL_COLOR_ATTACHMENT0, GL.GL_TEXTURE_2D, texture.name, level
         )
-        gl.glBindRenderbuffer(GL.GL_RENDERBUFFER, self._depth)
-        gl.glRenderbufferStorage(
-            GL.GL_RENDERBUFFER, GL.GL_DEPTH24_STENCIL8, self.width, self.height
-        )
-        gl.glFramebufferRenderbuffer(
-            GL.GL_FRAMEBUFFER, GL.GL_DEPTH_STENCIL_ATTACHMENT, GL.GL_RENDERBUFFER, self._depth
-        )
+        if depth:
+            gl.glBindRenderbuffer(GL.GL_RENDERBUFFER, self._depth)
+            gl.glRenderbufferStorage(
+                GL.GL_RENDERBUFFER, GL.GL_DEPTH24_STENCIL8, self.width, self.height
+            )
+            gl.glFramebufferRenderbuffer(
+                GL.GL_FRAMEBUFFER, GL.GL_DEPTH_STENCIL_ATTACHMENT, GL.GL_RENDERBUFFER, self._depth
+            )
         status = gl.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
         if status != GL.GL_FRAMEBUFFER_COMPLETE:
-            gl.glDeleteRenderbuffers(1, [self._depth])
-            gl.glDeleteFramebuffers(1, [self.name])
+            self._free()
             raise GLContextError(
                 f"texture framebuffer {self.width}x{self.height} incomplete (status {status:#x})"
             )
         super().__init__(registry)
 
     def _free(self) -> None:
-        gl.glDeleteRenderbuffers(1, [self._depth])
+        if self._depth:
+            gl.glDeleteRenderbuffers(1, [self._depth])
         gl.glDeleteFramebuffers(1, [self.name])
 
 

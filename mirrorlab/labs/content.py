@@ -13,7 +13,7 @@ import re
 from pathlib import Path
 
 from mirrorlab.labs import LabSpec, find_lab
-from mirrorlab.labs.trusted.variants import Variant
+from mirrorlab.labs.trusted.variants import Variant, header_line
 
 MARK = re.compile(r"\{\{(\w+)\}\}")
 BLOCK = re.compile(r"(# --- variant[^\n]*\n)(.*?)(# --- end of variant)", re.S)
@@ -62,7 +62,9 @@ def handout(spec: LabSpec, variant: Variant) -> str:
 
 
 def starter(spec: LabSpec, variant: Variant) -> str:
-    return render(template(spec, "starter.py"), values(variant))
+    """The starter of ``variant``: its header line (:func:`~.variants.header_line`: the
+    variant's numbers, for ``lab check`` away from ``variant.json``), then the template."""
+    return header_line(variant) + render(template(spec, "starter.py"), values(variant))
 
 
 def reference_folder(spec: LabSpec) -> Path:

@@ -31,7 +31,7 @@ if TYPE_CHECKING:
     from mirrorlab.passes.scene_draw import SceneDrawer
     from mirrorlab.plan import PlannedPass, Rectangle, ReflectorDraw, ViewPlan
     from mirrorlab.scene.model import Light, Reflector, Scene
-    from mirrorlab.views import View
+    from mirrorlab.views import View, Warp
 
 SCRATCH_KEPT = 4
 """Scratch framebuffers kept, by size (most recently used)."""
@@ -92,10 +92,17 @@ class SharedResources:
             )
         return self._textures[source]
 
-    def program(self, vertex: str, fragment: str, **defines: str | int) -> Program:
-        key = (vertex, fragment, tuple(sorted(defines.items())))
+    def program(
+        self, vertex: str, fragment: str, warp: Warp | None = None, **defines: str | int
+    ) -> Program:
+        """The program of the shader pair with ``defines``, made on first use. A program
+        that draws a warped view (:class:`~mirrorlab.views.Warp`) is made for its ``warp``:
+        the warp's shader stands in for ``warp.glsl``. A pass that draws in any view asks
+        for its program with that view's ``warp``."""
+        key = (vertex, fragment, tuple(sorted(defines.items())), warp)
         if key not in self._programs:
-            self._programs[key] = Program(self.registry, vertex, fragment, defines)
+            includes = None if warp is None else {"warp.glsl": warp.shader}
+            self._programs[key] = Program(self.registry, vertex, fragment, defines, includes)
         return self._programs[key]
 
     def scratch(self, size: tuple[int, int]) -> Framebuffer:
@@ -164,7 +171,7 @@ def apply_view_state(view: View, stencil_level: int) -> None:
     """Winding, clipping and stencil test for drawing ``view`` at ``stencil_level`` (0: the
     whole target; k > 0: only where a stencil mirror k levels deep marked it)."""
     gl.glFrontFace(GL.GL_CW if view.mirrored else GL.GL_CCW)
-    if view.clip_plane is None:
+    if view.clip_plane is None and view.warp is None:  # a warp may cut by the distance
         gl.glDisable(GL.GL_CLIP_DISTANCE0)
     else:
         gl.glEnable(GL.GL_CLIP_DISTANCE0)

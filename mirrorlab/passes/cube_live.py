@@ -13,7 +13,13 @@ from __future__ import annotations
 import numpy as np
 
 from mirrorlab.bounds import encloses
-from mirrorlab.gl.resources import DepthTextureCube, Program, RenderTarget, TextureCube
+from mirrorlab.gl.resources import (
+    DepthTextureCube,
+    Program,
+    RenderTarget,
+    Texture2D,
+    TextureCube,
+)
 from mirrorlab.passes.base import SharedResources, ViewDrawer
 from mirrorlab.passes.envmap import CurvedPass
 from mirrorlab.passes.sky import background_cube
@@ -25,7 +31,7 @@ from mirrorlab.scene.model import (
     DistanceSearch,
     SphereProxy,
 )
-from mirrorlab.views import View
+from mirrorlab.views import View, Warp
 
 PARALLAX_CODES = {None: 0, "box": 1, "sphere": 2, "distance": 3}
 """The ``PARALLAX`` define of ``envmap_cube.frag`` for each kind of correction."""
@@ -65,10 +71,15 @@ class LiveCubeMapped(CurvedPass):
             assert background is not None
             self.background = background_cube(shared, background)
 
-    def make_program(self, shared: SharedResources, reflector: CurvedReflector) -> Program:
+    def make_program(
+        self, shared: SharedResources, reflector: CurvedReflector, warp: Warp | None = None
+    ) -> Program:
         kind = None if reflector.parallax is None else reflector.parallax.kind
         program = shared.program(
-            self.entry.vertex_shader, self.entry.fragment_shader, PARALLAX=PARALLAX_CODES[kind]
+            self.entry.vertex_shader,
+            self.entry.fragment_shader,
+            warp,
+            PARALLAX=PARALLAX_CODES[kind],
         )
         program.use()
         program.set_int(self.entry.sampler, 0)
@@ -122,7 +133,8 @@ class LiveCubeMapped(CurvedPass):
         cube.generate_mipmaps()
         return draws
 
-    def map_for(self, draw: ReflectorDraw) -> TextureCube:
+    def map_for(self, draw: ReflectorDraw) -> Texture2D | TextureCube:
+        """The slot's cube (a subclass may resample it into a map of another kind)."""
         return self.cube(draw.slot)
 
     def lookup_uniforms(

@@ -20,7 +20,7 @@ from mirrorlab.plan import PlannedPass, ReflectorDraw
 from mirrorlab.scene.backgrounds import environment_of, load_picture
 from mirrorlab.scene.model import Background, CurvedReflector
 from mirrorlab.techniques import technique
-from mirrorlab.views import View, eye_position, is_orthographic
+from mirrorlab.views import View, Warp, eye_position
 
 OUTPUT_COLOR = 0
 OUTPUT_COORDINATES = 1
@@ -59,14 +59,31 @@ class CurvedPass:
         self.entry = technique(reflector.technique)
         self.output_mode = OUTPUT_COLOR
         self.mesh = shared.mesh(reflector.mesh)
+        self.made_for = reflector
         self.program = self.make_program(shared, reflector)
+        self._warped: dict[Warp, Program] = {}
 
-    def make_program(self, shared: SharedResources, reflector: CurvedReflector) -> Program:
-        """The technique's shader program, its map on texture unit 0."""
-        program = shared.program(self.entry.vertex_shader, self.entry.fragment_shader)
+    def make_program(
+        self, shared: SharedResources, reflector: CurvedReflector, warp: Warp | None = None
+    ) -> Program:
+        """The technique's shader program (for views of ``warp``), its map on texture
+        unit 0."""
+        program = shared.program(self.entry.vertex_shader, self.entry.fragment_shader, warp)
         program.use()
         program.set_int(self.entry.sampler, 0)
         return program
+
+    def program_for(self, view: View) -> Program:
+        """The program that draws the reflector in ``view``: :attr:`program`, or one made
+        for a warped view's warp."""
+        if view.warp is None:
+            return self.program
+        held = self._warped.get(view.warp)
+        if held is None:
+            held = self._warped[view.warp] = self.make_program(
+                self.shared, self.made_for, view.warp
+            )
+        return held
 
     def release(self) -> None:
         """Nothing of its own: the program and the mesh are shared."""
@@ -121,7 +138,7 @@ class CurvedPass:
         gl.glEnable(GL.GL_DEPTH_TEST)
         gl.glEnable(GL.GL_CULL_FACE)
         entry = self.entry
-        program = self.program
+        program = self.program_for(view)
         program.use()
         program.set_int(entry.sampler, 0)  # a program may be shared: set what is ours
         for name, value in entry.constants:
@@ -133,7 +150,7 @@ class CurvedPass:
         program.set_int("output_mode", self.output_mode)
         set_clip_plane(program, view)
         if program.has_uniform("orthographic"):  # "normal" ignores where the eye is
-            program.set_int("orthographic", is_orthographic(view.projection))
+            program.set_int("orthographic", view.orthographic)
         if entry.view_ray:
             program.set_vec3("eye_world", eye_position(view.view) - view.origin)
             program.set_vec3("view_direction", view.forward)

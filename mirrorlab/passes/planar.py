@@ -8,7 +8,13 @@ import numpy as np
 from mirrorlab import math3d
 from mirrorlab.gl.calls import gl
 from mirrorlab.gl.opengl import GL
-from mirrorlab.gl.resources import MeshBuffer, RenderTarget, Texture2D, TextureFramebuffer
+from mirrorlab.gl.resources import (
+    MeshBuffer,
+    Program,
+    RenderTarget,
+    Texture2D,
+    TextureFramebuffer,
+)
 from mirrorlab.passes.base import SharedResources, ViewDrawer, set_view_uniforms
 from mirrorlab.plan import PlannedPass, Rectangle, ReflectorDraw, ViewPlan, bounding
 from mirrorlab.scene.model import Background, PlanarReflector
@@ -54,13 +60,19 @@ class PlanarPass:
         self._quad_of = reflector
         self._placed: list[tuple[View, PlanarReflector, np.ndarray]] = []
         """The quad's origin-relative model in the last few views (:meth:`quad_model`)."""
-        self.mirror_program = shared.program("mirror.vert", "mirror.frag")
-        self.flat_program = shared.program("flat.vert", "flat.frag")
-        self.mirror_program.use()
-        self.mirror_program.set_int("environment", 0)
+        self.mirror_program(None)  # made now: its texture unit set once
 
     def release(self) -> None:
         self.quad.release()
+
+    def mirror_program(self, view: View | None) -> Program:
+        """The textured mirror's program for ``view`` (its warp's, when warped)."""
+        program = self.shared.program(
+            "mirror.vert", "mirror.frag", None if view is None else view.warp
+        )
+        program.use()
+        program.set_int("environment", 0)  # set once: a program skips an unchanged value
+        return program
 
     def place(self, reflector: PlanarReflector) -> None:
         """Make the quad ``reflector``'s (its corners and texture coordinates)."""
@@ -83,7 +95,7 @@ class PlanarPass:
 
     def flat_quad(self, view: View, color, far_depth: bool) -> None:
         """The quad in one flat colour (``far_depth``: at the far plane's depth)."""
-        program = self.flat_program
+        program = self.shared.program("flat.vert", "flat.frag", view.warp)
         program.use()
         set_view_uniforms(program, view)
         program.set_mat4("model", self.quad_model(view))
@@ -103,9 +115,8 @@ class PlanarPass:
         """Front textured (by the quad's own coordinates, or projectively: where the
         capture view ``source`` saw each point, :func:`~mirrorlab.views.projective_lookup`),
         back in its backing colour; returns 1."""
-        program = self.mirror_program
         gl.glDisable(GL.GL_CULL_FACE)
-        program.use()
+        program = self.mirror_program(view)
         set_view_uniforms(program, view)
         program.set_mat4("model", self.quad_model(view))
         program.set_vec3("backing_color", self.reflector.backing)

@@ -52,7 +52,7 @@ from mirrorlab.plan import Rectangle
 from mirrorlab.scene.mesh import TextureSource
 from mirrorlab.scene.model import CurvedReflector, PlanarReflector, Scene
 from mirrorlab.scene.robot import PartLooks
-from mirrorlab.views import View
+from mirrorlab.views import View, Warp
 
 FEW_PARTS = 32
 """Up to this many parts in view, none is culled for covering no pixel centre: testing
@@ -196,7 +196,8 @@ class SceneDrawer:
         self.draw_path: DrawPath = draw_path
         self.shared = shared
         shared.packed.carry_parts()
-        self._programs: dict[int, tuple[Program, Program]] = {}  # by light count
+        # by light count and warp
+        self._programs: dict[tuple[int, Warp | None], tuple[Program, Program]] = {}
         self._tables: OrderedDict[ObjectArrays, PartTable] = OrderedDict()
         self._looks: OrderedDict[tuple[PartLooks, ...], PartTable] = OrderedDict()
         # the recorded views: those drawn in the frame being drawn or the
@@ -309,16 +310,17 @@ class SceneDrawer:
 
     # ------------------------------------------------------------- drawing
 
-    def programs(self, scene: Scene) -> tuple[Program, Program]:
+    def programs(self, scene: Scene, warp: Warp | None = None) -> tuple[Program, Program]:
         """The lit programs for ``scene``'s number of lights (each count has its own,
-        ``LIGHT_COUNT`` defined in lighting.glsl): one drawing a surface by uniforms (a
-        plain reflector), and one drawing parts from a parts buffer (the objects)."""
+        ``LIGHT_COUNT`` defined in lighting.glsl) in views of ``warp``: one drawing a
+        surface by uniforms (a plain reflector), and one drawing parts from a parts
+        buffer (the objects)."""
         count = len(scene.lights)
-        held = self._programs.get(count)
+        held = self._programs.get((count, warp))
         if held is None:
-            held = self._programs[count] = (
-                self.shared.program("scene.vert", "scene.frag", LIGHT_COUNT=count),
-                self.shared.program("scene_packed.vert", "scene.frag", LIGHT_COUNT=count),
+            held = self._programs[(count, warp)] = (
+                self.shared.program("scene.vert", "scene.frag", warp, LIGHT_COUNT=count),
+                self.shared.program("scene_packed.vert", "scene.frag", warp, LIGHT_COUNT=count),
             )
             for program in held:  # the texture unit is set once, when made
                 program.use()
@@ -328,7 +330,7 @@ class SceneDrawer:
     def begin(self, scene: Scene, view: View, packed: bool = False) -> Program:
         """Bind the lit program for ``scene`` (the one reading a parts buffer with
         ``packed``) and set ``view``'s and the lights' uniforms on it."""
-        by_uniforms, from_buffer = self.programs(scene)
+        by_uniforms, from_buffer = self.programs(scene, view.warp)
         program = from_buffer if packed else by_uniforms
         program.use()
         set_view_uniforms(program, view)

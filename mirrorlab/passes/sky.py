@@ -9,16 +9,16 @@ import numpy as np
 from mirrorlab.envmap import bake_cube_faces
 from mirrorlab.gl.calls import gl
 from mirrorlab.gl.opengl import GL
-from mirrorlab.gl.resources import MeshBuffer, TextureCube
+from mirrorlab.gl.resources import MeshBuffer, Program, TextureCube
 from mirrorlab.passes.base import SharedResources, cube_from_folder
 from mirrorlab.scene.backgrounds import environment_of, load_cube_faces
 from mirrorlab.scene.model import Background
-from mirrorlab.views import View, is_orthographic
+from mirrorlab.views import View, Warp
 
 SKY_SIZE = 256
 """Edge of the cube map a baked background is drawn from."""
 
-_SCREEN_TRIANGLE = np.array(
+SCREEN_TRIANGLE = np.array(
     [
         (-1.0, -1.0, 0.0, 0, 0, 1, 0, 0),
         (3.0, -1.0, 0.0, 0, 0, 1, 0, 0),
@@ -26,6 +26,8 @@ _SCREEN_TRIANGLE = np.array(
     ],
     dtype=np.float32,
 )
+"""One triangle covering the whole target (as :class:`~mirrorlab.gl.resources.MeshBuffer`
+vertices: NDC x, y; ``envmap_sky.vert`` draws it), for passes that fill a target."""
 
 
 @lru_cache(maxsize=8)
@@ -55,10 +57,13 @@ def background_cube(shared: SharedResources, background: Background) -> TextureC
 def ray_directions(view: View) -> np.ndarray:
     """``(3, 3)``: (ndc x, ndc y, 1) to the world direction of the view ray through that
     point. Only the projection's x, y and w rows enter, so an oblique near plane (which
-    changes only the z row) does not disturb it."""
+    changes only the z row) does not disturb it. A warped view's is its eye-to-world
+    rotation: its warp's shader gives the eye direction (warp.glsl)."""
     projection = np.asarray(view.projection, dtype=np.float64)
     rotation = np.asarray(view.view, dtype=np.float64)[:3, :3]
-    if is_orthographic(projection):
+    if view.warp is not None:
+        return rotation.T
+    if view.orthographic:
         to_eye = np.zeros((3, 3))
         to_eye[2, 2] = -1.0
     else:  # eye direction d = (dx, dy, -1): w = 1, and rows x, y give dx, dy
@@ -78,10 +83,16 @@ class SkyPass:
     def __init__(self, shared: SharedResources, background: Background) -> None:
         self.background = background
         self.cube = background_cube(shared, background)
-        self.program = shared.program("envmap_sky.vert", "envmap_sky.frag")
-        self.triangle = MeshBuffer(shared.registry, _SCREEN_TRIANGLE, np.arange(3, dtype=np.uint32))
-        self.program.use()
-        self.program.set_int("sky_texture", 0)
+        self.shared = shared
+        self.triangle = MeshBuffer(shared.registry, SCREEN_TRIANGLE, np.arange(3, dtype=np.uint32))
+        self.program(None)
+
+    def program(self, warp: Warp | None) -> Program:
+        """The background's program for views of ``warp``, bound."""
+        program = self.shared.program("envmap_sky.vert", "envmap_sky.frag", warp)
+        program.use()
+        program.set_int("sky_texture", 0)  # set once: a program skips an unchanged value
+        return program
 
     def release(self) -> None:
         """Free the cube map and the triangle (the program is shared)."""
@@ -94,8 +105,7 @@ class SkyPass:
         gl.glDisable(GL.GL_DEPTH_TEST)
         gl.glDepthMask(GL.GL_FALSE)
         gl.glDisable(GL.GL_CULL_FACE)
-        self.program.use()
-        self.program.set_mat3("ndc_to_direction", ray_directions(view))
+        self.program(view.warp).set_mat3("ndc_to_direction", ray_directions(view))
         self.cube.bind(0)
         self.triangle.draw()
         gl.glEnable(GL.GL_CULL_FACE)

@@ -931,8 +931,8 @@ class _Reader:
         if "source" in table:
             if entry.source == "faces":
                 source = self.folder_of_faces(table["source"], f"{key}.source")
-            elif entry.source == "picture":
-                source = self.file(table["source"], f"{key}.source", "sphere-map picture")
+            elif entry.source is not None:  # a picture: the map in the technique's layout
+                source = self.file(table["source"], f"{key}.source", f"{name} map's picture")
             else:
                 raise self.fail(
                     f"{key}.source",

@@ -6,6 +6,9 @@
 // them (camera-relative rendering); what lies on its negative side is cut away.
 uniform vec4 clip_plane;
 
+float world_clip_distance;  // what clip_world wrote (a warp may cut further, warp.glsl)
+
 void clip_world(vec4 world_position) {
-    gl_ClipDistance[0] = dot(clip_plane, world_position);
+    world_clip_distance = dot(clip_plane, world_position);
+    gl_ClipDistance[0] = world_clip_distance;
 }

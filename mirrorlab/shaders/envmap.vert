@@ -9,6 +9,7 @@
 // composed with that move in float64 on the CPU.
 #include "common.glsl"
 #include "clip.glsl"
+#include "project.glsl"
 #include "texgen.glsl"
 layout(location = 0) in vec3 position;
 layout(location = 1) in vec3 normal;
@@ -45,5 +46,5 @@ void main() {
         vertex_sphere_st = sphere_map(u - 2.0 * dot(n, u) * n);
     }
     clip_world(world);
-    gl_Position = projection * eye;
+    gl_Position = project(projection, eye);
 }

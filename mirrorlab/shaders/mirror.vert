@@ -4,6 +4,7 @@
 // the quad's own texture coordinate (the lab's fixed orthographic capture) or the
 // position seen through the capture's camera (projective, divided per fragment).
 #include "clip.glsl"
+#include "project.glsl"
 layout(location = 0) in vec3 position;
 layout(location = 2) in vec2 uv;
 
@@ -22,5 +23,5 @@ void main() {
         environment_coord = vec4(uv, 0.0, 1.0);
     }
     clip_world(world_position);
-    gl_Position = view_projection * world_position;
+    gl_Position = project(view_projection, world_position);
 }

@@ -7,6 +7,7 @@
 // cuts away what lies behind the mirror. (scene_packed.vert draws every part of a pass
 // in one multi-draw, reading the same two matrices from a buffer.)
 #include "clip.glsl"
+#include "project.glsl"
 layout(location = 0) in vec3 position;
 layout(location = 1) in vec3 normal;
 layout(location = 2) in vec2 uv;
@@ -25,5 +26,5 @@ void main() {
     surface_uv = uv;
     surface = part[3];
     clip_world(world_position);
-    gl_Position = view_projection * world_position;
+    gl_Position = project(view_projection, world_position);
 }

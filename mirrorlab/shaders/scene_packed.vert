@@ -8,6 +8,7 @@
 // a small part was about four times as slow reading them from a storage buffer indexed
 // by the instance.)
 #include "clip.glsl"
+#include "project.glsl"
 layout(location = 0) in vec3 position;
 layout(location = 1) in vec3 normal;
 layout(location = 2) in vec2 uv;
@@ -27,5 +28,5 @@ void main() {
     surface_uv = uv;
     surface = part[3];
     clip_world(world_position);
-    gl_Position = view_projection * world_position;
+    gl_Position = project(view_projection, world_position);
 }

@@ -9,7 +9,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+from mirrorlab.accuracy import SweepSettings, lab_panel, scene_techniques, sphere_panels
 from mirrorlab.cli import main
+from mirrorlab.scene.model import CAPTURE_MODES
+from mirrorlab.techniques import techniques
 
 TIMES = ("wall_ms", "gpu_ms")
 
@@ -43,10 +46,25 @@ def test_the_quick_sweep_on_two_processes_gives_the_figures_of_one(tmp_path, cap
     assert result.returncode == 0, result.stderr[-2000:]
     assert "truths and scoring on pool (2 workers)" in result.stdout
     serial, parallel = figures(one), figures(two)
-    # 83 rows of fixed sizes, and the ortho capture sized to its footprint (two techniques,
-    # two viewpoints)
-    assert len(serial) == 87
-    assert sum(r["technique"].endswith(" footprint") for r in serial) == 4
+    # every configuration of the quick sweep at each of its viewpoints, the ortho capture
+    # sized to its footprint among them (each capture mode, two viewpoints)
+    quick = SweepSettings.quick()
+    panels = [lab_panel(quick), *sphere_panels(quick)]
+    assert len(serial) == sum(
+        len(panel.viewpoints)
+        * (
+            1
+            + len(
+                scene_techniques(
+                    panel.scene, quick.sizes, panel.proxies, quick.steps, quick.map_sizes
+                )
+            )
+        )
+        for panel in panels
+    )
+    own_cameras = sum(t.own_camera for t in techniques("planar"))
+    footprints = len(lab_panel(quick).viewpoints) * len(CAPTURE_MODES) * own_cameras
+    assert sum(r["technique"].endswith(" footprint") for r in serial) == footprints
     assert serial == parallel
     # the figures are real measurements: the ray tracer's rows score zero, others do not
     assert {r["mae"] for r in serial if r["technique"].startswith("raytrace")} == {"0.0"}

@@ -23,6 +23,7 @@ import mirrorlab
 from mirrorlab.data import scenes_dir
 from mirrorlab.options import apply_options
 from mirrorlab.scene.model import Scene
+from mirrorlab.techniques import technique_names
 from tests.scenekit import vec3
 
 SIZE = (96, 96)
@@ -84,20 +85,13 @@ TECHNIQUE_VARIANTS: tuple[tuple[str, dict[str, Any]], ...] = (
     ("lab20", {"method": "reflected", "env_size": 40}),
     *(
         ("chrome_sphere", {"method": method, "map_size": 64})
-        for method in (
-            "sphere",
-            "sphere-vertex",
-            "sphere-texgen",
-            "cube",
-            "cube-live",
-            "latlong",
-            "normal",
-        )
+        for method in technique_names("curved")
     ),
     ("two_mirrors", {"method": "stencil"}),
     ("mirror_and_sphere", {"max_bounces": 3}),
 )
-"""Shipped scenes with options that put every technique and capture mode on screen."""
+"""Shipped scenes with options that put every technique and capture mode on screen (every
+curved technique of the registry on the chrome sphere)."""
 
 
 def sequences() -> Iterator[Sequence]:

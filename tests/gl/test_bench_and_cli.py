@@ -24,8 +24,11 @@ from mirrorlab.accuracy import (
 from mirrorlab.cli import main
 from mirrorlab.data import data_path, scenes_dir
 from mirrorlab.scene.backgrounds import CUBE_FACE_FILES
-from mirrorlab.techniques import technique_names
+from mirrorlab.techniques import technique_names, techniques
 from tests.imagecheck import assert_images_close
+
+CORRECTIONS = ("box", "sphere", "distance")
+"""The parallax corrections the quick sweep measures: its panels' two proxies, the search."""
 
 SKY_CUBE = data_path("textures") / "sky_cube"
 
@@ -42,21 +45,30 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     assert main(["bench", "accuracy", "--quick", "--out-dir", str(tmp_path)]) == 0
     out = capsys.readouterr()
     assert "technique" in out.out and "reflected-fbo" in out.out and "cube-live" in out.out
-    # What the quick sweep measures, from its settings: the lab mirror at 2 viewpoints x
-    # (ray tracer + ortho and reflected x 2 captures x 2 sizes + ortho x 2 captures with a
-    # footprint-sized texture + stencil); the sphere alone
-    # in the sky, among its objects and in the room, 1 view each x (ray tracer + 7 maps x
-    # 2 sizes + the live cube map with a box proxy, a sphere proxy and a distance search
-    # x 2 sizes).
+    # What the quick sweep measures, from its settings and the registry: the lab mirror at
+    # 2 viewpoints x (ray tracer + each capturing planar technique x 2 captures x 2 sizes
+    # + one with a camera of its own x 2 captures with a footprint-sized texture + each
+    # inline one); the sphere alone in the sky, among its objects and in the room, 1 view
+    # each x (ray tracer + each curved map at 128 + each that takes a parallax correction
+    # with a box proxy, a sphere proxy and a distance search at 128).
     quick = SweepSettings.quick()
     assert quick.sizes == (64, 128) and quick.viewpoints == ("head-on far", "60 deg")
-    assert quick.steps == ()
+    assert quick.steps == () and quick.map_sizes == (128,)
     lab_rows = 2 * (1 + len(lab_techniques(quick.sizes)))
     sphere_rows = sum(
-        1 + len(curved_techniques(quick.sizes, panel.proxies, quick.steps))
+        1 + len(curved_techniques(quick.map_sizes, panel.proxies, quick.steps))
         for panel in sphere_panels(quick)
     )
-    assert (lab_rows, sphere_rows) == (2 * (1 + 2 * 2 * 2 + 2 + 1), 3 * (1 + 7 * 2 + 3 * 2))
+    planar, curved = techniques("planar"), techniques("curved")
+    captured = [t for t in planar if not t.draws_inline]
+    corrected = [t.name for t in curved if t.parallax]
+    assert lab_rows == 2 * (
+        1
+        + len(captured) * 2 * 2
+        + sum(t.own_camera for t in captured) * 2
+        + sum(t.draws_inline for t in planar)
+    )
+    assert sphere_rows == 3 * (1 + len(curved) + len(corrected) * 3)
     total = lab_rows + sphere_rows
     # one progress bar (tqdm, on stderr), and it reached its end: a step per row, and one
     # more per viewpoint for scoring its frames (2 lab views, 3 sphere scenes)
@@ -84,9 +96,7 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     }
     assert set(sky) == {
         *technique_names("curved"),
-        "cube-live box",
-        "cube-live sphere",
-        "cube-live distance",
+        *(f"{name} {correction}" for name in corrected for correction in CORRECTIONS),
     }
     assert sky["sphere"] < sky["normal"] and sky["cube"] < sky["normal"]
     room = {
@@ -94,8 +104,10 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
         for r in table
         if r["scene"] == "sphere-room" and r["map_size"] == "128"
     }
-    assert room["cube-live box"] < 0.01 and room["cube-live distance"] < 0.01
-    assert room["cube-live"] > 0.2
+    for name in corrected:  # in the room, the room as the proxy, or what the capture saw
+        assert room[name] > 0.2, name
+        assert room[f"{name} box"] < 0.05 * room[name], (name, room)
+        assert room[f"{name} distance"] < 0.05 * room[name], (name, room)
     assert all(float(r["wall_ms"]) > 0 for r in table)
     markdown = (tmp_path / "accuracy.md").read_text()
     assert markdown.count("| technique |") == 4  # lab, sphere-sky, -objects, -room

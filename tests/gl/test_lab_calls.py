@@ -6,6 +6,7 @@ reply or one line, never an internal error."""
 
 from __future__ import annotations
 
+import importlib
 import json
 import os
 import re
@@ -19,6 +20,7 @@ from hypothesis import strategies as st
 
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Framebuffer
+from mirrorlab.labs import unregister
 from mirrorlab.labs.trusted import calls as C
 from mirrorlab.labs.trusted.call_executor import Executor, Stop
 from mirrorlab.labs.trusted.pipe import PipeBudget, PipeClosed, PipeError, TrustedChannel
@@ -77,6 +79,15 @@ def family(name: str) -> str:
     family name it starts with."""
     found = [f for f in FORMS if re.fullmatch(re.escape(f) + r"[0-9]?[a-z]*v?", name)]
     return max(found, key=len) if found else ""
+
+
+@pytest.fixture(scope="module")
+def quad_lab():
+    """The test folder's quad lab, which opens every channel (registered while the module
+    runs: lab-parametrised tests elsewhere take the shipped labs)."""
+    spec = importlib.import_module("tests.labs.fourth_lab").SPEC
+    yield spec
+    unregister(spec.name)
 
 
 @pytest.fixture
@@ -172,46 +183,52 @@ def test_every_form_of_every_allowed_family_is_allowed():
         assert not missing, f"{name}: the labs allow some forms but not {missing}"
 
 
-def test_every_allowed_call_runs_in_every_form(target):
+def test_every_allowed_call_runs_in_every_form(target, quad_lab):
     """Each allowed name exists in PyOpenGL (what the sandbox's stand-in offers) and, with
     arguments its checks accept, gets a reply: a value or the student's error, never an
     exception of the checker's own."""
     from OpenGL import GLU
 
+    from mirrorlab.labs.trusted.lab_run import reset_state
+
     failures = []
-    labs = ("lab20", "spheremap", "cubemap")
+    labs = ("lab20", "spheremap", "cubemap", quad_lab.name)  # the quad lab opens every channel
     sessions = {lab: open_session(lab, SIZE, default_variant(lab)) for lab in labs}
     for op, specs, module in (("gl", C.GL_SPECS, GL), ("glu", C.GLU_SPECS, GLU)):
         for name, spec in specs.items():
             assert callable(getattr(module, name, None)), f"PyOpenGL has no {name}"
             # each call in a lab that offers it (every call is offered by one)
-            lab = next(lab for lab in labs if op == "glu" or name in C.lab_specs(lab))
-            ex = prepared(sessions[lab])
+            offering = [lab for lab in labs if op == "glu" or name in C.lab_specs(lab)]
             args = arguments(name, spec)
             in_begin = spec.in_begin and name != "glEnd"
-            if in_begin:
-                assert send(ex, "glBegin", [int(GL.GL_TRIANGLES)])["ok"]
-            try:
-                reply = send(ex, name, args, op, arrays=[np.zeros(256, np.uint8)])
-            except Exception as exc:  # the failure is the point
-                failures.append(f"{name}{tuple(args)}: {type(exc).__name__}: {exc}")
-                continue
-            finally:
+            for lab in offering:
+                ex = prepared(sessions[lab])
                 if in_begin:
-                    send(ex, "glEnd", [])
-                ex.end_open_primitive()  # glBegin's own
-                GL.glUseProgram(0)
-            if not reply["ok"]:
-                # allowed arguments, set-up state: only the GL's own verdict may refuse
-                assert reply["type"] == "GLError", (name, args, reply)
+                    assert send(ex, "glBegin", [int(GL.GL_TRIANGLES)])["ok"]
+                try:
+                    reply = send(ex, name, args, op, arrays=[np.zeros(256, np.uint8)])
+                except Exception as exc:  # the failure is the point
+                    failures.append(f"{name}{tuple(args)}: {type(exc).__name__}: {exc}")
+                    break
+                finally:
+                    if in_begin:
+                        send(ex, "glEnd", [])
+                    ex.end_open_primitive()  # glBegin's own
+                    GL.glUseProgram(0)
+                    reset_state()
+                if reply["ok"] or reply["type"] == "GLError":
+                    break  # allowed arguments, set-up state: only GL's own verdict refuses
+                # an argument of a channel this lab closes (the quad lab opens them all)
+                assert reply["type"] == "NotImplementedError" and lab != quad_lab.name, reply
+                assert "this lab's handout draws nothing with it" in reply["message"], reply
     assert not failures, "\n".join(failures)
     assert int(GL.glGetError()) == GL.GL_NO_ERROR
 
 
-def test_integer_forms_draw_where_the_float_forms_do(target):
+def test_integer_forms_draw_where_the_float_forms_do(target, quad_lab):
     """glVertex3i and glVertex2s put the vertex where glVertex3f does; glColor3ub's and
-    glColor3us's colours are GL's normalised ones."""
-    ex = prepared()
+    glColor3us's colours are GL's normalised ones (in the quad lab, which offers colours)."""
+    ex = prepared(open_session(quad_lab.name, SIZE, default_variant(quad_lab.name)))
     send(ex, "glBegin", [int(GL.GL_TRIANGLES)])
     for name, args in (
         ("glColor3ub", [255, 0, 51]),

@@ -1,8 +1,8 @@
 """The labs' executor, fed messages directly in a headless context (no sandbox): each call
 is checked before it runs, refused in the words PyOpenGL would use, and noted with the
-student's line; pixel data must hold what GL will read; pixels the student uploads taint
-what they are drawn into and copied to, and a clear cleans the frame again; every limit
-ends the run with one line; the lab's own objects are out of reach."""
+student's line; pixel data must hold what GL will read, and be zeros
+(tests/gl/test_lab_channels.py tries every channel); copies keep the picture they copied;
+every limit ends the run with one line; the lab's own objects are out of reach."""
 
 from __future__ import annotations
 
@@ -75,7 +75,7 @@ def test_calls_are_refused_before_they_run(context):
     assert len(ex.call_errors) == len(cases)
 
 
-def test_pixel_data_must_hold_what_gl_reads_and_uploads_taint(context):
+def test_pixel_data_must_hold_what_gl_reads_and_be_zeros(context):
     ex = executor()
     (texture,) = [call(ex, "glGenTextures", 1)[0]["value"]]
     assert call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), texture)[0]["ok"]
@@ -91,15 +91,16 @@ def test_pixel_data_must_hold_what_gl_reads_and_uploads_taint(context):
         {"$a": 0},
     )
     # 5 pixels of 3 bytes: rows of 15 bytes padded to 16 at GL_UNPACK_ALIGNMENT 4
-    short = np.full(5 * 4 * 3, 200, dtype=np.uint8)
+    short = np.zeros(5 * 4 * 3, dtype=np.uint8)
     reply, _ = call(ex, "glTexImage2D", *image, arrays=[short])
     assert not reply["ok"] and "GL would read 63" in reply["message"]
-    enough = np.full(63, 200, dtype=np.uint8)
-    assert call(ex, "glTexImage2D", *image, arrays=[enough])[0]["ok"]
-    assert ex.tracker.textures[texture].tainted
+    assert call(ex, "glTexImage2D", *image, arrays=[np.zeros(63, dtype=np.uint8)])[0]["ok"]
+    picture = np.full(63, 200, dtype=np.uint8)
+    reply, _ = call(ex, "glTexImage2D", *image, arrays=[picture])
+    assert reply["type"] == "ValueError" and "no pixels of a file's own" in reply["message"]
     blank = (*image[:-1], None)
     assert call(ex, "glTexImage2D", *blank)[0]["ok"]
-    assert not ex.tracker.textures[texture].tainted
+    assert ex.tracker.textures[texture].images[(0, 0)].source == "blank"
 
 
 def _quad(ex: Executor) -> None:
@@ -110,50 +111,21 @@ def _quad(ex: Executor) -> None:
     assert reply["ok"], reply
 
 
-def test_a_frame_drawn_with_uploaded_pixels_is_tainted_and_copies_carry_it(context):
+def test_copies_keep_the_picture_copied(context):
     ex = executor()
-    picture, capture = call(ex, "glGenTextures", 2)[0]["value"]
-    call(ex, "glActiveTexture", int(GL.GL_TEXTURE3))
-    call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), picture)
-    call(ex, "glPixelStorei", int(GL.GL_UNPACK_ALIGNMENT), 1)
-    call(
-        ex,
-        "glTexImage2D",
-        int(GL.GL_TEXTURE_2D),
-        0,
-        int(GL.GL_RGB),
-        2,
-        2,
-        0,
-        int(GL.GL_RGB),
-        int(GL.GL_UNSIGNED_BYTE),
-        {"$a": 0},
-        arrays=[np.full(12, 99, dtype=np.uint8)],
-    )
-    call(ex, "glActiveTexture", int(GL.GL_TEXTURE0))
+    capture = call(ex, "glGenTextures", 1)[0]["value"]
     ex.begin_frame()
     _quad(ex)
-    assert "bound on unit 3" in ex.tracker.framebuffer_taint
     call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), capture)
     copy = (int(GL.GL_TEXTURE_2D), 0, int(GL.GL_RGB), 0, 0, 64, 64, 0)
     assert call(ex, "glCopyTexImage2D", *copy)[0]["ok"]
-    assert ex.tracker.textures[capture].tainted
     call(ex, "glClear", int(GL.GL_COLOR_BUFFER_BIT))
-    assert ex.tracker.framebuffer_taint == ""
-    call(ex, "glActiveTexture", int(GL.GL_TEXTURE3))
-    call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), 0)
-    call(ex, "glActiveTexture", int(GL.GL_TEXTURE0))
-    call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), capture)
-    _quad(ex)  # the tainted capture is bound on unit 0 now: drawing taints again
-    assert ex.tracker.framebuffer_taint
-    call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), 0)
-    call(ex, "glClear", int(GL.GL_COLOR_BUFFER_BIT))
-    call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), capture)
-    call(ex, "glCopyTexImage2D", *copy)
-    assert not ex.tracker.textures[capture].tainted
+    assert call(ex, "glCopyTexImage2D", *copy)[0]["ok"]
+    assert ex.tracker.textures[capture].images[(0, 0)].source == "copy"
     copies = [e for e in ex.tracker.frames[-1]["events"] if e["kind"] == "copy"]
     assert [e["picture"] for e in copies] == ["copy_0_0", "copy_0_1"]
     assert ex.pictures["copy_0_0"].shape == (64, 64, 3)
+    call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), 0)
 
 
 def test_the_labs_own_objects_are_out_of_reach(context):
@@ -214,7 +186,7 @@ def test_each_limit_ends_the_run_in_one_line(context):
         call(ex, "glFlush")
     ex = executor(limits=RunLimits(frame_vertices=3))
     ex.begin_frame()
-    call(ex, "glBegin", int(GL.GL_POINTS))
+    call(ex, "glBegin", int(GL.GL_TRIANGLES))
     for _ in range(3):
         call(ex, "glVertex2f", 0, 0)
     with pytest.raises(Stop, match="more than 3 vertices in one frame"):
@@ -240,58 +212,6 @@ def test_each_limit_ends_the_run_in_one_line(context):
         None,
     )
     assert not reply["ok"] and "more than 0 MiB" in reply["message"]
-
-
-def test_taint_follows_pixels_through_masks_scissors_and_copies(context):
-    """A clear that writes no colour, or writes only part of the frame, leaves the rest of
-    the uploaded pixels tainted; a copy of a tainted part carries the taint, of a clean
-    part does not."""
-    ex = executor()
-    picture, capture = call(ex, "glGenTextures", 2)[0]["value"]
-    call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), picture)
-    call(ex, "glPixelStorei", int(GL.GL_UNPACK_ALIGNMENT), 1)
-    call(
-        ex,
-        "glTexImage2D",
-        int(GL.GL_TEXTURE_2D),
-        0,
-        int(GL.GL_RGB),
-        2,
-        2,
-        0,
-        int(GL.GL_RGB),
-        int(GL.GL_UNSIGNED_BYTE),
-        {"$a": 0},
-        arrays=[np.full(12, 99, dtype=np.uint8)],
-    )
-    ex.begin_frame()
-    _quad(ex)
-    call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), 0)
-    for mask in ((0, 0, 0, 0), (1, 1, 0, 1)):
-        call(ex, "glColorMask", *mask)
-        call(ex, "glClear", int(GL.GL_COLOR_BUFFER_BIT))
-        call(ex, "glColorMask", 1, 1, 1, 1)
-        assert ex.tracker.framebuffer_taint, mask
-    call(ex, "glEnable", int(GL.GL_SCISSOR_TEST))
-    call(ex, "glScissor", 0, 0, 32, 64)
-    call(ex, "glClear", int(GL.GL_COLOR_BUFFER_BIT))
-    call(ex, "glDisable", int(GL.GL_SCISSOR_TEST))
-    assert ex.tracker.framebuffer_taint and ex.tracker.taint_in((0, 0, 32, 64)) == ""
-    call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), capture)
-    assert call(ex, "glCopyTexImage2D", int(GL.GL_TEXTURE_2D), 0, int(GL.GL_RGB), 0, 0, 32, 32, 0)[
-        0
-    ]["ok"]
-    assert not ex.tracker.textures[capture].tainted
-    call(ex, "glCopyTexImage2D", int(GL.GL_TEXTURE_2D), 0, int(GL.GL_RGB), 16, 0, 32, 32, 0)
-    assert ex.tracker.textures[capture].tainted
-    # a draw that writes no colour taints nothing
-    call(ex, "glClear", int(GL.GL_COLOR_BUFFER_BIT))
-    assert ex.tracker.framebuffer_taint == ""
-    call(ex, "glColorMask", 0, 0, 0, 1)
-    _quad(ex)
-    call(ex, "glColorMask", 1, 1, 1, 1)
-    assert ex.tracker.framebuffer_taint == ""
-    call(ex, "glBindTexture", int(GL.GL_TEXTURE_2D), 0)
 
 
 def test_nothing_reads_back_and_set_up_draws_nothing(context):

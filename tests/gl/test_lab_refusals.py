@@ -7,6 +7,7 @@ emulation (``./dev test-macos``) says the same."""
 
 from __future__ import annotations
 
+import importlib
 import re
 from typing import Any
 
@@ -16,6 +17,7 @@ from hypothesis import strategies as st
 
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Framebuffer
+from mirrorlab.labs import unregister
 from mirrorlab.labs.trusted import calls as C
 from mirrorlab.labs.trusted.call_executor import Executor
 from mirrorlab.labs.trusted.session import open_session
@@ -143,11 +145,21 @@ def test_every_float_argument_that_is_not_finite_is_named(bad):
         assert "would be undefined" in error.message and "finite" in error.message
 
 
+@pytest.fixture(scope="module")
+def quad_lab():
+    """The test folder's quad lab, which opens every channel (lines and points for
+    glLineWidth; registered while the module runs: lab-parametrised tests elsewhere take
+    the shipped labs)."""
+    spec = importlib.import_module("tests.labs.fourth_lab").SPEC
+    yield spec
+    unregister(spec.name)
+
+
 @pytest.fixture
-def executor(registry) -> Executor:
+def executor(registry, quad_lab) -> Executor:
     target = Framebuffer(registry, *SIZE)
     target.bind()
-    return Executor(open_session("cubemap", SIZE, default_variant("cubemap")))
+    return Executor(open_session(quad_lab.name, SIZE, default_variant(quad_lab.name)))
 
 
 def run(ex: Executor, op: str, name: str, *args: Any) -> dict[str, Any]:

@@ -63,3 +63,43 @@ def test_lab_start_and_check_from_the_installed_wheel(installed: Installed, empt
     assert checked.returncode == 0, checked.stdout + checked.stderr
     assert "8/8 tasks passed" in checked.stdout
     assert not cache.exists()  # judged against the packaged reference
+
+
+def test_info_a_headed_starter_and_a_canvas_gradebook_from_the_installed_wheel(
+    installed: Installed, empty_folder: Path
+):
+    """``mirrorlab info`` names the OpenGL and the sandbox; a starter moved away from its
+    folder is judged by its first line (no note); a class graded from a CSV list writes
+    Canvas's layout with the list's names and ids. All from the wheel, no solutions."""
+    info = installed.run("mirrorlab", "info", cwd=empty_folder)
+    assert info.returncode == 0, info.stdout + info.stderr
+    lines = dict(line.split(None, 1) for line in info.stdout.splitlines() if " " in line)
+    assert lines["mirrorlab"].strip() and "profile" in lines["profile"], info.stdout
+    assert lines["draw"].startswith("path ") and lines["sandbox"].strip(), info.stdout
+    started = installed.run("mirrorlab", "lab", "start", "lab20", "mine", cwd=empty_folder)
+    assert started.returncode == 0, started.stderr
+    assert (empty_folder / "mine" / "starter.py").read_text().startswith("# mirrorlab variant: ")
+    submissions = empty_folder / "class"
+    submissions.mkdir()
+    shutil.copy(empty_folder / "mine" / "starter.py", submissions / "s1001.py")
+    (empty_folder / "class.csv").write_text("id,name,email\ns1001,Ada Lovelace,ada@uni.edu\n")
+    graded = installed.run(
+        "mirrorlab",
+        "lab",
+        "grade",
+        "lab20",
+        "class",
+        "--students",
+        "class.csv",
+        "--format",
+        "canvas",
+        "--out-dir",
+        "grades",
+        cwd=empty_folder,
+    )
+    assert graded.returncode == 0, graded.stdout + graded.stderr
+    assert (empty_folder / "grades" / "gradebook.csv").read_text().splitlines() == [
+        "Student,ID,SIS User ID,SIS Login ID,Section,Lab 20: the multipass mirror",
+        "Points Possible,,,,,8",
+        "Ada Lovelace,,s1001,ada@uni.edu,,0",
+    ]

@@ -165,7 +165,7 @@ def send(header):
     Crash(
         "lab20",
         "display_ends_inside_glbegin",
-        (("    render_mirror()\n", "    render_mirror()\n    glBegin(GL_POINTS)\n"),),
+        (("    render_mirror()\n", "    render_mirror()\n    glBegin(GL_TRIANGLES)\n"),),
         "returned inside glBegin",
     ),
 )

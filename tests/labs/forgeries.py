@@ -246,7 +246,7 @@ for folder in ({str(cache)!r}, os.path.expanduser("~/.cache/mirrorlab"), "/root/
         ),
         "forge_replay_reference": (
             replay(unpacked(frame), unpacked(capture)),
-            "pixels this file uploaded",
+            "no pixels of a file's own",
         ),
         "forge_draw_with_mirrorlab": (
             HEADER
@@ -261,7 +261,7 @@ PICTURE = render(load_scene("lab"), size=(WIDTH, HEIGHT))
             replay("picture[::-1].tobytes()", "picture[::-1].tobytes()").replace(
                 "import base64, zlib\n", "import base64, zlib\n" + NUMPY_PICTURES
             ),
-            "pixels this file uploaded",
+            "no pixels of a file's own",
         ),
         "forge_upload_1gib": (
             HEADER
@@ -301,7 +301,7 @@ while True:
             HEADER
             + """
 def display():  # a frame: set-up and the top level draw nothing
-    glBegin(GL_POINTS)
+    glBegin(GL_TRIANGLES)
     while True:
         glVertex3f(0, 0, 0)
 """,

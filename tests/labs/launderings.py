@@ -8,10 +8,13 @@
 - ``noop_clear_*``: the shipped reference frame (``mirrorlab/labs/*/reference/arrays.npz``)
   uploaded and drawn over the whole frame, then a clear that writes nothing
   (``glColorMask(0, 0, 0, 0)``), a clear outside the pasted part (scissored), or a copy of
-  the pasted frame into a texture and back after a clear: each must still be known as
-  uploaded pixels.
+  the pasted frame into a texture and back after a clear: since round three (issue 44) no
+  file's own pixels reach GL at all, so the upload itself is refused.
 - ``overlay_lab20``: the reference solution, then a white band, a bar and a red box
   blended at 8.5 % over the finished frame: every pixel within the per-pixel tolerance.
+  Lab 20's handout teaches no blending, so ``glEnable(GL_BLEND)`` is refused; the whole
+  frame's rule that sees such marks is tested on pictures in tests/unit/test_overlays.py
+  and on a hatched word drawn through lab 20's own calls in tests/labs/test_channels.py.
 
 Each entry: lab -> name -> (source, a phrase a hint must hold).
 """
@@ -218,7 +221,7 @@ def overlay_lab20() -> str:
 
 def launderings() -> dict[str, dict[str, tuple[str, str]]]:
     """lab -> file name -> (source, a phrase one of its failing hints must hold)."""
-    uploaded = "pixels this file uploaded"
+    uploaded = "no pixels of a file's own"
     found: dict[str, dict[str, tuple[str, str]]] = {
         "lab20": {
             "measure_variant_at_setup": (
@@ -229,7 +232,7 @@ def launderings() -> dict[str, dict[str, tuple[str, str]]]:
                 measure_variant("display"),
                 "glReadPixels is not one of the OpenGL calls this lab offers",
             ),
-            "overlay_lab20": (overlay_lab20(), "faint offset"),
+            "overlay_lab20": (overlay_lab20(), "glEnable(GL_BLEND)"),
         },
         "spheremap": {},
         "cubemap": {},

@@ -84,12 +84,12 @@ def test_the_sandbox_holds_no_answers(tmp_path):
         pytest.fail("bubblewrap is needed (./dev setup installs it)")
     box = new_box(tmp_path)
     try:
-        (box / "mine.py").write_text("# a student's file\n")
         run = Sandboxed(
             [str(sandbox.interpreter()), "-I", "-S", "-c", PROBE],
             box,
             Limits(cpu_seconds=20, seconds=60),
             lab_side=find_lab("lab20").student_file,
+            files={"mine.py": b"# a student's file\n"},
         )
         code, _, _ = run.wait()
         assert code == 0, sandbox.tail(box / "stderr.txt")

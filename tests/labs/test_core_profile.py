@@ -9,6 +9,7 @@ would."""
 
 from __future__ import annotations
 
+import importlib
 import io
 import os
 import subprocess
@@ -18,7 +19,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from mirrorlab.labs import find_lab, lab_names
+from mirrorlab.labs import find_lab, lab_names, unregister
 from mirrorlab.labs.trusted.grading import grade_folder
 from tests import MACOS_CONTEXT
 from tests.labs.classroom import STARTER, starter_text
@@ -39,8 +40,8 @@ PIXEL_TOLERANCE = 2
 """The most a channel of the student's picture may differ (of 255) between the two ways,
 but on :data:`STRAY_PIXELS` of the pixels. Measured on every solution, starter and mutant
 of the three labs (63 files): at most 1, on at most 0.011% of the pixels; on
-:data:`FIXED_FUNCTION`'s, 20 pixels (0.005%) of a point centred on a pixel corner, which
-the core context rasterises as a sprite one row and column over."""
+:data:`FIXED_FUNCTION`'s (in the quad lab), 10 pixels (0.015%) of a point centred on a
+pixel corner, which the core context rasterises as a sprite one row and column over."""
 STRAY_PIXELS = 0.0005
 """The judges' own share of pixels a frame may differ on (0.05%)."""
 
@@ -91,13 +92,38 @@ FIXED_FUNCTION = '''import numpy as np
 FAN = [(0.8 + 0.15 * c, 0.8 + 0.15 * s, c, s) for c, s in (
     (1.0, 0.0), (0.8776, 0.4794), (0.5403, 0.8415), (0.0707, 0.9975), (-0.4161, 0.9093),
     (-0.8011, 0.5985), (-0.99, 0.1411))]
+WIDTH = HEIGHT = 256
+metal = cube = blank = luminance = old_style = 0
 
 
-blank = luminance = old_style = 0
+def textures():
+    """A lab picture, and from copies of the frame so far a cube map and textures of the
+    legacy formats (luminance, luminance and alpha, across the quad's edge), GL_CLAMP."""
+    global metal, cube, blank, luminance, old_style
+    metal, cube, blank, luminance, old_style = (int(t) for t in glGenTextures(5))
+    lab.load_picture_texture(metal, "metal")
+    glBindTexture(GL_TEXTURE_CUBE_MAP, cube)
+    for face in range(6):
+        x, y = 20 * face, 30 + 10 * face
+        glCopyTexImage2D(GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0, GL_RGB, x, y, 64, 64, 0)
+    for pname in (GL_TEXTURE_MIN_FILTER, GL_TEXTURE_MAG_FILTER):
+        glTexParameteri(GL_TEXTURE_CUBE_MAP, pname, GL_LINEAR)
+    glBindTexture(GL_TEXTURE_2D, luminance)
+    glCopyTexImage2D(GL_TEXTURE_2D, 0, GL_LUMINANCE, 63, 100, 2, 2, 0)
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST)
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR)
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP)
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP)
+    glBindTexture(GL_TEXTURE_2D, old_style)
+    glCopyTexImage2D(GL_TEXTURE_2D, 0, GL_LUMINANCE_ALPHA, 62, 120, 4, 1, 0)
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR)
+    glBindTexture(GL_TEXTURE_2D, blank)  # format 3, its image at level 0, sampled from 1:
+    glTexImage2D(GL_TEXTURE_2D, 0, 3, 4, 4, 0, GL_RGB, GL_UNSIGNED_BYTE, None)
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, 1)  # incomplete: untextured
 
 
 def fixed_function():
-    """Drawing in the fixed pipeline's ways the labs allow (an oracle's test only)."""
+    """Drawing in every fixed pipeline's way (an oracle's test only)."""
     glUseProgram(0)
     glMatrixMode(GL_PROJECTION)
     glPushMatrix()
@@ -141,7 +167,7 @@ def fixed_function():
     glEnd()
     glShadeModel(GL_SMOOTH)
     glActiveTexture(GL_TEXTURE0)
-    glBindTexture(GL_TEXTURE_2D, tex_ids[METAL])
+    glBindTexture(GL_TEXTURE_2D, metal)
     glEnable(GL_TEXTURE_2D)
     glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_MODULATE)
     glMatrixMode(GL_TEXTURE)
@@ -172,6 +198,7 @@ def fixed_function():
     glEnd()
     glTexGeni(GL_S, GL_TEXTURE_GEN_MODE, GL_OBJECT_LINEAR)
     glTexGeni(GL_T, GL_TEXTURE_GEN_MODE, GL_EYE_LINEAR)
+    glTexGenfv(GL_S, GL_OBJECT_PLANE, (2.0, 0.5, 0.0, 0.25))
     glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_DECAL)
     glBegin(GL_TRIANGLE_STRIP)
     glVertex2f(0.2, 0.2)
@@ -193,9 +220,6 @@ def fixed_function():
     glBegin(GL_POINTS)
     glVertex2f(0, 0)
     glEnd()
-    global blank
-    if not blank:
-        blank = int(glGenTextures(1))
     glBindTexture(GL_TEXTURE_2D, blank)
     glEnable(GL_TEXTURE_2D)
     glColor3f(0.2, 0.9, 0.4)
@@ -205,22 +229,6 @@ def fixed_function():
     glVertex2f(0.75, 0.2)
     glVertex2f(0.55, 0.2)
     glEnd()
-    global luminance, old_style
-    if not luminance:  # legacy formats: a 2 x 2 luminance texture, GL_CLAMP, format 3
-        luminance, old_style = (int(t) for t in glGenTextures(2))
-        glPixelStorei(GL_UNPACK_ALIGNMENT, 1)
-        glBindTexture(GL_TEXTURE_2D, luminance)
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_LUMINANCE, 2, 2, 0, GL_LUMINANCE, GL_UNSIGNED_BYTE,
-                     np.array([[0, 255], [128, 64]], dtype=np.uint8))
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST)
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR)
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP)
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP)
-        glBindTexture(GL_TEXTURE_2D, old_style)
-        glTexImage2D(GL_TEXTURE_2D, 0, 3, 2, 1, 0, GL_RGB, GL_UNSIGNED_BYTE,
-                     np.array([255, 0, 0, 0, 0, 255], dtype=np.uint8))
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR)
-        glPixelStorei(GL_UNPACK_ALIGNMENT, 4)
     glBindTexture(GL_TEXTURE_2D, luminance)
     glColor3f(1, 0.5, 1)
     glBegin(GL_QUADS)
@@ -236,6 +244,7 @@ def fixed_function():
     glEnd()
     glDisable(GL_TEXTURE_2D)
     glColor3f(1, 1, 1)
+    cube_discs()
     glMatrixMode(GL_PROJECTION)
     glPopMatrix()
     glMatrixMode(GL_MODELVIEW)
@@ -243,40 +252,25 @@ def fixed_function():
     glEnable(GL_DEPTH_TEST)
 
 
-_display = display
-
-
-def display():
-    _display()
-    fixed_function()
-'''
-"""Appended to lab 20's solution: drawing in the fixed pipeline's ways the labs allow and no
-mutant uses (default lighting, the material GL_COLOR_MATERIAL leaves, flat shading,
-quads, quad strips, polygons, fans, texture matrices, texgen's sphere map, object and eye
-planes, the texture environments, lines, points, a texture without an image, which leaves
-its unit untextured, legacy texture formats and GL_CLAMP), framed by push and pop."""
-
-
-CUBE_FIXED_FUNCTION = '''def cube_fixed_function():
-    """The live cube map through texgen in the fixed pipeline (an oracle's test only)."""
-    glUseProgram(0)
+def cube_discs():
+    """The cube map on two discs, through GL_REFLECTION_MAP and GL_NORMAL_MAP texgen."""
     glActiveTexture(GL_TEXTURE1)
-    glBindTexture(GL_TEXTURE_CUBE_MAP, cube_texture)
+    glBindTexture(GL_TEXTURE_CUBE_MAP, cube)
     glEnable(GL_TEXTURE_CUBE_MAP)
     glTexEnvi(GL_TEXTURE_ENV, GL_TEXTURE_ENV_MODE, GL_REPLACE)
-    for mode, x in ((GL_REFLECTION_MAP, -2.6), (GL_NORMAL_MAP, -1.2)):
+    for mode, x in ((GL_REFLECTION_MAP, -0.6), (GL_NORMAL_MAP, -0.2)):
         for coord in (GL_S, GL_T, GL_R):
             glTexGeni(coord, GL_TEXTURE_GEN_MODE, mode)
         for cap in (GL_TEXTURE_GEN_S, GL_TEXTURE_GEN_T, GL_TEXTURE_GEN_R):
             glEnable(cap)
         glBegin(GL_TRIANGLE_FAN)
         glNormal3f(0, 0, 1)
-        glVertex3f(x, 1.6, 1.5)
+        glVertex3f(x, -0.3, 0.2)
         for i in range(13):
-            c, s = (1, 0.866, 0.5, 0, -0.5, -0.866, -1, -0.866, -0.5, 0, 0.5, 0.866, 1)[i], \
+            c, s = (1, 0.866, 0.5, 0, -0.5, -0.866, -1, -0.866, -0.5, 0, 0.5, 0.866, 1)[i], \\
                 (0, 0.5, 0.866, 1, 0.866, 0.5, 0, -0.5, -0.866, -1, -0.866, -0.5, 0)[i]
             glNormal3f(c, s, 0.4)
-            glVertex3f(x + 0.6 * c, 1.6 + 0.6 * s, 1.5)
+            glVertex3f(x + 0.15 * c, -0.3 + 0.15 * s, 0.2)
         glEnd()
     for cap in (GL_TEXTURE_GEN_S, GL_TEXTURE_GEN_T, GL_TEXTURE_GEN_R, GL_TEXTURE_CUBE_MAP):
         glDisable(cap)
@@ -289,10 +283,17 @@ _display = display
 
 def display():
     _display()
-    cube_fixed_function()
+    if not metal:
+        textures()
+    fixed_function()
 '''
-"""Appended to the cube-map solution: its live cube map on two discs, through
-GL_REFLECTION_MAP and GL_NORMAL_MAP texgen and a cube map enabled on unit 1."""
+"""Appended to the quad lab's solution (the test folder's lab that opens every channel the
+shipped labs close): drawing in every way the fixed pipeline can (default lighting, the
+material GL_COLOR_MATERIAL leaves, flat shading, quads, quad strips, polygons, fans,
+texture matrices, texgen's sphere map, object and eye planes, the texture environments,
+lines, points, a texture without an image, which leaves its unit untextured, legacy
+texture formats from copies and GL_CLAMP, a cube map through GL_REFLECTION_MAP and
+GL_NORMAL_MAP texgen), framed by push and pop."""
 
 
 SLOW_CRASHES = {
@@ -382,14 +383,6 @@ def test_core_and_compatibility_grade_alike(lab, tmp_path, monkeypatch):
     crashes = crashes_of(lab)
     for student, source in crashes.items():
         (folder / f"{student}.py").write_text(source)
-    if lab == "lab20":
-        (folder / "fixed_function.py").write_text(
-            (SOLUTIONS / f"{spec.folder}.py").read_text() + "\n\n" + FIXED_FUNCTION
-        )
-    if lab == "cubemap":
-        (folder / "cube_fixed_function.py").write_text(
-            (SOLUTIONS / f"{spec.folder}.py").read_text() + "\n\n" + CUBE_FIXED_FUNCTION
-        )
     if lab == "spheremap":  # GLSL naming compatibility built-ins: translated both ways
         (folder / "builtins.py").write_text(
             (SOLUTIONS / f"{spec.folder}.py")
@@ -401,11 +394,7 @@ def test_core_and_compatibility_grade_alike(lab, tmp_path, monkeypatch):
         )
     native = _grade(lab, folder, monkeypatch, tmp_path / "cache-native", core=False)
     core = _grade(lab, folder, monkeypatch, tmp_path / "cache-core", core=True)
-    extra = {
-        "spheremap": ["builtins"],
-        "lab20": ["fixed_function"],
-        "cubemap": ["cube_fixed_function"],
-    }[lab]
+    extra = ["builtins"] if lab == "spheremap" else []
     assert (
         sorted(native)
         == sorted(core)
@@ -425,3 +414,36 @@ def test_core_and_compatibility_grade_alike(lab, tmp_path, monkeypatch):
         assert all(passed for _, passed, _ in core[student].tasks), core[student].tasks
     for task, passed, hint in core["starter"].tasks:
         assert not passed and STARTER[lab][task] in hint, (task, hint)
+
+
+def test_the_fixed_pipeline_draws_alike_in_both_contexts(tmp_path, monkeypatch):
+    """Every way of the fixed pipeline (:data:`FIXED_FUNCTION`), in the quad lab of the
+    test folder, which opens every channel the shipped labs close: the same verdicts and
+    the same picture within the tolerance, Mesa's pipeline against the emulation."""
+    spec = importlib.import_module("tests.labs.fourth_lab").SPEC
+    try:
+        folder = tmp_path / "class"
+        folder.mkdir()
+        (folder / "solution.py").write_text(spec.solution.read_text())
+        (folder / "fixed_function.py").write_text(
+            spec.solution.read_text() + "\n\n" + FIXED_FUNCTION
+        )
+        native = _grade(spec.name, folder, monkeypatch, tmp_path / "cache-native", core=False)
+        core = _grade(spec.name, folder, monkeypatch, tmp_path / "cache-core", core=True)
+    finally:
+        unregister(spec.name)
+    assert sorted(native) == sorted(core) == ["fixed_function", "solution"]
+    assert all(passed for _, passed, _ in core["solution"].tasks)
+    for student, expected in native.items():
+        got = core[student]
+        assert got.status == expected.status == "ok", (student, got.status, got.detail)
+        assert got.tasks == expected.tasks, student
+        a, b = _student_picture(expected.picture_png), _student_picture(got.picture_png)
+        difference = np.abs(a - b).max(axis=-1)
+        stray = float((difference > PIXEL_TOLERANCE).mean())
+        assert stray <= STRAY_PIXELS, (student, stray, int(difference.max()))
+    # the fixed-function file drew what it draws (its display() raised nothing, which no
+    # task of the quad lab would say)
+    drawn = _student_picture(native["fixed_function"].picture_png)
+    plain = _student_picture(native["solution"].picture_png)
+    assert float((np.abs(drawn - plain).max(axis=-1) > 40).mean()) > 0.1

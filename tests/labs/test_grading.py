@@ -93,7 +93,7 @@ def test_grades_csv_is_the_expected_one(engine, classroom, graded):
         expected = {name: expected[name] for name in part_of_the_class(expected)}
     out, result = graded(engine)
     rows = read_csv(out / "grades.csv")
-    assert list(rows[0]) == ["student", "task", "passed", "hint", "seconds"]
+    assert list(rows[0]) == ["student", "task", "passed", "hint", "seconds", "id"]
     assert compare(rows, expected) == []
     assert [r["student"] for r in rows] == sorted(r["student"] for r in rows)
     engine_words = {
@@ -141,6 +141,9 @@ def test_gradebook_and_feedback_pages(graded, classroom):
         "variant",
         "copy_of",
         "feedback",
+        "id",
+        "email",
+        "not_graded",
     ]
     assert [r["student"] for r in rows] == sorted(expected)
     # without a key everyone has the lab's own numbers: no file is another's copy

@@ -1,20 +1,15 @@
 """Evidence nobody can launder (issue 39, round two): the forgeries of tests/labs/
-launderings.py each fail at least one task, with the hint that names what they did; the
-whole-frame rule sees a faint overlay in patches and lets noise and half-pixel edges
-pass; taint follows pixels through clears, masks, scissors and copies."""
+launderings.py each fail at least one task, with the hint that names what they did (since
+round three, the refusal of the channel they used: tests/gl/test_lab_channels.py tries
+every channel, tests/unit/test_overlays.py the whole frame's rule)."""
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 from mirrorlab.labs import find_lab, lab_names
-from mirrorlab.labs.content import reference_folder
 from mirrorlab.labs.trusted import calls as C
-from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.grading import grade_folder
-from mirrorlab.labs.trusted.judging import allowed_pixels, differing, faint_patches
-from mirrorlab.labs.trusted.state import Tracker
 from tests.labs.conftest import LIMITS, SOLUTIONS
 from tests.labs.launderings import launderings
 
@@ -50,55 +45,6 @@ def test_no_lab_offers_a_way_to_read_what_was_drawn():
     assert "glCopyTexImage2D" not in C.lab_specs("spheremap")
     assert "glCopyTexImage2D" in C.lab_specs("lab20")
     assert "glUniform1i" in C.lab_specs("lab20") and "glUniform1i" not in C.lab_specs("cubemap")
-
-
-def _reference(lab: str) -> np.ndarray:
-    return Evidence.load(reference_folder(find_lab(lab))).arrays["frame"]
-
-
-def _blend(frame: np.ndarray, box: tuple[int, int, int, int], colour, alpha: float) -> np.ndarray:
-    out = frame.astype(np.float64)
-    x0, y0, x1, y1 = box
-    out[y0:y1, x0:x1] = out[y0:y1, x0:x1] * (1 - alpha) + np.asarray(colour) * alpha
-    return np.round(out).astype(np.uint8)
-
-
-@pytest.mark.parametrize("lab", sorted(lab_names()))
-def test_a_faint_overlay_shows_in_patches_and_noise_does_not(lab):
-    reference = _reference(lab)
-    marked = reference
-    for box, colour in (
-        ((0, 30, 256, 54), (255, 255, 255)),
-        ((20, 70, 36, 230), (255, 255, 255)),
-        ((150, 130, 230, 210), (255, 0, 0)),
-    ):
-        marked = _blend(marked, box, colour, 0.085)
-    # under the per-pixel tolerance, as the issue found
-    assert int(np.abs(marked.astype(int) - reference).max()) <= 24
-    assert int(differing(marked, reference).sum()) <= allowed_pixels(reference.shape)
-    assert int(faint_patches(marked, reference).sum()) > 10 * allowed_pixels(reference.shape)
-    # noise of a few levels, everywhere
-    rng = np.random.default_rng(7)
-    noisy = np.clip(reference.astype(int) + rng.integers(-3, 4, reference.shape), 0, 255)
-    assert int(faint_patches(noisy.astype(np.uint8), reference).sum()) == 0
-    # a uniform offset of a few levels over the whole frame (another driver's rounding)
-    shifted = np.clip(reference.astype(int) + 4, 0, 255).astype(np.uint8)
-    assert int(faint_patches(shifted, reference).sum()) == 0
-    # everything drawn one pixel over: edges, not patches
-    moved = np.roll(reference, 1, axis=1)
-    assert int(faint_patches(moved, reference).sum()) <= allowed_pixels(reference.shape)
-
-
-def test_taint_follows_pixels():
-    tracker = Tracker()
-    assert tracker.framebuffer_taint == ""
-    tracker.taint("texture 3 holds uploaded pixels", (0, 0, 64, 64), (64, 64))
-    assert tracker.framebuffer_taint
-    tracker.untaint((0, 0, 32, 64))  # a scissored clear: half the frame
-    assert tracker.framebuffer_taint and tracker.taint_in((0, 0, 32, 64)) == ""
-    assert tracker.taint_in((30, 0, 8, 8)) and tracker.taint_in((-5, -5, 1000, 1000))
-    tracker.untaint((32, 0, 32, 64))
-    assert tracker.framebuffer_taint == "" and tracker.taint_in((0, 0, 64, 64)) == ""
 
 
 def test_one_file_for_every_variant_gets_a_refusal_for_each_student(tmp_path):

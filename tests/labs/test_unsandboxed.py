@@ -106,6 +106,13 @@ def test_a_check_without_bubblewrap_passes_and_says_once_it_is_not_sandboxed(tmp
 def check_note(done: subprocess.CompletedProcess, how: str, picture: Path) -> None:
     assert done.returncode == 0, done.stderr
     assert "8/8 tasks passed" in done.stdout
+    # the teacher's solution names no variant: the line under its name says what it is
+    # judged against
+    assert done.stdout.splitlines()[1] == (
+        "  note: lab20_mirror.py names no variant (no variant.json beside it, no variant "
+        "line at its top): judged against the lab's own numbers; a released starter is "
+        "checked in its own folder"
+    ), done.stdout
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1, done.stderr
     assert lines[0].startswith(

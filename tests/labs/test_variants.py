@@ -8,6 +8,7 @@ whose); a student's ``lab check`` at home judges against their own released refe
 
 from __future__ import annotations
 
+import csv
 import html
 import json
 import re
@@ -15,11 +16,12 @@ import re
 import pytest
 
 from mirrorlab.labs import find_lab, lab_names, labs
-from mirrorlab.labs.content import handout, solution_for, starter
+from mirrorlab.labs.content import MARK, handout, solution_for, starter
 from mirrorlab.labs.trusted.variants import (
     VariantError,
     default_variant,
     derive_variant,
+    header_line,
     read_key,
     student_key,
     variant_from_file,
@@ -62,7 +64,7 @@ def test_every_variant_renders_and_compiles():
                 starter(spec, variant),
                 solution_for(text, variant),
             ):
-                assert "{{" not in rendered and "}}" not in rendered
+                assert not MARK.search(rendered), MARK.search(rendered)
             compile(starter(spec, variant), "starter.py", "exec")
             compile(solution_for(text, variant), "solution.py", "exec")
             if lab == "lab20":
@@ -168,29 +170,30 @@ def test_grading_with_the_key_passes_the_honest_and_fails_the_copy(released, tmp
         str(LIMITS.cpu_seconds),
     )
     assert done.returncode == 0, done.stderr
+    # every output keeps the class list's names (the files are Ada_Lovelace.py ...)
     book = {row["student"]: row for row in read_csv(out / "gradebook.csv")}
-    assert book["Ada_Lovelace"]["score"] == book["Ben_Ng"]["score"] == "8"
-    assert book["Ada_Lovelace"]["copy_of"] == book["Ben_Ng"]["copy_of"] == ""
+    assert book["Ada Lovelace"]["score"] == book["Ben Ng"]["score"] == "8"
+    assert book["Ada Lovelace"]["copy_of"] == book["Ben Ng"]["copy_of"] == ""
     # --copies=flag (the default): the score as judged, the copy named in the gradebook
-    assert int(book["Cy_Twombly"]["score"]) < 8
-    assert book["Cy_Twombly"]["copy_of"] == "Ada_Lovelace"
-    assert book["Cy_Twombly"]["variant"] == derive_variant("lab20", read_key(key), "Cy Twombly").id
-    assert "copy: 'Cy_Twombly' carries the numbers of Ada_Lovelace" in done.stdout
-    copied = [row for row in read_csv(out / "grades.csv") if row["student"] == "Cy_Twombly"]
+    assert int(book["Cy Twombly"]["score"]) < 8
+    assert book["Cy Twombly"]["copy_of"] == "Ada Lovelace"
+    assert book["Cy Twombly"]["variant"] == derive_variant("lab20", read_key(key), "Cy Twombly").id
+    assert "copy: 'Cy Twombly' carries the numbers of Ada Lovelace" in done.stdout
+    copied = [row for row in read_csv(out / "grades.csv") if row["student"] == "Cy Twombly"]
     failed = {row["task"]: row["hint"] for row in copied if row["passed"] == "no"}
     assert "another student's" in failed["task 1 (capture_camera)"]
     assert "another student's" in failed["task 7 (mirror_quad)"]
     report = (out / "report.html").read_text()
-    assert "numbers of Ada_Lovelace" in report
+    assert "numbers of Ada Lovelace" in report
     # the flag sits in the score's cell (the second column, on screen at any width)
     found = re.search(
-        r'<tr data-student="Cy_Twombly"><td[^>]*>[^<]*</td>'
+        r'<tr data-student="Cy Twombly"><td[^>]*>[^<]*</td>'
         r'(<td class="score".*?</td>)',
         report,
     )
     assert found is not None
     score_cell = found.group(1)
-    assert "copy: the numbers of Ada_Lovelace" in score_cell
+    assert "copy: the numbers of Ada Lovelace" in score_cell
     page = html.unescape(
         re.sub(
             r"data:image/png;base64,[A-Za-z0-9+/=]+",
@@ -271,18 +274,109 @@ def test_copies_policy_and_names_off_the_class_list(released, tmp_path):
     assert "no submission: 'Ada Lovelace' of the class list" in done.stdout
     assert "graded 1 submissions" in done.stdout
     book = read_csv(out / "gradebook.csv")
-    assert [row["student"] for row in book] == ["cy_twombly"]
+    assert [row["student"] for row in book] == ["Cy Twombly"]
     assert (book[0]["score"], book[0]["percent"], book[0]["copy_of"]) == (
         "0",
         "0.0",
         "Ada Lovelace",
     )
-    assert {row["student"] for row in read_csv(out / "grades.csv")} == {"cy_twombly"}
+    assert {row["student"] for row in read_csv(out / "grades.csv")} == {"Cy Twombly"}
     assert not (out / "feedback" / "Zed_Stranger.html").exists()
     report = (out / "report.html").read_text()
     assert re.search(r'id="unlisted">[^<]*<b>Zed_Stranger</b>', report)
     assert re.search(r'id="missing">[^<]*Ada Lovelace', report)
     assert "scored 0 (--copies=zero)" in report
+
+
+def test_a_csv_class_list_names_every_output_and_the_canvas_gradebook(released, tmp_path):
+    """The class as a CSV with ids and emails: submissions named by an id, an email's
+    name and a name; every output says the list's names and ids; --format canvas writes
+    Canvas's import layout. Ada's file carries a header naming Ben's variant: lab grade
+    never reads it (a variant follows from the key and the name), so she passes."""
+    _, key, submissions = released
+    roster = tmp_path / "class.csv"
+    roster.write_text(
+        "id,name,email\n"
+        "s1001,Ada Lovelace,ada@uni.edu\n"
+        "s1002,Ben Ng,ben.ng@uni.edu\n"
+        "s1003,Cy Twombly,cy@uni.edu\n"
+    )
+    ben = derive_variant("lab20", read_key(key), "Ben Ng")
+    folder = tmp_path / "class"
+    folder.mkdir()
+    ada = (submissions / "Ada_Lovelace.py").read_text()
+    (folder / "s1001.py").write_text(header_line(ben) + ada)
+    (folder / "ben.ng@uni.edu.py").write_text((submissions / "Ben_Ng.py").read_text())
+    (folder / "Twombly, Cy").mkdir()
+    (folder / "Twombly, Cy" / "starter.py").write_text(ada)
+    out = tmp_path / "grades"
+    done = mirrorlab_command(
+        "lab",
+        "grade",
+        "lab20",
+        str(folder),
+        "--key",
+        str(key),
+        "--students",
+        str(roster),
+        "--format",
+        "canvas",
+        "--assignment",
+        "Lab 20 (4411)",
+        "--out-dir",
+        str(out),
+        "--jobs",
+        "2",
+        "--timeout",
+        str(LIMITS.cpu_seconds),
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "copy: 'Cy Twombly (s1003)' carries the numbers of Ada Lovelace (s1001)" in done.stdout
+    with open(out / "gradebook.csv", newline="") as stream:
+        table = list(csv.reader(stream))
+    assert table[:2] == [
+        ["Student", "ID", "SIS User ID", "SIS Login ID", "Section", "Lab 20 (4411)"],
+        ["Points Possible", "", "", "", "", "8"],
+    ]
+    assert [row[:5] for row in table[2:]] == [
+        ["Ada Lovelace", "", "s1001", "ada@uni.edu", ""],
+        ["Ben Ng", "", "s1002", "ben.ng@uni.edu", ""],
+        ["Cy Twombly", "", "s1003", "cy@uni.edu", ""],
+    ]
+    assert table[2][5] == table[3][5] == "8" and int(table[4][5]) < 8
+    rows = read_csv(out / "grades.csv")
+    assert {(r["student"], r["id"]) for r in rows} == {
+        ("Ada Lovelace", "s1001"),
+        ("Ben Ng", "s1002"),
+        ("Cy Twombly", "s1003"),
+    }
+    page = (out / "feedback" / "Ada_Lovelace.html").read_text()
+    assert "Ada Lovelace (s1001)" in page and "8 of 8 tasks passed" in page
+    assert '<span class="id">s1002</span>' in (out / "report.html").read_text()
+
+
+def test_a_released_starter_checked_away_from_its_folder_is_judged_by_its_header(
+    released, tmp_path
+):
+    """Ben's finished file without variant.json beside it: with its header, judged against
+    Ben's numbers (the reference from the solutions) or told in one line where its
+    reference is. (Without a header it is judged against the lab's own numbers, and told
+    so: test_unsandboxed.py's check of the solution.)"""
+    _, key, submissions = released
+    ben = derive_variant("lab20", read_key(key), "Ben Ng")
+    headed = tmp_path / "headed.py"
+    headed.write_text(header_line(ben) + (submissions / "Ben_Ng.py").read_text())
+    command = ("lab", "check", "lab20")
+    limit = ("--timeout", str(LIMITS.cpu_seconds))
+    done = mirrorlab_command(*command, str(headed), *limit, env={"MIRRORLAB_SOLUTIONS": None})
+    assert done.returncode == 2 and done.stdout == "", done.stdout + done.stderr
+    assert done.stderr.strip().splitlines() == [
+        f"mirrorlab lab: error: no reference for variant {ben.id} of lab20: its released "
+        f"folder's reference/ is missing; give --solutions DIR (the teacher's labs/solutions)"
+    ]
+    done = mirrorlab_command(*command, str(headed), *limit, "--out", str(tmp_path / "a.png"))
+    assert done.returncode == 0 and "8/8 tasks passed" in done.stdout, done.stdout + done.stderr
+    assert f"(variant {ben.id})" in done.stdout and done.stderr == ""
 
 
 @pytest.mark.parametrize("lab", ["spheremap", "cubemap"])
@@ -336,11 +430,12 @@ def test_the_other_labs_variants_fail_a_copied_file(lab, tmp_path):
         str(LIMITS.cpu_seconds),
     )
     assert done.returncode == 0, done.stderr
+    # the outputs say the class list's names (the files are student_N.py, default_copy.py)
     rows = read_csv(out / "grades.csv")
-    mine = [r for r in rows if r["student"] == name]
-    assert all(r["passed"] == "yes" for r in mine), mine
-    theirs = [r for r in rows if r["student"] == "default_copy"]
-    assert not all(r["passed"] == "yes" for r in theirs)
+    mine = [r for r in rows if r["student"] == student]
+    assert mine and all(r["passed"] == "yes" for r in mine), mine
+    theirs = [r for r in rows if r["student"] == "default copy"]
+    assert theirs and not all(r["passed"] == "yes" for r in theirs)
     # the lab's own numbers are another variant's for this student (unless both are alike)
     own = derive_variant(lab, KEY, "default_copy")
     if not own.same_numbers(default_variant(lab)):
@@ -348,11 +443,11 @@ def test_the_other_labs_variants_fail_a_copied_file(lab, tmp_path):
         # --copies=hold: the gradebook flags the default variant's copy and books no score
         book = {row["student"]: row for row in read_csv(out / "gradebook.csv")}
         assert (
-            book["default_copy"]["copy_of"],
-            book["default_copy"]["score"],
-            book["default_copy"]["percent"],
+            book["default copy"]["copy_of"],
+            book["default copy"]["score"],
+            book["default copy"]["percent"],
         ) == ("default variant", "", "")
-        assert book[name]["copy_of"] == "" and book[name]["score"] == str(len(spec.tasks))
+        assert book[student]["copy_of"] == "" and book[student]["score"] == str(len(spec.tasks))
     assert len(spec.tasks) == len(theirs)
     if lab == "spheremap":
         key = shared.student.replace(" ", "_")

@@ -14,7 +14,7 @@ from mirrorlab import accuracy, flip
 from mirrorlab.options import apply_options
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import BoxProxy, DistanceSearch
-from mirrorlab.techniques import technique_names
+from mirrorlab.techniques import names_where, technique_names
 from tests.scenekit import curved_reflector, planar_reflector
 
 
@@ -206,15 +206,21 @@ def test_planar_configurations_cover_every_capture_mode_and_size_plus_stencil():
             assert mirror.texture_size == options["env_size"]
 
 
+def corrected() -> tuple[str, ...]:
+    """The curved techniques that take a parallax correction."""
+    return names_where(lambda t: t.kind == "curved" and t.parallax)
+
+
 def test_curved_configurations_stop_at_the_largest_map_the_sweep_bakes():
     configs = accuracy.curved_techniques((64, 2048))
+    assert corrected(), "the live cube map at least takes a correction"
     assert [label for label, _ in configs] == [
         *technique_names("curved"),
-        "cube-live distance",
-        "cube-live distance 2+0",
-        "cube-live distance 4+1",
-        "cube-live distance 16+2",
-        "cube-live distance 32+4",
+        *(
+            f"{name} distance{steps}"
+            for name in corrected()
+            for steps in ("", " 2+0", " 4+1", " 16+2", " 32+4")
+        ),
     ]
     assert all(o["map_size"] == 64 for _, o in configs)
     assert accuracy.ENVMAP_MAX_SIZE < 2048
@@ -222,7 +228,7 @@ def test_curved_configurations_stop_at_the_largest_map_the_sweep_bakes():
     for label, options in configs:
         reflector = curved_reflector(apply_options(sphere, options), "sphere")
         assert reflector.technique == label.split()[0]
-        if label == "cube-live":  # the plain live cube map has no correction
+        if label in corrected():  # the plain one has no correction
             assert reflector.parallax is None
         elif "distance" in label:
             steps = label.split()[-1] if label[-1].isdigit() else accuracy.DEFAULT_STEPS
@@ -232,26 +238,27 @@ def test_curved_configurations_stop_at_the_largest_map_the_sweep_bakes():
 def test_the_live_cube_map_is_measured_with_each_proxy_and_each_step_count():
     proxies = (("box", "box:-4,-2,-4,4,4,4"), ("sphere", "sphere:3"))
     configs = accuracy.curved_techniques((64, 256, 512), proxies, ("4+1", "8+2"))
-    labels = [(label, o["map_size"]) for label, o in configs if label.startswith("cube-live ")]
-    assert labels == [
-        ("cube-live box", 64),
-        ("cube-live box", 256),
-        ("cube-live box", 512),
-        ("cube-live sphere", 64),
-        ("cube-live sphere", 256),
-        ("cube-live sphere", 512),
-        ("cube-live distance", 64),
-        ("cube-live distance", 256),
-        ("cube-live distance", 512),
-        ("cube-live distance 4+1", 256),
-    ]
+    for name in corrected():
+        labels = [(label, o["map_size"]) for label, o in configs if label.startswith(f"{name} ")]
+        assert labels == [
+            (f"{name} box", 64),
+            (f"{name} box", 256),
+            (f"{name} box", 512),
+            (f"{name} sphere", 64),
+            (f"{name} sphere", 256),
+            (f"{name} sphere", 512),
+            (f"{name} distance", 64),
+            (f"{name} distance", 256),
+            (f"{name} distance", 512),
+            (f"{name} distance 4+1", 256),
+        ]
+        room = load_scene("sphere_room")
+        boxed = apply_options(room, dict(next(o for label, o in configs if label == f"{name} box")))
+        assert curved_reflector(boxed, "sphere").parallax == BoxProxy(
+            (-4.0, -2.0, -4.0), (4.0, 4.0, 4.0)
+        )
     assert accuracy.search_map_size((64, 128)) == 128
     assert accuracy.search_map_size((512, 1024)) == 512
-    room = load_scene("sphere_room")
-    boxed = apply_options(room, dict(configs[-10][1]))
-    assert curved_reflector(boxed, "sphere").parallax == BoxProxy(
-        (-4.0, -2.0, -4.0), (4.0, 4.0, 4.0)
-    )
 
 
 def test_proxies_are_the_box_around_the_objects_and_the_sphere_inside_it():
@@ -273,7 +280,10 @@ def test_a_scene_gets_the_configurations_of_its_kinds_of_reflector():
         for name in ("lab20", "chrome_sphere", "mirror_and_sphere", "no_mirror")
     }
     assert labels["lab20"] == [label for label, _ in accuracy.lab_techniques(sizes)]
-    assert labels["chrome_sphere"] == [*technique_names("curved"), "cube-live distance"]
+    assert labels["chrome_sphere"] == [
+        *technique_names("curved"),
+        *(f"{name} distance" for name in corrected()),
+    ]
     assert labels["mirror_and_sphere"] == labels["lab20"] + labels["chrome_sphere"]
     assert labels["no_mirror"] == []
 

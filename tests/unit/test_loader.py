@@ -49,7 +49,7 @@ from mirrorlab.scene.model import (
     Transform,
     Vec3,
 )
-from mirrorlab.techniques import technique_names
+from mirrorlab.techniques import names_where, technique_names
 from tests import REPO_DIR
 
 MODELS = sorted((data_path("models")).glob("*.obj"))
@@ -692,10 +692,11 @@ def test_a_missing_picture_is_named(tmp_path):
     document["background"] = {"sphere_map": "gone.png"}
     assert_refused(tmp_path, document, "background.sphere_map", "picture", "does not exist")
     document = base_document()
-    document["reflectors"][1].update(technique="sphere", source="gone.png")
-    assert_refused(
-        tmp_path, document, "reflectors[1].source", "sphere-map picture", "does not exist"
-    )
+    for name in names_where(lambda t: t.source not in (None, "faces")):
+        document["reflectors"][1].update(technique=name, source="gone.png")
+        assert_refused(
+            tmp_path, document, "reflectors[1].source", f"{name} map's picture", "does not exist"
+        )
 
 
 def test_a_missing_cube_face_is_named(tmp_path):
@@ -1494,9 +1495,10 @@ def test_a_bad_parallax_table_is_named(tmp_path, parallax, key, words):
 def test_parallax_belongs_to_live_cube_maps_only(tmp_path):
     document = base_document()
     document["reflectors"][1].update(technique="cube", parallax={"proxy": "distance"})
-    assert_refused(
-        tmp_path, document, "reflectors[1].parallax", "applies to technique 'cube-live', not 'cube'"
-    )
+    corrected = names_where(lambda t: t.parallax)
+    assert "cube" not in corrected
+    error = assert_refused(tmp_path, document, "reflectors[1].parallax", "applies to technique")
+    assert error.problem.endswith(f"{', '.join(map(repr, corrected))}, not 'cube'")
     document = base_document()
     document["reflectors"][0]["parallax"] = {"proxy": "distance"}
     assert_refused(tmp_path, document, "reflectors[0].parallax", "unknown key")

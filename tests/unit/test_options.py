@@ -22,7 +22,11 @@ from mirrorlab.options import (
 )
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import BoxProxy, DistanceSearch, SphereProxy
+from mirrorlab.techniques import technique, techniques
 from tests.scenekit import curved_reflector, planar_reflector, scene_robot
+
+CORRECTED = tuple(t.name for t in techniques("curved") if t.parallax)
+"""The curved techniques that take a parallax correction (the registry's, in order)."""
 
 SKY_CUBE = data_path("textures") / "sky_cube"
 
@@ -96,11 +100,13 @@ def test_leaving_ortho_drops_the_labs_capture_camera():
 def test_a_reflectors_source_is_kept_only_where_it_means_the_same():
     cone = load_scene("cone")
     picture = curved_reflector(cone, "cone").source
-    assert curved_reflector(apply_options(cone, {"method": "sphere"}), "cone").source == picture
-    assert curved_reflector(apply_options(cone, {"method": "normal"}), "cone").source == picture
-    # A picture is no folder of cube faces, and latlong takes no source: baked instead.
-    for method in ("cube", "latlong", "cube-live"):
-        assert curved_reflector(apply_options(cone, {"method": method}), "cone").source is None
+    kind = technique(curved_reflector(cone, "cone").technique).source
+    assert picture is not None and kind == "picture"
+    # A sphere-map picture is no folder of cube faces, nor a picture of another map's
+    # layout; a technique that takes no source bakes its map or captures it instead.
+    for entry in techniques("curved"):
+        kept = curved_reflector(apply_options(cone, {"method": entry.name}), "cone").source
+        assert kept == (picture if entry.source == kind else None), entry.name
     faces = apply_options(
         load_scene("sphere"),
         {"set": ['reflectors[0].technique="cube"', f'reflectors[0].source="{SKY_CUBE}"']},
@@ -178,8 +184,8 @@ def test_leaving_cube_live_drops_the_parallax_correction():
         (
             "chrome_sphere",
             "distance",
-            "--parallax: scene 'chrome_sphere' has no cube-live "
-            "reflector (--method cube-live makes every curved",
+            f"--parallax: scene 'chrome_sphere' has no {' or '.join(CORRECTED)} "
+            f"reflector (--method {CORRECTED[0]} makes every curved",
         ),
         ("lab20", "distance", "--parallax: scene 'lab20' has no curved reflector"),
     ],
@@ -287,9 +293,9 @@ def test_set_changes_any_key_path_as_a_file_would():
         ),
         (
             {"method": "spheer"},
-            "--method: reflectors[0].technique: expected one of ortho, "
-            "reflected, stencil, sphere, sphere-vertex, sphere-texgen, cube, "
-            "cube-live, latlong, normal, got 'spheer' (did you mean 'sphere'?)",
+            "--method: reflectors[0].technique: expected one of "
+            + ", ".join(t.name for t in techniques() if t.kind != "frame")
+            + ", got 'spheer' (did you mean 'sphere'?)",
         ),
         ({"method": 5}, "--method: reflectors[0].technique: expected a string, got the number 5"),
         (

@@ -18,7 +18,14 @@ from mirrorlab.commands.arguments import scene_from_args
 from mirrorlab.options import OptionError, apply_options, split_frame_technique
 from mirrorlab.plan import TextureState, plan_frame
 from mirrorlab.scene.loader import SceneError, load_scene, loads
-from mirrorlab.techniques import Technique, register, technique, technique_names, unregister
+from mirrorlab.techniques import (
+    Technique,
+    register,
+    technique,
+    technique_names,
+    techniques,
+    unregister,
+)
 from tests.scenekit import curved_reflector
 
 PROBE_MIRROR = Technique(
@@ -199,16 +206,11 @@ def test_a_frame_technique_is_a_method_like_the_ray_tracer():
 
 
 def test_every_list_comes_from_the_registry():
-    assert technique_names("planar") == ("ortho", "reflected", "stencil")
-    assert set(technique_names("curved")) == {
-        "sphere",
-        "sphere-vertex",
-        "sphere-texgen",
-        "cube",
-        "cube-live",
-        "latlong",
-        "normal",
-    }
+    every = techniques()
+    for kind in ("planar", "curved", "frame"):
+        assert technique_names(kind) == tuple(t.name for t in every if t.kind == kind)
+    assert set(technique_names()) == {t.name for t in every}
+    assert technique_names("planar") and technique_names("curved")
     with registered(replace(PROBE_MIRROR, name="probe-two")):
         assert technique_names("planar")[-1] == "probe-two"
     with pytest.raises(ValueError, match="already registered"):

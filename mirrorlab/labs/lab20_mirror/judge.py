@@ -60,6 +60,17 @@ def regions(run: J.Run) -> dict[str, np.ndarray | None]:
     return {"mirror": mirror}
 
 
+def clamp_rim(run: J.Run) -> np.ndarray | None:
+    """The mirror's outline, 3 pixels either side, when ENVIRONMENT wraps with GL_CLAMP
+    (which the handout accepts): its linear filter darkens a thin rim there with the border
+    colour, not a mark of the file's; else None."""
+    params = run.student.state.get("environment_parameters") or {}
+    if J.GL_CLAMP not in (params.get("GL_TEXTURE_WRAP_S"), params.get("GL_TEXTURE_WRAP_T")):
+        return None
+    projection, view = Lab20.viewer_for(run.size)
+    return J.convex_rim(np.array(run.numbers["corners"]), projection @ view, run.size, 3)
+
+
 JUDGE = J.LabJudge(
     lab="lab20",
     roles={"environment": "tex_ids[ENVIRONMENT]", "metal": "tex_ids[METAL]"},
@@ -69,6 +80,7 @@ JUDGE = J.LabJudge(
     regions=regions,
     frame_task="passes",
     owner={"mirror": ("mirror_quad", "the mirror's picture")},
+    allowed=clamp_rim,
     tasks=(
         J.TaskRule(
             "capture_camera",
@@ -91,7 +103,6 @@ JUDGE = J.LabJudge(
             ("create_mirror",),
             checks=(
                 J.Happens(CAPTURE, "the capture's drawing"),
-                J.Untainted("the capture", events=COPY),
                 J.SamePicture("the capture's picture", events=COPY),
             ),
             explain=(
@@ -133,7 +144,6 @@ JUDGE = J.LabJudge(
             checks=(
                 J.Stopped("render_mirror"),
                 J.Happens(MIRROR, "the mirror's quad"),
-                J.Untainted("the mirror", events=MIRROR),
                 J.SameSampling(MIRROR, "texture_shader", "lab.texSampler"),
             ),
             families=SHADING,

@@ -40,6 +40,13 @@ def left_out() -> dict[str, str]:
     return {name: "lab 20 makes no texture coordinates by texgen" for name in calls.TEXGEN}
 
 
+def channels() -> tuple[str, ...]:
+    """The ways of :data:`~mirrorlab.labs.trusted.calls.CHANNELS` from a file's numbers to
+    the frame this lab's handout teaches: the mirror quad (its corners and texture
+    coordinates, filled) and the copy of the capture."""
+    return ("immediate_mode", "texture_coordinates", "copies")
+
+
 class Lab20(LabBase):
     """Lab 20, the multipass mirror: the robot on its base at the variant's pose, a dark
     frame behind the variant's mirror, the viewer, and ``textureShader`` (sampler
@@ -121,12 +128,8 @@ def draw_scene(executor: Executor, args: list[Any]) -> None:
                 executor.owned_texture(value, f"robot[{node!r}].texture", GL_TEXTURE_2D) or None
             )
             shown[node] = textures[node]
-    used = [t for t in textures.values() if t]
     bound = executor.record_draw(
-        "draw_scene",
-        lambda: executor.lab.draw_scene(textures),
-        executor.taint_of(used),
-        textures=shown,
+        "draw_scene", lambda: executor.lab.draw_scene(textures), textures=shown
     )
     executor.after_kit_draw(bound)
 

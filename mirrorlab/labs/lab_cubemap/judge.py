@@ -271,7 +271,6 @@ JUDGE = J.LabJudge(
                 J.Happens(COPIES, "the copies into the faces"),
                 J.CopiesAfterDraws(COPIES, FACES),
                 J.SameCopies(COPIES),
-                J.Untainted("the faces", texture="cube_texture"),
                 J.SamePicture("the faces", array="cube_faces"),
             ),
             explain=(J.SameClears(FACES, "face"),),

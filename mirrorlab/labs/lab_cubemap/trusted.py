@@ -18,6 +18,7 @@ from mirrorlab.labs.trusted.session import (
     LabBase,
     LabSetupError,
     current_matrices,
+    kit_state,
     lazy_gl,
     read_cube_faces,
     uniform,
@@ -45,6 +46,12 @@ def left_out() -> dict[str, str]:
         },
         **{name: "the cube-map lab's shader makes the lookup; no texgen" for name in calls.TEXGEN},
     }
+
+
+def channels() -> tuple[str, ...]:
+    """The ways of :data:`~mirrorlab.labs.trusted.calls.CHANNELS` from a file's numbers to
+    the frame this lab's handout teaches: the six copies of the capture."""
+    return ("copies",)
 
 
 class CubeMapLab(LabBase):
@@ -130,7 +137,8 @@ class CubeMapLab(LabBase):
         GL.glActiveTexture(GL.GL_TEXTURE0)
         GL.glEnable(GL.GL_TEXTURE_CUBE_MAP_SEAMLESS)
         legacy.load_matrix_uniforms(program)
-        self.mesh("env_sphere").draw()
+        with kit_state():
+            self.mesh("env_sphere").draw()
         GL.glUseProgram(previous)
 
 
@@ -143,7 +151,7 @@ def kit_calls() -> dict[str, Any]:
 
 
 def draw_scene(executor: Executor, args: list[Any]) -> None:
-    bound = executor.record_draw("draw_scene", executor.lab.draw_scene, "")
+    bound = executor.record_draw("draw_scene", executor.lab.draw_scene)
     executor.after_kit_draw(bound)
 
 
@@ -161,7 +169,6 @@ def draw_sphere(executor: Executor, args: list[Any]) -> None:
     executor.record_draw(
         "draw_sphere",
         lambda: executor.lab.draw_sphere(glsl, texture, 0, executor.limits.programs),
-        executor.taint_of([texture]),
         **extra,
     )
     tracker = executor.tracker

@@ -11,12 +11,15 @@ import numpy as np
 
 from mirrorlab import math3d
 from mirrorlab.labs.trusted import legacy
+from mirrorlab.labs.trusted.calls import UNITS
 from mirrorlab.labs.trusted.session import (
     ENV_UNIT,
     LabBase,
     LabSetupError,
     Mesh,
+    kit_state,
     lazy_gl,
+    modelview_times,
     uniform,
 )
 from mirrorlab.labs.trusted.state import GL_TEXTURE_2D
@@ -42,6 +45,13 @@ def left_out() -> dict[str, str]:
             for name in calls.UNIFORMS
         },
     }
+
+
+def channels() -> tuple[str, ...]:
+    """The ways of :data:`~mirrorlab.labs.trusted.calls.CHANNELS` from a file's numbers to
+    the frame this lab's handout teaches: texgen's modes for s and t (the kit draws
+    everything, and textures its cone itself)."""
+    return ("texgen",)
 
 
 class SphereMapLab(LabBase):
@@ -85,53 +95,68 @@ class SphereMapLab(LabBase):
         GL.glActiveTexture(GL.GL_TEXTURE0 + ENV_UNIT)
         GL.glBindTexture(GL.GL_TEXTURE_2D, int(texture))
         GL.glActiveTexture(GL.GL_TEXTURE0)
-        FF = legacy.gl()
-        FF.glMatrixMode(GL.GL_MODELVIEW)
-        FF.glPushMatrix()
-        FF.glMultMatrixd(np.ascontiguousarray(self.cone_model.T))
-        legacy.load_matrix_uniforms(program)
-        self.mesh("cone").draw()
-        FF.glPopMatrix()
+        with kit_state(), modelview_times(self.cone_model):
+            legacy.load_matrix_uniforms(program)
+            self.mesh("cone").draw()
         GL.glUseProgram(previous)
 
     def draw_cone_fixed_function(self) -> None:
         """The cone with no shader, in the fixed-function pipeline: its texture coordinates
-        whatever texgen makes of them on the variant's unit, textured there (GL_REPLACE);
-        every other unit's texturing off while it is drawn."""
+        whatever texgen makes of s and t on the variant's unit, textured there with the 2D
+        texture bound on it (GL_REPLACE, the texture matrix the identity, no r or q
+        generated, the current q 1); texturing off on every other unit the labs' calls can name, no
+        lighting, normals normalised, the kit's raster state (:func:`kit_state`); all
+        of it as the file left it again after."""
         GL = lazy_gl()
+        FF = legacy.gl()
         previous = int(GL.glGetIntegerv(GL.GL_CURRENT_PROGRAM))
         active = int(GL.glGetIntegerv(GL.GL_ACTIVE_TEXTURE))
         GL.glUseProgram(0)
-        FF = legacy.gl()
-        FF.glDisable(GL.GL_LIGHTING)
+        normalize = bool(FF.glIsEnabled(GL.GL_NORMALIZE))
         FF.glEnable(GL.GL_NORMALIZE)
-        enabled = []
-        for unit in range(4):
-            GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
-            for cap in (GL.GL_TEXTURE_2D, GL.GL_TEXTURE_CUBE_MAP):
-                if FF.glIsEnabled(cap):
-                    enabled.append((unit, cap))
-                    FF.glDisable(cap)
-        GL.glActiveTexture(GL.GL_TEXTURE0 + self.texgen_unit)
+        saved: list[tuple[int, int, bool]] = []
+        texgen = GL.GL_TEXTURE0 + self.texgen_unit
+        for unit in sorted(UNITS):
+            GL.glActiveTexture(unit)
+            for cap in (
+                GL.GL_TEXTURE_2D,
+                GL.GL_TEXTURE_CUBE_MAP,
+                *((GL.GL_TEXTURE_GEN_R, GL.GL_TEXTURE_GEN_Q) if unit == texgen else ()),
+            ):
+                saved.append((unit, cap, bool(FF.glIsEnabled(cap))))
+                FF.glDisable(cap)
+        GL.glActiveTexture(texgen)
         FF.glEnable(GL.GL_TEXTURE_2D)
+        environment = int(
+            np.asarray(FF.glGetTexEnviv(GL.GL_TEXTURE_ENV, GL.GL_TEXTURE_ENV_MODE)).reshape(-1)[0]
+        )
         FF.glTexEnvi(GL.GL_TEXTURE_ENV, GL.GL_TEXTURE_ENV_MODE, GL.GL_REPLACE)
-        FF.glMatrixMode(GL.GL_MODELVIEW)
-        FF.glPushMatrix()
-        FF.glMultMatrixd(np.ascontiguousarray(self.cone_model.T))
+        texture_matrix = legacy.texture_matrix(self.texgen_unit)
+        FF.glMatrixMode(GL.GL_TEXTURE)
+        FF.glLoadIdentity()
+        coordinates = legacy.current_texcoords(self.texgen_unit)
+        FF.glMultiTexCoord4f(texgen, 0.0, 0.0, 0.0, 1.0)  # q is 1: s and t as texgen makes them
         mesh = self.mesh("cone")
         emulation = legacy.emulated()
-        if emulation is not None:
-            emulation.draw_elements(mesh.vao, mesh.count)
-        else:
-            self._draw_client_arrays(mesh)
-        FF.glPopMatrix()
-        FF.glDisable(GL.GL_TEXTURE_2D)
-        for unit, cap in enabled:
-            GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
-            FF.glEnable(cap)
-        GL.glActiveTexture(active)
-        FF.glDisable(GL.GL_NORMALIZE)
-        GL.glUseProgram(previous)
+        try:
+            with kit_state(), modelview_times(self.cone_model):
+                if emulation is not None:
+                    emulation.draw_elements(mesh.vao, mesh.count)
+                else:
+                    self._draw_client_arrays(mesh)
+        finally:
+            GL.glActiveTexture(texgen)
+            FF.glMatrixMode(GL.GL_TEXTURE)
+            FF.glLoadMatrixd(np.ascontiguousarray(texture_matrix.T))
+            FF.glMatrixMode(GL.GL_MODELVIEW)
+            FF.glMultiTexCoord4f(texgen, *(float(c) for c in coordinates))
+            FF.glTexEnvi(GL.GL_TEXTURE_ENV, GL.GL_TEXTURE_ENV_MODE, environment)
+            for unit, cap, on in saved:
+                GL.glActiveTexture(unit)
+                (FF.glEnable if on else FF.glDisable)(cap)
+            GL.glActiveTexture(active)
+            (FF.glEnable if normalize else FF.glDisable)(GL.GL_NORMALIZE)
+            GL.glUseProgram(previous)
 
     @staticmethod
     def _draw_client_arrays(mesh: Mesh) -> None:
@@ -173,7 +198,7 @@ def kit_calls() -> dict[str, Any]:
 
 
 def draw_backdrop(executor: Executor, args: list[Any]) -> None:
-    bound = executor.record_draw("draw_backdrop", executor.lab.draw_backdrop, "")
+    bound = executor.record_draw("draw_backdrop", executor.lab.draw_backdrop)
     executor.after_kit_draw(bound)
 
 
@@ -185,7 +210,6 @@ def draw_cone_shader(executor: Executor, args: list[Any]) -> None:
     executor.record_draw(
         "draw_cone_shader",
         lambda: executor.lab.draw_cone_shader(glsl, texture, 0, executor.limits.programs),
-        executor.taint_of([texture]),
         texture=texture,
     )
     tracker = executor.tracker
@@ -209,12 +233,8 @@ def draw_cone_fixed_function(executor: Executor, args: list[Any]) -> None:
         "texture": int(GL.glGetIntegerv(GL.GL_TEXTURE_BINDING_2D)),
     }
     GL.glActiveTexture(previous)
-    texture = executor.tracker.bound(GL_TEXTURE_2D, unit)
     executor.record_draw(
-        "draw_cone_fixed_function",
-        executor.lab.draw_cone_fixed_function,
-        executor.taint_of([texture]),
-        seen=seen,
+        "draw_cone_fixed_function", executor.lab.draw_cone_fixed_function, seen=seen
     )
     executor.ok()
 

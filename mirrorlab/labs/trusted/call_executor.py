@@ -139,6 +139,20 @@ class Executor:
         tracker = self.tracker
         tracker.clear_color.value = tuple(float(v) for v in GL.glGetFloatv(GL.GL_COLOR_CLEAR_VALUE))
         tracker.viewport.value = [int(v) for v in GL.glGetIntegerv(GL.GL_VIEWPORT)]
+        self._clear_target()
+
+    @staticmethod
+    def _clear_target() -> None:
+        """Every run starts from a cleared target: a new one's memory may hold what an
+        earlier context drew there (another file's frame, a reference's)."""
+        if GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER) != GL.GL_FRAMEBUFFER_COMPLETE:
+            return
+        colour = GL.glGetFloatv(GL.GL_COLOR_CLEAR_VALUE)
+        GL.glClearColor(0.0, 0.0, 0.0, 0.0)
+        GL.glClearDepth(1.0)
+        GL.glClearStencil(0)
+        GL.glClear(GL.GL_COLOR_BUFFER_BIT | GL.GL_DEPTH_BUFFER_BIT | GL.GL_STENCIL_BUFFER_BIT)
+        GL.glClearColor(*(float(v) for v in colour))
 
     # ------------------------------------------------------------------ the message
     def begin_frame(self, keep: int = 0) -> None:
@@ -354,7 +368,15 @@ class Executor:
         }.get(C.form_type(name), np.float32)
         return np.asarray(values, dtype=dtype)
 
+    def _open(self, kind: str, value: int, name: str) -> None:
+        """NotImplementedError when ``value`` (a glBegin mode, a switch, a matrix mode, by
+        ``kind``) belongs to a channel this lab's handout does not teach (:mod:`.calls`)."""
+        why = C.open_for(self.session.name, kind, value)
+        if why:
+            raise CallError("NotImplementedError", f"{name}({C.gl_name(value)}): {why}")
+
     def matrix_mode(self, name: str, args: list[Any], arrays: Any) -> None:
+        self._open("matrix_modes", args[0], name)
         legacy.gl().glMatrixMode(args[0])
         self.ok()
         self.tracker.matrix_mode = self.tracker.setting(args[0])
@@ -407,41 +429,6 @@ class Executor:
             scissor=scissor,
             viewport=tracker.viewport.plain(),
         )
-        if args[0] & GL.GL_COLOR_BUFFER_BIT and all(self._colour_mask()[:3]):
-            box = (
-                self._scissor_box() if scissor else (0, 0, self.session.width, self.session.height)
-            )
-            tracker.untaint(box)
-
-    @staticmethod
-    def _colour_mask() -> list[bool]:
-        return [
-            bool(v) for v in np.asarray(GL.glGetBooleanv(GL.GL_COLOR_WRITEMASK)).reshape(-1)[:4]
-        ]
-
-    @staticmethod
-    def _scissor_on() -> bool:
-        return bool(GL.glIsEnabled(GL.GL_SCISSOR_TEST))
-
-    @staticmethod
-    def _scissor_box() -> tuple[int, int, int, int]:
-        x, y, w, h = (
-            int(v) for v in np.asarray(GL.glGetIntegerv(GL.GL_SCISSOR_BOX)).reshape(-1)[:4]
-        )
-        return x, y, w, h
-
-    def _draw_box(self) -> tuple[int, int, int, int] | None:
-        """The pixels a draw now may write (the viewport within the scissor box), None
-        when the colour mask writes no colour."""
-        if not any(self._colour_mask()[:3]):
-            return None
-        x, y, w, h = (int(v) for v in np.asarray(GL.glGetIntegerv(GL.GL_VIEWPORT)).reshape(-1)[:4])
-        if self._scissor_on():
-            sx, sy, sw, sh = self._scissor_box()
-            x0, y0 = max(x, sx), max(y, sy)
-            x1, y1 = min(x + w, sx + sw), min(y + h, sy + sh)
-            x, y, w, h = x0, y0, max(x1 - x0, 0), max(y1 - y0, 0)
-        return x, y, w, h
 
     def clear_color(self, name: str, args: list[Any], arrays: Any) -> None:
         GL.glClearColor(*args)
@@ -449,6 +436,8 @@ class Executor:
         self.tracker.clear_color = self.tracker.setting(tuple(args))
 
     def enable(self, name: str, args: list[Any], arrays: Any) -> None:
+        if name == "glEnable":  # switching off what a lab never lets on is harmless
+            self._open("caps", args[0], name)
         getattr(legacy.gl(), name)(args[0])
         self.ok()
         self.tracker.set_enabled(args[0], name == "glEnable")
@@ -462,6 +451,7 @@ class Executor:
 
     # ------------------------------------------------------------------ immediate mode
     def begin(self, name: str, args: list[Any], arrays: Any) -> None:
+        self._open("modes", args[0], name)
         legacy.gl().glBegin(args[0])
         self.tracker.primitive = Primitive(args[0], self.tracker.line, self.tracker.function)
 
@@ -483,7 +473,7 @@ class Executor:
             location = getattr(self.session, "texSampler", -1)
             setting = self.tracker.uniforms.get((program, location))
             extra["sampler_set"] = setting.plain() if setting else None
-        self.record_draw("primitive", None, self.tracker.sampled_taint(), **extra)
+        self.record_draw("primitive", None, **extra)
 
     def end_open_primitive(self) -> dict[str, Any] | None:
         """After a lab function returned (or raised) inside glBegin: the primitive ended
@@ -649,27 +639,35 @@ class Executor:
         height: int,
         fmt: int,
         kind: int,
-    ) -> np.ndarray | None:
-        """The student's pixels, exactly as many bytes as GL will read (GL reads rows
-        padded to GL_UNPACK_ALIGNMENT); CallError when they are fewer."""
-        if data is None:
-            return None
-        index = data["$a"]
-        if not 0 <= index < len(arrays):
-            raise CallError("ValueError", f"{name}: the pixel data is missing")
-        raw = arrays[index].reshape(-1).view(np.uint8)
+    ) -> np.ndarray:
+        """What GL reads for an upload: zeros, exactly as many bytes as GL will read (rows
+        padded to GL_UNPACK_ALIGNMENT), for ``data`` None (so that a blank texture never
+        shows what GL's memory held before) or all zeros. A file's own pixels never reach
+        GL: CallError for data that is not all zeros, or fewer bytes than GL reads."""
         pixel = C.PIXEL_FORMATS[fmt] * C.PIXEL_TYPES[kind][0]
         alignment = self.alignment[int(GL.GL_UNPACK_ALIGNMENT)]
         row = -(-width * pixel // alignment) * alignment
         needed = row * max(height - 1, 0) + width * pixel if width and height else 0
-        if raw.size < needed:
-            raise gl_error(
-                C.GL_INVALID_OPERATION,
-                f"{name}: the data holds {raw.size} bytes, "
-                f"and GL would read {needed} ({width}x{height}, alignment "
-                f"{alignment})",
-            )
-        return np.ascontiguousarray(raw[:needed])
+        if data is not None:
+            index = data["$a"]
+            if not 0 <= index < len(arrays):
+                raise CallError("ValueError", f"{name}: the pixel data is missing")
+            raw = arrays[index].reshape(-1).view(np.uint8)
+            if raw.size < needed:
+                raise gl_error(
+                    C.GL_INVALID_OPERATION,
+                    f"{name}: the data holds {raw.size} bytes, "
+                    f"and GL would read {needed} ({width}x{height}, alignment "
+                    f"{alignment})",
+                )
+            if raw[:needed].any():
+                raise CallError(
+                    "ValueError",
+                    f"{name}: the labs take no pixels of a file's own, only None or zeros "
+                    f"(a blank texture): pictures come from lab.load_picture_texture, "
+                    f"and what is drawn from its copies",
+                )
+        return np.zeros(max(needed, 1), dtype=np.uint8)
 
     def tex_image(self, name: str, args: list[Any], arrays: list[np.ndarray]) -> None:
         target, level, internalformat, width, height, border, fmt, kind, data = args
@@ -681,7 +679,6 @@ class Executor:
             target, level, internalformat, width, height, border, fmt, kind, pixels
         )
         self.ok()
-        tainted = pixels is not None and bool(pixels.any())
         self._write(
             texture,
             key,
@@ -689,11 +686,10 @@ class Executor:
                 width,
                 height,
                 internalformat,
-                "upload" if pixels is not None else "blank",
+                "blank",
                 self.tracker.line,
                 self.tracker.function,
                 len(self.tracker.frames) - 1,
-                tainted,
             ),
         )
         self.tracker.event(
@@ -703,8 +699,7 @@ class Executor:
             level=level,
             width=width,
             height=height,
-            data=pixels is not None,
-            tainted=tainted,
+            data=data is not None,
             texture=texture.name,
             unit=self.tracker.active_unit.value,
         )
@@ -718,11 +713,9 @@ class Executor:
         RAW_1_1.glTexSubImage2D(target, level, x, y, width, height, fmt, kind, pixels)
         self.ok()
         image = texture.images.get((_face(target), level))
-        tainted = pixels is not None and bool(pixels.any())
         if image is not None:
-            image.tainted = image.tainted or tainted
-            image.source, image.line = "upload", self.tracker.line
-        self._written(texture, level)
+            image.line = self.tracker.line
+        self._written(texture, _face(target), level)
         self.tracker.event(
             "upload",
             fn=name,
@@ -731,23 +724,47 @@ class Executor:
             width=width,
             height=height,
             data=True,
-            tainted=tainted,
             texture=texture.name,
             unit=self.tracker.active_unit.value,
         )
 
     def _write(self, texture: Texture, key: tuple[int, int], image: Image) -> None:
         texture.images[key] = image
-        self._written(texture, key[1])
+        self._written(texture, *key)
 
-    def _written(self, texture: Texture, level: int) -> None:
+    def _written(self, texture: Texture, face: int, level: int) -> None:
+        """After a write to ``level`` of ``face``: with GL_GENERATE_MIPMAP on, a write to
+        level 0 makes the levels below it from it (here as in GL, where the emulation makes
+        them itself), and they are noted as made from it."""
         texture.writes += 1
         if level == 0:
             auto = texture.params.get(int(GL.GL_GENERATE_MIPMAP))
             texture.mipmaps_fresh = bool(auto and auto.value)
-            emulation = legacy.emulated()
-            if emulation is not None and texture.mipmaps_fresh:
-                emulation.regenerate_mipmaps(texture.target)
+            if texture.mipmaps_fresh:
+                emulation = legacy.emulated()
+                if emulation is not None:
+                    emulation.regenerate_mipmaps(texture.target)
+                self._mipmap_chain(texture, face)
+
+    def _mipmap_chain(self, texture: Texture, face: int) -> None:
+        """Levels 1 and on of ``face``, made from its level 0 (each replaces what the
+        level held: GL's mipmap generation writes every one)."""
+        image = texture.images.get((face, 0))
+        if image is None:
+            return
+        frame = len(self.tracker.frames) - 1
+        width, height, level = image.width, image.height, 0
+        while width > 1 or height > 1:
+            width, height, level = max(width // 2, 1), max(height // 2, 1), level + 1
+            texture.images[(face, level)] = Image(
+                width,
+                height,
+                image.internalformat,
+                "mipmap",
+                self.tracker.line,
+                self.tracker.function,
+                frame,
+            )
 
     def copy_tex_image(self, name: str, args: list[Any], arrays: Any) -> None:
         texture = self._texture(args[0], name)
@@ -766,7 +783,7 @@ class Executor:
             self.pictures[picture] = self.session_frame()
         getattr(legacy.gl(), name)(*args)
         self.ok()
-        taint = self.tracker.taint_in((x, y, width, height))
+        self._zero_outside(target, level, offset, (x, y, width, height))
         key = (_face(target), level)
         if name == "glCopyTexImage2D":
             self._write(
@@ -780,15 +797,13 @@ class Executor:
                     self.tracker.line,
                     self.tracker.function,
                     frame,
-                    bool(taint),
                 ),
             )
         else:
             image = texture.images.get(key)
             if image is not None:
-                image.tainted = image.tainted or bool(taint)
                 image.source, image.line = "copy", self.tracker.line
-            self._written(texture, level)
+            self._written(texture, *key)
         tracker = self.tracker
         tracker.event(
             "copy",
@@ -805,10 +820,52 @@ class Executor:
             unit=tracker.active_unit.value,
             unit_line=tracker.active_unit.line,
             binding_line=tracker.bindings[(tracker.active_unit.value, _bind_target(target))].line,
-            taint=taint,
             picture=picture,
             viewport=tracker.viewport.plain(),
         )
+
+    def _zero_outside(
+        self,
+        target: int,
+        level: int,
+        offset: tuple[int, int],
+        box: tuple[int, int, int, int],
+    ) -> None:
+        """After a copy of ``box`` (x, y, width, height of the framebuffer) into ``level``
+        of image ``target`` at ``offset``: the texels whose pixels lay outside the
+        framebuffer, which GL leaves undefined (memory of anything's), made zeros."""
+        x, y, width, height = box
+        frame_width, frame_height = self.session.width, self.session.height
+        left, bottom = max(0, -x), max(0, -y)
+        right, top = min(width, frame_width - x), min(height, frame_height - y)
+        if left == 0 and bottom == 0 and right >= width and top >= height:
+            return
+        right, top = max(right, left), max(top, bottom)
+        strips = [  # (x, y, width, height) in the copy's own texels
+            (0, 0, width, bottom),
+            (0, top, width, height - top),
+            (0, bottom, left, top - bottom),
+            (right, bottom, width - right, top - bottom),
+        ]
+        depth = int(GL.glGetTexLevelParameteriv(target, level, GL.GL_TEXTURE_DEPTH_SIZE))
+        fmt = GL.GL_DEPTH_COMPONENT if depth else GL.GL_RGBA
+        GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
+        for sx, sy, sw, sh in strips:
+            if sw > 0 and sh > 0:
+                zeros = np.zeros(sw * sh * 4, dtype=np.uint8)
+                RAW_1_1.glTexSubImage2D(
+                    target,
+                    level,
+                    offset[0] + sx,
+                    offset[1] + sy,
+                    sw,
+                    sh,
+                    fmt,
+                    GL.GL_UNSIGNED_BYTE,
+                    zeros,
+                )
+        GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, self.alignment[int(GL.GL_UNPACK_ALIGNMENT)])
+        self.ok()
 
     def session_frame(self) -> np.ndarray:
         """The target's colour now, ``(h, w, 3)`` uint8, row 0 at the top."""
@@ -817,7 +874,10 @@ class Executor:
         self.end_open_primitive()  # a read inside glBegin would leave the array unwritten
         # into zeros, so that a read GL refused never shows uninitialised memory
         rows = np.zeros((self.session.height, self.session.width, 3), dtype=np.uint8)
-        return read_pixels(self.session.width, self.session.height, rows)
+        try:
+            return read_pixels(self.session.width, self.session.height, rows)
+        finally:  # read_pixels packs rows of its own; the file's setting is the file's
+            GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, self.alignment[int(GL.GL_PACK_ALIGNMENT)])
 
     def tex_parameter(self, name: str, args: list[Any], arrays: Any) -> None:
         target, pname, value = args
@@ -860,21 +920,8 @@ class Executor:
         self.ok()
         texture.mipmaps = self.tracker.setting(True)
         texture.mipmaps_fresh = True
-        frame = len(self.tracker.frames) - 1
-        for face, image in bases.items():
-            width, height, level = image.width, image.height, 0
-            while width > 1 or height > 1:
-                width, height, level = max(width // 2, 1), max(height // 2, 1), level + 1
-                texture.images[(face, level)] = Image(
-                    width,
-                    height,
-                    image.internalformat,
-                    "mipmap",
-                    self.tracker.line,
-                    self.tracker.function,
-                    frame,
-                    image.tainted,
-                )
+        for face in bases:
+            self._mipmap_chain(texture, face)
         self.tracker.event(
             "mipmap", target=args[0], texture=texture.name, unit=self.tracker.active_unit.value
         )
@@ -1086,9 +1133,7 @@ class Executor:
         tracker.matrix_mode = tracker.setting(GL_MODELVIEW)
         self.ok()
 
-    def record_draw(
-        self, who: str, draw: Callable[[], Any] | None, taint: str, **extra: Any
-    ) -> Any:
+    def record_draw(self, who: str, draw: Callable[[], Any] | None, **extra: Any) -> Any:
         tracker = self.tracker
         projection, modelview = current_matrices()
         viewport = [int(v) for v in np.asarray(GL.glGetIntegerv(GL.GL_VIEWPORT))]
@@ -1099,14 +1144,9 @@ class Executor:
             modelview=modelview.tolist(),
             viewport=viewport,
             state=tracker.snapshot(),
-            taint=taint,
             **extra,
         )
-        box = self._draw_box() if taint else None
-        result = draw() if draw is not None else None
-        if taint and box is not None:
-            tracker.taint(taint, box, (self.session.width, self.session.height))
-        return result
+        return draw() if draw is not None else None
 
     def kit_load_picture(self, args: list[Any]) -> None:
         if len(args) != 2 or not isinstance(args[1], str):
@@ -1161,13 +1201,6 @@ class Executor:
             tracker.matrix_mode = tracker.setting(mode)
             tracker.matrix_op("lab.set_viewer", [aspect], replaces=True)
         tracker.matrix_mode = tracker.setting(GL_MODELVIEW)
-
-    def taint_of(self, textures: list[int]) -> str:
-        for texture in textures:
-            record = self.tracker.textures.get(texture)
-            if record is not None and record.tainted:
-                return f"texture {texture} holds uploaded pixels"
-        return ""
 
     def take_glsl(self, value: Any, variable: str) -> str:
         if not isinstance(value, str):

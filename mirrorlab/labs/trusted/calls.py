@@ -263,7 +263,6 @@ def bits(allowed: Enums) -> Check:
         if type(value) is not int:
             raise CallError("TypeError", f"{what}: expected GL bits (an integer)")
         if value & ~every or value < 0:
-            call = what.split("(")[0]
             shown_value = (
                 shown(value)
                 if value < 0 or value >= 1 << 32
@@ -271,8 +270,8 @@ def bits(allowed: Enums) -> Check:
             )
             raise gl_error(
                 GL_INVALID_VALUE,
-                f"{what}: {shown_value} has bits {call} does not take; it takes "
-                f"{_listed([allowed.names[b] for b in sorted(allowed.names)])}, or'ed",
+                f"{what}: {shown_value} has bits other than "
+                f"{_listed([allowed.names[b] for b in sorted(allowed.names)])}",
             )
         return value
 
@@ -1113,14 +1112,236 @@ SETUP_DRAWS = frozenset({"glBegin", "glCopyTexImage2D", "glCopyTexSubImage2D"})
 the set-up functions), like the kit's drawing calls; a lab draws only in its frame."""
 
 
+# ------------------------------------------------------------------------ the channels
+@dataclass(frozen=True)
+class Channel:
+    """A way a file's own numbers could reach the frame, closed unless a lab's handout
+    teaches it (the lab's ``trusted.channels()``): the calls that open it (every form),
+    the ``glBegin`` modes and the ``glEnable`` switches that do, and the matrix modes."""
+
+    name: str
+    carries: str
+    """What of the file's numbers it would carry to the frame, for a person."""
+    calls: tuple[str, ...] = ()
+    modes: frozenset[int] = frozenset()
+    caps: frozenset[int] = frozenset()
+    matrix_modes: frozenset[int] = frozenset()
+
+
+def _forms(*prefixes: str) -> tuple[str, ...]:
+    return tuple(name for name in GL_SPECS if name.startswith(prefixes))
+
+
+FILLED_MODES = enums(
+    "GL_TRIANGLES",
+    "GL_TRIANGLE_STRIP",
+    "GL_TRIANGLE_FAN",
+    "GL_QUADS",
+    "GL_QUAD_STRIP",
+    "GL_POLYGON",
+)
+CHANNELS: dict[str, Channel] = {
+    c.name: c
+    for c in (
+        Channel(
+            "immediate_mode",
+            "vertex positions: filled shapes of the file's own drawn wherever it says",
+            ("glBegin", "glEnd", *_forms("glVertex")),
+            modes=FILLED_MODES,
+        ),
+        Channel(
+            "texture_coordinates",
+            "which texel of a lab picture or of a copy each vertex shows",
+            _forms("glTexCoord"),
+        ),
+        Channel(
+            "multitexture_coordinates",
+            "texture coordinates on units other than 0",
+            _forms("glMultiTexCoord"),
+        ),
+        Channel(
+            "vertex_colours",
+            "colours: each vertex a colour of the file's own",
+            (*(name for name in _forms("glColor") if form_type(name)), "glShadeModel"),
+        ),
+        Channel(
+            "lines_and_points",
+            "lines and points, which GL draws even where a viewport is empty and past "
+            "its edges (wide lines, big points)",
+            ("glPolygonMode", "glLineWidth", "glPointSize"),
+            modes=enums("GL_POINTS", "GL_LINES", "GL_LINE_STRIP", "GL_LINE_LOOP"),
+            caps=enums("GL_LINE_SMOOTH", "GL_POINT_SMOOTH"),
+        ),
+        Channel(
+            "lighting",
+            "normals, lit: each vertex a grey of the file's own; fog",
+            _forms("glNormal"),
+            caps=enums(
+                "GL_LIGHTING",
+                "GL_LIGHT0",
+                "GL_LIGHT1",
+                "GL_COLOR_MATERIAL",
+                "GL_NORMALIZE",
+                "GL_RESCALE_NORMAL",
+                "GL_FOG",
+            ),
+        ),
+        Channel(
+            "fixed_texturing",
+            "textures combined by the fixed pipeline's texture environments (replace, "
+            "add, blend ...) on any unit",
+            _forms("glTexEnv"),
+            caps=enums("GL_TEXTURE_2D", "GL_TEXTURE_CUBE_MAP"),
+        ),
+        Channel(
+            "texgen",
+            "texture coordinates made by texgen from the geometry",
+            (
+                *(name for name in _forms("glTexGen") if not name.endswith("v")),
+                *_forms("glGetTexGen"),
+            ),
+            caps=enums("GL_TEXTURE_GEN_S", "GL_TEXTURE_GEN_T"),
+        ),
+        Channel(
+            "texgen_planes",
+            "texgen planes and the r and q coordinates: any linear map from the window "
+            "to a picture",
+            tuple(n for n in _forms("glTexGen") if n.endswith("v")),
+            caps=enums("GL_TEXTURE_GEN_R", "GL_TEXTURE_GEN_Q"),
+        ),
+        Channel(
+            "texture_matrix",
+            "the texture matrix: any linear map of texture coordinates",
+            matrix_modes=enums("GL_TEXTURE"),
+        ),
+        Channel(
+            "copies",
+            "copies of what was drawn into a texture (whole pictures)",
+            ("glCopyTexImage2D",),
+        ),
+        Channel(
+            "copy_parts",
+            "parts of what was drawn copied into parts of a texture: a picture painted "
+            "rectangle by rectangle from clears",
+            ("glCopyTexSubImage2D",),
+        ),
+        Channel(
+            "scissor",
+            "the scissor box: clears that paint rectangles of the file's colours",
+            ("glScissor",),
+            caps=enums("GL_SCISSOR_TEST"),
+        ),
+        Channel(
+            "blending",
+            "blending: pixels added to, or mixed with, what is drawn",
+            ("glBlendFunc",),
+            caps=enums("GL_BLEND", "GL_ALPHA_TEST"),
+        ),
+        Channel(
+            "border_colour",
+            "a texture's border colour, shown outside its picture",
+            ("glTexParameterfv", "glTexParameteriv"),
+        ),
+        Channel("stencil", "the stencil test", caps=enums("GL_STENCIL_TEST")),
+    )
+}
+"""Every way a file's numbers could reach the frame other than those closed for every
+lab (pixel data: only None or zeros; copies from outside the framebuffer), each closed
+unless a lab's handout teaches it. docs/labs-teachers.md lists them with why."""
+
+NEUTRAL = frozenset(
+    {
+        "glMatrixMode",
+        "glLoadIdentity",
+        "glPushMatrix",
+        "glPopMatrix",
+        "glOrtho",
+        "glFrustum",
+        *_forms("glTranslate", "glScale", "glRotate", "glLoad", "glMult"),
+        "glViewport",
+        "glClear",
+        "glClearColor",
+        "glClearDepth",
+        "glClearDepthf",
+        "glDepthRange",
+        "glDepthRangef",
+        "glFlush",
+        "glFinish",
+        "glEnable",
+        "glDisable",
+        "glDepthFunc",
+        "glDepthMask",
+        "glColorMask",
+        "glCullFace",
+        "glFrontFace",
+        "glHint",
+        "glPolygonOffset",
+        "glPixelStorei",
+        "glPixelStoref",
+        "glGenTextures",
+        "glDeleteTextures",
+        "glIsTexture",
+        "glBindTexture",
+        "glActiveTexture",
+        "glTexImage2D",
+        "glTexSubImage2D",
+        "glTexParameteri",
+        "glTexParameterf",
+        "glGenerateMipmap",
+        "glUseProgram",
+        *_forms("glUniform", "glGetUniformLocation"),
+        *_forms("glGet", "glIs"),
+    }
+) - {n for c in CHANNELS.values() for n in c.calls}
+"""Calls that carry no number of the file's to a pixel: matrices and the viewport (where
+the lab's own drawing lands), clears (the whole frame, one colour, with the scissor
+closed), depth, culling and colour masks (which of the lab's pixels stay), texture
+objects, their sampling and mipmaps made from level 0, uploads (checked: zeros only), the
+lab's programs, queries."""
+NEUTRAL_CAPS = enums(
+    "GL_DEPTH_TEST",
+    "GL_CULL_FACE",
+    "GL_TEXTURE_CUBE_MAP_SEAMLESS",
+    "GL_POLYGON_OFFSET_FILL",
+    "GL_MULTISAMPLE",
+    "GL_DITHER",
+)
+"""Switches that carry no number of the file's to a pixel (the others are a channel's)."""
+
+
 @lru_cache(maxsize=16)
 def left_out(lab: str) -> dict[str, str]:
     """Calls of :data:`GL_SPECS` ``lab``'s handout does not need, with why: its lab's
-    ``trusted.left_out()`` (the registry's)."""
+    ``trusted.left_out()`` (the registry's), and every call of a channel its handout does
+    not teach (:func:`lab_channels`)."""
     from mirrorlab.labs import find_lab
 
-    found: dict[str, str] = find_lab(lab).module("trusted").left_out()
+    found: dict[str, str] = {}
+    taught = lab_channels(lab)
+    for channel in CHANNELS.values():
+        if channel.name not in taught:
+            found.update({name: closed(channel) for name in channel.calls})
+    found.update(find_lab(lab).module("trusted").left_out())
     return found
+
+
+@lru_cache(maxsize=16)
+def lab_channels(lab: str) -> frozenset[str]:
+    """The channels of :data:`CHANNELS` ``lab``'s handout teaches: its lab's
+    ``trusted.channels()`` (none when it has no such function)."""
+    from mirrorlab.labs import find_lab
+
+    trusted = find_lab(lab).module("trusted")
+    taught = frozenset(getattr(trusted, "channels", lambda: ())())
+    unknown = taught - set(CHANNELS)
+    if unknown:
+        raise ValueError(f"lab {lab}: no channel named {', '.join(sorted(unknown))}")
+    return taught
+
+
+def closed(channel: Channel) -> str:
+    """Why a call of ``channel`` is refused, for the student (one line)."""
+    return f"this lab's handout draws nothing with it ({channel.carries})"
 
 
 def lab_specs(lab: str) -> dict[str, Spec]:
@@ -1133,6 +1354,16 @@ def lab_specs(lab: str) -> dict[str, Spec]:
 def refusal(lab: str, name: str) -> str:
     """Why ``lab`` does not offer ``name`` (one line), '' when no reason is on file."""
     return left_out(lab).get(name) or REFUSED.get(name, "")
+
+
+def open_for(lab: str, kind: str, value: int) -> str:
+    """'' when ``value`` (a glBegin mode, a glEnable switch or a matrix mode: ``kind`` is
+    ``modes``, ``caps`` or ``matrix_modes``) is one ``lab`` allows, else why not."""
+    taught = lab_channels(lab)
+    for channel in CHANNELS.values():
+        if value in getattr(channel, kind) and channel.name not in taught:
+            return closed(channel)
+    return ""
 
 
 def refused_text(lab: str, name: str) -> str:

@@ -26,7 +26,7 @@ import numpy as np
 
 from mirrorlab.labs import LabSpec, find_lab, lab_names
 from mirrorlab.labs.trusted.evidence import Evidence
-from mirrorlab.labs.trusted.gl_process import run_job
+from mirrorlab.labs.trusted.failures import run_attributed
 from mirrorlab.labs.trusted.judging import Context, TaskResult
 from mirrorlab.labs.trusted.sandbox import Limits, sandboxed, unsandboxed_note
 from mirrorlab.labs.trusted.variants import (
@@ -34,6 +34,7 @@ from mirrorlab.labs.trusted.variants import (
     VariantError,
     default_variant,
     variant_from_file,
+    variant_from_header,
 )
 
 CHECK_SIZE = (256, 256)
@@ -170,7 +171,7 @@ def make_reference(
     from mirrorlab.labs.content import solution_for
 
     text = solution_for(solution, variant)
-    evidence = run_job(spec, text.encode(), "solution.py", variant, limits, size, keep=keep)
+    evidence = run_attributed(spec, text.encode(), "solution.py", variant, limits, size, keep)
     if evidence.status != "ok":
         raise CheckError(f"the reference solution of {spec.name} did not run: {evidence.detail}")
     problems = evidence.errors or evidence.call_errors
@@ -259,7 +260,7 @@ def check_submission(
     ``context.variant``."""
     module = spec.module("judge")
     started = time.perf_counter()
-    evidence = run_job(spec, source, file_name, context.variant, limits, size, keep)
+    evidence = run_attributed(spec, source, file_name, context.variant, limits, size, keep)
     try:
         results = module.judge(spec, evidence, reference, context)
     except Exception as exc:  # a judge's own fault: every task fails, saying so
@@ -295,14 +296,43 @@ def report_lines(spec: LabSpec, check: CheckResult) -> list[str]:
 
 def file_variant(spec: LabSpec, path: Path) -> Variant:
     """The variant of a student's file: its released folder's ``variant.json`` beside it,
-    else the lab's own numbers."""
+    else the variant its header names (:data:`~.variants.HEADER`: the first line of every
+    starter), else the lab's own numbers. (``lab grade`` never asks: a variant follows
+    from the course key and the student's name there.)"""
     found = path.parent / VARIANT_FILE
-    if found.is_file():
-        try:
+    try:
+        if found.is_file():
             return variant_from_file(found, spec.name)
-        except VariantError as exc:
-            raise ValueError(str(exc)) from None
-    return default_variant(spec.name)
+        named = variant_from_header(_text(path), spec.name, str(path))
+    except VariantError as exc:
+        raise ValueError(str(exc)) from None
+    return named if named is not None else default_variant(spec.name)
+
+
+def default_note(spec: LabSpec, path: Path) -> str:
+    """The line ``lab check`` says under the file's name when ``path`` names no variant (no
+    ``variant.json`` beside it, no header) and is judged against the lab's own numbers
+    ('' otherwise)."""
+    if (path.parent / VARIANT_FILE).is_file():
+        return ""
+    try:
+        if variant_from_header(_text(path), spec.name, str(path)) is not None:
+            return ""
+    except VariantError:
+        return ""
+    return (
+        f"note: {path.name} names no variant (no {VARIANT_FILE} beside it, no variant line "
+        f"at its top): judged against the lab's own numbers; a released starter is checked "
+        f"in its own folder"
+    )
+
+
+def _text(path: Path) -> str:
+    try:
+        with open(path, "rb") as stream:
+            return stream.read(1 << 16).decode("utf-8", errors="replace")
+    except OSError:
+        return ""
 
 
 def folder_file(spec: LabSpec, folder: Path) -> Path:
@@ -339,6 +369,7 @@ def run_check(
     task passed. Without ``file``, the lab file of the current folder (:func:`folder_file`)
     is checked. The report's first line names the file checked."""
     from mirrorlab.files import write_png_atomic
+    from mirrorlab.gl.context import choose
 
     spec = find_lab(lab)
     folder = solutions_dir(solutions)
@@ -349,13 +380,24 @@ def run_check(
     variant = file_variant(spec, path)
     released = path.parent / REFERENCE_FOLDER
     out = out or Path("out") / f"{spec.name}_check.png"
+    choose("offscreen", new_process=True)  # no OpenGL: render's one line, before any of it
     if not sandboxed():
         print(f"mirrorlab lab check: {unsandboxed_note()}", file=sys.stderr)
+    note = default_note(spec, path)
     reference = reference_evidence(spec, variant, folder, limits, released=released)
+    made_for = reference.variant.get("id") if isinstance(reference.variant, dict) else None
+    if made_for not in (None, variant.id):
+        raise CheckError(
+            f"{path.name} is variant {variant.id}, but the {REFERENCE_FOLDER}/ beside it is "
+            f"variant {made_for}'s: check the file in its own released folder"
+        )
     check = check_submission(
         spec, source, reference, Context(variant), str(path), path.name, limits
     )
-    print("\n".join(report_lines(spec, check)))
+    lines = report_lines(spec, check)
+    if note:  # right under the file's name: what it was judged against
+        lines.insert(1, f"  {note}")
+    print("\n".join(lines))
     write_png_atomic(out, check.picture)
     print(f"picture (student | reference | difference): {out}")
     return 0 if check.passed else 1

@@ -11,8 +11,10 @@ asked can stop it at a deadline whatever the student's GLSL does to the driver
 from __future__ import annotations
 
 import dataclasses
+import errno
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -26,14 +28,33 @@ from mirrorlab.labs.trusted.pipe import wait_readable
 from mirrorlab.labs.trusted.sandbox import Limits, SandboxError
 from mirrorlab.labs.trusted.variants import Variant
 
-EXIT_SANDBOX, EXIT_FAILED = 3, 4
+EXIT_SANDBOX, EXIT_FAILED, EXIT_NO_GL, EXIT_MACHINE = 3, 4, 5, 6
+"""The GL process's exit statuses for a job: its sandbox could not start; it failed while
+running the file (the file's calls or the checker: :mod:`.failures` tells them apart);
+it could not make an OpenGL context; its own machine failed it (a full disk)."""
 MEMORY_MB = 3072
 """The GL process's own address-space limit (Mesa's threads reserve much more than they
 touch; its resident memory is measured in the tests)."""
 
 
+DISK_ERRORS = frozenset(
+    getattr(errno, name)
+    for name in ("ENOSPC", "EDQUOT", "EROFS", "EIO", "EFBIG")
+    if hasattr(errno, name)
+)
+"""The errors of a disk that refuses the checker's own files: the machine's, whatever the
+file ran (a full disk, a quota, a read-only or failing one)."""
+
+
 class CheckerError(RuntimeError):
-    """The checker's own process failed: a fault of the machine or of mirrorlab."""
+    """The checker's OpenGL process failed while it ran a file: the file's calls may have
+    crashed it, or the checker or the machine failed (:mod:`.failures` tells them
+    apart)."""
+
+
+class MachineError(CheckerError):
+    """The checker's machine failed it, whatever the file: its disk is full or will not
+    take the check's files. Never a grade."""
 
 
 def peak_kib() -> int:
@@ -72,7 +93,7 @@ def execute(job: dict[str, Any]) -> Evidence:
     )
     limits = Limits(**job["limits"])
     source = Path(job["file"]).read_bytes()
-    context = offscreen_context()
+    context = offscreen_context()  # GLContextError: no OpenGL here (run_one says so)
     try:
         target = Framebuffer(context.resources, *size)
         target.bind()
@@ -93,17 +114,47 @@ def execute(job: dict[str, Any]) -> Evidence:
     return evidence
 
 
+def _note(path: Path, text: str) -> None:
+    """Why a job failed, for the process that asked (nothing when even that cannot be
+    written: the exit status says enough)."""
+    try:
+        path.write_text(text)
+    except OSError:
+        pass
+
+
 def run_one(job_file: Path) -> int:
     """Run the job in ``job_file``; its evidence (or why not) goes to the job's folder.
-    Returns the process's exit status for it."""
-    job = json.loads(job_file.read_text())
+    Returns the process's exit status for it: 0, or one of :data:`EXIT_SANDBOX`,
+    :data:`EXIT_NO_GL` and :data:`EXIT_MACHINE` (the machine's failures, told before any
+    of the file's calls or after all of them), or :data:`EXIT_FAILED` (raised in
+    between)."""
+    from mirrorlab.errors import GLContextError
+
+    try:
+        job = json.loads(job_file.read_text())
+    except OSError as exc:
+        return EXIT_MACHINE if exc.errno is not None else EXIT_FAILED
     out = Path(job["out"])
     try:
         evidence = execute(job)
     except SandboxError as exc:
-        (out / "sandbox_error.txt").write_text(str(exc))
+        _note(out / "sandbox_error.txt", str(exc))
         return EXIT_SANDBOX
-    evidence.save(out, compress=False)
+    except GLContextError as exc:
+        _note(out / "no_gl.txt", str(exc))
+        return EXIT_NO_GL
+    except OSError as exc:
+        if exc.errno not in DISK_ERRORS:
+            raise  # attributed by a second run and a control (failures.py)
+        # the file's own failures are evidence; a disk that refuses the checker's is not
+        _note(out / "machine_error.txt", f"{exc.strerror or exc} ({exc.filename or 'a file'})")
+        return EXIT_MACHINE
+    try:
+        evidence.save(out, compress=False)
+    except OSError as exc:
+        _note(out / "machine_error.txt", f"cannot write its evidence: {exc.strerror or exc}")
+        return EXIT_MACHINE
     return 0
 
 
@@ -117,8 +168,11 @@ def serve() -> int:
         try:
             code = run_one(Path(line.strip()))
         except Exception as exc:  # the job's own folder says what failed
-            job_out = Path(json.loads(Path(line.strip()).read_text())["out"])
-            (job_out / "checker_error.txt").write_text(f"{type(exc).__name__}: {exc}")
+            try:
+                job_out = Path(json.loads(Path(line.strip()).read_text())["out"])
+                _note(job_out / "checker_error.txt", f"{type(exc).__name__}: {exc}")
+            except (OSError, ValueError, KeyError):
+                pass
             code = EXIT_FAILED
         os.write(reply_fd, f"{code}\n".encode())
     return 0
@@ -207,8 +261,8 @@ class CheckerProcess:
         return self.process.poll() is None and self.jobs < JOBS_PER_PROCESS
 
     def run(self, job_file: Path, timeout: float) -> int | None:
-        """The job's exit status, or None when it did not end in ``timeout`` seconds or
-        the process died (the process is then ended)."""
+        """The job's exit status, or None when it did not end in ``timeout`` seconds (the
+        process is then ended); CheckerError when the process died meanwhile."""
         self.jobs += 1
         try:
             assert self.process.stdin is not None
@@ -216,11 +270,16 @@ class CheckerProcess:
             self.process.stdin.flush()
         except (BrokenPipeError, OSError):
             self.close()
-            return None
+            raise CheckerError("the checker's OpenGL process had ended before the job") from None
         ready = wait_readable(self.reply_read, timeout)
         line = os.read(self.reply_read, 64) if ready else b""
         if not line:
+            died = self.process.poll() is not None
             self.close()
+            if died:
+                code = self.process.returncode
+                how = f"signal {-code}" if code < 0 else f"exit status {code}"
+                raise CheckerError(f"the checker's OpenGL process died ({how})")
             return None
         return int(line.split()[0])
 
@@ -261,16 +320,41 @@ def run_job(
 ) -> Evidence:
     """Run ``source`` (the student's file, called ``file_name``) through ``spec``'s lab for
     ``variant`` in a checker process of its own (with ``keep``, this process's kept one:
-    see :class:`CheckerProcess`), which is stopped if it outlives the run's own limits;
-    SandboxError when the sandbox cannot start, CheckerError when the checker's process
-    fails."""
+    see :class:`CheckerProcess`), which is stopped if it outlives the run's own limits.
+    Raises SandboxError when the sandbox cannot start, GLContextError (render's one line)
+    when no OpenGL context can be made, MachineError when the machine fails the check (a
+    full disk), CheckerError when the checker's process fails otherwise."""
     from mirrorlab.labs.trusted.sandbox import sweep_stale
 
     sweep_stale(Path(tempfile.gettempdir()))
-    with tempfile.TemporaryDirectory(prefix=f"mirrorlab-check-{os.getpid()}-") as folder:
-        base = Path(folder)
+    try:
+        folder = tempfile.mkdtemp(prefix=f"mirrorlab-check-{os.getpid()}-")
+    except OSError as exc:
+        raise MachineError(
+            f"cannot make the check's folder in {tempfile.gettempdir()}: {exc.strerror or exc}"
+        ) from None
+    try:
+        return _run_in(Path(folder), spec, source, file_name, variant, limits, size, keep)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def _run_in(
+    base: Path,
+    spec: LabSpec,
+    source: bytes,
+    file_name: str,
+    variant: Variant,
+    limits: Limits,
+    size: tuple[int, int],
+    keep: bool,
+) -> Evidence:
+    """:func:`run_job` in its folder ``base`` (the checker's own files only)."""
+    from mirrorlab.errors import GLContextError
+
+    out = base / "out"
+    try:
         (base / "source.py").write_bytes(source)
-        out = base / "out"
         out.mkdir()
         job = {
             "lab": spec.name,
@@ -286,44 +370,59 @@ def run_job(
         }
         job_file = base / "job.json"
         job_file.write_text(json.dumps(job))
-        deadline = limits.seconds + 60
-        stderr = ""
-        if keep:
-            code = kept_process().run(job_file, deadline)
-        else:
-            try:
-                done = subprocess.run(
-                    [sys.executable, "-m", "mirrorlab.labs.trusted.gl_process", str(job_file)],
-                    capture_output=True,
-                    text=True,
-                    env=gl_process_environment(),
-                    timeout=deadline,
-                    **child_options(MEMORY_MB, die_with_parent=True),
-                )
-                code, stderr = done.returncode, done.stderr
-            except subprocess.TimeoutExpired:
-                code = None
-        if code is None:
-            return Evidence(
-                spec.name,
-                "timeout",
-                f"stopped after {deadline:g} s: the calls took too long to draw",
-                variant=variant.plain(),
+    except OSError as exc:
+        raise MachineError(
+            f"cannot write the check's files in {base.parent}: {exc.strerror or exc}"
+        ) from None
+    deadline = limits.seconds + 60
+    stderr = ""
+    if keep:
+        code = kept_process().run(job_file, deadline)
+    else:
+        try:
+            done = subprocess.run(
+                [sys.executable, "-m", "mirrorlab.labs.trusted.gl_process", str(job_file)],
+                capture_output=True,
+                text=True,
+                env=gl_process_environment(),
+                timeout=deadline,
+                **child_options(MEMORY_MB, die_with_parent=True),
             )
-        if code == EXIT_SANDBOX:
-            raise SandboxError((out / "sandbox_error.txt").read_text().strip())
-        if code != 0:
-            failure = out / "checker_error.txt"
-            lines = [line for line in stderr.strip().splitlines() if line.strip()]
-            last = (
-                failure.read_text().strip()
-                if failure.is_file()
-                else (lines[-1] if lines else f"exit status {code}")
-            )
-            if code < 0:
-                last = f"it died ({-code}); {last}"
-            raise CheckerError(f"the checker's OpenGL process failed: {last[:300]}")
+            code, stderr = done.returncode, done.stderr
+        except subprocess.TimeoutExpired:
+            code = None
+    if code is None:
+        return Evidence(
+            spec.name,
+            "timeout",
+            f"stopped after {deadline:g} s: the calls took too long to draw",
+            variant=variant.plain(),
+        )
+
+    def said(name: str, otherwise: str) -> str:
+        try:
+            return (out / name).read_text().strip()[:300] or otherwise
+        except OSError:
+            return otherwise
+
+    if code == EXIT_SANDBOX:
+        raise SandboxError(said("sandbox_error.txt", "the sandbox could not start"))
+    if code == EXIT_NO_GL:
+        raise GLContextError(said("no_gl.txt", "no OpenGL context for the checker"))
+    if code == EXIT_MACHINE:
+        raise MachineError(
+            f"the checker's OpenGL process failed: {said('machine_error.txt', 'its disk')}"
+        )
+    if code != 0:
+        lines = [line for line in stderr.strip().splitlines() if line.strip()]
+        last = said("checker_error.txt", lines[-1] if lines else f"exit status {code}")
+        if code < 0:
+            last = f"it died ({-code}); {last}"
+        raise CheckerError(f"the checker's OpenGL process failed: {last[:300]}")
+    try:
         return Evidence.load(out)
+    except ValueError as exc:
+        raise MachineError(f"the checker's evidence could not be read back: {exc}") from None
 
 
 if __name__ == "__main__":

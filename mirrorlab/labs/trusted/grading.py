@@ -9,8 +9,13 @@ student is judged against their own variant (derived from the key and their name
 the numbers of every other variant of the class (and the lab's own) are known to the
 judges, so a file copied from another student fails saying so, and ``gradebook.csv`` names
 whose numbers it carries (``copy_of``) and scores it by the teacher's policy for copies
-(:data:`COPIES`). With a class list (``--students``, needed with ``--key``), a submission
-whose name is not on it is reported and not graded. Each submission is sent to
+(:data:`COPIES`). With a class list (``--students``, needed with ``--key``: :mod:`.roster`),
+a submission named by no student of it is reported and not graded, and every output
+keeps the list's names and ids. A submission the checker itself could not grade (no
+OpenGL on a worker, a full disk, a checker that fails whatever the file: see
+:mod:`.failures`) is "not graded": no score, its name printed, exit status 1; where the
+machine cannot grade at all (no OpenGL, no sandbox), grading stops before it writes
+anything (:class:`GradingStopped`). Each submission is sent to
 a worker as its bytes, with the teacher's solution's text when references are to be made
 from it, so workers on other machines need no shared folder; each worker makes (and
 caches) the references it needs. Results are collected by student: a job run twice (its
@@ -25,13 +30,14 @@ import io
 import re
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from mirrorlab.files import Outputs, png_bytes
 from mirrorlab.jobs import open_executor
 from mirrorlab.labs import LabSpec, find_lab
+from mirrorlab.labs.trusted.roster import Student, find_student
 from mirrorlab.labs.trusted.sandbox import Limits
 from mirrorlab.labs.trusted.variants import (
     Variant,
@@ -41,8 +47,8 @@ from mirrorlab.labs.trusted.variants import (
     student_key,
 )
 
-CSV_COLUMNS = ("student", "task", "passed", "hint", "seconds")
-GRADEBOOK_COLUMNS = ("student", "score", "max_score", "percent", "variant", "copy_of", "feedback")
+CSV_COLUMNS = ("student", "task", "passed", "hint", "seconds", "id")
+NOT_GRADED = "not graded"
 COPIES = {
     "flag": "the score as judged (the tasks that carry the other numbers fail), the copy "
     "named in copy_of",
@@ -54,11 +60,21 @@ COPIES = {
 lab's own (``--copies``), and what ``gradebook.csv`` gives it; ``flag`` is the default."""
 
 
+class GradingStopped(RuntimeError):
+    """This machine cannot grade (no OpenGL for the checker, no sandbox): nothing was
+    written; one line saying why."""
+
+
 @dataclass(frozen=True)
 class Submission:
+    """A student's submission: the student (the class list's name once matched to it),
+    the file (None, with the ``problem``, when there is none to run) and the class list's
+    record of the student (:class:`~.roster.Student`, None without a list)."""
+
     student: str
     path: Path | None
     problem: str = ""
+    who: Student | None = None
 
 
 @dataclass
@@ -75,14 +91,28 @@ class Grade:
     picture_png: bytes
     variant: str = "default"
     copied_from: str = ""
+    not_graded: str = ""
+    """Why the checker could not grade it (its own or its machine's failure, never the
+    file's): no score anywhere, the tasks not judged."""
+    student_id: str = ""
+    email: str = ""
+    fields: dict[str, str] = field(default_factory=dict, repr=False)
+    """The class list's own columns of the student (an LMS export's identifiers)."""
 
     @property
     def score(self) -> int:
         return sum(passed for _, passed, _ in self.tasks)
 
+    @property
+    def label(self) -> str:
+        """The student as the class list names them, with their id: ``Ada (s1001)``."""
+        return f"{self.student} ({self.student_id})" if self.student_id else self.student
+
     def booked(self, copies: str = "flag") -> int | None:
         """The score the gradebook gives under the policy ``copies`` (:data:`COPIES`):
-        None for ``hold`` of a copy."""
+        None for ``hold`` of a copy, and for a submission not graded."""
+        if self.not_graded:
+            return None
         if not self.copied_from or copies == "flag":
             return self.score
         return 0 if copies == "zero" else None
@@ -100,18 +130,29 @@ def safe_name(student: str) -> str:
 
 
 def match_class(
-    submissions: list[Submission], students: list[str]
-) -> tuple[list[Submission], list[Submission], list[str]]:
-    """Split ``submissions`` by the class list ``students`` (names compared as
-    :func:`~.variants.student_key` compares them): those on it, those not on it, and the
-    names on it with no submission."""
-    listed = {student_key(name): name for name in students}
+    submissions: list[Submission], roster: list[Student]
+) -> tuple[list[Submission], list[Submission], list[Student]]:
+    """Split ``submissions`` by the class list ``roster`` (:func:`~.roster.find_student`):
+    those of a student on it (renamed to the list's name, with its record), those of
+    nobody on it, and the students with no submission. ValueError when two submissions
+    are one student's."""
     on: list[Submission] = []
     off: list[Submission] = []
+    taken: dict[str, Submission] = {}
     for submission in submissions:
-        (on if student_key(submission.student) in listed else off).append(submission)
-    handed = {student_key(s.student) for s in on}
-    return on, off, [name for key, name in listed.items() if key not in handed]
+        who = find_student(roster, submission.student)
+        if who is None:
+            off.append(submission)
+            continue
+        if who.name in taken:
+            first = taken[who.name]
+            raise ValueError(
+                f"SUBMISSIONS_DIR: {first.student!r} and {submission.student!r} are both "
+                f"{who.label()!r} of the class list; keep one"
+            )
+        taken[who.name] = submission
+        on.append(replace(submission, student=who.name, who=who))
+    return on, off, [s for s in roster if s.name not in taken]
 
 
 def find_submissions(folder: Path) -> list[Submission]:
@@ -210,6 +251,8 @@ def _reference_from_text(spec: LabSpec, variant: Variant, solution: str, limits:
 def unrunnable(
     spec: LabSpec, submission: Submission, problem: str, variant: str = "default"
 ) -> Grade:
+    """The grade of a submission with nothing to run (no file, an unreadable one): every
+    task failed with ``problem``."""
     from mirrorlab.labs.trusted.judging import blank
 
     return Grade(
@@ -219,7 +262,34 @@ def unrunnable(
         0.0,
         png_bytes(blank((64, 192))),
         variant,
+        **_identity(submission),
     )
+
+
+def not_graded(
+    spec: LabSpec, submission: Submission, reason: str, variant: str = "default"
+) -> Grade:
+    """The grade of a submission the checker could not grade (``reason``: its own or its
+    machine's failure): no score, each task "not graded"."""
+    from mirrorlab.labs.trusted.judging import blank
+
+    return Grade(
+        submission.student,
+        [(t.id, False, f"{NOT_GRADED}: {reason}") for t in spec.tasks],
+        NOT_GRADED,
+        0.0,
+        png_bytes(blank((64, 192))),
+        variant,
+        not_graded=reason,
+        **_identity(submission),
+    )
+
+
+def _identity(submission: Submission) -> dict[str, Any]:
+    who = submission.who
+    if who is None:
+        return {}
+    return {"student_id": who.id, "email": who.email, "fields": dict(who.fields)}
 
 
 def grades_csv(spec: LabSpec, grades: list[Grade]) -> str:
@@ -234,35 +304,12 @@ def grades_csv(spec: LabSpec, grades: list[Grade]) -> str:
                 (
                     grade.student,
                     spec.task_name(task_id),
-                    "yes" if passed else "no",
+                    NOT_GRADED if grade.not_graded else "yes" if passed else "no",
                     hint,
                     f"{grade.seconds:.2f}",
+                    grade.student_id,
                 )
             )
-    return buffer.getvalue()
-
-
-def gradebook_csv(spec: LabSpec, grades: list[Grade], copies: str = "flag") -> str:
-    """One row per student (name order) with the score, as an LMS gradebook import takes
-    it: ``student,score,max_score,percent,variant,copy_of,feedback``; a copy (``copy_of``
-    names whose numbers it carries) scored by the policy ``copies`` (:data:`COPIES`)."""
-    buffer = io.StringIO()
-    writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(GRADEBOOK_COLUMNS)
-    total = len(spec.tasks)
-    for grade in sorted(grades, key=lambda g: g.student):
-        score = grade.booked(copies)
-        writer.writerow(
-            (
-                grade.student,
-                "" if score is None else score,
-                total,
-                "" if score is None else f"{100 * score / total:.1f}",
-                grade.variant,
-                grade.copy_of(),
-                f"feedback/{safe_name(grade.student)}.html",
-            )
-        )
     return buffer.getvalue()
 
 
@@ -284,12 +331,15 @@ def grade_folder(
     key: bytes | None = None,
     solutions: Path | None = None,
     submissions: list[Submission] | None = None,
-    roster: list[str] | None = None,
+    roster: list[Student] | None = None,
 ) -> tuple[list[Grade], str]:
     """Grade every submission in ``folder`` (or those given, found in it by
-    :func:`find_submissions`); with a ``key``, the variants of the class list ``roster``
-    (default: the submissions' names) are the others a copy is told by. Returns the grades
-    and the engine's name."""
+    :func:`find_submissions` and matched to the class list by :func:`match_class`); with a
+    ``key``, the variants of the class list ``roster`` (default: the submissions' names)
+    are the others a copy is told by. A submission the checker could not grade is "not
+    graded" (:func:`not_graded`); GradingStopped when this machine grades none (no OpenGL,
+    no sandbox: on this machine's own workers, the first one to say so stops the rest).
+    Returns the grades and the engine's name."""
     from tqdm import tqdm
 
     from mirrorlab.labs.trusted.checker import reference_evidence, solution_source
@@ -312,15 +362,16 @@ def grade_folder(
         handed = {student_key(s.student) for s in submissions}
         others.update(
             {
-                name: derive_variant(spec.name, key, name).plain()
-                for name in roster
-                if student_key(name) not in handed
+                student.name: derive_variant(spec.name, key, student.name).plain()
+                for student in roster
+                if student_key(student.name) not in handed
             }
         )
     if key is not None:
         others["default"] = default_variant(spec.name).plain()
     grades: dict[str, Grade] = {}
     work: dict[str, tuple] = {}
+    by_student = {s.student: s for s in submissions}
     for submission in submissions:
         variant = variants[submission.student]
         if submission.path is None:
@@ -359,17 +410,32 @@ def grade_folder(
         for outcome in executor.run(grade_one, work):
             if outcome.key in grades:  # never counted twice
                 continue
+            submission = by_student[outcome.key]
             if outcome.error is not None:
-                submission = next(s for s in submissions if s.student == outcome.key)
-                grades[outcome.key] = unrunnable(
-                    spec, submission, f"grading failed: {outcome.error}", variants[outcome.key].id
+                if scheduler is None and outcome.error.startswith(MACHINE_CANNOT_GRADE):
+                    raise GradingStopped(outcome.error.split(": ", 1)[-1])
+                grades[outcome.key] = not_graded(
+                    spec, submission, outcome.error, variants[outcome.key].id
                 )
             else:
                 grades[outcome.key] = outcome.value
             bar.update(1)
         engine_name = f"{executor.engine} ({executor.workers} worker"
         engine_name += "s)" if executor.workers != 1 else ")"
-    return [grades[s.student] for s in submissions], engine_name
+    return [_identified(grades[s.student], s) for s in submissions], engine_name
+
+
+MACHINE_CANNOT_GRADE = ("GLContextError:", "GLVersionError:", "SandboxError:")
+"""A job's error (``Type: message``) that says this machine grades nothing: no OpenGL for
+the checker, no sandbox."""
+
+
+def _identified(grade: Grade, submission: Submission) -> Grade:
+    """``grade`` with the class list's id, email and columns of its student."""
+    who = submission.who
+    if who is None:
+        return grade
+    return replace(grade, student_id=who.id, email=who.email, fields=dict(who.fields))
 
 
 def _sandbox_or_risk(limits: Limits) -> str:
@@ -403,14 +469,22 @@ def run_grade(
     solutions: str | Path | None = None,
     students_file: Path | None = None,
     copies: str = "flag",
+    layout: str = "plain",
+    assignment: str | None = None,
 ) -> int:
-    """The ``grade`` command: grade, then write grades.csv, gradebook.csv, the feedback
-    pages, the pictures and report.html together (all or none). With a class list
-    (``students_file``), submissions not on it are reported, one line each, and not
-    graded; it is needed with a key (a variant is made from a name on the list)."""
+    """The ``grade`` command: grade, then write grades.csv, gradebook.csv (in the LMS
+    ``layout``: :mod:`.gradebooks`, its column named ``assignment``), the feedback pages,
+    the pictures and report.html together (all or none). With a class list
+    (``students_file``: :mod:`.roster`), submissions of nobody on it are reported, one line
+    each, and not graded; it is needed with a key (a variant is made from a name on the
+    list). Returns 0, or 1 when the checker could not grade some submissions (each named;
+    their gradebook cells empty). GradingStopped (nothing written) when this machine
+    cannot grade at all."""
+    from mirrorlab.errors import GLContextError
     from mirrorlab.labs.trusted.checker import solutions_dir
-    from mirrorlab.labs.trusted.release import read_students
+    from mirrorlab.labs.trusted.gradebooks import FORMATS, check_format
     from mirrorlab.labs.trusted.report import feedback_html, report_html
+    from mirrorlab.labs.trusted.roster import read_roster
 
     spec = find_lab(lab)
     if copies not in COPIES:
@@ -424,14 +498,18 @@ def run_grade(
             "--key: grading variants needs the class list the lab was released "
             "to (a variant is made from a name on it): give --students FILE"
         )
-    students = read_students(students_file) if students_file is not None else None
+    students = read_roster(students_file) if students_file is not None else None
+    check_format(layout, students)
+    column = assignment if assignment is not None else spec.title
+    if not column.strip():
+        raise ValueError("--assignment: the gradebook's column needs a name")
     found = solutions_dir(solutions)
     out_dir = out_dir or folder.parent / f"{folder.name}-grades"
     if out_dir.exists() and not out_dir.is_dir():
         raise ValueError(f"--out-dir: {str(out_dir)!r} is a file, expected a folder")
     submissions = find_submissions(folder)
     unlisted: list[Submission] = []
-    missing: list[str] = []
+    missing: list[Student] = []
     if students is not None:
         submissions, unlisted, missing = match_class(submissions, students)
         if not submissions:
@@ -441,6 +519,13 @@ def run_grade(
             )
     # after the command line's own errors, before anything is run or said of the class
     unsandboxed = _sandbox_or_risk(limits)
+    if scheduler is None:  # this machine's own workers: OpenGL for their checkers
+        from mirrorlab.gl.context import choose
+
+        try:
+            choose("offscreen", new_process=True)
+        except GLContextError as exc:
+            raise GradingStopped(str(exc)) from None
     for submission in unlisted:
         where = submission.path or folder / submission.student
         print(
@@ -448,23 +533,28 @@ def run_grade(
             f"list {students_file}"
         )
     started = time.perf_counter()
-    grades, engine_name = grade_folder(
-        spec,
-        folder,
-        jobs,
-        scheduler,
-        engine,
-        limits,
-        key=key,
-        solutions=found,
-        submissions=submissions,
-        roster=students,
-    )
+    try:
+        grades, engine_name = grade_folder(
+            spec,
+            folder,
+            jobs,
+            scheduler,
+            engine,
+            limits,
+            key=key,
+            solutions=found,
+            submissions=submissions,
+            roster=students,
+        )
+    except GLContextError as exc:  # the reference, made here first
+        raise GradingStopped(str(exc)) from None
     engine_name += unsandboxed
     seconds = time.perf_counter() - started
     with Outputs() as outputs:
         outputs.add(out_dir / "grades.csv", grades_csv(spec, grades).encode())
-        outputs.add(out_dir / "gradebook.csv", gradebook_csv(spec, grades, copies).encode())
+        outputs.add(
+            out_dir / "gradebook.csv", FORMATS[layout](spec, grades, copies, column).encode()
+        )
         for grade in grades:
             name = safe_name(grade.student)
             outputs.add(out_dir / "pictures" / f"{name}.png", grade.picture_png)
@@ -472,21 +562,40 @@ def run_grade(
         outputs.add(
             out_dir / "report.html",
             report_html(
-                spec, grades, engine_name, seconds, copies, [s.student for s in unlisted], missing
+                spec,
+                grades,
+                engine_name,
+                seconds,
+                copies,
+                [s.student for s in unlisted],
+                [s.label() for s in missing],
             ).encode(),
         )
-    for name in missing:
-        print(f"no submission: {name!r} of the class list")
+    labels = {s.name: s.label() for s in students or []}
+    for student in missing:
+        print(f"no submission: {student.label()!r} of the class list")
     for grade in grades:
         if grade.copied_from:
+            whose = labels.get(grade.copied_from, grade.copy_of())
             print(
-                f"copy: {grade.student!r} carries the numbers of {grade.copy_of()}; "
+                f"copy: {grade.label!r} carries the numbers of {whose}; "
                 f"--copies={copies}: {COPIES[copies]}"
             )
+    skipped = [g for g in grades if g.not_graded]
+    for grade in skipped:
+        print(f"{NOT_GRADED}: {grade.label!r}: {grade.not_graded}")
     full = sum(g.score == len(spec.tasks) for g in grades)
+    graded = len(grades) - len(skipped)
     print(
-        f"graded {len(grades)} submissions of {spec.name} in {seconds:.1f} s on "
-        f"{engine_name}: {full} passed every task; {out_dir / 'grades.csv'}, "
-        f"{out_dir / 'gradebook.csv'}, {out_dir / 'report.html'}"
+        f"graded {graded} submissions of {spec.name} in {seconds:.1f} s on "
+        f"{engine_name}: {full} passed every task"
+        + (
+            f"; {len(skipped)} not graded (the checker's own failure: no score, named "
+            f"above; grade them again)"
+            if skipped
+            else ""
+        )
+        + f"; {out_dir / 'grades.csv'}, {out_dir / 'gradebook.csv'} ({layout}), "
+        f"{out_dir / 'report.html'}"
     )
-    return 0
+    return 1 if skipped else 0

@@ -22,14 +22,24 @@ does not)."""
 ALLOWED_SHARE = 0.0005
 """A picture passes with at most this share of its pixels differing (32 of 256 x 256)."""
 ALLOWED_MIN = 16
-FAINT = 6
-"""The whole frame: a pixel is offset when one of its channels is at least this many levels
-brighter than every reference pixel in its 3 x 3 neighbourhood (or darker than every one),
-and it is part of a patch when at least :data:`PATCH_NEIGHBOURS` of its 8 neighbours are
-offset the same way. Patches count as differing pixels, so an overlay blended faintly
-enough to stay under :data:`TOLERANCE` still shows; noise of a few levels, and an edge
-drawn half a pixel over, do not."""
-PATCH_NEIGHBOURS = 4
+OVERLAY_LEVELS = 6
+"""The whole frame, at every scale and orientation. A pixel's *residual* is how far its
+channels lie outside the range of the reference's 5 x 5 neighbourhood around it
+(:data:`OVERLAY_REACH`): above (the most any channel is above the neighbourhood's
+largest) and below, 0 within it, so an edge or a detail drawn up to 2 pixels over, or
+blurred that far, has none. Any window of
+:data:`WINDOWS`, anywhere in the frame, whose mean residual above (or below) is at least
+this many levels marks its pixels with a residual of that kind: they count as differing
+pixels. So a mark a person can read is caught however faint per pixel, however thin or
+sparse: a patch offset by 6 levels, a line of 6 along a row, column or diagonal (12 at
+other angles), hatching on every other column at 12, dots on every other pixel of every
+other row at 24; while no change of under 6 levels anywhere (rounding, another driver's
+noise, a uniform offset) ever is."""
+WINDOWS = tuple(("square", n) for n in (2, 4, 8, 16, 32)) + tuple(
+    (kind, n) for kind in ("row", "column", "diagonal", "antidiagonal") for n in (4, 8, 16, 32)
+)
+"""The windows :data:`OVERLAY_LEVELS` is judged over: squares of 2 to 32 pixels a side and
+strips 4 to 32 pixels long along rows, columns and both diagonals."""
 
 
 @dataclass(frozen=True)
@@ -225,27 +235,131 @@ def _spread(image: np.ndarray, pick: Any) -> np.ndarray:
     return out
 
 
-def _neighbours(mask: np.ndarray) -> np.ndarray:
-    """How many of each pixel's 8 neighbours are set in ``mask``, ``(h, w)`` int."""
-    height, width = mask.shape
-    padded = np.pad(mask, 1).astype(np.int8)
-    count = np.zeros((height, width), dtype=np.int8)
-    for dy in range(3):
-        for dx in range(3):
-            if dy != 1 or dx != 1:
-                count += padded[dy : dy + height, dx : dx + width]
-    return count
+OVERLAY_REACH = 2
+"""How far (pixels) around a pixel the reference's range is taken for its residual: an
+edge or a detail drawn up to this far over, or blurred over this far (another GPU's
+filtering, a mipmap level more), makes none."""
 
 
-def faint_patches(student: np.ndarray, reference: np.ndarray, faint: int = FAINT) -> np.ndarray:
-    """The pixels of ``student`` offset from ``reference`` (``(h, w, 3)`` uint8) in patches
-    of one sign (see :data:`FAINT`), ``(h, w)`` bool."""
-    a, b = student.astype(np.int16), reference.astype(np.int16)
-    brighter = np.asarray((a - _spread(b, np.maximum) >= faint).any(-1))
-    darker = np.asarray((_spread(b, np.minimum) - a >= faint).any(-1))
-    return (brighter & (_neighbours(brighter) >= PATCH_NEIGHBOURS)) | (
-        darker & (_neighbours(darker) >= PATCH_NEIGHBOURS)
+def residual(picture: np.ndarray, other: np.ndarray, reach: int = OVERLAY_REACH) -> np.ndarray:
+    """How far each channel of ``picture`` lies outside the range of ``other``'s
+    neighbourhood ``reach`` pixels around it (``(h, w, 3)`` uint8 each), ``(h, w, 3)``
+    int16: positive above the largest, negative below the smallest, 0 within."""
+    a, b = picture.astype(np.int16), other.astype(np.int16)
+    largest, smallest = b, b
+    for _ in range(reach):
+        largest, smallest = _spread(largest, np.maximum), _spread(smallest, np.minimum)
+    above = np.maximum(a - largest, 0)
+    below = np.maximum(smallest - a, 0)
+    return (above - below).astype(np.int16)
+
+
+def _shifted(values: np.ndarray, dy: int, dx: int) -> np.ndarray:
+    """``values`` moved so that entry (y, x) holds values[y + dy, x + dx] (zeros past the
+    edges; ``dy`` and ``dx`` may be negative)."""
+    out = np.zeros_like(values)
+    height, width = values.shape[:2]
+    if abs(dy) >= height or abs(dx) >= width:
+        return out
+    source_y, target_y = (
+        (slice(dy, height), slice(0, height - dy)) if dy >= 0 else (slice(0, dy), slice(-dy, None))
     )
+    source_x, target_x = (
+        (slice(dx, width), slice(0, width - dx)) if dx >= 0 else (slice(0, dx), slice(-dx, None))
+    )
+    out[target_y, target_x] = values[source_y, source_x]
+    return out
+
+
+DIRECTIONS = {"row": (0, 1), "column": (1, 0), "diagonal": (1, 1), "antidiagonal": (1, -1)}
+
+
+def _steps(kind: str, n: int) -> list[tuple[int, int]]:
+    """The doubling steps that sum a window of ``kind`` and size ``n`` (a power of two)
+    from its first pixel: each adds the sum so far moved by (dy, dx)."""
+    steps: list[tuple[int, int]] = []
+    size = 1
+    while size < n:
+        if kind == "square":
+            steps += [(0, size), (size, 0)]
+        else:
+            dy, dx = DIRECTIONS[kind]
+            steps.append((dy * size, dx * size))
+        size *= 2
+    return steps
+
+
+def _marked(offset: np.ndarray, levels: float) -> np.ndarray:
+    """The pixels of ``offset`` (``(h, w)``, >= 0) lying in a window of :data:`WINDOWS`
+    whose mean is at least ``levels``, where the offset itself is not 0, ``(h, w)`` bool."""
+    marks = np.zeros(offset.shape, dtype=bool)
+    if offset.max(initial=0) < levels:
+        return marks  # no window's mean reaches what no pixel does
+    for kind in ("square", *DIRECTIONS):
+        total = offset.astype(np.int32)
+        done: list[tuple[int, int]] = []
+        for n in sorted(n for k, n in WINDOWS if k == kind):
+            for step in _steps(kind, n)[len(done) :]:
+                total = total + _shifted(total, *step)
+                done.append(step)
+            flagged = total >= levels * (n * n if kind == "square" else n)
+            if flagged.any():
+                for dy, dx in reversed(done):  # each window's flag over its pixels
+                    flagged = flagged | _shifted(flagged, -dy, -dx)
+                marks |= flagged
+    return marks & (offset > 0)
+
+
+def overlay_marks(
+    student: np.ndarray, reference: np.ndarray, levels: float = OVERLAY_LEVELS
+) -> np.ndarray:
+    """The pixels of a mark on ``student`` against ``reference`` (``(h, w, 3)`` uint8),
+    at every scale and orientation of :data:`WINDOWS` (see :data:`OVERLAY_LEVELS`; the
+    residual above and the residual below, each its largest over the channels),
+    ``(h, w)`` bool."""
+    values = residual(student, reference)
+    above = np.maximum(values, 0).max(axis=-1)
+    below = np.maximum(-values, 0).max(axis=-1)
+    return _marked(above, levels) | _marked(below, levels)
+
+
+COLOUR_FORMATS = frozenset(
+    {3, 4, 0x1907, 0x1908, 0x8051, 0x8058, 0x8054, 0x805B, 0x881B, 0x881A, 0x8815, 0x8814}
+)
+"""Internal formats that keep a picture's red, green and blue as they are (GL_RGB,
+GL_RGBA, 3, 4 and their 8-, 16-bit and float sizes)."""
+FORMAT_NAMES = {
+    1: "1 (one channel)",
+    2: "2 (two channels)",
+    0x1902: "GL_DEPTH_COMPONENT",
+    0x81A5: "GL_DEPTH_COMPONENT16",
+    0x81A6: "GL_DEPTH_COMPONENT24",
+    0x1906: "GL_ALPHA",
+    0x1903: "GL_RED",
+    0x8229: "GL_R8",
+    0x822B: "GL_RG8",
+    0x1909: "GL_LUMINANCE",
+    0x8040: "GL_LUMINANCE8",
+    0x190A: "GL_LUMINANCE_ALPHA",
+    0x8C41: "GL_SRGB8",
+    0x8C43: "GL_SRGB8_ALPHA8",
+}
+
+
+def copy_format_slip(copy: dict[str, Any]) -> str:
+    """What a ``copy`` event's internal format does to the picture when it is not one of
+    :data:`COLOUR_FORMATS`, '' when it keeps the colours."""
+    found = copy.get("internalformat")
+    if not isinstance(found, int) or found in COLOUR_FORMATS or found == 0:
+        return ""
+    name = FORMAT_NAMES.get(found, f"{found:#x}")
+    if "DEPTH" in name:
+        what = "a depth texture: it copies the depth buffer, not the picture"
+    elif "SRGB" in name:
+        what = "an sRGB texture: the picture reads back darker"
+    else:
+        what = "a texture of fewer channels than the picture's red, green and blue"
+    return f"copies as {name}, {what}; copy as GL_RGB"
 
 
 def allowed_pixels(shape: tuple[int, ...]) -> int:
@@ -316,28 +430,24 @@ def judge_frame(
     regions: dict[str, np.ndarray | None],
     frame_task: str,
     owner: dict[str, tuple[str, str]],
+    allowed: np.ndarray | None = None,
 ) -> Verdicts:
     """The final frame compared with the reference frame as a whole, after the per-task
-    verdicts: pixels that differ beyond :data:`TOLERANCE` and pixels offset faintly in
-    patches (:func:`faint_patches`) both count. A frame that differs in more pixels than
-    allowed must be explained by a failed task whose region (``regions[task]``, a mask;
-    None for the whole frame) holds the differing pixels; otherwise the task that owns
+    verdicts: pixels that differ beyond :data:`TOLERANCE` and the pixels of a faint mark
+    (:func:`overlay_marks`) both count. A frame that differs in more pixels than allowed
+    must be explained by a failed task whose region (``regions[task]``, a mask; None for
+    the whole frame) holds the differing pixels; otherwise the task that owns
     them (``owner``: a region's name -> (task id, what it is)) fails saying where, or
-    ``frame_task`` fails with the count."""
+    ``frame_task`` fails with the count. ``allowed``: pixels whose faint mark is a
+    difference the handout accepts (a mask), not counted."""
     frame, ref = student.image("frame"), reference.image("frame")
     if frame is None or ref is None or frame.shape != ref.shape:
         return verdicts
     verdicts = dict(verdicts)
-    taint = student.state.get("frame_taint")
-    if taint:
-        verdicts[frame_task] = (
-            False,
-            f"the frame shows pixels this file uploaded ({taint}): "
-            f"a lab's pictures must be drawn by its calls",
-        )
-        return verdicts
-    patches = faint_patches(frame, ref)
-    mask = differing(frame, ref) | patches
+    marks = overlay_marks(frame, ref)
+    if allowed is not None and allowed.shape == marks.shape:
+        marks &= ~allowed
+    mask = differing(frame, ref) | marks
     limit = allowed_pixels(frame.shape)
     if int(mask.sum()) <= limit:
         return verdicts
@@ -367,9 +477,9 @@ def judge_frame(
             )
             return verdicts
     passed, hint = verdicts.get(frame_task, (True, ""))
-    faint = int((left & patches).sum())
+    faint = int((left & marks).sum())
     what = (
-        f" ({faint} of them by a faint offset in patches: an overlay?)"
+        f" ({faint} of them by a faint mark over the frame: an overlay?)"
         if faint * 2 >= count
         else ""
     )
@@ -386,11 +496,11 @@ def difference_picture(
 ) -> np.ndarray:
     """``|student - reference|`` amplified four times, ``(h, w, 3)`` uint8; with ``marked``
     the pixels that differ as a whole-picture comparison counts them (beyond the tolerance,
-    or in faint patches) are red."""
+    or in a faint mark) are red."""
     diff = np.abs(student.astype(np.int16) - reference.astype(np.int16)) * 4
     out = np.clip(diff, 0, 255).astype(np.uint8)
     if marked:
-        out[differing(student, reference) | faint_patches(student, reference)] = (255, 0, 0)
+        out[differing(student, reference) | overlay_marks(student, reference)] = (255, 0, 0)
     return out
 
 

@@ -31,6 +31,7 @@ from mirrorlab.labs.trusted.judging import (
     Context,
     TaskResult,
     Verdicts,
+    copy_format_slip,
     differing,
     judge_frame,
     matrix,
@@ -50,6 +51,7 @@ from mirrorlab.labs.trusted.variants import Variant
 
 GL_COLOR_BUFFER_BIT, GL_DEPTH_BUFFER_BIT = 0x4000, 0x0100
 GL_MODELVIEW, GL_PROJECTION = 0x1700, 0x1701
+GL_CLAMP = 0x2900
 FILTERS = {
     0x2600: "GL_NEAREST",
     0x2601: "GL_LINEAR",
@@ -74,7 +76,7 @@ PARAMETERS = {
     0x8072: ("GL_TEXTURE_WRAP_R", 0x2901),
 }
 """A texture's parameters the checks compare: name, GL's default."""
-SAME_WRAP = {0x2900: 0x812F}
+SAME_WRAP = {GL_CLAMP: 0x812F}
 """GL_CLAMP as the handouts allow it: GL_CLAMP_TO_EDGE."""
 AXES = {(1, 0, 0): "+X", (-1, 0, 0): "-X", (0, 1, 0): "+Y", (0, -1, 0): "-Y", (0, 0, 1): "+Z"}
 AXES[(0, 0, -1)] = "-Z"
@@ -588,39 +590,10 @@ class SamePicture:
 
 
 @dataclass(frozen=True)
-class Untainted:
-    """Neither ``events`` nor the evidence's ``state`` key show pixels the file uploaded."""
-
-    what: str
-    events: Events | None = None
-    state: str = ""
-    texture: str = ""
-
-    def __call__(self, run: Run) -> Finding | None:
-        why = ""
-        if self.events is not None:
-            why = next(
-                (str(e["taint"]) for e in self.events.find(run.student) if e.get("taint")), ""
-            )
-        if self.state and run.student.state.get(self.state):
-            why = str(run.student.state[self.state])
-        if self.texture:
-            record = run.student.texture(run.student.state.get(self.texture))
-            if record is not None and record.get("tainted"):
-                why = "it holds uploaded pixels"
-        if why:
-            return Finding(
-                f"{self.what} shows pixels this file uploaded ({why}): a lab's pictures must "
-                f"be drawn by its calls",
-                final=True,
-            )
-        return None
-
-
-@dataclass(frozen=True)
 class SameCopies:
     """The copies ``events`` take what the solution's take: into the texture of the same
-    role, the same face and level, the same part of the framebuffer, a colour format."""
+    role, the same face and level, the same part of the framebuffer, a format that keeps the
+    picture's colours (:func:`.judging.copy_format_slip`)."""
 
     events: Events
 
@@ -672,43 +645,9 @@ class SameCopies:
                     f"pixels; the solution's {theirs.get('width')} x {theirs.get('height')}",
                     frozenset({"image"}),
                 )
-            formats = (mine.get("internalformat"), theirs.get("internalformat"))
-            if formats[0] and formats[1] and colour_format(formats[0]) != colour_format(formats[1]):
-                keeps = (
-                    "only the brightness" if formats[0] in (0x1909, 0x8040) else "not the colour"
-                )
-                return Finding(
-                    f"the copy at {at} makes a {format_name(formats[0])} texture, which keeps "
-                    f"{keeps}; the solution copies {format_name(formats[1])}",
-                    frozenset({"image"}),
-                )
+            if slip := copy_format_slip(mine):
+                return Finding(f"the copy at {at} {slip}", frozenset({"image"}))
         return None
-
-
-FORMAT_NAMES = {
-    3: "3",
-    4: "4",
-    0x1907: "GL_RGB",
-    0x1908: "GL_RGBA",
-    0x8051: "GL_RGB8",
-    0x8058: "GL_RGBA8",
-    0x1909: "GL_LUMINANCE",
-    0x8040: "GL_LUMINANCE8",
-    0x1906: "GL_ALPHA",
-    0x190A: "GL_LUMINANCE_ALPHA",
-    0x1903: "GL_RED",
-    0x8229: "GL_R8",
-    0x822B: "GL_RG8",
-    0x1902: "GL_DEPTH_COMPONENT",
-}
-
-
-def colour_format(value: int) -> bool:
-    return value in (3, 4, 0x1907, 0x1908, 0x8051, 0x8058, 0x8C41, 0x8C43, 0x8054, 0x805B)
-
-
-def format_name(value: int) -> str:
-    return FORMAT_NAMES.get(value, f"{value:#x}")
 
 
 @dataclass(frozen=True)
@@ -1511,6 +1450,9 @@ class LabJudge:
     glsl_functions: tuple[str, ...] = ()
     frame: Callable[[Run], tuple[Evidence, Evidence]] | None = None
     """The runs the whole frame is compared as (the cube-map lab blurs a mipmapped sphere)."""
+    allowed: Callable[[Run], np.ndarray | None] = lambda run: None
+    """The frame's pixels whose faint mark is a difference the handout accepts (a mask; lab
+    20's GL_CLAMP rim around the mirror), not counted by the whole frame's rule."""
 
 
 def judge(
@@ -1545,6 +1487,7 @@ def judge(
         {**{r.id: regions.get(r.region) if r.region else None for r in declared.tasks}, **regions},
         declared.frame_task,
         declared.owner,
+        declared.allowed(run),
     )
     frame_hint = verdicts.get(declared.frame_task, (True, ""))
     if not frame_hint[0] and findings.get(declared.frame_task) is None:
@@ -1601,6 +1544,33 @@ def polygon_region(
     seen through ``clip`` (projection @ view), ``grow`` pixels wider, ``(h, w)`` bool."""
     points = [clip @ np.append(c, 1.0) for c in corners]
     return triangles_mask(points, [(0, i, i + 1) for i in range(1, len(points) - 1)], size, grow)
+
+
+def convex_rim(
+    corners: np.ndarray, clip: np.ndarray, size: tuple[int, int], reach: float
+) -> np.ndarray:
+    """The pixels of a ``size`` (w, h) frame within ``reach`` pixels either side of the
+    outline of the convex polygon ``corners`` ``(n, 3)`` seen through ``clip`` (projection
+    @ view; every corner in front of the eye), ``(h, w)`` bool."""
+    width, height = size
+    points = [clip @ np.append(c, 1.0) for c in corners]
+    if any(p[3] <= 1e-6 for p in points):
+        return np.zeros((height, width), dtype=bool)
+    screen = [((p[0] / p[3] + 1) / 2 * width, (1 - p[1] / p[3]) / 2 * height) for p in points]
+    yy, xx = np.mgrid[0:height, 0:width] + 0.5
+    area = sum(
+        x0 * y1 - x1 * y0
+        for (x0, y0), (x1, y1) in zip(screen, screen[1:] + screen[:1], strict=True)
+    )
+    sign = 1.0 if area > 0 else -1.0
+    outer = np.ones((height, width), dtype=bool)
+    inner = np.ones((height, width), dtype=bool)
+    for (x0, y0), (x1, y1) in zip(screen, screen[1:] + screen[:1], strict=True):
+        length = float(np.hypot(x1 - x0, y1 - y0))
+        distance = sign * ((x1 - x0) * (yy - y0) - (y1 - y0) * (xx - x0))
+        outer &= distance >= -reach * length
+        inner &= distance >= reach * length
+    return outer & ~inner
 
 
 def drawn_region(draw: dict[str, Any], size: tuple[int, int]) -> np.ndarray:

@@ -37,7 +37,6 @@ from mirrorlab.labs.trusted.pipe import (
     TrustedChannel,
 )
 from mirrorlab.labs.trusted.sandbox import (
-    SANDBOX_BOX,
     SANDBOX_LAB_SIDE,
     SANDBOX_PACKAGES,
     SANDBOX_SITE,
@@ -47,8 +46,8 @@ from mirrorlab.labs.trusted.sandbox import (
     SandboxError,
     interpreter,
     new_box,
+    remove_box,
     sandbox_mode,
-    tail,
     user_interpreter,
 )
 from mirrorlab.labs.trusted.session import LabBase, LabSetupError
@@ -166,35 +165,42 @@ class LabRun:
             self.channel.close()
             self.channel = None
         if self.box is not None:
-            shutil.rmtree(self.box, ignore_errors=True)
+            remove_box(self.box)
             self.box = None
 
     def start(self) -> None:
         """The sandbox, the pipe, the session sent, the runner ready; RunEnded states
         (status not ok) are kept in the evidence, SandboxError when it cannot start."""
         self.box = new_box()
-        student = self.box / BOX_FILE
-        student.write_bytes(self.source)
         mode = sandbox_mode()
         lab_side = self.spec.student_file
         if mode == "bwrap":
             python, packages, site = interpreter(), SANDBOX_PACKAGES, SANDBOX_SITE
-            path, lab_side_path = f"{SANDBOX_BOX}/{BOX_FILE}", SANDBOX_LAB_SIDE
-        else:
-            python, packages, site = user_interpreter(), str(self.box / "pkg"), ""
+            lab_side_path = SANDBOX_LAB_SIDE
+        else:  # the student side beside the scratch, where the run may read, not write
+            library = self.box / "lib"
+            library.mkdir()
+            python, packages, site = user_interpreter(), str(library / "pkg"), ""
             if mode == "none":
-                python, site = interpreter(), _offer_numpy(self.box / "site")
+                python, site = interpreter(), _offer_numpy(library / "site")
             shutil.copytree(
                 STUDENT_PACKAGE,
-                self.box / "pkg" / "labstudent",
+                library / "pkg" / "labstudent",
                 ignore=shutil.ignore_patterns("__pycache__"),
             )
-            shutil.copyfile(lab_side, self.box / "pkg" / "lab_side.py")
-            path, lab_side_path = str(student), str(self.box / "pkg" / "lab_side.py")
+            shutil.copyfile(lab_side, library / "pkg" / "lab_side.py")
+            lab_side_path = str(library / "pkg" / "lab_side.py")
         argv = [str(python), "-I", "-S", "-B", "-c", BOOT.format(packages=packages, site=site)]
         self.sandbox = Sandboxed(
-            argv, self.box, self.limits, pipe=True, owner=self.owner, lab_side=lab_side
+            argv,
+            self.box,
+            self.limits,
+            pipe=True,
+            owner=self.owner,
+            lab_side=lab_side,
+            files={BOX_FILE: self.source},
         )
+        path = self.sandbox.place(BOX_FILE)
         # the pipe: the runner's stdin and stdout, as file descriptors of the channel's own
         process = self.sandbox.process
         assert process.stdin is not None and process.stdout is not None
@@ -225,9 +231,9 @@ class LabRun:
 
     def _ended_early(self) -> None:
         """The runner died before it said ready: the sandbox itself failed."""
-        assert self.sandbox is not None and self.box is not None
+        assert self.sandbox is not None
         code, _, stopped = self.sandbox.wait(timeout=10)
-        stderr = tail(self.box / "stderr.txt")
+        stderr = self.sandbox.stderr_tail()
         last = next((line for line in reversed(stderr.strip().splitlines()) if line.strip()), "")
         if stopped:
             self.end(*self._classify(code, stopped))
@@ -251,6 +257,10 @@ class LabRun:
             return "timeout", (
                 f"stopped after {limits.seconds:g} s of waiting (the wall-clock limit)"
             )
+        if stopped == "scratch":
+            from mirrorlab.labs.trusted.scratch import scratch_message
+
+            return "scratch", (f"stopped when its scratch space held more than {scratch_message()}")
         if stopped == "processes":
             from mirrorlab.labs.trusted.sandbox import MAX_PROCESSES
 
@@ -262,8 +272,8 @@ class LabRun:
             return "timeout", (
                 f"stopped at the CPU-time limit of {limits.cpu_seconds} s (an endless loop?)"
             )
-        assert self.box is not None
-        stderr = tail(self.box / "stderr.txt")
+        assert self.sandbox is not None
+        stderr = self.sandbox.stderr_tail()
         if "MemoryError" in stderr or "Cannot allocate memory" in stderr:
             return "memory", f"stopped at the memory limit of {limits.memory_mb} MB"
         died = (
@@ -381,7 +391,6 @@ class LabRun:
                     break
         if not self.ended:
             self.evidence.arrays["frame"] = self.executor.session_frame()
-            self.evidence.state["frame_taint"] = self.executor.tracker.framebuffer_taint
         self.finish()
         if self.evidence.status == "ok":
             self.observe()
@@ -460,39 +469,44 @@ class LabRun:
 
 
 def reset_state() -> None:
-    """State a student's calls may have left that would change the checker's own drawing
-    and reading."""
+    """Every state a student's calls may have left that the checker's own drawing and
+    reading depend on, set to GL's defaults (the trusted side's own work starts from
+    here, whatever the file left): switches (every one the labs' calls can reach, on every
+    texture unit), masks, depth, polygon mode and offset, pixel store, each unit's
+    texture environment, texture matrix and bindings, the matrices (loaded: no stack is
+    pushed), the program, the active unit, the current colour."""
+    from mirrorlab.labs.trusted.state import UNIT_CAPS
+
     GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, GL.glGetIntegerv(GL.GL_FRAMEBUFFER_BINDING))
     FF = legacy.gl()  # the legacy switches are the emulation's on a core context
-    for cap in (
-        GL.GL_SCISSOR_TEST,
-        GL.GL_BLEND,
-        GL.GL_CULL_FACE,
-        GL.GL_STENCIL_TEST,
-        GL.GL_ALPHA_TEST,
-        GL.GL_LIGHTING,
-        GL.GL_FOG,
-        GL.GL_POLYGON_OFFSET_FILL,
-    ):
+    for cap in sorted(C.CAPS - set(UNIT_CAPS) - {int(GL.GL_DEPTH_TEST)}):
         FF.glDisable(cap)
+    GL.glEnable(GL.GL_DEPTH_TEST)
     GL.glColorMask(1, 1, 1, 1)
     GL.glDepthMask(1)
     GL.glDepthFunc(GL.GL_LESS)
-    GL.glPolygonMode(GL.GL_FRONT_AND_BACK, GL.GL_FILL)
+    GL.glDepthRange(0.0, 1.0)
+    GL.glCullFace(GL.GL_BACK)
+    GL.glFrontFace(GL.GL_CCW)
+    GL.glPolygonOffset(0.0, 0.0)
+    FF.glPolygonMode(GL.GL_FRONT_AND_BACK, GL.GL_FILL)
     GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 4)
     GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 4)
-    for unit in range(8):
-        GL.glActiveTexture(GL.GL_TEXTURE0 + unit)
-        for cap in (
-            GL.GL_TEXTURE_2D,
-            GL.GL_TEXTURE_CUBE_MAP,
-            GL.GL_TEXTURE_GEN_S,
-            GL.GL_TEXTURE_GEN_T,
-            GL.GL_TEXTURE_GEN_R,
-            GL.GL_TEXTURE_GEN_Q,
-        ):
+    for unit in sorted(C.UNITS):
+        GL.glActiveTexture(unit)
+        for cap in UNIT_CAPS:
             FF.glDisable(cap)
+        FF.glTexEnvi(GL.GL_TEXTURE_ENV, GL.GL_TEXTURE_ENV_MODE, GL.GL_MODULATE)
+        FF.glMatrixMode(GL.GL_TEXTURE)
+        FF.glLoadIdentity()
+        GL.glBindTexture(GL.GL_TEXTURE_2D, 0)
+        GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, 0)
     GL.glActiveTexture(GL.GL_TEXTURE0)
+    for mode in (GL.GL_PROJECTION, GL.GL_MODELVIEW):
+        FF.glMatrixMode(mode)
+        FF.glLoadIdentity()
+    FF.glColor4f(1.0, 1.0, 1.0, 1.0)
     GL.glUseProgram(0)
+    GL.glBindVertexArray(0)
     while GL.glGetError() != GL.GL_NO_ERROR:
         pass

@@ -353,6 +353,18 @@ def texture_matrix(unit: int) -> np.ndarray:
     return matrix.reshape(4, 4).T.copy()
 
 
+def current_texcoords(unit: int) -> np.ndarray:
+    """The current texture coordinates (s, t, r, q) of ``unit`` now, ``(4,)``."""
+    if _active is not None:
+        return np.asarray(_active.texcoords[unit], dtype=np.float64).copy()
+    GL = _gl()
+    active = int(GL.glGetIntegerv(GL.GL_ACTIVE_TEXTURE))
+    GL.glActiveTexture(GL_TEXTURE0 + unit)
+    coords = np.asarray(GL.glGetFloatv(GL.GL_CURRENT_TEXTURE_COORDS), dtype=np.float64)
+    GL.glActiveTexture(active)
+    return coords.reshape(-1)[:4].copy()
+
+
 # ---------------------------------------------------------------------- the matrices
 # In float32, each entry computed and each product summed in the order Mesa's own matrix
 # code does (src/mesa/math/m_matrix.c) and GLU's: a vertex exactly on a clip plane (lab
@@ -730,6 +742,11 @@ class FixedFunction:
 
     glTexEnvf = glTexEnvi
 
+    def glGetTexEnviv(self, target: int, pname: int) -> np.ndarray:
+        if target != GL_TEXTURE_ENV or pname != GL_TEXTURE_ENV_MODE:
+            raise gl_error(GL_INVALID_ENUM)
+        return np.array([self.env.get(self.unit(), GL_MODULATE)], dtype=np.int32)
+
     def glTexGeni(self, coord: int, pname: int, mode: int) -> None:
         index = coord - GL_S
         if not 0 <= index < 4 or pname != GL_TEXTURE_GEN_MODE or mode not in GEN_MODES:
@@ -831,6 +848,8 @@ class FixedFunction:
         height: int,
         border: int,
     ) -> None:
+        if internalformat in (1, 2, 3, 4):  # a copy takes no number of components (Mesa's)
+            raise gl_error(GL_INVALID_ENUM)
         internal, swizzle = CORE_FORMATS.get(internalformat, (internalformat, None))
         _gl().glCopyTexImage2D(target, level, internal, x, y, width, height, border)
         self._swizzle(target, swizzle)

@@ -65,36 +65,6 @@ def run_start(lab: str, folder: Path) -> int:
     return 0
 
 
-def read_students(path: Path) -> list[str]:
-    """The class list: one name per line; blank lines and ``#`` comments skipped; two names
-    that are one student (:func:`~.variants.student_key`) refused."""
-    try:
-        lines = path.read_text().splitlines()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ValueError(f"--students: cannot read {str(path)!r}: {exc}") from None
-    names: list[str] = []
-    seen: dict[str, str] = {}
-    for number, line in enumerate(lines, 1):
-        name = line.split("#", 1)[0].strip()
-        if not name:
-            continue
-        key = student_key(name)
-        if not key:
-            raise ValueError(
-                f"--students: line {number} of {path.name}, {name!r}, has no letters or digits"
-            )
-        if key in seen:
-            raise ValueError(
-                f"--students: {name!r} (line {number}) and {seen[key]!r} are the "
-                f"same student to mirrorlab; give each a distinct name"
-            )
-        seen[key] = name
-        names.append(name)
-    if not names:
-        raise ValueError(f"--students: {str(path)!r} holds no names (one a line)")
-    return names
-
-
 def course_key(path: Path) -> bytes:
     """The key in ``path``, made (random, mode 0600) when the file does not exist."""
     if not path.exists():
@@ -140,9 +110,10 @@ def run_release(
     from mirrorlab.jobs import open_executor
     from mirrorlab.labs.trusted.checker import solution_source, solutions_dir
     from mirrorlab.labs.trusted.grading import safe_name
+    from mirrorlab.labs.trusted.roster import read_roster
 
     spec = find_lab(lab)
-    students = read_students(students_file)
+    students = [student.name for student in read_roster(students_file)]
     folder = solutions_dir(solutions)
     if folder is None:
         raise ValueError(
@@ -207,4 +178,4 @@ def run_solution(lab: str, student: str, key_file: Path, solutions: str | Path |
     return 0
 
 
-__all__ = ["KEY_BYTES", "read_students", "run_release", "run_solution", "run_start"]
+__all__ = ["KEY_BYTES", "run_release", "run_solution", "run_start"]

@@ -31,8 +31,10 @@ th, td { border: 1px solid #ccc; padding: 4px 6px; vertical-align: top; font-siz
 th { background: #eee; cursor: pointer; user-select: none; white-space: nowrap; }
 th.sorted-up::after { content: " \\25B2"; } th.sorted-down::after { content: " \\25BC"; }
 td.pass { background: #e3f6e3; } td.fail { background: #fbe4e4; }
+td.not-judged { background: #eee; color: #666; }
 td.task { max-width: 14em; }
-td.copied, .copy { color: #a00; }
+td.copied, .copy, td.not-graded { color: #a00; }
+.id { font-size: 11px; display: block; color: #555; }
 .copy { font-size: 11px; display: block; }
 td.task .hint { color: #555; font-size: 11px; }
 img.thumb { width: 270px; display: block; }
@@ -117,14 +119,27 @@ def report_html(
                 f'<span class="copy">copy: the numbers of {escape(grade.copy_of())}; '
                 f"{scored} (--copies={escape(copies)})</span>"
             )
+        ident = f'<span class="id">{escape(grade.student_id)}</span>' if grade.student_id else ""
+        if grade.not_graded:
+            score_cell = (
+                f'<td class="score not-graded" data-sort="-1">not graded'
+                f'<span class="copy">{escape(grade.not_graded)}</span></td>'
+            )
+        else:
+            score_cell = (
+                f'<td class="score" data-sort="{grade.score}">{grade.score}/{len(tasks)}{copy}</td>'
+            )
         cells = [
-            f'<td class="student">{escape(grade.student)}</td>',
-            f'<td class="score" data-sort="{grade.score}">{grade.score}/{len(tasks)}{copy}</td>',
+            f'<td class="student">{escape(grade.student)}{ident}</td>',
+            score_cell,
             f'<td class="picture" data-sort="{grade.score}"><a href="{escape(picture)}">'
             f'<img class="thumb" src="{escape(picture)}" alt="{escape(grade.student)}">'
             f"</a></td>",
         ]
         for task in tasks:
+            if grade.not_graded:  # nothing was judged: no verdict to show
+                cells.append('<td class="task not-judged" data-sort="-1">not graded</td>')
+                continue
             passed, hint = verdicts.get(task.id, (False, "not checked"))
             word = "pass" if passed else "FAIL"
             note = f'<div class="hint">{escape(hint)}</div>' if hint else ""
@@ -147,6 +162,12 @@ def report_html(
         f"{seconds:.1f} s on {escape(engine)}. Click a column's header to sort."
     )
     notes = []
+    skipped = [g for g in grades if g.not_graded]
+    if skipped:
+        notes.append(
+            '<p id="not-graded">Not graded, the checker\'s own failure (no score; grade '
+            f"them again): {', '.join(f'<b>{escape(g.label)}</b>' for g in skipped)}</p>"
+        )
     if unlisted:
         notes.append(
             '<p id="unlisted">Not graded, not on the class list: '
@@ -202,16 +223,32 @@ def feedback_html(spec: LabSpec, grade) -> str:
         )
     image = base64.b64encode(grade.picture_png).decode()
     variant = "" if grade.variant == "default" else f" (variant {escape(grade.variant)})"
-    return f"""<!DOCTYPE html>
+    if grade.not_graded:
+        return f"""<!DOCTYPE html>
 <html lang="en">
 <head>
 <meta charset="utf-8">
-<title>{escape(spec.title)}: {escape(grade.student)}</title>
+<title>{escape(spec.title)}: {escape(grade.label)}</title>
 <style>{FEEDBACK_STYLE}</style>
 </head>
 <body>
 <h1>{escape(spec.title)}</h1>
-<p>{escape(grade.student)}{variant}: {grade.score} of {len(grade.tasks)} tasks passed.</p>
+<p>{escape(grade.label)}{variant}: Not graded. The checker failed on the grading machine
+({escape(grade.not_graded)}); this says nothing of your file, which your teacher grades
+again.</p>
+</body>
+</html>
+"""
+    return f"""<!DOCTYPE html>
+<html lang="en">
+<head>
+<meta charset="utf-8">
+<title>{escape(spec.title)}: {escape(grade.label)}</title>
+<style>{FEEDBACK_STYLE}</style>
+</head>
+<body>
+<h1>{escape(spec.title)}</h1>
+<p>{escape(grade.label)}{variant}: {grade.score} of {len(grade.tasks)} tasks passed.</p>
 <ol>
 {chr(10).join(items)}
 </ol>

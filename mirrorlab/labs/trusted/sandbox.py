@@ -8,17 +8,21 @@ How, in order of preference (:func:`sandbox_mode` says which applies):
   read-only (the system's libraries), the interpreter's own folder read-only (wherever it
   is: every folder above it is made anew, open, holding nothing else, so an interpreter
   under a closed home works), the student side of the labs (:mod:`mirrorlab.labs.student`)
-  and numpy read-only under ``/lab``, the run's box writable at ``/lab/box``, an empty
-  ``/tmp``. No checkout, no venv, no other package, no solution, no reference, no other
-  submission, no home. Network, process ids, IPC and the host name are unshared. Run as
-  root, the process then drops to a user id of its own (``setpriv``).
+  and numpy read-only under ``/lab``, the run's scratch (:mod:`.scratch`: at most
+  :data:`~.scratch.SCRATCH_MB` MiB and :data:`~.scratch.SCRATCH_FILES` files and folders)
+  writable at ``/lab/box`` and ``/tmp``, everything else read-only. No checkout, no venv,
+  no other package, no solution, no reference, no other submission, no home. Network,
+  process ids, IPC and the host name are unshared. Run as root, the process then drops to
+  a user id of its own (``setpriv``).
 - ``user`` (root on Linux, no working bubblewrap): the same limits, the process under a
-  user id of its own, which may write only in its box (and world-writable places). The
-  file system stays visible to it (readable files only): the note of
+  user id of its own, which may write only in its scratch: where the kernel gives a mount
+  namespace every other mount is read-only there (else world-writable places stay open
+  to it). The file system stays visible to it (readable files only): the note of
   :func:`unsandboxed_note` says so.
 - ``none`` (no bubblewrap, not root on Linux; every macOS and Windows machine): the file
   runs in a process of its own, as the user, over the same pipe, with what limits the
-  system has. Nothing keeps it from reading or writing what the user may.
+  system has; its scratch is watched. Nothing keeps it from reading or writing what the
+  user may.
 
 Only ``bwrap`` is a sandbox. The other two run only when the run's :class:`Limits` say
 ``unsandboxed`` (a student's own file in ``lab check`` and ``lab run``, the teacher's
@@ -46,11 +50,13 @@ import sysconfig
 import tempfile
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
+
+from mirrorlab.labs.trusted import scratch
 
 UID_BASE = 200_000
 """Sandboxed processes run as UID_BASE + the id of the process that asked for the run (the
@@ -64,6 +70,10 @@ STUDENT_PACKAGE = Path(__file__).resolve().parent.parent / "student"
 """The student side's folder: the only part of mirrorlab a sandbox sees."""
 
 BOX_PREFIX = "mirrorlab-box-"
+SCRATCH_FOLDER = "scratch"
+"""The run folder's scratch (:mod:`.scratch`): the one place its program may write."""
+STDERR_KEPT = 4000
+"""Bytes of a piped run's errors kept (its last ones)."""
 SANDBOX_BOX = "/lab/box"
 SANDBOX_PACKAGES = "/lab/pkg"
 SANDBOX_SITE = "/lab/site"
@@ -165,6 +175,11 @@ def _missing() -> tuple[str, str]:
         "no sandbox: bubblewrap is not installed",
         "install it (Debian/Ubuntu: apt-get install bubblewrap; Fedora: dnf install bubblewrap)",
     )
+
+
+def unsandboxed_reason() -> str:
+    """Why there is no sandbox here, in a few words ('' where bubblewrap works)."""
+    return "" if sandbox_mode() == "bwrap" else _missing()[0]
 
 
 def missing_sandbox() -> str:
@@ -278,10 +293,13 @@ def numpy_folders() -> list[Path]:
     return [folder, *([libs] if libs.is_dir() else [])]
 
 
-def bwrap_arguments(box: Path, lab_side: Path | None = None) -> list[str]:
+def bwrap_arguments(space: Path, lab_side: Path | None = None) -> list[str]:
     """The bwrap command line before the program: the sandbox's file system (see the
-    module's text), ``box`` writable at :data:`SANDBOX_BOX`, the lab's ``student.py``
-    (``lab_side``) read-only at :data:`SANDBOX_LAB_SIDE`."""
+    module's text), the run's scratch ``space`` (:mod:`.scratch`) writable at :data:`SANDBOX_BOX`
+    (its ``box/``) and ``/tmp`` (its ``tmp/``), the lab's ``student.py`` (``lab_side``)
+    read-only at :data:`SANDBOX_LAB_SIDE`. Everything else is read-only: bubblewrap's own
+    root and ``/dev`` (file systems of the sandbox's owner, without a total) are made so
+    once the sandbox is built, so the scratch is the only place a file may write."""
     root = _Root()
     root.bind(Path("/usr"))
     for link in ("bin", "sbin", "lib", "lib64", "lib32", "libx32"):
@@ -299,9 +317,8 @@ def bwrap_arguments(box: Path, lab_side: Path | None = None) -> list[str]:
         "/proc",
         "--dev",
         "/dev",
-        "--size",
-        str(64 << 20),
-        "--tmpfs",
+        "--bind",
+        str(space / scratch.TMP),
         "/tmp",
     ]
     root.made.update(Path(p) for p in ("/etc", "/etc/ld.so.cache", "/proc", "/dev", "/tmp"))
@@ -320,16 +337,19 @@ def bwrap_arguments(box: Path, lab_side: Path | None = None) -> list[str]:
         root.bind(lab_side.resolve(), Path(SANDBOX_LAB_SIDE))
     for folder in numpy_folders():
         root.bind(folder, Path(SANDBOX_SITE, folder.name))
-    root.bind(box, Path(SANDBOX_BOX), writable=True)
+    root.bind(space / scratch.BOX, Path(SANDBOX_BOX), writable=True)
+    hidden = [root.arguments[i + 1] for i, a in enumerate(root.arguments) if a == "--tmpfs"]
+    for made in [*hidden, "/dev", "/"]:
+        root.arguments += ["--remount-ro", made]
     return [shutil.which("bwrap") or "bwrap", *root.arguments, "--chdir", SANDBOX_BOX]
 
 
-def _environment(home: str) -> dict[str, str]:
+def _environment(home: str, temporary: str) -> dict[str, str]:
     return {
         "PATH": "/usr/bin:/bin",
         "LANG": "C.UTF-8",
         "HOME": home,
-        "TMPDIR": "/tmp",
+        "TMPDIR": temporary,
         "PYTHONDONTWRITEBYTECODE": "1",
         "PYTHONNOUSERSITE": "1",
         "PYTHONHASHSEED": "0",
@@ -438,12 +458,17 @@ def user_interpreter() -> Path:
 
 
 class Sandboxed:
-    """``argv`` running in the sandbox with ``box`` as its only writable place (started at
-    once). With ``pipe``, its stdin and stdout are pipes to this process (``process.stdin``
-    and ``process.stdout``); else its stdin is empty and its output goes to
-    ``box/stdout.txt``. Its errors go to ``box/stderr.txt``. A watchdog thread kills the
-    run at the wall-clock limit or when it starts too many processes; :meth:`wait` ends it
-    and says why."""
+    """``argv`` running in the sandbox (started at once), with ``box`` (a folder of
+    :func:`new_box`) as its run folder. The one place it may write is its scratch
+    (:mod:`.scratch`): ``box/scratch``, made with ``box/`` (its working folder, holding
+    ``files``: name -> bytes) and ``tmp/`` (its temporary folder) at the start, at most
+    :data:`~.scratch.SCRATCH_MB` MiB and :data:`~.scratch.SCRATCH_FILES` files and
+    folders. With ``pipe``, its stdin and stdout are pipes to this process
+    (``process.stdin`` and ``process.stdout``) and its errors are kept in memory (the last
+    4000 bytes: :meth:`stderr_tail`); else its stdin is empty and its output and errors go
+    to ``box/stdout.txt`` and ``box/stderr.txt``. A watchdog thread kills the run at the
+    wall-clock limit, when it starts too many processes, or (a ``watched`` scratch) when
+    its scratch holds more than the totals; :meth:`wait` ends it and says why."""
 
     def __init__(
         self,
@@ -453,6 +478,7 @@ class Sandboxed:
         pipe: bool = False,
         owner: int | None = None,
         lab_side: Path | None = None,
+        files: Mapping[str, bytes] | None = None,
     ) -> None:
         mode = sandbox_mode()
         if mode != "bwrap" and not limits.unsandboxed:
@@ -461,13 +487,29 @@ class Sandboxed:
         root = mode != "none" and _is_root()
         self.uid = sandbox_uid(owner) if root else -1
         self.root = root
-        if root:
-            for path in [self.box, *self.box.rglob("*")]:
-                os.chown(path, self.uid, self.uid)
+        self.scratch = self.box / SCRATCH_FOLDER
+        self.scratch.mkdir(mode=0o700)
+        self.kind = scratch.scratch_kind(mode)
+        files = dict(files or {})
+        drop_to = self.uid if root else None
+        made: Callable[[], None] | None = None
+        if self.kind == "tmpfs":
+            made = scratch.tmpfs_preexec(
+                self.scratch,
+                files,
+                drop_to,
+                user_namespace=mode == "bwrap" and not root,
+                read_only_host=mode == "user",
+            )
+        else:
+            scratch.prepare_watched(self.scratch, files, drop_to)
+        if mode == "user":  # the dropped user reaches its scratch and the run's own files
+            self.box.chmod(0o711)
+            self.scratch.chmod(0o711)
         if mode == "bwrap":
-            env = _environment(SANDBOX_BOX)
+            env = _environment(SANDBOX_BOX, "/tmp")
             command = [
-                *bwrap_arguments(self.box, lab_side),
+                *bwrap_arguments(self.scratch, lab_side),
                 "--unshare-ipc",
                 "--unshare-pid",
                 "--unshare-net",
@@ -496,13 +538,13 @@ class Sandboxed:
             else:
                 command += ["--unshare-user", "--"]
             command += argv
-            preexec = _limit(limits, None)
+            limit = _limit(limits, None)
         elif mode == "user":
-            env = _environment(str(self.box))
+            env = _environment(str(self.scratch / scratch.BOX), str(self.scratch / scratch.TMP))
             command = argv
-            preexec = _limit(limits, self.uid)
+            limit = _limit(limits, self.uid)
         else:
-            env = _environment(str(self.box))
+            env = _environment(str(self.scratch / scratch.BOX), str(self.scratch / scratch.TMP))
             if sys.platform == "win32":  # what Python and Windows need to start at all
                 env = {
                     **env,
@@ -510,40 +552,98 @@ class Sandboxed:
                     **{k: os.environ[k] for k in ("SYSTEMROOT", "TEMP", "TMP") if k in os.environ},
                 }
             command = argv
-            preexec = _limit(limits, None, processes=False)
+            limit = _limit(limits, None, processes=False)
         self.started = time.perf_counter()
         self.stopped = ""
         self._done = threading.Event()
-        # its own session (POSIX) or process group (Windows), to be ended as one
+        self._errors = bytearray()
+        try:
+            self.process = self._start(command, env, pipe, made, limit)
+        except subprocess.SubprocessError as exc:
+            if self.kind != "tmpfs":
+                raise SandboxError(f"the run could not start ({mode} mode): {exc}") from None
+            # the kernel refused the run's own file system: watched, from now on
+            scratch.refuse(mode)
+            self.kind = "watched"
+            scratch.prepare_watched(self.scratch, files, drop_to)
+            try:
+                self.process = self._start(command, env, pipe, None, limit)
+            except subprocess.SubprocessError as again:
+                raise SandboxError(f"the run could not start ({mode} mode): {again}") from None
+        self._drain: threading.Thread | None = None
+        if pipe:
+            self._drain = threading.Thread(target=self._keep_errors, daemon=True)
+            self._drain.start()
+        self._watchdog = threading.Thread(target=self._watch, daemon=True)
+        self._watchdog.start()
+
+    def _start(
+        self,
+        command: list[str],
+        env: dict[str, str],
+        pipe: bool,
+        made: Callable[[], None] | None,
+        limit: Callable[[], None] | None,
+    ) -> subprocess.Popen:
+        """The run's process, in a session (POSIX) or process group (Windows) of its own to
+        be ended as one; ``made`` (the tmpfs scratch) then ``limit`` run in it first."""
         group: dict[str, Any]
         if sys.platform == "win32":
             group = {"creationflags": subprocess.CREATE_NEW_PROCESS_GROUP}
         else:
-            group = {"start_new_session": True, "preexec_fn": preexec}
+            group = {"start_new_session": True, "preexec_fn": _chain(made, limit)}
+        workdir = self.box if made is not None else self.scratch / scratch.BOX
         with (
-            open(self.box / "stderr.txt", "wb") as err,
+            open(os.devnull if pipe else self.box / "stderr.txt", "wb") as err,
             open(os.devnull if pipe else self.box / "stdout.txt", "wb") as out,
         ):
-            self.process = subprocess.Popen(
+            return subprocess.Popen(
                 command,
                 stdin=subprocess.PIPE if pipe else subprocess.DEVNULL,
                 stdout=subprocess.PIPE if pipe else out,
-                stderr=err,
-                cwd=self.box,
+                stderr=subprocess.PIPE if pipe else err,
+                cwd=workdir,
                 env=env,
                 **group,
             )
-        self._watchdog = threading.Thread(target=self._watch, daemon=True)
-        self._watchdog.start()
+
+    def place(self, name: str) -> str:
+        """Where the program sees ``name`` of its working folder (one of ``files``)."""
+        if self.mode == "bwrap":
+            return f"{SANDBOX_BOX}/{name}"
+        return str(self.scratch / scratch.BOX / name)
+
+    def _keep_errors(self) -> None:
+        stream = self.process.stderr
+        assert stream is not None
+        while True:
+            try:
+                chunk = os.read(stream.fileno(), 1 << 16)
+            except OSError:
+                break
+            if not chunk:
+                break
+            self._errors += chunk
+            del self._errors[: max(0, len(self._errors) - STDERR_KEPT)]
+
+    def stderr_tail(self) -> str:
+        """The last bytes of what the program wrote to its errors, as text ('' if none);
+        with ``pipe``, once :meth:`wait` has returned."""
+        if self._drain is None:
+            return tail(self.box / "stderr.txt")
+        return bytes(self._errors).decode(errors="replace")
 
     def _watch(self) -> None:
-        while not self._done.wait(0.05):
+        watched = self.kind == "watched"
+        while not self._done.wait(scratch.WATCH_SECONDS):
             if self.process.poll() is not None:
                 return
             if self.root and len(uid_processes(self.uid)) > MAX_PROCESSES:
                 self.kill("processes")
             elif time.perf_counter() - self.started > self.limits.seconds:
                 self.kill("wall")
+            elif watched and scratch.over(self.scratch):
+                self.kill("scratch")
 
     def kill(self, why: str = "checker") -> None:
         """Stop the run now (``why`` is kept for :meth:`wait`)."""
@@ -566,7 +666,8 @@ class Sandboxed:
 
     def wait(self, timeout: float | None = None) -> tuple[int | None, float, str]:
         """(exit code, or None when stopped; seconds; why it was stopped: ``""``,
-        ``"wall"``, ``"processes"`` or ``"checker"``). Kills what is left."""
+        ``"wall"``, ``"processes"``, ``"scratch"`` or ``"checker"``). Kills what is
+        left."""
         try:
             code: int | None = self.process.wait(timeout=timeout)
         except subprocess.TimeoutExpired:
@@ -574,11 +675,26 @@ class Sandboxed:
             code = self.process.wait()
         self._done.set()
         self._watchdog.join()
+        if self._drain is not None:
+            self._drain.join(timeout=10)
         if self.root:
             _kill_uid(self.uid)
-        if self.stopped in ("wall", "processes"):
+        if self.stopped in ("wall", "processes", "scratch"):
             code = None
         return code, time.perf_counter() - self.started, self.stopped
+
+
+def _chain(*steps: Callable[[], None] | None) -> Callable[[], None] | None:
+    """One function running each of ``steps`` that is given, in order (None: none)."""
+    given = [step for step in steps if step is not None]
+    if not given:
+        return None
+
+    def run() -> None:  # pragma: no cover - runs in the child before it starts
+        for step in given:
+            step()
+
+    return run
 
 
 def run_sandboxed(argv: list[str], box: Path, limits: Limits) -> tuple[int | None, float, str]:
@@ -635,11 +751,17 @@ def _alive(pid: int) -> bool:
 
 
 def sweep_stale(parent: Path) -> None:
-    """Remove the boxes and check folders that dead processes left in ``parent``."""
+    """Remove the boxes and check folders that dead processes left in ``parent`` (with the
+    system's own tool, however deep a tree a run left there: :func:`~.scratch.discard`)."""
     for prefix in STALE_PREFIXES:
         for folder in parent.glob(f"{prefix}*"):
             if folder.is_dir() and _stale(folder, prefix):
-                shutil.rmtree(folder, ignore_errors=True)
+                scratch.discard(folder)
+
+
+def remove_box(box: Path) -> None:
+    """Remove a run folder of :func:`new_box` after its run (see :func:`sweep_stale`)."""
+    scratch.discard(box)
 
 
 def new_box(root: Path | None = None) -> Path:

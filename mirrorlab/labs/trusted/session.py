@@ -13,6 +13,8 @@ on unit 1 (the sphere-map lab's texgen cone is textured from the variant's unit)
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
+from contextlib import contextmanager
 from functools import lru_cache
 from typing import Any
 
@@ -244,6 +246,85 @@ def current_matrices() -> tuple[np.ndarray, np.ndarray]:
     return legacy.current_matrices()
 
 
+@contextmanager
+def modelview_times(model: np.ndarray) -> Iterator[None]:
+    """The modelview matrix times ``model`` (row-major ``(4, 4)``) while the kit draws,
+    the file's own again after, with the modelview matrix current: loaded, never pushed
+    (the file's stack may be full). The product is summed in float32 in the order GL's
+    own glMultMatrix sums it (:func:`.legacy.multiply`), so it is the matrix a push and a
+    glMultMatrix would have made."""
+    GL = lazy_gl()
+    FF = legacy.gl()
+    FF.glMatrixMode(GL.GL_MODELVIEW)
+    _, saved = current_matrices()
+    top = saved.astype(np.float32)
+    product = legacy.multiply(top, np.asarray(model, dtype=np.float64).astype(np.float32))
+    FF.glLoadMatrixf(np.ascontiguousarray(product.T))
+    try:
+        yield
+    finally:
+        FF.glMatrixMode(GL.GL_MODELVIEW)
+        FF.glLoadMatrixf(np.ascontiguousarray(top.T))
+
+
+RASTER_CAPS = (
+    "GL_BLEND",
+    "GL_SCISSOR_TEST",
+    "GL_STENCIL_TEST",
+    "GL_CULL_FACE",
+    "GL_POLYGON_OFFSET_FILL",
+)
+"""Switches that change which of a draw's fragments land and how: off for the kit's draws."""
+LEGACY_CAPS = ("GL_ALPHA_TEST", "GL_FOG", "GL_LIGHTING")
+"""The fixed pipeline's switches that change what a draw writes: off for the kit's draws
+(the emulation's own on a core context)."""
+
+
+@contextmanager
+def kit_state() -> Iterator[None]:
+    """The raster state the kit's draws depend on, set for them whatever the file left
+    (blending, scissor, stencil, culling, polygon offset and mode, the alpha test, fog and
+    lighting off; depth test on with GL_LESS, depth and colour writes on), and the file's
+    own back after. What the kit's drawing is documented to use or leave (the matrices, the
+    viewport, unit 0 with the object textures bound there) is not touched here."""
+    GL = lazy_gl()
+    FF = legacy.gl()
+    caps = {
+        name: bool(GL.glIsEnabled(getattr(GL, name))) for name in (*RASTER_CAPS, "GL_DEPTH_TEST")
+    }
+    legacy_caps = {name: bool(FF.glIsEnabled(getattr(GL, name))) for name in LEGACY_CAPS}
+    colour_mask = [
+        bool(v) for v in np.asarray(GL.glGetBooleanv(GL.GL_COLOR_WRITEMASK)).reshape(-1)[:4]
+    ]
+    depth_mask = bool(np.asarray(GL.glGetBooleanv(GL.GL_DEPTH_WRITEMASK)).reshape(-1)[0])
+    depth_func = int(np.asarray(GL.glGetIntegerv(GL.GL_DEPTH_FUNC)).reshape(-1)[0])
+    polygon_modes = [int(v) for v in np.asarray(GL.glGetIntegerv(GL.GL_POLYGON_MODE)).reshape(-1)]
+    for name in RASTER_CAPS:
+        GL.glDisable(getattr(GL, name))
+    for name in LEGACY_CAPS:
+        FF.glDisable(getattr(GL, name))
+    GL.glEnable(GL.GL_DEPTH_TEST)
+    GL.glColorMask(True, True, True, True)
+    GL.glDepthMask(True)
+    GL.glDepthFunc(GL.GL_LESS)
+    GL.glPolygonMode(GL.GL_FRONT_AND_BACK, GL.GL_FILL)
+    try:
+        yield
+    finally:
+        for name, on in caps.items():
+            (GL.glEnable if on else GL.glDisable)(getattr(GL, name))
+        for name, on in legacy_caps.items():
+            (FF.glEnable if on else FF.glDisable)(getattr(GL, name))
+        GL.glColorMask(*colour_mask)
+        GL.glDepthMask(depth_mask)
+        GL.glDepthFunc(depth_func)
+        if legacy.emulated() is None and len(polygon_modes) > 1:  # each face its own
+            GL.glPolygonMode(GL.GL_FRONT, polygon_modes[0])
+            GL.glPolygonMode(GL.GL_BACK, polygon_modes[1])
+        else:
+            FF.glPolygonMode(GL.GL_FRONT_AND_BACK, polygon_modes[0])
+
+
 class Mesh:
     """One mesh file in a vertex buffer, drawn with generic attributes 0 (position),
     1 (normal) and 2 (texture coordinate), which the compatibility profile's
@@ -309,40 +390,57 @@ def upload_picture(texture_id: int, image: np.ndarray) -> None:
     GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_T, GL.GL_REPEAT)
 
 
+def read_level(target: int, level: int) -> np.ndarray:
+    """Level ``level`` of image ``target`` (GL_TEXTURE_2D or a cube face) of the texture
+    bound on the active unit, ``(h, w, 3)`` uint8 with row 0 at the top, ``(0, 0, 3)``
+    when it has no storage: a colour format as its red, green and blue (a luminance one as
+    GL reads it back), a depth format as grey (depth 0 to 1, black to white), whatever
+    the file's copies and uploads made it."""
+    GL = lazy_gl()
+    width = int(GL.glGetTexLevelParameteriv(target, level, GL.GL_TEXTURE_WIDTH))
+    height = int(GL.glGetTexLevelParameteriv(target, level, GL.GL_TEXTURE_HEIGHT))
+    if width <= 0 or height <= 0:
+        return np.zeros((0, 0, 3), dtype=np.uint8)
+    GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
+    if int(GL.glGetTexLevelParameteriv(target, level, GL.GL_TEXTURE_DEPTH_SIZE)):
+        depth = np.zeros((height, width), dtype=np.float32)
+        GL.glGetTexImage(target, level, GL.GL_DEPTH_COMPONENT, GL.GL_FLOAT, depth)
+        grey = np.round(np.clip(depth, 0.0, 1.0) * 255).astype(np.uint8)
+        image = np.repeat(grey[..., None], 3, axis=-1)
+    else:
+        image = np.zeros((height, width, 3), dtype=np.uint8)
+        GL.glGetTexImage(target, level, GL.GL_RGB, GL.GL_UNSIGNED_BYTE, image)
+    GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 4)
+    return np.ascontiguousarray(image[::-1])
+
+
 def read_texture_2d(texture_id: int, level: int = 0) -> np.ndarray:
     """Level ``level`` of 2D texture ``texture_id`` as ``(h, w, 3)`` uint8, row 0 at the
-    top; (0, 0, 3) when it has no storage. Keeps the active unit's binding."""
+    top; (0, 0, 3) when it has no storage (:func:`read_level`). Keeps the active unit's
+    binding."""
     GL = lazy_gl()
     previous = int(GL.glGetIntegerv(GL.GL_TEXTURE_BINDING_2D))
     GL.glBindTexture(GL.GL_TEXTURE_2D, int(texture_id))
-    width = int(GL.glGetTexLevelParameteriv(GL.GL_TEXTURE_2D, level, GL.GL_TEXTURE_WIDTH))
-    height = int(GL.glGetTexLevelParameteriv(GL.GL_TEXTURE_2D, level, GL.GL_TEXTURE_HEIGHT))
-    image = np.zeros((0, 0, 3), dtype=np.uint8)
-    if width > 0 and height > 0:
-        GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
-        data = GL.glGetTexImage(GL.GL_TEXTURE_2D, level, GL.GL_RGB, GL.GL_UNSIGNED_BYTE)
-        image = np.frombuffer(data, dtype=np.uint8).reshape(height, width, 3)[::-1].copy()
-    GL.glBindTexture(GL.GL_TEXTURE_2D, previous)
-    return image
+    try:
+        return read_level(GL.GL_TEXTURE_2D, level)
+    finally:
+        GL.glBindTexture(GL.GL_TEXTURE_2D, previous)
 
 
 def read_cube_faces(texture: int) -> np.ndarray | None:
     """The six level-0 faces of cube map ``texture``, ``(6, n, n, 3)`` uint8 (row 0 at
-    ``t = 1``), or None when they are not all the same square size."""
+    ``t = 1``; :func:`read_level`), or None when they are not all the same square size."""
     GL = lazy_gl()
     previous = int(GL.glGetIntegerv(GL.GL_TEXTURE_BINDING_CUBE_MAP))
     GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, texture)
     faces: list[np.ndarray] = []
     try:
         for face in range(6):
-            target = GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face
-            width = int(GL.glGetTexLevelParameteriv(target, 0, GL.GL_TEXTURE_WIDTH))
-            height = int(GL.glGetTexLevelParameteriv(target, 0, GL.GL_TEXTURE_HEIGHT))
-            if width == 0 or width != height or (faces and faces[0].shape[0] != width):
+            found = read_level(GL.GL_TEXTURE_CUBE_MAP_POSITIVE_X + face, 0)
+            width = found.shape[0]
+            if width == 0 or found.shape[1] != width or (faces and faces[0].shape[0] != width):
                 return None
-            GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
-            data = GL.glGetTexImage(target, 0, GL.GL_RGB, GL.GL_UNSIGNED_BYTE)
-            faces.append(np.frombuffer(data, dtype=np.uint8).reshape(width, width, 3)[::-1])
+            faces.append(found)
     finally:
         GL.glBindTexture(GL.GL_TEXTURE_CUBE_MAP, previous)
     return np.stack(faces)
@@ -450,23 +548,19 @@ class LabBase:
         GL.glUniform3f(uniform(program, "light_eye"), *(float(v) for v in light_eye))
         GL.glUniform1f(uniform(program, "ambient"), 0.3)
         GL.glUniform1f(uniform(program, "diffuse"), 0.7)
-        GL.glEnable(GL.GL_DEPTH_TEST)
         GL.glActiveTexture(GL.GL_TEXTURE0)
-        FF = legacy.gl()
-        FF.glMatrixMode(GL.GL_MODELVIEW)
         bound = []
-        for mesh, model, color, texture in parts:
-            FF.glPushMatrix()
-            FF.glMultMatrixd(np.ascontiguousarray(np.asarray(model, dtype=np.float64).T))
-            legacy.load_matrix_uniforms(program)
-            GL.glUniform3f(uniform(program, "color"), *(float(c) for c in color))
-            textured = texture is not None and int(texture) > 0
-            GL.glUniform1i(uniform(program, "use_texture"), int(textured))
-            if textured:
-                GL.glBindTexture(GL.GL_TEXTURE_2D, int(texture))
-                bound.append(int(texture))
-            self.mesh(mesh).draw()
-            FF.glPopMatrix()
+        with kit_state():
+            for mesh, model, color, texture in parts:
+                with modelview_times(model):
+                    legacy.load_matrix_uniforms(program)
+                    GL.glUniform3f(uniform(program, "color"), *(float(c) for c in color))
+                    textured = texture is not None and int(texture) > 0
+                    GL.glUniform1i(uniform(program, "use_texture"), int(textured))
+                    if textured:
+                        GL.glBindTexture(GL.GL_TEXTURE_2D, int(texture))
+                        bound.append(int(texture))
+                    self.mesh(mesh).draw()
         GL.glUseProgram(previous_program)
         return bound
 

@@ -4,13 +4,10 @@ The executor updates a :class:`Tracker` after each call it executed: the matrix 
 the operations on each matrix, the viewport, the clear colour, the active texture unit,
 the textures bound on each unit, the enabled switches and the texgen modes per unit, the
 current program; for each of them the student's line that set it and the lab function
-that was running. Each texture keeps where its pictures came from (:class:`Texture`):
-blank, a lab picture, a copy of the framebuffer, or pixels the student uploaded, which
-taint it. Taint follows pixels: drawing with a tainted texture taints the pixels the draw
-may write (the viewport, within the scissor box, unless the colour mask writes nothing), a
-clear untaints only the pixels it writes (the scissor box, every colour channel written),
-and copying a tainted part of the framebuffer taints the copy. Nothing here is read from
-the sandbox but the calls.
+that was running. Each texture keeps where each level of each face came from
+(:class:`Image`): blank (a file uploads only None or zeros), a lab picture, a copy of the
+framebuffer, or mipmaps made from level 0 (by glGenerateMipmap or GL_GENERATE_MIPMAP).
+Nothing here is read from the sandbox but the calls.
 """
 
 from __future__ import annotations
@@ -18,8 +15,6 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from typing import Any
-
-import numpy as np
 
 GL_MODELVIEW, GL_PROJECTION, GL_TEXTURE = 0x1700, 0x1701, 0x1702
 GL_TEXTURE_2D, GL_TEXTURE_CUBE_MAP = 0x0DE1, 0x8513
@@ -76,7 +71,7 @@ class Setting:
 @dataclass
 class Image:
     """One level of one face of a texture: its size and format, and where its texels came
-    from (``blank``, ``picture:NAME``, ``copy``, ``upload``, ``mipmap``)."""
+    from (``blank``, ``picture:NAME``, ``copy``, ``mipmap``)."""
 
     width: int
     height: int
@@ -85,7 +80,6 @@ class Image:
     line: int
     function: str
     frame: int
-    tainted: bool = False
 
     def plain(self) -> dict[str, Any]:
         return dict(vars(self))
@@ -105,10 +99,6 @@ class Texture:
     """Whether glGenerateMipmap ran after the last write to a level-0 picture."""
     writes: int = 0
 
-    @property
-    def tainted(self) -> bool:
-        return any(image.tainted for image in self.images.values())
-
     def nbytes(self) -> int:
         return sum(i.width * i.height * texel_bytes(i.internalformat) for i in self.images.values())
 
@@ -121,7 +111,6 @@ class Texture:
             "params": {str(k): v.plain() for k, v in self.params.items()},
             "mipmaps": self.mipmaps.plain() if self.mipmaps else None,
             "mipmaps_fresh": self.mipmaps_fresh,
-            "tainted": self.tainted,
         }
 
 
@@ -179,10 +168,6 @@ class Tracker:
         self.program = Setting(0)
         self.uniforms: dict[tuple[int, int], Setting] = {}
         self.textures: dict[int, Texture] = {}
-        self.taint_mask: np.ndarray | None = None
-        """The framebuffer's pixels that may show uploaded pixels, ``(h, w)`` bool, row 0
-        at the bottom (GL's window coordinates); None until a tainted draw."""
-        self.taint_why = ""
         self.texcoords = [[0.0, 0.0, 0.0, 1.0] for _ in range(4)]
         self.color = [1.0, 1.0, 1.0, 1.0]
         self.primitive: Primitive | None = None
@@ -263,43 +248,6 @@ class Tracker:
         self.events.append(record)
         return record
 
-    # ---------------------------------------------------------------- taint by pixel
-    @property
-    def framebuffer_taint(self) -> str:
-        """Why the framebuffer holds uploaded pixels ('' when no pixel does)."""
-        return self.taint_why if self.taint_mask is not None and self.taint_mask.any() else ""
-
-    @staticmethod
-    def _rows(box: tuple[int, int, int, int], shape: tuple[int, ...]) -> tuple[slice, slice]:
-        x, y, width, height = box
-        return (
-            slice(max(y, 0), max(min(y + height, shape[0]), 0)),
-            slice(max(x, 0), max(min(x + width, shape[1]), 0)),
-        )
-
-    def taint(self, why: str, box: tuple[int, int, int, int], size: tuple[int, int]) -> None:
-        """The pixels of ``box`` (x, y, width, height in window coordinates) of a ``size``
-        (w, h) framebuffer may now show uploaded pixels, because of ``why``."""
-        if self.taint_mask is None:
-            self.taint_mask = np.zeros((size[1], size[0]), dtype=bool)
-        rows, columns = self._rows(box, self.taint_mask.shape)
-        self.taint_mask[rows, columns] = True
-        if self.taint_mask.any():
-            self.taint_why = why
-
-    def untaint(self, box: tuple[int, int, int, int]) -> None:
-        """The pixels of ``box`` were overwritten by the checker's own values (a clear)."""
-        if self.taint_mask is not None:
-            rows, columns = self._rows(box, self.taint_mask.shape)
-            self.taint_mask[rows, columns] = False
-
-    def taint_in(self, box: tuple[int, int, int, int]) -> str:
-        """Why the pixels of ``box`` may show uploaded pixels ('' when none may)."""
-        if self.taint_mask is None:
-            return ""
-        rows, columns = self._rows(box, self.taint_mask.shape)
-        return self.taint_why if self.taint_mask[rows, columns].any() else ""
-
     # ---------------------------------------------------------------- state changes
     def bound(self, target: int, unit: int | None = None) -> int:
         setting = self.bindings.get((self.active_unit.value if unit is None else unit, target))
@@ -333,14 +281,6 @@ class Tracker:
         """The student's texture bound to ``target`` (its binding target, GL_TEXTURE_2D or
         GL_TEXTURE_CUBE_MAP) on the active unit."""
         return self.textures.get(self.bound(target))
-
-    def sampled_taint(self) -> str:
-        """Why a draw now would show uploaded pixels: a tainted texture bound on a unit."""
-        for (unit, _), setting in self.bindings.items():
-            texture = self.textures.get(int(setting.value))
-            if texture is not None and texture.tainted:
-                return f"texture {texture.name}, bound on unit {unit}, holds uploaded pixels"
-        return ""
 
     def snapshot(self) -> dict[str, Any]:
         """The state a draw or copy is judged by (JSON-able)."""

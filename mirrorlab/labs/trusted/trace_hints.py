@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from mirrorlab.labs.trusted.evidence import Evidence
+from mirrorlab.labs.trusted.judging import COLOUR_FORMATS
 
 GL_TEXTURE_2D, GL_TEXTURE_CUBE_MAP = 0x0DE1, 0x8513
 GL_MODELVIEW, GL_PROJECTION, GL_TEXTURE = 0x1700, 0x1701, 0x1702
@@ -45,9 +46,6 @@ MODE_NAMES = {
     GL_PROJECTION: "GL_PROJECTION",
     GL_TEXTURE: "GL_TEXTURE",
 }
-COLOUR_FORMATS = frozenset({3, 4, 0x1907, 0x1908, 0x8051, 0x8058})
-"""Internal formats that keep every colour channel (GL_RGB, GL_RGBA, GL_RGB8, GL_RGBA8, 3,
-4): one form for an alignment; a copy into GL_LUMINANCE or GL_ALPHA is another."""
 CLAMP = 0x2900
 FILL_MODES = frozenset({0x0004, 0x0005, 0x0006, 0x0007, 0x0008, 0x0009})
 """glBegin's modes that fill (triangles, strips, fans, quads, polygons): the handouts allow

@@ -105,19 +105,58 @@ def variant_from_file(path: Path, lab: str) -> Variant:
         data = json.loads(path.read_text())
     except (OSError, UnicodeDecodeError, ValueError) as exc:
         raise VariantError(f"{path}: not a variant file ({exc})") from None
+    return variant_from_plain(data, lab, str(path))
+
+
+def variant_from_plain(data: Any, lab: str, where: str) -> Variant:
+    """The variant ``data`` (:meth:`Variant.plain`'s form, read from ``where``) names,
+    checked against ``lab``'s options; VariantError (one line naming ``where``) when it is
+    not one of them."""
     if not isinstance(data, dict) or data.get("lab") != lab:
         other = data.get("lab") if isinstance(data, dict) else None
-        raise VariantError(f"{path}: a variant of {other!r}, not of {lab}")
+        raise VariantError(f"{where}: a variant of {other!r}, not of {lab}")
     values = data.get("values")
     options = find_lab(lab).options
     if not isinstance(values, dict) or set(values) != set(options):
-        raise VariantError(f"{path}: expected the values {', '.join(options)}")
+        raise VariantError(f"{where}: expected the values {', '.join(options)}")
     for name, value in values.items():
         if value not in options[name]:
             raise VariantError(
-                f"{path}: {name} = {value!r} is not one of {', '.join(map(str, options[name]))}"
+                f"{where}: {name} = {value!r} is not one of {', '.join(map(str, options[name]))}"
             )
     ident = str(data.get("id", ""))
     if not re.fullmatch(r"default|[0-9a-f]{8}", ident):
-        raise VariantError(f"{path}: id {ident!r} is not a variant id")
+        raise VariantError(f"{where}: id {ident!r} is not a variant id")
+    if ident == "default" and values != dict(find_lab(lab).defaults):
+        raise VariantError(f"{where}: the default variant with numbers of its own")
     return Variant(lab, dict(values), ident, str(data.get("student", ""))[:200])
+
+
+HEADER = "# mirrorlab variant: "
+"""The first line of every starter ``lab start`` and ``lab release`` write: the variant's
+numbers (:meth:`Variant.plain` as one line of JSON), which ``lab check`` reads when the
+file is checked away from its ``variant.json``. ``lab grade`` never reads it: a variant
+follows from the course key and the student's name there."""
+HEADER_LINES = 5
+"""How far down a file the header may have moved (a shebang or coding line above it)."""
+
+
+def header_line(variant: Variant) -> str:
+    """The header of a starter of ``variant`` (one line, with its newline)."""
+    return f"{HEADER}{json.dumps(variant.plain(), separators=(', ', ': '))}\n"
+
+
+def variant_from_header(text: str, lab: str, where: str) -> Variant | None:
+    """The variant a file's header names (:data:`HEADER`), None when it has none;
+    VariantError (one line) when the line is there but names no variant of ``lab``."""
+    for number, line in enumerate(text.splitlines()[:HEADER_LINES], 1):
+        if line.startswith(HEADER):
+            try:
+                data = json.loads(line[len(HEADER) :])
+            except ValueError as exc:
+                raise VariantError(
+                    f"{where}: line {number}, its variant line, is not one ({exc}); take it "
+                    f"again from the starter you were given"
+                ) from None
+            return variant_from_plain(data, lab, f"{where}, line {number}")
+    return None
