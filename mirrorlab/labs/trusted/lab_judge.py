@@ -123,11 +123,14 @@ class Events:
 class Finding:
     """What a failing check found: ``hint``; ``slots``, the kinds of state it is about
     (for choosing the divergence that explains it); ``final`` when the hint stands as it is
-    (a copy of another variant, a picture judged once another task passes)."""
+    (a copy of another variant, a picture judged once another task passes); ``about``, the
+    function whose calls it is about when that is not the task's own (then its slots choose
+    nothing among the task's functions' divergences)."""
 
     hint: str
     slots: frozenset[str] = frozenset()
     final: bool = False
+    about: str | None = None
 
 
 @dataclass
@@ -180,7 +183,9 @@ class Happens:
         mine, theirs = self.events.find(run.student), self.events.find(run.reference)
         if not mine and theirs:
             return Finding(
-                f"{self.what} never happens: no {self.events.said()}", _slots(self.events)
+                f"{self.what} never happens: no {self.events.said()}",
+                _slots(self.events),
+                about=self.events.within,
             )
         if self.count and len(mine) != len(theirs):
             return Finding(
@@ -1514,7 +1519,8 @@ def hint(run: Run, rule: TaskRule, found: Finding) -> str:
     if failed and rule.after_first:
         return f"judged once {run.task_name(failed[0])} passes"
     divergences = [d for f in rule.functions for d in run.hints.divergences(f, rule.families)]
-    chosen = next((d for d in divergences if d.slots & found.slots), None) or next(
+    slots = found.slots if found.about in (None, *rule.functions) else frozenset()
+    chosen = next((d for d in divergences if d.slots & slots), None) or next(
         iter(divergences), None
     )
     if chosen is not None:
