@@ -1039,7 +1039,11 @@ TRACE_SLIPS = (
         "lab20",
         "quad_as_a_line_loop",
         (("glBegin(GL_QUADS)", "glBegin(GL_LINE_LOOP)"),),
-        {"mirror_quad": "glBegin at line 81 (glBegin(GL_LINE_LOOP)) has mode = GL_LINE_LOOP"},
+        {  # lines are a channel lab 20 leaves closed: refused, named by the mode
+            "mirror_texture": "glBegin with GL_LINE_LOOP",
+            "mirror_quad": "glBegin with GL_LINE_LOOP",
+            "passes": "not judged",
+        },
     ),
     # the sphere-map lab
     Mutant(
@@ -1414,10 +1418,6 @@ TRACE_SLIPS = (
             "live_frame": "not judged",
         },
     ),
-)
-
-TRACE_EQUIVALENT = (
-    # other forms the handouts allow: each passes every task
     Mutant(
         "lab20",
         "copy_into_the_existing_image",
@@ -1427,7 +1427,19 @@ TRACE_EQUIVALENT = (
                 "glCopyTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, 0, 0, WIDTH, HEIGHT)",
             ),
         ),
+        {  # partial copies are a channel lab 20 leaves closed (main's channels): refused
+            "capture_camera": "glCopyTexSubImage2D is not one of the OpenGL calls",
+            "capture_scene": "glCopyTexSubImage2D is not one of the OpenGL calls",
+            "capture_copy": "glCopyTexSubImage2D is not one of the OpenGL calls",
+            "mirror_texture": "not judged",
+            "mirror_quad": "not judged",
+            "passes": "not judged",
+        },
     ),
+)
+
+TRACE_EQUIVALENT = (
+    # other forms the handouts allow: each passes every task
     Mutant(
         "lab20",
         "rgba_copy",
@@ -1563,7 +1575,11 @@ HELD_OUT = (
         "spheremap",
         "enable_gen_r",
         (("    glEnable(GL_TEXTURE_GEN_T)\n", "    glEnable(GL_TEXTURE_GEN_R)\n"),),
-        {"texgen_draw": "GL_TEXTURE_GEN_R", "side_by_side": "judged once task 4"},
+        {  # r is a channel this lab leaves closed: refused, and the frame stops there
+            "texgen_setup": "judged once task 4",
+            "texgen_draw": "glEnable with GL_TEXTURE_GEN_R",
+            "side_by_side": "not judged",
+        },
     ),
     Mutant(
         "spheremap",

@@ -373,7 +373,7 @@ class Executor:
         ``kind``) belongs to a channel this lab's handout does not teach (:mod:`.calls`)."""
         why = C.open_for(self.session.name, kind, value)
         if why:
-            raise CallError("NotImplementedError", f"{name}({C.gl_name(value)}): {why}")
+            raise CallError("NotImplementedError", f"{name} with {C.gl_name(value)}: {why}")
 
     def matrix_mode(self, name: str, args: list[Any], arrays: Any) -> None:
         self._open("matrix_modes", args[0], name)
