@@ -111,16 +111,16 @@ def image_error(image: np.ndarray, truth: np.ndarray, mask: np.ndarray) -> Image
     worst = diff.max(axis=1)
     mse = float(np.mean(diff**2))
     psnr = math.inf if mse == 0.0 else 10.0 * math.log10(255.0**2 / mse)
-    # FLIP looks at each pixel's surroundings, so it is computed on the whole picture and
-    # only then averaged over the region.
-    flip_error = flip.flip_map(image, truth)
+    # FLIP looks at each pixel's surroundings: its map is computed on the region and what
+    # lies within reach of it, and only then averaged over the region.
+    flip_error = flip.region_mean(image, truth, mask)
     return ImageError(
         float(diff.mean()),
         float(np.percentile(worst, 95)),
         psnr,
         float(np.mean(worst > OFF_BY)),
         count,
-        math.nan if flip_error is None else float(flip_error[mask].mean()),
+        math.nan if flip_error is None else flip_error,
     )
 
 
@@ -128,10 +128,14 @@ def image_error(image: np.ndarray, truth: np.ndarray, mask: np.ndarray) -> Image
 class SweepRow:
     """One measured configuration: ``scene`` ("lab" mirror, or "sphere-sky",
     "sphere-objects" and "sphere-room" for the environment maps),
-    technique, map size (0: the technique has no texture) and viewpoint; times are
-    medians in milliseconds (``gpu_ms`` from GL timer queries, NaN where there is no
-    GL work); ``pixels`` the reflector pixels scored (0: none, and the error figures
-    NaN; -1: not recorded, in a CSV from before the column)."""
+    technique, map size (0: the technique has no texture) and viewpoint; the error
+    figures of :class:`ImageError`; times are medians in milliseconds (``gpu_ms`` from
+    GL timer queries, NaN where there is no GL work); ``pixels`` the reflector pixels
+    scored (0: none, and the error figures NaN; -1: not recorded, in a CSV from before
+    the column); ``flip`` the mean LDR-FLIP over them (NaN where flip-evaluator is
+    missing, or in a CSV from before the column); ``miss_share`` the share of them that
+    the technique filled from its fallback (:func:`fallback_share`; NaN for a technique
+    without one)."""
 
     scene: str
     technique: str
@@ -144,6 +148,37 @@ class SweepRow:
     wall_ms: float
     gpu_ms: float
     pixels: int = -1
+    flip: float = math.nan
+    miss_share: float = math.nan
+
+
+REQUIRED_COLUMNS = 10
+"""A sweep's CSV holds at least the first ten of :class:`SweepRow`'s fields, in order;
+the later ones (``pixels``, ``flip``, ``miss_share``) came later, and a CSV written before
+any of them still loads (its missing figures NaN, ``pixels`` -1)."""
+
+TRUTH = "raytrace"
+"""The technique whose rows are the ground truth itself (labelled ``raytrace`` or
+``raytrace NxN`` when supersampled): zero error by definition, never a point of a plot's
+axes or of a Pareto frontier."""
+
+
+def is_truth(technique: str) -> bool:
+    """Whether ``technique`` (a row's label) is the ground truth's row."""
+    return technique == TRUTH or technique.startswith(f"{TRUTH} ")
+
+
+def fallback_share(fallback: np.ndarray | None, mask: np.ndarray) -> float:
+    """The share of the scored pixels (``mask`` ``(h, w)`` bool) that a technique filled
+    from its fallback (``fallback`` ``(h, w)`` bool, from
+    :meth:`mirrorlab.renderer.SceneRenderer.fallback_mask`): NaN where the technique has
+    none (``fallback`` None) or nothing is scored."""
+    count = int(np.count_nonzero(mask))
+    if fallback is None or count == 0:
+        return math.nan
+    if fallback.shape != mask.shape:
+        raise ValueError(f"a fallback mask of shape {fallback.shape} for a frame of {mask.shape}")
+    return float(np.count_nonzero(fallback & mask)) / count
 
 
 DEFAULT_STEPS = f"{DistanceSearch().steps}+{DistanceSearch().secant}"
@@ -197,7 +232,7 @@ def lab_techniques(sizes: Sequence[int]) -> list[tuple[str, dict]]:
     size 0, as it differs from view to view), and the stencil mirror."""
     rows = []
     planar = techniques("planar")
-    for entry in (t for t in planar if not t.draws_inline):
+    for entry in (t for t in planar if t.texture in CAPTURED):
         for capture in CAPTURE_MODES:
             rows += [
                 (
@@ -213,8 +248,16 @@ def lab_techniques(sizes: Sequence[int]) -> list[tuple[str, dict]]:
                         {"method": entry.name, "capture": capture, "env_size": FOOTPRINT_TEXTURE},
                     )
                 )
-    rows += [(entry.name, {"method": entry.name}) for entry in planar if entry.draws_inline]
+    rows += [
+        (entry.name, {"method": entry.name}) for entry in planar if entry.texture not in CAPTURED
+    ]
     return rows
+
+
+CAPTURED = ("fixed", "viewer")
+"""The texture kinds of the planar techniques that capture into a texture (measured at
+each capture mode and size); the others (drawn in place, or from the view's own frame)
+are measured once."""
 
 
 def search_map_size(sizes: Sequence[int]) -> int:
@@ -232,14 +275,27 @@ def curved_techniques(
     """``(label, options)`` for every curved technique at each map size, and the live cube
     map with each parallax correction: the ``proxies`` (``(label, --parallax text)``), and
     the distance search at every size and with each other of ``steps`` (linear+secant)
-    at the :func:`search_map_size` (labelled ``cube-live distance STEPS``)."""
+    at the :func:`search_map_size` (labelled ``cube-live distance STEPS``); a technique
+    with a probe that takes a parallax correction (``ssr``), plain and with its probe's
+    distance search at each size."""
     sizes = [size for size in sizes if size <= ENVMAP_MAX_SIZE]
     rows = []
     for entry in techniques("curved"):
         plain = {"parallax": "none"} if entry.parallax else {}
         rows += [(entry.name, {"method": entry.name, "map_size": size, **plain}) for size in sizes]
     searched = search_map_size(sizes)
-    for name in (entry.name for entry in techniques("curved") if entry.parallax):
+    for entry in techniques("curved"):
+        if entry.probe and entry.parallax:  # its probe with the distance search
+            rows += [
+                (
+                    f"{entry.name} distance",
+                    {"method": entry.name, "map_size": size, "parallax": "distance"},
+                )
+                for size in sizes
+            ]
+    for name in (
+        entry.name for entry in techniques("curved") if entry.parallax and not entry.probe
+    ):
         corrections = [(f"{name} {label}", text) for label, text in proxies]
         corrections.append((f"{name} distance", "distance"))
         for label, text in corrections:
@@ -255,6 +311,23 @@ def curved_techniques(
             if other != DEFAULT_STEPS
         ]
     return rows
+
+
+def panel_configurations(panel: Panel, settings: SweepSettings) -> list[tuple[str, dict]]:
+    """The configurations measured at each of ``panel``'s viewpoints (see
+    :func:`scene_techniques`), as :func:`run_panels` measures them: one row each per
+    viewpoint, after the ground truth's own row."""
+    return scene_techniques(
+        panel.scene, settings.sizes, panel.proxies, settings.steps, settings.map_sizes
+    )
+
+
+def sweep_rows(panels: Sequence[Panel], settings: SweepSettings) -> int:
+    """How many rows :func:`run_panels` gives for ``panels``: at each viewpoint, the
+    truth's and one per configuration."""
+    return sum(
+        len(panel.viewpoints) * (1 + len(panel_configurations(panel, settings))) for panel in panels
+    )
 
 
 def scene_techniques(
@@ -397,9 +470,26 @@ def trace_truth(
     return Truth(truth.to_uint8(), erode(truth.reflective_mask, inset), float(np.median(times)))
 
 
-def score_frames(truth: Truth, images: Sequence[np.ndarray]) -> list[ImageError]:
-    """Each of ``images`` ``(h, w, 3)`` uint8 against ``truth``: a job of the third phase."""
-    return [image_error(image, truth.image, truth.mask) for image in images]
+@dataclass(frozen=True)
+class Frame:
+    """A configuration's last timed frame: the ``image`` ``(h, w, 3)`` uint8 and, for a
+    technique with a fallback, the ``fallback`` ``(h, w)`` bool of the pixels it filled
+    from it (None for the others)."""
+
+    image: np.ndarray
+    fallback: np.ndarray | None = None
+
+
+def score_frames(truth: Truth, frames: Sequence[Frame]) -> list[tuple[ImageError, float]]:
+    """Each of ``frames`` against ``truth``: its :class:`ImageError` and its
+    :func:`fallback_share` over the scored pixels. A job of the third phase."""
+    return [
+        (
+            image_error(frame.image, truth.image, truth.mask),
+            fallback_share(frame.fallback, truth.mask),
+        )
+        for frame in frames
+    ]
 
 
 def run_panels(
@@ -435,10 +525,7 @@ def run_panels(
         for panel in panels
         for name, camera in panel.viewpoints.items()
     ]
-    configurations = [
-        scene_techniques(scene, settings.sizes, panel.proxies, settings.steps, settings.map_sizes)
-        for panel, _, scene in views
-    ]
+    configurations = [panel_configurations(panel, settings) for panel, _, _ in views]
     total = 2 * len(views) + sum(len(c) for c in configurations)
     bar = tqdm(
         total=total,
@@ -450,9 +537,9 @@ def run_panels(
         mininterval=0.5,
     )
     truths: dict[int, Truth] = {}
-    frames: dict[int, list[np.ndarray]] = {}
+    frames: dict[int, list[Frame]] = {}
     timings: dict[int, list[tuple[str, int, float, float]]] = {}
-    errors: dict[int, list[ImageError]] = {}
+    errors: dict[int, list[tuple[ImageError, float]]] = {}
     with bar:
         bar.set_postfix_str("ray tracing the truths", refresh=False)
         order = sorted(range(len(views)), key=lambda i: -views[i][0].supersample)
@@ -479,10 +566,10 @@ def run_panels(
                     bar.set_postfix_str(
                         f"{technique_label} {map_size or ''} {panel.name} {name}", refresh=False
                     )
-                    image, wall, gpu = measure_frames(
+                    frame, wall, gpu = measure_frames(
                         renderer, configured, framebuffer, timer, settings
                     )
-                    frames[index].append(image)
+                    frames[index].append(frame)
                     timings[index].append((technique_label, map_size, wall, gpu))
                     bar.update()
         bar.set_postfix_str("scoring the frames", refresh=False)
@@ -495,9 +582,7 @@ def run_panels(
     rows: list[SweepRow] = []
     for index, (panel, name, _) in enumerate(views):
         label = (
-            "raytrace"
-            if panel.supersample == 1
-            else (f"raytrace {panel.supersample}x{panel.supersample}")
+            TRUTH if panel.supersample == 1 else f"{TRUTH} {panel.supersample}x{panel.supersample}"
         )
         scored = int(np.count_nonzero(truths[index].mask))
         none = math.nan if scored == 0 else 0.0  # the truth itself: no error, if any pixels
@@ -514,9 +599,10 @@ def run_panels(
                 truths[index].milliseconds,
                 math.nan,
                 scored,
+                none if flip.available() else math.nan,
             )
         )
-        for (technique_label, map_size, wall, gpu), error in zip(
+        for (technique_label, map_size, wall, gpu), (error, missed) in zip(
             timings[index], errors[index], strict=True
         ):
             rows.append(
@@ -532,6 +618,8 @@ def run_panels(
                     wall,
                     gpu,
                     error.pixels,
+                    error.flip,
+                    missed,
                 )
             )
     return rows
@@ -599,10 +687,12 @@ def time_frames(
 
 def measure_frames(
     renderer: SceneRenderer, scene: Scene, framebuffer, timer, settings: SweepSettings
-) -> tuple[np.ndarray, float, float]:
+) -> tuple[Frame, float, float]:
     """Time frames of ``scene`` (see :func:`time_frames`), each capturing its reflectors
     afresh as a moving scene would (maps baked from the background are kept). Returns
-    the last frame ``(h, w, 3)`` uint8 and the median wall and GL milliseconds."""
+    the last frame (with the pixels its techniques filled from a fallback, where one
+    has one: :meth:`~mirrorlab.renderer.SceneRenderer.fallback_mask`) and the median
+    wall and GL milliseconds."""
     from mirrorlab.gl.context import check_gl_errors
 
     def frame() -> None:
@@ -613,8 +703,9 @@ def measure_frames(
 
     wall, gpu = time_frames(frame, timer, settings)
     image = framebuffer.read()
+    fallback = renderer.fallback_mask()
     check_gl_errors("a sweep frame")
-    return image, wall, gpu
+    return Frame(image, fallback), wall, gpu
 
 
 ENVMAP_MAX_SIZE = 1024
@@ -638,7 +729,10 @@ def erode(mask: np.ndarray, pixels: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class SummaryRow:
-    """A technique and size over all viewpoints: mean error figures, median times."""
+    """A technique and size over all viewpoints: each error figure's mean over the
+    viewpoints with reflector pixels (``psnr`` that of their mean squared error;
+    ``flip`` and ``miss_share`` NaN where none of them has one), median times, and the
+    viewpoint of the largest MAE."""
 
     scene: str
     technique: str
@@ -649,6 +743,9 @@ class SummaryRow:
     wall_ms: float
     gpu_ms: float
     worst_viewpoint: str
+    psnr: float = math.nan
+    flip: float = math.nan
+    miss_share: float = math.nan
 
 
 def summarise(rows: Sequence[SweepRow]) -> list[SummaryRow]:
@@ -663,24 +760,41 @@ def summarise(rows: Sequence[SweepRow]) -> list[SummaryRow]:
         scored = [r for r in group if not math.isnan(r.mae)]
         worst = max(scored, key=lambda r: r.mae) if scored else None
         gpu = [r.gpu_ms for r in group if not math.isnan(r.gpu_ms)]
-
-        def mean(values: list[float]) -> float:
-            return float(np.mean(values)) if values else math.nan
-
         summary.append(
             SummaryRow(
                 scene,
                 technique,
                 map_size,
-                mean([r.mae for r in scored]),
-                mean([r.p95 for r in scored]),
-                mean([r.share_off for r in scored]),
+                _mean([r.mae for r in scored]),
+                _mean([r.p95 for r in scored]),
+                _mean([r.share_off for r in scored]),
                 float(np.median([r.wall_ms for r in group])),
                 float(np.median(gpu)) if gpu else math.nan,
                 worst.viewpoint if worst is not None else NO_REFLECTOR_PIXELS,
+                _pooled_psnr([r.psnr for r in scored]),
+                _mean([r.flip for r in scored if not math.isnan(r.flip)]),
+                _mean([r.miss_share for r in scored if not math.isnan(r.miss_share)]),
             )
         )
     return summary
+
+
+def _mean(values: Sequence[float]) -> float:
+    return float(np.mean(values)) if values else math.nan
+
+
+def _pooled_psnr(psnrs: Sequence[float]) -> float:
+    """The PSNR (dB) of the mean of the squared errors the ``psnrs`` stand for (inf where
+    every one is exact; NaN where there is none)."""
+    known = [p for p in psnrs if not math.isnan(p)]
+    if not known:
+        return math.nan
+    mse = float(np.mean([0.0 if math.isinf(p) else 255.0**2 / 10.0 ** (p / 10.0) for p in known]))
+    return math.inf if mse == 0.0 else 10.0 * math.log10(255.0**2 / mse)
+
+
+_INT_FIELDS = ("map_size", "pixels")
+_TEXT_FIELDS = ("scene", "technique", "viewpoint")
 
 
 def rows_to_csv(rows: Sequence[SweepRow]) -> str:
@@ -694,30 +808,34 @@ def rows_to_csv(rows: Sequence[SweepRow]) -> str:
 
 def rows_from_csv(text: str) -> list[SweepRow]:
     """Rows written by :func:`rows_to_csv` (to re-make the tables and plot without
-    measuring again); ValueError naming the line that does not fit."""
+    measuring again), also by an earlier version without the later columns (see
+    :data:`REQUIRED_COLUMNS`: their figures NaN, ``pixels`` -1); ValueError naming the
+    line that does not fit."""
     reader = csv.DictReader(io.StringIO(text))
     names = [f.name for f in fields(SweepRow)]
-    if reader.fieldnames not in (names, names[:-1]):  # a CSV from before "pixels" too
-        raise ValueError(f"expected the columns {','.join(names)}, got {reader.fieldnames}")
+    columns = list(reader.fieldnames or [])
+    if len(columns) < REQUIRED_COLUMNS or columns != names[: len(columns)]:
+        raise ValueError(
+            f"expected the columns {','.join(names)} (the last {len(names) - REQUIRED_COLUMNS} "
+            f"may be left out), got {reader.fieldnames}"
+        )
     rows = []
     for line, record in enumerate(reader, start=2):
         try:
-            number = {n: float(record[n]) if record[n] else math.nan for n in names[4:-1]}
-            rows.append(
-                SweepRow(
-                    record["scene"],
-                    record["technique"],
-                    int(record["map_size"]),
-                    record["viewpoint"],
-                    number["mae"],
-                    number["p95"],
-                    number["psnr"],
-                    number["share_off"],
-                    number["wall_ms"],
-                    number["gpu_ms"],
-                    int(record.get("pixels") or -1),
-                )
-            )
+            if None in record:
+                raise ValueError(f"more cells than the {len(columns)} columns")
+            values: dict[str, object] = {}
+            for name in columns:
+                cell = record[name]
+                if cell is None:
+                    raise ValueError(f"no cell for {name!r}")
+                if name in _TEXT_FIELDS:
+                    values[name] = cell
+                elif name in _INT_FIELDS:
+                    values[name] = int(cell) if cell or name == "map_size" else -1
+                else:
+                    values[name] = float(cell) if cell else math.nan
+            rows.append(SweepRow(**values))  # type: ignore[arg-type]
         except ValueError as exc:
             raise ValueError(f"line {line}: {exc}") from None
     return rows
@@ -733,15 +851,38 @@ def _csv_cell(value: object) -> str:
 
 
 def summary_table(summary: Sequence[SummaryRow]) -> list[list[str]]:
-    """Header plus one row of text cells per summary row."""
+    """Header plus one row of text cells per summary row. The ``FLIP`` cell is empty where
+    FLIP is missing (see :func:`flip_note`); a ``miss share`` column is there when a
+    technique among the rows has a fallback (``-`` for the others)."""
+    misses = any(not math.isnan(row.miss_share) for row in summary)
     table = [
-        ["technique", "map", "MAE /255", "p95 /255", "off >10", "wall ms", "GL ms", "worst view"]
+        [
+            "technique",
+            "map",
+            "MAE /255",
+            "p95 /255",
+            "PSNR dB",
+            "off >10",
+            "FLIP",
+            *(["miss share"] if misses else []),
+            "wall ms",
+            "GL ms",
+            "worst view",
+        ]
     ]
     for row in summary:
         if math.isnan(row.mae):  # nothing to score: said so, never a zero error
-            errors = [NO_REFLECTOR_PIXELS, "-", "-"]
+            errors = [NO_REFLECTOR_PIXELS, "-", "-", "-", "-"]
         else:
-            errors = [f"{row.mae:.2f}", f"{row.p95:.1f}", f"{row.share_off:.1%}"]
+            errors = [
+                f"{row.mae:.2f}",
+                f"{row.p95:.1f}",
+                f"{row.psnr:.1f}",
+                f"{row.share_off:.1%}",
+                "" if math.isnan(row.flip) else f"{row.flip:.3f}",
+            ]
+        if misses:
+            errors.append("-" if math.isnan(row.miss_share) else f"{row.miss_share:.1%}")
         table.append(
             [
                 row.technique,
@@ -753,6 +894,96 @@ def summary_table(summary: Sequence[SummaryRow]) -> list[list[str]]:
             ]
         )
     return table
+
+
+def _measured(summary: Sequence[SummaryRow]) -> list[SummaryRow]:
+    """The rows that score a technique: not the truth's, with reflector pixels."""
+    return [r for r in summary if not is_truth(r.technique) and not math.isnan(r.mae)]
+
+
+def flip_note(summary: Sequence[SummaryRow], reason: str | None) -> str | None:
+    """What a table says under its empty FLIP column: ``reason`` (why FLIP is missing),
+    where no technique among the rows has a FLIP figure; None where one has (or there is
+    nothing to score)."""
+    measured = _measured(summary)
+    if not measured or any(not math.isnan(r.flip) for r in measured):
+        return None
+    return f"FLIP is empty: {reason or 'no FLIP figures were measured'}"
+
+
+@dataclass(frozen=True)
+class Frontier:
+    """The Pareto frontier of one scene's configurations, error against median wall time:
+    the ``rows`` no other configuration beats in both (none is as fast and as accurate
+    and better in one), cheapest first. ``metric`` the error it is drawn by (``flip``, or
+    ``mae`` where a configuration lacks FLIP; ``note`` then says why)."""
+
+    scene: str
+    metric: str
+    rows: tuple[SummaryRow, ...]
+    note: str | None = None
+
+
+def pareto_front(points: Sequence[tuple[float, float]]) -> list[int]:
+    """The indices of the ``(cost, error)`` points on the Pareto frontier (both to be
+    small): those no other point dominates, that is, none has a cost and an error no
+    greater and one of them smaller. Points with a NaN are neither on it nor dominate.
+    In the order of cost, then error, then index."""
+    if not points:
+        return []
+    values = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    finite: np.ndarray = np.asarray(~np.isnan(values).any(axis=1))
+    cost, error = values[:, 0][:, None], values[:, 1][:, None]
+    # dominated[i, j]: point j beats point i
+    no_worse = (values[:, 0][None, :] <= cost) & (values[:, 1][None, :] <= error)
+    better = (values[:, 0][None, :] < cost) | (values[:, 1][None, :] < error)
+    dominated = (no_worse & better & finite[None, :]).any(axis=1)
+    front = [int(i) for i in np.flatnonzero(finite & ~dominated)]
+    return sorted(front, key=lambda i: (values[i, 0], values[i, 1], i))
+
+
+def frontier(summary: Sequence[SummaryRow], scene: str) -> Frontier:
+    """``scene``'s :class:`Frontier` among ``summary``'s rows (the truth left out: it is
+    the reference, exact by definition), by mean FLIP where every configuration has one,
+    by MAE otherwise (:func:`flip_note` says why FLIP is empty)."""
+    rows = _measured([r for r in summary if r.scene == scene])
+    missing = sum(math.isnan(r.flip) for r in rows)
+    metric, note = "flip", None
+    if missing:
+        metric = "mae"
+        if missing == len(rows):
+            note = "by MAE, as FLIP is empty"
+        else:
+            note = f"by MAE: {missing} of {len(rows)} configurations have no FLIP figure"
+    front = pareto_front([(r.wall_ms, getattr(r, metric)) for r in rows])
+    return Frontier(scene, metric, tuple(rows[i] for i in front), note)
+
+
+def frontier_table(front: Frontier) -> list[list[str]]:
+    """Header plus one row of text cells per configuration on ``front``, cheapest first."""
+    table = [["wall ms", "technique", "map", "FLIP", "MAE /255", "off >10"]]
+    for row in front.rows:
+        table.append(
+            [
+                f"{row.wall_ms:.2f}",
+                row.technique,
+                str(row.map_size) if row.map_size else "-",
+                "" if math.isnan(row.flip) else f"{row.flip:.3f}",
+                f"{row.mae:.2f}",
+                f"{row.share_off:.1%}",
+            ]
+        )
+    return table
+
+
+def frontier_heading(front: Frontier) -> str:
+    """The line above a frontier's table."""
+    metric = "mean FLIP" if front.metric == "flip" else "MAE"
+    heading = (
+        f"Pareto frontier ({metric} against median wall time: no other configuration is "
+        "both faster and more accurate), cheapest first"
+    )
+    return heading + (f"; {front.note}" if front.note else "")
 
 
 def format_text(table: Sequence[Sequence[str]]) -> str:
@@ -808,19 +1039,33 @@ def _series(summary: Sequence[SummaryRow]) -> dict[str, list[tuple[SummaryRow, s
     return series
 
 
-def plot_summary(summary: Sequence[SummaryRow], path: Path, title: str) -> bool:
+PLOTTED = {
+    "mae": ("mean absolute error, /255 (log; 0 drawn at 0.001)", 1e-3),
+    "flip": ("mean FLIP, 0..1 (log; 0 drawn at 0.0001)", 1e-4),
+}
+"""The error figures the plot draws, one panel each per scene: axis label and the floor a
+zero is drawn at on the log axis."""
+
+
+def plot_summary(
+    summary: Sequence[SummaryRow], path: Path, title: str, flip_reason: str | None = None
+) -> bool:
     """Error against time, one marker per technique and size (and per step count of a
-    distance search), one panel per scene, saved as PNG at ``path``. Returns False (and
-    writes nothing) when matplotlib is not installed."""
-    data = plot_png(summary, title)
+    distance search), a row of panels per scene (MAE and FLIP), the Pareto frontier
+    marked in each; saved as PNG at ``path``. Returns False (and writes nothing) when
+    matplotlib is not installed."""
+    data = plot_png(summary, title, flip_reason)
     if data is None:
         return False
     write_bytes_atomic(path, data)
     return True
 
 
-def plot_png(summary: Sequence[SummaryRow], title: str) -> bytes | None:
-    """:func:`plot_summary`'s picture as PNG bytes; None without matplotlib."""
+def plot_png(
+    summary: Sequence[SummaryRow], title: str, flip_reason: str | None = None
+) -> bytes | None:
+    """:func:`plot_summary`'s picture as PNG bytes; None without matplotlib. A panel
+    without FLIP figures says ``flip_reason``."""
     try:
         import matplotlib
 
@@ -828,64 +1073,19 @@ def plot_png(summary: Sequence[SummaryRow], title: str) -> bytes | None:
         import matplotlib.pyplot as plt
     except ImportError:
         return None
-    markers = "osD^v<>Px*hX"
     scenes = list(dict.fromkeys(r.scene for r in summary))
-    columns = min(2, len(scenes))
-    rows_of_panels = math.ceil(len(scenes) / columns)
     figure, panels = plt.subplots(
-        rows_of_panels,
-        columns,
-        figsize=(8.0 * columns, 6.0 * rows_of_panels),
+        len(scenes),
+        len(PLOTTED),
+        figsize=(8.0 * len(PLOTTED), 6.0 * len(scenes)),
         dpi=100,
         squeeze=False,
+        layout="constrained",  # room for the figure's title above the panels' own
     )
-    for axes in panels.flat[len(scenes) :]:
-        axes.set_visible(False)
-    for axes, scene in zip(panels.flat, scenes, strict=False):
-        # The ray tracer has no error by definition and is far slower: named in the
-        # panel's title rather than drawn, so that the techniques keep the axes.
-        traced = [r for r in summary if r.scene == scene and r.technique.startswith("raytrace")]
-        rows = [
-            r for r in summary if r.scene == scene and r not in traced and not math.isnan(r.mae)
-        ]
-        palette = plt.get_cmap("tab20")
-        for index, (name, points) in enumerate(_series(rows).items()):
-            times = [row.wall_ms for row, _ in points]
-            errors = [max(row.mae, 1e-3) for row, _ in points]
-            dashed = " by steps " in name
-            # a colour of its own each (tab20's dark shades), the steps of a search black
-            colour = "black" if dashed else palette((2 * index) % 20 + (2 * index) // 20 % 2)
-            axes.plot(
-                times,
-                errors,
-                marker=markers[index % len(markers)],
-                color=colour,
-                linestyle=("--" if dashed else "-") if len(points) > 1 else "",
-                label=name,
-            )
-            for (_, note), x, y in zip(points, times, errors, strict=True):
-                if note:
-                    axes.annotate(
-                        note, (x, y), fontsize=7, textcoords="offset points", xytext=(4, 3)
-                    )
-        axes.set_xscale("log")
-        axes.set_yscale("log")
-        axes.set_xlabel("median wall time per frame (ms, log)")
-        axes.set_ylabel("mean absolute error, /255 (log; 0 drawn at 0.001)")
-        heading = SCENE_TITLES.get(scene, scene)
-        if traced:
-            truth = traced[0]
-            heading += f"\n(ground truth: {truth.technique}, {truth.wall_ms:.0f} ms a frame)"
-        axes.set_title(heading, fontsize=10)
-        axes.grid(True, which="both", alpha=0.3)
-        if rows:
-            axes.legend(fontsize=7, ncol=2)
-        else:
-            axes.text(
-                0.5, 0.5, NO_REFLECTOR_PIXELS, transform=axes.transAxes, ha="center", va="center"
-            )
+    for row_of_panels, scene in zip(panels, scenes, strict=True):
+        for axes, metric in zip(row_of_panels, PLOTTED, strict=True):
+            _plot_panel(axes, summary, scene, metric, flip_reason)
     figure.suptitle(title)
-    figure.tight_layout()
     with io.BytesIO() as buffer:
         figure.savefig(buffer, format="png")
         data = buffer.getvalue()
@@ -893,9 +1093,130 @@ def plot_png(summary: Sequence[SummaryRow], title: str) -> bytes | None:
     return data
 
 
+def _plot_panel(
+    axes, summary: Sequence[SummaryRow], scene: str, metric: str, flip_reason: str | None
+) -> None:
+    """One panel: ``scene``'s configurations, ``metric`` (a key of :data:`PLOTTED`)
+    against median wall time, each technique a line over its sizes, and the Pareto
+    frontier of those points as a grey staircase with its points ringed."""
+    import matplotlib.pyplot as plt
+
+    markers = "osD^v<>Px*hX"
+    label, floor = PLOTTED[metric]
+    # The ray tracer has no error by definition and is far slower: named in the panel's
+    # title rather than drawn, so that the techniques keep the axes.
+    traced = [r for r in summary if r.scene == scene and is_truth(r.technique)]
+    rows = [
+        r
+        for r in _measured([r for r in summary if r.scene == scene])
+        if not math.isnan(getattr(r, metric))
+    ]
+    palette = plt.get_cmap("tab20")
+    for index, (name, points) in enumerate(_series(rows).items()):
+        times = [row.wall_ms for row, _ in points]
+        errors = [max(getattr(row, metric), floor) for row, _ in points]
+        dashed = " by steps " in name
+        # a colour of its own each (tab20's dark shades), the steps of a search black
+        colour = "black" if dashed else palette((2 * index) % 20 + (2 * index) // 20 % 2)
+        axes.plot(
+            times,
+            errors,
+            marker=markers[index % len(markers)],
+            color=colour,
+            linestyle=("--" if dashed else "-") if len(points) > 1 else "",
+            label=name,
+        )
+        for (_, note), x, y in zip(points, times, errors, strict=True):
+            if note:
+                axes.annotate(note, (x, y), fontsize=7, textcoords="offset points", xytext=(4, 3))
+    front = [rows[i] for i in pareto_front([(r.wall_ms, getattr(r, metric)) for r in rows])]
+    if front:
+        times = [r.wall_ms for r in front]
+        errors = [max(getattr(r, metric), floor) for r in front]
+        axes.plot(
+            times,
+            errors,
+            drawstyle="steps-post",
+            color="grey",
+            linewidth=6,
+            alpha=0.35,
+            zorder=0,
+            label="Pareto frontier",
+        )
+        axes.scatter(times, errors, s=160, facecolors="none", edgecolors="grey", zorder=1)
+    axes.set_xscale("log")
+    axes.set_yscale("log")
+    axes.set_xlabel("median wall time per frame (ms, log)")
+    axes.set_ylabel(label)
+    heading = f"{SCENE_TITLES.get(scene, scene)}: {'MAE' if metric == 'mae' else 'FLIP'}"
+    if traced:
+        truth = traced[0]
+        heading += f"\n(ground truth: {truth.technique}, {truth.wall_ms:.0f} ms a frame)"
+    axes.set_title(heading, fontsize=10)
+    axes.grid(True, which="both", alpha=0.3)
+    if rows:
+        axes.legend(fontsize=7, ncol=2)
+    else:
+        scored = _measured([r for r in summary if r.scene == scene])
+        empty = NO_REFLECTOR_PIXELS
+        if scored and metric == "flip":
+            empty = f"no FLIP figures: {flip_reason or 'none were measured'}"
+        axes.text(
+            0.5,
+            0.5,
+            "\n".join(_wrapped(empty, 60)),
+            transform=axes.transAxes,
+            ha="center",
+            va="center",
+            fontsize=9,
+        )
+
+
+def _wrapped(text: str, width: int) -> list[str]:
+    import textwrap
+
+    return textwrap.wrap(text, width) or [text]
+
+
+CSV_WITHOUT_FLIP = (
+    "{name} holds no FLIP figures (written before the column, or measured where "
+    "flip-evaluator was missing)"
+)
+"""Why FLIP is empty in a report re-made from a CSV (``name`` the file's)."""
+
+
+SweptScenes = str | Scene | Sequence[str | Scene]
+"""What a sweep measures: ``lab`` (the mirror techniques), ``sphere`` (the environment
+maps), ``all`` (both), a scene (from its own camera: every technique its reflectors can
+take), or several of these."""
+
+
+def panels_for(scenes: SweptScenes, settings: SweepSettings) -> list[Panel]:
+    """The panels of :data:`SweptScenes`, in the order given; ValueError when two would
+    have one name (their rows could not be told apart)."""
+    items = [scenes] if isinstance(scenes, str | Scene) else list(scenes)
+    panels: list[Panel] = []
+    for item in items:
+        if isinstance(item, Scene):
+            panels.append(file_panel(item))
+        elif item in ("lab", "sphere", "all"):
+            panels += [lab_panel(settings)] if item in ("lab", "all") else []
+            panels += sphere_panels(settings) if item in ("sphere", "all") else []
+        else:
+            raise ValueError(f"--scene: expected lab, sphere, all or a scene, got {item!r}")
+    names = [panel.name for panel in panels]
+    twice = sorted({name for name in names if names.count(name) > 1})
+    if twice:
+        raise ValueError(
+            f"--scene: two scenes named {twice[0]!r} (give each scene once; a scene file's "
+            "name key tells its rows from another's)"
+        )
+    return panels
+
+
 def run_command(
     settings: SweepSettings,
-    scenes: str | Scene,
+    scenes: SweptScenes,
     out_dir: Path,
     from_csv: Path | None = None,
     say: Callable[[str], None] = print,
@@ -903,10 +1224,10 @@ def run_command(
     scheduler: str | None = None,
     engine: str = "pool",
 ) -> int:
-    """``mirrorlab bench accuracy``: measure (or read ``from_csv``), print the tables, and
-    write accuracy.csv, accuracy.md and accuracy.png into ``out_dir``. The truths and the
-    scoring run on ``jobs`` processes (or the Dask ``scheduler``'s workers; see
-    :func:`run_panels`), the timed frames in this process."""
+    """``mirrorlab bench accuracy``: measure (or read ``from_csv``), print the tables (and
+    each scene's Pareto frontier), and write accuracy.csv, accuracy.md and accuracy.png
+    into ``out_dir``. The truths and the scoring run on ``jobs`` processes (or the Dask
+    ``scheduler``'s workers; see :func:`run_panels`), the timed frames in this process."""
     if from_csv is not None:
         try:
             rows = rows_from_csv(from_csv.read_text())
@@ -915,13 +1236,9 @@ def run_command(
         except ValueError as exc:
             raise ValueError(f"--from-csv: {from_csv}: {exc}") from None
         title = f"accuracy vs time, from {from_csv.name}"
+        flip_reason: str | None = CSV_WITHOUT_FLIP.format(name=from_csv.name)
     else:
-        if isinstance(scenes, Scene):
-            panels = [file_panel(scenes)]
-        else:
-            panels = ([lab_panel(settings)] if scenes in ("lab", "all") else []) + (
-                sphere_panels(settings) if scenes in ("sphere", "all") else []
-            )
+        panels = panels_for(scenes, settings)
         started = time.perf_counter()
         with open_executor(jobs, scheduler, engine) as executor:
             rows = run_panels(panels, settings, executor=executor)
@@ -935,14 +1252,30 @@ def run_command(
             f"accuracy vs time, {settings.frame}x{settings.frame} frames, llvmpipe; "
             f"medians of {settings.frames} frames"
         )
+        flip_reason = flip.MISSING
     summary = summarise(rows)
     markdown = [title, ""]
     for scene in dict.fromkeys(r.scene for r in summary):
-        table = summary_table([r for r in summary if r.scene == scene])
+        mine = [r for r in summary if r.scene == scene]
+        table = summary_table(mine)
         heading = SCENE_TITLES.get(scene, scene)
-        say(f"\n{heading}:\n{format_text(table)}")
+        note = flip_note(mine, flip_reason)
+        front = frontier(summary, scene)
+        text = [f"\n{heading}:", format_text(table)]
         markdown += [f"### {heading}", "", format_markdown(table), ""]
-    plot = plot_png(summary, title)
+        if note is not None:
+            text.append(note)
+            markdown += [note, ""]
+        if front.rows:
+            text += ["", f"{frontier_heading(front)}:", format_text(frontier_table(front))]
+            markdown += [
+                f"{frontier_heading(front)}:",
+                "",
+                format_markdown(frontier_table(front)),
+                "",
+            ]
+        say("\n".join(text))
+    plot = plot_png(summary, title, flip_reason)
     written = []
     with Outputs() as outputs:  # all three files, or none
         if from_csv is None:

@@ -22,6 +22,7 @@ if TYPE_CHECKING:
     from mirrorlab.gl.resources import Framebuffer
     from mirrorlab.plan import FramePlan
     from mirrorlab.renderer import FrameStats, SceneRenderer
+    from mirrorlab.screen_space import MissMask
 
 SceneLike = Scene | str | Path
 
@@ -159,6 +160,14 @@ class Renderer:
                     self._target = None
                 assert self._context is not None
                 self._target = Framebuffer(self._context.resources, *size)
+                # Made, it is bound; the renderer puts back at every frame's end what was
+                # bound at its first (it owns the context): the default framebuffer, not
+                # this one, which a frame of another size deletes (binding a deleted name
+                # is an error in a core context, as on macOS).
+                from mirrorlab.gl.calls import gl
+                from mirrorlab.gl.opengl import GL
+
+                gl.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
         return self._target
 
     def render(
@@ -223,6 +232,22 @@ class Renderer:
         return plan_frame(
             posed, check_size(size) if size is not None else self.size, state, use_plan
         )
+
+    def ssr_mask(self) -> MissMask:
+        """What screen-space reflections (technique ``ssr``) did at each pixel of the last
+        :meth:`render`: a :class:`~mirrorlab.screen_space.MissMask` of the frame (for
+        each reflector pixel, whether its reflected ray was found on the screen, with
+        what weight, or why it fell back to the probe), all zero where no reflector drawn
+        by ``ssr`` shows. Its ``miss_share`` is the share of those pixels that fell back
+        to the probe; ``image()`` is it as a picture."""
+        from mirrorlab.passes.ssr import frame_mask
+
+        renderer = self.scene_renderer
+        if self.last_stats is None:
+            raise ValueError("ssr_mask: no frame rendered yet")
+        assert self._context is not None
+        self._context.make_current()
+        return frame_mask(renderer, self.last_stats.plan.top)
 
     def read_texture(self, reflector: str, *, slot: int = 0) -> Frame:
         """A planar reflector's capture texture from the last frame, ``(h, w, 3)`` uint8

@@ -24,6 +24,7 @@ from mirrorlab.scene.model import CAPTURE_MODES, FOOTPRINT_TEXTURE, Scene
 from mirrorlab.techniques import (
     Technique,
     frame_technique,
+    reflector_technique_names,
     technique,
     technique_names,
     techniques,
@@ -179,7 +180,13 @@ def _entry(name: Any) -> Technique | None:
 
 
 def _reflector_technique_names() -> tuple[str, ...]:
-    return technique_names("planar") + technique_names("curved")
+    return reflector_technique_names()
+
+
+def _is_planar(reflector: Mapping) -> bool:
+    """Whether a scene document's reflector table is a planar mirror's (a curved
+    reflector's names its mesh), whatever its technique."""
+    return "mesh" not in reflector
 
 
 def _apply_technique(document: dict, value: Any, flag: str) -> None:
@@ -201,6 +208,13 @@ def _apply_technique(document: dict, value: Any, flag: str) -> None:
         for reflector in reflectors:
             reflector["technique"] = value
         return
+    if entry.kind == "both":
+        reflectors = document.get("reflectors", [])
+        if not reflectors:
+            raise OptionError(flag, f"scene {document.get('name')!r} has no reflector")
+        for reflector in reflectors:
+            _set_technique(reflector, value)
+        return
     planar = entry.kind == "planar"
     for reflector in _reflectors_of_kind(
         document, planar, flag, f"{value} is a technique for a {_KIND_NAMES[planar]}, and "
@@ -217,6 +231,11 @@ def _set_technique(reflector: dict, value: str) -> None:
     if "source" in reflector and (old is None or entry.source != old.source):
         del reflector["source"]
     reflector["technique"] = value
+    if not entry.probe:
+        reflector.pop("ssr", None)  # the settings of a technique that falls back to a map
+        if _is_planar(reflector):
+            for key in ("map_size", "source", "capture_center", "parallax"):
+                reflector.pop(key, None)  # a planar mirror's map is its probe's
     if not entry.own_camera:
         reflector.pop("ortho", None)
         if reflector.get("texture_size") == FOOTPRINT_TEXTURE:
@@ -232,7 +251,7 @@ def with_technique(scene: Scene, name: str, value: str) -> Scene:
     document = scene_to_document(scene)
     for reflector in document.get("reflectors", []):
         if reflector.get("name") == name:
-            allowed = technique_names(technique(reflector["technique"]).kind)
+            allowed = technique_names("planar" if _is_planar(reflector) else "curved")
             parse_choice(f"technique of {name}", value, allowed)
             _set_technique(reflector, value)
             return from_document(document, scene.source)
@@ -244,11 +263,7 @@ _KIND_NAMES = {True: "planar mirror", False: "curved reflector"}
 
 def _reflectors_of_kind(document: dict, planar: bool, flag: str, why: str = "") -> list[dict]:
     """The document's planar (or curved) reflectors; OptionError when it has none."""
-    targets = [
-        r
-        for r in document.get("reflectors", [])
-        if (getattr(_entry(r.get("technique")), "kind", None) == "planar") == planar
-    ]
+    targets = [r for r in document.get("reflectors", []) if _is_planar(r) == planar]
     if not targets:
         what = "none" if why else f"no {_KIND_NAMES[planar]}"
         raise OptionError(flag, f"{why}scene {document.get('name')!r} has {what}")
@@ -301,11 +316,12 @@ def _apply_parallax(document: dict, value: Any, flag: str) -> None:
         value = parse_parallax(flag, value)
     live = [
         r
-        for r in _reflectors_of_kind(document, False, flag)
+        for r in document.get("reflectors", [])
         if getattr(_entry(r.get("technique")), "parallax", False)
     ]
     if not live:
-        names = [t.name for t in techniques("curved") if t.parallax]
+        _reflectors_of_kind(document, False, flag)  # with no curved reflector, says so
+        names = [t.name for t in techniques("curved") if t.parallax and not t.probe]
         raise OptionError(
             flag,
             f"scene {document.get('name')!r} has no {' or '.join(names)} "

@@ -62,13 +62,15 @@ reflector whose footprint may cover fewer pixels than that is drawn plain, with 
 capture, which changes those pixels (16 saves the captures of reflectors seen from very
 far away)."""
 
-DrawMode = Literal["hidden", "back", "plain", "map", "texture", "inline"]
+DrawMode = Literal["hidden", "back", "plain", "map", "texture", "inline", "screen"]
 """``hidden``: not drawn (out of view); ``back``: only a planar mirror's backing shows;
 ``plain``: a lit surface; ``map``: with its map; ``texture``: with its capture;
-``inline``: the world seen through it (its ``nested`` plan), drawn in place. The last
-three are the technique's own draw (:attr:`ReflectorDraw.own`), which its registry
-entry places before or after the view's objects."""
-OWN_MODES = ("map", "texture", "inline")
+``inline``: the world seen through it (its ``nested`` plan), drawn in place; ``screen``:
+from the view's own frame as its target holds it then (a ``screen`` texture, copied at
+the draw), with what the frame does not hold from its ``fallback``. The last four are
+the technique's own draw (:attr:`ReflectorDraw.own`), which its registry entry places
+before or after the view's objects."""
+OWN_MODES = ("map", "texture", "inline", "screen")
 """The modes of :data:`DrawMode` in which a reflector is drawn by its technique's own
 draw, not as a surface like any other."""
 
@@ -169,7 +171,10 @@ class ReflectorDraw:
     capture camera: a reflected capture's, for its projective lookup), for an inline
     draw the ``nested`` plan of the world seen through it, and the ``reason``;
     ``footprint`` where it can show in the view (:mod:`mirrorlab.footprint`; None where
-    it was not needed)."""
+    it was not needed). A technique with a probe (its entry's ``probe``) gets its
+    probe's draw in the same view as ``fallback`` (None: no probe). A view that shows a
+    reflector drawn from the view's own frame (``screen``) is drawn whole: its plan has
+    no scissor."""
 
     reflector: Reflector
     mode: DrawMode
@@ -178,6 +183,7 @@ class ReflectorDraw:
     source: View | None = None
     nested: ViewPlan | None = None
     footprint: Footprint | None = field(default=None, compare=False, repr=False)
+    fallback: ReflectorDraw | None = None
 
     @property
     def own(self) -> bool:
@@ -526,6 +532,14 @@ class _Planner:
         reflectors = index.reflectors
         if self.use_plan:
             codes, footprints = visibility(index, view, excluded, scissor)
+            if scissor is not None and any(
+                technique(reflectors[i].technique).texture == "screen"
+                for i in (codes <= BACK).nonzero()[0].tolist()
+            ):
+                # a reflector that reads the view's own frame reads all of it: the view
+                # is drawn whole
+                scissor = None
+                codes, footprints = visibility(index, view, excluded, None)
         else:
             codes, footprints = np.zeros(len(reflectors), dtype=np.int8), {}
             if excluded is not None and excluded in index.names:
@@ -575,6 +589,20 @@ class _Planner:
             return ReflectorDraw(
                 reflector, "map", "its sphere map for this view", slot=slot, footprint=footprint
             )
+        fallback = None
+        if entry.probe:
+            probe = entry.probe_function()(reflector)
+            if probe is not None:
+                fallback = self.draw(probe, view, bounce, footprint, scissor)
+        if entry.texture == "screen":
+            return ReflectorDraw(
+                reflector,
+                "screen",
+                "the view's own frame, what it does not hold from "
+                + ("its probe" if fallback is not None else "the background colour"),
+                footprint=footprint,
+                fallback=fallback,
+            )
         found = entry.capture_function()(reflector, view, footprint, scissor, self)
         if found is None:
             return ReflectorDraw(
@@ -592,7 +620,13 @@ class _Planner:
             )
         slot = self.capture(reflector, view, bounce, found, entry.texture)
         return ReflectorDraw(
-            reflector, "texture", "its capture", slot=slot, source=source, footprint=footprint
+            reflector,
+            "texture",
+            "its capture",
+            slot=slot,
+            source=source,
+            footprint=footprint,
+            fallback=fallback,
         )
 
     # ------------------------------------------------------------- textures

@@ -807,6 +807,112 @@ def _trace_band(
     mask[top:bottom] = traced.reflective_mask.reshape(rows, k, width, k).all(axis=(1, 3))
 
 
+@dataclass(frozen=True)
+class ReflectionHits:
+    """Where the reflected ray of each pixel of a view goes, for judging screen-space
+    reflections: which surfaces the view itself shows.
+
+    ``reflector`` ``(h, w)`` int: the index in the scene's reflectors of the reflector
+    whose front the pixel's primary ray meets (-1: none, or its back); ``point`` ``(h,
+    w, 3)`` the world point the reflected ray meets first (NaN where it escapes or the
+    pixel shows no reflector); ``escaped`` ``(h, w)`` bool: the reflected ray meets
+    nothing; ``on_screen``: the point lies within the view (its sides, near and far
+    planes); ``visible``: on screen, and the first surface the viewer sees along the
+    line of sight to it (nothing nearer in the way, and not a surface seen from behind).
+    Row 0 at the top."""
+
+    reflector: np.ndarray
+    point: np.ndarray
+    escaped: np.ndarray
+    on_screen: np.ndarray
+    visible: np.ndarray
+
+
+def reflection_hits(scene: Scene, size: Sequence[int], tolerance: float = 1e-4) -> ReflectionHits:
+    """:class:`ReflectionHits` of ``scene`` seen by its camera at ``size`` (width, height):
+    one primary ray per pixel centre, as :func:`trace_scene` traces them, its reflection
+    off the reflector it meets (about the interpolated normal turned towards it, from
+    just off the surface), and a ray from the eye towards each point met. A point is
+    visible when that ray's first surface lies within ``tolerance`` (a share of the
+    distance) of it. Perspective cameras."""
+    width, height = (int(v) for v in size)
+    rays = ray_scene(scene)
+    first_reflector = len(rays.surfaces) - len(scene.reflectors)
+    camera = scene.camera
+    view = camera.view()
+    projection = camera.projection(width / height)
+    matrix = projection @ view
+    inverse = np.linalg.inv(matrix)
+    x = (np.arange(width) + 0.5) / width * 2.0 - 1.0
+    y = 1.0 - (np.arange(height) + 0.5) / height * 2.0
+    grid_x, grid_y = np.meshgrid(x, y)
+    flat = np.stack([grid_x.ravel(), grid_y.ravel()], axis=1)
+    near = _unproject(inverse, flat, -1.0)
+    directions = _unproject(inverse, flat, 1.0) - near
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+
+    def beyond(points: np.ndarray) -> np.ndarray:
+        clip = np.column_stack([points, np.ones(len(points))]) @ matrix.T
+        return clip[:, 2] > clip[:, 3]
+
+    count = width * height
+    seen = rays._first_visible(near, directions, None, beyond)
+    surface = np.where(seen.face >= 0, rays._face_surface[np.maximum(seen.face, 0)], -1)
+    mirror = (seen.face >= 0) & seen.front & (surface >= first_reflector)
+    mirror &= rays._reflective[np.maximum(surface, 0)]
+    reflector = np.where(mirror, surface - first_reflector, -1)
+    point = np.full((count, 3), np.nan)
+    escaped = np.zeros(count, dtype=bool)
+    chosen = np.flatnonzero(mirror)
+    if len(chosen):
+        faces = seen.face[chosen]
+        corners = rays._faces[faces]
+        weights = _barycentric(rays._triangles[faces], seen.point[chosen])
+        normals = np.einsum("nk,nkd->nd", weights, rays._normals[corners])
+        normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-300)
+        incoming = directions[chosen]
+        towards = np.where(np.einsum("nd,nd->n", normals, incoming) > 0, -1.0, 1.0)[:, None]
+        facing = normals * towards
+        reflected = incoming - 2.0 * np.einsum("nd,nd->n", incoming, facing)[:, None] * facing
+        reflected /= np.linalg.norm(reflected, axis=1, keepdims=True)
+        face_normals = rays._face_normals[faces]
+        leave = face_normals / np.linalg.norm(face_normals, axis=1, keepdims=True)
+        met = rays._first_visible(
+            rays.offset_points(seen.point[chosen], leave), reflected, None, None
+        )
+        hit = met.face >= 0
+        point[chosen[hit]] = met.point[hit]
+        escaped[chosen[~hit]] = True
+    found = np.flatnonzero(np.isfinite(point[:, 0]))
+    on_screen = np.zeros(count, dtype=bool)
+    visible = np.zeros(count, dtype=bool)
+    if len(found):
+        targets = point[found]
+        clip = np.column_stack([targets, np.ones(len(found))]) @ matrix.T
+        w = clip[:, 3]
+        inside = w > 0
+        ndc = clip[:, :3] / np.where(inside, w, 1.0)[:, None]
+        inside &= (np.abs(ndc) <= 1.0).all(axis=1)
+        on_screen[found] = inside
+        eye = np.asarray(camera.eye, dtype=np.float64)
+        offset = targets - eye
+        distance = np.linalg.norm(offset, axis=1)
+        look = offset / np.maximum(distance, 1e-300)[:, None]
+        forward = -view[2, :3]
+        start = camera.depth_range[0] / np.maximum(look @ forward, 1e-12)
+        sight = rays._first_visible(eye + look * start[:, None], look, None, None)
+        reached = np.where(sight.face >= 0, np.linalg.norm(sight.point - eye, axis=1), np.inf)
+        visible[found] = inside & (np.abs(reached - distance) <= tolerance * distance)
+    shape = (height, width)
+    return ReflectionHits(
+        reflector.reshape(shape),
+        point.reshape(height, width, 3),
+        escaped.reshape(shape),
+        on_screen.reshape(shape),
+        visible.reshape(shape),
+    )
+
+
 def trace_frame(scene: Scene, size: Sequence[int], progress: bool = False) -> np.ndarray:
     """The ``raytrace`` technique (:mod:`mirrorlab.techniques`): ``scene``'s ground truth at
     ``size`` as ``(h, w, 3)`` uint8."""

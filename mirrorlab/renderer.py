@@ -26,6 +26,7 @@ from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import RenderTarget, Texture2D, TextureCube
 from mirrorlab.passes.base import (
     ReflectorPass,
+    ReportsFallback,
     SharedResources,
     apply_view_state,
     gl_state,
@@ -136,7 +137,17 @@ def _pass_key(reflector: Reflector, background: Background) -> tuple:
     """What a reflector's pass is made from: everything but where it is (it may move every
     frame; a planar pass places its quad at each draw) and the sizes of a curved one's
     parallax correction (read at each draw; the kind chooses the shader), and the
-    background for the maps baked from it."""
+    background for the maps baked from it; for a technique with a probe, its probe's
+    pass key too (the pass makes its probe's pass)."""
+    entry = technique(reflector.technique)
+    if entry.probe:
+        probe = entry.probe_function()(reflector)
+        own = _own_pass_key(reflector, background)
+        return (own, None if probe is None else _pass_key(probe, background))
+    return _own_pass_key(reflector, background)
+
+
+def _own_pass_key(reflector: Reflector, background: Background) -> tuple:
     if isinstance(reflector, PlanarReflector):
         return (reflector.technique, reflector.capture, None)
     if isinstance(reflector, CurvedReflector):
@@ -499,6 +510,34 @@ class SceneRenderer:
         replayed."""
         held = self._passes.get(draw.reflector.name)
         return None if held is None else held[1].shown_texture(draw)
+
+    def drawn_pass(self, draw: ReflectorDraw) -> ReflectorPass | None:
+        """The pass that drew ``draw`` (one of the last frame's draws), for a reader of
+        what it made; None where the renderer holds none for that reflector. Looking
+        changes nothing: the frame is still replayed."""
+        held = self._passes.get(draw.reflector.name)
+        return None if held is None else held[1]
+
+    def fallback_mask(self) -> np.ndarray | None:
+        """Which pixels of the last frame the reflectors' techniques filled from their
+        fallback (their probe) instead of their own method: ``(h, w)`` bool over the
+        frame, row 0 at the top, the union over the reflectors drawn in the frame's own
+        view whose pass reports it
+        (:class:`~mirrorlab.passes.base.ReportsFallback`). None where no reflector drawn
+        there has a fallback (every shipped technique but those that fall back). Looking
+        changes nothing: the frame is still replayed."""
+        if self.last_frame is None:
+            return None
+        top = self.last_frame.plan.top
+        union: np.ndarray | None = None
+        for draw in top.draws:
+            held = self._passes.get(draw.reflector.name)
+            if held is None or not isinstance(held[1], ReportsFallback):
+                continue
+            mask = held[1].fallback_mask(draw, top.view)
+            if mask is not None:
+                union = mask.copy() if union is None else union | mask
+        return union
 
     def pass_for(self, name: str) -> ReflectorPass:
         """The pass of the current scene's reflector ``name`` (for checks and the demo).

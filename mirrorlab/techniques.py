@@ -37,12 +37,17 @@ from typing import TYPE_CHECKING, Any, Literal
 
 if TYPE_CHECKING:
     from mirrorlab.plan import CaptureCamera
+    from mirrorlab.scene.model import Reflector
 
-TechniqueKind = Literal["planar", "curved", "frame"]
+TechniqueKind = Literal["planar", "curved", "both", "frame"]
 """``planar``: a flat mirror's technique; ``curved``: an environment-mapped mesh's;
+``both``: either's (a reflector of either kind may take it: screen-space reflections);
 ``frame``: draws the whole frame itself, instead of the rasteriser (the ray tracer)."""
 
-TextureKind = Literal["static", "baked", "fixed", "viewer", "inline"]
+REFLECTOR_KINDS = ("planar", "curved")
+"""The kinds of reflector a scene holds (a ``both`` technique serves each)."""
+
+TextureKind = Literal["static", "baked", "fixed", "viewer", "inline", "screen"]
 """What a reflector technique's texture depends on:
 
 - ``static``: nothing but the background or a picture: made once.
@@ -53,6 +58,13 @@ TextureKind = Literal["static", "baked", "fixed", "viewer", "inline"]
 - ``viewer``: the scene from the viewer's mirror image: captured again when the scene
   or the viewer changes.
 - ``inline``: no texture: the reflection is drawn straight into the view (stencil).
+- ``screen``: the view's own frame, its colour and depth as the view's target holds them
+  when the reflector is drawn (after the objects: ``draws_after_objects``), copied by
+  the pass at each draw (:class:`mirrorlab.passes.view_frame.ViewFrame`): never held
+  from one view or frame to the next, so never reused and never planned as a pass of
+  its own; a replayed frame makes the copy again (it is one of the frame's recorded
+  calls), so it reads what that frame drew. What such a technique cannot find on the
+  screen comes from its ``probe``.
 """
 
 CAMERA_TEXTURES = ("fixed", "viewer", "inline")
@@ -83,7 +95,11 @@ class Technique:
     lookup follows the world-space view ray (``eye_world``, ``view_direction``);
     ``map_size_uniform``: its shader is told its map's size; ``parallax``: it takes a
     ``parallax`` table; ``own_camera``: planar, an ``ortho`` table sets its camera;
-    ``gl_version`` the OpenGL (major, minor) its pass needs.
+    ``gl_version`` the OpenGL (major, minor) its pass needs; ``probe``, as
+    ``module:function``: a :data:`ProbeFunction` giving the reflector as another
+    technique (its probe) draws it, whose draw the planner plans too and hands the pass
+    as :attr:`mirrorlab.plan.ReflectorDraw.fallback` (screen-space reflections fall back
+    to it where the screen holds no answer).
     """
 
     name: str
@@ -104,6 +120,12 @@ class Technique:
     parallax: bool = False
     own_camera: bool = False
     gl_version: tuple[int, int] = (3, 3)
+    probe: str = ""
+
+    def serves(self, kind: str) -> bool:
+        """Whether a reflector of ``kind`` (``planar`` or ``curved``) may take it (or, for
+        ``frame``, whether it is a frame technique)."""
+        return self.kind == kind or (self.kind == "both" and kind in REFLECTOR_KINDS)
 
     @property
     def draws_inline(self) -> bool:
@@ -122,6 +144,16 @@ class Technique:
     def capture_function(self) -> CaptureCamera:
         """Its capture camera (imports its module)."""
         return _load(self.capture_camera, self.name, "capture_camera")
+
+    def probe_function(self) -> ProbeFunction:
+        """Its probe (imports its module)."""
+        return _load(self.probe, self.name, "probe")
+
+
+ProbeFunction = Callable[["Reflector"], "Reflector | None"]
+"""A technique's probe (its entry's ``probe``): ``reflector -> reflector or None``, the
+reflector as the technique it falls back to draws it (a reflector of a curved technique,
+with the map that technique needs), None where it has none. Numpy only."""
 
 
 _LOADED: dict[str, Any] = {}
@@ -161,6 +193,11 @@ def register(entry: Technique) -> Technique:
         raise ValueError(
             f"technique {entry.name!r} shows the scene ({entry.texture}): it needs a capture_camera"
         )
+    elif entry.texture == "screen" and not entry.draws_after_objects:
+        raise ValueError(
+            f"technique {entry.name!r} reads the view's own frame (screen): it must draw "
+            "after the view's objects (draws_after_objects)"
+        )
     _REGISTRY[entry.name] = entry
     return entry
 
@@ -171,13 +208,19 @@ def unregister(name: str) -> None:
 
 
 def techniques(kind: TechniqueKind | None = None) -> tuple[Technique, ...]:
-    """Every registered technique (of ``kind``), in the order they were registered."""
-    return tuple(t for t in _REGISTRY.values() if kind is None or t.kind == kind)
+    """Every registered technique (that serves ``kind``: a ``both`` technique is among
+    the ``planar`` and the ``curved`` ones), in the order they were registered."""
+    return tuple(t for t in _REGISTRY.values() if kind is None or t.serves(kind))
 
 
 def technique_names(kind: TechniqueKind | None = None) -> tuple[str, ...]:
     """The names of :func:`techniques` ``(kind)``."""
     return tuple(t.name for t in techniques(kind))
+
+
+def reflector_technique_names() -> tuple[str, ...]:
+    """Every technique a reflector may take (of either kind), each once."""
+    return tuple(t.name for t in _REGISTRY.values() if t.kind != "frame")
 
 
 def technique(name: str) -> Technique:
@@ -377,6 +420,21 @@ for _entry in (
         sampler="paraboloid_texture",
         capture_camera="mirrorlab.captures:paraboloid_camera",
         view_ray=True,
+    ),
+    Technique(
+        "ssr",
+        "both",
+        "screen-space reflections: the reflected ray marched through the view's own "
+        "depth (McGuire-Mara DDA), its misses from a probe (any map technique)",
+        texture="screen",
+        pass_class="mirrorlab.passes.ssr:ScreenSpaceReflections",
+        vertex_shader="envmap.vert",
+        fragment_shader="ssr_march.frag",
+        sampler="frame_color",
+        draws_after_objects=True,
+        view_ray=True,
+        parallax=True,
+        probe="mirrorlab.screen_space:probe_reflector",
     ),
     Technique(
         "raytrace",

@@ -1,7 +1,13 @@
+import os
 from pathlib import Path
 
 REPO_DIR = Path(__file__).resolve().parents[1]
 """The checkout the tests run from (its bench/ scripts, tools/ and docs/)."""
+
+if os.environ.get("MIRRORLAB_TEST_TWINS"):  # a run with copies of techniques: tests/twins.py
+    from tests.twins import register_from_environment
+
+    register_from_environment()
 
 MACOS_CONTEXT = {
     "MESA_GL_VERSION_OVERRIDE": "4.1FC",

@@ -25,6 +25,19 @@ from mirrorlab.scene.model import (
     Vec3,
 )
 
+MAP_TEXTURES = ("static", "baked", "fixed")
+"""The texture kinds of the curved techniques that look the reflection up in a map (made
+once, baked for the view, or captured), whose lookup coordinates tests read back."""
+
+
+def map_technique_names() -> tuple[str, ...]:
+    """The curved techniques whose reflection is a map lookup (:data:`MAP_TEXTURES`), from
+    the registry; a technique drawn from the view's own frame (``screen``) is not one."""
+    from mirrorlab.techniques import techniques
+
+    return tuple(t.name for t in techniques("curved") if t.texture in MAP_TEXTURES)
+
+
 SPHERE_MESH = data_path("models") / "env_sphere.obj"
 BOX_MESH = data_path("models") / "hand.obj"
 PANEL_MESH = data_path("models") / "panel.obj"

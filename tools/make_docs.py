@@ -1,6 +1,7 @@
 """Re-make the README's comparison pictures in docs/ (headless; run from the checkout):
 
     .venv/bin/python tools/make_docs.py [methods] [envmaps] [cone] [parallax] [maps] [warp]
+                                        [ssr]
 
 (all of them when none is named). docs/methods.png: the lab scene (lab20) 30 degrees off
 the mirror's normal, by each mirror technique and the ray tracer. docs/envmaps.png: the
@@ -12,8 +13,10 @@ where the pixels that still differ lie. docs/direction_maps.png: the chrome sphe
 octahedral and dual-paraboloid maps, each above the map it samples. docs/paraboloid_warp.png:
 the room's sphere by the dual-paraboloid map converted from the cube capture and by the
 vertex-warped one, with the room's walls as shipped (two triangles each) and cut into
-small triangles, above their maps. The accuracy plot comes from `mirrorlab bench
-accuracy`, the texel-budget study's from `bench/texel_budget.py`.
+small triangles, above their maps. docs/ssr.png: each of the scenes made to show
+screen-space reflections' failures: the frame, its miss mask, the frame without its probe
+and the ray tracer. The accuracy plot comes from `mirrorlab bench accuracy`, the
+texel-budget study's from `bench/texel_budget.py`.
 """
 
 from __future__ import annotations
@@ -135,7 +138,7 @@ def parallax_picture(renderer) -> None:
     Image.fromarray(np.vstack(rows)).save(DOCS / "parallax.png")
 
 
-PICTURES = ("methods", "envmaps", "cone", "parallax", "maps", "warp")
+PICTURES = ("methods", "envmaps", "cone", "parallax", "maps", "warp", "ssr")
 FILES = {"maps": "direction_maps", "warp": "paraboloid_warp"}
 """The file a picture is written to, where it is not named as the picture is."""
 
@@ -231,7 +234,60 @@ def main(pictures: list[str]) -> None:
             cone_picture(renderer)
         if "parallax" in chosen:
             parallax_picture(renderer)
+        if "ssr" in chosen:
+            ssr_picture(renderer)
     print(f"wrote {', '.join(f'{DOCS}/{FILES.get(name, name)}.png' for name in sorted(chosen))}")
+
+
+SSR_SCENES = (
+    "ssr_behind_camera",
+    "ssr_thin_pole",
+    "ssr_grazing_water",
+    "ssr_sphere_near",
+    "ssr_box_room",
+)
+
+
+def ssr_picture(renderer) -> None:
+    """docs/ssr.png: a row per scene of :data:`SSR_SCENES`: the frame, its miss mask, the
+    frame without its probe (misses in the background's colour) and the ray tracer, with
+    each one's mean FLIP and the share of false hits in the mask's label."""
+    from mirrorlab import screen_space
+    from mirrorlab.accuracy import image_error
+    from mirrorlab.raytrace import reflection_hits
+
+    size = (320, 320)
+    rows = []
+    for name in SSR_SCENES:
+        scene = mirrorlab.load_scene(name)
+        frame = np.asarray(renderer.render(scene, size=size))
+        mask = renderer.ssr_mask()
+        none = [f'reflectors[{i}].ssr.probe="none"' for i in range(len(scene.reflectors))]
+        bare = np.asarray(renderer.render(scene, size=size, set=none))
+        truth = trace_scene(scene, size).to_uint8()
+        hits = reflection_hits(scene, size)
+        region = (hits.reflector >= 0) & mask.reflector
+        false = screen_space.false_hits(mask, hits.visible, hits.reflector >= 0)
+        with_probe, alone = image_error(frame, truth, region), image_error(bare, truth, region)
+        rows.append(
+            np.hstack(
+                [
+                    labelled(frame, f"{name}: ssr, FLIP {with_probe.flip:.3f}"),
+                    labelled(
+                        mask.image(),
+                        f"miss mask: {mask.miss_share:.0%} to the probe, "
+                        f"{false.sum() / max(region.sum(), 1):.2%} false hits",
+                    ),
+                    labelled(bare, f"no probe, FLIP {alone.flip:.3f}"),
+                    labelled(truth, "raytrace"),
+                ]
+            )
+        )
+        print(
+            f"{name}: FLIP {with_probe.flip:.4f} (no probe {alone.flip:.4f}), miss share "
+            f"{mask.miss_share:.3f}, false hits {false.sum()} of {region.sum()}"
+        )
+    Image.fromarray(np.vstack(rows)).save(DOCS / "ssr.png")
 
 
 def methods_picture(renderer) -> None:

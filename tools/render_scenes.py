@@ -1,6 +1,8 @@
 """Render every shipped scene file to docs/scenes/NAME.png (headless; from the checkout):
 
-    .venv/bin/python tools/render_scenes.py
+    .venv/bin/python tools/render_scenes.py [NAME ...]
+
+(the scenes named, else all of them).
 
 An animated scene is shown at its first, middle and last frames side by side.
 """
@@ -19,9 +21,11 @@ DOCS = Path(__file__).resolve().parent.parent / "docs" / "scenes"
 SIZE = (384, 384)
 
 
-def main() -> None:
+def main(names: list[str]) -> None:
     with mirrorlab.Renderer(SIZE) as renderer:
         for path in sorted(scenes_dir().glob("*.toml")):
+            if names and path.stem not in names:
+                continue
             scene = mirrorlab.load_scene(path)
             frames = sorted({0, scene.frame_count // 2, scene.frame_count - 1})
             image = np.hstack([renderer.render(scene, frame=frame) for frame in frames])
@@ -30,4 +34,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+
+    main(sys.argv[1:])

@@ -15,6 +15,7 @@ CONTROLS: tuple[tuple[str, str], ...] = (
     ("1-9", "technique of the reflector under the mouse (else the first)"),
     ("M", "that reflector's next technique"),
     ("E", "show its texture (a cube map: six faces) as an inset"),
+    ("X", "show screen-space reflections' miss mask over the frame (technique ssr)"),
     ("P", "print the frame's plan to the terminal"),
     ("S", "save a screenshot"),
     ("R", "reset scene and camera"),

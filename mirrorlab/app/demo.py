@@ -14,6 +14,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,6 +24,9 @@ from mirrorlab.gl.context import WindowContext, gl_pass, window_context
 from mirrorlab.options import with_technique
 from mirrorlab.scene.model import Camera, CurvedReflector, Scene
 from mirrorlab.techniques import technique, technique_names
+
+if TYPE_CHECKING:
+    from mirrorlab.gl.resources import Texture2D
 
 JOINT_STEP_DEG = 5.0
 ZOOM_FACTOR = 1.1
@@ -108,6 +112,8 @@ class DemoApp:
         self.dirty = True
         self.show_help = False
         self.show_inset = False
+        self.show_mask = False
+        self._mask_texture: Texture2D | None = None
         self.save_next = False
         self.print_plan = False
         self.last_ms = 0.0
@@ -240,6 +246,8 @@ class DemoApp:
             self.next_technique()
         elif key == glfw.KEY_E and once:
             self.show_inset = not self.show_inset
+        elif key == glfw.KEY_X and once:
+            self.show_mask = not self.show_mask
         elif key == glfw.KEY_P and once:
             self.print_plan = True
         elif key == glfw.KEY_S and once:
@@ -332,6 +340,8 @@ class DemoApp:
     def draw_overlay(self, scene: Scene, stats, size: tuple[int, int]) -> None:
         scale = self.scale()
         margin = round(8 * scale)
+        if self.show_mask:
+            self.draw_mask(stats, size, scale, margin)
         if self.show_inset:
             self.draw_inset(scene, stats, size, scale, margin)
         if self.show_help:
@@ -346,6 +356,35 @@ class DemoApp:
                 names = "  ".join(f"{i + 1} {n}" for i, n in enumerate(self.techniques_of(index)))
                 lines += ["", f"techniques of {scene.reflectors[index].name}: {names}"]
             self.overlay.text("help", lines, (margin, margin), size, scale)
+
+    def draw_mask(self, stats, size: tuple[int, int], scale: float, margin: int) -> None:
+        """Screen-space reflections' miss mask of the frame over the whole window: white
+        where a reflector pixel's ray was found on the screen (grey as it fades into the
+        probe), a colour for each reason it fell back to the probe, black elsewhere."""
+        from mirrorlab.gl.resources import Texture2D
+        from mirrorlab.passes.ssr import frame_mask
+        from mirrorlab.screen_space import REASONS
+
+        mask = frame_mask(self.renderer, stats.plan.top)
+        if self._mask_texture is not None:
+            self._mask_texture.release()
+        texture = self._mask_texture = Texture2D(
+            self.context.resources, size[0], size[1], mask.image(), mipmaps=False, clamp=True
+        )
+        self.overlay.texture(texture, (0, 0), size, size)
+        if mask.reflector.any():
+            counts = mask.counts()
+            pixels = int(mask.reflector.sum())
+            lines = [
+                f"miss mask: {100 * mask.miss_share:.1f}% of {pixels} reflector pixels fell "
+                "back to the probe",
+                ", ".join(f"{reason} {counts[reason]}" for reason in REASONS[1:] if counts[reason]),
+            ]
+        else:
+            lines = ["miss mask: no reflector drawn by ssr (M picks a technique)"]
+        self.overlay.text(
+            "mask", lines, (margin, size[1] - margin - 20 * scale * len(lines)), size, scale
+        )
 
     def draw_inset(
         self, scene: Scene, stats, size: tuple[int, int], scale: float, margin: int
@@ -442,6 +481,9 @@ class DemoApp:
         )
 
     def release(self) -> None:
+        if self._mask_texture is not None:
+            self._mask_texture.release()
+            self._mask_texture = None
         self.overlay.release()
         self.renderer.release()
 

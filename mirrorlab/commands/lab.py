@@ -63,16 +63,40 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     check.add_argument(
         "--out", help="the picture student | reference | difference (default out/LAB_check.png)"
     )
-    run = lab_commands.add_parser(
-        "run", help="run a lab file in a window (the file itself runs in the sandbox)"
+    check.add_argument(
+        "--watch",
+        action="store_true",
+        help="check the file again every time it is saved, until Ctrl-C (the checker "
+        "stays ready between saves, so each check takes a fraction of the first)",
     )
-    run.add_argument("lab_name", metavar="LAB")
-    run.add_argument("file", metavar="FILE", nargs="?")
-    run.add_argument("--size", default="512x512", help="WIDTHxHEIGHT (default %(default)s)")
+    run = lab_commands.add_parser(
+        "run",
+        help="run a lab file in a window (the file itself runs in the sandbox)",
+        description="Run a lab file in a window: the lab's set-up functions once, then "
+        "display() every frame, drawn as the checker draws it. Esc or the window's close "
+        "button ends it; an error in the file is one line naming its task and line.",
+    )
+    run.add_argument("lab_name", metavar="LAB", help=lab_help)
+    run.add_argument(
+        "file",
+        metavar="FILE",
+        nargs="?",
+        help="the student's file (default: starter.py of the current folder, where lab "
+        "start puts it, as for lab check); a variant.json beside it (from lab release) "
+        "names its variant",
+    )
+    run.add_argument(
+        "--size", default="512x512", help="the window's size, WIDTHxHEIGHT (default %(default)s)"
+    )
     run.add_argument(
         "--max-frames", metavar="N", default="0", help="close after this many frames (0: until Esc)"
     )
     run.add_argument("--screenshot", metavar="PATH", help="write the last frame as a PNG")
+    run.add_argument(
+        "--watch",
+        action="store_true",
+        help="run the file again in the same window every time it is saved",
+    )
     grade = lab_commands.add_parser(
         "grade",
         parents=[limits, solutions],
@@ -188,7 +212,7 @@ def run(args: argparse.Namespace) -> int:
         size = parse_size("--size", args.size)
         max_frames = parse_count("--max-frames", args.max_frames, 0, 10**9)
         screenshot = check_output("--screenshot", args.screenshot) if args.screenshot else None
-        return run_window(args.lab_name, args.file, size, max_frames, screenshot)
+        return run_window(args.lab_name, args.file, size, max_frames, screenshot, watch=args.watch)
     from mirrorlab.labs.trusted.sandbox import Limits
 
     cpu = parse_count("--timeout", args.timeout, 1, 3600)
@@ -203,7 +227,7 @@ def run(args: argparse.Namespace) -> int:
         from mirrorlab.labs.trusted.checker import run_check
 
         out = check_output("--out", args.out) if args.out else None
-        return run_check(args.lab_name, args.file, out, limits, args.solutions)
+        return run_check(args.lab_name, args.file, out, limits, args.solutions, args.watch)
     if action == "release":
         from mirrorlab.labs.trusted.release import run_release
 

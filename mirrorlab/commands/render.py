@@ -80,6 +80,13 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
         metavar="PATH",
         help="also write the first planar mirror's capture texture as a PNG",
     )
+    render.add_argument(
+        "--save-ssr-mask",
+        metavar="PATH",
+        help="also write the miss mask of screen-space reflections (technique ssr) as a "
+        "PNG: white where a reflector pixel's ray was found on the screen (grey where it "
+        "fades into the probe), a colour for each reason it fell back to the probe",
+    )
     from mirrorlab.techniques import techniques
 
     for entry in techniques("frame"):  # --raytrace: the whole frame by another renderer
@@ -101,6 +108,7 @@ def run(args: argparse.Namespace) -> int:
     fps = parse_count("--fps", args.fps, 1, 100)
     out = check_output("--out", args.out) if args.out else None
     save_env = check_output("--save-env", args.save_env) if args.save_env else None
+    save_mask = check_output("--save-ssr-mask", args.save_ssr_mask) if args.save_ssr_mask else None
     out_dir = check_folder("--out-dir", args.out_dir) if args.out_dir else None
     animations = [
         (kind, check_output(f"--{kind}", path, f".{kind}"))
@@ -117,7 +125,11 @@ def run(args: argparse.Namespace) -> int:
             if given:
                 raise UsageError(f"{option}: works on a batch of frames; give --out-dir DIR too")
     else:
-        for option, given in (("--stats", args.stats), ("--save-env", save_env)):
+        for option, given in (
+            ("--stats", args.stats),
+            ("--save-env", save_env),
+            ("--save-ssr-mask", save_mask),
+        ):
             if given:
                 raise UsageError(
                     f"{option}: measures frames in one renderer; give it without --out-dir"
@@ -127,7 +139,21 @@ def run(args: argparse.Namespace) -> int:
     if out is None and out_dir is None:
         out = check_output("--out", Path("out") / f"{scene.name}.png", make_folder=True)
     frames = frame_list(args, scene)
+    if save_mask is not None:
+        from mirrorlab.techniques import technique
+
+        if frame_technique is not None:
+            raise UsageError(
+                f"--save-ssr-mask: the frame is drawn by {frame_technique}; screen-space "
+                "reflections are drawn by OpenGL (--method ssr)"
+            )
+        if not any(technique(r.technique).texture == "screen" for r in scene.reflectors):
+            raise UsageError(
+                f"--save-ssr-mask: scene {scene.name} has no reflector drawn by screen-space "
+                "reflections (--method ssr makes every reflector one)"
+            )
     outputs = ([("--out", out)] if out else []) + ([("--save-env", save_env)] if save_env else [])
+    outputs += [("--save-ssr-mask", save_mask)] if save_mask else []
     outputs += [(f"--{kind}", path) for kind, path in animations]
     if out_dir is not None:
         from mirrorlab.batch import frame_name
@@ -167,6 +193,7 @@ def run(args: argparse.Namespace) -> int:
         frame_technique,
         debug=args.debug,
         tiny_pixels=tiny_pixels_of(args),
+        save_mask=save_mask,
     )
 
 
@@ -229,9 +256,11 @@ def render_frames(
     say: Callable[[str], None] = print,
     debug: bool = False,
     tiny_pixels: float = TINY_PIXELS,
+    save_mask: Path | None = None,
 ) -> int:
     """Render ``frames`` of ``scene`` in order; the last goes to ``out`` (with ``save_env``,
-    its capture texture too), all files together at the end, or none. With ``stats``, each
+    its capture texture too; with ``save_mask``, the miss mask of its screen-space
+    reflections), all files together at the end, or none. With ``stats``, each
     frame is also drawn with every pass (--no-plan) by a second renderer, in turn with the
     planned one, so both are timed under the same conditions, and the two frames are
     compared pixel for pixel. ``frame_technique`` names a technique that draws the whole
@@ -282,6 +311,9 @@ def render_frames(
             environment = _environment(renderer, scene) if save_env is not None else None
             if save_env is not None and environment is not None:
                 outputs.add_png(save_env, environment)
+            mask = renderer.ssr_mask() if save_mask is not None else None
+            if save_mask is not None and mask is not None:
+                outputs.add_png(save_mask, mask.image())
             gl_renderer = renderer.gl_renderer
             described = renderer.gl_description if stats else None
     last = records[-1][1]
@@ -298,6 +330,13 @@ def render_frames(
             say(
                 f"wrote {save_env} (capture texture, {environment.shape[1]}x{environment.shape[0]})"
             )
+    if save_mask is not None and mask is not None:
+        shares = (
+            "no reflector pixel drawn by ssr"
+            if not mask.reflector.any()
+            else f"{100 * mask.miss_share:.1f}% of its reflector pixels fell back to the probe"
+        )
+        say(f"wrote {save_mask} (screen-space reflections' miss mask: {shares})")
     if described is not None:
         from mirrorlab.gl.context import summary
 

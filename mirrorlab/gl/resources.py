@@ -203,6 +203,12 @@ class Program(_Resource):
         if not self._unchanged(location, ("1i", int(value))):
             gl.glUniform1i(location, int(value))
 
+    def set_ivec2(self, uniform: str, value) -> None:
+        x, y = (int(v) for v in value)
+        location = self.location(uniform)
+        if not self._unchanged(location, ("2i", x, y)):
+            gl.glUniform2i(location, x, y)
+
     def _free(self) -> None:
         gl.glDeleteProgram(self.name)
 
@@ -1054,3 +1060,223 @@ class FloatFramebuffer(Framebuffer):
         data = gl.glReadPixels(0, 0, self.width, self.height, GL.GL_RGBA, GL.GL_FLOAT)
         pixels = np.frombuffer(data, dtype=np.float32).reshape(self.height, self.width, 4)
         return pixels[::-1].copy()
+
+
+class FrameTextures(_Resource):
+    """A copy of a target's own frame: its colour (``GL_RGBA8``, alpha kept, filtered
+    ``GL_LINEAR`` for reads between pixels) and its depth (``GL_DEPTH_COMPONENT24``, the
+    bits mirrorlab's targets keep it in, as a live cube map's depth copies are; read
+    ``GL_NEAREST``: a depth between two surfaces would be a surface that is not there),
+    each ``width`` x ``height``, clamped, no mipmaps, no depth comparison (a lookup of
+    the depth returns it in ``.r``)."""
+
+    def __init__(self, registry: ResourceRegistry, width: int, height: int) -> None:
+        check_texture_size(width, height, "the view's frame copy")
+        self.width, self.height = int(width), int(height)
+        self.color, self.depth = (int(n) for n in np.atleast_1d(gl.glGenTextures(2)))
+        formats = (
+            (self.color, GL.GL_RGBA8, GL.GL_RGBA, GL.GL_UNSIGNED_BYTE),
+            (self.depth, GL.GL_DEPTH_COMPONENT24, GL.GL_DEPTH_COMPONENT, GL.GL_FLOAT),
+        )
+        for name, internal, layout, kind in formats:
+            gl.glBindTexture(GL.GL_TEXTURE_2D, name)
+            gl.glTexImage2D(
+                GL.GL_TEXTURE_2D, 0, internal, self.width, self.height, 0, layout, kind, None
+            )
+            smooth = GL.GL_LINEAR if name == self.color else GL.GL_NEAREST
+            for parameter, value in (
+                (GL.GL_TEXTURE_MIN_FILTER, smooth),
+                (GL.GL_TEXTURE_MAG_FILTER, smooth),
+                (GL.GL_TEXTURE_WRAP_S, GL.GL_CLAMP_TO_EDGE),
+                (GL.GL_TEXTURE_WRAP_T, GL.GL_CLAMP_TO_EDGE),
+                (GL.GL_TEXTURE_MAX_LEVEL, 0),
+            ):
+                gl.glTexParameteri(GL.GL_TEXTURE_2D, parameter, value)
+        gl.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_COMPARE_MODE, GL.GL_NONE)
+        super().__init__(registry)
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return self.width, self.height
+
+    def copy(self, region: tuple[int, int, int, int] | None = None) -> None:
+        """Copy the bound read framebuffer's colour and depth into both textures, all of
+        them or the pixel rectangle ``region`` (x, y, width, height, clipped to them)."""
+        x, y, w, h = (0, 0, self.width, self.height) if region is None else region
+        x0, y0 = max(int(x), 0), max(int(y), 0)
+        x1, y1 = min(int(x + w), self.width), min(int(y + h), self.height)
+        if x1 <= x0 or y1 <= y0:
+            return
+        for name in (self.color, self.depth):
+            gl.glBindTexture(GL.GL_TEXTURE_2D, name)
+            gl.glCopyTexSubImage2D(GL.GL_TEXTURE_2D, 0, x0, y0, x0, y0, x1 - x0, y1 - y0)
+
+    def bind(self, color_unit: int, depth_unit: int) -> None:
+        """The colour on texture unit ``color_unit``, the depth on ``depth_unit``."""
+        for unit, name in ((color_unit, self.color), (depth_unit, self.depth)):
+            gl.glActiveTexture(GL.GL_TEXTURE0 + unit)
+            gl.glBindTexture(GL.GL_TEXTURE_2D, name)
+
+    def read_color(self) -> np.ndarray:
+        """The colour copy as ``(height, width, 4)`` uint8, row 0 at the top."""
+        gl.glBindTexture(GL.GL_TEXTURE_2D, self.color)
+        gl.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
+        data = gl.glGetTexImage(GL.GL_TEXTURE_2D, 0, GL.GL_RGBA, GL.GL_UNSIGNED_BYTE)
+        pixels = np.frombuffer(data, dtype=np.uint8).reshape(self.height, self.width, 4)
+        return pixels[::-1].copy()
+
+    def read_depth(self) -> np.ndarray:
+        """The depth copy as ``(height, width)`` float32 window depths in [0, 1], row 0 at
+        the top."""
+        gl.glBindTexture(GL.GL_TEXTURE_2D, self.depth)
+        gl.glPixelStorei(GL.GL_PACK_ALIGNMENT, 4)
+        data = gl.glGetTexImage(GL.GL_TEXTURE_2D, 0, GL.GL_DEPTH_COMPONENT, GL.GL_FLOAT)
+        depths = np.frombuffer(data, dtype=np.float32).reshape(self.height, self.width)
+        return depths[::-1].copy()
+
+    def _free(self) -> None:
+        gl.glDeleteTextures([self.color, self.depth])
+
+
+class AttachmentFramebuffer(_Resource):
+    """A framebuffer that draws into textures of its own, one colour attachment per
+    format of ``formats`` (``GL_RGBA8``, ``GL_RGBA32F``, ...), all ``width`` x ``height``,
+    ``GL_NEAREST``, clamped, no depth buffer: fragment output ``k`` lands in
+    :attr:`textures` ``[k]``."""
+
+    def __init__(
+        self, registry: ResourceRegistry, width: int, height: int, formats: tuple[int, ...]
+    ) -> None:
+        check_texture_size(width, height, "a pass's own target")
+        self.width, self.height = int(width), int(height)
+        self.formats = tuple(formats)
+        self.textures = [int(n) for n in np.atleast_1d(gl.glGenTextures(len(formats)))]
+        self.name = int(gl.glGenFramebuffers(1))
+        gl.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
+        for index, (name, internal) in enumerate(zip(self.textures, self.formats, strict=True)):
+            float_format = internal in (GL.GL_RGBA32F, GL.GL_RGBA16F)
+            gl.glBindTexture(GL.GL_TEXTURE_2D, name)
+            gl.glTexImage2D(
+                GL.GL_TEXTURE_2D,
+                0,
+                internal,
+                self.width,
+                self.height,
+                0,
+                GL.GL_RGBA,
+                GL.GL_FLOAT if float_format else GL.GL_UNSIGNED_BYTE,
+                None,
+            )
+            for parameter, value in (
+                (GL.GL_TEXTURE_MIN_FILTER, GL.GL_NEAREST),
+                (GL.GL_TEXTURE_MAG_FILTER, GL.GL_NEAREST),
+                (GL.GL_TEXTURE_WRAP_S, GL.GL_CLAMP_TO_EDGE),
+                (GL.GL_TEXTURE_WRAP_T, GL.GL_CLAMP_TO_EDGE),
+                (GL.GL_TEXTURE_MAX_LEVEL, 0),
+            ):
+                gl.glTexParameteri(GL.GL_TEXTURE_2D, parameter, value)
+            gl.glFramebufferTexture2D(
+                GL.GL_FRAMEBUFFER, GL.GL_COLOR_ATTACHMENT0 + index, GL.GL_TEXTURE_2D, name, 0
+            )
+        self.buffers = np.array(
+            [GL.GL_COLOR_ATTACHMENT0 + i for i in range(len(formats))], dtype=np.uint32
+        )
+        self.buffers.flags.writeable = False  # handed to GL by every recorded frame
+        gl.glDrawBuffers(len(formats), self.buffers)
+        status = gl.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
+        if status != GL.GL_FRAMEBUFFER_COMPLETE:
+            gl.glDeleteFramebuffers(1, [self.name])
+            gl.glDeleteTextures(self.textures)
+            raise GLContextError(
+                f"framebuffer {self.width}x{self.height} of {len(formats)} textures incomplete "
+                f"(status {status:#x})"
+            )
+        super().__init__(registry)
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return self.width, self.height
+
+    def bind(self) -> None:
+        gl.glBindFramebuffer(GL.GL_FRAMEBUFFER, self.name)
+
+    def bind_texture(self, index: int, unit: int) -> None:
+        """Attachment ``index``'s texture on texture unit ``unit``."""
+        gl.glActiveTexture(GL.GL_TEXTURE0 + unit)
+        gl.glBindTexture(GL.GL_TEXTURE_2D, self.textures[index])
+
+    def read_float(self, index: int) -> np.ndarray:
+        """Attachment ``index`` as ``(height, width, 4)`` float32, row 0 at the top."""
+        gl.glBindTexture(GL.GL_TEXTURE_2D, self.textures[index])
+        gl.glPixelStorei(GL.GL_PACK_ALIGNMENT, 4)
+        data = gl.glGetTexImage(GL.GL_TEXTURE_2D, 0, GL.GL_RGBA, GL.GL_FLOAT)
+        pixels = np.frombuffer(data, dtype=np.float32).reshape(self.height, self.width, 4)
+        return pixels[::-1].copy()
+
+    def _free(self) -> None:
+        gl.glDeleteFramebuffers(1, [self.name])
+        gl.glDeleteTextures(self.textures)
+
+
+class DepthPyramid(_Resource):
+    """A pyramid of nearest depths over a ``width`` x ``height`` depth buffer: one
+    ``GL_R32F`` texture whose level ``k`` (GL's sizes: ``max(1, size >> k)``) holds, for
+    each texel, the least window depth of the level ``k - 1`` texels under it (the last
+    texel of a row or column also takes the one left over where the level below has an
+    odd count, so it covers the buffer to its end); one framebuffer a level to draw it.
+    Read ``GL_NEAREST`` with ``texelFetch``."""
+
+    def __init__(self, registry: ResourceRegistry, width: int, height: int) -> None:
+        check_texture_size(width, height, "a depth pyramid")
+        self.width, self.height = int(width), int(height)
+        sizes = [(self.width, self.height)]
+        while sizes[-1] != (1, 1):
+            w, h = sizes[-1]
+            sizes.append((max(1, w // 2), max(1, h // 2)))
+        self.sizes = tuple(sizes)
+        self.texture = int(gl.glGenTextures(1))
+        gl.glBindTexture(GL.GL_TEXTURE_2D, self.texture)
+        for level, (w, h) in enumerate(sizes):
+            gl.glTexImage2D(
+                GL.GL_TEXTURE_2D, level, GL.GL_R32F, w, h, 0, GL.GL_RED, GL.GL_FLOAT, None
+            )
+        for parameter, value in (
+            (GL.GL_TEXTURE_MIN_FILTER, GL.GL_NEAREST_MIPMAP_NEAREST),
+            (GL.GL_TEXTURE_MAG_FILTER, GL.GL_NEAREST),
+            (GL.GL_TEXTURE_WRAP_S, GL.GL_CLAMP_TO_EDGE),
+            (GL.GL_TEXTURE_WRAP_T, GL.GL_CLAMP_TO_EDGE),
+            (GL.GL_TEXTURE_BASE_LEVEL, 0),
+            (GL.GL_TEXTURE_MAX_LEVEL, len(sizes) - 1),
+        ):
+            gl.glTexParameteri(GL.GL_TEXTURE_2D, parameter, value)
+        self.framebuffers = [int(n) for n in np.atleast_1d(gl.glGenFramebuffers(len(sizes)))]
+        for level, name in enumerate(self.framebuffers):
+            gl.glBindFramebuffer(GL.GL_FRAMEBUFFER, name)
+            gl.glFramebufferTexture2D(
+                GL.GL_FRAMEBUFFER, GL.GL_COLOR_ATTACHMENT0, GL.GL_TEXTURE_2D, self.texture, level
+            )
+            status = gl.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
+            if status != GL.GL_FRAMEBUFFER_COMPLETE:
+                gl.glDeleteFramebuffers(len(self.framebuffers), self.framebuffers)
+                gl.glDeleteTextures([self.texture])
+                raise GLContextError(
+                    f"depth pyramid level {level} {sizes[level]} incomplete (status {status:#x})"
+                )
+        super().__init__(registry)
+
+    @property
+    def levels(self) -> int:
+        return len(self.sizes)
+
+    def read_level(self, level: int) -> np.ndarray:
+        """Level ``level`` as ``(h, w)`` float32, row 0 at the top."""
+        width, height = self.sizes[level]
+        gl.glBindTexture(GL.GL_TEXTURE_2D, self.texture)
+        gl.glPixelStorei(GL.GL_PACK_ALIGNMENT, 4)
+        data = gl.glGetTexImage(GL.GL_TEXTURE_2D, level, GL.GL_RED, GL.GL_FLOAT)
+        values = np.frombuffer(data, dtype=np.float32).reshape(height, width)
+        return values[::-1].copy()
+
+    def _free(self) -> None:
+        gl.glDeleteFramebuffers(len(self.framebuffers), self.framebuffers)
+        gl.glDeleteTextures([self.texture])

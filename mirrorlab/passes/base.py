@@ -1,13 +1,15 @@
 """What every pass shares: GL copies of meshes, pictures and programs made once per
 context (:class:`SharedResources`), the per-view GL state (:func:`apply_view_state`), and
-the protocol a reflector's technique follows (:class:`ReflectorPass`)."""
+the protocol a reflector's technique follows (:class:`ReflectorPass`, and
+:class:`ReportsFallback` for one that falls back to another where its own method has no
+answer)."""
 
 from __future__ import annotations
 
 import ctypes
 import functools
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -332,6 +334,23 @@ class ReflectorPass(Protocol):
 
     def release(self) -> None:
         """Free every GL object this pass made (not the shared ones)."""
+        ...
+
+
+@runtime_checkable
+class ReportsFallback(Protocol):
+    """What a pass adds to :class:`ReflectorPass` when its technique has a fallback (a
+    probe it draws where its own method finds no answer, as screen-space reflections do
+    for rays that leave the screen): which pixels of a view it filled that way. The
+    accuracy sweep reports the share of a reflector's pixels that fell back (its ``miss
+    share``) for every technique whose pass has this method; the others have none."""
+
+    def fallback_mask(self, draw: ReflectorDraw, view: View) -> np.ndarray | None:
+        """``(h, w)`` bool over ``view``'s target (``view.size``), row 0 at the top as a
+        read-back frame is: True where the last frame's ``draw`` (one of this pass's draws
+        in ``view``) showed its fallback instead of its own method's answer. None where it
+        drew nothing in ``view``. Called after the frame, with its context current (it
+        may read GL back); it changes nothing that is drawn."""
         ...
 
 

@@ -40,6 +40,7 @@ from mirrorlab.scene.model import (
     DEFAULT_PLAIN_COLOR,
     FOOTPRINT_TEXTURE,
     PARALLAX_PROXIES,
+    SSR_NO_PROBE,
     Animation,
     Background,
     BoxProxy,
@@ -54,10 +55,17 @@ from mirrorlab.scene.model import (
     PlanarReflector,
     RobotObject,
     Scene,
+    ScreenSpace,
     SphereProxy,
     Transform,
 )
-from mirrorlab.techniques import names_where, technique, technique_names
+from mirrorlab.techniques import (
+    Technique,
+    names_where,
+    reflector_technique_names,
+    technique,
+    techniques,
+)
 
 """The shipped scene files."""
 DEFAULT_SCENE = "lab20"
@@ -119,7 +127,15 @@ _PLANAR_KEYS = (
     "ortho",
     "color",
     "backing",
+    "map_size",
+    "source",
+    "capture_center",
+    "parallax",
+    "ssr",
 )
+_PLANAR_MAP_KEYS = ("map_size", "source", "capture_center", "parallax")
+"""A planar mirror's keys for the map of a technique that falls back to one (``ssr``)."""
+_SSR_KEYS = ("probe", "stride", "steps", "thickness", "max_distance", "refine", "edge_fade")
 _CURVED_KEYS = (
     "name",
     "technique",
@@ -130,6 +146,7 @@ _CURVED_KEYS = (
     "capture_center",
     "color",
     "parallax",
+    "ssr",
 )
 _PARALLAX_KEYS = {
     "box": ("min", "max"),
@@ -323,6 +340,13 @@ def scene_to_document(scene: Scene, base: Path | None = None) -> dict[str, Any]:
                 }
             entry["color"] = list(reflector.color)
             entry["backing"] = list(reflector.backing)
+            if technique(reflector.technique).probe:
+                entry["map_size"] = reflector.map_size
+                entry["capture_center"] = list(reflector.capture_center)
+                if reflector.source is not None:
+                    entry["source"] = rel(reflector.source)
+                if reflector.parallax is not None:
+                    entry["parallax"] = parallax_document(reflector.parallax)
         else:
             entry = {
                 "name": reflector.name,
@@ -337,6 +361,8 @@ def scene_to_document(scene: Scene, base: Path | None = None) -> dict[str, Any]:
                 entry["source"] = rel(reflector.source)
             if reflector.parallax is not None:
                 entry["parallax"] = parallax_document(reflector.parallax)
+        if reflector.ssr is not None:
+            entry["ssr"] = screen_space_document(reflector.ssr)
         reflectors.append(entry)
     document["reflectors"] = reflectors
     if scene.animation is not None:
@@ -370,6 +396,19 @@ def parallax_document(parallax: Parallax) -> dict[str, Any]:
         "steps": parallax.steps,
         "secant": parallax.secant,
         "thickness": parallax.thickness,
+    }
+
+
+def screen_space_document(settings: ScreenSpace) -> dict[str, Any]:
+    """A reflector's ``ssr`` table."""
+    return {
+        "probe": settings.probe,
+        "stride": settings.stride,
+        "steps": settings.steps,
+        "thickness": settings.thickness,
+        "max_distance": settings.max_distance,
+        "refine": settings.refine,
+        "edge_fade": settings.edge_fade,
     }
 
 
@@ -796,11 +835,13 @@ class _Reader:
             key = f"reflectors[{i}]"
             if not isinstance(item, Mapping):
                 raise self.fail(key, f"expected a table, got {_kind(item)}")
-            names = technique_names("planar") + technique_names("curved")
+            names = reflector_technique_names()
             if "technique" not in item:
                 raise self.fail(f"{key}.technique", f"missing; expected one of {', '.join(names)}")
             name = self.choice(item["technique"], f"{key}.technique", names)
-            if technique(name).kind == "planar":
+            entry = technique(name)
+            # a technique for either kind: a mesh makes a curved reflector
+            if entry.kind == "planar" or (entry.kind == "both" and "mesh" not in item):
                 reflectors.append(self.planar(item, key, name))
             else:
                 reflectors.append(self.curved(item, key, name))
@@ -830,10 +871,19 @@ class _Reader:
         if "texture_size" in table:
             texture_size = self.texture_size(table["texture_size"], f"{key}.texture_size", name)
         ortho = self.ortho(table["ortho"], f"{key}.ortho") if "ortho" in table else None
-        if ortho is not None and not technique(name).own_camera:
+        entry = technique(name)
+        if ortho is not None and not entry.own_camera:
             owners = _techniques_with(lambda t: t.own_camera)
             raise self.fail(f"{key}.ortho", f"applies to {owners}, not {name!r}")
-        return PlanarReflector(
+        given = [k for k in (*_PLANAR_MAP_KEYS, "ssr") if k in table]
+        if given and not entry.probe:
+            owners = _techniques_with(lambda t: bool(t.probe))
+            raise self.fail(
+                f"{key}.{given[0]}",
+                f"applies to a planar mirror of {owners} (a map it falls back to), not {name!r}",
+            )
+        ssr = self.screen_space(table["ssr"], f"{key}.ssr") if "ssr" in table else None
+        mirror = PlanarReflector(
             name=self.text(table.get("name", "mirror"), f"{key}.name"),
             corners=corners,
             technique=name,
@@ -842,6 +892,93 @@ class _Reader:
             ortho=ortho,
             color=self.color(table.get("color", list(DEFAULT_PLAIN_COLOR)), f"{key}.color"),
             backing=self.color(table.get("backing", list(DEFAULT_BACKING)), f"{key}.backing"),
+            map_size=self.integer(table.get("map_size", 256), f"{key}.map_size", 4, MAX_MAP_SIZE),
+            capture_center=self.vec3(
+                table.get("capture_center", [0, 0, 0]), f"{key}.capture_center"
+            ),
+            ssr=ssr,
+        )
+        mapped = _map_technique(entry, ssr)
+        source = self.map_source(table, key, name, mapped)
+        parallax = self.map_parallax(table, key, name, mapped, mirror.probe_center())
+        return replace(mirror, source=source, parallax=parallax)
+
+    def map_source(
+        self, table: Mapping[str, Any], key: str, name: str, mapped: Technique | None
+    ) -> Path | None:
+        """A reflector's ``source``, as the technique of its map (``mapped``) takes it."""
+        if "source" not in table:
+            return None
+        kind = None if mapped is None else mapped.source
+        if kind == "faces":
+            return self.folder_of_faces(table["source"], f"{key}.source")
+        if kind is not None and mapped is not None:  # a picture: the map in its layout
+            return self.file(table["source"], f"{key}.source", f"{mapped.name} map's picture")
+        via = "" if mapped is None or mapped.name == name else f" (its probe {mapped.name!r})"
+        raise self.fail(
+            f"{key}.source",
+            f"technique {name!r}{via} takes no source (only "
+            f"{_techniques_with(lambda t: t.source is not None)} do: a "
+            "live map captures the scene, the others are baked from the "
+            "background)",
+        )
+
+    def map_parallax(
+        self,
+        table: Mapping[str, Any],
+        key: str,
+        name: str,
+        mapped: Technique | None,
+        center: np.ndarray,
+    ) -> Parallax | None:
+        """A reflector's ``parallax``, which the technique of its map (``mapped``) must
+        take; a box proxy must hold the capture centre ``center`` ``(3,)``."""
+        if "parallax" not in table:
+            return None
+        if mapped is None or not mapped.parallax:
+            via = "" if mapped is None or mapped.name == name else f" with probe {mapped.name!r}"
+            owners = _techniques_with(lambda t: t.parallax and not t.probe)
+            raise self.fail(f"{key}.parallax", f"applies to {owners}, not {name!r}{via}")
+        parallax = self.parallax(table["parallax"], f"{key}.parallax")
+        if isinstance(parallax, BoxProxy):
+            if not (np.all(center >= parallax.min) and np.all(center <= parallax.max)):
+                raise self.fail(
+                    f"{key}.parallax",
+                    "the reflector's capture centre "
+                    f"{[round(float(v), 6) for v in center]} is outside the box "
+                    "proxy; the box must enclose the reflector",
+                )
+        return parallax
+
+    def screen_space(self, value: Any, key: str) -> ScreenSpace:
+        """An ``ssr`` table: screen-space reflections' settings."""
+        from mirrorlab.screen_space import MAX_REFINE, MAX_STEPS, MAX_STRIDE
+
+        table = self.table(value, key, _SSR_KEYS)
+        default = ScreenSpace()
+        probes = (*probe_technique_names(), SSR_NO_PROBE)
+        return ScreenSpace(
+            probe=self.choice(table.get("probe", default.probe), f"{key}.probe", probes),
+            stride=self.number(
+                table.get("stride", default.stride), f"{key}.stride", 0.25, MAX_STRIDE
+            ),
+            steps=self.integer(table.get("steps", default.steps), f"{key}.steps", 1, MAX_STEPS),
+            thickness=self.number(
+                table.get("thickness", default.thickness),
+                f"{key}.thickness",
+                0.0,
+                100.0,
+                low_open=True,
+            ),
+            max_distance=self.number(
+                table.get("max_distance", default.max_distance), f"{key}.max_distance", 0.0
+            ),
+            refine=self.integer(
+                table.get("refine", default.refine), f"{key}.refine", 0, MAX_REFINE
+            ),
+            edge_fade=self.number(
+                table.get("edge_fade", default.edge_fade), f"{key}.edge_fade", 0.0, 0.5
+            ),
         )
 
     def texture_size(self, value: Any, key: str, name: str) -> int | Literal["footprint"]:
@@ -927,20 +1064,12 @@ class _Reader:
             raise self.fail(f"{key}.mesh", "missing: a curved reflector needs a mesh file")
         mesh = self.mesh_file(table["mesh"], f"{key}.mesh")
         entry = technique(name)
-        source = None
-        if "source" in table:
-            if entry.source == "faces":
-                source = self.folder_of_faces(table["source"], f"{key}.source")
-            elif entry.source is not None:  # a picture: the map in the technique's layout
-                source = self.file(table["source"], f"{key}.source", f"{name} map's picture")
-            else:
-                raise self.fail(
-                    f"{key}.source",
-                    f"technique {name!r} takes no source (only "
-                    f"{_techniques_with(lambda t: t.source is not None)} do: a "
-                    "live map captures the scene, the others are baked from the "
-                    "background)",
-                )
+        if "ssr" in table and not entry.probe:
+            owners = _techniques_with(lambda t: bool(t.probe))
+            raise self.fail(f"{key}.ssr", f"applies to {owners}, not {name!r}")
+        ssr = self.screen_space(table["ssr"], f"{key}.ssr") if "ssr" in table else None
+        mapped = _map_technique(entry, ssr)
+        source = self.map_source(table, key, name, mapped)
         reflector = CurvedReflector(
             name=self.text(table.get("name", mesh.stem), f"{key}.name"),
             mesh=mesh,
@@ -952,25 +1081,10 @@ class _Reader:
                 table.get("capture_center", [0, 0, 0]), f"{key}.capture_center"
             ),
             color=self.color(table.get("color", list(DEFAULT_PLAIN_COLOR)), f"{key}.color"),
+            ssr=ssr,
         )
-        if "parallax" not in table:
-            return reflector
-        if not entry.parallax:
-            raise self.fail(
-                f"{key}.parallax",
-                f"applies to {_techniques_with(lambda t: t.parallax)}, not {name!r}",
-            )
-        parallax = self.parallax(table["parallax"], f"{key}.parallax")
-        if isinstance(parallax, BoxProxy):
-            center = reflector.center()
-            if not (np.all(center >= parallax.min) and np.all(center <= parallax.max)):
-                raise self.fail(
-                    f"{key}.parallax",
-                    "the reflector's capture centre "
-                    f"{[round(float(v), 6) for v in center]} is outside the box "
-                    "proxy; the box must enclose the reflector",
-                )
-        return replace(reflector, parallax=parallax)
+        parallax = self.map_parallax(table, key, name, mapped, reflector.center())
+        return reflector if parallax is None else replace(reflector, parallax=parallax)
 
     def parallax(self, value: Any, key: str) -> Parallax:
         known = ("proxy", *dict.fromkeys(k for keys in _PARALLAX_KEYS.values() for k in keys))
@@ -1285,6 +1399,27 @@ def _segments_cross(a, b, c, d, normal) -> bool:
         return float(np.cross(q - p, r - p) @ normal)
 
     return side(a, b, c) * side(a, b, d) < 0 and side(c, d, a) * side(c, d, b) < 0
+
+
+def probe_technique_names() -> tuple[str, ...]:
+    """The techniques a reflector's ``ssr.probe`` may name: every curved technique whose
+    map is made from the scene or the background (not from the view's own frame, and
+    with no probe of its own)."""
+    return tuple(
+        t.name
+        for t in techniques("curved")
+        if t.texture in ("static", "baked", "fixed") and not t.probe
+    )
+
+
+def _map_technique(entry: Technique, ssr: ScreenSpace | None) -> Technique:
+    """The technique whose map a reflector of technique ``entry`` draws with: its own, or
+    for a technique with a probe, the probe's (with :data:`SSR_NO_PROBE`, the default
+    probe's: its map settings are kept for when a probe is named again, unused)."""
+    if not entry.probe:
+        return entry
+    probe = (ssr or ScreenSpace()).probe
+    return technique(ScreenSpace().probe if probe == SSR_NO_PROBE else probe)
 
 
 def _techniques_with(test) -> str:

@@ -180,6 +180,36 @@ FOOTPRINT_STEP = 16
 a little keeps the capture's size, and the capture."""
 
 
+SSR_NO_PROBE = "none"
+"""The ``probe`` of :class:`ScreenSpace` that falls back to nothing: a ray the screen
+holds no answer for shows the background's colour (to measure what a probe earns)."""
+
+
+@dataclass(frozen=True)
+class ScreenSpace:
+    """How screen-space reflections (technique ``ssr``) march and where they fall back
+    (:mod:`mirrorlab.screen_space` holds the march's numpy reference and the defaults'
+    reasons).
+
+    ``probe`` names the technique a ray the screen holds no answer for is looked up in
+    (any curved technique: ``cube-live``, ``cube``, ``latlong``, ...; or
+    :data:`SSR_NO_PROBE`); ``stride`` is the pixels between the march's samples along the
+    ray's longer screen axis; ``steps`` the most samples a ray takes; ``thickness`` how
+    far behind the surface seen at a pixel a ray may pass and still meet it, as a share
+    of that surface's distance from the eye; ``max_distance`` how far a ray is followed
+    in world units (0: until it leaves the view); ``refine`` the halvings that narrow a
+    hit down; ``edge_fade`` the share of the screen's smaller side over which hits near
+    its edges blend into the probe."""
+
+    probe: str = "cube-live"
+    stride: float = 1.0
+    steps: int = 256
+    thickness: float = 0.02
+    max_distance: float = 0.0
+    refine: int = 4
+    edge_fade: float = 0.03
+
+
 @dataclass(frozen=True)
 class PlanarReflector:
     """A flat four-cornered mirror. ``corners`` ``(4, 3)`` run counter-clockwise seen
@@ -191,7 +221,12 @@ class PlanarReflector:
     covers in that view, see :data:`FOOTPRINT_TEXTURE`). ``ortho`` is the
     capture camera of the ``ortho`` technique (None: one derived from the corners, see
     :func:`ortho_capture_for`). ``color`` is its plain look when bounces run out;
-    ``backing`` the unlit colour of its back."""
+    ``backing`` the unlit colour of its back.
+
+    A technique that falls back to a map (``ssr``: :class:`ScreenSpace`, its settings in
+    ``ssr``) reads that map's settings from ``map_size``, ``source``, ``capture_center``
+    (a live map's capture point, from the mirror's centre, in world axes that turn with
+    the mirror) and ``parallax``, as a curved reflector's own map has them."""
 
     name: str
     corners: tuple[Vec3, Vec3, Vec3, Vec3]
@@ -201,6 +236,11 @@ class PlanarReflector:
     ortho: OrthoCapture | None = None
     color: Vec3 = DEFAULT_PLAIN_COLOR
     backing: Vec3 = DEFAULT_BACKING
+    map_size: int = 256
+    source: Path | None = None
+    capture_center: Vec3 = (0.0, 0.0, 0.0)
+    parallax: Parallax | None = None
+    ssr: ScreenSpace | None = None
 
     kind: ClassVar[Literal["planar"]] = "planar"
 
@@ -248,6 +288,7 @@ class PlanarReflector:
             return _vec(goal + turn @ (np.asarray(point, dtype=np.float64) - center))
 
         corners = tuple(place(c) for c in self.corner_array)
+        offset = _vec(turn @ np.asarray(self.capture_center, dtype=np.float64))
         ortho = self.ortho
         if ortho is not None:
             ortho = replace(
@@ -256,7 +297,17 @@ class PlanarReflector:
                 target=place(ortho.target),
                 up=_vec(turn @ np.asarray(ortho.up, dtype=np.float64)),
             )
-        return replace(self, corners=corners, ortho=ortho)  # type: ignore[arg-type]
+        return replace(
+            self,
+            corners=corners,  # type: ignore[arg-type]
+            ortho=ortho,
+            capture_center=offset,
+        )
+
+    def probe_center(self) -> np.ndarray:
+        """World position ``(3,)`` a live probe map of the mirror is captured from: its
+        centre moved by :attr:`capture_center`."""
+        return self.center + np.asarray(self.capture_center, dtype=np.float64)
 
     def texcoords(self) -> np.ndarray:
         """``(4, 2)`` texture coordinates of the corners in the ortho capture: where the
@@ -338,7 +389,10 @@ class CurvedReflector:
     as it is, or a folder of six cube faces for ``cube`` (None: baked from the
     background); ``capture_center`` the point, in the mesh's own frame, a live cube
     map is captured from; ``parallax`` (``cube-live`` only) how its lookups correct for
-    nearby surroundings (None: everything is taken as infinitely far away)."""
+    nearby surroundings (None: everything is taken as infinitely far away); ``ssr`` the
+    settings of screen-space reflections (technique ``ssr``; None: the defaults), whose
+    probe map is this reflector's own (``map_size``, ``source``, ``capture_center``,
+    ``parallax``)."""
 
     name: str
     mesh: Path
@@ -349,6 +403,7 @@ class CurvedReflector:
     capture_center: Vec3 = (0.0, 0.0, 0.0)
     color: Vec3 = DEFAULT_PLAIN_COLOR
     parallax: Parallax | None = None
+    ssr: ScreenSpace | None = None
 
     kind: ClassVar[Literal["curved"]] = "curved"
 

@@ -9,10 +9,11 @@ import subprocess
 import sys
 from pathlib import Path
 
-from mirrorlab.accuracy import SweepSettings, lab_panel, scene_techniques, sphere_panels
+from mirrorlab.accuracy import SweepSettings, lab_panel, sphere_panels, sweep_rows
 from mirrorlab.cli import main
 from mirrorlab.scene.model import CAPTURE_MODES
 from mirrorlab.techniques import techniques
+from tests import REPO_DIR
 
 TIMES = ("wall_ms", "gpu_ms")
 
@@ -26,12 +27,13 @@ def test_the_quick_sweep_on_two_processes_gives_the_figures_of_one(tmp_path, cap
     one, two = tmp_path / "one", tmp_path / "two"
     assert main(["bench", "accuracy", "--quick", "--jobs", "1", "--out-dir", str(one)]) == 0
     assert "truths and scoring on serial (1 worker)" in capsys.readouterr().out
-    # a process of its own: a pool forks, and this test process holds EGL contexts
+    # a process of its own: a pool forks, and this test process holds EGL contexts (it
+    # imports the tests, so a run with twins of techniques registered has them there too)
     result = subprocess.run(
         [
             sys.executable,
-            "-m",
-            "mirrorlab.cli",
+            "-c",
+            "import sys, tests; from mirrorlab.cli import main; sys.exit(main(sys.argv[1:]))",
             "bench",
             "accuracy",
             "--quick",
@@ -42,29 +44,22 @@ def test_the_quick_sweep_on_two_processes_gives_the_figures_of_one(tmp_path, cap
         ],
         capture_output=True,
         text=True,
+        cwd=REPO_DIR,
     )
     assert result.returncode == 0, result.stderr[-2000:]
     assert "truths and scoring on pool (2 workers)" in result.stdout
     serial, parallel = figures(one), figures(two)
-    # every configuration of the quick sweep at each of its viewpoints, the ortho capture
-    # sized to its footprint among them (each capture mode, two viewpoints)
+    # every configuration at every viewpoint, the ortho capture sized to its footprint
+    # among them (each capture mode of each technique with a camera of its own, at each of
+    # the lab's viewpoints)
     quick = SweepSettings.quick()
-    panels = [lab_panel(quick), *sphere_panels(quick)]
-    assert len(serial) == sum(
-        len(panel.viewpoints)
-        * (
-            1
-            + len(
-                scene_techniques(
-                    panel.scene, quick.sizes, panel.proxies, quick.steps, quick.map_sizes
-                )
-            )
-        )
-        for panel in panels
+    lab = lab_panel(quick)
+    assert len(serial) == sweep_rows([lab, *sphere_panels(quick)], quick)
+    own = sum(t.own_camera for t in techniques("planar") if not t.draws_inline)
+    footprints = len(lab.viewpoints) * len(CAPTURE_MODES) * own
+    assert (
+        footprints > 0 and sum(r["technique"].endswith(" footprint") for r in serial) == footprints
     )
-    own_cameras = sum(t.own_camera for t in techniques("planar"))
-    footprints = len(lab_panel(quick).viewpoints) * len(CAPTURE_MODES) * own_cameras
-    assert sum(r["technique"].endswith(" footprint") for r in serial) == footprints
     assert serial == parallel
     # the figures are real measurements: the ray tracer's rows score zero, others do not
     assert {r["mae"] for r in serial if r["technique"].startswith("raytrace")} == {"0.0"}

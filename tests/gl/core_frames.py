@@ -2,8 +2,10 @@
 Mesa simulate macOS's OpenGL (:data:`MACOS_CONTEXT`): compiles every shader the renderer
 ships on its own, draws the first two frames of every golden sequence
 (:mod:`tests.gl.golden_frames`: every shipped scene, every technique) with a renderer of
-the context's own draw path, and saves them to OUT.npz with what the context is (its
-version, whether it is a core profile, the draw path taken). Test helper of
+the context's own draw path, and each technique for either kind of reflector on every
+shipped scene with a reflector (:func:`either_kind_frames`), and saves them to OUT.npz
+with what the context is (its version, whether it is a core profile, the draw path
+taken). Test helper of
 ``tests/gl/test_core_profile.py``."""
 
 from __future__ import annotations
@@ -70,6 +72,7 @@ def main(out: str) -> None:
     from mirrorlab.gl.context import HeadlessContext, gl_version
     from mirrorlab.gl.opengl import GL
     from mirrorlab.renderer import SceneRenderer
+    from tests.gl.frames import draw
     from tests.gl.golden_frames import draw_sequence, sequences
 
     with HeadlessContext(debug=True) as context:
@@ -92,7 +95,35 @@ def main(out: str) -> None:
                 frames[sequence.name] = draw_sequence(renderer, short)
             finally:
                 renderer.release()
+        renderer = SceneRenderer(context.resources)
+        try:
+            for name, scene in either_kind_frames():
+                frames[name] = draw(renderer, scene, EITHER_SIZE)[0]
+        finally:
+            renderer.release()
     np.savez_compressed(out, info=np.array(json.dumps(info)), **frames)
+
+
+EITHER_SIZE = (64, 64)
+"""The size of :func:`either_kind_frames`' frames."""
+
+
+def either_kind_frames():
+    """``(name, scene)``: each technique that serves both kinds of reflector on every
+    shipped scene with a reflector (``--method`` giving it to every reflector), one frame
+    each (the golden sequences show each curved technique on one scene only)."""
+    import mirrorlab
+    from mirrorlab.data import scenes_dir
+    from mirrorlab.options import apply_options
+    from mirrorlab.techniques import techniques
+
+    either = [t.name for t in techniques() if t.kind == "both"]
+    for path in sorted(scenes_dir().glob("*.toml")):
+        scene = mirrorlab.load_scene(path.stem)
+        if not scene.reflectors:
+            continue
+        for method in either:
+            yield f"{method}:{path.stem}", apply_options(scene, {"method": method})
 
 
 if __name__ == "__main__":

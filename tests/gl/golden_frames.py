@@ -23,8 +23,9 @@ import mirrorlab
 from mirrorlab.data import scenes_dir
 from mirrorlab.options import apply_options
 from mirrorlab.scene.model import Scene
-from mirrorlab.techniques import technique_names
+from mirrorlab.techniques import technique_names, techniques
 from tests.scenekit import vec3
+from tests.twins import original
 
 SIZE = (96, 96)
 """Width, height of every frame."""
@@ -71,10 +72,13 @@ class Sequence:
 
     name: str
     frames: tuple[tuple[Scene, int], ...]
+    golden: str = ""
+    """The PNG's name when it is not ``name``: a copy of a technique under another name
+    (:mod:`tests.twins`) draws its original's golden frames."""
 
     @property
     def path(self) -> Path:
-        return FOLDER / f"{self.name}.png"
+        return FOLDER / f"{self.golden or self.name}.png"
 
 
 TECHNIQUE_VARIANTS: tuple[tuple[str, dict[str, Any]], ...] = (
@@ -87,11 +91,18 @@ TECHNIQUE_VARIANTS: tuple[tuple[str, dict[str, Any]], ...] = (
         ("chrome_sphere", {"method": method, "map_size": 64})
         for method in technique_names("curved")
     ),
+    # a technique for both kinds of reflector on the lab's planar mirror too
+    *(("lab20", {"method": t.name}) for t in techniques("planar") if t.kind == "both"),
     ("two_mirrors", {"method": "stencil"}),
     ("mirror_and_sphere", {"max_bounces": 3}),
 )
 """Shipped scenes with options that put every technique and capture mode on screen (every
-curved technique of the registry on the chrome sphere)."""
+curved technique of the registry on the chrome sphere, and a technique for both kinds on
+the lab's mirror: a new one needs its golden PNG made, ``python tools/make_golden.py``)."""
+
+
+def _label(options: dict[str, Any]) -> str:
+    return "_".join(f"{key}-{value}" for key, value in options.items())
 
 
 def sequences() -> Iterator[Sequence]:
@@ -105,8 +116,11 @@ def sequences() -> Iterator[Sequence]:
         yield Sequence(path.stem, frames)
     for name, options in TECHNIQUE_VARIANTS:
         scene = apply_options(mirrorlab.load_scene(name), options)
-        label = "_".join(f"{key}-{value}" for key, value in options.items())
-        yield Sequence(f"{name}__{label}", tuple((frame, 0) for frame in still_sequence(scene)))
+        frames = tuple((frame, 0) for frame in still_sequence(scene))
+        golden = ""
+        if "method" in options and original(options["method"]) != options["method"]:
+            golden = f"{name}__{_label({**options, 'method': original(options['method'])})}"
+        yield Sequence(f"{name}__{_label(options)}", frames, golden)
 
 
 def draw_sequence(renderer, sequence: Sequence, **render_options) -> np.ndarray:

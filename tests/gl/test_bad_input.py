@@ -19,6 +19,7 @@ from PIL import Image
 from mirrorlab.cli import main
 from mirrorlab.data import data_path
 from mirrorlab.scene.backgrounds import CUBE_FACE_FILES
+from mirrorlab.techniques import technique_names
 
 MODELS = data_path("models")
 
@@ -399,7 +400,7 @@ def test_non_finite_values_in_a_scene_file(capsys, outputs, tmp_path):
 # --------------------------------------------------------------------------- not errors
 
 
-@pytest.mark.parametrize("method", ["ortho", "reflected", "stencil"])
+@pytest.mark.parametrize("method", technique_names("planar"))
 @pytest.mark.parametrize("eye", ["-7,1,-2", "-7,3,5", "-9,1,-2", "-12,4,6"])
 def test_a_camera_on_or_behind_the_mirror_plane_renders(capsys, tmp_path, method, eye):
     # On the plane x = -7 (inside the glass or beside it) and behind it: no reflection to

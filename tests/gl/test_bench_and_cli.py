@@ -8,23 +8,32 @@ import csv
 import json
 import re
 import shutil
+from dataclasses import replace
 
 import numpy as np
 import pytest
 from PIL import Image
 
 import mirrorlab
+from mirrorlab import flip
 from mirrorlab.accuracy import (
     SweepSettings,
-    curved_techniques,
+    erode,
+    is_truth,
+    lab_panel,
     lab_techniques,
     lab_viewpoints,
+    panel_configurations,
     sphere_panels,
+    sweep_rows,
 )
 from mirrorlab.cli import main
 from mirrorlab.data import data_path, scenes_dir
+from mirrorlab.passes.envmap import CubeMapped
+from mirrorlab.raytrace import trace_scene
 from mirrorlab.scene.backgrounds import CUBE_FACE_FILES
-from mirrorlab.techniques import technique_names, techniques
+from mirrorlab.scene.loader import load_scene
+from mirrorlab.techniques import register, technique, technique_names, techniques, unregister
 from tests.imagecheck import assert_images_close
 
 CORRECTIONS = ("box", "sphere", "distance")
@@ -45,40 +54,31 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
     assert main(["bench", "accuracy", "--quick", "--out-dir", str(tmp_path)]) == 0
     out = capsys.readouterr()
     assert "technique" in out.out and "reflected-fbo" in out.out and "cube-live" in out.out
-    # What the quick sweep measures, from its settings and the registry: the lab mirror at
-    # 2 viewpoints x (ray tracer + each capturing planar technique x 2 captures x 2 sizes
-    # + one with a camera of its own x 2 captures with a footprint-sized texture + each
-    # inline one); the sphere alone in the sky, among its objects and in the room, 1 view
-    # each x (ray tracer + each curved map at 128 + each that takes a parallax correction
-    # with a box proxy, a sphere proxy and a distance search at 128).
+    # What the quick sweep measures, from its settings: the lab mirror at 2 viewpoints and
+    # the sphere alone in the sky, among its objects and in the room, 1 view each; at each,
+    # the ray tracer and every configuration of the scene's techniques (every registered
+    # technique of its reflectors' kinds: tests/unit/test_accuracy.py checks the list).
     quick = SweepSettings.quick()
     assert quick.sizes == (64, 128) and quick.viewpoints == ("head-on far", "60 deg")
-    assert quick.steps == () and quick.map_sizes == (128,)
-    lab_rows = 2 * (1 + len(lab_techniques(quick.sizes)))
-    sphere_rows = sum(
-        1 + len(curved_techniques(quick.map_sizes, panel.proxies, quick.steps))
-        for panel in sphere_panels(quick)
-    )
-    planar, curved = techniques("planar"), techniques("curved")
-    captured = [t for t in planar if not t.draws_inline]
-    corrected = [t.name for t in curved if t.parallax]
-    assert lab_rows == 2 * (
-        1
-        + len(captured) * 2 * 2
-        + sum(t.own_camera for t in captured) * 2
-        + sum(t.draws_inline for t in planar)
-    )
-    assert sphere_rows == 3 * (1 + len(curved) + len(corrected) * 3)
-    total = lab_rows + sphere_rows
+    assert quick.steps == ()
+    panels = [lab_panel(quick), *sphere_panels(quick)]
+    total = sweep_rows(panels, quick)
     # one progress bar (tqdm, on stderr), and it reached its end: a step per row, and one
     # more per viewpoint for scoring its frames (2 lab views, 3 sphere scenes)
-    steps = total + 2 + 3
+    steps = total + sum(len(panel.viewpoints) for panel in panels)
     assert f"{steps}/{steps}" in out.err, out.err[-400:]
     with open(tmp_path / "accuracy.csv") as stream:
         table = list(csv.DictReader(stream))
     assert len(table) == total
     by_key = {(r["scene"], r["technique"], r["map_size"], r["viewpoint"]): r for r in table}
     assert len(by_key) == total  # one row per configuration and viewpoint
+    for panel in panels:
+        measured = {r["technique"] for r in table if r["scene"] == panel.name}
+        configured = {label for label, _ in panel_configurations(panel, quick)}
+        assert {t for t in measured if not is_truth(t)} == configured, panel.name
+        kinds = {r.kind for r in panel.scene.reflectors}
+        methods = {o["method"] for _, o in panel_configurations(panel, quick)}
+        assert methods == {n for kind in kinds for n in technique_names(kind)}, panel.name
     assert {r["viewpoint"] for r in table if r["scene"] == "lab"} == set(quick.viewpoints)
     assert set(quick.viewpoints) <= set(lab_viewpoints())
     assert float(by_key[("lab", "raytrace", "0", "60 deg")]["mae"]) == 0.0
@@ -94,23 +94,39 @@ def test_quick_accuracy_sweep_writes_table_csv_and_plot(tmp_path, capsys):
         for r in table
         if r["scene"] == "sphere-sky" and r["map_size"] == "128"
     }
-    assert set(sky) == {
-        *technique_names("curved"),
-        *(f"{name} {correction}" for name in corrected for correction in CORRECTIONS),
-    }
     assert sky["sphere"] < sky["normal"] and sky["cube"] < sky["normal"]
     room = {
         r["technique"]: float(r["share_off"])
         for r in table
         if r["scene"] == "sphere-room" and r["map_size"] == "128"
     }
-    for name in corrected:  # in the room, the room as the proxy, or what the capture saw
-        assert room[name] > 0.2, name
+    # in the room, the room as the proxy, or what the capture saw: each technique measured
+    # with a box proxy (every one that takes a parallax correction and a proxy)
+    boxed = [label.removesuffix(" box") for label in room if label.endswith(" box")]
+    assert "cube-live" in boxed
+    for name in boxed:
+        assert room[name] > 0.2, (name, room)
         assert room[f"{name} box"] < 0.05 * room[name], (name, room)
         assert room[f"{name} distance"] < 0.05 * room[name], (name, room)
+    # FLIP beside the old figures (or, without flip-evaluator, empty, and the table says
+    # why); no shipped technique falls back to a probe, so no miss share
+    scored = [r for r in table if not r["technique"].startswith("raytrace")]
+    if flip.available():
+        assert all(0.0 <= float(r["flip"]) < 1.0 for r in scored)
+        # the exact techniques at the frame's size look like the truth; ortho does not
+        ortho_flip = float(by_key[("lab", "ortho-copy", "128", "60 deg")]["flip"])
+        assert ortho_flip > 0.01 > float(by_key[("lab", "reflected-copy", "128", "60 deg")]["flip"])
+        assert {r["flip"] for r in table if r["technique"].startswith("raytrace")} == {"0.0"}
+    else:
+        assert all(r["flip"] == "" for r in table) and "FLIP is empty" in out.out
+    assert all(r["miss_share"] == "" for r in table) and "miss share" not in out.out
+    # each scene's Pareto frontier is named: configurations of that scene, cheapest first
+    assert out.out.count("Pareto frontier") == len(panels)
     assert all(float(r["wall_ms"]) > 0 for r in table)
     markdown = (tmp_path / "accuracy.md").read_text()
-    assert markdown.count("| technique |") == 4  # lab, sphere-sky, -objects, -room
+    lines = markdown.splitlines()
+    assert sum(line.startswith("| technique |") for line in lines) == 4  # 4 scenes
+    assert sum(line.startswith("| wall ms | technique |") for line in lines) == 4  # frontiers
     # Re-making the report from the CSV measures nothing and gives the same tables.
     (tmp_path / "accuracy.md").unlink()
     again = tmp_path / "again"
@@ -160,10 +176,9 @@ def test_accuracy_sweep_of_a_scene_file(tmp_path, capsys, monkeypatch):
     assert len(table) == total
     assert {r["scene"] for r in table} == {"two_mirrors"}
     assert {r["viewpoint"] for r in table} == {"camera"}
-    techniques = {r["technique"] for r in table}
-    assert techniques == {"raytrace", "stencil"} | {
-        f"{m}-{c}" for m in ("ortho", "reflected") for c in ("copy", "fbo")
-    } | {f"ortho-{c} footprint" for c in ("copy", "fbo")}
+    measured = {r["technique"] for r in table}
+    assert measured == {"raytrace", *(label for label, _ in lab_techniques((128,)))}
+    assert {"stencil", "reflected-copy", "reflected-fbo", "ortho-fbo footprint"} <= measured
     # The exact techniques, two bounces deep, at the frame's size: 99% of the mirrors'
     # pixels within 10/255 of the ray tracer.
     rows = {(r["technique"], r["map_size"]): r for r in table}
@@ -218,6 +233,58 @@ def test_a_sweep_from_inside_the_sphere_reports_no_reflector_pixels(tmp_path, ca
     assert not re.search(r"\b0\.00\b", out)
 
 
+class RightHalfFallback(CubeMapped):
+    """A static cube map that says it filled the right half of every view from a
+    fallback: what a technique with a probe (screen-space reflections) reports."""
+
+    def fallback_mask(self, draw, view) -> np.ndarray:
+        width, height = view.size
+        mask = np.zeros((height, width), dtype=bool)
+        mask[:, width // 2 :] = True
+        return mask
+
+
+def test_a_technique_with_a_fallback_gets_its_miss_share(tmp_path, capsys):
+    """The sweep reports, for a technique whose pass reports the pixels it filled from its
+    fallback (any technique: one registered here), the share of the reflector's scored
+    pixels that fell back; the others have none (an empty cell, ``-`` in the table)."""
+    entry = replace(
+        technique("cube"), name="cube-halfback", pass_class=f"{__name__}:RightHalfFallback"
+    )
+    register(entry)
+    try:
+        out_dir = tmp_path / "out"
+        args = ["--frame", "32", "--sizes", "16", "--frames", "1", "--out-dir", str(out_dir)]
+        scene = str(scenes_dir() / "chrome_sphere.toml")
+        assert main(["bench", "accuracy", "--scene", scene, *args]) == 0
+    finally:
+        unregister(entry.name)
+    out = capsys.readouterr().out
+    with open(out_dir / "accuracy.csv") as stream:
+        table = {r["technique"]: r for r in csv.DictReader(stream)}
+    truth = trace_scene(load_scene("chrome_sphere"), (32, 32), 4)
+    scored = erode(truth.reflective_mask, 1)  # as the sweep scores a curved reflector
+    right = scored[:, 16:].sum() / scored.sum()
+    assert 0.3 < right < 0.7
+    assert float(table["cube-halfback"]["miss_share"]) == pytest.approx(right)
+    assert all(r["miss_share"] == "" for name, r in table.items() if name != "cube-halfback")
+    # the same pictures as the cube map's: the same errors
+    for figure in ("mae", "flip", "share_off"):
+        assert table["cube-halfback"][figure] == table["cube"][figure]
+    assert "cube-halfback" in out and "miss share" in out
+    rows = [
+        [cell.strip() for cell in line.strip("|").split("|")]
+        for line in (out_dir / "accuracy.md").read_text().splitlines()
+        if line.startswith("| ")
+    ]
+    header = rows[0]
+    cells = {  # the table of configurations (not the frontier's, of other columns)
+        row[0]: dict(zip(header, row, strict=True)) for row in rows[1:] if len(row) == len(header)
+    }
+    assert cells["cube-halfback"]["miss share"] == f"{right:.1%}"
+    assert cells["cube"]["miss share"] == "-"
+
+
 def test_bench_refuses_a_file_as_its_folder_and_unknown_benchmarks(tmp_path, capsys):
     blocker = tmp_path / "taken"
     blocker.write_text("keep me")
@@ -229,10 +296,13 @@ def test_bench_refuses_a_file_as_its_folder_and_unknown_benchmarks(tmp_path, cap
     assert main(["bench", "accuracy", "--sizes", "64,zero"]) == 2
     assert main(["bench", "accuracy", "--from-csv", str(blocker)]) == 2
     assert main(["bench", "accuracy", "--scene", "moon"]) == 2
+    cone = str(scenes_dir() / "spheremap_cone.toml")
+    assert main(["bench", "accuracy", "--scene", cone, "--scene", "cone"]) == 2
     errors = capsys.readouterr().err.strip().splitlines()
-    assert len(errors) == 4 and "--out-dir" in errors[0]
+    assert len(errors) == 5 and "--out-dir" in errors[0]
     assert "--sizes" in errors[1] and "--from-csv" in errors[2]
     assert "moon" in errors[3] and "unknown scene" in errors[3]
+    assert "--scene: two scenes named 'spheremap_cone'" in errors[4]
     assert blocker.read_text() == "keep me"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["taken"]
 
@@ -242,9 +312,9 @@ def test_bench_refuses_a_file_as_its_folder_and_unknown_benchmarks(tmp_path, cap
 
 @pytest.mark.parametrize(
     "scene, method",
-    [
+    [  # each technique once (one for either kind on the lab's mirror)
         *(("lab20", m) for m in technique_names("planar")),
-        *(("chrome_sphere", m) for m in technique_names("curved")),
+        *(("chrome_sphere", t.name) for t in techniques("curved") if not t.serves("planar")),
     ],
 )
 def test_render_command_draws_each_technique(tmp_path, capsys, scene, method):

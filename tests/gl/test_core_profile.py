@@ -20,7 +20,8 @@ import pytest
 from mirrorlab.data import scenes_dir
 from mirrorlab.testing import difference_image
 from tests import MACOS_CONTEXT
-from tests.gl.core_frames import FRAMES
+from tests.gl.core_frames import EITHER_SIZE, FRAMES, either_kind_frames
+from tests.gl.frames import draw
 from tests.gl.golden_frames import draw_sequence, sequences
 from tests.imagecheck import save_failure
 
@@ -80,6 +81,32 @@ def test_frames_in_the_core_context_equal_the_default_contexts(
             f"{sequence.name}: {int((core != default).any(axis=-1).sum())} pixels "
             f"differ between the core and the default context; images in {folder}"
         )
+
+
+EITHER = list(either_kind_frames())
+
+
+@pytest.mark.parametrize("name,scene", EITHER, ids=[name for name, _ in EITHER])
+def test_a_technique_for_either_kind_draws_every_shipped_scene_alike_in_both_contexts(
+    core_frames, scene_renderer, name, scene
+):
+    """A technique that serves planar and curved reflectors (screen-space reflections)
+    on every shipped scene that has a reflector: the same frame in both contexts, exactly
+    (tolerance 0: the same Mesa compiles the same shaders)."""
+    _, frames = core_frames
+    default, stats = draw(scene_renderer, scene, EITHER_SIZE)
+    assert any(d.own for d in stats.plan.top.draws) or not any(
+        d.mode != "hidden" for d in stats.plan.top.draws
+    )
+    core = frames[name]
+    if not np.array_equal(core, default):
+        folder = save_failure(
+            f"core_{name.replace(':', '_')}",
+            core=core,
+            default=default,
+            diff=difference_image(core, default),
+        )
+        pytest.fail(f"{name}: {int((core != default).any(axis=-1).sum())} pixels differ; {folder}")
 
 
 def test_every_shipped_scene_is_drawn_in_the_core_context(core_frames):

@@ -10,6 +10,7 @@ import pytest
 
 from mirrorlab.raytrace import trace_scene
 from mirrorlab.renderer import SceneRenderer
+from mirrorlab.techniques import technique_names
 from tests.gl.frames import draw
 from tests.imagecheck import save_failure
 from tests.unit.test_moving_mirrors import turning
@@ -37,7 +38,7 @@ def test_a_moving_mirror_agrees_with_the_truth_in_every_frame(scene_renderer, me
     assert seen >= 4  # it was in view, held, turned
 
 
-@pytest.mark.parametrize("method", ["ortho", "reflected", "stencil"])
+@pytest.mark.parametrize("method", technique_names("planar"))
 def test_a_moving_mirror_planned_equals_unplanned_in_any_order(scene_renderer, method):
     scene = turning(method)
     unplanned = SceneRenderer(scene_renderer.registry)

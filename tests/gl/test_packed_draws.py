@@ -27,6 +27,7 @@ from mirrorlab.passes import scene_draw
 from mirrorlab.passes.scene_draw import indirect_commands, texture_runs
 from mirrorlab.renderer import SceneRenderer
 from mirrorlab.scene.model import MeshObject, Transform
+from mirrorlab.techniques import technique, technique_names
 from tests.gl.frames import draw
 from tests.scenekit import mirror, scene_robot, vec3
 
@@ -140,7 +141,7 @@ def test_a_new_pose_keeps_the_layout_of_its_parts_and_draws_as_a_fresh_renderer(
     assert made_per_frame[2] > 0 and made_per_frame[5] > 0
 
 
-@pytest.mark.parametrize("method", ["reflected", "stencil", "ortho"])
+@pytest.mark.parametrize("method", technique_names("planar"))
 def test_a_frames_views_are_recorded_before_its_first_draw(scene_renderer, monkeypatch, method):
     """Every view a frame draws objects in (a capture's camera, the camera's view, the
     world in a stencil mirror) has its draw recorded before the first multi-draw, and
@@ -179,14 +180,15 @@ def test_a_frames_views_are_recorded_before_its_first_draw(scene_renderer, monke
 
 @pytest.mark.parametrize(
     "scene_name, method",
-    [("lab20", "ortho"), ("lab20", "reflected"), ("lab20", "stencil"), ("mirror_and_sphere", None)],
+    [*(("lab20", name) for name in technique_names("planar")), ("mirror_and_sphere", None)],
 )
 def test_a_view_draws_its_reflectors_before_the_objects_and_stencil_mirrors_after(
     scene_renderer, monkeypatch, scene_name, method
 ):
     """In the camera's view, a reflector drawn on its own (a textured mirror, a mapped
     sphere) comes before the objects, so what it hides fails the depth test unshaded; a
-    stencil mirror comes after them, as it marks only the pixels they leave showing."""
+    stencil mirror comes after them, as it marks only the pixels they leave showing: each
+    technique where its registry entry says (``draws_after_objects``)."""
     from mirrorlab.passes.envmap import CurvedPass
     from mirrorlab.passes.planar import PlanarPass
 
@@ -195,7 +197,7 @@ def test_a_view_draws_its_reflectors_before_the_objects_and_stencil_mirrors_afte
         original = owner.draw
 
         def noted_pass_draw(self, step, view, *rest, _o=original):
-            events.append((step.mode, view.label))
+            events.append((step.reflector.technique, view.label))
             return _o(self, step, view, *rest)
 
         monkeypatch.setattr(owner, "draw", noted_pass_draw)
@@ -210,12 +212,14 @@ def test_a_view_draws_its_reflectors_before_the_objects_and_stencil_mirrors_afte
     if method is not None:
         scene = apply_options(scene, {"method": method})
     draw(scene_renderer, scene, SIZE)
-    camera = [mode for mode, label in events if label == "camera"]
+    camera = [what for what, label in events if label == "camera"]
     assert camera.count("objects") == 1, events
     before, after = camera[: camera.index("objects")], camera[camera.index("objects") + 1 :]
     assert before or after, events  # the view shows a reflector
-    assert "inline" not in before and set(after) <= {"inline"}, events
-    assert bool(after) == (method == "stencil"), events
+    assert not any(technique(name).draws_after_objects for name in before), events
+    assert all(technique(name).draws_after_objects for name in after), events
+    if method is not None:
+        assert bool(after) == technique(method).draws_after_objects, events
 
 
 def test_a_thousand_boxes_of_one_mesh_are_one_command(scene_renderer, registry):

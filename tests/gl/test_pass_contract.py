@@ -5,7 +5,11 @@
   not, and a replayed frame is the frame a renderer that never replays draws;
 - a technique with a capture camera and a draw order of its own, registered in this file
   alone, gets the frames its entry defines: its camera from where the entry says, its
-  draw before or after the objects as the entry says (pixels worked out here in numpy).
+  draw before or after the objects as the entry says (pixels worked out here in numpy);
+- a technique of the ``screen`` kind (the view's own frame), registered here alone: it
+  must draw after the objects; no pass is planned for its texture; the copy is made at
+  the draw, holds what the view drew, and is one of the recorded calls, so a replayed
+  frame reads what that frame drew.
 """
 
 from __future__ import annotations
@@ -19,7 +23,9 @@ import mirrorlab
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Framebuffer
 from mirrorlab.options import apply_options
-from mirrorlab.passes.planar import CapturingMirror
+from mirrorlab.passes.base import set_view_uniforms
+from mirrorlab.passes.planar import CapturingMirror, PlanarPass
+from mirrorlab.passes.view_frame import ViewFrame
 from mirrorlab.plan import CaptureCameras
 from mirrorlab.renderer import SceneRenderer
 from mirrorlab.scene.model import (
@@ -32,7 +38,7 @@ from mirrorlab.scene.model import (
     Transform,
 )
 from mirrorlab.techniques import Technique, register, technique_names, techniques, unregister
-from mirrorlab.views import camera_view
+from mirrorlab.views import camera_view, projective_lookup
 from tests.gl.frames import draw
 from tests.scenekit import PANEL_MESH
 
@@ -277,3 +283,123 @@ def test_a_technique_that_shows_the_scene_needs_a_capture_camera():
     with pytest.raises(ValueError, match="needs a capture_camera"):
         register(entry)
     assert "no-camera" not in technique_names()
+
+
+# --------------------------------------------- the view's own frame (the screen kind)
+
+SHIFT = 6
+"""Pixels to the left the test's screen technique reads the view's own frame from."""
+SQUARE_CORNERS = ((-1, -1), (1, -1), (1, 1), (-1, 1))
+
+
+class ShiftedFrame(PlanarPass):
+    """The test's ``screen`` technique: the glass shows the view's own frame as it was
+    when the glass was drawn (after the objects), read :data:`SHIFT` pixels to the left:
+    a copy through :class:`mirrorlab.passes.view_frame.ViewFrame`, sampled on the quad
+    through the view's own projective lookup, moved."""
+
+    def __init__(self, shared, reflector, background=None) -> None:
+        super().__init__(shared, reflector, background)
+        self.frames = ViewFrame(shared.registry)
+
+    def update(self, step, reflector, renderer, frame_target):
+        raise AssertionError("a screen technique has no planned texture")
+
+    def release(self) -> None:
+        self.frames.release()
+        super().release()
+
+    def draw_own(self, draw, view, renderer, target, stencil_level):
+        frame = self.frames.copy(view.size, None)
+        program = self.mirror_program(view)
+        program.use()
+        set_view_uniforms(program, view)
+        program.set_mat4("model", self.quad_model(view))
+        program.set_vec3("backing_color", self.reflector.backing)
+        program.set_int("projective", True)
+        shift = np.eye(4)
+        shift[0, 3] = -SHIFT / view.size[0]
+        program.set_mat4("texture_matrix", shift @ projective_lookup(view, view))
+        frame.bind(0, 1)
+        self.quad.draw()
+        return 1
+
+
+def screen_technique(name: str) -> Technique:
+    return Technique(
+        name,
+        "planar",
+        "a test's: the view's own frame, shifted, on the glass",
+        texture="screen",
+        pass_class=f"{__name__}:ShiftedFrame",
+        draws_after_objects=True,
+    )
+
+
+def test_a_screen_technique_must_draw_after_the_objects():
+    entry = replace(screen_technique("early-screen"), draws_after_objects=False)
+    with pytest.raises(ValueError, match="must draw after the view's objects"):
+        register(entry)
+    assert "early-screen" not in technique_names()
+
+
+def test_the_views_own_frame_is_copied_at_the_draw_never_planned_and_replayed_fresh(registry):
+    """The screen kind: the planner plans no pass for it (mode ``screen``, no capture, no
+    slot held), the copy holds the view as the objects left it (the glass shows what lay
+    under it, shifted), a moved object is in the next copy, and a replayed frame, whose
+    recorded calls hold the copy, is the frame a renderer that never replays draws."""
+    name = "shifted-frame"
+    register(screen_technique(name))
+    renderer = SceneRenderer(registry)
+    reference = SceneRenderer(registry)
+    target = Framebuffer(registry, *SIZE)
+    try:
+        scene = fixed_point_scene(name)
+        stats = renderer.render(scene, target)
+        (glass,) = stats.plan.top.draws
+        assert glass.mode == "screen" and glass.own and glass.fallback is None
+        assert [p.name for p in stats.plan.passes] == ["camera"]
+        assert renderer.state.held == {}
+        image = target.read()
+        bare, _ = draw(reference, replace(scene, reflectors=()), SIZE)
+        window = window_points(scene, GLASS)
+        cx, cy, cz = BLOCKER_CENTER
+        half = BLOCKER_SIDE / 2
+        blocker = window_points(
+            scene, [(cx + dx * half, cy + dy * half, cz) for dx, dy in SQUARE_CORNERS]
+        )
+        # the glass, where the blocker (in front of it) leaves it showing
+        sure = inside(window, SIZE, 1.5) & ~inside(blocker, SIZE, -1.5)
+        shifted = np.roll(bare, SHIFT, axis=1)  # what lies SHIFT pixels to the left
+        sure[:, :SHIFT] = False
+        assert sure.sum() > 200
+        differing = (image != shifted).any(axis=-1) & sure
+        assert not differing.any(), f"{int(differing.sum())} glass pixels differ"
+        outside = ~inside(window, SIZE, -1.5)
+        assert np.array_equal(image[outside], bare[outside])
+        # the blocker moves every frame: the plan stays, the frame is replayed, and the
+        # copy in the replayed calls reads what this frame drew
+        replayed = 0
+        for step in range(6):
+            x = BLOCKER_CENTER[0] - 0.3 * step
+            moved = scene.with_object(
+                "blocker",
+                transform=Transform(
+                    position=(x, BLOCKER_CENTER[1], BLOCKER_CENTER[2]), scale=(BLOCKER_SIDE,) * 3
+                ),
+            )
+            kept = renderer.recorded_frame
+            renderer.render(moved, target)
+            replayed += kept is not None and renderer.recorded_frame is kept
+            expected, _ = draw(reference, moved, SIZE)
+            assert np.array_equal(target.read(), expected), f"frame {step}"
+        assert replayed >= 3
+        recorded = renderer.recorded_frame
+        assert recorded is not None
+        names = [getattr(call[0], "__name__", "") for call in recorded.calls]
+        assert names.count("glCopyTexSubImage2D") == 2  # the colour and the depth
+    finally:
+        unregister(name)
+        renderer.release()
+        reference.release()
+        target.release()

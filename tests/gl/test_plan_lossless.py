@@ -23,6 +23,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from mirrorlab import techniques as registry
 from mirrorlab.renderer import SceneRenderer
 from mirrorlab.scene.model import (
     Background,
@@ -107,7 +108,7 @@ def reflectors(draw, camera, aspect, index: int):
     technique = draw(st.sampled_from(technique_names("curved")))
     radius = draw(st.sampled_from([0.05, 0.4, 1.5, 6.0]))
     made = ball(name, center, radius, technique, map_size=draw(st.sampled_from([16, 32])))
-    if technique == "cube-live":
+    if registry.technique(technique).parallax:
         parallax = draw(st.sampled_from([None, "box", "sphere", "distance"]))
         if parallax == "box":
             made = replace(made, parallax=BoxProxy(tuple(center - 8.0), tuple(center + 8.0)))
@@ -125,7 +126,10 @@ def scenes(draw):
     aspect = size[0] / size[1]
     count = draw(st.integers(1, 3))
     made = [draw(reflectors(camera, aspect, i)) for i in range(count)]
-    live = sum(1 for r in made if r.technique == "cube-live")
+    # live maps (six captures each) cost the most bounces: two or more, at most two deep
+    live = sum(
+        1 for r in made if r.kind == "curved" and registry.technique(r.technique).texture == "fixed"
+    )
     bounces = draw(st.integers(0, 3 if live < 2 else 2))
     robot = RobotObject(
         angles=(draw(st.floats(-90, 90)), 30.0, -60.0),
@@ -199,7 +203,7 @@ def test_planned_frames_equal_unplanned_frames_on_generated_scenes(scene_rendere
         unplanned.release()
 
 
-@pytest.mark.parametrize("method", ["reflected", "stencil", "ortho"])
+@pytest.mark.parametrize("method", technique_names("planar"))
 def test_a_mirror_flush_with_a_wall_comes_out_the_same_planned_or_not_on_either_path(
     scene_renderer, method
 ):
@@ -213,7 +217,7 @@ def test_a_mirror_flush_with_a_wall_comes_out_the_same_planned_or_not_on_either_
         transform=Transform(scale=(8.0, 6.0, 1.0)),
     )
     glass = mirror("glass", (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), 3.0, 2.0, method)
-    if method == "ortho":
+    if registry.technique(method).own_camera:  # ortho: the capture camera it needs
         glass = replace(
             glass,
             ortho=OrthoCapture(

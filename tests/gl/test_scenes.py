@@ -15,9 +15,11 @@ from mirrorlab.options import apply_options
 from mirrorlab.passes.base import gl_state
 from mirrorlab.raytrace import trace_scene
 from mirrorlab.scene.model import Scene
+from mirrorlab.techniques import technique_names
 from tests.gl.frames import draw
 from tests.imagecheck import save_failure
 from tests.scenekit import curved_reflector, vec3
+from tests.twins import original
 
 SCENE_FILES = sorted(p.stem for p in scenes_dir().glob("*.toml"))
 SIZE = (128, 128)
@@ -212,6 +214,16 @@ TRUTH_TOLERANCE = {
     # here with one ray a pixel, its level of detail from ray differentials that the
     # sphere's turning normal spreads; test_parallax.py compares it inside the silhouette)
     ("sphere_room", "sphere"): 0.95,
+    # screen-space reflections (their probe a live cube map): the screen where the march
+    # finds it, the probe elsewhere; measured 98.7% (the lamp behind the camera, from the
+    # probe), 96.9% (the thin pole: the probe's distance search beside it), 86.5%
+    # (grazing water: the probe displaces the pillars), 82.5% (the sphere among objects:
+    # the probe's parallax), 99.2% (the room)
+    ("ssr_behind_camera", "floor"): 0.97,
+    ("ssr_thin_pole", "floor"): 0.95,
+    ("ssr_grazing_water", "water"): 0.84,
+    ("ssr_sphere_near", "sphere"): 0.80,
+    ("ssr_box_room", "floor"): 0.98,
 }
 
 
@@ -248,7 +260,7 @@ def test_each_scene_agrees_with_its_ray_traced_truth(scene_renderer, name, techn
         need = TRUTH_TOLERANCE[(name, reflector.name)]
         if (
             reflector.kind == "planar"
-            and reflector.technique in ("reflected", "stencil")
+            and original(reflector.technique) in ("reflected", "stencil")
             and not any(r.kind == "curved" for r in scene.reflectors)
         ):
             need = 0.99
@@ -269,7 +281,7 @@ def test_each_scene_agrees_with_its_ray_traced_truth(scene_renderer, name, techn
 # --------------------------------------------------------------------------- GL state
 
 
-@pytest.mark.parametrize("technique", ["reflected", "stencil", "ortho"])
+@pytest.mark.parametrize("technique", technique_names("planar"))
 def test_a_frame_three_bounces_deep_leaves_the_gl_state_as_it_found_it(scene_renderer, technique):
     from mirrorlab.gl.opengl import GL
     from mirrorlab.gl.resources import Framebuffer
@@ -288,7 +300,7 @@ def test_a_frame_three_bounces_deep_leaves_the_gl_state_as_it_found_it(scene_ren
     finally:
         target.release()
     captures = [p for p in stats.plan.ran if p.name == "capture"]
-    if technique != "stencil":
+    if captures:  # a mirror that captures (not one drawn in place): three deep
         assert max(p.bounce for p in captures) == 3
     assert after == before
     assert GL.glGetError() == GL.GL_NO_ERROR

@@ -7,11 +7,18 @@ evidence, inside the sandbox."""
 from __future__ import annotations
 
 import shutil
+import subprocess
 from pathlib import Path
 
-from mirrorlab.labs import labs
+import numpy as np
+
+from mirrorlab.labs import find_lab, labs
+from mirrorlab.labs.content import reference_folder
+from mirrorlab.scene.backgrounds import load_picture
+from mirrorlab.testing import assert_image_close
 from tests import REPO_DIR
 from tests.installed.conftest import Installed
+from tests.labs.warm_checks import Watch, save_by_rename
 
 
 def test_the_wheel_carries_each_labs_handout_starter_and_reference(wheel_names: list[str]):
@@ -62,7 +69,60 @@ def test_lab_start_and_check_from_the_installed_wheel(installed: Installed, empt
     )
     assert checked.returncode == 0, checked.stdout + checked.stderr
     assert "8/8 tasks passed" in checked.stdout
-    assert not cache.exists()  # judged against the packaged reference
+    # judged against the packaged reference (the cache holds the lab's meshes and pictures
+    # as arrays, and no reference)
+    assert not (cache / "lab-references").exists()
+
+
+def test_lab_check_watch_and_lab_run_in_a_lab_folder_from_the_installed_wheel(
+    installed: Installed, empty_folder: Path
+):
+    """In the folder ``lab start`` made, without naming the file: ``lab check --watch``
+    answers a save and ends on Ctrl-C; ``lab run`` shows that folder's starter.py (not the
+    package's), in a window under Xvfb."""
+    assert (
+        installed.run("mirrorlab", "lab", "start", "lab20", "mine", cwd=empty_folder).returncode
+        == 0
+    )
+    folder = empty_folder / "mine"
+    env = {**installed.env(), "MIRRORLAB_CACHE": str(empty_folder / "cache")}
+    watch = Watch(folder, name="", command=(str(installed.bin / "mirrorlab"),), env=env)
+    with watch:
+        assert "0/8 tasks passed" in watch.report()
+        save_by_rename(
+            folder / "starter.py", (REPO_DIR / "labs" / "solutions" / "lab20_mirror.py").read_text()
+        )
+        assert "8/8 tasks passed" in watch.report()
+        code, out, errors = watch.interrupt()
+    assert code == 0 and "stopped watching" in out and "Traceback" not in errors, (out, errors)
+    if shutil.which("xvfb-run") is None:
+        return
+    shot = empty_folder / "window.png"
+    shown = subprocess.run(
+        [
+            "xvfb-run",
+            "-a",
+            str(installed.bin / "mirrorlab"),
+            "lab",
+            "run",
+            "lab20",
+            "--size",
+            "256x256",
+            "--max-frames",
+            "2",
+            "--screenshot",
+            str(shot),
+        ],
+        cwd=folder,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert shown.returncode == 0, shown.stderr
+    with np.load(reference_folder(find_lab("lab20")) / "arrays.npz") as reference:
+        frame = reference["frame"]
+    assert_image_close(load_picture(shot), frame, tolerance=8, fraction=0.99, name="wheel_lab_run")
 
 
 def test_info_a_headed_starter_and_a_canvas_gradebook_from_the_installed_wheel(

@@ -161,6 +161,36 @@ def send(header):
         ),
         "could not be compiled within the limits",
     ),
+    # the checker's own names and bindings in the student's GLSL (issue 44): each once
+    # "the checker's OpenGL process failed"; now refused in one line before any driver
+    # sees it, and every task judged
+    Crash(
+        "spheremap",
+        "uniform_float_ml_modelview",
+        (
+            (
+                'SPHERE_MAP_GLSL = """\n',
+                'SPHERE_MAP_GLSL = """\nuniform float ml_ModelViewMatrix;\n',
+            ),
+            (
+                "return u - 2.0 * dot(n, u) * n;",
+                "return (u - 2.0 * dot(n, u) * n) * ml_ModelViewMatrix;",
+            ),
+        ),
+        "names beginning with ml_ are the checker's own",
+    ),
+    Crash(
+        "cubemap",
+        "sampler_clashing_with_the_probe",
+        (
+            (
+                'CUBE_MAP_GLSL = """\n',
+                'CUBE_MAP_GLSL = """\nuniform samplerCube faces;\n',
+            ),
+            ("    vec3 a = abs(r);", "    vec3 a = abs(r) + texture(faces, r).rgb * 0.0;"),
+        ),
+        "'uniform' outside a function",
+    ),
     # a frame left inside glBegin
     Crash(
         "lab20",

@@ -401,7 +401,7 @@ SPHEREMAP = (
         "st_no_plus_one",
         (("(r.z + 1.0) * (r.z + 1.0)", "r.z * r.z"),),
         {
-            "sphere_coordinates": "m must use (r.z + 1)",
+            "sphere_coordinates": "the term 1 missing",
             "side_by_side": "the shader's cone's half is judged once task",
         },
     ),
@@ -497,7 +497,7 @@ ROUND_TWO_SPHEREMAP = (
             ),
         ),
         {
-            "sphere_coordinates": "is not normalised",
+            "sphere_coordinates": "h not normalised",
             "side_by_side": "the shader's cone's half is judged once task",
         },
     ),
@@ -512,7 +512,7 @@ ROUND_TWO_SPHEREMAP = (
             ),
         ),
         {
-            "sphere_coordinates": "is not normalised",
+            "sphere_coordinates": "h not normalised",
             "side_by_side": "the shader's cone's half is judged once task",
         },
     ),
@@ -530,7 +530,7 @@ ROUND_TWO_SPHEREMAP = (
         "reflect_clamped_dot",
         (("return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * max(dot(n, u), 0.0) * n;"),),
         {
-            "reflection": "dot(n, u) is clamped",
+            "reflection": "n.u clamped to 0 or more",
             "side_by_side": "the shader's cone's half is judged once task",
         },
     ),
@@ -577,7 +577,7 @@ CUBEMAP = (
                 "return vec2((sc + 1.0) / 2.0, (tc + 1.0) / 2.0);",
             ),
         ),
-        {"face_coordinates": "divided by |major axis|"},
+        {"face_coordinates": "the division by |ma| missing"},
     ),
     Mutant(
         "cubemap",
@@ -699,7 +699,7 @@ ROUND_TWO_CUBEMAP = (
                 "else if (face == 2) { sc = r.z; tc = r.x; ma = abs(r.y); }",
             ),
         ),
-        {"face_coordinates": "on the +Y face (face 2): s and t swapped"},
+        {"face_coordinates": "on the +Y face (face 2): sc and tc swapped"},
     ),
     Mutant(
         "cubemap",
@@ -721,31 +721,28 @@ PROBED_SLIPS = (
         "spheremap",
         "reflect_abs_dot",
         (("return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * abs(dot(n, u)) * n;"),),
-        {
-            "reflection": "abs(dot(n, u))",
-            "side_by_side": "the shader's cone's half is judged once task",
-        },
-        cause="abs(dot(n, u))",
+        {"reflection": "abs(n.u)", "side_by_side": "the shader's cone's half is judged once task"},
+        cause="abs(n.u): the sign of n.u matters",
     ),
     Mutant(
         "spheremap",
         "reflect_clamped_dot_clamp",
         (("return u - 2.0 * dot(n, u) * n;", "return u - 2.0 * clamp(dot(n, u), 0.0, 1.0) * n;"),),
         {
-            "reflection": "dot(n, u) is clamped",
+            "reflection": "n.u clamped to 0 or more",
             "side_by_side": "the shader's cone's half is judged once task",
         },
-        cause="is clamped (clamp or max)",
+        cause="n.u clamped to 0 or more (clamp or max)",
     ),
     Mutant(
         "spheremap",
         "st_minus_one",
         (("(r.z + 1.0) * (r.z + 1.0)", "(r.z - 1.0) * (r.z - 1.0)"),),
         {
-            "sphere_coordinates": "the sign of the 1 in m",
+            "sphere_coordinates": "the sign of rz flipped",
             "side_by_side": "the shader's cone's half is judged once task",
         },
-        cause="the sign of the 1 in m",
+        cause="m = 2 sqrt(rx^2 + ry^2 + (-rz + 1)^2)",
     ),
     Mutant(
         "spheremap",
@@ -758,10 +755,10 @@ PROBED_SLIPS = (
             ),
         ),
         {
-            "sphere_coordinates": "is not normalised",
+            "sphere_coordinates": "h not normalised",
             "side_by_side": "the shader's cone's half is judged once task",
         },
-        cause="halfway vector (r.x, r.y, r.z + 1) is not normalised",
+        cause="h not normalised",
     ),
     Mutant(
         "cubemap",
@@ -771,7 +768,7 @@ PROBED_SLIPS = (
             ("return r.y >= 0.0 ? 2 : 3;", "return r.y >= 0.0 ? 3 : 2;"),
             ("return r.z >= 0.0 ? 4 : 5;", "return r.z >= 0.0 ? 5 : 4;"),
         ),
-        {"face_selection": "the opposite sign", "face_coordinates": "task 1"},
+        {"face_selection": "the opposite sign"},
         cause="the right axis but the opposite sign",
     ),
     Mutant(
@@ -793,8 +790,8 @@ PROBED_SLIPS = (
                 "    else { sc = -r.x; tc = -r.y; ma = r.z; }",
             ),
         ),
-        {"face_coordinates": "mirrored on the negative faces"},
-        cause="with its sign, s and t are mirrored",
+        {"face_coordinates": "abs() missing around ma"},
+        cause="abs() missing around ma",
     ),
     Mutant(
         "cubemap",
@@ -805,8 +802,8 @@ PROBED_SLIPS = (
                 "else if (face == 1) { sc = r.z; tc = -r.y; ma = r.x; }",
             ),
         ),
-        {"face_coordinates": "on the -X face (face 1): ma is the major axis's size"},
-        cause="on the -X face (face 1): ma is the major axis's size",
+        {"face_coordinates": "on the -X face (face 1), ma: abs() missing around rx"},
+        cause="on the -X face (face 1), ma: abs() missing around rx",
     ),
     Mutant(
         "cubemap",
@@ -817,8 +814,143 @@ PROBED_SLIPS = (
                 "return vec2((sc / length(r) + 1.0) / 2.0, (tc / length(r) + 1.0) / 2.0);",
             ),
         ),
-        {"face_coordinates": "divided by the length of r"},
+        {"face_coordinates": "divided by the length of r where the formula divides by |ma|"},
         cause="divided by the length of r",
+    ),
+)
+
+REFLECT = "return u - 2.0 * dot(n, u) * n;"
+HALF_ST = "vec2(r.x / m + 0.5, r.y / m + 0.5)"
+M_LINE = "float m = 2.0 * sqrt(r.x * r.x + r.y * r.y + (r.z + 1.0) * (r.z + 1.0));"
+CUBE_ST = "return vec2((sc / ma + 1.0) / 2.0, (tc / ma + 1.0) / 2.0);"
+CUBE_TABLE = (
+    "    if (face == 0) { sc = -r.z; tc = -r.y; ma = abs(r.x); }\n"
+    "    else if (face == 1) { sc = r.z; tc = -r.y; ma = abs(r.x); }\n"
+    "    else if (face == 2) { sc = r.x; tc = r.z; ma = abs(r.y); }\n"
+    "    else if (face == 3) { sc = r.x; tc = -r.z; ma = abs(r.y); }\n"
+    "    else if (face == 4) { sc = r.x; tc = -r.y; ma = abs(r.z); }\n"
+    "    else { sc = -r.x; tc = -r.y; ma = abs(r.z); }"
+)
+
+PROBED_VARIANTS = (
+    # issue 45's GLSL slips, each named by the variant of the formula its values follow
+    # (mirrorlab/labs/trusted/formulas.py), not by a rule written for it
+    Mutant(
+        "spheremap",
+        "reflect_scales_u",
+        ((REFLECT, "return u - 2.0 * dot(n, u) * u;"),),
+        {
+            "reflection": "u where the formula has n",
+            "side_by_side": "the shader's cone's half is judged once task",
+        },
+        cause="r = u - 2 (n.u) u",
+    ),
+    Mutant(
+        "spheremap",
+        "reflect_dot_squared",
+        ((REFLECT, "return u - 2.0 * dot(n, u) * dot(n, u) * n;"),),
+        {
+            "reflection": "n.u squared",
+            "side_by_side": "the shader's cone's half is judged once task",
+        },
+    ),
+    Mutant(
+        "spheremap",
+        "st_m_without_square_root",
+        ((M_LINE, M_LINE.replace("2.0 * sqrt(", "2.0 * (")),),
+        {
+            "sphere_coordinates": "without its square root",
+            "side_by_side": "the shader's cone's half is judged once task",
+        },
+    ),
+    Mutant(
+        "spheremap",
+        "st_half_applied_twice",
+        ((HALF_ST, "vec2(0.5 * r.x / m + 0.5, 0.5 * r.y / m + 0.5)"),),
+        {
+            "sphere_coordinates": "1/2 applied twice",
+            "side_by_side": "the shader's cone's half is judged once task",
+        },
+    ),
+    Mutant(
+        "spheremap",
+        "st_square_without_parentheses",
+        (("(r.z + 1.0) * (r.z + 1.0)", "r.z + 1.0 * r.z + 1.0"),),
+        {
+            "sphere_coordinates": "without its parentheses",
+            "side_by_side": "the shader's cone's half is judged once task",
+        },
+    ),
+    Mutant(
+        "spheremap",
+        "st_a_mistake_nobody_listed",
+        ((HALF_ST, "vec2(r.x * r.y + 0.5, r.y / m + 0.5)"),),
+        {
+            "sphere_coordinates": "a mistake the checker does not know",
+            "side_by_side": "the shader's cone's half is judged once task",
+        },
+    ),
+    Mutant(
+        "cubemap",
+        "face_comparisons_chained",
+        (("if (a.x >= a.y && a.x >= a.z)", "if (a.x >= a.y && a.y >= a.z)"),),
+        {"face_selection": "the comparisons are chained"},
+    ),
+    Mutant(
+        "cubemap",
+        "face_numbered_by_sign",
+        (
+            ("return r.x >= 0.0 ? 0 : 1;", "return r.x >= 0.0 ? 0 : 3;"),
+            ("return r.y >= 0.0 ? 2 : 3;", "return r.y >= 0.0 ? 1 : 4;"),
+            ("return r.z >= 0.0 ? 4 : 5;", "return r.z >= 0.0 ? 2 : 5;"),
+        ),
+        {"face_selection": "numbered +X, +Y, +Z, -X, -Y, -Z"},
+    ),
+    Mutant(
+        "cubemap",
+        "st_ma_rx_on_every_face",
+        ((CUBE_TABLE, CUBE_TABLE.replace("abs(r.y)", "abs(r.x)").replace("abs(r.z)", "abs(r.x)")),),
+        {"face_coordinates": "every face takes ma of the +X face"},
+    ),
+    Mutant(
+        "cubemap",
+        "st_half_applied_twice",
+        ((CUBE_ST, "return vec2((sc / ma + 1.0) / 2.0 / 2.0, (tc / ma + 1.0) / 2.0 / 2.0);"),),
+        {"face_coordinates": "1/2 applied twice"},
+    ),
+    Mutant(
+        "cubemap",
+        "st_component_swapped_on_one_face",
+        (("if (face == 0) { sc = -r.z;", "if (face == 0) { sc = -r.x;"),),
+        {"face_coordinates": "on the +X face (face 0), sc: rx where the formula has rz"},
+    ),
+)
+
+GLSL_EQUIVALENT = (
+    # right forms the handout allows, which the probe must pass on every input it draws
+    Mutant("spheremap", "reflect_builtin", ((REFLECT, "return reflect(u, n);"),)),
+    Mutant(
+        "spheremap",
+        "st_unit_length_identity",
+        ((M_LINE, "float m = 2.0 * sqrt(2.0 * (r.z + 1.0));"),),
+    ),
+    Mutant(
+        "spheremap",
+        "st_normalised_halfway",
+        (
+            (
+                M_LINE + "\n    return " + HALF_ST + ";",
+                "vec3 h = normalize(r + vec3(0.0, 0.0, 1.0));\n    return h.xy * 0.5 + 0.5;",
+            ),
+        ),
+    ),
+    Mutant(
+        "cubemap",
+        "face_strict_comparisons",
+        (
+            ("if (a.x >= a.y && a.x >= a.z)", "if (a.x > a.y && a.x > a.z)"),
+            ("if (a.y >= a.z)", "if (a.y > a.z)"),
+        ),
     ),
 )
 
@@ -850,7 +982,7 @@ CUBE_EQUIVALENT = (
 
 MUTANTS = (*LAB20, *SPHEREMAP, *CUBEMAP)
 ROUND_TWO = (*ROUND_TWO_LAB20, *ROUND_TWO_SPHEREMAP, *ROUND_TWO_CUBEMAP)
-EVERY_MUTANT = (*MUTANTS, *LAB20_MORE, *ROUND_TWO, *PROBED_SLIPS)
+EVERY_MUTANT = (*MUTANTS, *LAB20_MORE, *ROUND_TWO, *PROBED_SLIPS, *PROBED_VARIANTS)
 """Every mistake of the suite; each one's first failing task names its cause."""
 
 

@@ -5,10 +5,9 @@ small while a file tries to send it 1 GiB."""
 
 from __future__ import annotations
 
-import re
 import subprocess
 import sys
-from concurrent.futures import ThreadPoolExecutor
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -17,9 +16,10 @@ from mirrorlab.labs import find_lab
 from mirrorlab.labs.trusted.gl_process import run_job
 from mirrorlab.labs.trusted.sandbox import Limits
 from mirrorlab.labs.trusted.variants import default_variant
-from tests.labs.conftest import mirrorlab_command, read_csv
+from tests.labs.conftest import LIMITS, mirrorlab_command, read_csv
 from tests.labs.forgeries import forgeries
-from tests.labs.glsl_forgeries import GLSL_FORGERIES
+from tests.labs.glsl_forgeries import GLSL_FORGERIES, PHRASES
+from tests.labs.warm_checks import check_files, report
 
 TIMEOUT = "20"
 """CPU seconds a forgery may spend: enough that each meets the limit it is about (calls,
@@ -38,33 +38,22 @@ def forged(tmp_path_factory, lab_environment):
     return folder, {name: phrase for name, (_, phrase) in found.items()}
 
 
-def check_one(folder, name: str) -> subprocess.CompletedProcess:
-    return mirrorlab_command(
-        "lab",
-        "check",
-        "lab20",
-        str(folder / f"{name}.py"),
-        "--out",
-        str(folder / f"{name}.png"),
-        "--timeout",
-        TIMEOUT,
-    )
-
-
-def test_every_forgery_fails_lab_check_in_one_line(forged):
+def test_every_forgery_fails_the_check_in_one_line(forged, capfd):
+    """Through the warm checker (``lab check --watch``'s), one forgery after another: each
+    fails, with a hint, one line a task, and no traceback or other word on stderr."""
     folder, phrases = forged
     assert len(phrases) >= 15
-    with ThreadPoolExecutor(2) as pool:
-        results = dict(zip(phrases, pool.map(lambda n: check_one(folder, n), phrases), strict=True))
-    for name, done in results.items():
-        assert done.returncode == 1, (name, done.stdout, done.stderr)
-        assert done.stderr == "" and "Traceback" not in done.stdout, (name, done.stderr)
-        score = re.search(r"(\d+)/8 tasks passed", done.stdout)
-        assert score and int(score.group(1)) < TASKS, (name, done.stdout)
-        hints = [line for line in done.stdout.splitlines() if line.strip().startswith("hint:")]
+    limits = replace(LIMITS, cpu_seconds=int(TIMEOUT), seconds=3.0 * int(TIMEOUT) + 30)
+    checks = check_files("lab20", [folder / f"{name}.py" for name in phrases], limits)
+    for name, check in checks.items():
+        printed = report("lab20", check)
+        assert not check.passed and check.score < TASKS, (name, printed)
+        assert "Traceback" not in printed, (name, printed)
+        hints = [line for line in printed.splitlines() if line.strip().startswith("hint:")]
         assert hints, name
         phrase = phrases[name]
         assert phrase is None or any(phrase in hint for hint in hints), (name, phrase, hints)
+    assert capfd.readouterr().err == ""
 
 
 def test_every_forgery_fails_lab_grade(forged, tmp_path):
@@ -150,17 +139,35 @@ def test_the_command_stays_small_while_a_file_sends_1_gib(forged):
     assert peak_kib < 400 * 1024, f"the command peaked at {peak_kib} KiB"
 
 
-@pytest.mark.parametrize("lab", sorted(GLSL_FORGERIES))
-def test_glsl_macro_forgeries_do_not_get_every_task(lab, tmp_path, lab_environment):
-    """The student's GLSL is compiled alone: macros that would rewrite the kit's probe
-    shader reach nothing, and functions that return constants fail the GLSL tasks."""
-    path = tmp_path / f"forge_{lab}.py"
-    path.write_text(GLSL_FORGERIES[lab])
-    done = mirrorlab_command(
-        "lab", "check", lab, str(path), "--out", str(tmp_path / "check.png"), "--timeout", TIMEOUT
-    )
-    tasks = len(find_lab(lab).tasks)
-    assert done.returncode == 1 and done.stderr == "", done.stdout + done.stderr
-    score = re.search(rf"(\d+)/{tasks} tasks passed", done.stdout)
-    assert score and int(score.group(1)) < tasks, done.stdout
-    assert "[FAIL] task 1" in done.stdout, done.stdout
+@pytest.fixture(scope="module")
+def glsl_forgeries_graded(tmp_path_factory, lab_environment):
+    """Every GLSL forgery graded, a lab's at once (two at a time)."""
+    from mirrorlab.labs.trusted.grading import grade_folder
+    from tests.labs.conftest import LIMITS, SOLUTIONS
+
+    found = {}
+    for lab in ("spheremap", "cubemap"):
+        folder = tmp_path_factory.mktemp(f"glsl-{lab}")
+        for name, source in GLSL_FORGERIES.items():
+            if name.split("_")[0] == lab:
+                (folder / f"{name}.py").write_text(source)
+        grades, _ = grade_folder(
+            find_lab(lab), folder, 2, None, "pool", LIMITS, progress=False, solutions=SOLUTIONS
+        )
+        found.update({g.student: g for g in grades})
+    return found
+
+
+@pytest.mark.parametrize("name", sorted(GLSL_FORGERIES))
+def test_glsl_forgeries_fail_the_glsl_tasks_in_one_line(glsl_forgeries_graded, name):
+    """The student's GLSL is compiled alone (macros reach nothing), judged on inputs the
+    checker draws (constants and 64 hard-coded fragments, the rest discarded, fail) and
+    refused when it names the checker's own ``ml_`` uniforms."""
+    grade = glsl_forgeries_graded[name]
+    assert grade.status == "ok", grade
+    verdicts = {task: (passed, hint) for task, passed, hint in grade.tasks}
+    first, second = list(verdicts)[:2]
+    for task in (first, second):
+        passed, hint = verdicts[task]
+        assert not passed and "\n" not in hint and "Traceback" not in hint, (task, hint)
+    assert PHRASES[name] in verdicts[first][1], verdicts[first]

@@ -1,6 +1,7 @@
 """Hints by cause, from the call trace: every mutant of the suite (tests/labs/mutants.py:
-the first rounds', issue 45's slips by pattern, the held-out batch, and the forms the
-handouts allow, which pass every task) is checked, the hint of its first failing task names
+the first rounds', issue 45's slips by pattern, the held-out batch, the GLSL slips the
+value probe names, and the forms the handouts allow, which pass every task) is checked (one
+warm checker a lab: tests/labs/warm_checks.py), the hint of its first failing task names
 that mutant's cause, every task fails or passes as the mutant says, and no hint asks for a
 call the file already made with the same arguments (the hints' property: parsed from the
 hint, searched among the calls the file executed)."""
@@ -9,19 +10,29 @@ from __future__ import annotations
 
 import re
 
-from mirrorlab.jobs import PoolExecutor
-from tests.labs.conftest import LIMITS, SOLUTIONS
-from tests.labs.jobfunctions import judged_with_calls
+import pytest
+
+from mirrorlab.labs import lab_names
 from tests.labs.mutants import (
+    CUBE_EQUIVALENT,
     EVERY_MUTANT,
+    GLSL_EQUIVALENT,
     HELD_OUT,
     TRACE_EQUIVALENT,
     TRACE_SLIPS,
-    Mutant,
     problems,
+    write_mutants,
 )
+from tests.labs.warm_checks import check_folder_with_calls
 
-ALL = (*EVERY_MUTANT, *TRACE_SLIPS, *HELD_OUT, *TRACE_EQUIVALENT)
+ALL = (
+    *EVERY_MUTANT,
+    *TRACE_SLIPS,
+    *HELD_OUT,
+    *TRACE_EQUIVALENT,
+    *GLSL_EQUIVALENT,
+    *CUBE_EQUIVALENT,
+)
 CALL = re.compile(r"\b((?:glu?|lab\.)[A-Za-z_]\w*)\(([^()]*(?:\([^()]*\)[^()]*)*)\)")
 QUOTE = re.compile(r"line \d+ \((?:[^()]|\((?:[^()]|\([^()]*\))*\))*\)|line \d+: .*? -> ")
 """The student's own lines as a hint quotes them (``line N (code)``, ``line N: code ->``):
@@ -56,19 +67,20 @@ def made_with_those_arguments(fn: str, arguments: list[str], made: list[str]) ->
     return ""
 
 
-def test_hints_name_causes_and_never_ask_for_a_call_the_file_made():
-    sources = {f"{m.lab}_{m.name}": (m.lab, m.source()) for m in ALL}
-    mutants: dict[str, Mutant] = {f"{m.lab}_{m.name}": m for m in ALL}
-    assert len(sources) == len(ALL), "two mutants share a name"
-    graded = {}
-    with PoolExecutor(2) as executor:
-        jobs = {key: (lab, text, str(SOLUTIONS), LIMITS) for key, (lab, text) in sources.items()}
-        for outcome in executor.run(judged_with_calls, jobs):
-            assert outcome.error is None, f"{outcome.key}: {outcome.error}"
-            graded[outcome.key] = outcome.value
+def test_every_lab_has_a_dozen_slips_by_pattern():
+    slips = {lab: sum(m.lab == lab for m in TRACE_SLIPS) for lab in lab_names()}
+    assert min(slips.values()) >= 12, slips
+
+
+@pytest.mark.parametrize("lab", sorted(lab_names()))
+def test_hints_name_causes_and_never_ask_for_a_call_the_file_made(lab, tmp_path):
+    mutants = [m for m in ALL if m.lab == lab]
+    written = write_mutants(tmp_path / "class", mutants)
+    assert len(written) == len(mutants), "two mutants share a name"
+    graded = check_folder_with_calls(lab, tmp_path / "class")
     wrong = []
     for key, (tasks, made) in graded.items():
-        mutant = mutants[key]
+        mutant = written[key]
         verdicts = {task: (passed, hint) for task, passed, hint in tasks}
         wrong += [f"{key}: {p}" for p in problems(mutant.fails, verdicts)]
         failing = [(task, hint) for task, passed, hint in tasks if not passed]
@@ -83,7 +95,3 @@ def test_hints_name_causes_and_never_ask_for_a_call_the_file_made():
                 if made_call := made_with_those_arguments(fn, arguments, made):
                     wrong.append(f"{key} {task}: asks for {made_call}, which the file made: {hint}")
     assert wrong == []
-    slips = {
-        lab: sum(m.lab == lab for m in TRACE_SLIPS) for lab in ("lab20", "spheremap", "cubemap")
-    }
-    assert min(slips.values()) >= 12, slips

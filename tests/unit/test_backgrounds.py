@@ -29,8 +29,8 @@ from mirrorlab.scene.backgrounds import (
 )
 from mirrorlab.scene.loader import SceneError, load_scene
 from mirrorlab.scene.model import Background, CurvedReflector, MeshObject
-from mirrorlab.techniques import techniques
 from tests.scenekit import curved_reflector
+from tests.twins import reflector_choices
 
 SKY_CUBE = data_path("textures") / "sky_cube"
 LAUNCH = data_path("textures") / "launch.png"
@@ -267,11 +267,6 @@ def test_sphere_scene_is_a_unit_chrome_sphere_among_five_objects_in_the_sky():
     assert bare.content_key() != scene.content_key() and bare.reflectors == scene.reflectors
 
 
-def reflector_techniques() -> str:
-    """Every reflector technique of the registry, as a scene's error lists them."""
-    return ", ".join(t.name for t in techniques() if t.kind != "frame")
-
-
 def test_methods_and_scene_names_are_checked_with_the_choices():
     assert (
         apply_options(load_scene("sphere"), {"method": "latlong"}).reflector("sphere").technique
@@ -281,8 +276,8 @@ def test_methods_and_scene_names_are_checked_with_the_choices():
         with pytest.raises(OptionError) as info:
             apply_options(load_scene(name), {"method": "cubemap"})
         assert str(info.value) == (
-            f"--method: reflectors[0].technique: expected one of {reflector_techniques()}, "
-            "got 'cubemap' (did you mean 'cube'?)"
+            f"--method: reflectors[0].technique: expected one of {reflector_choices()}, got "
+            "'cubemap' (did you mean 'cube'?)"
         )
     with pytest.raises(OptionError, match=r"--method: expected one of ortho, .* got 'cubemap'"):
         apply_options(load_scene("no_mirror"), {"method": "cubemap"})

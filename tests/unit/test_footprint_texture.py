@@ -4,6 +4,7 @@ re-captured when its size changes. Numpy only."""
 
 from __future__ import annotations
 
+import re
 from dataclasses import replace
 
 import pytest
@@ -14,6 +15,7 @@ from mirrorlab.scene.loader import SceneError, from_document, load_scene, scene_
 from mirrorlab.scene.model import FOOTPRINT_STEP, Camera
 from mirrorlab.views import camera_view
 from tests.scenekit import planar_reflector
+from tests.twins import techniques_named
 
 SIZE = (160, 120)
 
@@ -63,10 +65,11 @@ def test_scene_files_and_options_take_footprint_for_ortho_only():
     assert from_document(scene_to_document(scene), lab.source) == scene  # it round-trips
     document["reflectors"][0]["technique"] = "reflected"
     document["reflectors"][0].pop("ortho", None)
+    owners = re.escape(techniques_named(lambda t: t.own_camera))
+    assert "'ortho'" in owners
     with pytest.raises(
         SceneError,
-        match=r'reflectors\[0\]\.texture_size: "footprint" '
-        r"applies to technique 'ortho'.*not 'reflected'",
+        match=rf'reflectors\[0\]\.texture_size: "footprint" applies to {owners}.*not \'reflected\'',
     ):
         from_document(document, lab.source)
     document["reflectors"][0].update(technique="ortho", texture_size="huge")
@@ -83,7 +86,7 @@ def test_scene_files_and_options_take_footprint_for_ortho_only():
     assert planar_reflector(switched, "mirror").texture_size is None
     kept = apply_options(footprinted, {"method": "ortho"})
     assert planar_reflector(kept, "mirror").texture_size == "footprint"
-    with pytest.raises(OptionError, match=r"--env-size.*applies to technique 'ortho'"):
+    with pytest.raises(OptionError, match=rf"--env-size.*applies to {owners}"):
         footprint_lab(method="reflected")
     numbered = apply_options(load_scene("lab20"), {"env_size": 64, "method": "reflected"})
     assert planar_reflector(numbered, "mirror").texture_size == 64

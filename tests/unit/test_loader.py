@@ -19,6 +19,7 @@ import tomlkit
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
+from mirrorlab import techniques as registry
 from mirrorlab.data import data_path, scenes_dir
 from mirrorlab.plan import plan_frame
 from mirrorlab.scene.loader import (
@@ -51,6 +52,7 @@ from mirrorlab.scene.model import (
 )
 from mirrorlab.techniques import names_where, technique_names
 from tests import REPO_DIR
+from tests.twins import reflector_choices, techniques_named
 
 MODELS = sorted((data_path("models")).glob("*.obj"))
 PICTURES = sorted((data_path("textures")).glob("*.png"))
@@ -291,13 +293,12 @@ def curved_reflectors(draw, name: str) -> dict[str, Any]:
         "capture_center": draw(vec(moderate)),
         "color": draw(vec(unit)),
     }
-    if technique == "cube" and draw(st.booleans()):
+    takes = registry.technique(technique)
+    if takes.source == "faces" and draw(st.booleans()):
         entry["source"] = str(SKY_CUBE)
-    elif technique in ("sphere", "sphere-vertex", "sphere-texgen", "normal") and draw(
-        st.booleans()
-    ):
+    elif takes.source == "picture" and draw(st.booleans()):
         entry["source"] = str(draw(st.sampled_from(PICTURES)))
-    elif technique == "cube-live" and draw(st.booleans()):
+    elif takes.parallax and draw(st.booleans()):
         entry["parallax"] = draw(parallax_tables())
         if entry["parallax"]["proxy"] == "box":  # numbers beyond 1e6 are refused: keep
             entry["capture_center"] = [0.0, 0.0, 0.0]  # the centre inside the box
@@ -618,7 +619,7 @@ def test_wrong_types_are_named_with_what_was_expected(tmp_path):
             ("reflectors", 0, "technique"),
             "mirror",
             "reflectors[0].technique",
-            "expected one of ortho, reflected, stencil, sphere",
+            f"expected one of {reflector_choices()}, got",
         ),
         (
             ("reflectors", 1, "map_size"),
@@ -1057,7 +1058,8 @@ def test_other_structural_mistakes_are_named(tmp_path):
         "up": [0, 1, 0],
         "extents": [-1, 1, -1, 1, 0, 5],
     }
-    cases.append((document, "reflectors[0].ortho", "applies to technique 'ortho'"))
+    owners = techniques_named(lambda t: t.own_camera)
+    cases.append((document, "reflectors[0].ortho", f"applies to {owners}"))
     document = base_document()
     document["reflectors"][1]["source"] = "x.png"
     cases.append((document, "reflectors[1].source", "technique 'cube-live' takes no source"))
@@ -1495,10 +1497,12 @@ def test_a_bad_parallax_table_is_named(tmp_path, parallax, key, words):
 def test_parallax_belongs_to_live_cube_maps_only(tmp_path):
     document = base_document()
     document["reflectors"][1].update(technique="cube", parallax={"proxy": "distance"})
-    corrected = names_where(lambda t: t.parallax)
-    assert "cube" not in corrected
-    error = assert_refused(tmp_path, document, "reflectors[1].parallax", "applies to technique")
-    assert error.problem.endswith(f"{', '.join(map(repr, corrected))}, not 'cube'")
+    # the maps that take one (a technique with a probe takes it for its probe's map)
+    owners = techniques_named(lambda t: t.parallax and not t.probe)
+    assert "'cube-live'" in owners and "'cube'" not in owners
+    assert_refused(tmp_path, document, "reflectors[1].parallax", f"applies to {owners}, not 'cube'")
     document = base_document()
-    document["reflectors"][0]["parallax"] = {"proxy": "distance"}
-    assert_refused(tmp_path, document, "reflectors[0].parallax", "unknown key")
+    document["reflectors"][0]["parallax"] = {"proxy": "distance"}  # a reflected mirror's
+    assert_refused(
+        tmp_path, document, "reflectors[0].parallax", "applies to a planar mirror of technique"
+    )

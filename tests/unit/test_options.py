@@ -24,11 +24,15 @@ from mirrorlab.scene.loader import load_scene
 from mirrorlab.scene.model import BoxProxy, DistanceSearch, SphereProxy
 from mirrorlab.techniques import technique, techniques
 from tests.scenekit import curved_reflector, planar_reflector, scene_robot
+from tests.twins import reflector_choices
 
-CORRECTED = tuple(t.name for t in techniques("curved") if t.parallax)
-"""The curved techniques that take a parallax correction (the registry's, in order)."""
+CORRECTED = tuple(t.name for t in techniques("curved") if t.parallax and not t.probe)
+"""The curved map techniques that take a parallax correction (the registry's, in order;
+one with a probe takes it for its probe's map)."""
 
 SKY_CUBE = data_path("textures") / "sky_cube"
+CORRECTED = tuple(t.name for t in techniques("curved") if t.parallax)
+"""The curved techniques that take a parallax correction, in the registry's order."""
 
 
 def changed_fields(before, after) -> set[str]:
@@ -146,9 +150,13 @@ def test_parallax_sets_every_live_cube_map_in_any_form():
 
 
 def test_leaving_cube_live_drops_the_parallax_correction():
+    """... for every curved technique that takes none; one that takes it keeps it."""
     room = load_scene("sphere_room")
-    for method in ("cube", "sphere", "latlong"):
-        assert curved_reflector(apply_options(room, {"method": method}), "sphere").parallax is None
+    corrected = curved_reflector(room, "sphere").parallax
+    assert corrected is not None
+    for entry in techniques("curved"):
+        moved = curved_reflector(apply_options(room, {"method": entry.name}), "sphere")
+        assert moved.parallax == (corrected if entry.parallax else None), entry.name
     assert apply_options(room, {"method": "cube-live"}) == room
 
 
@@ -293,9 +301,8 @@ def test_set_changes_any_key_path_as_a_file_would():
         ),
         (
             {"method": "spheer"},
-            "--method: reflectors[0].technique: expected one of "
-            + ", ".join(t.name for t in techniques() if t.kind != "frame")
-            + ", got 'spheer' (did you mean 'sphere'?)",
+            f"--method: reflectors[0].technique: expected one of {reflector_choices()}, "
+            "got 'spheer' (did you mean 'sphere'?)",
         ),
         ({"method": 5}, "--method: reflectors[0].technique: expected a string, got the number 5"),
         (

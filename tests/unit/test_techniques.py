@@ -20,12 +20,14 @@ from mirrorlab.plan import TextureState, plan_frame
 from mirrorlab.scene.loader import SceneError, load_scene, loads
 from mirrorlab.techniques import (
     Technique,
+    reflector_technique_names,
     register,
     technique,
     technique_names,
     techniques,
     unregister,
 )
+from tests import REPO_DIR
 from tests.scenekit import curved_reflector
 
 PROBE_MIRROR = Technique(
@@ -206,11 +208,20 @@ def test_a_frame_technique_is_a_method_like_the_ray_tracer():
 
 
 def test_every_list_comes_from_the_registry():
+    # each kind's list holds every technique that serves it (one for both kinds in
+    # either), in the order registered, and nothing else
     every = techniques()
+    names = technique_names()
+    assert names == tuple(t.name for t in every) and len(set(names)) == len(names)
     for kind in ("planar", "curved", "frame"):
-        assert technique_names(kind) == tuple(t.name for t in every if t.kind == kind)
-    assert set(technique_names()) == {t.name for t in every}
+        assert technique_names(kind) == tuple(t.name for t in every if t.serves(kind))
     assert technique_names("planar") and technique_names("curved")
+    both = [t.name for t in every if t.kind == "both"]
+    assert all(n in technique_names("planar") and n in technique_names("curved") for n in both)
+    assert reflector_technique_names() == tuple(t.name for t in every if t.kind != "frame")
+    # the lab's and the textbook's techniques, each of its kind
+    assert {"ortho", "reflected", "stencil"} <= set(technique_names("planar"))
+    assert {"sphere", "cube", "cube-live", "latlong", "normal"} <= set(technique_names("curved"))
     with registered(replace(PROBE_MIRROR, name="probe-two")):
         assert technique_names("planar")[-1] == "probe-two"
     with pytest.raises(ValueError, match="already registered"):
@@ -221,13 +232,15 @@ def test_every_list_comes_from_the_registry():
 
 def test_the_lists_hold_under_python_O():
     # No import-time asserts keep lists in step: -O (which drops asserts) changes nothing.
+    # (the child imports the tests too, so a run with twins registered has them there)
     code = (
+        "import tests; "
         "from mirrorlab.techniques import technique_names as t; "
         "from mirrorlab.scene.loader import load_scene; "
         "s = load_scene('mirror_and_sphere'); print(len(t()), s.reflectors[0].technique)"
     )
     out = subprocess.run(
-        [sys.executable, "-O", "-c", code], capture_output=True, text=True, check=True
+        [sys.executable, "-O", "-c", code], capture_output=True, text=True, check=True, cwd=REPO_DIR
     ).stdout.split()
     assert out == [str(len(technique_names())), "reflected"]
 

@@ -20,6 +20,7 @@ import mirrorlab
 from mirrorlab import math3d
 from mirrorlab.app.demo import ZOOM_FACTOR, Orbit
 from mirrorlab.options import apply_options
+from mirrorlab.techniques import technique_names
 from tests.imagecheck import assert_images_close, save_failure
 from tests.scenekit import curved_reflector, planar_reflector
 from tests.window.xwindow import (
@@ -166,9 +167,9 @@ def test_every_control_of_the_lab_demo(xdisplay, lab_demo, tmp_path):
     same_picture("demo_wheel", after, headless("lab20", orbit, angles=angles))
     before = after
 
-    # 1-9 pick the technique of the reflector under the mouse: 2 is reflected.
+    # 1-9 pick the technique of the reflector under the mouse, in the registry's order.
     move_pointer(d, window, *pixel_of("lab20", (-7.0, 1.0, -2.0), orbit))
-    press(d, window, "2")
+    press(d, window, str(technique_names("planar").index("reflected") + 1))
     after = shows(d, window, "mirror: reflected")
     assert changed_pixels(before, after) > 50
     same_picture(
@@ -226,7 +227,7 @@ def test_number_keys_and_inset_follow_the_reflector_under_the_mouse(xdisplay):
         before = settled(d, window, 0, "the first frame")
         sphere = curved_reflector(scene, "sphere")
         move_pointer(d, window, *pixel_of("mirror_and_sphere", sphere.center(), orbit))
-        press(d, window, "4")  # the fourth curved technique: a static cube map
+        press(d, window, str(technique_names("curved").index("cube") + 1))  # a static cube map
         after = shows(d, window, "sphere: cube -")
         assert changed_pixels(before, after) > 20
         same_picture(
@@ -280,3 +281,32 @@ def test_demo_screenshot_matches_the_headless_render(tmp_path, method):
     window_frame = np.asarray(Image.open(shot).convert("RGB"))
     headless_frame = mirrorlab.render("lab20", size=(WIDTH, HEIGHT), method=method)
     same_picture(f"demo_vs_headless_{method}", window_frame, headless_frame)
+
+
+@pytest.mark.parametrize("scene", ["ssr_box_room", "ssr_sphere_near"])
+def test_screen_space_reflections_in_the_demo_and_their_miss_mask(xdisplay, scene):
+    """Screen-space reflections (a planar floor, a curved sphere) in the window, as the
+    headless render draws them (the frame copied from the window's own framebuffer);
+    X shows their miss mask over the window, as the API gives it (its label aside)."""
+    d = xdisplay
+    demo = Demo(scene, "--size", f"{WIDTH}x{HEIGHT}")
+    try:
+        window = find_window(d, f"mirrorlab demo - {scene}")
+        loaded = mirrorlab.load_scene(scene)
+        orbit = Orbit.from_eye(loaded.camera.eye, loaded.camera.target)
+        frame = settled(d, window, 0, "the first frame")
+        same_picture(f"demo_{scene}", frame, headless(scene, orbit))
+        count = frame_number(window)
+        press(d, window, "x")
+        masked = settled(d, window, count, "the frame with the miss mask")
+        with mirrorlab.Renderer((WIDTH, HEIGHT)) as renderer:
+            camera = replace(loaded.camera, eye=orbit.eye(), target=orbit.target)
+            renderer.render(replace(loaded, camera=camera))
+            expected = renderer.ssr_mask().image()
+        top = slice(0, HEIGHT * 2 // 3)  # its label lies along the bottom
+        same_picture(f"demo_{scene}_mask", masked[top], expected[top])
+        press(d, window, "Escape")
+        assert demo.finish() == 0
+        assert demo.err == [], demo.err
+    finally:
+        demo.stop()

@@ -8,6 +8,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import threading
 
 from mirrorlab.labs import find_lab
 from mirrorlab.labs.trusted.gl_process import run_job
@@ -16,11 +17,12 @@ from mirrorlab.labs.trusted.variants import default_variant
 from mirrorlab.scene.backgrounds import load_picture
 from mirrorlab.testing import assert_image_close
 from tests import REPO_DIR
+from tests.window.xwindow import GIVE_UP_S, find_window, press, screenshot, wait_for
 
 SOLUTION = REPO_DIR / "labs" / "solutions" / "lab20_mirror.py"
 
 
-def lab_run(*args: str) -> subprocess.CompletedProcess:
+def lab_run(*args: str, cwd=None) -> subprocess.CompletedProcess:
     env = {**os.environ, "PYOPENGL_PLATFORM": "glx"}
     return subprocess.run(
         [sys.executable, "-m", "mirrorlab.cli", "lab", "run", *args],
@@ -28,6 +30,7 @@ def lab_run(*args: str) -> subprocess.CompletedProcess:
         text=True,
         env=env,
         timeout=300,
+        cwd=cwd,
     )
 
 
@@ -92,3 +95,116 @@ def test_lab_run_keeps_the_file_in_its_sandbox(tmp_path):
     assert len(lines) == 1 and "while loading the file, line 1" in lines[0], done.stderr
     assert "No such file or directory" in lines[0]
     assert not target.exists()
+
+
+class LabRun:
+    """``mirrorlab lab run ARGS`` in a process of its own, its stderr read as it comes."""
+
+    def __init__(self, *args: str, cwd=None) -> None:
+        env = {**os.environ, "PYOPENGL_PLATFORM": "glx"}
+        self.process = subprocess.Popen(
+            [sys.executable, "-m", "mirrorlab.cli", "lab", "run", *args],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env,
+            cwd=cwd,
+        )
+        self.errors: list[str] = []
+        self.reader = threading.Thread(target=self._read, daemon=True)
+        self.reader.start()
+
+    def _read(self) -> None:
+        assert self.process.stderr is not None
+        for line in self.process.stderr:
+            self.errors.append(line)
+
+    def __enter__(self) -> LabRun:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.process.poll() is None:
+            self.process.kill()
+        self.process.communicate()
+
+    def finish(self) -> int:
+        code = self.process.wait(timeout=GIVE_UP_S)
+        self.reader.join(GIVE_UP_S)
+        return code
+
+
+def test_lab_run_without_a_file_runs_the_folders_starter(tmp_path):
+    """As ``lab check`` does: the ``starter.py`` of the folder it runs in, here a finished
+    one; and a folder without one is refused in one line."""
+    (tmp_path / "starter.py").write_text(SOLUTION.read_text())
+    shot = tmp_path / "window.png"
+    done = lab_run(
+        "lab20", "--size", "128x128", "--max-frames", "2", "--screenshot", str(shot), cwd=tmp_path
+    )
+    assert done.returncode == 0, done.stderr
+    limits = Limits(cpu_seconds=5, seconds=60, unsandboxed=not sandboxed())
+    evidence = run_job(
+        find_lab("lab20"),
+        SOLUTION.read_bytes(),
+        "solution.py",
+        default_variant("lab20"),
+        limits,
+        (128, 128),
+    )
+    assert_image_close(
+        load_picture(shot),
+        evidence.arrays["frame"],
+        tolerance=8,
+        fraction=0.99,
+        name="lab_run_starter",
+    )
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    refused = lab_run("lab20", "--max-frames", "1", cwd=empty)
+    assert refused.returncode == 2 and "holds no starter.py" in refused.stderr, refused.stderr
+    assert len(refused.stderr.strip().splitlines()) == 1
+
+
+def test_a_tap_of_esc_closes_a_window_whose_frames_are_slow(xdisplay, tmp_path):
+    """Esc is a key callback, not a look once a frame: a tap while a frame takes half a
+    second (pressed and released before the frame ends) still closes the window."""
+    slow = tmp_path / "slow.py"
+    slow.write_text(
+        "import time\n"
+        + SOLUTION.read_text().replace(
+            "def display():\n", "def display():\n    time.sleep(0.5)\n", 1
+        )
+    )
+    with LabRun("lab20", str(slow), "--size", "128x128", cwd=tmp_path) as run:
+        window = find_window(xdisplay, "mirrorlab lab lab20 - slow.py")
+        wait_for(lambda: screenshot(xdisplay, window).any(), "the first frame")
+        press(xdisplay, window, "Escape")
+        assert run.finish() == 0, "".join(run.errors)
+
+
+def test_lab_run_watch_runs_each_save_in_the_same_window(xdisplay, tmp_path):
+    mine = tmp_path / "mine.py"
+    mine.write_text(SOLUTION.read_text())
+    with LabRun("lab20", "mine.py", "--watch", "--size", "128x128", cwd=tmp_path) as run:
+        window = find_window(xdisplay, "mirrorlab lab lab20 - mine.py")
+        first = wait_for(
+            lambda: (lambda image: image if image.any() else None)(screenshot(xdisplay, window)),
+            "the first frame",
+        )
+        assert tuple(first[0, 0]) != (255, 0, 0)
+        staging = tmp_path / ".mine.py.swp"  # saved as vim saves: a new file renamed
+        staging.write_text(
+            SOLUTION.read_text().replace(
+                "    create_mirror()\n    glClear(",
+                "    create_mirror()\n    glClearColor(1, 0, 0, 1)\n    glClear(",
+                1,
+            )
+        )
+        os.replace(staging, mine)
+        wait_for(
+            lambda: tuple(screenshot(xdisplay, window)[0, 0]) == (255, 0, 0),
+            "the saved file's frame in the same window",
+        )
+        press(xdisplay, window, "Escape")
+        assert run.finish() == 0, "".join(run.errors)
+    assert any("mine.py saved: running it again" in line for line in run.errors), run.errors

@@ -1,9 +1,8 @@
 """The cube-map lab's judge, declared: its tasks, the student functions each judges, the
 checks its verdict rests on and the lab's numbers (the sphere's centre). The GLSL tasks
-are judged by the face and (s, t) the student's functions give every pixel of the sphere
-and the value probe's inputs, against the OpenGL table and the usual slips
-(:func:`judge_face`, :func:`judge_coordinates`); every other task, and every hint, by
-:mod:`mirrorlab.labs.trusted.lab_judge`. Numpy only."""
+are judged by the value probe, one call each (:func:`.probe.judge`: the face and (s, t) on
+the checker's secret inputs, slips named by the formulas' variants); every other task, and
+every hint, by :mod:`mirrorlab.labs.trusted.lab_judge`. Numpy only."""
 
 from __future__ import annotations
 
@@ -11,23 +10,19 @@ from typing import Any
 
 import numpy as np
 
-from mirrorlab.envmap import cube_map
-from mirrorlab.labs import LabSpec, task_name
+from mirrorlab.labs import LabSpec
 from mirrorlab.labs.lab_cubemap.variant import cube_center
 from mirrorlab.labs.trusted import lab_judge as J
+from mirrorlab.labs.trusted import probe
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.judging import (
-    INTEGER_HALF,
     Context,
     TaskResult,
-    glsl_body,
     picture,
 )
-from mirrorlab.labs.trusted.probe import INPUTS, slip, slip_per_face
 from mirrorlab.labs.trusted.variants import Variant
 
 GLSL_FUNCTIONS = ("cube_face", "cube_face_st")
-CUBE_INPUTS = INPUTS["cube_face_st"][0].shape[0]
 MIN_FILTER = 0x2801
 MIPMAP_FILTERS = {
     0x2700: "GL_NEAREST_MIPMAP_NEAREST",
@@ -42,111 +37,15 @@ FARTHEST_OBJECT = 9.7
 """The picture behind the scene is this far along -z from any centre of the variants."""
 
 
-def _task(task_id: str) -> str:
-    """How a hint names another task of this lab (``task 8 (passes)``)."""
-    return task_name("cubemap", task_id)
-
-
-def _values(student: Evidence) -> tuple[np.ndarray, np.ndarray] | str:
-    """(face, s, t) ``(n, 3)`` the student's functions gave and the kit's r ``(n, 3)``, or
-    why there are none."""
-    problem = student.state.get("values_error")
-    if isinstance(problem, dict):
-        return str(problem.get("message", ""))
-    mask = student.arrays.get("values_mask")
-    if not isinstance(mask, np.ndarray) or mask.dtype != bool or mask.ndim != 2 or mask.sum() < 50:
-        return "the sphere could not be drawn with CUBE_MAP_GLSL"
-    shape = (*mask.shape, 3)
-    values, r = student.floats("values_face_st", shape), student.floats("values_r", shape)
-    if values is None or r is None:
-        return "the sphere could not be drawn with CUBE_MAP_GLSL"
-    return values[mask], r[mask]
-
-
 def judge_face(student: Evidence) -> tuple[bool, str]:
-    got = _values(student)
-    if isinstance(got, str):
-        return False, got
-    values, r = got
-    if not np.all(np.isfinite(values[:, 0])):
-        return False, "cube_face gives no number on the sphere"
-    face = np.round(values[:, 0]).astype(np.int64)
-    right, _, _ = cube_map(r)
-    if np.mean(face == right) >= 0.98:
-        return True, ""
-    # the slip is named by the probe's values: directions on every face, of several
-    # lengths, the major component negative on half of them
-    found = slip("cube_face", student.floats("probe_cube_face", (CUBE_INPUTS, 4)))
-    if found == "signed":
-        return False, (
-            "the face is picked by the largest signed component; the major axis is "
-            "the one of largest magnitude: compare abs(r.x), abs(r.y), abs(r.z)"
-        )
-    if found == "opposite":
-        return False, (
-            "the right axis but the opposite sign: a positive component picks the "
-            "POSITIVE face (0, 2, 4)"
-        )
-    if np.mean(face // 2 == right // 2) >= 0.98:
-        return False, "the right axis, but the sign picks the wrong face on some pixels"
-    if np.mean((face < 0) | (face > 5)) > 0.02:
-        return False, "cube_face returns numbers outside 0..5"
-    return False, (
-        f"cube_face picks the wrong face on {np.mean(face != right):.0%} of the "
-        f"sphere's pixels (the face is the axis of r's largest magnitude)"
-    )
+    """task 1 (face_selection): ``cube_face`` by the value probe (:func:`.probe.judge`)."""
+    return probe.judge(student, "cubemap", "cube_face")
 
 
 def judge_coordinates(student: Evidence) -> tuple[bool, str]:
-    got = _values(student)
-    if isinstance(got, str):
-        return False, got
-    values, r = got
-    right_face, s, t = cube_map(r)
-    face = np.round(values[:, 0]).astype(np.int64)
-    ok = face == right_face
-    if ok.mean() < 0.5:
-        return False, f"judged once {_task('face_selection')} picks the right faces"
-    st = values[ok, 1:]
-    s, t = s[ok], t[ok]
-    if not np.all(np.isfinite(st)):
-        return False, "cube_face_st gives NaN or infinity on the sphere"
-    if np.mean(np.abs(st - np.stack([s, t], -1)).max(-1) <= 2e-3) >= 0.98:
-        return True, ""
-    # the slip is named by the probe's values: directions on every face, of several
-    # lengths, each with its right face whatever cube_face picks
-    hints = {
-        "swap": "s and t swapped: the table gives sc and tc per face, s from sc",
-        "flip_s": "s mirrored on the faces: check the sign of sc in the table",
-        "flip_t": "t upside down on the faces: check the sign of tc in the table",
-        "undivided": "sc and tc must be divided by |major axis| before (x + 1) / 2",
-        "length": "sc and tc are divided by the length of r; the table divides by |ma|, the "
-        "major axis's size: s = (sc/|ma| + 1) / 2",
-        "no_shift": "s and t must be (sc/|ma| + 1) / 2: they lie in [-1, 1] now",
-        "no_scale": "s and t must be (sc/|ma| + 1) / 2: the / 2 is missing",
-        "signed_major": "ma is the major axis's size, abs(...): with its sign, s and t are "
-        "mirrored on the negative faces",
-        "zero": "s and t are 0 everywhere: s = (sc/|ma| + 1) / 2",
-    }
-    probed = student.floats("probe_cube_face_st", (CUBE_INPUTS, 4))
-    found = slip("cube_face_st", probed)
-    # 1/2 in GLSL is integer division, 0: the same values as a factor 0 written out, so
-    # only the source tells which it is
-    if found == "zero" and INTEGER_HALF.search(glsl_body(student.source, "cube_face_st")):
-        return False, (
-            "s and t are 0 everywhere: 1/2 in GLSL is integer division, 0; write "
-            "0.5, or divide by 2.0: s = (sc/|ma| + 1) / 2.0"
-        )
-    if found in hints:
-        return False, hints[found]
-    wrong = slip_per_face(probed)
-    if wrong and all(wrong.values()):
-        names = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
-        return False, "; ".join(
-            f"on the {names[face]} face (face {face}): {hints[named]}"
-            for face, named in sorted(wrong.items())
-        )
-    return False, "cube_face_st differs from the OpenGL table's (sc/|ma| + 1) / 2 on the sphere"
+    """task 2 (face_coordinates): ``cube_face_st`` by the value probe
+    (:func:`.probe.judge`), given the right face whatever ``cube_face`` picks."""
+    return probe.judge(student, "cubemap", "cube_face_st")
 
 
 FACES = J.Events("draw", who="draw_scene", within="capture_cube")

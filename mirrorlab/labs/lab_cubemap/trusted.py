@@ -30,9 +30,6 @@ if TYPE_CHECKING:
     from mirrorlab.labs.trusted.call_executor import Executor
     from mirrorlab.labs.trusted.lab_run import LabRun
 
-PROBE_FUNCTIONS = ("cube_face", "cube_face_st")
-"""The student's GLSL functions the value probe evaluates."""
-
 
 def left_out() -> dict[str, str]:
     """Calls of the allow-list (:data:`~mirrorlab.labs.trusted.calls.GL_SPECS`) this lab's
@@ -195,9 +192,8 @@ def observe(run: LabRun) -> None:
             evidence.arrays["cube_faces"] = faces
     glsl = run.executor.glsl.get("CUBE_MAP_GLSL") or run.declared.get("CUBE_MAP_GLSL")
     if glsl is not None:
+        run.probe_glsl("kit_cube.vert", "kit_cube.frag", glsl, "CUBE_MAP_GLSL")
+        # the sphere's pixels (where the kit's r is written), for the frame's regions
         run.check_values(
-            lambda mode: session.draw_sphere(glsl, cube, mode, limit=64),
-            {"face_st": 1, "r": 2},
-            "cube_face",
+            lambda mode: session.draw_sphere(glsl, cube, mode, limit=64), {"r": 2}, "cube_face"
         )
-        run.probe_glsl("kit_cube.frag", glsl, PROBE_FUNCTIONS)

@@ -29,9 +29,6 @@ if TYPE_CHECKING:
     from mirrorlab.labs.trusted.call_executor import Executor
     from mirrorlab.labs.trusted.lab_run import LabRun
 
-PROBE_FUNCTIONS = ("reflect_eye", "sphere_map_st")
-"""The student's GLSL functions the value probe evaluates."""
-
 
 def left_out() -> dict[str, str]:
     """Calls of the allow-list (:data:`~mirrorlab.labs.trusted.calls.GL_SPECS`) this lab's
@@ -251,9 +248,10 @@ def observe(run: LabRun) -> None:
     # the GLSL the cone was drawn with, else the file's SPHERE_MAP_GLSL
     glsl = run.executor.glsl.get("SPHERE_MAP_GLSL") or run.declared.get("SPHERE_MAP_GLSL")
     if glsl is not None:
+        run.probe_glsl("kit_sphere.vert", "kit_sphere.frag", glsl, "SPHERE_MAP_GLSL")
+        # the cone's pixels (where the kit's u is written), for the frame's regions
         run.check_values(
             lambda mode: session.draw_cone_shader(glsl, session.backdrop_texture, mode, limit=64),
-            {"r": 1, "u": 2, "n": 3, "st": 4},
+            {"u": 2},
             "reflect_eye",
         )
-        run.probe_glsl("kit_sphere.frag", glsl, PROBE_FUNCTIONS)

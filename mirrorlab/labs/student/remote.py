@@ -10,11 +10,21 @@ from typing import Any
 
 from .wire import DTYPES, Channel
 
-numpy: Any
-try:  # the sandbox may offer numpy; nothing here needs it
-    import numpy
-except ImportError:  # pragma: no cover - depends on the sandbox
-    numpy = None
+
+def loaded_numpy() -> Any:
+    """numpy if the student's file has imported it, else None: a value can be a numpy
+    array only then, and the runner starts sooner without importing it itself."""
+    return sys.modules.get("numpy")
+
+
+def offered_numpy() -> Any:
+    """numpy where the sandbox offers it (imported on the first reply that carries an
+    array, as PyOpenGL returns one), else None; nothing here needs it."""
+    try:
+        import numpy
+    except ImportError:  # pragma: no cover - depends on the sandbox
+        return None
+    return numpy
 
 
 class GLError(Exception):
@@ -58,6 +68,7 @@ ERRORS: dict[str, type[BaseException]] = {
 def flatten(value: Any, what: str) -> list:
     """The numbers in ``value`` (a number, a sequence of any depth, a numpy array, a ctypes
     array or another buffer), in order."""
+    numpy = loaded_numpy()
     if numpy is not None and isinstance(value, numpy.ndarray):
         return value.ravel().tolist()
     scalar = _scalar(value)
@@ -149,6 +160,7 @@ def _pixels(value: Any, type_code: str, what: str) -> tuple[str, list[int], byte
     """Pixel data as (dtype, shape, bytes): its raw bytes, as PyOpenGL passes them."""
     if value is None:
         return None
+    numpy = loaded_numpy()
     if numpy is not None and isinstance(value, numpy.ndarray):
         array_ = numpy.ascontiguousarray(value)
         code = array_.dtype.str.lstrip("<>|=")
@@ -263,6 +275,7 @@ def decode(value: Any, payloads: list[tuple[str, list[int], bytes]]) -> Any:
         dtype, shape, data = payloads[value["$a"]]
         if value.get("as") == "bytes":
             return data
+        numpy = offered_numpy()
         if numpy is not None:
             return numpy.frombuffer(data, dtype=dtype).reshape(shape).copy()
         items: list[Any] = array.array(

@@ -18,6 +18,7 @@ import re
 import shutil
 import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -26,7 +27,8 @@ import numpy as np
 
 from mirrorlab.labs import LabSpec, find_lab, lab_names
 from mirrorlab.labs.trusted.evidence import Evidence
-from mirrorlab.labs.trusted.failures import run_attributed
+from mirrorlab.labs.trusted.failures import Runner, run_attributed
+from mirrorlab.labs.trusted.gl_process import run_job
 from mirrorlab.labs.trusted.judging import Context, TaskResult
 from mirrorlab.labs.trusted.sandbox import Limits, sandboxed, unsandboxed_note
 from mirrorlab.labs.trusted.variants import (
@@ -151,7 +153,8 @@ def trim_reference(evidence: Evidence) -> Evidence:
         evidence.detail,
         setup=list(evidence.setup),
         frames=[{"events": events}],
-        state=dict(evidence.state),
+        # the value probe's seed and inputs judge the student's GLSL only
+        state={k: v for k, v in evidence.state.items() if not k.startswith("probe_")},
         textures=dict(evidence.textures),
         arrays={k: v for k, v in evidence.arrays.items() if k in keep},
         variant=evidence.variant,
@@ -254,13 +257,26 @@ def check_submission(
     limits: Limits = DEFAULT_LIMITS,
     size: tuple[int, int] = CHECK_SIZE,
     keep: bool = False,
+    run: Runner = run_job,
 ) -> CheckResult:
-    """Run ``source`` in the sandbox through the trusted checker (with ``keep``, this
-    process's kept checker process) and judge it against ``reference`` for
-    ``context.variant``."""
-    module = spec.module("judge")
+    """Run ``source`` in the sandbox through the trusted checker (with ``keep``, a kept
+    checker process: this process's, or the one ``run`` keeps) and judge it against
+    ``reference`` for ``context.variant``; the checker's own failures are told from the
+    file's (:func:`~.failures.run_attributed`, with ``run`` for
+    :func:`~.gl_process.run_job`). A check in a process of its own imports the judge while
+    the file runs (an interrupt ends that process too: it is in the terminal's process
+    group, where a kept process is left to its owner)."""
     started = time.perf_counter()
-    evidence = run_attributed(spec, source, file_name, context.variant, limits, size, keep)
+    if keep:
+        module = spec.module("judge")
+        evidence = run_attributed(spec, source, file_name, context.variant, limits, size, keep, run)
+    else:
+        with ThreadPoolExecutor(1) as pool:
+            running = pool.submit(
+                run_attributed, spec, source, file_name, context.variant, limits, size, False, run
+            )
+            module = spec.module("judge")
+            evidence = running.result()
     try:
         results = module.judge(spec, evidence, reference, context)
     except Exception as exc:  # a judge's own fault: every task fails, saying so
@@ -358,16 +374,51 @@ def folder_file(spec: LabSpec, folder: Path) -> Path:
     return path
 
 
+def file_reference(
+    spec: LabSpec,
+    variant: Variant,
+    solutions: Path | None,
+    limits: Limits,
+    path: Path,
+    size: tuple[int, int] = CHECK_SIZE,
+) -> Evidence:
+    """The reference evidence the student's file ``path`` (of ``variant``) is judged
+    against (:func:`reference_evidence`, its released folder beside it); CheckError when
+    the ``reference/`` beside it is another variant's."""
+    released = path.parent / REFERENCE_FOLDER
+    reference = reference_evidence(spec, variant, solutions, limits, size, released=released)
+    made_for = reference.variant.get("id") if isinstance(reference.variant, dict) else None
+    if made_for not in (None, variant.id):
+        raise CheckError(
+            f"{path.name} is variant {variant.id}, but the {REFERENCE_FOLDER}/ beside it is "
+            f"variant {made_for}'s: check the file in its own released folder"
+        )
+    return reference
+
+
+def file_report(spec: LabSpec, path: Path, check: CheckResult) -> list[str]:
+    """The check of the file ``path`` as ``lab check`` prints it: :func:`report_lines`,
+    with the note of :func:`default_note` right under the file's name (what it was judged
+    against)."""
+    lines = report_lines(spec, check)
+    note = default_note(spec, path)
+    if note:
+        lines.insert(1, f"  {note}")
+    return lines
+
+
 def run_check(
     lab: str,
     file: str | None,
     out: Path | None,
     limits: Limits,
     solutions: str | Path | None = None,
+    watch: bool = False,
 ) -> int:
     """``mirrorlab lab check``: print the verdicts, write the picture; 0 only when every
     task passed. Without ``file``, the lab file of the current folder (:func:`folder_file`)
-    is checked. The report's first line names the file checked."""
+    is checked. The report's first line names the file checked. With ``watch``, the file
+    is checked again on every save until Ctrl-C (:func:`~.watch.watch_check`)."""
     from mirrorlab.files import write_png_atomic
     from mirrorlab.gl.context import choose
 
@@ -376,28 +427,21 @@ def run_check(
     path = Path(file) if file else folder_file(spec, Path.cwd())
     if not path.is_file():
         raise FileNotFoundError(f"FILE: {str(path)!r} is not a file")
-    source = path.read_bytes()
-    variant = file_variant(spec, path)
-    released = path.parent / REFERENCE_FOLDER
     out = out or Path("out") / f"{spec.name}_check.png"
     choose("offscreen", new_process=True)  # no OpenGL: render's one line, before any of it
     if not sandboxed():
         print(f"mirrorlab lab check: {unsandboxed_note()}", file=sys.stderr)
-    note = default_note(spec, path)
-    reference = reference_evidence(spec, variant, folder, limits, released=released)
-    made_for = reference.variant.get("id") if isinstance(reference.variant, dict) else None
-    if made_for not in (None, variant.id):
-        raise CheckError(
-            f"{path.name} is variant {variant.id}, but the {REFERENCE_FOLDER}/ beside it is "
-            f"variant {made_for}'s: check the file in its own released folder"
-        )
+    if watch:
+        from mirrorlab.labs.trusted.watch import watch_check
+
+        return watch_check(spec, path, out, limits, folder)
+    source = path.read_bytes()
+    variant = file_variant(spec, path)
+    reference = file_reference(spec, variant, folder, limits, path)
     check = check_submission(
         spec, source, reference, Context(variant), str(path), path.name, limits
     )
-    lines = report_lines(spec, check)
-    if note:  # right under the file's name: what it was judged against
-        lines.insert(1, f"  {note}")
-    print("\n".join(lines))
+    print("\n".join(file_report(spec, path, check)))
     write_png_atomic(out, check.picture)
     print(f"picture (student | reference | difference): {out}")
     return 0 if check.passed else 1

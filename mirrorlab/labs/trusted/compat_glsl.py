@@ -54,9 +54,18 @@ FUNCTIONS = {
     "shadow2D": "texture",
 }
 PREFIX = "ml_"
-TRANSLATED_STATE = frozenset({PREFIX + name[3:] for name in MATRICES} | {PREFIX + "TextureMatrix"})
-"""The uniforms the built-in matrices become: GL's own state, which a student's function
-may read (as it may read ``gl_ModelViewMatrix`` on a compatibility context)."""
+GL_FLOAT_MAT3, GL_FLOAT_MAT4 = 0x8B5B, 0x8B5C
+TRANSLATED_STATE = {
+    **{
+        PREFIX + name[3:]: GL_FLOAT_MAT3 if kind == "mat3" else GL_FLOAT_MAT4
+        for name, kind in MATRICES.items()
+    },
+    PREFIX + "TextureMatrix[0]": GL_FLOAT_MAT4,
+}
+"""The uniforms the built-in matrices become, as GL lists an active one (name and type):
+GL's own state, which a student's function may read (as it may read
+``gl_ModelViewMatrix`` on a compatibility context); a student's GLSL may not name them
+itself (:mod:`.glsl_source`)."""
 _TOKENS = re.compile(r"//[^\n]*|/\*.*?\*/|[A-Za-z_][A-Za-z0-9_]*|\n|.", re.DOTALL)
 _VERSION = re.compile(r"#\s*version\s+(\d+)(\s+\w+)?")
 

@@ -20,13 +20,16 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mirrorlab.labs import LabSpec
 from mirrorlab.labs.trusted.evidence import Evidence
 from mirrorlab.labs.trusted.pipe import wait_readable
 from mirrorlab.labs.trusted.sandbox import Limits, SandboxError
 from mirrorlab.labs.trusted.variants import Variant
+
+if TYPE_CHECKING:
+    from mirrorlab.labs.trusted.prepared import PreparedRun
 
 EXIT_SANDBOX, EXIT_FAILED, EXIT_NO_GL, EXIT_MACHINE = 3, 4, 5, 6
 """The GL process's exit statuses for a job: its sandbox could not start; it failed while
@@ -75,41 +78,32 @@ def peak_kib() -> int:
     return peak // 1024 if sys.platform == "darwin" else peak
 
 
-def execute(job: dict[str, Any]) -> Evidence:
-    """Run ``job`` in this process (which must not have loaded OpenGL for a window)."""
-    from mirrorlab.gl.context import offscreen_context
-    from mirrorlab.gl.resources import Framebuffer
-    from mirrorlab.labs import load_lab
-    from mirrorlab.labs.trusted.lab_run import LabRun
-    from mirrorlab.labs.trusted.session import open_session
+def execute(job: dict[str, Any], prepared: PreparedRun | None = None) -> Evidence:
+    """Run ``job`` in this process (which must not have loaded OpenGL for a window): in
+    ``prepared`` (a run prepared for a job like it, its runner still without a file), else
+    in a run prepared now, whose runner starts first and loads while this process loads
+    OpenGL, makes its context and opens the lab's session."""
+    from mirrorlab.labs.trusted.prepared import PreparedRun
 
-    spec = load_lab(job["lab"], job["package"], job["import_root"])
-    size = (int(job["size"][0]), int(job["size"][1]))
-    variant = Variant(
-        spec.name,
-        dict(job["variant"]["values"]),
-        job["variant"]["id"],
-        job["variant"].get("student", ""),
-    )
-    limits = Limits(**job["limits"])
     source = Path(job["file"]).read_bytes()
-    context = offscreen_context()  # GLContextError: no OpenGL here (run_one says so)
+    # GLContextError: no OpenGL here (run_one says so)
+    run_in = prepared if prepared is not None else PreparedRun(job, source)
     try:
-        target = Framebuffer(context.resources, *size)
-        target.bind()
-        session = open_session(spec.name, size, variant)
+        from mirrorlab.labs.trusted.lab_run import LabRun
+
         with LabRun(
-            spec,
-            session,
+            run_in.spec,
+            run_in.session,
             source,
             job["name"],
-            limits,
-            registry=context.resources,
+            run_in.limits,
+            registry=run_in.resources,
             owner=job.get("owner"),
+            runner=run_in.take_runner(),
         ) as run:
             evidence = run.check()
     finally:
-        context.release()
+        run_in.release()
     evidence.state["checker_peak_kib"] = peak_kib()
     return evidence
 
@@ -123,8 +117,9 @@ def _note(path: Path, text: str) -> None:
         pass
 
 
-def run_one(job_file: Path) -> int:
-    """Run the job in ``job_file``; its evidence (or why not) goes to the job's folder.
+def run_one(job_file: Path, prepared: PreparedRun | None = None) -> int:
+    """Run the job in ``job_file`` (in ``prepared`` when it was prepared for a job like it;
+    it is released either way); its evidence (or why not) goes to the job's folder.
     Returns the process's exit status for it: 0, or one of :data:`EXIT_SANDBOX`,
     :data:`EXIT_NO_GL` and :data:`EXIT_MACHINE` (the machine's failures, told before any
     of the file's calls or after all of them), or :data:`EXIT_FAILED` (raised in
@@ -134,10 +129,19 @@ def run_one(job_file: Path) -> int:
     try:
         job = json.loads(job_file.read_text())
     except OSError as exc:
+        if prepared is not None:
+            prepared.release()
         return EXIT_MACHINE if exc.errno is not None else EXIT_FAILED
+    except BaseException:
+        if prepared is not None:
+            prepared.release()
+        raise
+    if prepared is not None and not prepared.fits(job):
+        prepared.release()
+        prepared = None
     out = Path(job["out"])
     try:
-        evidence = execute(job)
+        evidence = execute(job, prepared)
     except SandboxError as exc:
         _note(out / "sandbox_error.txt", str(exc))
         return EXIT_SANDBOX
@@ -158,30 +162,55 @@ def run_one(job_file: Path) -> int:
     return 0
 
 
-def serve() -> int:
+def serve(prepare: bool = False) -> int:
     """Run the jobs whose files come one a line on stdin, one after another, each in a
     context of its own; after each, its exit status on stdout (whatever else would be
-    written there, by Python or a library, goes to stderr)."""
+    written there, by Python or a library, goes to stderr). With ``prepare``, the next
+    run is prepared as soon as a job's status is written, for a job like the last one
+    (:class:`~.prepared.PreparedRun`: a new runner, context and session, which nothing of
+    any job has touched). Each student GLSL text is still compiled and probed in a process
+    of its own, started when the text arrives. The process is its parent's to stop
+    (closing stdin ends it), so an interrupt from the terminal is left to the parent."""
+    from mirrorlab.labs.trusted.prepared import prepare_like
+
+    if hasattr(signal, "SIGINT"):
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
     reply_fd = os.dup(1)
     os.dup2(2, 1)
-    for line in sys.stdin:
-        try:
-            code = run_one(Path(line.strip()))
-        except Exception as exc:  # the job's own folder says what failed
+    prepared: PreparedRun | None = None
+    try:
+        for line in sys.stdin:
+            job_file = Path(line.strip())
+            try:  # read now: the asker removes the job's folder once it has the status
+                job = json.loads(job_file.read_text())
+            except (OSError, ValueError):
+                job = None
             try:
-                job_out = Path(json.loads(Path(line.strip()).read_text())["out"])
-                _note(job_out / "checker_error.txt", f"{type(exc).__name__}: {exc}")
-            except (OSError, ValueError, KeyError):
-                pass
-            code = EXIT_FAILED
-        os.write(reply_fd, f"{code}\n".encode())
+                code = run_one(job_file, prepared)
+            except Exception as exc:  # the job's own folder says what failed
+                try:
+                    job_out = Path(json.loads(job_file.read_text())["out"])
+                    _note(job_out / "checker_error.txt", f"{type(exc).__name__}: {exc}")
+                except (OSError, ValueError, KeyError):
+                    pass
+                code = EXIT_FAILED
+            prepared = None
+            os.write(reply_fd, f"{code}\n".encode())
+            if prepare and job is not None:
+                prepared = prepare_like(job)
+    finally:
+        if prepared is not None:
+            prepared.release()
     return 0
 
 
 def main(argv: list[str]) -> int:
     if argv[0] == "--serve":
-        return serve()
-    return run_one(Path(argv[0]))
+        return serve(prepare="--prepare" in argv[1:])
+    code = run_one(Path(argv[0]))
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)  # the evidence is written: nothing to wait for in the interpreter's end
 
 
 def child_options(
@@ -245,11 +274,17 @@ class CheckerProcess:
     outlives its deadline, or a process that dies, ends the process; the next job starts
     a new one, as does every :data:`JOBS_PER_PROCESS`-th."""
 
+    SERVE: tuple[str, ...] = ("--serve",)
+    """How the process is started (:func:`main`'s arguments)."""
+    STDERR: int | None = None
+    """Where what the process writes goes (None: this process's stderr)."""
+
     def __init__(self) -> None:
         self.process = subprocess.Popen(
-            [sys.executable, "-m", "mirrorlab.labs.trusted.gl_process", "--serve"],
+            [sys.executable, "-m", "mirrorlab.labs.trusted.gl_process", *self.SERVE],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
+            stderr=self.STDERR,
             env=gl_process_environment(),
             **child_options(MEMORY_MB, die_with_parent=True),
         )
@@ -317,13 +352,15 @@ def run_job(
     limits: Limits,
     size: tuple[int, int],
     keep: bool = False,
+    process: CheckerProcess | None = None,
 ) -> Evidence:
     """Run ``source`` (the student's file, called ``file_name``) through ``spec``'s lab for
     ``variant`` in a checker process of its own (with ``keep``, this process's kept one:
-    see :class:`CheckerProcess`), which is stopped if it outlives the run's own limits.
-    Raises SandboxError when the sandbox cannot start, GLContextError (render's one line)
-    when no OpenGL context can be made, MachineError when the machine fails the check (a
-    full disk), CheckerError when the checker's process fails otherwise."""
+    see :class:`CheckerProcess`; or ``process``, the caller's), which is stopped if it
+    outlives the run's own limits. Raises SandboxError when the sandbox cannot start,
+    GLContextError (render's one line) when no OpenGL context can be made, MachineError
+    when the machine fails the check (a full disk), CheckerError when the checker's
+    process fails otherwise."""
     from mirrorlab.labs.trusted.sandbox import sweep_stale
 
     sweep_stale(Path(tempfile.gettempdir()))
@@ -334,7 +371,7 @@ def run_job(
             f"cannot make the check's folder in {tempfile.gettempdir()}: {exc.strerror or exc}"
         ) from None
     try:
-        return _run_in(Path(folder), spec, source, file_name, variant, limits, size, keep)
+        return _run_in(Path(folder), spec, source, file_name, variant, limits, size, keep, process)
     finally:
         shutil.rmtree(folder, ignore_errors=True)
 
@@ -348,6 +385,7 @@ def _run_in(
     limits: Limits,
     size: tuple[int, int],
     keep: bool,
+    process: CheckerProcess | None = None,
 ) -> Evidence:
     """:func:`run_job` in its folder ``base`` (the checker's own files only)."""
     from mirrorlab.errors import GLContextError
@@ -376,8 +414,8 @@ def _run_in(
         ) from None
     deadline = limits.seconds + 60
     stderr = ""
-    if keep:
-        code = kept_process().run(job_file, deadline)
+    if process is not None or keep:
+        code = (process or kept_process()).run(job_file, deadline)
     else:
         try:
             done = subprocess.run(

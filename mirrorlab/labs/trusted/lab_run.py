@@ -12,8 +12,6 @@ call stream; nothing it writes to its box is ever read.
 
 from __future__ import annotations
 
-import os
-import shutil
 import signal
 import time
 from collections.abc import Callable
@@ -36,31 +34,18 @@ from mirrorlab.labs.trusted.pipe import (
     PipeTimeout,
     TrustedChannel,
 )
+from mirrorlab.labs.trusted.runner import Runner, start_runner
 from mirrorlab.labs.trusted.sandbox import (
-    SANDBOX_LAB_SIDE,
-    SANDBOX_PACKAGES,
-    SANDBOX_SITE,
-    STUDENT_PACKAGE,
     Limits,
     Sandboxed,
     SandboxError,
-    interpreter,
-    new_box,
     remove_box,
     sandbox_mode,
-    user_interpreter,
 )
 from mirrorlab.labs.trusted.session import LabBase, LabSetupError
 
 FRAMES = 2
 """Frames drawn by a check: the second shows what a capture left for the next frame."""
-BOX_FILE = "student.py"
-"""The student's file in its box (whatever it was called: never the box's own
-stdout.txt or stderr.txt)."""
-BOOT = (
-    "import sys; sys.path[:0] = [{packages!r}]; sys.path.append({site!r}); "
-    "from labstudent.runner import main; sys.exit(main(sys.argv[1:]))"
-)
 
 
 @lru_cache(maxsize=4)
@@ -98,21 +83,6 @@ def _signal_name(number: int) -> str:
         return f"signal {number}"
 
 
-def _offer_numpy(folder: Path) -> str:
-    """A folder that offers numpy alone (links to its folders), as the sandbox does; where
-    links cannot be made (Windows without the right), numpy's own site folder."""
-    from mirrorlab.labs.trusted.sandbox import numpy_folders
-
-    found = numpy_folders()
-    folder.mkdir()
-    try:
-        for source in found:
-            (folder / source.name).symlink_to(source, target_is_directory=True)
-    except OSError:
-        return str(found[0].parent) if found else ""
-    return str(folder)
-
-
 class LabRun:
     """One run of the student's ``source`` (named ``file_name``) through ``spec``'s lab in
     ``session``; use as a context manager, then :meth:`check` (or drive it yourself with
@@ -129,9 +99,11 @@ class LabRun:
         budget: PipeBudget | None = None,
         registry: Any = None,
         owner: int | None = None,
+        runner: Runner | None = None,
     ) -> None:
         self.spec, self.session, self.limits = spec, session, limits
         self.owner = owner
+        self.runner = runner
         self.registry = registry
         self.executor = Executor(session, run_limits or RunLimits())
         self.budget = budget or PipeBudget()
@@ -157,6 +129,9 @@ class LabRun:
         self.release()
 
     def release(self) -> None:
+        if self.runner is not None:  # given, never started
+            self.runner.release()
+            self.runner = None
         if self.sandbox is not None:
             self.sandbox.kill()
             self.sandbox.wait(timeout=10)
@@ -169,59 +144,30 @@ class LabRun:
             self.box = None
 
     def start(self) -> None:
-        """The sandbox, the pipe, the session sent, the runner ready; RunEnded states
-        (status not ok) are kept in the evidence, SandboxError when it cannot start."""
-        self.box = new_box()
-        mode = sandbox_mode()
-        lab_side = self.spec.student_file
-        if mode == "bwrap":
-            python, packages, site = interpreter(), SANDBOX_PACKAGES, SANDBOX_SITE
-            lab_side_path = SANDBOX_LAB_SIDE
-        else:  # the student side beside the scratch, where the run may read, not write
-            library = self.box / "lib"
-            library.mkdir()
-            python, packages, site = user_interpreter(), str(library / "pkg"), ""
-            if mode == "none":
-                python, site = interpreter(), _offer_numpy(library / "site")
-            shutil.copytree(
-                STUDENT_PACKAGE,
-                library / "pkg" / "labstudent",
-                ignore=shutil.ignore_patterns("__pycache__"),
-            )
-            shutil.copyfile(lab_side, library / "pkg" / "lab_side.py")
-            lab_side_path = str(library / "pkg" / "lab_side.py")
-        argv = [str(python), "-I", "-S", "-B", "-c", BOOT.format(packages=packages, site=site)]
-        self.sandbox = Sandboxed(
-            argv,
-            self.box,
-            self.limits,
-            pipe=True,
-            owner=self.owner,
-            lab_side=lab_side,
-            files={BOX_FILE: self.source},
-        )
-        path = self.sandbox.place(BOX_FILE)
-        # the pipe: the runner's stdin and stdout, as file descriptors of the channel's own
-        process = self.sandbox.process
-        assert process.stdin is not None and process.stdout is not None
-        read_fd, write_fd = os.dup(process.stdout.fileno()), os.dup(process.stdin.fileno())
-        process.stdout.close()
-        process.stdin.close()
-        self.channel = TrustedChannel(read_fd, write_fd, self.budget)
+        """The sandbox (the runner given, else one started now), the pipe, the session
+        sent, the runner ready; RunEnded states (status not ok) are kept in the evidence,
+        SandboxError when it cannot start."""
+        runner = self.runner or start_runner(self.spec, self.limits, self.owner, self.source)
+        self.runner = None
+        self.box, self.sandbox = runner.box, runner.sandbox
+        self.sandbox.started = time.perf_counter()  # its clock starts with the run
+        self.channel = TrustedChannel(runner.read_fd, runner.write_fd, self.budget)
         self.deadline = time.monotonic() + self.limits.seconds
         description = {
             "op": "session",
             "lab": self.spec.name,
             "labs": list(lab_names()),
-            "lab_side": lab_side_path,
-            "file": path,
+            "lab_side": runner.lab_side,
+            "file": runner.file,
             "functions": list(self.spec.functions),
             "declared": list(self.spec.declared),
             "kit": self.session.student_values(),
             **gl_names(self.spec.name),
         }
+        # a runner started before its file was known writes it into its box first
+        source = [] if runner.has_file else [("u1", [len(self.source)], self.source)]
         try:
-            self.channel.send(description)
+            self.channel.send(description, source)
             header, _ = self.channel.receive(self.deadline)
         except (PipeClosed, PipeTimeout, PipeError):
             self._ended_early()
@@ -421,21 +367,22 @@ class LabRun:
         self.spec.module("trusted").observe(self)
         reset_state()
 
-    def probe_glsl(self, kit_fragment: str, glsl: str, functions: tuple[str, ...]) -> None:
-        """The lab's GLSL functions on the value probe's chosen inputs (:mod:`.probe`):
-        ``probe_<function>`` ``(n, 4)`` float32 each; nothing when the GLSL did not make
-        the kit's program (the check values say why)."""
-        from mirrorlab.labs.trusted.probe import run_probe
+    def probe_glsl(self, vertex: str, fragment: str, glsl: str, variable: str) -> None:
+        """The value probe of the lab's GLSL functions in ``glsl`` (the string
+        ``variable``, linked to the kit's ``vertex`` and ``fragment`` files), made where
+        the text was first compiled (:mod:`.glslcheck`, :mod:`.probe`): its inputs and
+        values into the evidence (``probe_<function>...``), or ``probe_error``, the
+        student's error that stopped it (a probe that cannot run is never a pass)."""
+        from mirrorlab.labs.trusted import probe
+        from mirrorlab.labs.trusted.glslcheck import precompile
+        from mirrorlab.labs.trusted.session import StudentShaderError
 
-        if "values_error" in self.evidence.state:
-            return
-        reset_state()
         try:
-            found = run_probe(kit_fragment, glsl, functions, self.registry)
-        except LabSetupError:
+            answer = precompile(vertex, fragment, glsl, variable, lab=self.spec.name)
+        except StudentShaderError as exc:
+            self.evidence.state["probe_error"] = str(exc)[:400]
             return
-        for function, values in found.items():
-            self.evidence.arrays[f"probe_{function}"] = values
+        probe.record(self.evidence, answer.drawn, answer.values, answer.seed)
 
     def check_values(
         self, draw: Callable[[int], None], modes: dict[str, int], function: str

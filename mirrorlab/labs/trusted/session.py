@@ -16,6 +16,7 @@ import re
 from collections.abc import Iterator
 from contextlib import contextmanager
 from functools import lru_cache
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -24,6 +25,7 @@ from mirrorlab import math3d
 from mirrorlab.data import model_file, texture_file
 from mirrorlab.labs.trusted import legacy
 from mirrorlab.labs.trusted.compat_glsl import TRANSLATED_STATE, translate_compat_glsl
+from mirrorlab.labs.trusted.glsl_source import GlslRefused, prepare
 from mirrorlab.labs.trusted.variants import Variant
 
 ENV_UNIT = 1
@@ -40,10 +42,11 @@ class StudentShaderError(LabSetupError):
     """The student's GLSL did not compile: ``variable`` names the Python string, ``line``
     the line inside it (1-based, or 0 when unknown)."""
 
-    def __init__(self, variable: str, line: int, message: str) -> None:
-        self.variable, self.line, self.detail = variable, line, message
+    def __init__(self, variable: str, line: int, message: str, refused: bool = False) -> None:
+        self.variable, self.line, self.detail, self.refused = variable, line, message, refused
         where = f"{variable} line {line}" if line else variable
-        super().__init__(f"GLSL in {where} did not compile: {message}")
+        verb = "is refused" if refused else "did not compile"
+        super().__init__(f"GLSL in {where} {verb}: {message}")
 
 
 def lazy_gl():
@@ -107,12 +110,18 @@ def student_interface(kit_source: str) -> tuple[str, list[tuple[str, str, str]]]
 
 def student_shader(kind: int, kit_source: str, glsl: str, variable: str) -> int:
     """The student's GLSL ``glsl`` (of ``variable``) compiled as a shader object of its own,
-    of stage ``kind``: the kit file's ``#version`` line, then the text with its
+    of stage ``kind``: the kit file's ``#version`` line, then the text preprocessed and
+    checked here (:func:`.glsl_source.prepare`: no directive and no macro reaches the
+    driver, no ``ml_`` name and no declaration outside the functions) with its
     compatibility built-ins translated, as source string 1 (its lines counted from 1).
-    StudentShaderError when it does not compile."""
+    StudentShaderError when it is refused or does not compile."""
     stage = "vertex" if kind == lazy_gl().GL_VERTEX_SHADER else "fragment"
     version, _ = student_interface(kit_source)
-    source = f"{version}\n#line 1 1\n{translate_compat_glsl(glsl, stage)}\n"
+    try:
+        prepared = prepare(glsl, version or "#version 330 core")
+    except GlslRefused as exc:
+        raise StudentShaderError(variable, exc.line, exc.message, refused=True) from None
+    source = f"{version}\n#line 1 1\n{translate_compat_glsl(prepared, stage)}\n"
     return _compiled(kind, source, "", variable)
 
 
@@ -184,8 +193,8 @@ def _only_arguments(kit_source: str, student_shaders: list[int], variable: str) 
         calls.append(STUB_RESULTS[result].format(f"{name}({', '.join(args)})"))
     declared = "".join(f"{r} {n}({p});\n" for r, n, p in prototypes)
     stub = (
-        f"{version_line}\n{declared}out vec4 mirrorlab_stub_out;\nvoid main() {{\n"
-        f"    mirrorlab_stub_out = vec4({' + '.join(calls) or '0.0'});\n}}\n"
+        f"{version_line}\n{declared}out vec4 ml_stub_out;\nvoid main() {{\n"
+        f"    ml_stub_out = vec4({' + '.join(calls) or '0.0'});\n}}\n"
     )
     main = _compiled(GL.GL_FRAGMENT_SHADER, stub, "the kit's stub", variable)
     program = GL.glCreateProgram()
@@ -202,10 +211,12 @@ def _only_arguments(kit_source: str, student_shaders: list[int], variable: str) 
             )
         names = []
         for index in range(int(GL.glGetProgramiv(program, GL.GL_ACTIVE_UNIFORMS))):
-            name = _text(GL.glGetActiveUniform(program, index)[0])
+            name, _, kind = GL.glGetActiveUniform(program, index)
+            name = _text(name)
             # GL's own state (gl_ModelViewMatrix, or its translation for a core context)
-            # is not the kit's: the same for every draw
-            if not name.startswith("gl_") and name.split("[")[0] not in TRANSLATED_STATE:
+            # is not the kit's: the same for every draw; only the translation's own
+            # names and types (the student's text may not name ml_ itself)
+            if not name.startswith("gl_") and TRANSLATED_STATE.get(name) != int(kind):
                 names.append(name)
         if names or GL.glGetProgramiv(program, GL.GL_ACTIVE_UNIFORM_BLOCKS):
             shown = ", ".join(names) or "a uniform block"
@@ -348,42 +359,93 @@ class Mesh:
 @lru_cache(maxsize=32)
 def mesh_arrays(name: str) -> tuple[np.ndarray, np.ndarray]:
     """The shipped mesh ``name`` as interleaved float32 vertices and uint32 indices (read
-    once a process: a checker process kept for many runs reads each file once)."""
-    from mirrorlab.scene.mesh import load_mesh
+    once a process, through the asset cache: :mod:`.assets`)."""
+    from mirrorlab.labs.trusted.assets import cached_arrays
+    from mirrorlab.scene import mesh
 
-    data = load_mesh(model_file(name))
-    return (
-        np.ascontiguousarray(data.interleaved(), dtype=np.float32),
-        np.ascontiguousarray(data.indices.reshape(-1), dtype=np.uint32),
-    )
+    def read() -> dict[str, np.ndarray]:
+        data = mesh.load_mesh(model_file(name))
+        return {
+            "vertices": np.ascontiguousarray(data.interleaved(), dtype=np.float32),
+            "indices": np.ascontiguousarray(data.indices.reshape(-1), dtype=np.uint32),
+        }
+
+    sources = [model_file(name), Path(mesh.__file__)]
+    arrays = cached_arrays("mesh", name, sources, ("trimesh", "numpy"), read)
+    for array in arrays.values():
+        array.flags.writeable = False
+    return arrays["vertices"], arrays["indices"]
 
 
 @lru_cache(maxsize=8)
 def picture(name: str) -> np.ndarray:
-    """``textures/<name>.png`` as ``(h, w, 3)`` uint8, row 0 at the top."""
-    from mirrorlab.scene.backgrounds import load_picture
+    """``textures/<name>.png`` as ``(h, w, 3)`` uint8, row 0 at the top (read once a
+    process, through the asset cache: :mod:`.assets`)."""
+    from mirrorlab.labs.trusted.assets import cached_arrays
+    from mirrorlab.scene import backgrounds
 
-    return load_picture(texture_file(name))
+    def read() -> dict[str, np.ndarray]:
+        return {"pixels": backgrounds.load_picture(texture_file(name))}
+
+    sources = [texture_file(name), Path(backgrounds.__file__)]
+    pixels = cached_arrays("picture", name, sources, ("pillow",), read)["pixels"]
+    pixels.flags.writeable = False
+    return pixels
 
 
-def upload_picture(texture_id: int, image: np.ndarray) -> None:
-    """Fill GL texture ``texture_id`` (bound on the active unit) with ``image``: mipmapped,
-    repeating, trilinear."""
+def mipmap_levels(image: np.ndarray) -> list[np.ndarray] | None:
+    """The mipmap chain of ``image`` (``(n, n, 3)`` uint8, ``n`` a power of two; rows in
+    GL's order): level 0 (``image``) to the 1 x 1 level, each texel the mean of the 2 x 2
+    texels below it, rounded as llvmpipe's ``glGenerateMipmap`` rounds it (each row's pair,
+    then the two rows; texel for texel the same on the shipped pictures). None for another
+    shape, which GL then mipmaps itself."""
+    size = image.shape[0]
+    if image.ndim != 3 or image.shape[1] != size or size < 1 or size & (size - 1):
+        return None
+    levels = [image]
+    level: np.ndarray = image.astype(np.uint16)
+    while level.shape[0] > 1:
+        top = (level[0::2, 0::2] + level[0::2, 1::2] + 1) >> 1
+        bottom = (level[1::2, 0::2] + level[1::2, 1::2] + 1) >> 1
+        level = (top + bottom + 1) >> 1
+        levels.append(level.astype(np.uint8))
+    return levels
+
+
+@lru_cache(maxsize=8)
+def picture_levels(name: str) -> tuple[np.ndarray, ...]:
+    """The picture ``name``'s mipmap chain in GL's row order (:func:`mipmap_levels`), or
+    level 0 alone where GL must make the others; made once a process."""
+    image = np.ascontiguousarray(picture(name)[::-1])
+    levels = tuple(mipmap_levels(image) or [image])
+    for level in levels:
+        level.flags.writeable = False
+    return levels
+
+
+def upload_picture(texture_id: int, name: str) -> None:
+    """Fill GL texture ``texture_id`` (bound on the active unit) with the picture ``name``
+    (one of :data:`PICTURES`): mipmapped, repeating, trilinear. The levels are uploaded
+    as :func:`picture_levels` makes them: ``glGenerateMipmap`` would build a shader in each
+    new context, on llvmpipe a large share of a check's time."""
     GL = lazy_gl()
+    levels = picture_levels(name)
     GL.glBindTexture(GL.GL_TEXTURE_2D, int(texture_id))
     GL.glPixelStorei(GL.GL_UNPACK_ALIGNMENT, 1)
-    GL.glTexImage2D(
-        GL.GL_TEXTURE_2D,
-        0,
-        GL.GL_RGB8,
-        image.shape[1],
-        image.shape[0],
-        0,
-        GL.GL_RGB,
-        GL.GL_UNSIGNED_BYTE,
-        np.ascontiguousarray(image[::-1]),
-    )
-    GL.glGenerateMipmap(GL.GL_TEXTURE_2D)
+    for number, level in enumerate(levels):
+        GL.glTexImage2D(
+            GL.GL_TEXTURE_2D,
+            number,
+            GL.GL_RGB8,
+            level.shape[1],
+            level.shape[0],
+            0,
+            GL.GL_RGB,
+            GL.GL_UNSIGNED_BYTE,
+            level,
+        )
+    if len(levels) == 1:
+        GL.glGenerateMipmap(GL.GL_TEXTURE_2D)
     GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MIN_FILTER, GL.GL_LINEAR_MIPMAP_LINEAR)
     GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_MAG_FILTER, GL.GL_LINEAR)
     GL.glTexParameteri(GL.GL_TEXTURE_2D, GL.GL_TEXTURE_WRAP_S, GL.GL_REPEAT)
@@ -525,14 +587,15 @@ class LabBase:
                 raise LabSetupError(f"more than {limit} different {variable} strings in one run")
             from mirrorlab.labs.trusted.glslcheck import precompile
 
-            precompile(vertex, fragment, glsl, variable)  # where a bomb costs the file only
+            # where a bomb or an endless loop costs the file only; probed there too
+            precompile(vertex, fragment, glsl, variable, lab=self.name)
             self._programs[glsl] = compile_program(vertex, fragment, glsl, variable)
         return self._programs[glsl]
 
     def load_picture_texture(self, texture_id: int, name: str) -> None:
         GL = lazy_gl()
         GL.glActiveTexture(GL.GL_TEXTURE0)
-        upload_picture(texture_id, picture(name))
+        upload_picture(texture_id, name)
 
     def draw_parts(self, parts, light_world=(0.45, 0.8, 0.4)) -> list[int]:
         """Lit parts ``(mesh name, model (4, 4), colour, GL texture or None)`` under the
