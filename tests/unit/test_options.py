@@ -31,8 +31,6 @@ CORRECTED = tuple(t.name for t in techniques("curved") if t.parallax and not t.p
 one with a probe takes it for its probe's map)."""
 
 SKY_CUBE = data_path("textures") / "sky_cube"
-CORRECTED = tuple(t.name for t in techniques("curved") if t.parallax)
-"""The curved techniques that take a parallax correction, in the registry's order."""
 
 
 def changed_fields(before, after) -> set[str]:
