@@ -17,28 +17,28 @@ TASKS = [t.id for t in find_lab("lab20").tasks]
 
 STARTER = {
     "lab20": {
-        "capture_camera": "did not run",
-        "capture_scene": "draws nothing",
-        "capture_copy": "never called",
-        "environment_texture": "mipmaps",
-        "base_texture": "base not textured",
-        "mirror_texture": "task 7 (mirror_quad)",
-        "mirror_quad": "not called",
-        "passes": "never calls create_mirror",
+        "capture_camera": "create_mirror() is never called",
+        "capture_scene": "create_mirror() is never called",
+        "capture_copy": "create_mirror() is never called",
+        "environment_texture": "GL_NEAREST_MIPMAP_LINEAR (GL's default: never set)",
+        "base_texture": 'robot["base"].texture is no texture',
+        "mirror_texture": "render_mirror() is never called",
+        "mirror_quad": "render_mirror() is never called",
+        "passes": "create_mirror() is never called",
     },
     "spheremap": {
         "reflection": "reflect_eye: it gives the same value (0, 0, 1) for every input",
         "sphere_coordinates": "sphere_map_st: it gives the same value (0.5, 0.5)",
-        "texgen_setup": "never drawn",
-        "texgen_draw": "never draws the cone",
-        "side_by_side": "cone is not drawn",
+        "texgen_setup": "makes no glTexGeni(GL_S, GL_TEXTURE_GEN_MODE, GL_SPHERE_MAP)",
+        "texgen_draw": "draw_cone_texgen() is never called",
+        "side_by_side": "draw_cone_texgen() is never called",
     },
     "cubemap": {
         "face_selection": "cube_face: it gives the same value 0 for every input",
         "face_coordinates": "cube_face_st: it gives the same value (0.5, 0.5)",
-        "capture_cameras": "never called",
-        "capture_copy": "never called",
-        "live_frame": "never calls capture_cube",
+        "capture_cameras": "capture_cube() is never called",
+        "capture_copy": "capture_cube() is never called",
+        "live_frame": "capture_cube() is never called",
     },
 }
 

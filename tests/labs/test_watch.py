@@ -56,7 +56,8 @@ def each_save_is_checked(watch: Watch, path: Path, lab_environment: Path) -> Non
 
     save_by_rename(path, WRONG_EXTENTS.source())
     report = watch.report()
-    assert "[FAIL] task 1 (capture_camera)" in report and "wrong extents" in report, report
+    cause = WRONG_EXTENTS.fails["capture_camera"]
+    assert "[FAIL] task 1 (capture_camera)" in report and cause in report, report
 
     with open(path, "w") as stream:  # in place, as an editor that truncates and writes
         stream.write(solution("lab20"))

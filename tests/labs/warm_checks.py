@@ -16,9 +16,13 @@ import threading
 import time
 from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
-from mirrorlab.labs import find_lab
+from mirrorlab.labs import LabSpec, find_lab
 from mirrorlab.labs.trusted.checker import CheckResult, report_lines
+from mirrorlab.labs.trusted.evidence import Evidence
+from mirrorlab.labs.trusted.sandbox import Limits
+from mirrorlab.labs.trusted.variants import Variant
 from mirrorlab.labs.trusted.warm import WarmChecker
 from tests.labs.conftest import LIMITS, SOLUTIONS
 
@@ -45,6 +49,56 @@ def check_folder(lab: str, folder: Path, limits=LIMITS) -> dict[str, list[tuple[
         stem: [(r.task.id, r.passed, r.hint) for r in check.results]
         for stem, check in checks.items()
     }
+
+
+class TracingChecker(WarmChecker):
+    """A warm checker that keeps the evidence each file's check judged (by the file's
+    bytes: a check may also run the lab's starter, to tell the checker's failures from the
+    file's), for tests that read the calls a file executed."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.runs: dict[bytes, Evidence] = {}
+
+    def _run(
+        self,
+        spec: LabSpec,
+        source: bytes,
+        file_name: str,
+        variant: Variant,
+        limits: Limits,
+        size: tuple[int, int],
+        keep: bool,
+    ) -> Evidence:
+        evidence = super()._run(spec, source, file_name, variant, limits, size, keep)
+        self.runs[source] = evidence
+        return evidence
+
+
+def check_folder_with_calls(
+    lab: str, folder: Path, limits=LIMITS
+) -> dict[str, tuple[list[tuple[str, bool, str]], list[str]]]:
+    """Each ``.py`` file of ``folder`` checked by one warm checker (references made from
+    the solutions), by stem: its rows as :func:`check_folder` gives them, and the text of
+    every call the file executed (as the call trace names it: :mod:`.trace_hints`)."""
+    from mirrorlab.labs.trusted.trace_hints import Roles, Trace
+
+    spec = find_lab(lab)
+    declared = spec.module("judge").JUDGE
+    found = {}
+    checker = TracingChecker(spec, limits, SOLUTIONS)
+    with checker:
+        for path in sorted(folder.glob("*.py")):
+            source = path.read_bytes()
+            check = checker.check(path, source)
+            assert check is not None, path
+            evidence = checker.runs.pop(source)
+            roles = Roles(evidence, declared.roles, declared.programs, declared.uniforms)
+            made = [
+                c.text for c in Trace(evidence, roles).calls if c.kind != "function" and not c.error
+            ]
+            found[path.stem] = ([(r.task.id, r.passed, r.hint) for r in check.results], made)
+    return found
 
 
 def report(lab: str, check: CheckResult) -> str:

@@ -144,6 +144,7 @@ def observe(run: LabRun) -> None:
     metal = next((t.name for t in tracker.textures.values() if t.picture == "metal"), 0)
     evidence.state["environment"], evidence.state["metal"] = environment, metal
     evidence.state["texture_shader"] = run.session.textureShader
+    evidence.state["texture_sampler"] = run.session.texSampler
     if environment and GL.glIsTexture(environment):
         evidence.arrays["capture"] = read_texture_2d(environment)
         evidence.state["environment_parameters"] = texture_parameters(environment)

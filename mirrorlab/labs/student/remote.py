@@ -111,6 +111,20 @@ def _scalar(value: Any) -> int | float | None:
     return inner if isinstance(inner, int | float) else None
 
 
+def finite(value: Any) -> Any:
+    """``value`` with each number JSON cannot carry (nan, inf, -inf) as ``{"$f": "nan"}``, for
+    the checker to name in its reply."""
+    if isinstance(value, float) and value != value:
+        return {"$f": "nan"}
+    if isinstance(value, float) and value in (float("inf"), float("-inf")):
+        return {"$f": "inf" if value > 0 else "-inf"}
+    if isinstance(value, list):
+        return [finite(v) for v in value]
+    if isinstance(value, dict):
+        return {k: finite(v) for k, v in value.items()}
+    return value
+
+
 def checked_number(value: Any, kind: str, what: str) -> int | float:
     try:
         if kind == "f":
@@ -232,7 +246,9 @@ class Remote:
                     arrays.append(payload)
             else:  # "j": plain data for the lab's own calls
                 packed.append(value)
-        self.channel.send({"op": op, "fn": name, "args": packed, "line": self.line()}, arrays)
+        self.channel.send(
+            {"op": op, "fn": name, "args": finite(packed), "line": self.line()}, arrays
+        )
         reply, payloads = self.channel.receive()
         if "stop" in reply:
             os._exit(3)  # the checker has ended this run

@@ -130,6 +130,8 @@ class Executor:
         self.glsl: dict[str, str] = {}
         """The last GLSL string the student drew with, by the lab call that took it."""
         self.call_errors: list[dict[str, Any]] = []
+        self.traced: dict[str, Any] | None = None
+        """The call trace's record of the call running now (:meth:`.Tracker.trace`)."""
         self.pictures: dict[str, np.ndarray] = {}
         self.alignment = {int(GL.GL_UNPACK_ALIGNMENT): 4, int(GL.GL_PACK_ALIGNMENT): 4}
         self.kit_calls: dict[str, Callable[[list[Any]], Any]] = self._kit_calls()
@@ -197,6 +199,7 @@ class Executor:
 
     def call(self, header: dict[str, Any], arrays: list[np.ndarray]) -> Reply:
         op, name = header.get("op"), header.get("fn")
+        self.traced = None
         line = header.get("line")
         self.tracker.line = line if type(line) is int and 0 <= line < 1 << 20 else 0
         self.calls += 1
@@ -210,6 +213,7 @@ class Executor:
             raise Stop(f"stopped: more than {self.limits.frame_calls} calls in one frame")
         if not isinstance(name, str) or not name.isidentifier() or len(name) > 64:
             return self.error(CallError("TypeError", "a call without a name the labs know"), "?")
+        self.traced = self.tracker.trace(str(op), name, header.get("args"))
         started = time.perf_counter()
         try:
             if op == "kit":
@@ -222,6 +226,8 @@ class Executor:
             self._drain()
             return self.error(gl_error(int(exc.err)), name)
         except StudentShaderError as exc:
+            if self.traced is not None:
+                self.traced["error"] = str(exc)[:160]
             return (
                 {
                     "ok": False,
@@ -258,6 +264,8 @@ class Executor:
     def error(self, exc: CallError, name: str) -> Reply:
         if exc.kind == "GLError" and "(" not in exc.message:
             exc = gl_error(exc.err, broken_precondition(name, exc.err))
+        if self.traced is not None:
+            self.traced["error"] = exc.message[:160]
         if len(self.call_errors) < 200:
             self.call_errors.append(
                 {
@@ -322,6 +330,8 @@ class Executor:
         if self.tracker.primitive is not None and not spec.in_begin:
             raise gl_error(C.GL_INVALID_OPERATION, f"{name} between glBegin and glEnd")
         checked = C.check_arguments(name, spec, args)
+        if self.traced is not None:
+            self.traced.update(C.trace_notes(name, spec, checked))
         if spec.handler:
             return getattr(self, spec.handler)(name, checked, arrays)
         getattr(legacy.gl(), name)(*checked)
@@ -363,7 +373,7 @@ class Executor:
         ``kind``) belongs to a channel this lab's handout does not teach (:mod:`.calls`)."""
         why = C.open_for(self.session.name, kind, value)
         if why:
-            raise CallError("NotImplementedError", f"{name}({C.enum_name(value)}): {why}")
+            raise CallError("NotImplementedError", f"{name} with {C.gl_name(value)}: {why}")
 
     def matrix_mode(self, name: str, args: list[Any], arrays: Any) -> None:
         self._open("matrix_modes", args[0], name)
@@ -881,9 +891,12 @@ class Executor:
         }
         if pname in enum_params:
             if value not in C.TEX_PARAM_VALUES:
-                raise gl_error(
-                    C.GL_INVALID_ENUM, f"{name}: {value!r} is not a filter or a wrap mode"
+                why = (
+                    C.refused_enum(int(value), C.TEX_PARAM_VALUES, name)
+                    if int(value) == value
+                    else f"{value!r} is not a filter or a wrap mode"
                 )
+                raise gl_error(C.GL_INVALID_ENUM, f"{name}: {why}")
             legacy.gl().glTexParameteri(target, pname, int(value))
         elif isinstance(value, list):
             getattr(GL, name)(target, pname, self._array(name, value))
@@ -917,14 +930,24 @@ class Executor:
         value = args[2][0] if isinstance(args[2], list) else args[2]  # glTexEnv{if}v
         mode = int(value)
         if mode != value or mode not in C.TEXENV_MODES:
-            raise gl_error(C.GL_INVALID_ENUM, f"{name}: {args[2]!r} is not a texture mode")
+            why = (
+                C.refused_enum(mode, C.TEXENV_MODES, name)
+                if mode == value
+                else f"{args[2]!r} is not a texture mode"
+            )
+            raise gl_error(C.GL_INVALID_ENUM, f"{name}: {why}")
         legacy.gl().glTexEnvi(args[0], args[1], mode)
         self.ok()
 
     def texgen(self, name: str, args: list[Any], arrays: Any) -> None:
         coord, pname, mode = args
         if int(mode) != mode or int(mode) not in C.TEXGEN_MODES:
-            raise gl_error(C.GL_INVALID_ENUM, f"{name}: {mode!r} is not a texgen mode")
+            why = (
+                C.refused_enum(int(mode), C.TEXGEN_MODES, name)
+                if int(mode) == mode
+                else f"{mode!r} is not a texgen mode"
+            )
+            raise gl_error(C.GL_INVALID_ENUM, f"{name}: {why}")
         legacy.gl().glTexGeni(coord, pname, int(mode))
         self.ok()
         tracker = self.tracker

@@ -45,14 +45,115 @@ def gl_error(err: int, detail: str = "") -> CallError:
     return CallError("GLError", text + (f" ({detail})" if detail else ""), err)
 
 
-ENUM_NAMES: dict[int, str] = {}
-"""The name each enum of the allow-list was first given here (its refusals name it so)."""
+class Enums(frozenset[int]):
+    """A set of GL enums a call takes: each value's GL name (``names``), what one of them is
+    (``noun``: "a capability") and, for a run of consecutive values, what each is
+    (``member``: "face"), for a refusal that names what it got and what the call takes."""
+
+    names: dict[int, str]
+    noun: str
+    member: str
 
 
-def enums(*names: str) -> frozenset[int]:
-    for name in names:
-        ENUM_NAMES.setdefault(int(getattr(GL, name)), name)
-    return frozenset(int(getattr(GL, name)) for name in names)
+def enums(*names: str, noun: str = "", member: str = "", numbers: tuple[int, ...] = ()) -> Enums:
+    """The GL enums ``names`` (and plain ``numbers`` a call also takes, such as the legacy
+    internal formats 1 to 4), knowing their names, what one is and what a run's member is."""
+    values = {int(getattr(GL, name)): name for name in names}
+    values.update({n: str(n) for n in numbers})
+    found = Enums(values)
+    found.names, found.noun, found.member = values, noun, member
+    return found
+
+
+@lru_cache(maxsize=1)
+def _gl_constants() -> dict[int, list[str]]:
+    """Every GL_ constant PyOpenGL defines, by value (several names may share one)."""
+    found: dict[int, list[str]] = {}
+    for name in dir(GL):
+        value = getattr(GL, name, None)
+        if name.startswith("GL_") and type(value) is not bool and isinstance(value, int):
+            found.setdefault(int(value), []).append(name)
+    return found
+
+
+VENDOR = re.compile(r"_(ARB|EXT|NV|AMD|ATI|SGIS|SGIX|SGI|APPLE|MESA|IBM|INTEL|OES|KHR|3DFX|HP)$")
+
+
+def gl_name(value: int, allowed: Enums | None = None) -> str:
+    """GL's name for ``value``: the name the allow-list gives it (in ``allowed`` first, then in
+    any of its sets), else PyOpenGL's (core names before a vendor's, shorter first), else
+    its number in hex."""
+    if allowed is not None and value in allowed.names:
+        return allowed.names[value]
+    for known in ENUM_SETS:
+        if value in known.names:
+            return known.names[value]
+    names = _gl_constants().get(value, [])
+    if not names:
+        return f"{value:#x}"
+    return sorted(names, key=lambda n: (bool(VENDOR.search(n)), len(n), n))[0]
+
+
+def _listed(names: list[str]) -> str:
+    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " or " + names[-1]
+
+
+def _runs(values: frozenset[int]) -> list[tuple[int, int]]:
+    """The runs of three or more consecutive values in ``values``, (first, last) each."""
+    ordered, runs = sorted(values), []
+    start = 0
+    for i in range(1, len(ordered) + 1):
+        if i == len(ordered) or ordered[i] != ordered[i - 1] + 1:
+            if i - start >= 3:
+                runs.append((ordered[start], ordered[i - 1]))
+            start = i
+    return runs
+
+
+def refused_enum(value: int, allowed: Enums, call: str) -> str:
+    """Why ``value`` is not one of ``allowed`` (``call``'s), by GL's names: what it is (another
+    kind of enum, or a step past the end of a run such as the cube map's faces) and what
+    ``call`` takes."""
+    taken = [allowed.names[v] for v in sorted(allowed) if v in allowed.names]
+    for first, last in _runs(allowed):  # a run of consecutive enums as its ends
+        names = [allowed.names[v] for v in range(first, last + 1) if v in allowed.names]
+        if len(names) > 4 and names[0] in taken:
+            at = taken.index(names[0])
+            taken[at : at + len(names)] = [f"{names[0]} ... {names[-1]}"]
+    what = ""
+    for first, last in _runs(allowed):
+        member = allowed.member or "one"
+        if last < value <= last + 4:
+            what = f"{gl_name(last, allowed)} + {value - last} is past the last {member}"
+        elif first - 4 <= value < first:
+            what = f"{gl_name(first, allowed)} - {first - value} is before the first {member}"
+    if not what and 0 <= value < 0x100 and _runs(allowed):
+        first, last = _runs(allowed)[0]
+        member = allowed.member or "one"
+        what = f"{value} is a number, not a GL enum"
+        if value <= last - first:
+            what += f" (the {member} number {value} is {gl_name(first, allowed)} + {value})"
+    if not what:
+        name = gl_name(value)
+        kinds = [
+            k.noun
+            for k in ENUM_SETS
+            if value in k.names and not k.names[value].isdigit() and k.noun != allowed.noun
+        ]
+        if kinds:
+            what = f"{name} is {kinds[0]}"
+        elif name.startswith("0x"):
+            what = f"{name} is no GL enum"
+        else:
+            what = f"{name} is not {allowed.noun or 'one it takes'}"
+    if len(taken) <= 8:
+        takes = _listed(taken)
+    else:
+        # the names nearest the one given first (most words shared): GL_S -> GL_TEXTURE_GEN_S
+        words = set(gl_name(value).split("_")[1:])
+        nearest = sorted(taken, key=lambda n: (-len(words & set(n.split("_")[1:])), n.isdigit()))
+        takes = f"{allowed.noun or 'an enum'} such as {', '.join(nearest[:4])}"
+    return f"{what}; {call} takes {takes}"
 
 
 # ------------------------------------------------------------------------------ checks
@@ -80,8 +181,41 @@ def integer(lo: int = -(1 << 31), hi: int = (1 << 32) - 1) -> Check:
     return check
 
 
+NON_FINITE = {"nan": math.nan, "inf": math.inf, "-inf": -math.inf}
+"""What the student side sends for a number JSON cannot carry (``{"$f": "nan"}``)."""
+
+
+def _made_of(what: str) -> str:
+    """What GL makes from the arguments of the call ``what`` names, for a message."""
+    call = what.split("(")[0]
+    for prefix, made in (
+        ("glVertex", "the vertex's position"),
+        ("glTexCoord", "the texture coordinates"),
+        ("glMultiTexCoord", "the texture coordinates"),
+        ("glColor", "the colour"),
+        ("glNormal", "the normal"),
+        ("glClearColor", "the clear colour"),
+        ("glUniform", "the uniform's value"),
+        ("glViewport", "the viewport"),
+    ):
+        if call.startswith(prefix):
+            return made
+    if call in MATRIX_CALLS:
+        return "the matrix, and so every point it transforms,"
+    return "what GL makes of it"
+
+
 def real(lo: float = -1e9, hi: float = 1e9) -> Check:
     def check(value: Any, what: str) -> float:
+        if isinstance(value, dict) and set(value) == {"$f"} and value["$f"] in NON_FINITE:
+            text = {"nan": "nan (not a number)", "inf": "infinite", "-inf": "-infinite"}[
+                value["$f"]
+            ]
+            raise CallError(
+                "ValueError",
+                f"{what} is {text}: {_made_of(what)} would be undefined (not a finite "
+                f"number); the labs take finite numbers",
+            )
         if type(value) not in (int, float):
             raise CallError("TypeError", f"{what}: expected a number")
         if type(value) is int and not -(1 << 64) < value < 1 << 64:
@@ -100,30 +234,48 @@ def real(lo: float = -1e9, hi: float = 1e9) -> Check:
     return check
 
 
-def one_of(allowed: frozenset[int]) -> Check:
+def one_of(allowed: Enums) -> Check:
     def check(value: Any, what: str) -> int:
         if type(value) is not int:
             raise CallError("TypeError", f"{what}: expected a GL enum (an integer)")
         if value not in allowed:
-            number = f"{value:#x}" if -(1 << 64) < value < 1 << 64 else shown(value)
-            raise gl_error(
-                GL_INVALID_ENUM, f"{what} = {number} is not one the labs' OpenGL takes here"
-            )
+            call = what.split("(")[0]
+            if not -(1 << 64) < value < 1 << 64:
+                raise gl_error(GL_INVALID_ENUM, f"{what} = {shown(value)} is no GL enum")
+            raise gl_error(GL_INVALID_ENUM, f"{what}: {refused_enum(value, allowed, call)}")
         return value
 
+    check.enums = allowed  # type: ignore[attr-defined]
     return check
 
 
-def bits(allowed: int) -> Check:
+def bit_names(value: int, allowed: Enums) -> str:
+    """``value``'s bits by their GL names (``GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT``)."""
+    names = [allowed.names[bit] for bit in sorted(allowed.names) if value & bit == bit]
+    rest = value & ~sum(allowed.names)
+    return " | ".join([*names, *([gl_name(rest)] if rest else [])]) or "0"
+
+
+def bits(allowed: Enums) -> Check:
+    every = sum(allowed.names)
+
     def check(value: Any, what: str) -> int:
         if type(value) is not int:
             raise CallError("TypeError", f"{what}: expected GL bits (an integer)")
-        if value & ~allowed or value < 0:
+        if value & ~every or value < 0:
+            shown_value = (
+                shown(value)
+                if value < 0 or value >= 1 << 32
+                else f"{value:#x} ({bit_names(value, allowed)})"
+            )
             raise gl_error(
-                GL_INVALID_VALUE, f"{what} = {shown(value)} has bits the labs do not take"
+                GL_INVALID_VALUE,
+                f"{what}: {shown_value} has bits other than "
+                f"{_listed([allowed.names[b] for b in sorted(allowed.names)])}",
             )
         return value
 
+    check.bits = allowed  # type: ignore[attr-defined]
     return check
 
 
@@ -182,7 +334,12 @@ def pixels(value: Any, what: str) -> Any:
 
 
 # -------------------------------------------------------------------------------- enums
-MATRIX_MODES = enums("GL_MODELVIEW", "GL_PROJECTION", "GL_TEXTURE")
+MATRIX_MODES = enums(
+    "GL_MODELVIEW",
+    "GL_PROJECTION",
+    "GL_TEXTURE",
+    noun="a matrix mode (glMatrixMode's)",
+)
 CAPS = enums(
     "GL_DEPTH_TEST",
     "GL_CULL_FACE",
@@ -209,6 +366,7 @@ CAPS = enums(
     "GL_DITHER",
     "GL_ALPHA_TEST",
     "GL_FOG",
+    noun="a capability (glEnable's)",
 )
 BEGIN_MODES = enums(
     "GL_POINTS",
@@ -221,17 +379,25 @@ BEGIN_MODES = enums(
     "GL_QUADS",
     "GL_QUAD_STRIP",
     "GL_POLYGON",
+    noun="a primitive (glBegin's)",
 )
-CLEAR_BITS = int(
-    GL.GL_COLOR_BUFFER_BIT
-    | GL.GL_DEPTH_BUFFER_BIT
-    | GL.GL_STENCIL_BUFFER_BIT
-    | GL.GL_ACCUM_BUFFER_BIT
+CLEAR_BITS = enums(
+    "GL_COLOR_BUFFER_BIT",
+    "GL_DEPTH_BUFFER_BIT",
+    "GL_STENCIL_BUFFER_BIT",
+    "GL_ACCUM_BUFFER_BIT",
+    noun="a buffer bit (glClear's)",
 )
-BIND_TARGETS = enums("GL_TEXTURE_2D", "GL_TEXTURE_CUBE_MAP")
+BIND_TARGETS = enums(
+    "GL_TEXTURE_2D",
+    "GL_TEXTURE_CUBE_MAP",
+    noun="a texture target (glBindTexture's)",
+)
 IMAGE_TARGETS = enums(
     "GL_TEXTURE_2D",
     *(f"GL_TEXTURE_CUBE_MAP_{s}_{a}" for s in ("POSITIVE", "NEGATIVE") for a in "XYZ"),
+    noun="a texture image target",
+    member="face",
 )
 TEX_PARAMS = enums(
     "GL_TEXTURE_MIN_FILTER",
@@ -245,6 +411,7 @@ TEX_PARAMS = enums(
     "GL_TEXTURE_MAX_LOD",
     "GL_TEXTURE_LOD_BIAS",
     "GL_GENERATE_MIPMAP",
+    noun="a texture parameter",
 )
 TEX_PARAM_VALUES = enums(
     "GL_NEAREST",
@@ -258,37 +425,39 @@ TEX_PARAM_VALUES = enums(
     "GL_CLAMP_TO_BORDER",
     "GL_REPEAT",
     "GL_MIRRORED_REPEAT",
+    noun="a filter or wrap mode",
 )
-TEX_PARAM_VECTORS = enums("GL_TEXTURE_BORDER_COLOR")
-PIXEL_FORMATS = {
-    int(getattr(GL, name)): channels
-    for name, channels in (
-        ("GL_RGB", 3),
-        ("GL_RGBA", 4),
-        ("GL_BGR", 3),
-        ("GL_BGRA", 4),
-        ("GL_RED", 1),
-        ("GL_GREEN", 1),
-        ("GL_BLUE", 1),
-        ("GL_ALPHA", 1),
-        ("GL_LUMINANCE", 1),
-        ("GL_LUMINANCE_ALPHA", 2),
-        ("GL_DEPTH_COMPONENT", 1),
-    )
-}
-PIXEL_TYPES = {
-    int(getattr(GL, name)): (size, code)
-    for name, size, code in (
-        ("GL_UNSIGNED_BYTE", 1, "u1"),
-        ("GL_BYTE", 1, "i1"),
-        ("GL_UNSIGNED_SHORT", 2, "u2"),
-        ("GL_SHORT", 2, "i2"),
-        ("GL_UNSIGNED_INT", 4, "u4"),
-        ("GL_INT", 4, "i4"),
-        ("GL_FLOAT", 4, "f4"),
-    )
-}
-INTERNAL_FORMATS = frozenset({1, 2, 3, 4}) | enums(
+TEX_PARAM_VECTORS = enums(
+    "GL_TEXTURE_BORDER_COLOR",
+    noun="a texture parameter of four numbers",
+)
+PIXEL_FORMAT_CHANNELS = (
+    ("GL_RGB", 3),
+    ("GL_RGBA", 4),
+    ("GL_BGR", 3),
+    ("GL_BGRA", 4),
+    ("GL_RED", 1),
+    ("GL_GREEN", 1),
+    ("GL_BLUE", 1),
+    ("GL_ALPHA", 1),
+    ("GL_LUMINANCE", 1),
+    ("GL_LUMINANCE_ALPHA", 2),
+    ("GL_DEPTH_COMPONENT", 1),
+)
+PIXEL_FORMATS = {int(getattr(GL, name)): channels for name, channels in PIXEL_FORMAT_CHANNELS}
+PIXEL_FORMAT_ENUMS = enums(*(name for name, _ in PIXEL_FORMAT_CHANNELS), noun="a pixel format")
+PIXEL_TYPE_SIZES = (
+    ("GL_UNSIGNED_BYTE", 1, "u1"),
+    ("GL_BYTE", 1, "i1"),
+    ("GL_UNSIGNED_SHORT", 2, "u2"),
+    ("GL_SHORT", 2, "i2"),
+    ("GL_UNSIGNED_INT", 4, "u4"),
+    ("GL_INT", 4, "i4"),
+    ("GL_FLOAT", 4, "f4"),
+)
+PIXEL_TYPES = {int(getattr(GL, name)): (size, code) for name, size, code in PIXEL_TYPE_SIZES}
+PIXEL_TYPE_ENUMS = enums(*(name for name, _, _ in PIXEL_TYPE_SIZES), noun="a pixel type")
+INTERNAL_FORMATS = enums(
     "GL_RGB",
     "GL_RGBA",
     "GL_RGB8",
@@ -311,14 +480,41 @@ INTERNAL_FORMATS = frozenset({1, 2, 3, 4}) | enums(
     "GL_DEPTH_COMPONENT",
     "GL_DEPTH_COMPONENT16",
     "GL_DEPTH_COMPONENT24",
+    noun="an internal format",
+    numbers=(1, 2, 3, 4),
 )
-TEXGEN_COORDS = enums("GL_S", "GL_T", "GL_R", "GL_Q")
+TEXGEN_COORDS = enums(
+    "GL_S",
+    "GL_T",
+    "GL_R",
+    "GL_Q",
+    noun="a texture coordinate (glTexGen's)",
+)
 TEXGEN_MODES = enums(
-    "GL_EYE_LINEAR", "GL_OBJECT_LINEAR", "GL_SPHERE_MAP", "GL_NORMAL_MAP", "GL_REFLECTION_MAP"
+    "GL_EYE_LINEAR",
+    "GL_OBJECT_LINEAR",
+    "GL_SPHERE_MAP",
+    "GL_NORMAL_MAP",
+    "GL_REFLECTION_MAP",
+    noun="a texgen mode",
 )
-TEXGEN_PLANES = enums("GL_EYE_PLANE", "GL_OBJECT_PLANE")
-TEXENV_MODES = enums("GL_MODULATE", "GL_REPLACE", "GL_DECAL", "GL_BLEND", "GL_ADD")
-UNITS = frozenset(int(GL.GL_TEXTURE0) + i for i in range(8))
+TEXGEN_PARAMS = enums("GL_TEXTURE_GEN_MODE", noun="the texgen mode's name")
+TEXENV_TARGETS = enums("GL_TEXTURE_ENV", noun="the texture environment")
+TEXENV_PARAMS = enums("GL_TEXTURE_ENV_MODE", noun="the texture environment mode's name")
+TEXGEN_PLANES = enums(
+    "GL_EYE_PLANE",
+    "GL_OBJECT_PLANE",
+    noun="a texgen plane",
+)
+TEXENV_MODES = enums(
+    "GL_MODULATE",
+    "GL_REPLACE",
+    "GL_DECAL",
+    "GL_BLEND",
+    "GL_ADD",
+    noun="a texture environment mode",
+)
+UNITS = enums(*(f"GL_TEXTURE{i}" for i in range(8)), noun="a texture unit", member="unit")
 DEPTH_FUNCS = enums(
     "GL_NEVER",
     "GL_LESS",
@@ -328,6 +524,7 @@ DEPTH_FUNCS = enums(
     "GL_NOTEQUAL",
     "GL_GEQUAL",
     "GL_ALWAYS",
+    noun="a depth function",
 )
 BLEND_FACTORS = enums(
     "GL_ZERO",
@@ -340,11 +537,30 @@ BLEND_FACTORS = enums(
     "GL_ONE_MINUS_DST_ALPHA",
     "GL_DST_COLOR",
     "GL_ONE_MINUS_DST_COLOR",
+    noun="a blend factor",
 )
-FACES = enums("GL_FRONT", "GL_BACK", "GL_FRONT_AND_BACK")
-WINDINGS = enums("GL_CW", "GL_CCW")
-POLYGON_MODES = enums("GL_POINT", "GL_LINE", "GL_FILL")
-SHADE_MODELS = enums("GL_FLAT", "GL_SMOOTH")
+FACES = enums(
+    "GL_FRONT",
+    "GL_BACK",
+    "GL_FRONT_AND_BACK",
+    noun="a polygon face",
+)
+WINDINGS = enums(
+    "GL_CW",
+    "GL_CCW",
+    noun="a winding",
+)
+POLYGON_MODES = enums(
+    "GL_POINT",
+    "GL_LINE",
+    "GL_FILL",
+    noun="a polygon mode",
+)
+SHADE_MODELS = enums(
+    "GL_FLAT",
+    "GL_SMOOTH",
+    noun="a shade model",
+)
 HINT_TARGETS = enums(
     "GL_PERSPECTIVE_CORRECTION_HINT",
     "GL_LINE_SMOOTH_HINT",
@@ -352,52 +568,111 @@ HINT_TARGETS = enums(
     "GL_POLYGON_SMOOTH_HINT",
     "GL_FOG_HINT",
     "GL_GENERATE_MIPMAP_HINT",
+    noun="a hint target",
 )
-HINT_MODES = enums("GL_FASTEST", "GL_NICEST", "GL_DONT_CARE")
-STORE_PARAMS = enums("GL_UNPACK_ALIGNMENT", "GL_PACK_ALIGNMENT")
-STRINGS = enums("GL_VENDOR", "GL_RENDERER", "GL_VERSION", "GL_SHADING_LANGUAGE_VERSION")
-LEVEL_PARAMS = enums("GL_TEXTURE_WIDTH", "GL_TEXTURE_HEIGHT", "GL_TEXTURE_INTERNAL_FORMAT")
+HINT_MODES = enums(
+    "GL_FASTEST",
+    "GL_NICEST",
+    "GL_DONT_CARE",
+    noun="a hint mode",
+)
+STORE_PARAMS = enums(
+    "GL_UNPACK_ALIGNMENT",
+    "GL_PACK_ALIGNMENT",
+    noun="a pixel-store parameter",
+)
+STRINGS = enums(
+    "GL_VENDOR",
+    "GL_RENDERER",
+    "GL_VERSION",
+    "GL_SHADING_LANGUAGE_VERSION",
+    noun="a string name (glGetString's)",
+)
+LEVEL_PARAMS = enums(
+    "GL_TEXTURE_WIDTH",
+    "GL_TEXTURE_HEIGHT",
+    "GL_TEXTURE_INTERNAL_FORMAT",
+    noun="a texture level parameter",
+)
 
-QUERY_SIZES = {
-    int(getattr(GL, name)): size
-    for name, size in (
-        ("GL_VIEWPORT", 4),
-        ("GL_SCISSOR_BOX", 4),
-        ("GL_COLOR_CLEAR_VALUE", 4),
-        ("GL_DEPTH_CLEAR_VALUE", 1),
-        ("GL_MATRIX_MODE", 1),
-        ("GL_MODELVIEW_MATRIX", 16),
-        ("GL_PROJECTION_MATRIX", 16),
-        ("GL_TEXTURE_MATRIX", 16),
-        ("GL_ACTIVE_TEXTURE", 1),
-        ("GL_TEXTURE_BINDING_2D", 1),
-        ("GL_TEXTURE_BINDING_CUBE_MAP", 1),
-        ("GL_CURRENT_PROGRAM", 1),
-        ("GL_MAX_TEXTURE_SIZE", 1),
-        ("GL_MAX_TEXTURE_UNITS", 1),
-        ("GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS", 1),
-        ("GL_CURRENT_COLOR", 4),
-        ("GL_CURRENT_TEXTURE_COORDS", 4),
-        ("GL_MODELVIEW_STACK_DEPTH", 1),
-        ("GL_PROJECTION_STACK_DEPTH", 1),
-        ("GL_DEPTH_FUNC", 1),
-        ("GL_CULL_FACE_MODE", 1),
-        ("GL_FRONT_FACE", 1),
-        ("GL_PACK_ALIGNMENT", 1),
-        ("GL_UNPACK_ALIGNMENT", 1),
-        ("GL_MAX_VIEWPORT_DIMS", 2),
-        ("GL_DEPTH_RANGE", 2),
-        ("GL_DEPTH_WRITEMASK", 1),
-        ("GL_COLOR_WRITEMASK", 4),
-        ("GL_POLYGON_MODE", 2),
-        ("GL_SHADE_MODEL", 1),
-        ("GL_LINE_WIDTH", 1),
-        ("GL_POINT_SIZE", 1),
-        ("GL_BLEND_SRC", 1),
-        ("GL_BLEND_DST", 1),
-        ("GL_MAX_CUBE_MAP_TEXTURE_SIZE", 1),
-    )
-} | {cap: 1 for cap in CAPS}
+QUERY_NAME_SIZES = (
+    ("GL_VIEWPORT", 4),
+    ("GL_SCISSOR_BOX", 4),
+    ("GL_COLOR_CLEAR_VALUE", 4),
+    ("GL_DEPTH_CLEAR_VALUE", 1),
+    ("GL_MATRIX_MODE", 1),
+    ("GL_MODELVIEW_MATRIX", 16),
+    ("GL_PROJECTION_MATRIX", 16),
+    ("GL_TEXTURE_MATRIX", 16),
+    ("GL_ACTIVE_TEXTURE", 1),
+    ("GL_TEXTURE_BINDING_2D", 1),
+    ("GL_TEXTURE_BINDING_CUBE_MAP", 1),
+    ("GL_CURRENT_PROGRAM", 1),
+    ("GL_MAX_TEXTURE_SIZE", 1),
+    ("GL_MAX_TEXTURE_UNITS", 1),
+    ("GL_MAX_COMBINED_TEXTURE_IMAGE_UNITS", 1),
+    ("GL_CURRENT_COLOR", 4),
+    ("GL_CURRENT_TEXTURE_COORDS", 4),
+    ("GL_MODELVIEW_STACK_DEPTH", 1),
+    ("GL_PROJECTION_STACK_DEPTH", 1),
+    ("GL_DEPTH_FUNC", 1),
+    ("GL_CULL_FACE_MODE", 1),
+    ("GL_FRONT_FACE", 1),
+    ("GL_PACK_ALIGNMENT", 1),
+    ("GL_UNPACK_ALIGNMENT", 1),
+    ("GL_MAX_VIEWPORT_DIMS", 2),
+    ("GL_DEPTH_RANGE", 2),
+    ("GL_DEPTH_WRITEMASK", 1),
+    ("GL_COLOR_WRITEMASK", 4),
+    ("GL_POLYGON_MODE", 2),
+    ("GL_SHADE_MODEL", 1),
+    ("GL_LINE_WIDTH", 1),
+    ("GL_POINT_SIZE", 1),
+    ("GL_BLEND_SRC", 1),
+    ("GL_BLEND_DST", 1),
+    ("GL_MAX_CUBE_MAP_TEXTURE_SIZE", 1),
+)
+QUERY_SIZES = {int(getattr(GL, name)): size for name, size in QUERY_NAME_SIZES} | {
+    cap: 1 for cap in CAPS
+}
+QUERIES = enums(
+    *(name for name, _ in QUERY_NAME_SIZES), *CAPS.names.values(), noun="a state glGet takes"
+)
+
+ENUM_SETS: tuple[Enums, ...] = (
+    TEXGEN_COORDS,
+    UNITS,
+    MATRIX_MODES,
+    BEGIN_MODES,
+    TEXGEN_MODES,
+    TEXENV_MODES,
+    TEX_PARAMS,
+    TEX_PARAM_VALUES,
+    IMAGE_TARGETS,
+    BIND_TARGETS,
+    CAPS,
+    INTERNAL_FORMATS,
+    PIXEL_FORMAT_ENUMS,
+    PIXEL_TYPE_ENUMS,
+    CLEAR_BITS,
+    TEXGEN_PLANES,
+    TEXGEN_PARAMS,
+    TEXENV_TARGETS,
+    TEXENV_PARAMS,
+    DEPTH_FUNCS,
+    BLEND_FACTORS,
+    FACES,
+    WINDINGS,
+    POLYGON_MODES,
+    SHADE_MODELS,
+    HINT_TARGETS,
+    HINT_MODES,
+    STORE_PARAMS,
+    STRINGS,
+    LEVEL_PARAMS,
+)
+"""Every set of enums the allow-list takes, the more telling first: what names a value and
+says what kind of enum it is in a refusal."""
 
 SIDE = 1024
 """The largest texture side, viewport and copy the labs accept."""
@@ -548,8 +823,8 @@ GL_SPECS: dict[str, Spec] = {
         SIZE_INT,
         SIZE_INT,
         integer(0, 1),
-        one_of(frozenset(PIXEL_FORMATS)),
-        one_of(frozenset(PIXEL_TYPES)),
+        one_of(PIXEL_FORMAT_ENUMS),
+        one_of(PIXEL_TYPE_ENUMS),
         pixels,
         handler="tex_image",
     ),
@@ -561,8 +836,8 @@ GL_SPECS: dict[str, Spec] = {
         SIZE_INT,
         SIZE_INT,
         SIZE_INT,
-        one_of(frozenset(PIXEL_FORMATS)),
-        one_of(frozenset(PIXEL_TYPES)),
+        one_of(PIXEL_FORMAT_ENUMS),
+        one_of(PIXEL_TYPE_ENUMS),
         pixels,
         handler="tex_sub_image",
     ),
@@ -621,35 +896,35 @@ GL_SPECS: dict[str, Spec] = {
     "glGenerateMipmap": spec("i", one_of(BIND_TARGETS), handler="generate_mipmap"),
     "glTexEnvi": spec(
         "i i i",
-        one_of(enums("GL_TEXTURE_ENV")),
-        one_of(enums("GL_TEXTURE_ENV_MODE")),
+        one_of(TEXENV_TARGETS),
+        one_of(TEXENV_PARAMS),
         one_of(TEXENV_MODES),
     ),
     "glTexEnvf": spec(
         "i i f",
-        one_of(enums("GL_TEXTURE_ENV")),
-        one_of(enums("GL_TEXTURE_ENV_MODE")),
+        one_of(TEXENV_TARGETS),
+        one_of(TEXENV_PARAMS),
         real(0, 1 << 16),
         handler="texenv_f",
     ),
     "glTexEnviv": spec(
         "i i n",
-        one_of(enums("GL_TEXTURE_ENV")),
-        one_of(enums("GL_TEXTURE_ENV_MODE")),
+        one_of(TEXENV_TARGETS),
+        one_of(TEXENV_PARAMS),
         vector((1,), 0, 1 << 16, True),
         handler="texenv_f",
     ),
     "glTexEnvfv": spec(
         "i i v",
-        one_of(enums("GL_TEXTURE_ENV")),
-        one_of(enums("GL_TEXTURE_ENV_MODE")),
+        one_of(TEXENV_TARGETS),
+        one_of(TEXENV_PARAMS),
         vector((1,), 0, 1 << 16),
         handler="texenv_f",
     ),
     "glTexGeni": spec(
         "i i i",
         one_of(TEXGEN_COORDS),
-        one_of(enums("GL_TEXTURE_GEN_MODE")),
+        one_of(TEXGEN_PARAMS),
         one_of(TEXGEN_MODES),
         handler="texgen",
     ),
@@ -657,7 +932,7 @@ GL_SPECS: dict[str, Spec] = {
         f"glTexGen{t}": spec(
             "i i f",
             one_of(TEXGEN_COORDS),
-            one_of(enums("GL_TEXTURE_GEN_MODE")),
+            one_of(TEXGEN_PARAMS),
             real(0, 1 << 16),
             handler="texgen",
         )
@@ -732,7 +1007,7 @@ GL_SPECS: dict[str, Spec] = {
     # queries
     "glGetError": spec("", handler="get_error"),
     **{
-        name: spec("i", one_of(frozenset(QUERY_SIZES)), handler="get")
+        name: spec("i", one_of(QUERIES), handler="get")
         for name in ("glGetIntegerv", "glGetFloatv", "glGetDoublev", "glGetBooleanv")
     },
     "glIsEnabled": spec("i", one_of(CAPS), handler="is_enabled"),
@@ -755,7 +1030,7 @@ GL_SPECS: dict[str, Spec] = {
     },
     **{
         f"glGetTexGen{t}v": spec(
-            "i i", one_of(TEXGEN_COORDS), one_of(enums("GL_TEXTURE_GEN_MODE")), handler="get_texgen"
+            "i i", one_of(TEXGEN_COORDS), one_of(TEXGEN_PARAMS), handler="get_texgen"
         )
         for t in "ifd"
     },
@@ -1081,11 +1356,6 @@ def refusal(lab: str, name: str) -> str:
     return left_out(lab).get(name) or REFUSED.get(name, "")
 
 
-def enum_name(value: int) -> str:
-    """The allow-list's name for enum ``value`` (:data:`ENUM_NAMES`), else its hex."""
-    return ENUM_NAMES.get(value, f"{value:#x}")
-
-
 def open_for(lab: str, kind: str, value: int) -> str:
     """'' when ``value`` (a glBegin mode, a glEnable switch or a matrix mode: ``kind`` is
     ``modes``, ``caps`` or ``matrix_modes``) is one ``lab`` allows, else why not."""
@@ -1125,7 +1395,185 @@ def check_arguments(name: str, call: Spec, args: Any) -> list[Any]:
         raise CallError(
             "TypeError", f"{name}() takes {len(call.kinds)} arguments ({len(args)} given)"
         )
-    return [
-        check(value, f"{name}() argument {i + 1}")
+    names = arg_names(name)
+    checked = [
+        check(value, f"{name}() argument {i + 1}" + (f" ({names[i]})" if i < len(names) else ""))
         for i, (check, value) in enumerate(zip(call.checks, args, strict=False))
     ]
+    why, refused = degenerate(name, checked)
+    if refused:
+        raise gl_error(GL_INVALID_VALUE, f"{name}: {why}")
+    return checked
+
+
+VALUES_BY_NAME = {
+    "GL_TEXTURE_MIN_FILTER": "TEX_PARAM_VALUES",
+    "GL_TEXTURE_MAG_FILTER": "TEX_PARAM_VALUES",
+    "GL_TEXTURE_WRAP_S": "TEX_PARAM_VALUES",
+    "GL_TEXTURE_WRAP_T": "TEX_PARAM_VALUES",
+    "GL_TEXTURE_WRAP_R": "TEX_PARAM_VALUES",
+    "GL_TEXTURE_ENV_MODE": "TEXENV_MODES",
+    "GL_TEXTURE_GEN_MODE": "TEXGEN_MODES",
+}
+"""Parameters whose value is an enum though the call takes a number (glTexParameteri's
+filters, glTexEnvf's mode): the set that names the value."""
+
+
+def trace_notes(name: str, call: Spec, args: list[Any]) -> dict[str, Any]:
+    """What the call trace keeps of a checked call beside its numbers: the GL names of its
+    enum arguments (``names``, by position) and why it cannot work (``note``, from
+    :func:`degenerate`) when GL carries it out all the same."""
+    found: dict[str, Any] = {}
+    names: dict[str, str] = {}
+    for i, (check, value) in enumerate(zip(call.checks, args, strict=False)):
+        allowed = getattr(check, "enums", None)
+        if allowed is not None and type(value) is int:
+            names[str(i)] = gl_name(value, allowed)
+        elif getattr(check, "bits", None) is not None and type(value) is int:
+            names[str(i)] = bit_names(value, check.bits)  # type: ignore[attr-defined]
+        elif i and str(i - 1) in names and names[str(i - 1)] in VALUES_BY_NAME:
+            values = globals()[VALUES_BY_NAME[names[str(i - 1)]]]
+            number = value[0] if isinstance(value, list) and value else value
+            if isinstance(number, int | float) and int(number) == number and number in values:
+                names[str(i)] = gl_name(int(number), values)
+    if names:
+        found["names"] = names
+    why, _ = degenerate(name, args)
+    if why:
+        found["note"] = why
+    return found
+
+
+@lru_cache(maxsize=512)
+def arg_names(name: str) -> tuple[str, ...]:
+    """The names PyOpenGL gives the arguments of ``name`` (``('left', 'right', ...)``)."""
+    from OpenGL import GLU
+
+    function = getattr(GLU if name.startswith("glu") else GL, name, None)
+    while function is not None and not getattr(function, "argNames", None):
+        function = getattr(function, "wrappedOperation", None)  # PyOpenGL's lazy wrappers
+    return tuple(str(n) for n in getattr(function, "argNames", None) or ())
+
+
+MATRIX_CALLS = frozenset(
+    {
+        "glOrtho",
+        "glFrustum",
+        "gluOrtho2D",
+        "gluPerspective",
+        "gluLookAt",
+        *(f"gl{op}{t}" for op in ("Translate", "Scale", "Rotate") for t in "fd"),
+        *(
+            f"gl{op}Matrix{t}"
+            for op in ("Load", "Mult", "LoadTranspose", "MultTranspose")
+            for t in "fd"
+        ),
+    }
+)
+
+
+def _point(values: Any) -> str:
+    return "(" + ", ".join(f"{float(v):g}" for v in values) + ")"
+
+
+def degenerate(name: str, args: list[Any]) -> tuple[str, bool]:
+    """Why the call ``name`` with these (checked) ``args`` cannot do its work, naming the
+    argument, and whether GL refuses it (``GL_INVALID_VALUE``) or carries it out to no use
+    (a matrix that flattens space or looks nowhere, a viewport of no pixels): ('', False)
+    when it can. The same on every context, since the checker says it before GL runs."""
+    names = arg_names(name) or tuple(f"argument {i + 1}" for i in range(len(args)))
+    values = {n: a for n, a in zip(names, args, strict=False)}
+
+    def equal(a: str, b: str, what: str) -> str:
+        if a in values and b in values and values[a] == values[b]:
+            return f"{a} = {b} = {values[a]:g}: {what}"
+        return ""
+
+    if name in ("glOrtho", "glFrustum", "gluOrtho2D"):
+        for a, b, what in (
+            ("left", "right", "the box has no width, so x cannot be mapped to -1..1"),
+            ("bottom", "top", "the box has no height, so y cannot be mapped to -1..1"),
+            ("zNear", "zFar", "the box has no depth, so z cannot be mapped to -1..1"),
+        ):
+            if found := equal(a, b, what):
+                return found, True
+        if name == "glFrustum":
+            for key in ("zNear", "zFar"):
+                if values[key] <= 0:
+                    return (
+                        f"{key} = {values[key]:g}: a perspective box lies in front of the "
+                        f"eye, so both of its planes must be at a distance > 0",
+                        True,
+                    )
+    if name == "gluPerspective":
+        fovy, aspect, near, far = (values[k] for k in ("fovy", "aspect", "zNear", "zFar"))
+        if not 0 < fovy < 180:
+            return (
+                f"fovy = {fovy:g}: a field of view lies between 0 and 180 degrees; at "
+                f"{fovy:g} the camera sees {'nothing' if fovy <= 0 else 'everything at once'}",
+                False,
+            )
+        if aspect == 0:
+            return "aspect = 0: the view has no width (GLU leaves the matrix unchanged)", False
+        if near == far:
+            return (
+                f"zNear = zFar = {near:g}: the view has no depth (GLU leaves the matrix unchanged)",
+                False,
+            )
+        if near <= 0:
+            return (
+                f"zNear = {near:g}: the near plane must lie in front of the eye (> 0), or "
+                f"depth has no precision left",
+                False,
+            )
+    if name == "gluLookAt":
+        eye = [values[f"eye{a}"] for a in "XYZ"]
+        center = [values[f"center{a}"] for a in "XYZ"]
+        up = [values[f"up{a}"] for a in "XYZ"]
+        forward = [c - e for c, e in zip(center, eye, strict=True)]
+        if not any(forward):
+            return (
+                f"eye and center are both {_point(eye)}: the camera has no direction to look in",
+                False,
+            )
+        if not any(up):
+            return "up = (0, 0, 0): the camera has no up, so it can turn any way", False
+        cross = (
+            forward[1] * up[2] - forward[2] * up[1],
+            forward[2] * up[0] - forward[0] * up[2],
+            forward[0] * up[1] - forward[1] * up[0],
+        )
+        size = math.hypot(*forward) * math.hypot(*up)
+        if math.hypot(*cross) <= 1e-6 * size:
+            return (
+                f"up {_point(up)} is parallel to the view direction {_point(forward)} "
+                f"(center - eye): the camera's sideways direction is undefined, so it can "
+                f"turn any way about it",
+                False,
+            )
+    if name.startswith("glScale"):
+        flat = [a for a, v in zip("xyz", args, strict=False) if v == 0]
+        if flat:
+            return (
+                f"{' and '.join(flat)} = 0: a scale of 0 flattens everything onto "
+                f"{'a plane' if len(flat) == 1 else 'a line or a point'} (the matrix is "
+                f"singular)",
+                False,
+            )
+    if name.startswith("glRotate") and not any(args[1:4]):
+        return "the axis (0, 0, 0) has no direction: GL rotates nothing about it", False
+    if name in MATRIX_CALLS and "Matrix" in name and isinstance(args[0], list):
+        import numpy as np
+
+        matrix = np.asarray(args[0], dtype=np.float64).reshape(4, 4)
+        if abs(np.linalg.det(matrix)) < 1e-12 * max(1.0, float(np.abs(matrix).max()) ** 4):
+            return "the matrix is singular (determinant 0): it flattens space", False
+    if name in ("glViewport", "glScissor") and (args[2] == 0 or args[3] == 0):
+        return (
+            f"width {args[2]} x height {args[3]}: a box 0 pixels "
+            f"{'wide' if args[2] == 0 else 'high'} holds no pixel, so nothing is drawn",
+            False,
+        )
+    if name in ("glLineWidth", "glPointSize") and args[0] <= 0:
+        return f"{names[0]} = {args[0]:g}: a {name[2:-5].lower()} must be wider than 0", True
+    return "", False

@@ -140,21 +140,22 @@ def code_digest(home: Path) -> str:
 
 
 def trim_reference(evidence: Evidence) -> Evidence:
-    """What the judges read of a reference run: its pictures and the last frame's events
-    without their state snapshots."""
+    """What the judges read of a reference run: its pictures, the set-up's and the last
+    frame's events (the call trace the hints align a student's with among them)."""
     keep = {"frame", "capture", "cube_faces", "values_mask"}
-    events = []
-    for event in evidence.last_frame:
-        events.append({k: v for k, v in event.items() if k not in ("state", "vertices")})
+    events = list(evidence.last_frame)
+    for event in events:
         if event.get("picture"):
             keep.add(event["picture"])
     return Evidence(
         evidence.lab,
         evidence.status,
         evidence.detail,
+        setup=list(evidence.setup),
         frames=[{"events": events}],
         # the value probe's seed and inputs judge the student's GLSL only
         state={k: v for k, v in evidence.state.items() if not k.startswith("probe_")},
+        textures=dict(evidence.textures),
         arrays={k: v for k, v in evidence.arrays.items() if k in keep},
         variant=evidence.variant,
     )

@@ -280,7 +280,7 @@ class LabRun:
         errors = list(errors) if isinstance(errors, list) else []
         unended = self.executor.end_open_primitive()
         if unended is not None:  # the student's error, as if their function had raised it
-            errors.insert(0, unended)
+            errors.append(unended)  # after the error that left glBegin open, when one did
         for error in errors:
             if not isinstance(error, dict) or len(self.evidence.errors) >= 20:
                 continue
@@ -350,6 +350,13 @@ class LabRun:
         evidence.call_errors = executor.call_errors
         evidence.arrays.update(executor.pictures)
         evidence.state["calls"] = executor.calls
+        traced = {
+            str(e.get("fn"))
+            for events in (evidence.setup, *(f["events"] for f in evidence.frames))
+            for e in events
+            if e.get("kind") == "call" and e.get("op") in ("gl", "glu")
+        }
+        evidence.state["signatures"] = {fn: list(C.arg_names(fn)) for fn in sorted(traced)[:200]}
         evidence.state["declared"] = sorted(self.declared)
         return evidence
 

@@ -30,6 +30,29 @@ UNIT_CAPS = {
 """Switches that belong to the active texture unit."""
 TEXGEN_COORDS = {0x2000: "s", 0x2001: "t", 0x2002: "r", 0x2003: "q"}
 UNITS = 8
+TRACED = 3000
+"""Call records kept a frame (and for the set-up): a file that makes more is a flood."""
+
+
+def small(value: Any, depth: int = 0) -> Any:
+    """``value`` (a call's arguments, JSON-like) made small for the call trace: strings cut to
+    40 characters (GLSL becomes ``"<glsl>"``), lists to 16 items, dicts to 16 keys, pixel
+    data to ``"<data>"``, three levels deep."""
+    if isinstance(value, str):
+        return "<glsl>" if len(value) > 40 or "\n" in value else value
+    if isinstance(value, int) and not isinstance(value, bool) and not -(1 << 63) <= value < 1 << 63:
+        return f"{str(value)[:8]}... (an integer of {len(str(abs(value)))} digits)"
+    if isinstance(value, bool | int | float) or value is None:
+        return value
+    if depth >= 3:
+        return "..."
+    if isinstance(value, dict):
+        if set(value) == {"$a"}:
+            return "<data>"
+        return {str(k)[:40]: small(v, depth + 1) for k, v in list(value.items())[:16]}
+    if isinstance(value, list | tuple):
+        return [small(v, depth + 1) for v in list(value)[:16]]
+    return str(value)[:40]
 
 
 @dataclass
@@ -158,6 +181,8 @@ class Tracker:
         self._snapshot: dict[str, Any] | None = None
         """The last state snapshot: events share it while the state does not change."""
         self._counted: dict[str, Any] | None = None
+        self.traced = 0
+        """Call records of this frame (or of the set-up) so far (:meth:`trace`)."""
 
     # ---------------------------------------------------------------- who and where
     @property
@@ -190,7 +215,38 @@ class Tracker:
 
     def begin_frame(self) -> None:
         self.frames.append({"events": []})
-        self.frame_bytes, self._counted = 0, None
+        self.frame_bytes, self._counted, self.traced = 0, None, 0
+
+    def trace(self, op: str, name: str, args: Any) -> dict[str, Any] | None:
+        """The call trace: one ``call`` event per call the student's file made (``fn``, its
+        arguments made small, the student's line and lab function) with the state it acted
+        in (``ctx``: the active unit ``u``, the 2D and cube-map textures bound there ``t2``
+        and ``tc``, the matrix mode ``m``, the program ``p``, inside glBegin ``b``), before
+        it runs; the executor adds ``error`` when it failed. At most :data:`TRACED` a frame
+        (the labs make a few dozen), not counted in the evidence's cap."""
+        if self.traced >= TRACED:
+            return None
+        self.traced += 1
+        unit = self.active_unit.value
+        record = {
+            "kind": "call",
+            "line": self.line,
+            "function": self.function,
+            "steps": list(self.steps),
+            "fn": name,
+            "op": op,
+            "args": small(args),
+            "ctx": {
+                "u": unit,
+                "t2": self.bound(GL_TEXTURE_2D, unit),
+                "tc": self.bound(GL_TEXTURE_CUBE_MAP, unit),
+                "m": self.matrix_mode.value,
+                "p": self.program.value,
+                "b": int(self.primitive is not None),
+            },
+        }
+        self.events.append(record)
+        return record
 
     # ---------------------------------------------------------------- state changes
     def bound(self, target: int, unit: int | None = None) -> int:

@@ -1,55 +1,41 @@
-"""The quad lab's judge: the last frame's clear, then the frame against the reference."""
+"""The quad lab's judge, declared: the frame cleared as the solution clears it before the
+quad, and the quad the solution draws; every hint is the shared modules'
+(:mod:`mirrorlab.labs.trusted.lab_judge`)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from mirrorlab.labs import LabSpec
+from mirrorlab.labs.trusted import lab_judge as J
 from mirrorlab.labs.trusted.evidence import Evidence
-from mirrorlab.labs.trusted.judging import (
-    Context,
-    TaskResult,
-    Verdicts,
-    judge_frame,
-    picture,
-    results,
-    wrong_clear_colour,
-)
-from tests.labs.fourth_lab.variant import clear_colour
+from mirrorlab.labs.trusted.judging import Context, TaskResult, picture
 
-GL_COLOR_BUFFER_BIT = 0x4000
+QUAD = J.Events("draw", who="primitive", within="draw_quad", at_least=3, last=True)
+
+JUDGE = J.LabJudge(
+    lab="quad",
+    roles={},
+    frame_task="quad",
+    tasks=(
+        J.TaskRule(
+            "clear",
+            ("clear_background",),
+            checks=(J.Happens(QUAD, "the quad's drawing"), J.SameClears(QUAD, "the frame")),
+        ),
+        J.TaskRule(
+            "quad",
+            ("draw_quad",),
+            checks=(J.Happens(QUAD, "the quad's drawing"), J.SamePrimitive(QUAD, "quad")),
+        ),
+    ),
+)
 
 
 def judge(
     spec: LabSpec, student: Evidence, reference: Evidence, context: Context
 ) -> list[TaskResult]:
-    clears = [
-        e
-        for e in student.events("clear", within="clear_background")
-        if int(e.get("mask", 0)) & GL_COLOR_BUFFER_BIT
-    ]
-    colour = clear_colour(context.variant)
-    if not clears:
-        clear = (False, "clear_background() clears nothing: glClearColor, then glClear")
-    elif wrong := wrong_clear_colour(clears[-1], colour, student):
-        clear = (
-            False,
-            f"the frame is cleared to {wrong}; yours is ({', '.join(f'{c:g}' for c in colour)})",
-        )
-    else:
-        clear = (True, "")
-    quads = student.events("draw", who="primitive", within="draw_quad")
-    quad = (
-        (True, "")
-        if quads
-        else (False, "draw_quad() draws nothing: glBegin(GL_QUADS), four glVertex2f, glEnd")
-    )
-    verdicts: Verdicts = {"clear": clear, "quad": quad}
-    frame = reference.image("frame")
-    regions: dict[str, np.ndarray | None] = {"clear": None, "quad": None}
-    if frame is not None:
-        verdicts = judge_frame(verdicts, student, reference, regions, "quad", {})
-    return results(spec, student, verdicts)
+    return J.judge(JUDGE, spec, student, reference, context)
 
 
 def check_picture(student: Evidence, reference: Evidence) -> np.ndarray:
