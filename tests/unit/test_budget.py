@@ -182,14 +182,16 @@ def test_allow_keeps_its_techniques_only():
 def test_a_candidate_changes_a_moved_mirror_but_never_where_it_is(x, y, turn):
     scene = load_scene("lab20")
     mirror = planar_reflector(scene, "mirror").moved(position=(x, y, -2.0), rotation=(0, turn, 0))
+    assert isinstance(mirror, PlanarReflector)
     for candidate in candidates_for(mirror, scene):
         drawn = candidate.apply(mirror)
+        assert isinstance(drawn, PlanarReflector)
         assert drawn.corners == mirror.corners and drawn.name == mirror.name
         assert drawn.technique == candidate.technique
         if technique(drawn.technique).own_camera:
             assert drawn.ortho == mirror.ortho  # the lab's camera moves with the mirror
         else:
-            assert isinstance(drawn, PlanarReflector) and drawn.ortho is None
+            assert drawn.ortho is None
 
 
 # --------------------------------------------------------------------------- features
