@@ -21,7 +21,15 @@ import numpy as np
 
 from mirrorlab.bounds import ObjectArrays, scene_index
 from mirrorlab.draw_path import DrawPath
-from mirrorlab.gl.calls import Call, for_replay, gl, known_state, recording, replay
+from mirrorlab.gl.calls import (
+    Call,
+    for_replay,
+    forget_cached_state,
+    gl,
+    known_state,
+    recording,
+    replay,
+)
 from mirrorlab.gl.context import ResourceRegistry, gl_pass, gl_version, require_gl_version
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import RenderTarget, Texture2D, TextureCube
@@ -380,6 +388,7 @@ class SceneRenderer:
         except BaseException:
             self.state.clear()
             self.memo.clear()
+            forget_cached_state()  # the calls may have stopped partway
             raise
         for step in plan.passes:
             if step.runs and step.name != "camera":
@@ -433,6 +442,7 @@ class SceneRenderer:
             # What a failed pass left half made cannot be trusted by the next frame.
             self.state.clear()
             self.memo.clear()
+            forget_cached_state()
             raise
         finally:
             self.drawer.end_frame()
