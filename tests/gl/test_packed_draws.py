@@ -12,6 +12,7 @@ import subprocess
 import sys
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -209,9 +210,9 @@ def test_a_view_draws_its_reflectors_before_the_objects_and_stencil_mirrors_afte
     draws are noted, by every registered technique's pass: not those a pass makes within
     its own (``ssr`` draws its probe's after the objects, as its own draw)."""
     events = []
-    inside = []  # the pass draws being made
-
-    for owner in {entry.load() for entry in techniques() if entry.pass_class}:
+    inside: list[object] = []  # the pass draws being made
+    owners: set[Any] = {entry.load() for entry in techniques() if entry.pass_class}
+    for owner in owners:
 
         def noted_pass_draw(self, step, view, *rest, _o=owner.draw):
             if not inside:
