@@ -21,7 +21,15 @@ import numpy as np
 
 from mirrorlab.bounds import ObjectArrays, scene_index
 from mirrorlab.draw_path import DrawPath
-from mirrorlab.gl.calls import Call, for_replay, gl, known_state, recording, replay
+from mirrorlab.gl.calls import (
+    Call,
+    for_replay,
+    forget_cached_state,
+    gl,
+    known_state,
+    recording,
+    replay,
+)
 from mirrorlab.gl.context import ResourceRegistry, gl_pass, gl_version, require_gl_version
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import RenderTarget, Texture2D, TextureCube
@@ -242,12 +250,28 @@ class SceneRenderer:
             self._sky = SkyPass(self.shared, background)
         return self._sky
 
-    def _use_scene(self, scene: Scene) -> None:
-        if (
+    def _same_passes(self, scene: Scene) -> bool:
+        """Whether ``scene`` has the reflectors and background of the scene drawn last."""
+        return (
             self._scene is not None
             and scene.reflectors is self._scene.reflectors
             and scene.background == self._scene.background
-        ):
+        )
+
+    def _stale_passes(self, scene: Scene) -> list[str]:
+        """The reflectors whose passes drawing ``scene`` drops (gone, or made otherwise:
+        another technique, say), and with them what their textures held."""
+        if self._same_passes(scene):
+            return []
+        names = {r.name: r for r in scene.reflectors}
+        return [
+            name
+            for name, (key, _) in self._passes.items()
+            if name not in names or key != _pass_key(names[name], scene.background)
+        ]
+
+    def _use_scene(self, scene: Scene) -> None:
+        if self._same_passes(scene):
             self._scene = scene  # the same reflectors: the same passes
             return
         for reflector in scene.reflectors:
@@ -256,15 +280,12 @@ class SceneRenderer:
                 require_gl_version(entry.gl_version, f"technique {entry.name!r}")
         if self._gl_version < RENDERER_GL_VERSION:
             require_gl_version(RENDERER_GL_VERSION, "mirrorlab's renderer (GLSL 3.30)")
+        stale = self._stale_passes(scene)
         self._scene = scene
         self._scissor = None
         gl.glDisable(GL.GL_SCISSOR_TEST)  # a pass made for a new scene draws unscissored
-        names = {r.name: r for r in scene.reflectors}
-        for name in list(self._passes):
-            if name not in names or self._passes[name][0] != _pass_key(
-                names[name], scene.background
-            ):
-                self._drop(name)
+        for name in stale:
+            self._drop(name)
         with gl_pass("background"):
             self._sky_for(scene.background)
 
@@ -278,8 +299,13 @@ class SceneRenderer:
         tiny_pixels: float = TINY_PIXELS,
         view: View | None = None,
     ) -> FramePlan:
-        """The plan the next frame of ``scene`` at ``size`` would run (nothing is drawn)."""
-        return plan_frame(scene, size, self.state, use_plan, tiny_pixels, view)
+        """The plan the next frame of ``scene`` at ``size`` would run (nothing is drawn):
+        from what the textures hold but those of the passes drawing it drops."""
+        stale = self._stale_passes(scene)
+        state = self.state
+        if stale:
+            state = TextureState({k: v for k, v in state.held.items() if k[0] not in stale})
+        return plan_frame(scene, size, state, use_plan, tiny_pixels, view)
 
     def render(
         self,
@@ -380,6 +406,7 @@ class SceneRenderer:
         except BaseException:
             self.state.clear()
             self.memo.clear()
+            forget_cached_state()  # the calls may have stopped partway
             raise
         for step in plan.passes:
             if step.runs and step.name != "camera":
@@ -433,6 +460,7 @@ class SceneRenderer:
             # What a failed pass left half made cannot be trusted by the next frame.
             self.state.clear()
             self.memo.clear()
+            forget_cached_state()
             raise
         finally:
             self.drawer.end_frame()

@@ -32,7 +32,12 @@ errors surface at the next checked call or pass check
 records must not change an array it passed afterwards (mirrorlab's passes hand GL fresh or
 read-only arrays). What a recorded call reads from GL objects is read again at each replay:
 a buffer or texture filled again before a replay draws what it then holds (this is how a
-replayed frame draws the objects' new pose, sent to the views' buffers first).
+replayed frame draws the objects' new pose, sent to the views' buffers first). Nor may
+the recorded calls count on a value set before the recording began: a replay starts from
+what the last frame left, not from what the recorded one found. So code that leaves out a
+call because GL holds its value already (a program's uniform setters) trusts what it
+remembers only while :func:`cached_state_epoch` is unchanged; a recording's start changes
+it, and so a recorded frame sets every such value it reads itself.
 """
 
 from __future__ import annotations
@@ -131,11 +136,33 @@ raw = GLCalls(RAW)
 """mirrorlab's raw entry points (:data:`mirrorlab.gl.opengl.RAW`), through the layer."""
 
 
+_epoch = 0
+
+
+def cached_state_epoch() -> int:
+    """A number that changes whenever a memory of what GL holds (a value set, so its call
+    is left out when asked again) must be dropped: when a recording begins (see the replay
+    rule above) and when :func:`forget_cached_state` is called. Compare it with the
+    number taken when the memory was made."""
+    return _epoch
+
+
+def forget_cached_state() -> None:
+    """Make every memory of what GL holds out of date (:func:`cached_state_epoch`): after
+    calls that may have stopped partway (a failed frame or replay), or before calls that
+    must make every setting they count on (a recording)."""
+    global _epoch
+    _epoch += 1
+
+
 @contextmanager
 def recording(into: list[Call]) -> Iterator[None]:
     """Append to ``into``, while entered, every call the calling thread makes through
     :data:`gl` and :data:`raw` that can change GL state (in order, with its arguments as
-    given; see the replay rule above). Recordings do not nest."""
+    given; see the replay rule above). Recordings do not nest. Every memory of what GL
+    holds is dropped first (:func:`forget_cached_state`): the calls recorded set every
+    value they count on themselves."""
+    forget_cached_state()
     gl._record_into(into)
     try:
         raw._record_into(into)

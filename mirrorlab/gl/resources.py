@@ -21,7 +21,7 @@ from typing import Protocol
 import numpy as np
 
 from mirrorlab.errors import GLLimitError
-from mirrorlab.gl.calls import gl, raw
+from mirrorlab.gl.calls import cached_state_epoch, gl, raw
 from mirrorlab.gl.context import GLContextError, ResourceRegistry, unchecked
 from mirrorlab.gl.opengl import GL
 from mirrorlab.shaders import shader_source
@@ -122,6 +122,7 @@ class Program(_Resource):
         self.label = f"{vertex}+{fragment}"
         self._locations: dict[str, int] = {}
         self._values: dict[int, object] = {}  # what each uniform location holds
+        self._epoch = cached_state_epoch()  # when _values was begun
         super().__init__(registry)
 
     def use(self) -> None:
@@ -146,9 +147,15 @@ class Program(_Resource):
         return True
 
     # Each setter skips the call when the uniform already holds the value: a program keeps
-    # its uniforms, and a still frame sets the same ones every frame.
+    # its uniforms, and a still frame sets the same ones every frame. Not in a recording
+    # for a value set before it began (the replay rule, mirrorlab.gl.calls): a replay
+    # starts from the uniforms the recorded frame left, not from those it found.
 
     def _unchanged(self, location: int, value: object) -> bool:
+        epoch = cached_state_epoch()
+        if self._epoch != epoch:
+            self._values.clear()
+            self._epoch = epoch
         if self._values.get(location) == value:
             return True
         self._values[location] = value

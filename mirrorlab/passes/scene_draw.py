@@ -43,7 +43,7 @@ import numpy as np
 from mirrorlab import culling, math3d
 from mirrorlab.bounds import ObjectArrays, SceneIndex, scene_index
 from mirrorlab.draw_path import DRAW_PATHS, DrawPath
-from mirrorlab.gl.calls import gl
+from mirrorlab.gl.calls import cached_state_epoch, gl
 from mirrorlab.gl.context import gl_version, has_multi_draw
 from mirrorlab.gl.opengl import GL
 from mirrorlab.gl.resources import Buffer, Program
@@ -211,7 +211,9 @@ class SceneDrawer:
         self.parts_drawn = 0
         """Parts drawn since it was last set to 0 (the renderer does, each frame)."""
         self._lit: dict[Program, tuple] = {}
-        """The lights and ambient light each lit program was last given."""
+        """The lights and ambient light each lit program was last given, and the
+        :func:`~mirrorlab.gl.calls.cached_state_epoch` then (a recording sets them
+        again)."""
         self._offsets: tuple[Sequence, np.ndarray] | None = None
 
     # ------------------------------------------------------------- parts
@@ -334,7 +336,7 @@ class SceneDrawer:
         program = from_buffer if packed else by_uniforms
         program.use()
         set_view_uniforms(program, view)
-        lights = (scene.lights, scene.ambient)
+        lights = (scene.lights, scene.ambient, cached_state_epoch())
         if self._lit.get(program) != lights:  # only this drawer lights its programs
             light_uniforms(program, scene)
             self._lit[program] = lights

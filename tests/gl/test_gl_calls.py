@@ -14,9 +14,9 @@ import pytest
 from OpenGL import GL as PYOPENGL_GL
 
 import mirrorlab
-from mirrorlab.gl.calls import Call, GLCalls, gl, raw, recording
+from mirrorlab.gl.calls import Call, GLCalls, forget_cached_state, gl, raw, recording
 from mirrorlab.gl.opengl import GL, RAW
-from mirrorlab.gl.resources import Framebuffer
+from mirrorlab.gl.resources import Framebuffer, Program
 from mirrorlab.renderer import SceneRenderer
 
 GL_PACKAGE = Path(mirrorlab.__file__).parent / "gl"
@@ -182,6 +182,32 @@ def test_a_recording_holds_the_layers_state_changing_calls_in_order_and_makes_th
     if was_on:
         GL.glEnable(GL.GL_BLEND)
     assert gl.glEnable is GL.glEnable and raw.glDisable is RAW.glDisable
+
+
+def test_a_recording_sets_every_uniform_it_reads_itself(registry):
+    """A program leaves out setting a uniform to the value it holds, but not the first time
+    in a recording for a value set before it began (a replay starts from what the last
+    frame left, which the recorded one may have changed after reading): inside, a repeat
+    is left out again; after a failed frame (:func:`forget_cached_state`) too, it is set."""
+    program = Program(registry, "flat.vert", "flat.frag")
+    program.use()
+
+    def colour_calls(calls: list[Call]) -> int:
+        return sum(function.__name__ == "glUniform3f" for function, _, _ in calls)
+
+    program.set_vec3("color", (0.1, 0.2, 0.3))
+    calls: list[Call] = []
+    with recording(calls):
+        program.set_vec3("color", (0.1, 0.2, 0.3))
+        program.set_vec3("color", (0.1, 0.2, 0.3))
+    assert colour_calls(calls) == 1
+    calls = []
+    with recording(calls):
+        program.set_vec3("color", (0.1, 0.2, 0.3))  # set in the last recording: set again
+        forget_cached_state()
+        program.set_vec3("color", (0.1, 0.2, 0.3))  # and again after the memory is dropped
+    assert colour_calls(calls) == 2
+    GL.glUseProgram(0)
 
 
 def test_recordings_do_not_nest_and_an_error_inside_stops_one():

@@ -12,6 +12,7 @@ import subprocess
 import sys
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -25,9 +26,10 @@ from mirrorlab.gl.resources import Buffer
 from mirrorlab.options import apply_options
 from mirrorlab.passes import scene_draw
 from mirrorlab.passes.scene_draw import indirect_commands, texture_runs
+from mirrorlab.plan import FramePlan
 from mirrorlab.renderer import SceneRenderer
 from mirrorlab.scene.model import MeshObject, Transform
-from mirrorlab.techniques import technique, technique_names
+from mirrorlab.techniques import technique, technique_names, techniques
 from tests.gl.frames import draw
 from tests.scenekit import mirror, scene_robot, vec3
 
@@ -141,11 +143,25 @@ def test_a_new_pose_keeps_the_layout_of_its_parts_and_draws_as_a_fresh_renderer(
     assert made_per_frame[2] > 0 and made_per_frame[5] > 0
 
 
+def planned_views(plan: FramePlan) -> list[str]:
+    """The labels of the views a frame of ``plan`` draws objects in: its captures'
+    cameras (a probe's too), the camera's view, and the worlds seen in stencil mirrors
+    within any of them."""
+    pending = [view for step in plan.ran if step.name != "camera" for view in step.views]
+    pending.append(plan.top)
+    labels = []
+    while pending:
+        view_plan = pending.pop()
+        labels.append(view_plan.view.label)
+        pending += [shown.nested for shown in view_plan.shown if shown.nested is not None]
+    return labels
+
+
 @pytest.mark.parametrize("method", technique_names("planar"))
 def test_a_frames_views_are_recorded_before_its_first_draw(scene_renderer, monkeypatch, method):
-    """Every view a frame draws objects in (a capture's camera, the camera's view, the
-    world in a stencil mirror) has its draw recorded before the first multi-draw, and
-    the drawing uploads nothing more."""
+    """Every view a frame draws objects in (a capture's camera, a probe's, the camera's
+    view, the world in a stencil mirror: each its plan names) has its draw recorded
+    before the first multi-draw, and the drawing uploads nothing more."""
     events = []
     record = scene_draw.SceneDrawer._record
     draw_recorded = scene_draw.SceneDrawer._draw_recorded
@@ -169,9 +185,11 @@ def test_a_frames_views_are_recorded_before_its_first_draw(scene_renderer, monke
     monkeypatch.setattr(Buffer, "upload", noted_upload)
     scene = apply_options(mirrorlab.load_scene("lab20"), {"method": method})
     base, shoulder, elbow = scene_robot(scene).angles
-    draw(scene_renderer, scene.with_angles((base, shoulder, elbow + 7.0)), SIZE)
+    _, stats = draw(scene_renderer, scene.with_angles((base, shoulder, elbow + 7.0)), SIZE)
     drawn = [label for kind, label in events if kind == "draw"]
-    assert len(drawn) == 2, events  # the mirror's world and the camera's view
+    assert sorted(drawn) == sorted(planned_views(stats.plan)), events
+    # the world in the mirror is drawn in a view of its own (where it is not the screen's)
+    assert len(drawn) > 1 or technique(method).texture == "screen", events
     first_draw = events.index(("draw", drawn[0]))
     prepared = {label for kind, label in events[:first_draw] if kind == "record"}
     assert prepared == set(drawn), events
@@ -188,17 +206,22 @@ def test_a_view_draws_its_reflectors_before_the_objects_and_stencil_mirrors_afte
     """In the camera's view, a reflector drawn on its own (a textured mirror, a mapped
     sphere) comes before the objects, so what it hides fails the depth test unshaded; a
     stencil mirror comes after them, as it marks only the pixels they leave showing: each
-    technique where its registry entry says (``draws_after_objects``)."""
-    from mirrorlab.passes.envmap import CurvedPass
-    from mirrorlab.passes.planar import PlanarPass
-
+    technique where its registry entry says (``draws_after_objects``). The renderer's
+    draws are noted, by every registered technique's pass: not those a pass makes within
+    its own (``ssr`` draws its probe's after the objects, as its own draw)."""
     events = []
-    for owner in (PlanarPass, CurvedPass):
-        original = owner.draw
+    inside: list[object] = []  # the pass draws being made
+    owners: set[Any] = {entry.load() for entry in techniques() if entry.pass_class}
+    for owner in owners:
 
-        def noted_pass_draw(self, step, view, *rest, _o=original):
-            events.append((step.reflector.technique, view.label))
-            return _o(self, step, view, *rest)
+        def noted_pass_draw(self, step, view, *rest, _o=owner.draw):
+            if not inside:
+                events.append((step.reflector.technique, view.label))
+            inside.append(step)
+            try:
+                return _o(self, step, view, *rest)
+            finally:
+                inside.pop()
 
         monkeypatch.setattr(owner, "draw", noted_pass_draw)
     objects = scene_draw.SceneDrawer.draw
