@@ -147,9 +147,16 @@ class Watch:
         deadline = time.monotonic() + GIVE_UP_S
         while True:
             try:
-                line = self.lines.get(timeout=max(deadline - time.monotonic(), 0.01))
+                line = self.lines.get(timeout=min(max(deadline - time.monotonic(), 0.01), 1.0))
             except queue.Empty:
-                raise AssertionError(f"no {text!r} after {got}") from None
+                ended = self.process.poll() is not None and not self.reader.is_alive()
+                if ended or time.monotonic() >= deadline:
+                    assert self.process.stderr is not None
+                    errors = self.process.stderr.read() if ended else "(still running)"
+                    raise AssertionError(
+                        f"no {text!r} after {got}; exit {self.process.poll()}, stderr: {errors}"
+                    ) from None
+                continue
             got.append(line)
             self.seen.append(line)
             if text in line:

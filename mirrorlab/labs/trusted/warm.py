@@ -43,7 +43,7 @@ from mirrorlab.labs.trusted.checker import (
     file_variant,
 )
 from mirrorlab.labs.trusted.evidence import Evidence
-from mirrorlab.labs.trusted.gl_process import CheckerError, CheckerProcess, run_job
+from mirrorlab.labs.trusted.gl_process import CheckerProcess, run_job
 from mirrorlab.labs.trusted.judging import Context
 from mirrorlab.labs.trusted.sandbox import Limits, sandbox_uid, sweep_stale, uid_processes
 from mirrorlab.labs.trusted.variants import Variant
@@ -184,7 +184,10 @@ class WarmChecker:
                 size,
                 process=self.process if keep else None,
             )
-        except CheckerError:
+        except Exception:
+            # cancel() ends the GL process from another thread, closing its pipes while
+            # this one may be waiting on them: whatever that raises here (CheckerError,
+            # or OSError/ValueError from a closed descriptor) is the cancellation
             if self._cancelled:
                 raise Cancelled from None
             raise
