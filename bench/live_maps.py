@@ -21,15 +21,12 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
+from parallax import time_against_truth  # bench/parallax.py, beside this file
 
-from mirrorlab.accuracy import erode, image_error, sweep_gl
-from mirrorlab.gl.opengl import GL
 from mirrorlab.options import apply_options
-from mirrorlab.raytrace import trace_scene
 from mirrorlab.scene.loader import load_scene
 from mirrorlab.techniques import technique, techniques
 
@@ -51,34 +48,9 @@ def main(argv: list[str] | None = None) -> int:
         if technique(name).parallax:  # the plain lookup: what the capture costs
             options["parallax"] = "none"
         configured[name] = apply_options(scene, options)
-    size = (args.size, args.size)
-    truth = trace_scene(scene, size, supersample=4)
-    expected, mask = truth.to_uint8(), erode(truth.reflective_mask, 1)
-    times: dict[str, list[float]] = {label: [] for label in configured}
-    errors = {}
-    with sweep_gl(size) as (renderer, framebuffer, _):
-
-        def frame(label: str) -> float:
-            held = renderer.state.held
-            for key in [k for k, v in held.items() if v[0] not in ("bake", "picture")]:
-                del held[key]
-            start = time.perf_counter()
-            renderer.render(configured[label], framebuffer)
-            GL.glFinish()
-            return (time.perf_counter() - start) * 1e3
-
-        for label in configured:  # warm-up: programs, textures, the background bake
-            for _ in range(3):
-                frame(label)
-            error = image_error(framebuffer.read(), expected, mask)
-            errors[label] = {"mae": error.mae, "share_off": error.share_off}
-        labels = list(configured)
-        round_number = 0
-        while min(len(t) for t in times.values()) < args.frames:
-            shift = round_number % len(labels)
-            for label in labels[shift:] + labels[:shift]:
-                times[label] += [frame(label) for _ in range(args.block)]
-            round_number += 1
+    times, errors = time_against_truth(
+        scene, configured, (args.size, args.size), args.frames, args.block
+    )
     plain = float(np.median(times["cube-live"]))
     print(
         f"{args.scene}, {args.size}x{args.size} frames, map {args.map_size}, "

@@ -47,18 +47,14 @@ def variants(scene: Scene, map_size: int) -> dict[str, Scene]:
     }
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--scene", default="chrome_sphere")
-    parser.add_argument("--size", type=int, default=512)
-    parser.add_argument("--map-size", type=int, default=256)
-    parser.add_argument("--frames", type=int, default=40)
-    parser.add_argument("--block", type=int, default=5)
-    parser.add_argument("--json", type=Path)
-    args = parser.parse_args(argv)
-    scene = load_scene(args.scene)
-    configured = variants(scene, args.map_size)
-    size = (args.size, args.size)
+def time_against_truth(
+    scene: Scene, configured: dict[str, Scene], size: tuple[int, int], frames: int, block: int
+) -> tuple[dict[str, list[float]], dict[str, dict[str, float]]]:
+    """Each configured scene's frame times in ms (at least ``frames`` each, in blocks of
+    ``block``, the order rotated every round; what the renderer holds but baked
+    backgrounds and pictures dropped before each frame, so a frame pays its captures)
+    and its MAE and share off against ``scene``'s traced truth (4x supersampled), by
+    label."""
     truth = trace_scene(scene, size, supersample=4)
     expected, mask = truth.to_uint8(), erode(truth.reflective_mask, 1)
     times: dict[str, list[float]] = {label: [] for label in configured}
@@ -81,11 +77,28 @@ def main(argv: list[str] | None = None) -> int:
             errors[label] = {"mae": error.mae, "share_off": error.share_off}
         labels = list(configured)
         round_number = 0
-        while min(len(t) for t in times.values()) < args.frames:
+        while min(len(t) for t in times.values()) < frames:
             shift = round_number % len(labels)
             for label in labels[shift:] + labels[:shift]:
-                times[label] += [frame(label) for _ in range(args.block)]
+                times[label] += [frame(label) for _ in range(block)]
             round_number += 1
+    return times, errors
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--scene", default="chrome_sphere")
+    parser.add_argument("--size", type=int, default=512)
+    parser.add_argument("--map-size", type=int, default=256)
+    parser.add_argument("--frames", type=int, default=40)
+    parser.add_argument("--block", type=int, default=5)
+    parser.add_argument("--json", type=Path)
+    args = parser.parse_args(argv)
+    scene = load_scene(args.scene)
+    configured = variants(scene, args.map_size)
+    times, errors = time_against_truth(
+        scene, configured, (args.size, args.size), args.frames, args.block
+    )
     plain = float(np.median(times["cube-live"]))
     report = []
     print(
